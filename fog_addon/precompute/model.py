@@ -1,0 +1,112 @@
+"""Per-pixel fog formulas, written once for numpy, shader nodes and OSL.
+
+Every function takes an ops namespace ``m`` first (see ``ops.py``).  Inputs are
+physical: distances in m, the extinction (= scattering) coefficient ``beta``
+in 1/m.  Radiances are returned per unit radiant intensity of the light, i.e.
+multiply by I0 = P / (4 pi) W/sr (times the light colour) to get W/(m^2 sr).
+
+The airlight of Sun et al. 2005 (Eq. 5, solved as Eq. 9-12 with F(u, v) of
+Eq. 10) is evaluated here in the variable q = z + d, where z is the signed
+distance along the ray from the point closest to the light and d the distance
+to the light.  With Q = q in metres and h the distance from the light to the
+ray's line, the substitution q = h tan(xi) of Sun's Appendix A turns Eq. 5 into
+
+    L_a = beta I0 / (2 pi) * exp(-beta D_sv) * int_{Q0}^{Q1} exp(-beta (Q - Q0)) / (Q^2 + h^2) dQ
+
+so Sun's difference F(A1, v1) - F(A1, v0) (Eq. 11) becomes a difference of
+the tails K(Q0) - exp(-beta (Q1 - Q0)) K(Q1) with
+
+    K(Q) = int_Q^inf exp(-beta (Q' - Q)) / (Q'^2 + h^2) dQ'.
+
+The factor exp(-T_sv) is exact (Sun's e^{-T_sv cos(gamma)} e^{-A1 tan(gamma/2)}),
+so nothing exponentially small is ever tabulated or subtracted.  K depends on
+the polar coordinates (R, xi) of (h, Q): R^2 = Q^2 + h^2 = 2 Q d and
+xi = atan2(Q, h) (xi = gamma/2 at the viewer, Sun's upper limit at the surface).
+Divided by its two limits (no extinction: xi' / (R cos xi), far field 1/R^2),
+K is a table N(beta R, xi) in [0.80, 1.07] that bilinear interpolation
+reproduces to 2e-4 (see airlight.py).  Where the segment is short compared with
+the scale of its integrand, the difference would cancel, so the integral is
+taken directly by Gauss-Legendre quadrature instead.
+"""
+import math
+
+from . import tables
+
+# Gauss-Legendre nodes on [0, 1] for short ray segments.
+_GL_X = (0.033765242898423975, 0.16939530676686776, 0.38069040695840156,
+         0.6193095930415985, 0.8306046932331322, 0.966234757101576)
+_GL_W = (0.08566224618958517, 0.18038078652406933, 0.23395696728634552,
+         0.23395696728634552, 0.18038078652406933, 0.08566224618958517)
+
+SHORT_SEGMENT = 0.5   # a segment is short when beta*P < SHORT_SEGMENT * min(1, beta*R0)
+MIN_ANGLE = 1e-5     # rad; rays closer than this to a light are taken at this angle (gamma -> 0 and pi limits)
+MIN_DISTANCE = 1e-6   # m; distances to the light are clamped here (the glow of a point light is infinite on it)
+INV_4PI = 1.0 / (4.0 * math.pi)
+INV_2PI = 1.0 / (2.0 * math.pi)
+
+
+def xi_over_cos(m, xi):
+    """(pi/2 - xi) / cos(xi) for xi in [0, pi/2], with its limit 1 at pi/2."""
+    c = tables.HALF_PI - xi
+    return (c + 1e-7) / (m.sin(c) + 1e-7)
+
+
+def airlight_tail(m, beta, r, xi):
+    """K(Q) in 1/m for a point at polar coordinates (r, xi) about the light (module docstring)."""
+    r = m.maximum(r, MIN_DISTANCE)
+    n = m.table(tables.AIRLIGHT, tables.airlight_x(m, beta * r), tables.airlight_y(m, xi))
+    return n / (r / xi_over_cos(m, xi) + beta * r * r)
+
+
+def closest_point_q(m, d, along, h):
+    """Q = z + d, stably: h^2 / (d - z) where z < 0.  along = z is signed, d >= |z|."""
+    return m.select(m.less(0.0, along), along + d, h * h / m.maximum(d + m.abs(along), 1e-30))
+
+
+def airlight_segment(m, beta, d_sv, along, h, d_vp, d_sp):
+    """Airlight per unit intensity, 1/m^2: Sun et al. 2005 Eq. 5 / Eq. 11, ray from the viewer to a surface.
+
+    d_sv: viewer-light distance; along: D_sv cos(gamma); h: D_sv sin(gamma);
+    d_vp: viewer-surface distance; d_sp: light-surface distance (all m).
+    """
+    h = m.maximum(h, MIN_ANGLE * d_sv)
+    q0 = closest_point_q(m, d_sv, -along, h)
+    q1 = closest_point_q(m, d_sp, d_vp - along, h)
+    r0 = m.sqrt(2.0 * q0 * d_sv)
+    r1 = m.sqrt(2.0 * q1 * d_sp)
+    xi0 = m.atan2(q0, h)
+    xi1 = m.atan2(q1, h)
+    # P = Q1 - Q0 = d_vp + d_sp - d_sv = d_vp (q0 + q1) / (d_sv + d_sp), without cancellation.
+    seg = d_vp * (q0 + q1) / m.maximum(d_sp + d_sv, 1e-30)
+    long_ = airlight_tail(m, beta, r0, xi0) - m.exp(-beta * seg) * airlight_tail(m, beta, r1, xi1)
+    short = 0.0
+    for x, w in zip(_GL_X, _GL_W):
+        p = seg * x
+        q = q0 + p
+        short = short + w * m.exp(-beta * p) / m.maximum(q * q + h * h, 1e-30)
+    short = short * seg
+    is_short = m.less(beta * seg, SHORT_SEGMENT * m.minimum(1.0, beta * r0))
+    return (beta * INV_2PI) * m.exp(-beta * d_sv) * m.select(is_short, short, long_)
+
+
+def airlight_background(m, beta, d_sv, along, h):
+    """Airlight per unit intensity, 1/m^2, of a ray that meets no surface: Sun et al. 2005 Eq. 12."""
+    h = m.maximum(h, MIN_ANGLE * d_sv)
+    q0 = closest_point_q(m, d_sv, -along, h)
+    r0 = m.sqrt(2.0 * q0 * d_sv)
+    xi0 = m.atan2(q0, h)
+    return (beta * INV_2PI) * m.exp(-beta * d_sv) * airlight_tail(m, beta, r0, xi0)
+
+
+def ray_light_geometry(m, origin, direction, light):
+    """(d_sv, along, h) of a ray (unit ``direction``) and a light position, all vectors."""
+    to_light = light - origin
+    d_sv = m.length(to_light)
+    along = m.dot(to_light, direction)
+    h = m.length(m.cross(to_light, direction))
+    return d_sv, along, h
+
+
+def transmittance(m, beta, d):
+    """exp(-beta d): Beer-Lambert extinction over d metres (Sun et al. 2005 Eq. 2, 14, 19)."""
+    return m.exp(-beta * d)

@@ -1,0 +1,98 @@
+"""The numpy backend of the shader ops.
+
+Per-pixel fog formulas (``model.py``) are written once against an ``m``
+namespace: arithmetic operators on values plus the functions below.  This
+module evaluates them with numpy; ``fog_addon/nodes/sockets.py`` builds the
+very same formulas as shader nodes, and ``fog_addon/nodes/osl.py`` prints them
+as OSL.  Every function here therefore does exactly what its node
+counterpart does, including how a select mixes both branches (so a NaN or Inf
+in the branch not taken poisons the numpy result just as it would the shader).
+
+Scalars are arrays of shape (...); vectors are arrays of shape (..., 3).
+"""
+import numpy as np
+
+
+class NumpyOps:
+    """Shader ops on numpy arrays; ``tables`` maps TableSpec.name -> float32 array."""
+
+    def __init__(self, tables=None, dtype=np.float64):
+        self.tables = dict(tables or {})
+        self.dtype = dtype
+
+    # -- values ---------------------------------------------------------
+    def const(self, x):
+        return np.asarray(x, self.dtype)
+
+    # -- scalar functions (Blender Math node operations) -------------------
+    exp = staticmethod(np.exp)
+    sqrt = staticmethod(lambda x: np.sqrt(np.maximum(x, 0.0)))   # Math SQRT returns 0 below 0
+    sin = staticmethod(np.sin)
+    cos = staticmethod(np.cos)
+    floor = staticmethod(np.floor)
+    abs = staticmethod(np.abs)
+    minimum = staticmethod(np.minimum)
+    maximum = staticmethod(np.maximum)
+
+    @staticmethod
+    def atan2(y, x):
+        return np.arctan2(y, x)
+
+    @staticmethod
+    def power(x, y):
+        """Math POWER; the kernel only calls it with x >= 0."""
+        return np.power(x, y)
+
+    @staticmethod
+    def less(a, b):
+        """1.0 where a < b, else 0.0 (Math LESS_THAN)."""
+        return (np.asarray(a) < np.asarray(b)).astype(float)
+
+    @staticmethod
+    def select(cond, if_true, if_false):
+        """cond in {0, 1}: if_false + cond * (if_true - if_false), as the node tree does."""
+        return if_false + cond * (if_true - if_false)
+
+    @staticmethod
+    def clamp01(x):
+        return np.clip(x, 0.0, 1.0)
+
+    # -- vectors (Vector Math node operations) ------------------------------
+    @staticmethod
+    def dot(a, b):
+        return np.sum(np.asarray(a) * np.asarray(b), axis=-1)
+
+    @staticmethod
+    def cross(a, b):
+        return np.cross(a, b)
+
+    @staticmethod
+    def length(a):
+        return np.sqrt(np.sum(np.asarray(a) ** 2, axis=-1))
+
+    @staticmethod
+    def scale(v, s):
+        return np.asarray(v) * np.asarray(s)[..., None]
+
+    # -- tables ---------------------------------------------------------------
+    def table(self, spec, x, y, row0=0, rows=None):
+        """Bilinear lookup of table ``spec`` at grid coordinates x, y in [0, 1].
+
+        ``row0``/``rows`` select a horizontal band of the image (stacked tables).
+        Same arithmetic as the four Closest taps of the node version.
+        """
+        arr = self.tables[spec.name]
+        rows = arr.shape[0] if rows is None else rows
+        w = spec.width
+        fx = np.clip(x, 0.0, 1.0) * (w - 1)
+        fy = np.clip(y, 0.0, 1.0) * (rows - 1)
+        i = np.minimum(np.floor(fx), w - 2)
+        j = np.minimum(np.floor(fy), rows - 2)
+        tx, ty = fx - i, fy - j
+        i = i.astype(int)
+        j = j.astype(int) + row0
+        v00, v10 = arr[j, i], arr[j, i + 1]
+        v01, v11 = arr[j + 1, i], arr[j + 1, i + 1]
+        a = v00 + tx * (v10 - v00)
+        b = v01 + tx * (v11 - v01)
+        return a + ty * (b - a)
