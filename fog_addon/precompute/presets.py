@@ -1,0 +1,46 @@
+"""Fog presets from visibility classes of atmospheric optics, and unit conversions.
+
+Koschmieder's law (1924): meteorological visibility V = ln(1/0.02) / beta
+= 3.912 / beta, the distance at which a black object's contrast drops to 2 %.
+Visibility classes: haze 5-10 km, mist 1-5 km, fog 0.2-1 km, dense fog < 180 m;
+each preset takes a representative visibility inside its class.
+"""
+import math
+
+KOSCHMIEDER = -math.log(0.02)   # 3.912
+
+VISIBILITY_M = {
+    "haze": 8000.0,
+    "mist": 2000.0,
+    "fog": 500.0,
+    "dense_fog": 150.0,
+}
+
+
+def density_from_visibility(visibility_m):
+    """Extinction coefficient beta (1/m) for a meteorological visibility in m (Koschmieder)."""
+    return KOSCHMIEDER / visibility_m
+
+
+def visibility_from_density(beta):
+    """Meteorological visibility (m) for an extinction coefficient beta (1/m); inf for beta = 0."""
+    return math.inf if beta == 0 else KOSCHMIEDER / beta
+
+
+PRESETS = {name: density_from_visibility(v) for name, v in VISIBILITY_M.items()}
+
+
+def validate_density(beta):
+    """Return beta as a float, or raise ValueError with a message a user understands."""
+    try:
+        beta = float(beta)
+    except (TypeError, ValueError):
+        raise ValueError(f"fog density must be a number in 1/m, got {beta!r}") from None
+    if math.isnan(beta) or math.isinf(beta):
+        raise ValueError(f"fog density must be finite, got {beta}")
+    if beta < 0:
+        raise ValueError(f"fog density must be >= 0 (1/m), got {beta}")
+    if beta > 100:
+        raise ValueError(f"fog density {beta} 1/m means a visibility of {KOSCHMIEDER / beta * 100:.1f} cm; "
+                         "the largest supported density is 100 1/m")
+    return beta
