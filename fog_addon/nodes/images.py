@@ -1,0 +1,52 @@
+"""Tables as packed 32-bit float images (one shared copy per table)."""
+import bpy
+import numpy as np
+
+from ..precompute import tables
+
+VERSION_KEY = "analytic_fog_table_version"
+TABLE_VERSION = 1
+
+
+def _bakers():
+    from ..precompute import airlight, surface
+    return {
+        tables.AIRLIGHT.name: (tables.AIRLIGHT, airlight.bake_airlight_table),
+        tables.SURFACE.name: (tables.SURFACE, surface.bake_surface_table),
+    }
+
+
+def table_image(spec, bake):
+    """The image holding ``spec``'s table, baked and packed if missing or stale.
+
+    Values go to all four channels; the node tree reads Alpha, an exact float
+    output (CHANNEL_PACKED keeps it independent of RGB).  ``use_half_precision``
+    is off or EEVEE would upload half floats.
+    """
+    img = bpy.data.images.get(spec.name)
+    if (img is not None and img.get(VERSION_KEY) == TABLE_VERSION
+            and tuple(img.size) == (spec.width, spec.height) and img.packed_file is not None):
+        return img
+    if img is not None:
+        bpy.data.images.remove(img)
+    arr = np.asarray(bake(), np.float32)
+    assert arr.shape == (spec.height, spec.width), (arr.shape, spec)
+    img = bpy.data.images.new(spec.name, spec.width, spec.height, alpha=True, float_buffer=True, is_data=True)
+    img.colorspace_settings.name = "Non-Color"
+    img.alpha_mode = "CHANNEL_PACKED"
+    img.use_half_precision = False
+    img.pixels.foreach_set(np.repeat(arr[..., None], 4, axis=-1).ravel())
+    img.update()
+    img.pack()
+    img.use_fake_user = True
+    img[VERSION_KEY] = TABLE_VERSION
+    return img
+
+
+def all_table_images():
+    """{TableSpec.name: image} for every table the node groups use."""
+    return {name: table_image(spec, bake) for name, (spec, bake) in _bakers().items()}
+
+
+def table_names():
+    return list(_bakers())

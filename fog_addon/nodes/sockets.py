@@ -1,0 +1,211 @@
+"""The node backend of the shader ops: ``model.py`` formulas built as shader nodes.
+
+``NodeOps`` mirrors ``fog_addon.precompute.ops.NumpyOps`` function by function;
+a ``Val`` wraps an output socket (or a Python constant, folded at build time)
+and overloads arithmetic so the formulas read the same in both.
+"""
+import math
+
+import bpy
+
+COLUMN = 170.0
+ROW = 140.0
+
+
+class Val:
+    __slots__ = ("ops", "sock", "const", "vector", "col")
+
+    def __init__(self, ops, sock=None, const=None, vector=False, col=0):
+        self.ops, self.sock, self.const, self.vector, self.col = ops, sock, const, vector, col
+
+    def _bin(self, other, op, swap=False):
+        a, b = (other, self) if swap else (self, other)
+        return self.ops.binary(op, a, b)
+
+    __add__ = lambda s, o: s._bin(o, "ADD")
+    __radd__ = lambda s, o: s._bin(o, "ADD", True)
+    __sub__ = lambda s, o: s._bin(o, "SUBTRACT")
+    __rsub__ = lambda s, o: s._bin(o, "SUBTRACT", True)
+    __mul__ = lambda s, o: s._bin(o, "MULTIPLY")
+    __rmul__ = lambda s, o: s._bin(o, "MULTIPLY", True)
+    __truediv__ = lambda s, o: s._bin(o, "DIVIDE")
+    __rtruediv__ = lambda s, o: s._bin(o, "DIVIDE", True)
+
+    def __neg__(self):
+        return self.ops.binary("MULTIPLY", self, -1.0)
+
+
+_FOLD = {
+    "ADD": lambda a, b: a + b, "SUBTRACT": lambda a, b: a - b, "MULTIPLY": lambda a, b: a * b,
+    "DIVIDE": lambda a, b: a / b if b != 0 else 0.0,
+    "MINIMUM": min, "MAXIMUM": max, "POWER": lambda a, b: a ** b if a > 0 else 0.0,
+    "ARCTAN2": math.atan2, "LESS_THAN": lambda a, b: float(a < b),
+}
+_FOLD1 = {
+    "EXPONENT": math.exp, "SQRT": lambda a: math.sqrt(a) if a > 0 else 0.0, "SINE": math.sin,
+    "COSINE": math.cos, "FLOOR": math.floor, "ABSOLUTE": abs,
+}
+
+
+class NodeOps:
+    """Builds ``model.py`` formulas into ``tree``; ``images`` maps TableSpec.name -> bpy image."""
+
+    def __init__(self, tree, images=None, x0=0.0, y0=0.0):
+        self.tree = tree
+        self.images = images or {}
+        self.x0, self.y0 = x0, y0
+        self._rows = {}
+
+    # -- plumbing -----------------------------------------------------------
+    def wrap(self, x, vector=False):
+        if isinstance(x, Val):
+            return x
+        if isinstance(x, bpy.types.NodeSocket):
+            return Val(self, sock=x, vector=vector or x.type == "VECTOR", col=0)
+        return Val(self, const=float(x))
+
+    def node(self, bl_idname, col, **props):
+        n = self.tree.nodes.new(bl_idname)
+        row = self._rows.get(col, 0)
+        self._rows[col] = row + 1
+        n.location = (self.x0 + col * COLUMN, self.y0 - row * ROW)
+        n.hide = True
+        for k, v in props.items():
+            setattr(n, k, v)
+        return n
+
+    def _feed(self, sock, v):
+        if v.sock is not None:
+            self.tree.links.new(v.sock, sock)
+        elif sock.type == "VECTOR":
+            sock.default_value = (v.const, v.const, v.const)
+        else:
+            sock.default_value = v.const
+
+    def math(self, op, *args):
+        vals = [self.wrap(a) for a in args]
+        if all(v.const is not None for v in vals):
+            f = _FOLD.get(op) if len(vals) == 2 else _FOLD1.get(op)
+            return Val(self, const=float(f(*(v.const for v in vals))))
+        col = 1 + max(v.col for v in vals)
+        n = self.node("ShaderNodeMath", col, operation=op, use_clamp=False)
+        for s, v in zip(n.inputs, vals):
+            self._feed(s, v)
+        return Val(self, sock=n.outputs[0], col=col)
+
+    def vmath(self, op, *args, out=0):
+        vals = [self.wrap(a) for a in args]
+        col = 1 + max(v.col for v in vals)
+        n = self.node("ShaderNodeVectorMath", col, operation=op)
+        if op == "SCALE":
+            self._feed(n.inputs[0], vals[0])
+            self._feed(n.inputs["Scale"], vals[1])
+        else:
+            for s, v in zip(n.inputs, vals):
+                self._feed(s, v)
+        return Val(self, sock=n.outputs[out], vector=(out == 0), col=col)
+
+    def binary(self, op, a, b):
+        a, b = self.wrap(a), self.wrap(b)
+        if a.vector or b.vector:
+            if op in ("ADD", "SUBTRACT") and a.vector and b.vector:
+                return self.vmath(op, a, b)
+            if op == "MULTIPLY":
+                return self.vmath("SCALE", a, b) if a.vector else self.vmath("SCALE", b, a)
+            raise TypeError(f"unsupported vector operation {op}")
+        if op == "ADD" and b.const == 0.0:
+            return a
+        if op == "ADD" and a.const == 0.0:
+            return b
+        if op == "MULTIPLY" and b.const == 1.0:
+            return a
+        if op == "MULTIPLY" and a.const == 1.0:
+            return b
+        return self.math(op, a, b)
+
+    # -- the ops namespace (same names as NumpyOps) ----------------------------
+    def const(self, x):
+        return Val(self, const=float(x))
+
+    def exp(self, x):
+        return self.math("EXPONENT", x)
+
+    def sqrt(self, x):
+        return self.math("SQRT", x)
+
+    def sin(self, x):
+        return self.math("SINE", x)
+
+    def cos(self, x):
+        return self.math("COSINE", x)
+
+    def floor(self, x):
+        return self.math("FLOOR", x)
+
+    def abs(self, x):
+        return self.math("ABSOLUTE", x)
+
+    def minimum(self, a, b):
+        return self.math("MINIMUM", a, b)
+
+    def maximum(self, a, b):
+        return self.math("MAXIMUM", a, b)
+
+    def atan2(self, y, x):
+        return self.math("ARCTAN2", y, x)
+
+    def power(self, x, y):
+        return self.math("POWER", x, y)
+
+    def less(self, a, b):
+        return self.math("LESS_THAN", a, b)
+
+    def select(self, cond, if_true, if_false):
+        return if_false + cond * (if_true - if_false)
+
+    def clamp01(self, x):
+        return self.minimum(self.maximum(x, 0.0), 1.0)
+
+    def dot(self, a, b):
+        return self.vmath("DOT_PRODUCT", a, b, out=1)
+
+    def cross(self, a, b):
+        return self.vmath("CROSS_PRODUCT", a, b)
+
+    def length(self, a):
+        return self.vmath("LENGTH", a, out=1)
+
+    def scale(self, v, s):
+        return self.vmath("SCALE", v, s)
+
+    def combine(self, x, y, z):
+        vals = [self.wrap(v) for v in (x, y, z)]
+        col = 1 + max(v.col for v in vals)
+        n = self.node("ShaderNodeCombineXYZ", col)
+        for s, v in zip(n.inputs, vals):
+            self._feed(s, v)
+        return Val(self, sock=n.outputs[0], vector=True, col=col)
+
+    def table(self, spec, x, y, row0=0, rows=None):
+        """Bilinear lookup from four Closest taps (EEVEE's Linear filter is not exact bilinear here)."""
+        rows = spec.height if rows is None else rows
+        fx = self.clamp01(x) * float(spec.width - 1)
+        fy = self.clamp01(y) * float(rows - 1)
+        i = self.minimum(self.floor(fx), float(spec.width - 2))
+        j = self.minimum(self.floor(fy), float(rows - 2))
+        tx, ty = fx - i, fy - j
+        u0 = (i + 0.5) / float(spec.width)
+        u1 = u0 + 1.0 / spec.width
+        v0 = (j + (row0 + 0.5)) / float(spec.height)
+        v1 = v0 + 1.0 / spec.height
+        taps = [self._tap(spec, u, v) for v in (v0, v1) for u in (u0, u1)]
+        a = taps[0] + tx * (taps[1] - taps[0])
+        b = taps[2] + tx * (taps[3] - taps[2])
+        return a + ty * (b - a)
+
+    def _tap(self, spec, u, v):
+        uv = self.combine(u, v, 0.0)
+        n = self.node("ShaderNodeTexImage", uv.col + 1, interpolation="Closest", extension="EXTEND")
+        n.image = self.images[spec.name]
+        self.tree.links.new(uv.sock, n.inputs["Vector"])
+        return Val(self, sock=n.outputs["Alpha"], col=uv.col + 1)
