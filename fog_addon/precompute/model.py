@@ -39,7 +39,7 @@ _GL_W = (0.08566224618958517, 0.18038078652406933, 0.23395696728634552,
          0.23395696728634552, 0.18038078652406933, 0.08566224618958517)
 
 SHORT_SEGMENT = 0.5   # a segment is short when beta*P < SHORT_SEGMENT * min(1, beta*R0)
-MIN_ANGLE = 1e-5     # rad; rays closer than this to a light are taken at this angle (gamma -> 0 and pi limits)
+MIN_ANGLE = 1e-7     # rad; rays closer than this to a light are taken at this angle (gamma -> 0 and pi limits)
 MIN_DISTANCE = 1e-6   # m; distances to the light are clamped here (the glow of a point light is infinite on it)
 INV_4PI = 1.0 / (4.0 * math.pi)
 INV_2PI = 1.0 / (2.0 * math.pi)

@@ -83,7 +83,7 @@ class NumpyOps:
         """
         arr = self.tables[spec.name]
         rows = arr.shape[0] if rows is None else rows
-        w = spec.width
+        w = arr.shape[1]
         fx = np.clip(x, 0.0, 1.0) * (w - 1)
         fy = np.clip(y, 0.0, 1.0) * (rows - 1)
         i = np.minimum(np.floor(fx), w - 2)

@@ -1,0 +1,343 @@
+"""Accuracy of the airlight model (Sun et al. 2005 Eq. 5, our Eq. 11/12 reformulation in model.py).
+
+Requirement: ``airlight`` (what the shaders compute) is within 0.5 % relative
+error, sample by sample, of adaptive quadrature of Eq. 5 over 40 000 random
+(beta, D_sv, D_vp, gamma) with T_sv in [0.01, 20], T_vp in [0.01, 50],
+gamma in (0, pi), plus 4 000 background (D_vp = inf) rays and dedicated extremes.
+
+Reference values come from tools/airlight_reference.py (scipy quad of Eq. 5 in
+x, cross-checked by scipy quad of Eq. 9 in xi) and are cached in
+tests/data/airlight_reference.npz; ``--regen-references`` recomputes them.  A
+fresh subset with another seed is integrated live on every run so the cache
+cannot go stale.
+"""
+import math
+import sys
+import time
+
+import numpy as np
+import pytest
+from scipy.special import exp1
+
+from conftest import ROOT
+
+sys.path.insert(0, str(ROOT / "tools"))
+import airlight_reference as ref  # noqa: E402
+
+from fog_addon.precompute import airlight as al  # noqa: E402
+from fog_addon.precompute import model, tables  # noqa: E402
+from fog_addon.precompute.ops import NumpyOps  # noqa: E402
+
+TOL = 5e-3            # the requirement: 0.5 % max relative error, sample by sample
+REF_AGREEMENT = 1e-7  # the two independent quadratures of the reference must agree this well
+LIVE_SEED = 424242    # != ref.CACHE_SEED
+
+
+@pytest.fixture(scope="module")
+def table():
+    return al.bake_airlight_table()
+
+
+@pytest.fixture(scope="module")
+def cache(regen):
+    return ref.load_cache(regen=regen)
+
+
+def _params(c):
+    return c["beta"], c["d_sv"], c["d_vp"], c["gamma"]
+
+
+def _rel(a, b):
+    return np.abs(np.asarray(a, float) / np.asarray(b, float) - 1.0)
+
+
+def _describe(p, err, i):
+    b, s, v, g = (float(np.asarray(x)[i]) for x in p)
+    return (f"beta={b:.6g} d_sv={s:.6g} d_vp={v:.6g} gamma={g:.6g} (T_sv={b * s:.4g}, "
+            f"T_vp={b * v:.4g}) rel.err={float(err[i]):.3g}")
+
+
+# --- the reference itself -------------------------------------------------------
+
+def test_reference_cache_is_sound(cache):
+    b, s, v, g = _params(cache)
+    n = int(cache["n_finite"])
+    assert n == ref.N_CACHE and len(b) == ref.N_CACHE + ref.N_BACKGROUND
+    assert np.all(np.isfinite(v[:n])) and np.all(np.isinf(v[n:]))
+    t_sv, t_vp = b * s, b[:n] * v[:n]
+    assert t_sv.min() >= 0.0099 and t_sv.max() <= 20.01
+    assert t_vp.min() >= 0.0099 and t_vp.max() <= 50.01
+    assert g.min() > 0.0 and g.max() < math.pi
+    assert np.all(cache["reference"] > 0.0)
+    assert cache["eq9_rel_diff"].max() < REF_AGREEMENT   # Eq. 5 (in x) vs Eq. 9 (in xi) quadrature
+
+
+def test_live_reference_subset(table):
+    """300 fresh samples: the two quadratures agree, and the model meets the tolerance."""
+    fin = ref.sample_parameters(250, LIVE_SEED)
+    bg = ref.sample_parameters(50, LIVE_SEED + 1, background=True)
+    p = [np.concatenate([x, y]) for x, y in zip(fin, bg)]
+    r5, est, r9 = ref.reference_values(*p, processes=1, check=True)
+    assert np.max(est / r5) < 1e-9
+    assert np.max(_rel(r9, r5)) < REF_AGREEMENT
+    err = _rel(al.airlight(*p, table=table), r5)
+    i = int(np.argmax(err))
+    assert err[i] < TOL, _describe(p, err, i)
+
+
+def test_reference_infinite_tail_closed_form():
+    """Eq. 5 quadrature vs the closed form of the background case, K via Im(e^c E1(c)) / u."""
+    rng = np.random.default_rng(7)
+    for _ in range(40):
+        beta = 10 ** rng.uniform(-3, 0)
+        d_sv = 10 ** rng.uniform(-2, math.log10(20)) / beta
+        gamma = rng.uniform(0.01, math.pi - 0.01)
+        h, along = d_sv * math.sin(gamma), d_sv * math.cos(gamma)
+        q0 = d_sv - along
+        c = beta * q0 - 1j * beta * h
+        k = (np.exp(c) * exp1(c)).imag / (beta * h) * beta       # K(Q0) in 1/m
+        closed = beta / (2 * math.pi) * math.exp(-beta * d_sv) * k
+        assert abs(ref.eq5_quad(beta, d_sv, np.inf, gamma)[0] / closed - 1) < REF_AGREEMENT
+
+
+# --- the 40 000 random samples ------------------------------------------------------
+
+def _check_random(cache, table, mask_fn):
+    p = _params(cache)
+    err = _rel(al.airlight(*p, table=table), cache["reference"])
+    m = mask_fn(p)
+    assert np.all(np.isfinite(err))
+    e = np.where(m, err, 0.0)
+    i = int(np.argmax(e))
+    print(f"\nrelative error over {int(m.sum())} samples: max {e[i]:.3g}, p99 {np.percentile(err[m], 99):.3g}, "
+          f"median {np.median(err[m]):.3g}")
+    assert e[i] < TOL, _describe(p, err, i)
+
+
+def test_random_surface_rays(cache, table):
+    _check_random(cache, table, lambda p: np.isfinite(p[2]))
+
+
+def test_random_background_rays(cache, table):
+    _check_random(cache, table, lambda p: np.isinf(p[2]))
+
+
+# --- extremes ------------------------------------------------------------------
+
+def _vacuum(d_sv, d_vp, gamma):
+    """lim_{beta->0} L_a / beta = (1 / 4 pi h) [atan((x - D_sv cos g) / h)]_0^{D_vp}."""
+    h, along = d_sv * math.sin(gamma), d_sv * math.cos(gamma)
+    top = math.pi / 2 if math.isinf(d_vp) else math.atan2(d_vp - along, h)
+    return (top - math.atan2(-along, h)) / (4 * math.pi * h)
+
+
+def _aimed_beyond(beta, d_sv, d_vp):
+    """gamma = 0, surface before the light (D_vp < D_sv): beta/(4 pi) e^{-beta D_sv} (1/(D_sv - D_vp) - 1/D_sv)."""
+    return beta / (4 * math.pi) * math.exp(-beta * d_sv) * (1 / (d_sv - d_vp) - 1 / d_sv)
+
+
+def _away(beta, d_sv, d_vp):
+    """gamma = pi: beta/(4 pi) e^{beta D_sv} int_{D_sv}^{D_sv+D_vp} e^{-2 beta y} / y^2 dy via E1."""
+    k = 2 * beta
+    tail = lambda a: math.exp(-k * a) / a - k * exp1(k * a)          # int_a^inf e^{-ky}/y^2 dy
+    upper = 0.0 if math.isinf(d_vp) else tail(d_sv + d_vp)
+    return beta / (4 * math.pi) * math.exp(beta * d_sv) * (tail(d_sv) - upper)
+
+
+EXTREMES = [
+    # (beta, d_sv, d_vp, gamma, expected or callable, rel tolerance)  expected None: finite only
+    # gamma within 1e-6 of 0 and pi
+    (0.05, 20.0, 10.0, 0.0, _aimed_beyond(0.05, 20.0, 10.0), TOL),
+    (0.05, 20.0, 10.0, 5e-7, _aimed_beyond(0.05, 20.0, 10.0), TOL),
+    (0.2, 30.0, 29.0, 0.0, _aimed_beyond(0.2, 30.0, 29.0), TOL),
+    (0.01, 10.0, 1e-3, 0.0, _aimed_beyond(0.01, 10.0, 1e-3), TOL),
+    (0.05, 20.0, 10.0, math.pi, _away(0.05, 20.0, 10.0), TOL),
+    (0.05, 20.0, 10.0, math.pi - 5e-7, _away(0.05, 20.0, 10.0), TOL),
+    (0.05, 20.0, np.inf, math.pi, _away(0.05, 20.0, np.inf), TOL),
+    (1.0, 15.0, 50.0, math.pi, _away(1.0, 15.0, 50.0), TOL),
+    # ray through the light: the glow of a point light is infinite there; finite result required
+    (0.05, 20.0, 100.0, 0.0, None, None),
+    (0.05, 20.0, np.inf, 0.0, None, None),
+    (0.05, 20.0, 100.0, 1e-7, None, None),
+    (0.05, 20.0, 20.0, 0.0, None, None),          # surface exactly at the light
+    # beta -> 0: linear in beta with the vacuum integral; beta = 0 gives 0
+    (1e-6, 10.0, 30.0, 0.7, 1e-6 * _vacuum(10.0, 30.0, 0.7), TOL),
+    (1e-6, 10.0, np.inf, 2.5, 1e-6 * _vacuum(10.0, np.inf, 2.5), TOL),
+    (1e-6, 100.0, 1e3, 0.01, 1e-6 * _vacuum(100.0, 1e3, 0.01), TOL),
+    (0.0, 10.0, 30.0, 0.7, 0.0, 0.0),
+    (0.0, 10.0, np.inf, 0.7, 0.0, 0.0),
+    # D_vp -> 0: L ~ beta/(4 pi) e^{-beta D_sv} D_vp / D_sv^2
+    (0.1, 10.0, 1e-9, 1.0, 0.1 / (4 * math.pi) * math.exp(-1.0) * 1e-9 / 100.0, TOL),
+    (0.1, 10.0, 0.0, 1.0, 0.0, 0.0),
+    # D_sv -> 0 (light at the eye): infinite glow at D_sv = 0, finite result required
+    (0.1, 0.0, 10.0, 1.0, None, None),
+    (0.1, 1e-9, np.inf, 1.0, None, None),
+    # T_vp -> inf
+    (0.1, 50.0, 1e7, 1.2, "inf", TOL),
+    (0.5, 10.0, 1e6, 0.3, "inf", TOL),
+]
+
+QUAD_EXTREMES = [
+    # checked against Eq. 5 quadrature directly
+    (0.1, 1e-3, 10.0, 1.0),            # D_sv -> 0
+    (0.1, 1e-3, np.inf, 2.0),
+    (0.1, 10.0, 1e-6, 0.5),             # D_vp -> 0
+    (0.1, 10.0, 1e-6, 3.0),
+    (0.05, 20.0, 20.0 * math.cos(0.3), 0.3),     # surface exactly at the closest point
+    (0.5, 30.0, 30.0 * math.cos(1.4), 1.4),
+    (1e-3, 20.0, 20.0 * math.cos(1e-3), 1e-3),
+    (0.3, 50.0, 1e6, 0.8),              # T_vp = 3e5
+    (1e-6, 1e4, 1e4, 0.2),              # T -> 0
+    (1.0, 20.0, 50.0, 1e-4),            # glow: T_sv = 20 near the light
+    (1.0, 0.01, 50.0, 1e-4),
+    (1e-3, 1e4, 5e4, 1e-4),
+    (1.0, 20.0, 50.0, math.pi - 1e-4),
+]
+
+
+@pytest.mark.parametrize("beta,d_sv,d_vp,gamma,expected,tol", EXTREMES)
+def test_extremes_closed_form(table, beta, d_sv, d_vp, gamma, expected, tol):
+    got = float(al.airlight(beta, d_sv, d_vp, gamma, table=table))
+    assert math.isfinite(got) and got >= 0.0
+    if expected is None:
+        return
+    if isinstance(expected, str):
+        expected = float(al.airlight(beta, d_sv, np.inf, gamma, table=table))
+        ref_bg = ref.eq5_quad(beta, d_sv, np.inf, gamma)[0]
+        assert abs(expected / ref_bg - 1) < TOL
+    if expected == 0.0:
+        assert got == 0.0
+    else:
+        assert abs(got / expected - 1) < tol, (got, expected)
+
+
+@pytest.mark.parametrize("beta,d_sv,d_vp,gamma", QUAD_EXTREMES)
+def test_extremes_quadrature(table, beta, d_sv, d_vp, gamma):
+    got = float(al.airlight(beta, d_sv, d_vp, gamma, table=table))
+    want = ref.eq5_quad(beta, d_sv, d_vp, gamma)[0]
+    assert math.isfinite(got)
+    assert abs(got / want - 1) < TOL, (got, want)
+
+
+def test_reference_extremes_against_closed_forms():
+    """The quadrature reference reproduces the closed-form limits used above."""
+    assert abs(ref.eq5_quad(0.05, 20.0, 10.0, 0.0)[0] / _aimed_beyond(0.05, 20.0, 10.0) - 1) < 1e-9
+    assert abs(ref.eq5_quad(0.05, 20.0, 10.0, math.pi)[0] / _away(0.05, 20.0, 10.0) - 1) < 1e-9
+    assert abs(ref.eq5_quad(0.05, 20.0, np.inf, math.pi)[0] / _away(0.05, 20.0, np.inf) - 1) < 1e-9
+    assert abs(ref.eq5_quad(1e-9, 10.0, 30.0, 0.7)[0] / (1e-9 * _vacuum(10.0, 30.0, 0.7)) - 1) < 1e-7
+
+
+def test_vectorised_no_nan_on_mixed_batch(table):
+    """One batch mixing every extreme: a NaN in any branch would poison neighbours only if it leaked."""
+    rows = [e[:4] for e in EXTREMES]
+    b, s, v, g = (np.array(x, float) for x in zip(*rows))
+    out = al.airlight(b, s, v, g, table=table)
+    assert np.all(np.isfinite(out)) and np.all(out >= 0.0)
+    one_by_one = np.array([float(al.airlight(*r, table=table)) for r in rows])
+    np.testing.assert_array_equal(out, one_by_one)
+
+
+# --- k_inf and the table ------------------------------------------------------------
+
+def test_k_inf_closed_form():
+    u = np.geomspace(1e-4, 300.0, 40)
+    a = np.concatenate([[0.0], np.geomspace(1e-5, 500.0, 40)])
+    uu, aa = np.meshgrid(u, a)
+    c = aa - 1j * uu
+    closed = (np.exp(c) * exp1(c)).imag / uu
+    got = al.k_inf(uu, aa)
+    assert np.max(_rel(got, closed)) < 1e-9
+
+
+def test_table_bake_deterministic_and_in_range():
+    t1 = al.bake_airlight_table()
+    t2 = al.bake_airlight_table()
+    spec = tables.AIRLIGHT
+    assert t1.dtype == np.float32 and t1.shape == (spec.height, spec.width)
+    assert np.array_equal(t1, t2)
+    assert np.all(np.isfinite(t1))
+    assert 0.80 <= t1.min() and t1.max() <= 1.07          # documented range of N (model.py)
+    np.testing.assert_allclose(t1[:, 0], 1.0, atol=1e-3)    # rho -> 0: N -> 1
+
+
+# --- float32 (the shaders) -----------------------------------------------------------
+
+class Float32Ops(NumpyOps):
+    """NumpyOps that keeps every intermediate in float32, as a GPU/SVM shader does."""
+
+    def __init__(self, tables_):
+        super().__init__(tables_, dtype=np.float32)
+
+    @staticmethod
+    def less(a, b):
+        return (np.asarray(a) < np.asarray(b)).astype(np.float32)
+
+    def table(self, spec, x, y, row0=0, rows=None):
+        return np.asarray(super().table(spec, x, y, row0, rows), np.float32)
+
+
+def airlight_float32(beta, d_sv, d_vp, gamma, table):
+    f = lambda x: np.asarray(x, np.float32)
+    m = Float32Ops({tables.AIRLIGHT.name: table})
+    beta, d_sv, d_vp, gamma = (np.asarray(v, float) for v in (beta, d_sv, d_vp, gamma))
+    along, h = d_sv * np.cos(gamma), d_sv * np.sin(gamma)
+    finite = np.isfinite(d_vp)
+    dvp = np.where(finite, d_vp, 0.0)
+    d_sp = np.hypot(dvp - along, h)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        seg = model.airlight_segment(m, f(beta), f(d_sv), f(along), f(h), f(dvp), f(d_sp))
+        bg = model.airlight_background(m, f(beta), f(d_sv), f(along), f(h))
+    assert seg.dtype == np.float32 and bg.dtype == np.float32
+    return np.where(finite, seg, bg)
+
+
+def test_float32_evaluation(cache, table, record_property):
+    p = _params(cache)
+    got = airlight_float32(*p, table)
+    err = _rel(got, cache["reference"])
+    i = int(np.argmax(err))
+    msg = (f"float32: max {err.max():.3g}, p99 {np.percentile(err, 99):.3g}, "
+           f"median {np.median(err):.3g}; worst {_describe(p, err, i)}")
+    print("\n" + msg)
+    record_property("float32_error", msg)
+    assert np.all(np.isfinite(got))
+    assert err[i] < TOL, msg
+
+
+def test_float32_from_vectors(cache, table, record_property):
+    """As the shader: (d_sv, along, h) from float32 world-space vectors by model.ray_light_geometry.
+
+    The reference is recomputed at the geometry the float32 vectors actually
+    describe, so only the evaluation error is measured (3 000 cached samples).
+    """
+    n = 3000
+    b, s, v, g = (x[:n] for x in _params(cache))
+    f = np.float32
+    rng = np.random.default_rng(11)
+    origin = rng.uniform(-100, 100, (n, 3)).astype(f)
+    dirn = rng.normal(size=(n, 3))
+    dirn /= np.linalg.norm(dirn, axis=1, keepdims=True)
+    perp = np.cross(dirn, rng.normal(size=(n, 3)))
+    perp /= np.linalg.norm(perp, axis=1, keepdims=True)
+    light = (origin + s[:, None] * (np.cos(g)[:, None] * dirn + np.sin(g)[:, None] * perp)).astype(f)
+    dirn = dirn.astype(f)
+    m = Float32Ops({tables.AIRLIGHT.name: table})
+    d_sv, along, h = model.ray_light_geometry(m, origin, dirn, light)
+    d_sp = m.length(light - (origin + dirn * v.astype(f)[:, None]))
+    with np.errstate(over="ignore", invalid="ignore"):
+        got = model.airlight_segment(m, b.astype(f), d_sv, along, h, v.astype(f), d_sp)
+    assert got.dtype == np.float32
+    o, d, li = origin.astype(float), dirn.astype(float), light.astype(float)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    to = li - o
+    d_sv64 = np.linalg.norm(to, axis=1)
+    g64 = np.arctan2(np.linalg.norm(np.cross(to, d), axis=1), np.sum(to * d, axis=1))
+    want = ref.reference_values(b, d_sv64, v, g64, processes=1)[0]
+    err = _rel(got, want)
+    i = int(np.argmax(err))
+    msg = (f"float32 from vectors: max {err.max():.3g}, p99 {np.percentile(err, 99):.3g}, "
+           f"median {np.median(err):.3g}; worst {_describe((b, d_sv64, v, g64), err, i)}")
+    print("\n" + msg)
+    record_property("float32_vector_error", msg)
+    assert np.all(np.isfinite(got))
+    assert err[i] < TOL, msg
