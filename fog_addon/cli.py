@@ -1,0 +1,228 @@
+"""Command line: ``python -m fog_addon render|reference|compare ...``.
+
+    render SCENE.blend --engine cycles|eevee [--method nodes|osl] [--preset NAME | --density BETA]
+           [--anisotropy G] [--samples N] [--resolution WxH] --out OUT.png|OUT.exr
+    reference SCENE.blend [--preset NAME | --density BETA] [--anisotropy G] [--samples N]
+           [--resolution WxH] --out OUT.exr
+    compare TEST.exr REF.exr [--diff OUT.png]
+
+Exit codes: 0 success, 1 render/compare failure, 2 bad input (argparse errors too).
+Arguments are validated before Blender is imported, so bad input fails fast.
+"""
+import argparse
+import math
+import os
+import sys
+
+EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
+
+
+class UsageError(Exception):
+    """Bad command-line input (exit code 2)."""
+
+
+def _presets():
+    try:
+        from .precompute.presets import PRESETS
+    except ImportError:
+        PRESETS = {k: 3.912 / v for k, v in
+                   {"haze": 8000.0, "mist": 2000.0, "fog": 500.0, "dense_fog": 150.0}.items()}
+    return dict(PRESETS)
+
+
+def _finite_float(name):
+    def conv(s):
+        try:
+            v = float(s)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be a number, got {s!r}")
+        if not math.isfinite(v):
+            raise argparse.ArgumentTypeError(f"{name} must be finite, got {s!r}")
+        return v
+    return conv
+
+
+def _positive_int(name):
+    def conv(s):
+        try:
+            v = int(s)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be a positive integer, got {s!r}")
+        if v <= 0:
+            raise argparse.ArgumentTypeError(f"{name} must be a positive integer, got {s!r}")
+        return v
+    return conv
+
+
+def _resolution(s):
+    parts = s.lower().split("x")
+    try:
+        w, h = (int(p) for p in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"resolution must look like 640x360, got {s!r}")
+    if w <= 0 or h <= 0 or w > 16384 or h > 16384:
+        raise argparse.ArgumentTypeError(f"resolution out of range: {s!r}")
+    return (w, h)
+
+
+def _add_fog_flags(p):
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--preset", help="named fog density: " + ", ".join(sorted(_presets())))
+    g.add_argument("--density", type=_finite_float("density"), metavar="BETA",
+                   help="extinction = scattering coefficient in 1/m (>= 0)")
+    p.add_argument("--anisotropy", type=_finite_float("anisotropy"), default=0.0, metavar="G",
+                   help="Henyey-Greenstein g; only 0 (isotropic) is supported")
+    p.add_argument("--samples", type=_positive_int("samples"), metavar="N", help="samples per pixel")
+    p.add_argument("--resolution", type=_resolution, metavar="WxH", help="output size in pixels")
+    p.add_argument("--out", required=True, help="output image (.exr = linear float, .png = display)")
+    p.add_argument("--no-cast-shadows", action="store_true",
+                   help="hide objects from shadow rays (tests: the analytic model has no cast shadows)")
+    p.add_argument("--no-interreflection", action="store_true",
+                   help="hide objects from diffuse/glossy bounce rays (tests: no surface-to-surface light)")
+
+
+def build_parser():
+    ap = argparse.ArgumentParser(prog="python -m fog_addon",
+                                 description="Analytic Fog: render, path-traced reference, compare")
+    sub = ap.add_subparsers(dest="command", required=True)
+
+    r = sub.add_parser("render", help="render a scene with the analytic fog")
+    r.add_argument("scene", metavar="SCENE.blend")
+    r.add_argument("--engine", required=True, choices=["cycles", "eevee"])
+    r.add_argument("--method", choices=["nodes", "osl"], default="nodes")
+    _add_fog_flags(r)
+    r.add_argument("--pixel-centre", action="store_true",
+                   help="sample pixel centres (Gaussian 0.01 px filter), as the reference does")
+
+    f = sub.add_parser("reference", help="render the Cycles path-traced single-scattering reference")
+    f.add_argument("scene", metavar="SCENE.blend")
+    _add_fog_flags(f)
+    f.add_argument("--seed", type=int, default=0, help="Cycles sampling seed (noise estimates)")
+
+    c = sub.add_parser("compare", help="compare a test image with a reference")
+    c.add_argument("test", metavar="TEST.exr")
+    c.add_argument("ref", metavar="REF.exr")
+    c.add_argument("--diff", metavar="OUT.png", help="write test | reference | error map")
+    c.add_argument("--max-rel", type=_finite_float("max-rel"), default=0.1,
+                   help="relative error shown as white in the diff image (default 0.1)")
+    return ap
+
+
+def _resolve_density(args, required):
+    if args.preset is not None:
+        presets = _presets()
+        if args.preset not in presets:
+            raise UsageError(f"unknown preset {args.preset!r}; choose one of: {', '.join(sorted(presets))}")
+        args.density = float(presets[args.preset])
+    if args.density is None:
+        if required:
+            raise UsageError("give the fog density with --density BETA (1/m) or --preset NAME")
+        return
+    if args.density < 0:
+        raise UsageError(f"density must be >= 0 (1/m), got {args.density}")
+    try:
+        from .precompute.presets import validate_density
+    except ImportError:
+        return
+    try:
+        args.density = validate_density(args.density)
+    except ValueError as exc:
+        raise UsageError(str(exc))
+
+
+def _validate_common(args, density_required):
+    _resolve_density(args, density_required)
+    if args.anisotropy != 0.0:
+        raise UsageError(f"anisotropy {args.anisotropy} is not supported: the analytic model "
+                         "(Sun et al. 2005) is isotropic; use --anisotropy 0")
+    if not os.path.isfile(args.scene):
+        raise UsageError(f"scene file not found: {args.scene}")
+    if not args.scene.lower().endswith(".blend"):
+        raise UsageError(f"scene must be a .blend file: {args.scene}")
+    ext = os.path.splitext(args.out)[1].lower()
+    if ext not in (".exr", ".png"):
+        raise UsageError(f"--out must end in .exr or .png, got {args.out!r}")
+    out_dir = os.path.dirname(os.path.abspath(args.out))
+    if not os.path.isdir(out_dir):
+        raise UsageError(f"output directory does not exist: {out_dir}")
+
+
+def _open(args):
+    from . import measure
+    scene = measure.open_scene(args.scene)
+    if args.resolution:
+        measure.set_resolution(scene, *args.resolution)
+    return scene
+
+
+def cmd_render(args):
+    _validate_common(args, density_required=False)
+    try:
+        from . import render as render_mod
+    except ImportError as exc:
+        print(f"error: the analytic renderer (fog_addon/render.py) is not available: {exc}", file=sys.stderr)
+        return EXIT_FAIL
+    if not hasattr(render_mod, "apply_and_render"):
+        print("error: fog_addon.render has no apply_and_render(scene, args)", file=sys.stderr)
+        return EXIT_FAIL
+    from . import measure, reference
+    scene = _open(args)
+    if args.no_cast_shadows:
+        reference.disable_cast_shadows(scene)
+    args.engine_id = {"cycles": "CYCLES", "eevee": "BLENDER_EEVEE"}[args.engine]
+    result = render_mod.apply_and_render(scene, args)
+    if not os.path.isfile(args.out):
+        print(f"error: render did not write {args.out}", file=sys.stderr)
+        return EXIT_FAIL
+    print(f"wrote {args.out}")
+    return EXIT_OK if result is None or result is True or result == 0 else int(bool(result))
+
+
+def cmd_reference(args):
+    _validate_common(args, density_required=True)
+    import time
+    from . import measure, reference
+    scene = _open(args)
+    reference.configure_reference(scene, args.density, anisotropy=args.anisotropy,
+                                  samples=args.samples or reference.DEFAULT_SAMPLES)
+    if args.no_cast_shadows:
+        reference.disable_cast_shadows(scene)
+    if args.no_interreflection:
+        reference.disable_interreflection(scene)
+    scene.cycles.seed = args.seed
+    t0 = time.perf_counter()
+    measure.render_to_file(scene, args.out)
+    r = scene.render
+    print(f"wrote {args.out} ({r.resolution_x}x{r.resolution_y}, {scene.cycles.samples} spp, "
+          f"density {args.density:g} 1/m, {time.perf_counter() - t0:.2f} s)")
+    return EXIT_OK
+
+
+def cmd_compare(args):
+    for p in (args.test, args.ref):
+        if not os.path.isfile(p):
+            raise UsageError(f"image not found: {p}")
+    if args.max_rel <= 0:
+        raise UsageError("--max-rel must be > 0")
+    from . import compare
+    try:
+        m = compare.compare_files(args.test, args.ref, diff=args.diff, max_rel=args.max_rel)
+    except ValueError as exc:
+        raise UsageError(str(exc))
+    except OSError as exc:
+        raise UsageError(f"cannot read image: {exc}")
+    print(compare.format_metrics(m))
+    if args.diff:
+        print(f"diff image {args.diff}")
+    return EXIT_OK
+
+
+def main(argv=None):
+    ap = build_parser()
+    args = ap.parse_args(argv)
+    handler = {"render": cmd_render, "reference": cmd_reference, "compare": cmd_compare}[args.command]
+    try:
+        return handler(args)
+    except UsageError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_USAGE

@@ -1,0 +1,200 @@
+"""Helpers for render tests: build demo scenes, cache path-traced references,
+render test images and compare them -- each Blender job in a fresh process.
+
+Typical use in a test::
+
+    from render_harness import ensure_reference, render_test, assert_close
+
+    def test_street_lamps_nodes(regen, tmp_path):
+        ref = ensure_reference("street_lamps", 0.08, regen=regen)
+        img = render_test("street_lamps", 0.08, tmp_path / "nodes.exr", engine="cycles", method="nodes")
+        assert_close(img, ref, name="street_lamps_0.08_cycles_nodes", rel_rmse=0.02)
+
+References live in ``tests/references/<scene>_<density>.exr``: 64x36, RGBA float32,
+Cycles path-traced single scattering with cast shadows and interreflection
+disabled (the analytic model has neither; see fog_addon/reference.py).  They are
+rendered only when missing or when pytest runs with ``--regen-references``
+(fixture ``regen``) or FOG_REGEN_REFERENCES=1.
+"""
+import os
+import pathlib
+import subprocess
+import sys
+import tempfile
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+REFERENCES = ROOT / "tests" / "references"
+FAILURES = ROOT / "tests" / "_failures"
+DEMO_SCENES = ROOT / "demo_scenes"
+
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from fog_addon import compare as _compare   # noqa: E402  (pure numpy)
+
+PYTHON = os.environ.get("FOG_PYTHON") or str(ROOT / ".venv" / "bin" / "python")
+if not os.path.exists(PYTHON):
+    PYTHON = sys.executable
+
+# Test resolution and the sample counts that keep reference noise < 0.5 %.
+TEST_RESOLUTION = (64, 36)
+REFERENCE_SAMPLES = {"street_lamps": 4096, "spheres": 8192}
+# Measured noise of ONE cached reference (from a second seed; difference / sqrt 2), as
+# (relative RMSE, p95 per-pixel relative error, max per-pixel relative error).
+# Airlight-only pixels are nearly exact (QMC); the noise sits on fog-lit surfaces
+# (ground, spheres) and, with three lamps, in the street's airlight (light selection).
+# Render times on 2 cores: 17-26 s (street_lamps, 4096 spp), 34-39 s (spheres, 8192 spp).
+REFERENCE_NOISE = {
+    ("street_lamps", 0.08): (0.0026, 0.011, 0.08),
+    ("street_lamps", 0.03): (0.0020, 0.006, 0.04),
+    ("spheres", 0.15): (0.0025, 0.006, 0.08),
+    ("spheres", 0.05): (0.0017, 0.004, 0.04),
+}
+
+# One density per scene at optical thickness <= 2 to the farthest lit object,
+# plus a thinner one.  (scene, density in 1/m)
+REFERENCE_CASES = [
+    ("street_lamps", 0.08),
+    ("street_lamps", 0.03),
+    ("spheres", 0.15),
+    ("spheres", 0.05),
+]
+
+
+def _env():
+    env = dict(os.environ)
+    env.setdefault("TMPDIR", tempfile.gettempdir())
+    env["PYTHONPATH"] = str(ROOT) + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    env.setdefault("BLENDER_USER_RESOURCES", str(pathlib.Path(env["TMPDIR"]) / "blender_user"))
+    return env
+
+
+def run(args, timeout=600, check=True):
+    """Run ``PYTHON *args`` in a fresh process from the repo root; return CompletedProcess."""
+    cmd = [PYTHON] + [str(a) for a in args]
+    proc = subprocess.run(cmd, cwd=str(ROOT), env=_env(), capture_output=True, text=True, timeout=timeout)
+    if check and proc.returncode != 0:
+        raise RuntimeError(f"command failed (exit {proc.returncode}): {' '.join(cmd)}\n"
+                           f"--- stdout ---\n{proc.stdout[-4000:]}\n--- stderr ---\n{proc.stderr[-4000:]}")
+    return proc
+
+
+def run_bpy_code(code, *args, timeout=600, check=True):
+    """Run a Python snippet (which may import bpy) in a fresh process; ``sys.argv[1:]`` = args."""
+    return run(["-c", code] + [str(a) for a in args], timeout=timeout, check=check)
+
+
+def density_tag(density):
+    """File-name form of a density: 0.08 -> '0.08', 0.1 -> '0.1'."""
+    return f"{float(density):g}"
+
+
+def reference_path(scene, density):
+    return REFERENCES / f"{scene}_{density_tag(density)}.exr"
+
+
+def build_scene(scene, out_blend):
+    """Build demo scene ``scene`` (demo_scenes/<scene>.py) into ``out_blend``; return its path."""
+    script = DEMO_SCENES / f"{scene}.py"
+    if not script.is_file():
+        raise FileNotFoundError(f"no demo scene script {script}")
+    out_blend = pathlib.Path(out_blend)
+    out_blend.parent.mkdir(parents=True, exist_ok=True)
+    run([script, out_blend])
+    return out_blend
+
+
+def _scratch():
+    d = pathlib.Path(_env()["TMPDIR"]) / "fog_render_harness"
+    d.mkdir(parents=True, exist_ok=True)
+    return pathlib.Path(tempfile.mkdtemp(dir=d))
+
+
+def scene_blend(scene, workdir=None):
+    """A freshly built .blend of demo scene ``scene`` in ``workdir`` (a temp dir by default)."""
+    workdir = pathlib.Path(workdir) if workdir else _scratch()
+    blend = workdir / f"{scene}.blend"
+    if not blend.exists():
+        build_scene(scene, blend)
+    return blend
+
+
+def render_reference(scene, density, out, samples=None, resolution=TEST_RESOLUTION,
+                     cast_shadows=False, interreflection=False, blend=None):
+    """Path-trace the reference for ``scene`` at ``density`` into ``out`` (.exr) via the CLI."""
+    blend = blend or scene_blend(scene)
+    samples = samples or REFERENCE_SAMPLES.get(scene, 1024)
+    args = ["-m", "fog_addon", "reference", blend, "--density", repr(float(density)),
+            "--samples", int(samples), "--resolution", f"{resolution[0]}x{resolution[1]}", "--out", out]
+    if not cast_shadows:
+        args.append("--no-cast-shadows")
+    if not interreflection:
+        args.append("--no-interreflection")
+    run(args)
+    return pathlib.Path(out)
+
+
+_REGENERATED = set()   # references re-rendered in this process (regen renders each once)
+
+
+def ensure_reference(scene, density, regen=False, **kw):
+    """Path of the cached reference, rendering it if missing, or if ``regen`` and it
+    has not been re-rendered yet in this test session."""
+    path = reference_path(scene, density)
+    if not path.is_file() or (regen and path not in _REGENERATED):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(path.stem + ".tmp.exr")
+        render_reference(scene, density, tmp, **kw)
+        os.replace(tmp, path)
+        _REGENERATED.add(path)
+    return path
+
+
+def render_test(scene, density, out, engine="cycles", method=None, samples=None,
+                resolution=TEST_RESOLUTION, extra=(), blend=None, cast_shadows=False,
+                interreflection=False):
+    """Render demo ``scene`` with the analytic fog via ``python -m fog_addon render``
+    (pixel-centre sampling, cast shadows and interreflection off like the references)."""
+    blend = blend or scene_blend(scene)
+    args = ["-m", "fog_addon", "render", blend, "--engine", engine, "--density", repr(float(density)),
+            "--resolution", f"{resolution[0]}x{resolution[1]}", "--pixel-centre", "--out", out]
+    if not interreflection:
+        args.append("--no-interreflection")
+    if method:
+        args += ["--method", method]
+    if samples:
+        args += ["--samples", int(samples)]
+    if not cast_shadows:
+        args.append("--no-cast-shadows")
+    args += list(extra)
+    run(args)
+    return pathlib.Path(out)
+
+
+def compare_files(test, ref):
+    """Metrics dict from fog_addon.compare for two image files."""
+    return _compare.compare_files(test, ref)
+
+
+def assert_close(test, ref, name, rel_rmse=0.02, p95=None, mean_ratio_tol=None, mask=None):
+    """Compare ``test`` to ``ref`` (paths); on failure write tests/_failures/<name>_diff.png
+    (test | reference | relative-error map) and raise AssertionError with the metrics."""
+    from fog_addon import imageio
+    a = imageio.read_rgb(test)
+    b = imageio.read_rgb(ref)
+    m = _compare.metrics(a, b, mask=mask)
+    problems = []
+    if not m["rel_rmse"] <= rel_rmse:
+        problems.append(f"rel_rmse {m['rel_rmse']:.4g} > {rel_rmse}")
+    if p95 is not None and not m["p95_rel"] <= p95:
+        problems.append(f"p95_rel {m['p95_rel']:.4g} > {p95}")
+    if mean_ratio_tol is not None and not abs(m["mean_ratio"] - 1.0) <= mean_ratio_tol:
+        problems.append(f"mean_ratio {m['mean_ratio']:.5f} off by > {mean_ratio_tol}")
+    if problems:
+        FAILURES.mkdir(parents=True, exist_ok=True)
+        diff = FAILURES / f"{name}_diff.png"
+        _compare.write_diff(a, b, diff)
+        imageio.write_exr(FAILURES / f"{name}_test.exr", a)
+        raise AssertionError(f"{name}: " + "; ".join(problems) + f"\n{_compare.format_metrics(m)}\n"
+                             f"diff image: {diff}")
+    return m
