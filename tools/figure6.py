@@ -42,7 +42,7 @@ sys.path.insert(0, str(ROOT / "tools"))
 
 import airlight_reference as ref  # noqa: E402
 from fog_addon.precompute import airlight as al  # noqa: E402
-from fog_addon.precompute import model, tables  # noqa: E402
+from fog_addon.precompute import tables  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "out"
 PNG = ROOT / "docs" / "figures" / "figure6.png"
