@@ -5,7 +5,7 @@ import numpy as np
 from ..precompute import tables
 
 VERSION_KEY = "analytic_fog_table_version"
-TABLE_VERSION = 1
+TABLE_VERSION = 2
 
 
 def _bakers():

@@ -29,12 +29,25 @@ class TableSpec:
 # Normalised airlight kernel N(rho, xi); see airlight.py.
 AIRLIGHT = TableSpec("AnalyticFog Airlight N", 128, 64)
 
-# Surface-scattering factor M_n(T, theta) for the Phong exponents below,
-# stacked along Y: level k occupies rows [k * SURFACE_THETA, (k+1) * SURFACE_THETA).
-SURFACE_T = 64
-SURFACE_THETA = 64
-PHONG_EXPONENTS = (1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0, 256.0, 512.0, 1024.0)
+# Surface-scattering factor M_n(T, theta) of surface.py (Sun et al. 2005 Eq. 15-18),
+# stored as ln M_n for the Phong exponents below, stacked along Y: level k
+# (n = 2^(k / PHONG_LEVELS_PER_OCTAVE)) occupies rows [k * SURFACE_THETA, (k+1) * SURFACE_THETA).
+# Columns: optical light-surface distance T (surface_x); rows: lobe angle theta
+# (surface_y, graded on the lobe width of each level).  A quarter octave between
+# levels keeps the interpolation of ln M in log2 n within 0.2 % (an octave: 3 %).
+SURFACE_T = 96
+SURFACE_THETA = 65            # odd: theta = pi/2 (the clamped-cosine kink of n = 1) is a grid row
+PHONG_LEVELS_PER_OCTAVE = 4
+PHONG_EXPONENTS = tuple(2.0 ** (k / PHONG_LEVELS_PER_OCTAVE) for k in range(41))   # 1 ... 1024
 SURFACE = TableSpec("AnalyticFog Surface M", SURFACE_T, SURFACE_THETA * len(PHONG_EXPONENTS))
+
+SURFACE_T_MAX = 60.0          # X = 1; beyond it the lookup clamps (exp(-T) < 1e-26 there)
+SURFACE_T_SCALE = 1.0         # T0 of surface_x
+SURFACE_T_POWER = 0.15        # p of surface_x
+_SURFACE_X_NORM = 1.0 / (1.0 - (1.0 + SURFACE_T_MAX / SURFACE_T_SCALE) ** -SURFACE_T_POWER)
+SURFACE_UNIFORM_LEVELS = 4    # levels k < 4 (n < 2, the pi/2 kink matters) use theta / pi
+SURFACE_THETA_WIDTH = 0.7     # theta0 = 0.7 / sqrt(n) of the graded levels
+SURFACE_THETA_POWER = 0.1     # q of the graded levels
 
 
 def airlight_x(m, rho):
@@ -52,3 +65,51 @@ def airlight_rho(x):
 def airlight_y(m, xi):
     """Grid Y of the airlight table for the angle xi in [0, pi/2]."""
     return xi * (1.0 / HALF_PI)
+
+
+def surface_x(m, t):
+    """Grid X of the surface table for the optical distance T = beta D_sp >= 0.
+
+    X = sqrt((1 - (1 + T/T0)^-p) / (1 - (1 + T_max/T0)^-p)): ~sqrt(T) near 0
+    (M_n - M_n(0) ~ T ln T there), ~log-spaced for T of order 1-60.
+    """
+    return m.sqrt((1.0 - m.power(t * (1.0 / SURFACE_T_SCALE) + 1.0, -SURFACE_T_POWER)) * _SURFACE_X_NORM)
+
+
+def surface_t(x):
+    """Inverse of :func:`surface_x` (numpy floats): T at grid X in [0, 1]."""
+    import numpy as np
+    s = np.clip(np.asarray(x, float), 0.0, 1.0) ** 2 / _SURFACE_X_NORM
+    return SURFACE_T_SCALE * ((1.0 - s) ** (-1.0 / SURFACE_T_POWER) - 1.0)
+
+
+def surface_y(m, theta, level):
+    """Grid Y within the band of level ``level`` for the lobe angle theta in [0, pi].
+
+    ``level`` is a Python int or an ``m`` value holding an integer.  Levels
+    k < SURFACE_UNIFORM_LEVELS: Y = theta / pi; others Y = ((theta + t0)^q - t0^q) /
+    ((pi + t0)^q - t0^q) with t0 = 0.7 / sqrt(n_k) = 0.7 * 2^(-k / 8), q = 0.1: rows
+    graded on the lobe width near theta = 0, ~log-spaced beyond.
+    """
+    if isinstance(level, int):
+        if level < SURFACE_UNIFORM_LEVELS:
+            return theta * (1.0 / math.pi)
+        t0 = SURFACE_THETA_WIDTH * 2.0 ** (-0.5 * level / PHONG_LEVELS_PER_OCTAVE)
+        q = SURFACE_THETA_POWER
+        return (m.power(theta + t0, q) - t0 ** q) * (1.0 / ((math.pi + t0) ** q - t0 ** q))
+    t0 = SURFACE_THETA_WIDTH * m.power(2.0, level * (-0.5 / PHONG_LEVELS_PER_OCTAVE))
+    q = SURFACE_THETA_POWER
+    t0q = m.power(t0, q)
+    graded = (m.power(theta + t0, q) - t0q) / (m.power(t0 + math.pi, q) - t0q)   # denominator >= 0.2
+    return m.select(m.less(level, SURFACE_UNIFORM_LEVELS - 0.5), theta * (1.0 / math.pi), graded)
+
+
+def surface_theta(y, level):
+    """Inverse of :func:`surface_y` (numpy floats, Python int level): theta at grid Y in [0, 1]."""
+    import numpy as np
+    y = np.clip(np.asarray(y, float), 0.0, 1.0)
+    if level < SURFACE_UNIFORM_LEVELS:
+        return y * math.pi
+    t0 = SURFACE_THETA_WIDTH * 2.0 ** (-0.5 * level / PHONG_LEVELS_PER_OCTAVE)
+    q = SURFACE_THETA_POWER
+    return np.minimum((y * ((math.pi + t0) ** q - t0 ** q) + t0 ** q) ** (1.0 / q) - t0, math.pi)
