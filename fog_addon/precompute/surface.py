@@ -299,6 +299,9 @@ def principled_to_phong(m, base_color, metallic, roughness, specular_ior_level, 
       metal F0 = base colour; F0 = mix(F0_dielectric, base_color, metallic).
     * Schlick's Fresnel averaged over the cosine-weighted hemisphere:
       F_avg = F0 + (1 - F0) / 21  ->  rho_s = F_avg (the Phong lobe is normalised to 1).
+      Blender lowers the IOR itself to scale F0 (IOR Level), so a dielectric's
+      F_avg must vanish with F0: below F0 = 0.04 it is F0 (1 + (1 - F0) / 0.84),
+      which equals Schlick's average at 0.04 and is 0 at F0 = 0.
     * rho_d = base_color (1 - metallic) (1 - F_avg_dielectric): the diffuse base
       receives what the dielectric specular layer does not reflect.
     * level from roughness r: GGX alpha = r^2 ~ Blinn-Phong exponent 2/alpha^2 - 2
@@ -308,7 +311,8 @@ def principled_to_phong(m, base_color, metallic, roughness, specular_ior_level, 
     Ignored: transmission, coat, sheen, subsurface, diffuse roughness, anisotropy.
     """
     f0_d = m.minimum(specular_ior_level * (2.0 * ((ior - 1.0) / (ior + 1.0)) ** 2), 1.0)
-    avg_d = f0_d * (20.0 / 21.0) + 1.0 / 21.0
+    # Schlick's average, but going to 0 with F0 below 0.04: IOR Level 0 means no specular layer at all.
+    avg_d = m.minimum(f0_d * (20.0 / 21.0) + 1.0 / 21.0, f0_d * (1.0 + (1.0 - f0_d) * (1.0 / 0.84)))
     rho_d = m.scale(base_color, (1.0 - metallic) * (1.0 - avg_d))
     # rho_s = F_avg(mix(F0_d, base, metallic)) = (1 - metallic) avg_d + metallic (base 20/21 + 1/21)
     rho_s = m.scale(base_color, metallic * (20.0 / 21.0)) + _grey(m, (1.0 - metallic) * avg_d + metallic * (1.0 / 21.0))

@@ -1,0 +1,76 @@
+"""Tiny Cycles render of airlight over a black plane and the background; prints per-pixel
+ratios to the numpy model (fog_addon.precompute.airlight.airlight) as JSON.
+
+    python tests/scenes/airlight_probe.py OUT_DIR [ENGINE]
+"""
+import json
+import math
+import pathlib
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+from fog_addon import imageio, measure  # noqa: E402
+from fog_addon.ops import apply  # noqa: E402
+from fog_addon.precompute import airlight  # noqa: E402
+
+BETA, POWER, W, H = 0.2, 1000.0, 64, 48
+
+
+def main(out_dir, engine="CYCLES"):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    s = bpy.context.scene
+    cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
+    s.collection.objects.link(cam)
+    s.camera = cam
+    cam.location = (0, -6, 1)
+    cam.rotation_euler = (math.radians(90), 0, 0)
+    cam.data.clip_start = 0.001
+    cam.data.lens = 35.0
+    light = bpy.data.objects.new("L", bpy.data.lights.new("L", "POINT"))
+    light.data.energy = POWER
+    light.data.shadow_soft_size = 0
+    s.collection.objects.link(light)
+    light.location = (0.5, 0, 1.2)
+    bpy.ops.mesh.primitive_plane_add(size=20, location=(0, 0, 0))
+    mat = bpy.data.materials.new("black")
+    bpy.context.object.data.materials.append(mat)
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (0, 0, 0, 1)
+    bsdf.inputs["Specular IOR Level"].default_value = 0
+    s.world = bpy.data.worlds.new("W")
+    s.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0, 0, 0, 1)
+    apply.apply_fog(s, BETA)
+    s.render.engine = engine
+    measure.set_resolution(s, W, H)
+    measure.set_samples(s, 1)
+    measure.set_pixel_centre_filter(s)
+    s.cycles.max_bounces = 0
+    s.eevee.light_threshold = 1e-4
+    out = measure.render_to_file(s, str(pathlib.Path(out_dir) / "probe.exr"))
+    got = imageio.read_rgb(out)[..., 0]
+    # the camera ray of each pixel centre
+    ys, xs = np.mgrid[0:H, 0:W]
+    sw, f = cam.data.sensor_width, cam.data.lens
+    d = np.stack([((xs + 0.5) / W - 0.5) * sw, (0.5 - (ys + 0.5) / H) * sw * H / W, -np.full(xs.shape, f)], -1)
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    d = d @ np.array(cam.matrix_world.to_3x3()).T
+    c, lp = np.array(cam.location), np.array(light.location)
+    to = lp - c
+    gamma = np.arccos(np.clip(d @ to / np.linalg.norm(to), -1, 1))
+    t = np.where(d[..., 2] < 0, -c[2] / np.minimum(d[..., 2], -1e-12), np.inf)
+    hit = c[:2] + d[..., :2] * np.where(np.isfinite(t), t, 0)[..., None]
+    d_vp = np.where(np.all(np.abs(hit) <= 10.0, axis=-1), t, np.inf)   # the plane is 20 m wide
+    want = POWER / (4 * math.pi) * airlight.airlight(BETA, np.linalg.norm(to), d_vp, gamma)
+    r = got / want
+    bg = np.isinf(d_vp)
+    print(json.dumps({"median": float(np.median(r)), "max_dev": float(np.max(np.abs(r - 1))),
+                      "background_pixels": int(bg.sum()), "surface_pixels": int((~bg).sum())}))
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:])
