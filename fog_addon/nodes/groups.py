@@ -36,11 +36,12 @@ def _new_group(name, inputs, outputs):
         ng = bpy.data.node_groups.new(name, "ShaderNodeTree")
     ng.animation_data_clear()
     ng.nodes.clear()
-    ng.interface.clear()
-    for n, t in inputs:
-        ng.interface.new_socket(n, in_out="INPUT", socket_type=t)
-    for n, t in outputs:
-        ng.interface.new_socket(n, in_out="OUTPUT", socket_type=t)
+    want = [(n, t, "INPUT") for n, t in inputs] + [(n, t, "OUTPUT") for n, t in outputs]
+    have = [(i.name, i.socket_type, i.in_out) for i in ng.interface.items_tree if i.item_type == "SOCKET"]
+    if have != want:   # recreating the interface would reset every instance's input values
+        ng.interface.clear()
+        for n, t, io in want:
+            ng.interface.new_socket(n, in_out=io, socket_type=t)
     ng[FOG_PROP] = True
     gin = ng.nodes.new("NodeGroupInput")
     gout = ng.nodes.new("NodeGroupOutput")
