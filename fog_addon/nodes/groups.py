@@ -169,6 +169,25 @@ def _driven_vector(ng, name, x, y):
     return n
 
 
+def _light_instance(ng, k, light, group_name, inputs):
+    """Instance ``group_name`` for the ``k``-th light, its Light and Intensity inputs driven by ``light``.
+
+    ``inputs``: (output socket, input name) pairs for the other inputs.
+    Returns (group node, intensity node).
+    """
+    loc = _driven_vector(ng, f"Light {k} Location", -600, -300 * k)
+    _drive_location(loc, light)
+    inten = _driven_vector(ng, f"Light {k} Intensity", -600, -300 * k - 120)
+    _drive_intensity(inten, light.data)
+    node = ng.nodes.new("ShaderNodeGroup")
+    node.node_tree = bpy.data.node_groups[group_name]
+    node.name = node.label = f"Light {k}: {light.name}"
+    node.location = (-300, -300 * k)
+    for a, b in ((loc.outputs[0], "Light"), (inten.outputs[0], "Intensity"), *inputs):
+        ng.links.new(a, node.inputs[b])
+    return node, inten
+
+
 def build_surface(lights):
     """Scene group for materials: Sun et al. 2005 Eq. 19, L = e^{-T_vp} L_p + L_a, summed over ``lights``.
 
@@ -194,20 +213,11 @@ def build_surface(lights):
     beta = m.wrap(params.outputs["Beta"])
     air_sum = scat_sum = num = den = None
     for k, light in enumerate(lights):
-        loc = _driven_vector(ng, f"Light {k} Location", -600, -300 * k)
-        _drive_location(loc, light)
-        inten = _driven_vector(ng, f"Light {k} Intensity", -600, -300 * k - 120)
-        _drive_intensity(inten, light.data)
-        node = ng.nodes.new("ShaderNodeGroup")
-        node.node_tree = bpy.data.node_groups[LIGHT]
-        node.name = node.label = f"Light {k}: {light.name}"
-        node.location = (-300, -300 * k)
-        ins = node.inputs
-        for a, b in ((params.outputs["Beta"], "Beta"), (loc.outputs[0], "Light"), (inten.outputs[0], "Intensity"),
-                     (geo.outputs["Position"], "Position"), (geo.outputs["Incoming"], "Incoming"),
-                     (cam.outputs["View Distance"], "View Distance"), (geo.outputs["Normal"], "Normal"),
-                     (diffuse.sock, "Diffuse"), (specular.sock, "Specular"), (level.sock, "Glossy Level")):
-            ng.links.new(a, ins[b])
+        node, inten = _light_instance(ng, k, light, LIGHT, (
+            (params.outputs["Beta"], "Beta"), (geo.outputs["Position"], "Position"),
+            (geo.outputs["Incoming"], "Incoming"), (cam.outputs["View Distance"], "View Distance"),
+            (geo.outputs["Normal"], "Normal"), (diffuse.sock, "Diffuse"), (specular.sock, "Specular"),
+            (level.sock, "Glossy Level")))
         out = {s.name: m.wrap(s, vector=s.type != "VALUE") for s in node.outputs}
         w = out["Weight"] * m.dot(m.wrap(inten.outputs[0]), m.const(1.0 / 3.0) * m.combine(1.0, 1.0, 1.0))
         air_sum = out["Airlight"] if air_sum is None else air_sum + out["Airlight"]
@@ -252,17 +262,8 @@ def build_world(lights, camera):
     direction = m.vmath("NORMALIZE", m.wrap(geo.outputs["Position"]))
     total = None
     for k, light in enumerate(lights):
-        loc = _driven_vector(ng, f"Light {k} Location", -600, -300 * k)
-        _drive_location(loc, light)
-        inten = _driven_vector(ng, f"Light {k} Intensity", -600, -300 * k - 120)
-        _drive_intensity(inten, light.data)
-        node = ng.nodes.new("ShaderNodeGroup")
-        node.node_tree = bpy.data.node_groups[BACKGROUND_LIGHT]
-        node.name = node.label = f"Light {k}: {light.name}"
-        node.location = (-300, -300 * k)
-        for a, b in ((params.outputs["Beta"], "Beta"), (loc.outputs[0], "Light"), (inten.outputs[0], "Intensity"),
-                     (cam.outputs[0], "Camera"), (direction.sock, "Direction")):
-            ng.links.new(a, node.inputs[b])
+        node, _ = _light_instance(ng, k, light, BACKGROUND_LIGHT, (
+            (params.outputs["Beta"], "Beta"), (cam.outputs[0], "Camera"), (direction.sock, "Direction")))
         a = m.wrap(node.outputs["Airlight"], vector=True)
         total = a if total is None else total + a
     is_cam = m.wrap(path.outputs["Is Camera Ray"])
