@@ -96,6 +96,21 @@ def _as_hwc(arr):
     return np.ascontiguousarray(a)
 
 
+def _write(path, spec, data):
+    """Write ``data`` (H, W, C) to ``path`` with the OIIO ImageSpec ``spec``."""
+    o = oiio()
+    out = o.ImageOutput.create(os.fspath(path))
+    if out is None:
+        raise IOError(f"cannot create {path}: {o.geterror()}")
+    try:
+        if not out.open(os.fspath(path), spec):
+            raise IOError(f"cannot open {path} for writing: {out.geterror()}")
+        if not out.write_image(np.ascontiguousarray(data)):
+            raise IOError(f"cannot write {path}: {out.geterror()}")
+    finally:
+        out.close()
+
+
 def write_exr(path, arr, half=False, compression="zip"):
     """Write a float32 (or half) EXR; ``arr`` is ``(H, W[, C])``, top row first."""
     o = oiio()
@@ -107,16 +122,7 @@ def write_exr(path, arr, half=False, compression="zip"):
     names = {1: ["Y"], 2: ["Y", "A"], 3: ["R", "G", "B"], 4: ["R", "G", "B", "A"]}.get(c)
     if names:
         spec.channelnames = tuple(names)
-    out = o.ImageOutput.create(os.fspath(path))
-    if out is None:
-        raise IOError(f"cannot create {path}: {o.geterror()}")
-    try:
-        if not out.open(os.fspath(path), spec):
-            raise IOError(f"cannot open {path} for writing: {out.geterror()}")
-        if not out.write_image(a):
-            raise IOError(f"cannot write {path}: {out.geterror()}")
-    finally:
-        out.close()
+    _write(path, spec, a)
 
 
 def write_png(path, arr, bits=8):
@@ -131,16 +137,7 @@ def write_png(path, arr, bits=8):
     else:
         raise ValueError("bits must be 8 or 16")
     spec = o.ImageSpec(w, h, c, fmt)
-    out = o.ImageOutput.create(os.fspath(path))
-    if out is None:
-        raise IOError(f"cannot create {path}: {o.geterror()}")
-    try:
-        if not out.open(os.fspath(path), spec):
-            raise IOError(f"cannot open {path} for writing: {out.geterror()}")
-        if not out.write_image(np.ascontiguousarray(data)):
-            raise IOError(f"cannot write {path}: {out.geterror()}")
-    finally:
-        out.close()
+    _write(path, spec, data)
 
 
 def write(path, arr):
