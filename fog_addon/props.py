@@ -27,7 +27,8 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
         description="Henyey-Greenstein g of the fog's phase function (only isotropic fog, 0, so far)")
     method: bpy.props.EnumProperty(
         name="Method", default="NODES",
-        items=[("NODES", "Node Groups", "Shader node groups: Cycles and EEVEE")],
+        items=[("NODES", "Node Groups", "Shader node groups with packed tables: Cycles and EEVEE"),
+               ("OSL", "OSL", "Airlight by quadrature in an OSL script: Cycles only (switches Cycles' OSL on)")],
         description="How the fog is evaluated")
 
 

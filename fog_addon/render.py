@@ -15,17 +15,17 @@ def apply_and_render(scene, args):
     Keeps the scene's camera, lights, materials and colour management.  The
     density defaults to the scene's own setting, else the "fog" preset.
     """
-    if args.method != "nodes":
-        raise SystemExit(f"error: method {args.method!r} is not available yet; use --method nodes")
+    engine = args.engine_id
+    if args.method == "osl" and engine != "CYCLES":
+        raise SystemExit("error: --method osl needs --engine cycles (EEVEE cannot run OSL); use --method nodes")
     density = args.density
     if density is None:
         settings = getattr(scene, "analytic_fog", None)
         density = settings.density if settings is not None else presets.PRESETS["fog"]
     t0 = time.perf_counter()
-    skipped = apply.apply_fog(scene, density, anisotropy=args.anisotropy)
+    skipped = apply.apply_fog(scene, density, anisotropy=args.anisotropy, method=args.method)
     for name, why in skipped:
         print(f"note: {name}: {why}")
-    engine = args.engine_id
     scene.render.engine = engine
     measure.set_samples(scene, args.samples or DEFAULT_SAMPLES[engine])
     measure.set_cycles_cpu(scene)

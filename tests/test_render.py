@@ -21,9 +21,10 @@ THICK = [("street_lamps", 0.08), ("spheres", 0.15)]
 THIN = [("street_lamps", 0.03), ("spheres", 0.05)]
 
 
-def _case(tmp_path, regen, scene, density, engine):
+def _case(tmp_path, regen, scene, density, engine, method="nodes"):
     ref = h.ensure_reference(scene, density, regen)
-    out = h.render_test(scene, density, str(tmp_path / f"{scene}_{engine}.exr"), engine=engine)
+    out = h.render_test(scene, density, str(tmp_path / f"{scene}_{engine}_{method}.exr"), engine=engine,
+                        method=method)
     return out, ref
 
 
@@ -37,6 +38,12 @@ def test_cycles_nodes(tmp_path, regen, scene, density):
 def test_cycles_nodes_thin(tmp_path, regen, scene, density):
     out, ref = _case(tmp_path, regen, scene, density, "cycles")
     h.assert_close(out, ref, f"{scene}_{density}_cycles", rel_rmse=0.04, mean_ratio_tol=0.01)
+
+
+@pytest.mark.parametrize("scene,density", THICK)
+def test_cycles_osl(tmp_path, regen, scene, density):
+    out, ref = _case(tmp_path, regen, scene, density, "cycles", "osl")
+    h.assert_close(out, ref, f"{scene}_{density}_cycles_osl", rel_rmse=0.03, mean_ratio_tol=0.01)
 
 
 @pytest.mark.parametrize("scene,density", THICK)

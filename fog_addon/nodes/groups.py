@@ -8,6 +8,10 @@ One shared copy of each group per .blend:
   attenuation), instanced once per light.
 * ``AnalyticFog Background Light``: one point light's airlight on a ray that
   meets no surface (the World).
+
+  These two hold the fog's method: with "nodes" the airlight comes from the N
+  table (Cycles and EEVEE), with "osl" from the Script node of ``osl.py``
+  (quadrature, Cycles only).  Switching rebuilds just these two.
 * ``AnalyticFog Surface`` / ``AnalyticFog World``: the sum over the scene's fog
   lights, their positions and intensities fed by drivers (no Python expression,
   so they evaluate with auto-run off and without the add-on).  Rebuilding these
@@ -18,7 +22,10 @@ import math
 import bpy
 
 from ..precompute import model, surface
+from . import osl
 from .sockets import NodeOps
+
+METHODS = ("nodes", "osl")
 
 PARAMS = "AnalyticFog Params"
 LIGHT = "AnalyticFog Light"
@@ -37,8 +44,9 @@ def _new_group(name, inputs, outputs):
     ng.animation_data_clear()
     ng.nodes.clear()
     want = [(n, t, "INPUT") for n, t in inputs] + [(n, t, "OUTPUT") for n, t in outputs]
-    have = [(i.name, i.socket_type, i.in_out) for i in ng.interface.items_tree if i.item_type == "SOCKET"]
-    if have != want:   # recreating the interface would reset every instance's input values
+    have = sorted(((i.name, i.socket_type, i.in_out) for i in ng.interface.items_tree if i.item_type == "SOCKET"),
+                  key=lambda s: s[2])   # Blender lists outputs first; a stable sort puts them after the inputs
+    if have != want:   # recreating the interface would unlink every instance and reset its input values
         ng.interface.clear()
         for n, t, io in want:
             ng.interface.new_socket(n, in_out=io, socket_type=t)
@@ -81,7 +89,17 @@ def _colour_times(m, colour_sock, scalar):
     return m.vmath("SCALE", m.wrap(colour_sock, vector=True), scalar)
 
 
-def build_light(images):
+def _airlight_osl(m, beta, light, camera, direction, distance=None):
+    """The airlight Script node (``osl.airlight_source``) fed with these Vals; distance None: the background."""
+    node = osl.script_node(m.tree)
+    for name, v in (("Beta", beta), ("Light", light), ("Camera", camera), ("Direction", direction),
+                    ("Distance", distance)):
+        if v is not None:
+            m.feed(node.inputs[name], m.wrap(v))
+    return m.wrap(node.outputs["Airlight"])
+
+
+def build_light(images, method="nodes"):
     """Per-light surface group: Sun et al. 2005 Eq. 11 (airlight), 14 (direct), 17-18 (scattered)."""
     ng, gin, gout = _new_group(LIGHT, [
         ("Beta", F), ("Light", V), ("Intensity", C), ("Position", V), ("Incoming", V),
@@ -92,10 +110,13 @@ def build_light(images):
     beta, light, pos, incoming = g["Beta"], g["Light"], g["Position"], g["Incoming"]
     d_vp = g["View Distance"]
     camera = pos + incoming * d_vp
-    d_sv, along, h = model.ray_light_geometry(m, camera, -1.0 * incoming, light)
     to_light = light - pos
     d_sp = m.length(to_light)
-    air = model.airlight_segment(m, beta, d_sv, along, h, d_vp, d_sp)
+    if method == "osl":
+        air = _airlight_osl(m, beta, light, camera, -1.0 * incoming, d_vp)
+    else:
+        d_sv, along, h = model.ray_light_geometry(m, camera, -1.0 * incoming, light)
+        air = model.airlight_segment(m, beta, d_sv, along, h, d_vp, d_sp)
     att = model.transmittance(m, beta, d_sp)
     cos_n = m.dot(to_light, g["Normal"]) / m.maximum(d_sp, model.MIN_DISTANCE)
     weight = m.maximum(cos_n, 0.0) / m.maximum(d_sp * d_sp, model.MIN_DISTANCE ** 2)
@@ -115,15 +136,18 @@ def build_light(images):
     return ng
 
 
-def build_background_light(images):
+def build_background_light(images, method="nodes"):
     """Per-light world group: Sun et al. 2005 Eq. 12 (airlight of a ray to infinity)."""
     ng, gin, gout = _new_group(BACKGROUND_LIGHT, [
         ("Beta", F), ("Light", V), ("Intensity", C), ("Camera", V), ("Direction", V),
     ], [("Airlight", C)])
     m = NodeOps(ng, images)
     g = {s.name: m.wrap(s) for s in gin.outputs if s.name}
-    d_sv, along, h = model.ray_light_geometry(m, g["Camera"], g["Direction"], g["Light"])
-    air = model.airlight_background(m, g["Beta"], d_sv, along, h)
+    if method == "osl":
+        air = _airlight_osl(m, g["Beta"], g["Light"], g["Camera"], g["Direction"])
+    else:
+        d_sv, along, h = model.ray_light_geometry(m, g["Camera"], g["Direction"], g["Light"])
+        air = model.airlight_background(m, g["Beta"], d_sv, along, h)
     ng.links.new(_colour_times(m, g["Intensity"].sock, air).sock, gout.inputs["Airlight"])
     return ng
 

@@ -74,7 +74,8 @@ class NodeOps:
             setattr(n, k, v)
         return n
 
-    def _feed(self, sock, v):
+    def feed(self, sock, v):
+        """Connect Val ``v`` to input ``sock`` (or set its default value to the constant)."""
         if v.sock is not None:
             self.tree.links.new(v.sock, sock)
         elif sock.type == "VECTOR":
@@ -90,7 +91,7 @@ class NodeOps:
         col = 1 + max(v.col for v in vals)
         n = self.node("ShaderNodeMath", col, operation=op, use_clamp=False)
         for s, v in zip(n.inputs, vals):
-            self._feed(s, v)
+            self.feed(s, v)
         return Val(self, sock=n.outputs[0], col=col)
 
     def vmath(self, op, *args, out=0):
@@ -98,11 +99,11 @@ class NodeOps:
         col = 1 + max(v.col for v in vals)
         n = self.node("ShaderNodeVectorMath", col, operation=op)
         if op == "SCALE":
-            self._feed(n.inputs[0], vals[0])
-            self._feed(n.inputs["Scale"], vals[1])
+            self.feed(n.inputs[0], vals[0])
+            self.feed(n.inputs["Scale"], vals[1])
         else:
             for s, v in zip(n.inputs, vals):
-                self._feed(s, v)
+                self.feed(s, v)
         return Val(self, sock=n.outputs[out], vector=(out == 0), col=col)
 
     def binary(self, op, a, b):
@@ -183,7 +184,7 @@ class NodeOps:
         col = 1 + max(v.col for v in vals)
         n = self.node("ShaderNodeCombineXYZ", col)
         for s, v in zip(n.inputs, vals):
-            self._feed(s, v)
+            self.feed(s, v)
         return Val(self, sock=n.outputs[0], vector=True, col=col)
 
     def table(self, spec, x, y, row0=0, rows=None):

@@ -29,7 +29,8 @@ class FOG_OT_add(bpy.types.Operator):
         elif self.density >= 0 or math.isnan(self.density):
             density = self.density
         try:
-            skipped = apply.apply_fog(scene, density, tuple(settings.color), settings.anisotropy)
+            skipped = apply.apply_fog(scene, density, tuple(settings.color), settings.anisotropy,
+                                      settings.method.lower())
         except ValueError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}

@@ -1,10 +1,11 @@
 """Adding and removing the fog on a scene (what the operators and the command line call)."""
 import bpy
 
-from ..nodes import groups, images, wrap
+from ..nodes import groups, images, osl, wrap
 from ..precompute import presets
 
 SUPPORTED_LIGHTS = ("POINT",)
+OSL_WAS = "analytic_fog_osl_was"   # scene custom property: Cycles' OSL switch before the OSL method set it
 
 
 def fog_lights(scene):
@@ -29,20 +30,35 @@ def scene_materials(scene):
     return mats
 
 
-def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0):
+def use_osl(scene, on):
+    """Switch Cycles' Open Shading Language on for the OSL method (and back to what it was)."""
+    if on and OSL_WAS not in scene:
+        scene[OSL_WAS] = scene.cycles.shading_system
+        scene.cycles.shading_system = True
+    elif not on and OSL_WAS in scene:
+        scene.cycles.shading_system = bool(scene[OSL_WAS])
+        del scene[OSL_WAS]
+
+
+def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="nodes"):
     """Add (or update) the fog on ``scene``; adding twice is the same as once.
 
+    ``method``: "nodes" (node groups, Cycles and EEVEE) or "osl" (the airlight
+    by an OSL script, Cycles only; switches Cycles' OSL on).
     Returns a list of (data-block name, reason) for what was left out.
     Raises ValueError for bad settings before anything is changed.
     """
     beta = presets.validate_density(density)
     if anisotropy != 0.0:
         raise ValueError("anisotropic fog (anisotropy != 0) is not supported yet; use 0")
+    if method not in groups.METHODS:
+        raise ValueError(f"unknown method {method!r}; use one of {', '.join(groups.METHODS)}")
     lights, skipped = fog_lights(scene)
     imgs = images.all_table_images()
     groups.set_params(beta, tuple(albedo))
-    groups.build_light(imgs)
-    groups.build_background_light(imgs)
+    groups.build_light(imgs, method)
+    groups.build_background_light(imgs, method)
+    use_osl(scene, method == "osl")
     groups.build_surface(lights)
     groups.build_world(lights, scene.camera)
     for mat in scene_materials(scene):
@@ -75,3 +91,7 @@ def remove_fog(scene):
         img = bpy.data.images.get(name)
         if img is not None:
             bpy.data.images.remove(img)
+    text = bpy.data.texts.get(osl.TEXT)
+    if text is not None:
+        bpy.data.texts.remove(text)
+    use_osl(scene, False)

@@ -61,17 +61,21 @@ def bake_airlight_table(spec=tables.AIRLIGHT):
     return normalised_tail(rho[None, :], xi[:, None]).astype(np.float32)
 
 
-def airlight(beta, d_sv, d_vp, gamma, table=None):
+def airlight(beta, d_sv, d_vp, gamma, table=None, quadrature=False):
     """Airlight per unit intensity (1/m^2) of our model, in numpy, exactly as the shaders compute it.
 
     beta (1/m), d_sv, d_vp (m, ``np.inf`` for the background), gamma (rad); arrays broadcast.
+    ``quadrature``: the in-shader quadrature of the OSL method (no table) instead
+    of the table lookups of the node groups.
     """
-    table = bake_airlight_table() if table is None else table
-    m = NumpyOps({tables.AIRLIGHT.name: table})
     beta, d_sv, d_vp, gamma = np.broadcast_arrays(*(np.asarray(v, float) for v in (beta, d_sv, d_vp, gamma)))
     along = d_sv * np.cos(gamma)
     h = d_sv * np.sin(gamma)
     finite = np.isfinite(d_vp)
+    if quadrature:
+        return model.airlight_quadrature(NumpyOps(), beta, d_sv, along, h, np.where(finite, d_vp, model.FAR))
+    table = bake_airlight_table() if table is None else table
+    m = NumpyOps({tables.AIRLIGHT.name: table})
     dvp = np.where(finite, d_vp, 0.0)
     d_sp = np.hypot(dvp - along, h)
     with np.errstate(over="ignore", invalid="ignore"):

@@ -74,6 +74,22 @@ class NumpyOps:
     def scale(v, s):
         return np.asarray(v) * np.asarray(s)[..., None]
 
+    # -- loops -------------------------------------------------------------------
+    @staticmethod
+    def fori(count, body, state, done=None):
+        """Apply ``state = body(*state)`` ``count`` times; stop early once ``done(*state)`` is 1 everywhere.
+
+        The OSL backend prints a ``for`` loop with ``if (done) break;`` per pixel:
+        ``body`` must leave a finished state unchanged, so stopping early
+        changes nothing (shader nodes have no loops).
+        """
+        state = tuple(state)
+        for _ in range(count):
+            state = tuple(body(*state))
+            if done is not None and np.all(np.asarray(done(*state)) > 0.5):
+                break
+        return state
+
     # -- tables ---------------------------------------------------------------
     def table(self, spec, x, y, row0=0, rows=None):
         """Bilinear lookup of table ``spec`` at grid coordinates x, y in [0, 1].

@@ -1,4 +1,4 @@
-"""Add fog twice, remove it, and report whether every material, light and world is as before (JSON)."""
+"""Add fog twice, edit a fogged material, add again, remove it, and report what changed (JSON)."""
 import json
 import pathlib
 import sys
@@ -10,6 +10,9 @@ import bpy  # noqa: E402
 
 import fog_addon  # noqa: E402
 from demo_scenes import spheres  # noqa: E402
+
+EDIT_COLOR = (0.2, 0.5, 0.9, 1.0)   # the user's new Base Color for "Diffuse"
+EDIT_NODE = "User Roughness"        # the user's Value node linked into "Glossy"'s Roughness
 
 
 def snapshot_tree(tree):
@@ -38,6 +41,51 @@ def snapshot():
     }
 
 
+def differing(a, b):
+    """Keys of snapshots ``a`` and ``b`` that differ, as "key" or "key/data-block name"."""
+    out = []
+    for k in sorted(set(a) | set(b)):
+        va, vb = a.get(k), b.get(k)
+        if isinstance(va, dict) and isinstance(vb, dict):
+            out += [f"{k}/{n}" for n in sorted(set(va) | set(vb))
+                    if json.dumps(va.get(n), sort_keys=True) != json.dumps(vb.get(n), sort_keys=True)]
+        elif json.dumps(va, sort_keys=True) != json.dumps(vb, sort_keys=True):
+            out.append(k)
+    return out
+
+
+def _principled(mat):
+    return next(n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+
+
+def user_edit():
+    """What a user might do to fogged materials: change a value, add a node linked into the BSDF.
+
+    Returns the undo: a function putting the materials back as they were.
+    """
+    base = _principled(bpy.data.materials["Diffuse"]).inputs["Base Color"]
+    old_color = tuple(base.default_value)
+    base.default_value = EDIT_COLOR
+    tree = bpy.data.materials["Glossy"].node_tree
+    val = tree.nodes.new("ShaderNodeValue")
+    val.name = val.label = EDIT_NODE
+    val.location = (-400, -400)
+    val.outputs[0].default_value = 0.6
+    tree.links.new(val.outputs[0], _principled(bpy.data.materials["Glossy"]).inputs["Roughness"])
+
+    def undo():
+        base.default_value = old_color
+        tree.nodes.remove(tree.nodes[EDIT_NODE])
+    return undo
+
+
+def user_edit_present():
+    color = tuple(_principled(bpy.data.materials["Diffuse"]).inputs["Base Color"].default_value)
+    rough = _principled(bpy.data.materials["Glossy"]).inputs["Roughness"]
+    return (all(abs(a - b) < 1e-6 for a, b in zip(color, EDIT_COLOR))
+            and rough.is_linked and rough.links[0].from_node.name == EDIT_NODE)
+
+
 def main():
     bpy.ops.wm.read_factory_settings(use_empty=True)
     fog_addon.register()
@@ -47,20 +95,29 @@ def main():
     once = snapshot()
     assert bpy.ops.fog.add(density=0.1) == {"FINISHED"}
     twice = snapshot()
+    undo_edit = user_edit()
+    edited = snapshot()
+    assert bpy.ops.fog.add(density=0.1) == {"FINISHED"}
+    edit_kept_by_add = user_edit_present()
+    thrice = snapshot()
     try:   # an operator that reports an error raises in bpy.ops
         bad = bpy.ops.fog.add(density=float("nan"))
     except RuntimeError as e:
         bad = {"CANCELLED"} if "must be finite" in str(e) else {str(e)}
     after_bad = snapshot()
     assert bpy.ops.fog.remove() == {"FINISHED"}
+    edit_kept_by_remove = user_edit_present()
+    undo_edit()   # pre-fog materials plus the edit, minus the edit
     after = snapshot()
     fog_addon.unregister()
-    same = [k for k in once if json.dumps(once[k], sort_keys=True) == json.dumps(twice[k], sort_keys=True)]
     print(json.dumps({
-        "unchanged_by_second_add": same,
         "fog_changed_something": once != before,
-        "nan_cancelled": bad == {"CANCELLED"} and after_bad == twice,
-        "restored": json.dumps(after, sort_keys=True) == json.dumps(before, sort_keys=True),
+        "changed_by_second_add": differing(once, twice),
+        "changed_by_add_after_edit": differing(edited, thrice),
+        "edit_kept_by_add": edit_kept_by_add,
+        "edit_kept_by_remove": edit_kept_by_remove,
+        "nan_cancelled": bad == {"CANCELLED"} and after_bad == thrice,
+        "not_restored": differing(before, after),
     }))
 
 

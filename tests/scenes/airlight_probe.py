@@ -1,7 +1,10 @@
-"""Tiny Cycles render of airlight over a black plane and the background; prints per-pixel
+"""Tiny render of airlight over a black plane and the background; prints per-pixel
 ratios to the numpy model (fog_addon.precompute.airlight.airlight) as JSON.
 
-    python tests/scenes/airlight_probe.py OUT_DIR [ENGINE]
+    python tests/scenes/airlight_probe.py OUT_DIR [ENGINE [METHOD]]
+
+METHOD "nodes" (default) is compared with the table model, "osl" with the
+quadrature model; both are also compared with the other one ("other_*").
 """
 import json
 import math
@@ -21,7 +24,7 @@ from fog_addon.precompute import airlight  # noqa: E402
 BETA, POWER, W, H = 0.2, 1000.0, 64, 48
 
 
-def main(out_dir, engine="CYCLES"):
+def main(out_dir, engine="CYCLES", method="nodes"):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     s = bpy.context.scene
     cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
@@ -44,7 +47,7 @@ def main(out_dir, engine="CYCLES"):
     bsdf.inputs["Specular IOR Level"].default_value = 0
     s.world = bpy.data.worlds.new("W")
     s.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0, 0, 0, 1)
-    apply.apply_fog(s, BETA)
+    apply.apply_fog(s, BETA, method=method)
     s.render.engine = engine
     measure.set_resolution(s, W, H)
     measure.set_samples(s, 1)
@@ -65,10 +68,14 @@ def main(out_dir, engine="CYCLES"):
     t = np.where(d[..., 2] < 0, -c[2] / np.minimum(d[..., 2], -1e-12), np.inf)
     hit = c[:2] + d[..., :2] * np.where(np.isfinite(t), t, 0)[..., None]
     d_vp = np.where(np.all(np.abs(hit) <= 10.0, axis=-1), t, np.inf)   # the plane is 20 m wide
-    want = POWER / (4 * math.pi) * airlight.airlight(BETA, np.linalg.norm(to), d_vp, gamma)
-    r = got / want
+    scale = POWER / (4 * math.pi)
+    want = scale * airlight.airlight(BETA, np.linalg.norm(to), d_vp, gamma, quadrature=method == "osl")
+    other = scale * airlight.airlight(BETA, np.linalg.norm(to), d_vp, gamma, quadrature=method != "osl")
+    r, ro = got / want, got / other
     bg = np.isinf(d_vp)
     print(json.dumps({"median": float(np.median(r)), "max_dev": float(np.max(np.abs(r - 1))),
+                      "p99_dev": float(np.percentile(np.abs(r - 1), 99)),
+                      "other_median": float(np.median(ro)), "other_max_dev": float(np.max(np.abs(ro - 1))),
                       "background_pixels": int(bg.sum()), "surface_pixels": int((~bg).sum())}))
 
 
