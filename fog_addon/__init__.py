@@ -5,13 +5,16 @@ and imports without Blender.
 """
 
 
+def _modules():
+    from . import handlers, ops, props, ui
+    return props, ops, ui, handlers
+
+
 def register():
-    from . import props, ops
-    props.register()
-    ops.register()
+    for m in _modules():
+        m.register()
 
 
 def unregister():
-    from . import props, ops
-    ops.unregister()
-    props.unregister()
+    for m in reversed(_modules()):
+        m.unregister()

@@ -1,42 +1,91 @@
-"""The fog's settings, stored on the scene (``scene.analytic_fog``)."""
+"""The fog's settings: ``scene.analytic_fog`` and each light's ``light.analytic_fog``.
+
+Changing a setting while the fog is on updates the shared node groups at
+once (the viewport follows); materials are never rebuilt for it.
+"""
 import bpy
 
 from .precompute import presets
 
 
-def _update(self, context):
-    """Push a changed setting into the shared params group, if the fog is on."""
-    from .nodes import groups
-    if self.enabled and bpy.data.node_groups.get(groups.PARAMS) is not None:
-        groups.set_params(self.density, tuple(self.color))
+def _push(self, context):
+    """A density, colour or scale change: rewrite the shared params group (if the fog is on)."""
+    from .ops import apply
+    if self.enabled:
+        apply.update_params(context.scene)
+
+
+def _method_changed(self, context):
+    from .ops import apply
+    if self.enabled:
+        apply.set_method(context.scene, self.method.lower())
+
+
+def _light_changed(self, context):
+    from .ops import apply
+    apply.refresh_lights(context.scene)
+
+
+def _get_visibility(self):
+    return min(presets.visibility_from_density(self.density), 1e9)
+
+
+def _set_visibility(self, value):
+    self.density = presets.density_from_visibility(max(value, presets.MIN_VISIBILITY_M))
 
 
 class AnalyticFogSettings(bpy.types.PropertyGroup):
-    enabled: bpy.props.BoolProperty(name="Enabled", default=False,
-                                    description="The fog is applied to this scene (set by Add/Remove Fog)")
+    enabled: bpy.props.BoolProperty(
+        name="Fog", default=False, options=set(),
+        description="The fog is on in this scene (set by Add Fog / Remove Fog)")
     density: bpy.props.FloatProperty(
-        name="Density", default=presets.PRESETS["fog"], min=0.0, soft_max=1.0, max=100.0, precision=5,
-        unit="NONE", update=_update,
-        description="Extinction coefficient beta in 1/m (= scattering coefficient). "
+        name="Density", default=presets.PRESETS["fog"], min=0.0, soft_max=1.0, max=presets.MAX_DENSITY,
+        precision=5, step=0.1, update=_push,
+        description="Extinction coefficient beta in 1/m (equal to the scattering coefficient: no absorption). "
                     "Visibility V = 3.912 / beta (Koschmieder)")
+    visibility: bpy.props.FloatProperty(
+        name="Visibility", subtype="DISTANCE", unit="LENGTH", min=presets.MIN_VISIBILITY_M, max=1e9,
+        soft_min=1.0, soft_max=50000.0, get=_get_visibility, set=_set_visibility, options=set(),
+        description="Meteorological visibility in real metres: the distance at which a black object's contrast "
+                    "falls to 2 %. Sets the density by Koschmieder's law, beta = 3.912 / V")
+    scene_scale: bpy.props.FloatProperty(
+        name="Scene Scale", default=1.0, min=1e-6, max=1e6, soft_min=0.001, soft_max=1000.0, update=_push,
+        description="Real metres per Blender unit. A 1:100 model of a street (1 unit = 100 m) needs 100 "
+                    "to show a real fog's density; the fog's density per unit is Density x Scene Scale")
     color: bpy.props.FloatVectorProperty(
-        name="Color", subtype="COLOR", size=3, default=(1.0, 1.0, 1.0), min=0.0, max=1.0, update=_update,
+        name="Color", subtype="COLOR", size=3, default=(1.0, 1.0, 1.0), min=0.0, max=1.0, update=_push,
         description="Single-scattering albedo of the fog: the fraction of extinguished light it scatters")
     anisotropy: bpy.props.FloatProperty(
         name="Anisotropy", default=0.0, min=0.0, max=0.0,
         description="Henyey-Greenstein g of the fog's phase function (only isotropic fog, 0, so far)")
     method: bpy.props.EnumProperty(
-        name="Method", default="NODES",
+        name="Method", default="NODES", update=_method_changed,
         items=[("NODES", "Node Groups", "Shader node groups with packed tables: Cycles and EEVEE"),
                ("OSL", "OSL", "Airlight by quadrature in an OSL script: Cycles only (switches Cycles' OSL on)")],
         description="How the fog is evaluated")
+    selected_only: bpy.props.BoolProperty(
+        name="Selected Only", default=False,
+        description="Add the fog only to the materials of the selected objects (the World and lights always)")
+
+
+class AnalyticFogLight(bpy.types.PropertyGroup):
+    use: bpy.props.BoolProperty(
+        name="Fog Glow", default=True, update=_light_changed,
+        description="This light lights the analytic fog (glow, fog-lit surfaces)")
+
+
+CLASSES = (AnalyticFogSettings, AnalyticFogLight)
 
 
 def register():
-    bpy.utils.register_class(AnalyticFogSettings)
+    for c in CLASSES:
+        bpy.utils.register_class(c)
     bpy.types.Scene.analytic_fog = bpy.props.PointerProperty(type=AnalyticFogSettings)
+    bpy.types.Light.analytic_fog = bpy.props.PointerProperty(type=AnalyticFogLight)
 
 
 def unregister():
+    del bpy.types.Light.analytic_fog
     del bpy.types.Scene.analytic_fog
-    bpy.utils.unregister_class(AnalyticFogSettings)
+    for c in reversed(CLASSES):
+        bpy.utils.unregister_class(c)

@@ -201,6 +201,7 @@ def _oslquery_path():
 
 def script_node(tree):
     """A compiled Script node running the airlight shader, added to ``tree``."""
+    _oslquery_path()   # setting the script below already makes Cycles compile it
     node = tree.nodes.new("ShaderNodeScript")
     node.mode = "INTERNAL"
     node.script = airlight_text()

@@ -1,14 +1,22 @@
-"""Operators: ``bpy.ops.fog.add`` and ``bpy.ops.fog.remove`` (both undoable)."""
+"""Operators: ``fog.add``, ``fog.remove`` (both undoable) and ``fog.preset_add`` (Blender's preset system)."""
 import math
 
 import bpy
+from bl_operators.presets import AddPresetBase
 
 from . import apply
 from ..precompute import presets
 
+PRESET_SUBDIR = "analytic_fog"
+
+
+def _report_skipped(op, skipped):
+    for name, why in skipped:
+        op.report({"WARNING"}, f"{name}: {why}")
+
 
 class FOG_OT_add(bpy.types.Operator):
-    """Add analytic fog to the scene: glows around point lights, fogged surfaces and background"""
+    """Add analytic fog to the scene (or update it): glows around point lights, fogged surfaces and background"""
     bl_idname = "fog.add"
     bl_label = "Add Fog"
     bl_options = {"REGISTER", "UNDO"}
@@ -19,6 +27,11 @@ class FOG_OT_add(bpy.types.Operator):
         name="Preset", default="NONE",
         items=[("NONE", "Scene Setting", "Keep the scene's density")]
         + [(k.upper(), k.replace("_", " ").title(), f"Visibility {v:g} m") for k, v in presets.VISIBILITY_M.items()])
+    selected_only: bpy.props.EnumProperty(
+        name="Materials", default="SCENE",
+        items=[("SCENE", "Scene Setting", "As the scene's Selected Only setting"),
+               ("ALL", "All", "Every material in the scene"),
+               ("SELECTED", "Selected", "Only the selected objects' materials")])
 
     def execute(self, context):
         scene = context.scene
@@ -28,16 +41,17 @@ class FOG_OT_add(bpy.types.Operator):
             density = presets.PRESETS[self.preset.lower()]
         elif self.density >= 0 or math.isnan(self.density):
             density = self.density
+        only = settings.selected_only if self.selected_only == "SCENE" else self.selected_only == "SELECTED"
+        objects = list(context.selected_objects) if only else None
         try:
             skipped = apply.apply_fog(scene, density, tuple(settings.color), settings.anisotropy,
-                                      settings.method.lower())
+                                      settings.method.lower(), objects, settings.scene_scale)
         except ValueError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         settings.density = density
         settings.enabled = True
-        for name, why in skipped:
-            self.report({"WARNING"}, f"{name}: {why}")
+        _report_skipped(self, skipped)
         return {"FINISHED"}
 
 
@@ -53,7 +67,50 @@ class FOG_OT_remove(bpy.types.Operator):
         return {"FINISHED"}
 
 
-CLASSES = (FOG_OT_add, FOG_OT_remove)
+class FOG_OT_preset_builtin(bpy.types.Operator):
+    """Set the fog's density from a visibility class of atmospheric optics"""
+    bl_idname = "fog.preset_builtin"
+    bl_label = "Fog Preset"
+    bl_options = {"REGISTER", "UNDO"}
+
+    name: bpy.props.EnumProperty(
+        name="Preset",
+        items=[(k, k.replace("_", " ").title(), f"Visibility {v:g} m") for k, v in presets.VISIBILITY_M.items()])
+
+    def execute(self, context):
+        settings = context.scene.analytic_fog
+        settings.density = presets.PRESETS[self.name]
+        settings.color = (1.0, 1.0, 1.0)
+        return {"FINISHED"}
+
+
+class FOG_MT_presets(bpy.types.Menu):
+    """Built-in presets (visibility classes), then the user's own (Blender's preset files)"""
+    bl_label = "Fog Presets"
+    preset_subdir = PRESET_SUBDIR
+    preset_operator = "script.execute_preset"
+
+    def draw(self, context):
+        layout = self.layout
+        for key, vis in presets.VISIBILITY_M.items():
+            layout.operator(FOG_OT_preset_builtin.bl_idname,
+                            text=f"{key.replace('_', ' ').title()} ({vis / 1000:g} km)" if vis >= 1000 else
+                            f"{key.replace('_', ' ').title()} ({vis:g} m)").name = key
+        layout.separator()
+        bpy.types.Menu.draw_preset(self, context)
+
+
+class FOG_OT_preset_add(AddPresetBase, bpy.types.Operator):
+    """Save the fog's density and colour as a preset (or remove the active one)"""
+    bl_idname = "fog.preset_add"
+    bl_label = "Add Fog Preset"
+    preset_menu = "FOG_MT_presets"
+    preset_subdir = PRESET_SUBDIR
+    preset_defines = ["fog = bpy.context.scene.analytic_fog"]
+    preset_values = ["fog.density", "fog.color"]
+
+
+CLASSES = (FOG_OT_add, FOG_OT_remove, FOG_OT_preset_builtin, FOG_MT_presets, FOG_OT_preset_add)
 
 
 def register():

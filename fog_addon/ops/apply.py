@@ -1,4 +1,6 @@
-"""Adding and removing the fog on a scene (what the operators and the command line call)."""
+"""Adding, updating and removing the fog on a scene (what the operators, handlers and command line call)."""
+import math
+
 import bpy
 
 from ..nodes import groups, images, osl, wrap
@@ -6,28 +8,61 @@ from ..precompute import presets
 
 SUPPORTED_LIGHTS = ("POINT",)
 OSL_WAS = "analytic_fog_osl_was"   # scene custom property: Cycles' OSL switch before the OSL method set it
+LIGHTS_KEY = "analytic_fog_lights"  # on the Surface group: the lights and camera it was built for
 
 
 def fog_lights(scene):
-    """(lights taking part, [(name, reason)] for lights left out)."""
-    lights, skipped = [], []
+    """(lights taking part, [(name, reason)] for lights left out or worth a note)."""
+    lights, notes = [], []
     for obj in scene.objects:
         if obj.type != "LIGHT":
             continue
-        if obj.data.type not in SUPPORTED_LIGHTS:
-            skipped.append((obj.name, f"{obj.data.type.lower()} lights are not supported yet"))
+        data = obj.data
+        settings = getattr(data, "analytic_fog", None)
+        if data.type not in SUPPORTED_LIGHTS:
+            notes.append((obj.name, f"{data.type.lower()} lights are not supported yet: no fog glow"))
+        elif settings is not None and not settings.use:
+            continue
+        elif obj.hide_render:
+            continue
+        elif not data.energy > 0.0 or not any(c > 0.0 for c in data.color):
+            notes.append((obj.name, "has zero power: it lights no fog"))
         else:
             lights.append(obj)
-    return lights, skipped
+            s = obj.matrix_world.to_scale()
+            if max(s) - min(s) > 1e-6 * max(abs(max(s)), 1e-30):
+                notes.append((obj.name, "is scaled non-uniformly: a point light's fog ignores scale"))
+    return lights, notes
 
 
-def scene_materials(scene):
+def check_camera(camera):
+    """Raise ValueError unless ``camera`` can see analytic fog (a perspective or panoramic camera)."""
+    if camera is None:
+        raise ValueError("the scene has no camera: set one (Scene properties > Camera), then add the fog")
+    if camera.type != "CAMERA":
+        raise ValueError(f"the scene camera {camera.name!r} is not a camera object")
+    if camera.data.type == "ORTHO":
+        raise ValueError(f"camera {camera.name!r} is orthographic: the fog model needs rays from one point "
+                         "(a perspective camera)")
+
+
+def scene_materials(scene, objects=None):
+    """Materials of ``objects`` (default: every object in the scene), each once."""
     mats = []
-    for obj in scene.objects:
+    for obj in scene.objects if objects is None else objects:
         for slot in getattr(obj, "material_slots", ()):
             if slot.material is not None and slot.material not in mats:
                 mats.append(slot.material)
     return mats
+
+
+def scene_size(scene):
+    """Largest distance (m in scene units) from the camera to an object origin: the depth fog must cross."""
+    cam = scene.camera
+    if cam is None:
+        return 0.0
+    c = cam.matrix_world.translation
+    return max(((o.matrix_world.translation - c).length for o in scene.objects if o is not cam), default=0.0)
 
 
 def use_osl(scene, on):
@@ -40,28 +75,44 @@ def use_osl(scene, on):
         del scene[OSL_WAS]
 
 
-def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="nodes"):
+def _signature(lights, camera):
+    return "|".join([o.name_full for o in lights] + ["camera:" + (camera.name_full if camera else "")])
+
+
+def _build_scene_groups(scene, lights):
+    groups.build_surface(lights)[LIGHTS_KEY] = _signature(lights, scene.camera)
+    groups.build_world(lights, scene.camera)
+    for light in lights:
+        wrap.wrap_light(light.data)
+
+
+def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="nodes", objects=None,
+              scene_scale=1.0):
     """Add (or update) the fog on ``scene``; adding twice is the same as once.
 
     ``method``: "nodes" (node groups, Cycles and EEVEE) or "osl" (the airlight
-    by an OSL script, Cycles only; switches Cycles' OSL on).
+    by an OSL script, Cycles only; switches Cycles' OSL on).  ``objects``: fog
+    only their materials (default: all in the scene).  ``scene_scale``: real
+    metres per Blender unit (the groups get density * scene_scale per unit).
     Returns a list of (data-block name, reason) for what was left out.
     Raises ValueError for bad settings before anything is changed.
     """
     beta = presets.validate_density(density)
+    if not (math.isfinite(scene_scale) and scene_scale > 0.0):
+        raise ValueError(f"scene scale must be a positive number of metres per unit, got {scene_scale}")
     if anisotropy != 0.0:
         raise ValueError("anisotropic fog (anisotropy != 0) is not supported yet; use 0")
     if method not in groups.METHODS:
         raise ValueError(f"unknown method {method!r}; use one of {', '.join(groups.METHODS)}")
+    check_camera(scene.camera)
     lights, skipped = fog_lights(scene)
     imgs = images.all_table_images()
-    groups.set_params(beta, tuple(albedo))
+    groups.set_params(beta * scene_scale, tuple(albedo))
     groups.build_light(imgs, method)
     groups.build_background_light(imgs, method)
     use_osl(scene, method == "osl")
-    groups.build_surface(lights)
-    groups.build_world(lights, scene.camera)
-    for mat in scene_materials(scene):
+    _build_scene_groups(scene, lights)
+    for mat in scene_materials(scene, objects):
         why = wrap.wrap_material(mat)
         if why:
             skipped.append((mat.name, why))
@@ -71,9 +122,48 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
         why = wrap.wrap_world(scene.world)
         if why:
             skipped.append((scene.world.name, why))
-    for light in lights:
-        wrap.wrap_light(light.data)
+    if not lights:
+        skipped.append((scene.name, "has no point light taking part: the fog only dims"))
+    note = presets.invisible_fog_note(beta * scene_scale, scene_size(scene))
+    if note:
+        skipped.append((scene.name, note))
     return skipped
+
+
+def is_applied():
+    return bpy.data.node_groups.get(groups.SURFACE) is not None
+
+
+def update_params(scene):
+    """Push the scene's density, colour and scale into the shared params group."""
+    s = scene.analytic_fog
+    groups.set_params(s.density * s.scene_scale, tuple(s.color))
+
+
+def set_method(scene, method):
+    """Switch between the node groups' tables and the OSL quadrature: rebuilds two shared groups only."""
+    imgs = images.all_table_images()
+    groups.build_light(imgs, method)
+    groups.build_background_light(imgs, method)
+    use_osl(scene, method == "osl")
+
+
+def refresh_lights(scene):
+    """Rebuild the scene groups if the fog lights or the camera changed; materials are not touched.
+
+    Returns True if something was rebuilt.  Called from the depsgraph handler.
+    """
+    surface = bpy.data.node_groups.get(groups.SURFACE)
+    if surface is None or surface.library is not None:
+        return False
+    lights, _ = fog_lights(scene)
+    if surface.get(LIGHTS_KEY) == _signature(lights, scene.camera):
+        return False
+    _build_scene_groups(scene, lights)
+    for light in bpy.data.lights:
+        if light.users and light not in [o.data for o in lights] and wrap.is_fogged(light):
+            wrap.unwrap_light(light)
+    return True
 
 
 def remove_fog(scene):

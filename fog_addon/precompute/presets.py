@@ -8,6 +8,9 @@ each preset takes a representative visibility inside its class.
 import math
 
 KOSCHMIEDER = -math.log(0.02)   # 3.912
+MAX_DENSITY = 100.0             # 1/m: a visibility of 3.9 cm; beyond this the fog is a wall
+MIN_VISIBILITY_M = KOSCHMIEDER / MAX_DENSITY
+VISIBLE_DEPTH = 0.01            # optical depth below which a fog changes the picture by < 1 %
 
 VISIBILITY_M = {
     "haze": 8000.0,
@@ -40,7 +43,20 @@ def validate_density(beta):
         raise ValueError(f"fog density must be finite, got {beta}")
     if beta < 0:
         raise ValueError(f"fog density must be >= 0 (1/m), got {beta}")
-    if beta > 100:
+    if beta > MAX_DENSITY:
         raise ValueError(f"fog density {beta} 1/m means a visibility of {KOSCHMIEDER / beta * 100:.1f} cm; "
-                         "the largest supported density is 100 1/m")
+                         f"the largest supported density is {MAX_DENSITY:g} 1/m")
     return beta
+
+
+def invisible_fog_note(beta, size_m):
+    """A message if fog of ``beta`` (1/m) can't be seen across a scene ``size_m`` metres deep, else None.
+
+    Optical depth beta * size below VISIBLE_DEPTH dims and glows by under 1 %.
+    """
+    depth = beta * size_m
+    if size_m <= 0 or depth >= VISIBLE_DEPTH:
+        return None
+    return (f"This fog is invisible here: optical depth {depth:.2g} across the scene's {size_m:.3g} m "
+            f"(visibility {visibility_from_density(beta):.3g} m). Raise the density, or set Scene Scale "
+            f"to the real metres per Blender unit")

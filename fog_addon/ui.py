@@ -1,0 +1,95 @@
+"""The "Analytic Fog" panel in Properties > World and the 3D viewport sidebar, and each light's toggle."""
+import bpy
+
+from .ops import FOG_MT_presets, apply
+from .precompute import presets
+
+ENGINE_NOTES = {
+    "NODES": "Node groups: Cycles and EEVEE",
+    "OSL": "OSL: Cycles only (EEVEE shows no glow)",
+}
+
+
+def draw_fog(layout, context):
+    scene = context.scene
+    s = scene.analytic_fog
+    row = layout.row(align=True)
+    if s.enabled:
+        row.operator("fog.add", text="Update Fog", icon="FILE_REFRESH")
+        row.operator("fog.remove", text="", icon="X")
+    else:
+        row.operator("fog.add", text="Add Fog", icon="ADD")
+    row = layout.row(align=True)
+    row.menu(FOG_MT_presets.__name__, text=FOG_MT_presets.bl_label)
+    row.operator("fog.preset_add", text="", icon="ADD")
+    row.operator("fog.preset_add", text="", icon="REMOVE").remove_active = True
+    col = layout.column()
+    col.use_property_split = True
+    col.prop(s, "visibility")
+    col.prop(s, "density")
+    col.prop(s, "color")
+    col.prop(s, "scene_scale")
+    col.prop(s, "method")
+    col.label(text=ENGINE_NOTES[s.method], icon="INFO")
+    if s.method == "OSL" and scene.render.engine != "CYCLES":
+        col.label(text="Switch the render engine to Cycles to see OSL fog", icon="ERROR")
+    col.prop(s, "selected_only")
+    note = presets.invisible_fog_note(s.density * s.scene_scale, apply.scene_size(scene))
+    if note:
+        box = layout.box()
+        for i, line in enumerate(note.replace(": ", ". ").split(". ")):
+            box.label(text=line, icon="ERROR" if i == 0 else "BLANK1")
+    lights, notes = apply.fog_lights(scene)
+    layout.label(text=f"{len(lights)} light(s) light the fog", icon="LIGHT_POINT")
+    for name, why in notes:
+        layout.label(text=f"{name}: {why}", icon="ERROR")
+
+
+class WORLD_PT_analytic_fog(bpy.types.Panel):
+    bl_label = "Analytic Fog"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "world"
+
+    def draw(self, context):
+        draw_fog(self.layout, context)
+
+
+class VIEW3D_PT_analytic_fog(bpy.types.Panel):
+    bl_label = "Analytic Fog"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "Fog"
+
+    def draw(self, context):
+        draw_fog(self.layout, context)
+
+
+class DATA_PT_analytic_fog_light(bpy.types.Panel):
+    bl_label = "Analytic Fog"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "data"
+
+    @classmethod
+    def poll(cls, context):
+        return context.light is not None
+
+    def draw(self, context):
+        light = context.light
+        self.layout.prop(light.analytic_fog, "use")
+        if light.type not in apply.SUPPORTED_LIGHTS:
+            self.layout.label(text=f"{light.type.title()} lights don't light the fog yet", icon="INFO")
+
+
+CLASSES = (WORLD_PT_analytic_fog, VIEW3D_PT_analytic_fog, DATA_PT_analytic_fog_light)
+
+
+def register():
+    for c in CLASSES:
+        bpy.utils.register_class(c)
+
+
+def unregister():
+    for c in reversed(CLASSES):
+        bpy.utils.unregister_class(c)
