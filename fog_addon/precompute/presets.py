@@ -44,7 +44,7 @@ def validate_density(beta):
     if beta < 0:
         raise ValueError(f"fog density must be >= 0 (1/m), got {beta}")
     if beta > MAX_DENSITY:
-        raise ValueError(f"fog density {beta} 1/m means a visibility of {KOSCHMIEDER / beta * 100:.1f} cm; "
+        raise ValueError(f"fog density {beta} 1/m means a visibility of {KOSCHMIEDER / beta * 100:.2g} cm; "
                          f"the largest supported density is {MAX_DENSITY:g} 1/m")
     return beta
 

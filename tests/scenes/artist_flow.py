@@ -1,0 +1,184 @@
+"""What an artist does in the UI, without drawing it: settings, presets, light changes, bad input.
+
+Prints one JSON line of findings; tests/test_artist.py asserts on them.
+Run with BLENDER_USER_RESOURCES pointing at a scratch folder (user presets are written there).
+"""
+import json
+import math
+import pathlib
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests" / "scenes"))
+
+import bpy  # noqa: E402
+
+import fog_addon  # noqa: E402
+from add_remove import snapshot  # noqa: E402
+from demo_scenes import spheres  # noqa: E402
+
+R = {}
+
+
+def beta_in_groups():
+    return bpy.data.node_groups["AnalyticFog Params"].nodes["Beta"].outputs[0].default_value
+
+
+def light_instances():
+    return sorted(n.label.split(": ", 1)[1] for n in bpy.data.node_groups["AnalyticFog Surface"].nodes
+                  if n.bl_idname == "ShaderNodeGroup" and n.label.startswith("Light "))
+
+
+def add(**kw):
+    """bpy.ops.fog.add; returns ("FINISHED"|"CANCELLED", [messages]) - errors raise in bpy.ops."""
+    try:
+        return sorted(bpy.ops.fog.add(**kw))[0], None
+    except RuntimeError as e:
+        return "CANCELLED", str(e)
+
+
+def settings_and_presets(scene):
+    s = scene.analytic_fog
+    assert add(density=0.1)[0] == "FINISHED"
+    s.visibility = 1000.0
+    R["density_from_visibility_1km"] = s.density
+    R["beta_after_visibility"] = beta_in_groups()
+    s.scene_scale = 10.0
+    R["beta_after_scale_10"] = beta_in_groups()
+    s.scene_scale = 1.0
+    s.color = (0.5, 0.7, 0.9)
+    R["albedo_in_groups"] = list(bpy.data.node_groups["AnalyticFog Params"].nodes["Albedo"].outputs[0].default_value)
+    bpy.ops.fog.preset_builtin(name="haze")
+    R["haze_density"] = s.density
+    R["haze_beta_in_groups"] = beta_in_groups()
+    # a user preset through Blender's preset system: save, change, apply, remove
+    s.density, s.color = 0.0123, (0.9, 0.8, 0.7)
+    R["preset_add"] = sorted(bpy.ops.fog.preset_add(name="Harbour Fog"))[0]
+    path = bpy.utils.preset_find("Harbour_Fog", "analytic_fog")
+    R["preset_file"] = bool(path)
+    s.density, s.color = 0.5, (1.0, 1.0, 1.0)
+    bpy.ops.script.execute_preset(filepath=path, menu_idname="FOG_MT_presets")
+    R["preset_restored"] = [s.density, list(s.color)]
+    R["preset_beta_in_groups"] = beta_in_groups()
+    bpy.types.FOG_MT_presets.bl_label = "Harbour Fog"   # what execute_preset sets: the active preset
+    bpy.ops.fog.preset_add(remove_active=True)
+    R["preset_removed"] = not bpy.utils.preset_find("Harbour_Fog", "analytic_fog")
+
+
+def method_switch(scene):
+    mats = snapshot()["materials"]
+    scene.analytic_fog.method = "OSL"
+    R["osl_script_nodes"] = sum(n.bl_idname == "ShaderNodeScript"
+                                for g in ("AnalyticFog Light", "AnalyticFog Background Light")
+                                for n in bpy.data.node_groups[g].nodes)
+    R["osl_switch_on"] = scene.cycles.shading_system
+    scene.analytic_fog.method = "NODES"
+    R["osl_switch_restored"] = scene.cycles.shading_system
+    R["materials_kept_by_method_switch"] = snapshot()["materials"] == mats
+
+
+def lights_follow(scene):
+    mats = snapshot()["materials"]
+    R["lights_start"] = light_instances()
+    lamp = bpy.data.objects.new("Extra", bpy.data.lights.new("Extra", "POINT"))
+    lamp.data.energy = 200.0
+    lamp.location = (1.0, 2.0, 3.0)
+    scene.collection.objects.link(lamp)
+    bpy.context.view_layer.update()
+    R["lights_after_add"] = light_instances()
+    lamp.hide_render = True
+    bpy.context.view_layer.update()
+    R["lights_after_hide"] = light_instances()
+    lamp.hide_render = False
+    lamp.data.type = "AREA"
+    bpy.context.view_layer.update()
+    R["lights_after_area"] = light_instances()
+    lamp.data.type = "POINT"
+    lamp.data.analytic_fog.use = False
+    bpy.context.view_layer.update()
+    R["lights_after_toggle_off"] = light_instances()
+    lamp.data.analytic_fog.use = True
+    bpy.context.view_layer.update()
+    R["lights_after_toggle_on"] = light_instances()
+    bpy.data.objects.remove(lamp)
+    bpy.context.view_layer.update()
+    R["lights_after_delete"] = light_instances()
+    R["materials_kept_by_light_changes"] = snapshot()["materials"] == mats
+
+
+def bad_input(scene):
+    before = snapshot()
+    R["bad_density"] = {repr(d): add(density=d) for d in (float("nan"), float("inf"), 1e6)}
+    cam = scene.camera
+    scene.camera = None
+    R["no_camera"] = add(density=0.1)
+    scene.camera = cam
+    cam.data.type = "ORTHO"
+    R["ortho_camera"] = add(density=0.1)
+    cam.data.type = "PERSP"
+    R["unchanged_by_bad_input"] = snapshot() == before
+
+
+def light_notes(scene):
+    """Zero power, sun, non-uniform scale: reported by name (warnings), fog still added."""
+    from fog_addon.ops import apply
+    dark = bpy.data.objects.new("Dark", bpy.data.lights.new("Dark", "POINT"))
+    dark.data.energy = 0.0
+    sun = bpy.data.objects.new("Sunny", bpy.data.lights.new("Sunny", "SUN"))
+    squashed = bpy.data.objects.new("Squashed", bpy.data.lights.new("Squashed", "POINT"))
+    squashed.scale = (1.0, 1.0, 3.0)
+    for o in (dark, sun, squashed):
+        scene.collection.objects.link(o)
+    bpy.context.view_layer.update()
+    lights, notes = apply.fog_lights(scene)
+    R["light_notes"] = {name: why for name, why in notes}
+    R["lights_taking_part"] = sorted(o.name for o in lights)
+    for o in (dark, sun, squashed):
+        bpy.data.objects.remove(o)
+
+
+def selected_only(scene):
+    bpy.ops.fog.remove()
+    for o in scene.objects:
+        o.select_set(False)
+    target = next(o for o in scene.objects if o.type == "MESH" and o.active_material is not None)
+    target.select_set(True)
+    bpy.context.view_layer.objects.active = target
+    assert add(density=0.1, selected_only="SELECTED")[0] == "FINISHED"
+    from fog_addon.nodes import wrap
+    R["fogged_selected"] = sorted(m.name for m in bpy.data.materials if wrap.is_fogged(m))
+    R["selected_materials"] = sorted(s.material.name for s in target.material_slots)
+    bpy.ops.fog.remove()
+
+
+def invisible_note():
+    """A haze in a 10 m scene is invisible: the add warns (and still adds)."""
+    from fog_addon.ops import apply
+    from fog_addon.precompute import presets
+    scene = bpy.context.scene
+    R["invisible_note"] = any("invisible" in why for _, why in
+                              apply.apply_fog(scene, presets.PRESETS["haze"]))
+    R["visible_note_at_scale_1000"] = any("invisible" in why for _, why in
+                                          apply.apply_fog(scene, presets.PRESETS["haze"], scene_scale=1000.0))
+    apply.remove_fog(scene)
+
+
+def main():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    fog_addon.register()
+    scene = bpy.context.scene
+    spheres.build(scene)
+    settings_and_presets(scene)
+    method_switch(scene)
+    lights_follow(scene)
+    bad_input(scene)
+    light_notes(scene)
+    selected_only(scene)
+    invisible_note()
+    fog_addon.unregister()
+    print(json.dumps(R))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,79 @@
+"""The artist's controls without a window: settings, Blender presets, method switch, light
+changes through the depsgraph handler, selected-only, bad input (tests/scenes/artist_flow.py)."""
+import json
+import math
+import os
+import subprocess
+import sys
+
+import pytest
+
+from conftest import ROOT
+
+KOSCHMIEDER = -math.log(0.02)   # independent of fog_addon.precompute.presets
+
+
+@pytest.fixture(scope="module")
+def flow(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("artist")
+    env = dict(os.environ, BLENDER_USER_RESOURCES=str(tmp / "user"), HOME=str(tmp / "home"))
+    r = subprocess.run([sys.executable, str(ROOT / "tests" / "scenes" / "artist_flow.py")],
+                       capture_output=True, text=True, timeout=600, cwd=tmp, env=env)
+    assert r.returncode == 0, r.stderr[-3000:]
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+def test_visibility_density_scale_colour_reach_the_groups(flow):
+    assert flow["density_from_visibility_1km"] == pytest.approx(KOSCHMIEDER / 1000.0, rel=1e-6)
+    assert flow["beta_after_visibility"] == pytest.approx(KOSCHMIEDER / 1000.0, rel=1e-6)
+    assert flow["beta_after_scale_10"] == pytest.approx(10 * KOSCHMIEDER / 1000.0, rel=1e-6)
+    assert flow["albedo_in_groups"][:3] == pytest.approx([0.5, 0.7, 0.9], abs=1e-6)
+
+
+def test_presets(flow):
+    assert flow["haze_density"] == pytest.approx(KOSCHMIEDER / 8000.0, rel=1e-6)   # haze class 5-10 km
+    assert flow["haze_beta_in_groups"] == pytest.approx(flow["haze_density"])
+    assert flow["preset_add"] == "FINISHED" and flow["preset_file"]
+    density, colour = flow["preset_restored"]
+    assert density == pytest.approx(0.0123, rel=1e-6) and colour == pytest.approx([0.9, 0.8, 0.7], abs=1e-6)
+    assert flow["preset_beta_in_groups"] == pytest.approx(0.0123, rel=1e-6)
+    assert flow["preset_removed"]
+
+
+def test_method_switch_keeps_materials(flow):
+    assert flow["osl_script_nodes"] == 2 and flow["osl_switch_on"] is True
+    assert flow["osl_switch_restored"] is False
+    assert flow["materials_kept_by_method_switch"]
+
+
+def test_lights_followed_without_touching_materials(flow):
+    assert flow["lights_start"] == ["Lamp"]
+    assert flow["lights_after_add"] == ["Extra", "Lamp"]
+    assert flow["lights_after_hide"] == ["Lamp"]
+    assert flow["lights_after_area"] == ["Lamp"]
+    assert flow["lights_after_toggle_off"] == ["Lamp"]
+    assert flow["lights_after_toggle_on"] == ["Extra", "Lamp"]
+    assert flow["lights_after_delete"] == ["Lamp"]
+    assert flow["materials_kept_by_light_changes"]
+
+
+def test_bad_input_refused_with_a_message_and_nothing_changed(flow):
+    for d, (status, msg) in flow["bad_density"].items():
+        assert status == "CANCELLED" and "density" in msg, (d, msg)
+    assert flow["no_camera"][0] == "CANCELLED" and "no camera" in flow["no_camera"][1]
+    assert flow["ortho_camera"][0] == "CANCELLED" and "orthographic" in flow["ortho_camera"][1]
+    assert flow["unchanged_by_bad_input"]
+
+
+def test_light_notes(flow):
+    notes = flow["light_notes"]
+    assert "zero power" in notes["Dark"] and "not supported" in notes["Sunny"] and "non-uniform" in notes["Squashed"]
+    assert flow["lights_taking_part"] == ["Lamp", "Squashed"]
+
+
+def test_selected_only(flow):
+    assert flow["fogged_selected"] == flow["selected_materials"] == ["Diffuse"]
+
+
+def test_invisible_fog_is_reported(flow):
+    assert flow["invisible_note"] and not flow["visible_note_at_scale_1000"]
