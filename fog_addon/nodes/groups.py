@@ -34,6 +34,8 @@ SURFACE = "AnalyticFog Surface"
 WORLD = "AnalyticFog World"
 
 FOG_PROP = "analytic_fog"   # custom-property key marking data the fog made or changed
+BUILT = "analytic_fog_built"   # on the per-light groups: the method and version they were built for
+VERSION = 1                    # bump when a group's content changes: files made by older versions rebuild it
 
 
 def _new_group(name, inputs, outputs):
@@ -51,6 +53,7 @@ def _new_group(name, inputs, outputs):
         for n, t, io in want:
             ng.interface.new_socket(n, in_out=io, socket_type=t)
     ng[FOG_PROP] = True
+    ng.pop(BUILT, None)
     gin = ng.nodes.new("NodeGroupInput")
     gout = ng.nodes.new("NodeGroupOutput")
     gin.location = (-300, 0)
@@ -99,8 +102,16 @@ def _airlight_osl(m, beta, light, camera, direction, distance=None):
     return m.wrap(node.outputs["Airlight"])
 
 
+def _up_to_date(name, method):
+    """The group ``name`` if it was already built for ``method`` by this version (rebuilding costs seconds)."""
+    ng = bpy.data.node_groups.get(name)
+    return ng if ng is not None and ng.get(BUILT) == f"{method}/{VERSION}" else None
+
+
 def build_light(images, method="nodes"):
     """Per-light surface group: Sun et al. 2005 Eq. 11 (airlight), 14 (direct), 17-18 (scattered)."""
+    if (ng := _up_to_date(LIGHT, method)) is not None:
+        return ng
     ng, gin, gout = _new_group(LIGHT, [
         ("Beta", F), ("Light", V), ("Intensity", C), ("Position", V), ("Incoming", V),
         ("View Distance", F), ("Normal", V), ("Diffuse", C), ("Specular", C), ("Glossy Level", F),
@@ -133,11 +144,14 @@ def build_light(images, method="nodes"):
     ng.links.new(m.vmath("MULTIPLY", intensity, scattered).sock, gout.inputs["Scattered"])
     ng.links.new(att.sock, gout.inputs["Attenuation"])
     ng.links.new(weight.sock, gout.inputs["Weight"])
+    ng[BUILT] = f"{method}/{VERSION}"
     return ng
 
 
 def build_background_light(images, method="nodes"):
     """Per-light world group: Sun et al. 2005 Eq. 12 (airlight of a ray to infinity)."""
+    if (ng := _up_to_date(BACKGROUND_LIGHT, method)) is not None:
+        return ng
     ng, gin, gout = _new_group(BACKGROUND_LIGHT, [
         ("Beta", F), ("Light", V), ("Intensity", C), ("Camera", V), ("Direction", V),
     ], [("Airlight", C)])
@@ -149,6 +163,7 @@ def build_background_light(images, method="nodes"):
         d_sv, along, h = model.ray_light_geometry(m, g["Camera"], g["Direction"], g["Light"])
         air = model.airlight_background(m, g["Beta"], d_sv, along, h)
     ng.links.new(_colour_times(m, g["Intensity"].sock, air).sock, gout.inputs["Airlight"])
+    ng[BUILT] = f"{method}/{VERSION}"
     return ng
 
 

@@ -1,0 +1,150 @@
+"""Process A of the farm test (WITH the add-on): build a scene, render expectations, save .blend files.
+
+    python farm_build.py nodes OUTDIR    # nofog_cycles.exr, nodes_cycles.exr, nodes_eevee.exr, nodes.blend
+    python farm_build.py osl OUTDIR      # nofog_cycles.exr, osl_cycles.exr, osl.blend
+    python farm_build.py anim OUTDIR     # anim.blend (the light's position and power and the camera keyframed), then
+                                         # expect_<f>.exr: the same scene made STATIC at frame f, fog re-added
+
+The last line of stdout is one JSON object (see tests/test_farm.py).
+"""
+import os
+import pathlib
+import sys
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+
+import bpy  # noqa: E402
+
+import fog_addon  # noqa: E402
+from demo_scenes import add_camera, add_plane, add_point_light, add_sphere, material, set_world  # noqa: E402
+from farm_common import ANIM_FRAMES, emit, render_exr, render_settings  # noqa: E402
+
+DENSITY = 0.1   # 1/m: optical thickness about 0.6 from the camera to the sphere
+
+LIGHT_A = "Lamp A"       # moves in the animation: x from -2 (frame 1) to 3 (frame 10)
+LIGHT_B = "Lamp B"       # stays put
+LIGHT_A_X = {1: -2.0, 10: 3.0}
+LIGHT_A_POWER = {1: 150.0, 10: 450.0}   # the intensity drivers must follow too
+CAMERA_LOC = {1: (-1.0, -6.0, 1.4), 10: (1.5, -5.0, 2.0)}
+
+
+def build(scene):
+    """A ground plane, a sphere, two point lights, a camera and a dark world."""
+    world = set_world(scene)
+    # The fog makes the World non-constant, so Cycles' AUTOMATIC world sampling builds a
+    # 2048x1024 importance map by evaluating the whole fog World shader there (measured 37 s of
+    # a 37.5 s render here; 0.4 s with this 64 map, same picture to 1e-5).  A small MANUAL map
+    # keeps the test fast and still has Cycles build and sample one in both processes.
+    world.cycles.sampling_method = "MANUAL"
+    world.cycles.sample_map_resolution = 64
+    world.probe_resolution = "128"   # EEVEE's world probe (default 1024): 9 s -> 5 s per EEVEE render here
+    ground = material("Ground", (0.5, 0.5, 0.5), roughness=0.8, specular_ior_level=0.2)
+    ball = material("Ball", (0.8, 0.3, 0.2), roughness=0.4, specular_ior_level=0.5)
+    add_plane(scene, "Ground", -6.0, 6.0, -3.0, 8.0, 0.0, ground)
+    add_sphere(scene, "Ball", (0.3, 1.0, 0.7), 0.7, ball, segments=24, rings=12)
+    add_point_light(scene, LIGHT_A, (-1.5, 0.0, 1.6), 300.0)
+    b = add_point_light(scene, LIGHT_B, (1.8, 2.0, 1.3), 200.0)
+    b.data.color = (1.0, 0.8, 0.6)
+    add_camera(scene, (0.0, -6.0, 1.5), (0.0, 1.0, 0.6), lens=30.0)
+    render_settings(scene, "CYCLES")
+    return scene
+
+
+def packed_report():
+    return {img.name: img.packed_file is not None for img in bpy.data.images if img.type == "IMAGE"}
+
+
+def timed(log, name, fn, *args):
+    t = time.perf_counter()
+    out = fn(*args)
+    log[name] = round(time.perf_counter() - t, 2)
+    return out
+
+
+def nodes(outdir):
+    """The fog by the operator (method nodes): Cycles and EEVEE expectations, then nodes.blend."""
+    log = {}
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = build(bpy.context.scene)
+    timed(log, "nofog_cycles", render_exr, scene, os.path.join(outdir, "nofog_cycles.exr"))
+    fog_addon.register()
+    assert bpy.ops.fog.add(density=DENSITY) == {"FINISHED"}
+    timed(log, "nodes_cycles", render_exr, scene, os.path.join(outdir, "nodes_cycles.exr"))
+    render_settings(scene, "BLENDER_EEVEE")
+    timed(log, "nodes_eevee", render_exr, scene, os.path.join(outdir, "nodes_eevee.exr"))
+    render_settings(scene, "CYCLES")
+    packed = packed_report()
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(outdir, "nodes.blend"))
+    emit({"packed": packed, "render_s": log})
+
+
+def osl(outdir):
+    """The fog by apply_fog(method="osl") (Cycles only): expectation, then osl.blend."""
+    from fog_addon.ops import apply
+    log = {}
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = build(bpy.context.scene)
+    timed(log, "nofog_cycles", render_exr, scene, os.path.join(outdir, "nofog_cycles.exr"))
+    fog_addon.register()
+    skipped = apply.apply_fog(scene, DENSITY, method="osl")
+    timed(log, "osl_cycles", render_exr, scene, os.path.join(outdir, "osl_cycles.exr"))
+    packed = packed_report()
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(outdir, "osl.blend"))
+    emit({"packed": packed, "skipped": skipped, "shading_system_osl": bool(scene.cycles.shading_system),
+          "render_s": log})
+
+
+def _key(idb, path, frames_values, index=-1):
+    """Keyframe ``idb.path`` (or its component ``index``) with {frame: value} (linear interpolation)."""
+    bpy.context.preferences.edit.keyframe_new_interpolation_type = "LINEAR"
+    for f, v in frames_values.items():
+        if index >= 0:
+            getattr(idb, path)[index] = v
+        else:
+            setattr(idb, path, v)
+        idb.keyframe_insert(path, index=index, frame=f)
+
+
+def anim(outdir):
+    """anim.blend: one light moving (and its power animated), the camera moving; then the expectations."""
+    log = {}
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = build(bpy.context.scene)
+    scene.frame_start, scene.frame_end = 1, 10
+    lamp, cam = scene.objects[LIGHT_A], scene.camera
+    _key(lamp, "location", LIGHT_A_X, index=0)
+    _key(lamp.data, "energy", LIGHT_A_POWER)
+    _key(cam, "location", CAMERA_LOC)
+    fog_addon.register()
+    assert bpy.ops.fog.add(density=DENSITY) == {"FINISHED"}
+    scene.frame_set(1)
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(outdir, "anim.blend"))
+
+    # The state at each frame, then the same scene without animation, posed as at that frame.
+    states = {}
+    for f in ANIM_FRAMES:
+        scene.frame_set(f)
+        dg = bpy.context.evaluated_depsgraph_get()
+        states[f] = {ob.name: ob.evaluated_get(dg).matrix_world.copy() for ob in (lamp, cam)}
+        states[f]["power"] = lamp.data.evaluated_get(dg).energy
+    for idb in (lamp, cam, lamp.data):
+        idb.animation_data_clear()
+    poses = {}
+    for f in ANIM_FRAMES:
+        for ob in (lamp, cam):
+            ob.matrix_world = states[f][ob.name]
+        lamp.data.energy = states[f]["power"]
+        scene.frame_current = f
+        assert bpy.ops.fog.add(density=DENSITY) == {"FINISHED"}   # re-add the fog on the static scene
+        poses[f] = {"lamp": list(lamp.matrix_world.translation), "camera": list(cam.matrix_world.translation),
+                    "power": lamp.data.energy}
+        timed(log, f"expect_{f}", render_exr, scene, os.path.join(outdir, f"expect_{f}.exr"))
+    emit({"packed": packed_report(), "poses": poses, "render_s": log})
+
+
+if __name__ == "__main__":
+    mode, outdir = sys.argv[1], sys.argv[2]
+    {"nodes": nodes, "osl": osl, "anim": anim}[mode](outdir)

@@ -1,0 +1,224 @@
+"""A .blend saved with fog renders the same picture where the add-on is neither installed nor enabled
+(what a render farm does), also for an animation whose light and camera move.
+
+Process A (tests/scenes/farm_build.py, add-on imported and registered) builds a small scene
+(ground, sphere, point lights, camera, world), renders the expected pictures and saves the .blend.
+Process B (tests/scenes/farm_render.py) starts with a clean environment in a directory where
+``fog_addon`` cannot be imported, turns scripts auto-run off, opens the .blend and renders it.
+
+* nodes: Cycles (48x27, 4 spp, pixel centres, no denoiser, seed 0) and EEVEE (32x18, 1 sample);
+* osl: Cycles with the airlight from the OSL Script node (bytecode saved in the .blend);
+* anim: the same scene with one light's position and power and the camera keyframed; B renders
+  frames 1, 5, 10 after ``frame_set``.  A's expectation for frame f is the scene made static at
+  frame f (animation cleared, objects posed, fog re-added).
+
+B also checks: the tables are packed, every driver is valid and none is a Python expression, the
+OSL text is internal with bytecode in the Script nodes, the driven light/camera positions and light
+intensities equal the objects' own at each frame, and (a canary driver that needs auto-run fails)
+that Python drivers really cannot run in B.
+
+The World uses a 64 MANUAL importance map (see farm_build.build: with Cycles' AUTOMATIC map the
+fog's World shader costs about 37 s per render here).  The three lanes (A then B) run side by side.
+"""
+import concurrent.futures
+import json
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from conftest import FAILURES, ROOT
+from fog_addon import compare, imageio
+
+SCENES = ROOT / "tests" / "scenes"
+BUILD = SCENES / "farm_build.py"
+RENDER = SCENES / "farm_render.py"
+FRAMES = (1, 5, 10)
+TABLES = ("AnalyticFog Airlight N", "AnalyticFog Surface M")
+
+# B's picture against A's, as max |B - A| / max |A| over all pixels and channels.
+# Same engine, seed, samples and scene data in both processes: measured 0.0 (bit-identical) for
+# Cycles nodes, Cycles OSL and every animation frame, and for EEVEE.  The bound leaves room only for
+# float32 summation-order noise, far below any real failure (location drivers frozen at frame 1
+# gave 0.95 and 0.97 at frames 5 and 10; the fog itself changes the picture by 0.95 rel. RMSE).
+MATCH_MAX_REL = 1e-5
+# The fog must be there: the fogged picture differs from the fog-free one by at least this
+# (rel. RMSE); measured 0.95 (nodes and OSL) for this scene at beta = 0.1.
+MIN_FOG_EFFECT = 0.3
+# Consecutive animation frames must differ by at least this (rel. RMSE); measured 2.4 (1 -> 5)
+# and 1.15 (5 -> 10): the light moves 2.2-2.8 m, the camera 1.2-1.5 m and the power 150 -> 450 W.
+MIN_FRAME_CHANGE = 0.1
+
+LANES = {
+    "nodes": ("nodes.blend", [{"out": "farm_nodes_cycles.exr", "expect": "nodes_cycles.exr"},
+                              {"out": "farm_nodes_eevee.exr", "expect": "nodes_eevee.exr",
+                               "engine": "BLENDER_EEVEE"}]),
+    "osl": ("osl.blend", [{"out": "farm_osl_cycles.exr", "expect": "osl_cycles.exr"}]),
+    "anim": ("anim.blend", [{"out": f"farm_anim_{f}.exr", "expect": f"expect_{f}.exr", "frame": f}
+                            for f in FRAMES]),
+}
+
+
+def _base_env(base):
+    home, ures, tmp = base / "home", base / "user_resources", base / "tmp"
+    for d in (home, ures, tmp):
+        d.mkdir(parents=True, exist_ok=True)
+    return {"HOME": str(home), "BLENDER_USER_RESOURCES": str(ures), "TMPDIR": str(tmp),
+            "PYTHONDONTWRITEBYTECODE": "1"}
+
+
+NOISE = ("EGL Error", "Fra:")   # EEVEE's harmless first-GPU-use lines; render progress
+
+
+def _stderr_problems(stderr):
+    """Lines of B's stderr (before its deliberate canary failure) that report an error or warning."""
+    before = stderr.split("farm_render: renders done")[0]
+    return [ln for ln in before.splitlines()
+            if ln.strip() and not ln.startswith(NOISE) and any(w in ln for w in ("Error", "ERROR", "Traceback",
+                                                                                  "WARNING", "Warning"))]
+
+
+def _run(cmd, env, cwd):
+    t = time.perf_counter()
+    r = subprocess.run([str(c) for c in cmd], capture_output=True, text=True, timeout=600, env=env, cwd=cwd)
+    assert r.returncode == 0, f"{cmd[1]} exited {r.returncode}:\n{r.stderr[-3000:]}\n{r.stdout[-2000:]}"
+    lines = r.stdout.strip().splitlines()
+    assert lines, f"{cmd[1]} printed nothing; stderr:\n{r.stderr[-3000:]}"
+    res = json.loads(lines[-1])
+    res["wall_s"] = round(time.perf_counter() - t, 1)
+    res["stderr"] = r.stderr
+    return res
+
+
+def _lane(name, base):
+    """Process A (with the add-on) then process B (without it) for one lane; returns both reports."""
+    out = base / name
+    out.mkdir(parents=True, exist_ok=True)
+    # A: the normal environment plus isolated Blender user folders.
+    env_a = {**os.environ, **_base_env(base / f"{name}_a")}
+    env_a.pop("PYTHONPATH", None)
+    a = _run([sys.executable, BUILD, name, out], env_a, out)
+    # B: nothing inherited but PATH; cwd and the script's folder hold no fog_addon.
+    env_b = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), **_base_env(base / f"{name}_b")}
+    blend, jobs = LANES[name]
+    b_jobs = [{k: v for k, v in j.items() if k != "expect"} for j in jobs]
+    b = _run([sys.executable, "-s", RENDER, out / blend, out, json.dumps(b_jobs)], env_b, out)
+    return {"a": a, "b": b, "dir": out}
+
+
+@pytest.fixture(scope="module")
+def farm(tmp_path_factory):
+    base = tmp_path_factory.mktemp("farm")
+    t = time.perf_counter()
+    with concurrent.futures.ThreadPoolExecutor(max_workers=len(LANES)) as ex:
+        futures = {name: ex.submit(_lane, name, base) for name in LANES}
+        res = {name: f.result() for name, f in futures.items()}
+    print(f"\nfarm lanes: {time.perf_counter() - t:.1f} s wall; "
+          + "; ".join(f"{n}: A {r['a']['wall_s']} s {r['a']['render_s']}, B {r['b']['wall_s']} s "
+                      f"{[j['render_s'] for j in r['b']['jobs']]}" for n, r in res.items()))
+    return res
+
+
+def _read(path):
+    return imageio.read_rgb(path).astype(np.float64)
+
+
+def _max_rel(a, b):
+    return float(np.abs(a - b).max() / np.abs(b).max())
+
+
+def _assert_same(test, expect, name):
+    a, b = _read(test), _read(expect)
+    assert a.shape == b.shape, (name, a.shape, b.shape)
+    assert np.isfinite(a).all(), f"{name}: non-finite pixels in the farm render"
+    d = _max_rel(a, b)
+    print(f"\n{name}: max |B - A| / max A = {d:.3g}")
+    if d > MATCH_MAX_REL:
+        FAILURES.mkdir(parents=True, exist_ok=True)
+        compare.write_diff(a, b, FAILURES / f"farm_{name}_diff.png", max_rel=0.05)
+    assert d <= MATCH_MAX_REL, (f"{name}: rendered without the add-on, max |B - A| / max A = {d:.3g} "
+                                f"> {MATCH_MAX_REL}; {compare.format_metrics(compare.metrics(a, b))}")
+    return a
+
+
+@pytest.mark.parametrize("lane", list(LANES))
+def test_add_on_absent_in_farm_process(farm, lane):
+    b = farm[lane]["b"]
+    for when in ("before_open", "after_open", "after_renders"):
+        s = b[when]
+        assert not s["find_spec_fog_addon"], f"{when}: fog_addon is importable in the farm process"
+        assert not [m for m in s["enabled_addons"] if "fog" in m], f"{when}: enabled add-ons {s['enabled_addons']}"
+        assert s["fog_modules"] == [], f"{when}: modules loaded: {s['fog_modules']}"
+        assert not s["fog_operator"] and not s["scene_rna_prop"], f"{when}: the add-on's classes are registered"
+        assert not s["auto_exec"], f"{when}: scripts auto-run is on"
+    assert not _stderr_problems(b["stderr"]), "\n".join(_stderr_problems(b["stderr"]))
+    # no driver of the file was blocked for want of auto-run, and auto-run really is off
+    assert not b["blocked_scripts"]["autoexec_fail"], b["blocked_scripts"]
+    c = b["canary"]
+    assert not c["valid"] and c["autoexec_fail"], f"a Python driver ran in the farm process (auto-run on?): {c}"
+
+
+@pytest.mark.parametrize("lane", list(LANES))
+def test_saved_file_is_self_contained(farm, lane):
+    a, b = farm[lane]["a"], farm[lane]["b"]
+    assert all(a["packed"].get(t) for t in TABLES), f"tables not packed before saving: {a['packed']}"
+    for t in TABLES:
+        img = b["images"].get(t)
+        assert img is not None and img["packed"], f"{t} not packed in the saved file: {b['images']}"
+    # every driver of every job's evaluation is valid, and none is a Python expression
+    for job in b["jobs"]:
+        drivers = job["drivers"]
+        assert len(drivers) >= 12, f"expected the fog's location and intensity drivers, found {len(drivers)}"
+        bad = [d for d in drivers if not d["valid"]]
+        assert not bad, f"invalid drivers without the add-on: {bad[:5]}"
+        py = [d for d in drivers if d["type"] == "SCRIPTED" and not d["simple"]]
+        assert not py, f"Python-expression drivers (need auto-run): {py[:5]}"
+    s = b["settings"]
+    assert (s["engine"], s["samples"], s["seed"], s["animated_seed"], s["denoise"], s["filter"]) \
+        == ("CYCLES", 4, 0, False, False, "GAUSSIAN"), s
+
+
+def test_osl_script_is_internal_and_compiled(farm):
+    b = farm["osl"]["b"]
+    assert b["settings"]["osl"], "Cycles' OSL is off in the saved OSL file"
+    assert b["scripts"], "no Script node in the saved OSL file"
+    for s in b["scripts"]:
+        assert s["mode"] == "INTERNAL" and s["bytecode_chars"] > 0, s
+        text = b["texts"].get(s["script"])
+        assert text is not None and text["filepath"] == "" and text["chars"] > 0, (s, b["texts"])
+
+
+@pytest.mark.parametrize("lane,job", [(lane, j["out"]) for lane, (_, jobs) in LANES.items() for j in jobs])
+def test_farm_render_matches(farm, lane, job):
+    r = farm[lane]
+    spec = next(j for j in LANES[lane][1] if j["out"] == job)
+    img = _assert_same(r["dir"] / job, r["dir"] / spec["expect"], job[:-4])
+    if lane != "anim" and "engine" not in spec:   # the fog is there: not the fog-free picture
+        nofog = _read(r["dir"] / "nofog_cycles.exr")
+        effect = compare.metrics(img, nofog)["rel_rmse"]
+        assert effect > MIN_FOG_EFFECT, f"{job}: differs from the fog-free render by only {effect:.3g}"
+
+
+def test_animation_follows_light_and_camera(farm):
+    r = farm["anim"]
+    jobs = {j["frame"]: j for j in r["b"]["jobs"]}
+    poses = {int(f): p for f, p in r["a"]["poses"].items()}
+    for f in FRAMES:
+        # the driven positions and intensities in the farm process are the objects' own at that frame
+        for p in jobs[f]["positions"]:
+            assert p["expected"] is not None, p
+            assert np.allclose(p["driven"], p["expected"], rtol=1e-6, atol=1e-5), (f, p)
+        got = {(p["kind"], p["target"]): p["driven"] for p in jobs[f]["positions"]}
+        lamp, cam, power = (got.get(k) for k in (("Location", "Lamp A"), ("Location", "Camera"),
+                                                 ("Intensity", "Lamp A")))   # Lamp A's light is white
+        assert lamp and cam and power, jobs[f]["positions"]
+        assert np.allclose(lamp, poses[f]["lamp"], atol=1e-5), (f, lamp, poses[f])
+        assert np.allclose(cam, poses[f]["camera"], atol=1e-5), (f, cam, poses[f])
+        assert np.allclose(power, poses[f]["power"] / (4 * np.pi), rtol=1e-6), (f, power, poses[f])
+    imgs = {f: _read(r["dir"] / f"farm_anim_{f}.exr") for f in FRAMES}
+    for f, g in zip(FRAMES, FRAMES[1:]):
+        change = compare.metrics(imgs[g], imgs[f])["rel_rmse"]
+        assert change > MIN_FRAME_CHANGE, f"frames {f} and {g} differ by only {change:.3g}: the fog did not move"
