@@ -1,4 +1,4 @@
-"""fog.add twice is the same as once, also after the user edits a fogged material; bad density changes nothing; fog.remove restores every node tree exactly, keeping the user's edits."""
+"""fog.add twice is the same as once; after the user edits a fogged material it re-syncs only the fog's copies of the BSDF; bad density changes nothing; fog.remove restores every node tree exactly, keeping the user's edits."""
 import json
 import subprocess
 import sys
@@ -14,6 +14,7 @@ def test_add_twice_remove_restores(tmp_path):
     assert res["fog_changed_something"], res
     assert res["changed_by_second_add"] == [], f"a second fog.add changed {res['changed_by_second_add']}"
     assert res["changed_by_add_after_edit"] == [], f"fog.add after a user edit changed {res['changed_by_add_after_edit']}"
+    assert res["fog_follows_edit"], f"fog.add after a user edit did not re-sync the fog's copies: {res}"
     assert res["edit_kept_by_add"] and res["edit_kept_by_remove"], res
     assert res["nan_cancelled"], res
     assert res["not_restored"] == [], f"fog.remove did not restore {res['not_restored']}"

@@ -80,10 +80,10 @@ def _signature(lights, camera):
 
 
 def _build_scene_groups(scene, lights):
+    """Rebuild the Surface and World groups for ``lights``; returns [(light, reason)] for lights left unfogged."""
     groups.build_surface(lights)[LIGHTS_KEY] = _signature(lights, scene.camera)
     groups.build_world(lights, scene.camera)
-    for light in lights:
-        wrap.wrap_light(light.data)
+    return [(light.data.name, why) for light in lights if (why := wrap.wrap_light(light.data))]
 
 
 def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="nodes", objects=None,
@@ -94,8 +94,9 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     by an OSL script, Cycles only; switches Cycles' OSL on).  ``objects``: fog
     only their materials (default: all in the scene).  ``scene_scale``: real
     metres per Blender unit (the groups get density * scene_scale per unit).
-    Returns a list of (data-block name, reason) for what was left out.
-    Raises ValueError for bad settings before anything is changed.
+    Returns a list of (data-block name, reason) for what was left out or
+    fogged with a caveat.  Raises ValueError for bad settings before anything
+    is changed.
     """
     beta = presets.validate_density(density)
     if not (math.isfinite(scene_scale) and scene_scale > 0.0):
@@ -111,7 +112,7 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     groups.build_light(imgs, method)
     groups.build_background_light(imgs, method)
     use_osl(scene, method == "osl")
-    _build_scene_groups(scene, lights)
+    skipped += _build_scene_groups(scene, lights)
     for mat in scene_materials(scene, objects):
         why = wrap.wrap_material(mat)
         if why:
