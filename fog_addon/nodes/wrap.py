@@ -652,6 +652,23 @@ def _notes(mat, kinds, lost):
     return "; ".join(notes)
 
 
+_SAMPLING_WAS = "analytic_fog_sampling_was"   # on a World: Cycles' sampling method before the fog
+
+
+def _constant_shader(sock):
+    """True if nothing or an unlinked Background / Emission feeds ``sock``: a world of one colour."""
+    src = _source(sock)
+    return src is None or (src.node.bl_idname in _EMITTERS and not any(i.is_linked for i in src.node.inputs))
+
+
+def _skip_importance_map(world, constant):
+    """A world of one colour needs no importance map: its bake would cost ~2.5 s per Cycles render
+    once the fog makes the world shader non-constant (BSDF sampling of a constant world loses nothing)."""
+    if constant and _SAMPLING_WAS not in world:
+        world[_SAMPLING_WAS] = world.cycles.sampling_method
+        world.cycles.sampling_method = "NONE"
+
+
 def wrap_world(world):
     """Add the fog's airlight and background extinction to ``world``.  Idempotent."""
     why = read_only(world)
@@ -685,6 +702,8 @@ def wrap_world(world):
         tree.links.new(mix.outputs[0], new_out.inputs["Surface"])
         if out is not None and out.inputs["Volume"].is_linked:
             tree.links.new(out.inputs["Volume"].links[0].from_socket, new_out.inputs["Volume"])
+    cycles_out = effective_output(tree, "CYCLES", users_only=True)
+    _skip_importance_map(world, cycles_out is None or _constant_shader(cycles_out.inputs["Surface"]))
     return None
 
 
@@ -693,6 +712,9 @@ def unwrap(idblock):
     tree = idblock.node_tree
     if tree is None or read_only(idblock):
         return
+    if _SAMPLING_WAS in idblock:
+        idblock.cycles.sampling_method = idblock[_SAMPLING_WAS]
+        del idblock[_SAMPLING_WAS]
     back = []
     for link in tree.links:
         if _ours(link.from_node) and not _ours(link.to_node):
