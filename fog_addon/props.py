@@ -75,11 +75,11 @@ class AnalyticFogLight(bpy.types.PropertyGroup):
 
 
 CLASSES = (AnalyticFogSettings, AnalyticFogLight)
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(CLASSES)
 
 
 def register():
-    for c in CLASSES:
-        bpy.utils.register_class(c)
+    _register_classes()
     bpy.types.Scene.analytic_fog = bpy.props.PointerProperty(type=AnalyticFogSettings)
     bpy.types.Light.analytic_fog = bpy.props.PointerProperty(type=AnalyticFogLight)
 
@@ -87,5 +87,4 @@ def register():
 def unregister():
     del bpy.types.Light.analytic_fog
     del bpy.types.Scene.analytic_fog
-    for c in reversed(CLASSES):
-        bpy.utils.unregister_class(c)
+    _unregister_classes()

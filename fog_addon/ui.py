@@ -45,24 +45,23 @@ def draw_fog(layout, context):
         layout.label(text=f"{name}: {why}", icon="ERROR")
 
 
-class WORLD_PT_analytic_fog(bpy.types.Panel):
+class _FogPanel:
     bl_label = "Analytic Fog"
+
+    def draw(self, context):
+        draw_fog(self.layout, context)
+
+
+class WORLD_PT_analytic_fog(_FogPanel, bpy.types.Panel):
     bl_space_type = "PROPERTIES"
     bl_region_type = "WINDOW"
     bl_context = "world"
 
-    def draw(self, context):
-        draw_fog(self.layout, context)
 
-
-class VIEW3D_PT_analytic_fog(bpy.types.Panel):
-    bl_label = "Analytic Fog"
+class VIEW3D_PT_analytic_fog(_FogPanel, bpy.types.Panel):
     bl_space_type = "VIEW_3D"
     bl_region_type = "UI"
     bl_category = "Fog"
-
-    def draw(self, context):
-        draw_fog(self.layout, context)
 
 
 class DATA_PT_analytic_fog_light(bpy.types.Panel):
@@ -83,13 +82,4 @@ class DATA_PT_analytic_fog_light(bpy.types.Panel):
 
 
 CLASSES = (WORLD_PT_analytic_fog, VIEW3D_PT_analytic_fog, DATA_PT_analytic_fog_light)
-
-
-def register():
-    for c in CLASSES:
-        bpy.utils.register_class(c)
-
-
-def unregister():
-    for c in reversed(CLASSES):
-        bpy.utils.unregister_class(c)
+register, unregister = bpy.utils.register_classes_factory(CLASSES)

@@ -111,13 +111,4 @@ class FOG_OT_preset_add(AddPresetBase, bpy.types.Operator):
 
 
 CLASSES = (FOG_OT_add, FOG_OT_remove, FOG_OT_preset_builtin, FOG_MT_presets, FOG_OT_preset_add)
-
-
-def register():
-    for c in CLASSES:
-        bpy.utils.register_class(c)
-
-
-def unregister():
-    for c in reversed(CLASSES):
-        bpy.utils.unregister_class(c)
+register, unregister = bpy.utils.register_classes_factory(CLASSES)
