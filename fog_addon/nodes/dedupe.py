@@ -29,7 +29,7 @@ import re
 
 import bpy
 
-from . import groups, images, osl
+from . import groups, images, osl, wrap
 
 _SUFFIX = re.compile(r"^(?P<base>.+)\.(?P<num>\d{3,})$")
 
@@ -57,6 +57,12 @@ def _only_in_collections(obj):
     return obj.users == len(obj.users_collection) + (1 if obj.use_fake_user else 0)
 
 
+def pending():
+    """True if some fog node group, table image or OSL text has a suffixed copy (cheap: names only)."""
+    return any(_SUFFIX.match(idb.name) and idb.name.startswith(wrap.PREFIX)
+               for coll_name, _, _ in _shared() for idb in getattr(bpy.data, coll_name))
+
+
 def merge_duplicates(remove_pulled=False):
     """Remap every local ``AnalyticFog X.NNN`` group, table image and OSL text onto ``AnalyticFog X`` and delete it.
 
@@ -79,10 +85,8 @@ def merge_duplicates(remove_pulled=False):
         coll = getattr(bpy.data, coll_name)
         found = {}
         for idb in coll:
-            if idb.library is not None or not ours(idb):
-                continue
             m = _SUFFIX.match(idb.name)
-            if m and m["base"] in bases:
+            if m and m["base"] in bases and idb.library is None and ours(idb):
                 found.setdefault(m["base"], []).append((int(m["num"]), idb))
         for base in bases:
             keep = coll.get((base, None))

@@ -34,21 +34,28 @@ SURFACE = "AnalyticFog Surface"
 WORLD = "AnalyticFog World"
 
 FOG_PROP = "analytic_fog"   # custom-property key marking data the fog made or changed
+BUILDING = " (building)"     # name suffix of a group being built beside the one in use
 BUILT = "analytic_fog_built"   # on the per-light groups: the method and version they were built for
 VERSION = 1                    # bump when a group's content changes: files made by older versions rebuild it
 
 
 def _new_group(name, inputs, outputs):
-    """An empty shader group ``name`` with the given (name, socket type) interface; reused if present."""
+    """An empty shader group for ``name`` with the given (name, socket type) interface.
+
+    An unused group of that name is emptied and reused; one in use is left
+    alone and a new group is built beside it, for ``_install`` to swap in:
+    every node added to a group that 1 000 materials use costs ~50 ms, to a
+    fresh one almost nothing.
+    """
     ng = bpy.data.node_groups.get(name)
-    if ng is None:
-        ng = bpy.data.node_groups.new(name, "ShaderNodeTree")
+    if ng is None or ng.users:
+        ng = bpy.data.node_groups.new(name + BUILDING, "ShaderNodeTree")
     ng.animation_data_clear()
     ng.nodes.clear()
     want = [(n, t, "INPUT") for n, t in inputs] + [(n, t, "OUTPUT") for n, t in outputs]
     have = sorted(((i.name, i.socket_type, i.in_out) for i in ng.interface.items_tree if i.item_type == "SOCKET"),
                   key=lambda s: s[2])   # Blender lists outputs first; a stable sort puts them after the inputs
-    if have != want:   # recreating the interface would unlink every instance and reset its input values
+    if have != want:
         ng.interface.clear()
         for n, t, io in want:
             ng.interface.new_socket(n, in_out=io, socket_type=t)
@@ -59,6 +66,18 @@ def _new_group(name, inputs, outputs):
     gin.location = (-300, 0)
     gout.location = (4000, 0)
     return ng, gin, gout
+
+
+def _install(ng, name):
+    """Put a group built by ``_new_group`` in place of the old ``name``: its users are remapped to it."""
+    if ng.name == name:
+        return ng
+    old = bpy.data.node_groups.get(name)
+    if old is not None:
+        old.user_remap(ng)
+        bpy.data.node_groups.remove(old)
+    ng.name = name
+    return ng
 
 
 F, V, C = "NodeSocketFloat", "NodeSocketVector", "NodeSocketColor"
@@ -74,7 +93,7 @@ def build_params(beta, albedo):
     a.outputs[0].default_value = (*albedo, 1.0)
     ng.links.new(b.outputs[0], gout.inputs["Beta"])
     ng.links.new(a.outputs[0], gout.inputs["Albedo"])
-    return ng
+    return _install(ng, PARAMS)
 
 
 def set_params(beta, albedo):
@@ -145,7 +164,7 @@ def build_light(images, method="nodes"):
     ng.links.new(att.sock, gout.inputs["Attenuation"])
     ng.links.new(weight.sock, gout.inputs["Weight"])
     ng[BUILT] = f"{method}/{VERSION}"
-    return ng
+    return _install(ng, LIGHT)
 
 
 def build_background_light(images, method="nodes"):
@@ -164,7 +183,7 @@ def build_background_light(images, method="nodes"):
         air = model.airlight_background(m, g["Beta"], d_sv, along, h)
     ng.links.new(_colour_times(m, g["Intensity"].sock, air).sock, gout.inputs["Airlight"])
     ng[BUILT] = f"{method}/{VERSION}"
-    return ng
+    return _install(ng, BACKGROUND_LIGHT)
 
 
 # --- scene-level sums over the fog lights -------------------------------------------
@@ -278,7 +297,7 @@ def build_surface(lights):
         gout.inputs["Direct Attenuation"].default_value = direct.const
     else:
         ng.links.new(direct.sock, gout.inputs["Direct Attenuation"])
-    return ng
+    return _install(ng, SURFACE)
 
 
 def build_world(lights, camera):
@@ -310,4 +329,4 @@ def build_world(lights, camera):
     fog = m.vmath("MULTIPLY", albedo, total) * is_cam if lights else m.combine(0.0, 0.0, 0.0)
     ng.links.new(fog.sock, gout.inputs["Emission"])
     ng.links.new((1.0 - is_cam).sock, gout.inputs["Transmittance"])
-    return ng
+    return _install(ng, WORLD)

@@ -3,7 +3,7 @@ import math
 
 import bpy
 
-from ..nodes import groups, images, osl, wrap
+from ..nodes import dedupe, groups, images, osl, wrap
 from ..precompute import presets
 
 SUPPORTED_LIGHTS = ("POINT",)
@@ -76,14 +76,30 @@ def use_osl(scene, on):
 
 
 def _signature(lights, camera):
-    return "|".join([o.name_full for o in lights] + ["camera:" + (camera.name_full if camera else "")])
+    return "|".join([f"v{groups.VERSION}"] + [o.name_full for o in lights]
+                    + ["camera:" + (camera.name_full if camera else "")])
 
 
 def _build_scene_groups(scene, lights):
-    """Rebuild the Surface and World groups for ``lights``; returns [(light, reason)] for lights left unfogged."""
-    groups.build_surface(lights)[LIGHTS_KEY] = _signature(lights, scene.camera)
-    groups.build_world(lights, scene.camera)
+    """(Re)build the Surface and World groups for ``lights`` unless built for them already.
+
+    Returns [(light, reason)] for lights left unfogged.
+    """
+    surface, world = (bpy.data.node_groups.get(n) for n in (groups.SURFACE, groups.WORLD))
+    if surface is None or world is None or surface.get(LIGHTS_KEY) != _signature(lights, scene.camera):
+        groups.build_surface(lights)[LIGHTS_KEY] = _signature(lights, scene.camera)
+        groups.build_world(lights, scene.camera)
     return [(light.data.name, why) for light in lights if (why := wrap.wrap_light(light.data))]
+
+
+def merge_appended():
+    """Fold fog data appended from another fogged file onto this file's copies (``dedupe``).
+
+    Returns [(name, reason)] notes for objects the other file's drivers pulled in.
+    """
+    _, pulled = dedupe.merge_duplicates()
+    return [(name, "came in with fog appended from another file (its drivers' target); delete it if unwanted")
+            for name in pulled]
 
 
 def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="nodes", objects=None,
@@ -106,7 +122,9 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     if method not in groups.METHODS:
         raise ValueError(f"unknown method {method!r}; use one of {', '.join(groups.METHODS)}")
     check_camera(scene.camera)
+    notes = merge_appended()
     lights, skipped = fog_lights(scene)
+    skipped += notes
     imgs = images.all_table_images()
     groups.set_params(beta * scene_scale, tuple(albedo))
     groups.build_light(imgs, method)

@@ -1,0 +1,86 @@
+"""Helpers of the shared_*.py scene scripts: what fog data exists, and which copies the fogged data uses."""
+import pathlib
+import re
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+import bpy  # noqa: E402
+
+from fog_addon.nodes import groups, images, osl  # noqa: E402
+
+PREFIX = "AnalyticFog"
+SUFFIXED = re.compile(r"\.\d{3,}$")
+
+
+def fog_ids():
+    """{"groups"|"images"|"texts": sorted names of every AnalyticFog data-block}."""
+    return {
+        "groups": sorted(g.name for g in bpy.data.node_groups if g.name.startswith(PREFIX)),
+        "images": sorted(i.name for i in bpy.data.images if i.name.startswith(PREFIX)),
+        "texts": sorted(t.name for t in bpy.data.texts if t.name.startswith(PREFIX)),
+    }
+
+
+def copies(ids=None):
+    """{name: count} of the fog data-blocks by base name (the ``.NNN`` suffix stripped), and the suffixed names."""
+    ids = fog_ids() if ids is None else ids
+    count, suffixed = {}, []
+    for names in ids.values():
+        for n in names:
+            base = SUFFIXED.sub("", n)
+            count[base] = count.get(base, 0) + 1
+            if base != n:
+                suffixed.append(n)
+    return count, sorted(suffixed)
+
+
+def expected_names(method):
+    """What one fogged file holds: the five groups, every table (apply_fog bakes both), the OSL text."""
+    names = [groups.PARAMS, groups.LIGHT, groups.BACKGROUND_LIGHT, groups.SURFACE, groups.WORLD]
+    names += images.table_names()
+    if method == "osl":
+        names.append(osl.TEXT)
+    return sorted(names)
+
+
+def _group_nodes(tree):
+    return [n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup" and n.node_tree is not None]
+
+
+def fog_references():
+    """Every (user, fog data-block name) reference: group nodes in materials, worlds, lights and groups; images; texts."""
+    refs = []
+    owners = [(f"material {m.name}", m.node_tree) for m in bpy.data.materials if m.node_tree]
+    owners += [(f"world {w.name}", w.node_tree) for w in bpy.data.worlds if w.node_tree]
+    owners += [(f"light {l.name}", l.node_tree) for l in bpy.data.lights if l.node_tree]
+    owners += [(f"group {g.name}", g) for g in bpy.data.node_groups]
+    for who, tree in owners:
+        for n in tree.nodes:
+            if n.bl_idname == "ShaderNodeGroup" and n.node_tree is not None and n.node_tree.name.startswith(PREFIX):
+                refs.append((who, n.node_tree.name))
+            img = getattr(n, "image", None)
+            if img is not None and img.name.startswith(PREFIX):
+                refs.append((who, img.name))
+            script = getattr(n, "script", None)
+            if script is not None and script.name.startswith(PREFIX):
+                refs.append((who, script.name))
+    return sorted(set(refs))
+
+
+def driver_targets(idblock):
+    ad = idblock.animation_data if idblock is not None else None
+    if ad is None:
+        return []
+    return sorted({t.id.name for fc in ad.drivers for v in fc.driver.variables for t in v.targets if t.id})
+
+
+def fog_groups_of(mat):
+    return sorted(n.node_tree.name for n in _group_nodes(mat.node_tree) if n.node_tree.name.startswith(PREFIX))
+
+
+def beta(params_name=groups.PARAMS):
+    ng = bpy.data.node_groups.get(params_name)
+    return None if ng is None else ng.nodes["Beta"].outputs[0].default_value
