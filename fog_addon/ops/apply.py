@@ -149,10 +149,6 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     return skipped
 
 
-def is_applied():
-    return bpy.data.node_groups.get(groups.SURFACE) is not None
-
-
 def update_params(scene):
     """Push the scene's density, colour and scale into the shared params group."""
     s = scene.analytic_fog
