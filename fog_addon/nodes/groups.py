@@ -22,7 +22,7 @@ import math
 import bpy
 
 from ..precompute import model, surface
-from . import osl
+from . import images as table_images, osl
 from .sockets import NodeOps
 
 METHODS = ("nodes", "osl")
@@ -121,10 +121,17 @@ def _airlight_osl(m, beta, light, camera, direction, distance=None):
     return m.wrap(node.outputs["Airlight"])
 
 
+def _built_key(method):
+    return f"{method}/{VERSION}/tables {table_images.TABLE_VERSION}"
+
+
 def _up_to_date(name, method):
-    """The group ``name`` if it was already built for ``method`` by this version (rebuilding costs seconds)."""
+    """The group ``name`` if it was built for ``method`` by this version and its tables are all there
+    (rebuilding costs seconds)."""
     ng = bpy.data.node_groups.get(name)
-    return ng if ng is not None and ng.get(BUILT) == f"{method}/{VERSION}" else None
+    if ng is None or ng.get(BUILT) != _built_key(method):
+        return None
+    return ng if all(n.image is not None for n in ng.nodes if n.bl_idname == "ShaderNodeTexImage") else None
 
 
 def build_light(images, method="nodes"):
@@ -163,7 +170,7 @@ def build_light(images, method="nodes"):
     ng.links.new(m.vmath("MULTIPLY", intensity, scattered).sock, gout.inputs["Scattered"])
     ng.links.new(att.sock, gout.inputs["Attenuation"])
     ng.links.new(weight.sock, gout.inputs["Weight"])
-    ng[BUILT] = f"{method}/{VERSION}"
+    ng[BUILT] = _built_key(method)
     return _install(ng, LIGHT)
 
 
@@ -182,7 +189,7 @@ def build_background_light(images, method="nodes"):
         d_sv, along, h = model.ray_light_geometry(m, g["Camera"], g["Direction"], g["Light"])
         air = model.airlight_background(m, g["Beta"], d_sv, along, h)
     ng.links.new(_colour_times(m, g["Intensity"].sock, air).sock, gout.inputs["Airlight"])
-    ng[BUILT] = f"{method}/{VERSION}"
+    ng[BUILT] = _built_key(method)
     return _install(ng, BACKGROUND_LIGHT)
 
 
