@@ -77,3 +77,8 @@ def test_selected_only(flow):
 
 def test_invisible_fog_is_reported(flow):
     assert flow["invisible_note"] and not flow["visible_note_at_scale_1000"]
+
+
+def test_panels_draw(flow):
+    assert set(flow["panel_props"]) >= {"visibility", "density", "color", "scene_scale", "method", "selected_only",
+                                        "use"}

@@ -7,6 +7,7 @@ import json
 import math
 import pathlib
 import sys
+import types
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
@@ -164,6 +165,39 @@ def invisible_note():
     apply.remove_fog(scene)
 
 
+class FakeLayout:
+    """Stands in for a UI layout (drawing needs a window): records every prop it is asked to draw."""
+
+    def __init__(self, log):
+        self.log = log
+
+    def __getattr__(self, name):
+        def call(*args, **kw):
+            if name == "prop":
+                getattr(args[0], args[1])   # a wrong property name raises here, as it would in the panel
+                self.log.append(args[1])
+            return FakeLayout(self.log)
+        return call
+
+
+def panel_draws(scene):
+    """The World/sidebar panel and the light toggle draw without error, fog off and on."""
+    from fog_addon import ui
+    drawn = []
+    ui.draw_fog(FakeLayout(drawn), bpy.context)
+    add(density=0.1)
+    scene.analytic_fog.method = "OSL"
+    ui.draw_fog(FakeLayout(drawn), bpy.context)
+    scene.analytic_fog.method = "NODES"
+    lamp = next(o for o in scene.objects if o.type == "LIGHT")
+
+    class Ctx:
+        light = lamp.data
+    panel = types.SimpleNamespace(layout=FakeLayout(drawn))
+    ui.DATA_PT_analytic_fog_light.draw(panel, Ctx)
+    R["panel_props"] = sorted(set(drawn))
+
+
 def main():
     bpy.ops.wm.read_factory_settings(use_empty=True)
     fog_addon.register()
@@ -176,6 +210,7 @@ def main():
     light_notes(scene)
     selected_only(scene)
     invisible_note()
+    panel_draws(scene)
     fog_addon.unregister()
     print(json.dumps(R))
 
