@@ -13,7 +13,6 @@ cannot go stale.
 """
 import math
 import sys
-import time
 
 import numpy as np
 import pytest

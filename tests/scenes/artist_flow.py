@@ -4,7 +4,6 @@ Prints one JSON line of findings; tests/test_artist.py asserts on them.
 Run with BLENDER_USER_RESOURCES pointing at a scratch folder (user presets are written there).
 """
 import json
-import math
 import pathlib
 import sys
 import types
