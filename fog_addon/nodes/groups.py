@@ -36,7 +36,7 @@ WORLD = "AnalyticFog World"
 FOG_PROP = "analytic_fog"   # custom-property key marking data the fog made or changed
 BUILDING = " (building)"     # name suffix of a group being built beside the one in use
 BUILT = "analytic_fog_built"   # on the per-light groups: the method and version they were built for
-VERSION = 1                    # bump when a group's content changes: files made by older versions rebuild it
+VERSION = 2                    # bump when a group's content changes: files made by older versions rebuild it
 
 
 def _new_group(name, inputs, outputs):
@@ -260,11 +260,14 @@ def build_surface(lights):
     fog light the surface reflects, camera rays only), Transmittance
     e^{-beta D_vp} to scale the material, Direct Attenuation (EEVEE's
     stand-in for the per-light e^{-beta D_sp}: their average weighted by each
-    light's unshadowed irradiance).
+    light's unshadowed irradiance), and per engine the Mix Factor 1 - scale
+    of the user's shader (Cycles: 1 - Transmittance; EEVEE: 1 - Transmittance
+    * Direct Attenuation).
     """
     ng, gin, gout = _new_group(SURFACE, [
         ("Base Color", C), ("Metallic", F), ("Roughness", F), ("Specular IOR Level", F),
-    ], [("Emission", C), ("Transmittance", F), ("Direct Attenuation", F)])
+    ], [("Emission", C), ("Transmittance", F), ("Direct Attenuation", F),
+        ("Cycles Mix Factor", F), ("EEVEE Mix Factor", F)])
     m = NodeOps(ng, {})
     params = ng.nodes.new("ShaderNodeGroup")
     params.node_tree = bpy.data.node_groups[PARAMS]
@@ -304,6 +307,10 @@ def build_surface(lights):
         gout.inputs["Direct Attenuation"].default_value = direct.const
     else:
         ng.links.new(direct.sock, gout.inputs["Direct Attenuation"])
+    # the factors of the materials' Mix Shaders (1 - scale of the user's shader), computed once here
+    # rather than by two Math nodes per engine in each of a scene's materials
+    ng.links.new((1.0 - transmit).sock, gout.inputs["Cycles Mix Factor"])
+    ng.links.new((1.0 - transmit * direct).sock, gout.inputs["EEVEE Mix Factor"])
     return _install(ng, SURFACE)
 
 

@@ -590,17 +590,11 @@ def wrap_material(mat):
             shared[key] = (emit, passed)
         emit, passed = shared[key]
         y = y0 - 250 * (k + 1)
-        fac = _add(tree, "ShaderNodeMath", f"{target} Scale", (x0 + 200, y), operation="MULTIPLY")
-        tree.links.new(fog.outputs["Transmittance"], fac.inputs[0])
-        if target == "EEVEE":   # EEVEE ignores light node trees: attenuate direct light here
-            tree.links.new(fog.outputs["Direct Attenuation"], fac.inputs[1])
-        else:
-            fac.inputs[1].default_value = 1.0
-        inv = _add(tree, "ShaderNodeMath", f"{target} Mix Factor", (x0 + 350, y), operation="SUBTRACT")
-        inv.inputs[0].default_value = 1.0
-        tree.links.new(fac.outputs[0], inv.inputs[1])
+        # 1 - scale of the user's shader: e^{-beta D_vp}, in EEVEE times the Direct Attenuation
+        # (EEVEE ignores light node trees: direct light is attenuated here)
+        mix_factor = fog.outputs[f"{'EEVEE' if target == 'EEVEE' else 'Cycles'} Mix Factor"]
         mix = _add(tree, "ShaderNodeMixShader", f"{target} Attenuate", (x0 + 500, y))
-        tree.links.new(inv.outputs[0], mix.inputs[0])
+        tree.links.new(mix_factor, mix.inputs[0])
         tree.links.new(src, mix.inputs[1])
         if passed is not None:   # what lets light through keeps its weight: s P + (1 - s) P
             tree.links.new(passed, mix.inputs[2])
@@ -610,7 +604,7 @@ def wrap_material(mat):
             for w, e in kd.emitters:
                 total = _cadd(total, _cscale(e, w))
             back = _add(tree, "ShaderNodeEmission", f"{target} Emission Restore", (x0 + 500, y - 120))
-            b.feed(back.inputs["Color"], b.colour(_cscale(total, _sub(transmittance, ("sock", fac.outputs[0])))))
+            b.feed(back.inputs["Color"], b.colour(_cscale(total, _sub(transmittance, _sub(1.0, ("sock", mix_factor))))))
             add_back = _add(tree, "ShaderNodeAddShader", f"{target} Add Restore", (x0 + 575, y - 60))
             tree.links.new(last, add_back.inputs[0])
             tree.links.new(back.outputs[0], add_back.inputs[1])
