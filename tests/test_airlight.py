@@ -28,7 +28,7 @@ from fog_addon.precompute import model, tables  # noqa: E402
 from fog_addon.precompute.ops import NumpyOps  # noqa: E402
 
 TOL = 5e-3            # the requirement: 0.5 % max relative error, sample by sample
-QUAD_TOL = 1e-5       # the OSL method's in-shader quadrature (model.airlight_quadrature) measured 1.6e-6
+QUAD_TOL = 1e-5       # the OSL method's in-shader quadrature (model.airlight_quadrature) measured 1.1e-6
 REF_AGREEMENT = 1e-7  # the two independent quadratures of the reference must agree this well
 LIVE_SEED = 424242    # != ref.CACHE_SEED
 
@@ -53,6 +53,15 @@ def cache(regen):
 
 def _params(c):
     return c["beta"], c["d_sv"], c["d_vp"], c["gamma"]
+
+
+def _summary(label, p, err):
+    """One line of error statistics and the worst sample, printed for the log; returned for the assertion."""
+    i = int(np.argmax(err))
+    msg = (f"{label}: max {err[i]:.3g}, p99 {np.percentile(err, 99):.3g}, median {np.median(err):.3g}; "
+           f"worst {_describe(p, err, i)}")
+    print("\n" + msg)
+    return msg
 
 
 def _rel(a, b):
@@ -118,11 +127,9 @@ def _check_random(cache, method, mask_fn):
         err = _rel(airlight(*p), cache["reference"])
     m = mask_fn(p)
     assert np.all(np.isfinite(err))
-    e = np.where(m, err, 0.0)
-    i = int(np.argmax(e))
-    print(f"\nrelative error over {int(m.sum())} samples: max {e[i]:.3g}, p99 {np.percentile(err[m], 99):.3g}, "
-          f"median {np.median(err[m]):.3g}")
-    assert e[i] < tol, _describe(p, err, i)
+    sub = [np.asarray(x)[m] for x in p]
+    msg = _summary(f"relative error over {int(m.sum())} samples", sub, err[m])
+    assert err[m].max() < tol, msg
 
 
 def test_random_surface_rays(cache, method):
@@ -311,13 +318,10 @@ def test_float32_evaluation(cache, table, record_property):
     p = _params(cache)
     got = airlight_float32(*p, table)
     err = _rel(got, cache["reference"])
-    i = int(np.argmax(err))
-    msg = (f"float32: max {err.max():.3g}, p99 {np.percentile(err, 99):.3g}, "
-           f"median {np.median(err):.3g}; worst {_describe(p, err, i)}")
-    print("\n" + msg)
+    msg = _summary("float32", p, err)
     record_property("float32_error", msg)
     assert np.all(np.isfinite(got))
-    assert err[i] < TOL, msg
+    assert err.max() < TOL, msg
 
 
 def test_float32_from_vectors(cache, table, record_property):
@@ -350,10 +354,7 @@ def test_float32_from_vectors(cache, table, record_property):
     g64 = np.arctan2(np.linalg.norm(np.cross(to, d), axis=1), np.sum(to * d, axis=1))
     want = ref.reference_values(b, d_sv64, v, g64, processes=1)[0]
     err = _rel(got, want)
-    i = int(np.argmax(err))
-    msg = (f"float32 from vectors: max {err.max():.3g}, p99 {np.percentile(err, 99):.3g}, "
-           f"median {np.median(err):.3g}; worst {_describe((b, d_sv64, v, g64), err, i)}")
-    print("\n" + msg)
+    msg = _summary("float32 from vectors", (b, d_sv64, v, g64), err)
     record_property("float32_vector_error", msg)
     assert np.all(np.isfinite(got))
-    assert err[i] < TOL, msg
+    assert err.max() < TOL, msg

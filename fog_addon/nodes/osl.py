@@ -201,11 +201,12 @@ def _oslquery_path():
 
 def script_node(tree):
     """A compiled Script node running the airlight shader, added to ``tree``."""
-    _oslquery_path()   # setting the script below already makes Cycles compile it
+    _oslquery_path()   # setting the script below makes Cycles compile it (when Cycles is the engine)
     node = tree.nodes.new("ShaderNodeScript")
     node.mode = "INTERNAL"
     node.script = airlight_text()
-    compile_node(node)
+    if not node.bytecode:   # not compiled yet, or it failed: compile here to get the error
+        compile_node(node)
     return node
 
 

@@ -8,6 +8,15 @@ from . import apply
 from ..precompute import presets
 
 PRESET_SUBDIR = "analytic_fog"
+PRESET_TITLES = {k: k.replace("_", " ").title() for k in presets.VISIBILITY_M}
+
+
+def _distance(m):
+    return f"{m / 1000:g} km" if m >= 1000 else f"{m:g} m"
+
+
+def _preset_items(key=lambda k: k):
+    return [(key(k), PRESET_TITLES[k], f"Visibility {_distance(v)}") for k, v in presets.VISIBILITY_M.items()]
 
 
 def _report_skipped(op, skipped):
@@ -26,7 +35,7 @@ class FOG_OT_add(bpy.types.Operator):
     preset: bpy.props.EnumProperty(
         name="Preset", default="NONE",
         items=[("NONE", "Scene Setting", "Keep the scene's density")]
-        + [(k.upper(), k.replace("_", " ").title(), f"Visibility {v:g} m") for k, v in presets.VISIBILITY_M.items()])
+        + _preset_items(str.upper))
     selected_only: bpy.props.EnumProperty(
         name="Materials", default="SCENE",
         items=[("SCENE", "Scene Setting", "As the scene's Selected Only setting"),
@@ -75,7 +84,7 @@ class FOG_OT_preset_builtin(bpy.types.Operator):
 
     name: bpy.props.EnumProperty(
         name="Preset",
-        items=[(k, k.replace("_", " ").title(), f"Visibility {v:g} m") for k, v in presets.VISIBILITY_M.items()])
+        items=_preset_items())
 
     def execute(self, context):
         settings = context.scene.analytic_fog
@@ -94,8 +103,7 @@ class FOG_MT_presets(bpy.types.Menu):
         layout = self.layout
         for key, vis in presets.VISIBILITY_M.items():
             layout.operator(FOG_OT_preset_builtin.bl_idname,
-                            text=f"{key.replace('_', ' ').title()} ({vis / 1000:g} km)" if vis >= 1000 else
-                            f"{key.replace('_', ' ').title()} ({vis:g} m)").name = key
+                            text=f"{PRESET_TITLES[key]} ({_distance(vis)})").name = key
         layout.separator()
         bpy.types.Menu.draw_preset(self, context)
 

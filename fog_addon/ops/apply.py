@@ -80,15 +80,25 @@ def _signature(lights, camera):
                     + ["camera:" + (camera.name_full if camera else "")])
 
 
+def _scene_groups_current(lights, camera):
+    """True if the Surface and World groups exist and were built for these lights and this camera."""
+    surface, world = (bpy.data.node_groups.get(n) for n in (groups.SURFACE, groups.WORLD))
+    return surface is not None and world is not None and surface.get(LIGHTS_KEY) == _signature(lights, camera)
+
+
 def _build_scene_groups(scene, lights):
-    """(Re)build the Surface and World groups for ``lights`` unless built for them already.
+    """(Re)build the Surface and World groups for ``lights`` unless built for them already;
+    lights that no longer take part lose the fog's attenuation.
 
     Returns [(light, reason)] for lights left unfogged.
     """
-    surface, world = (bpy.data.node_groups.get(n) for n in (groups.SURFACE, groups.WORLD))
-    if surface is None or world is None or surface.get(LIGHTS_KEY) != _signature(lights, scene.camera):
+    if not _scene_groups_current(lights, scene.camera):
         groups.build_surface(lights)[LIGHTS_KEY] = _signature(lights, scene.camera)
         groups.build_world(lights, scene.camera)
+        taking_part = {o.data for o in lights}
+        for light in bpy.data.lights:
+            if light.users and light not in taking_part and wrap.is_fogged(light):
+                wrap.unwrap_light(light)
     return [(light.data.name, why) for light in lights if (why := wrap.wrap_light(light.data))]
 
 
@@ -122,14 +132,11 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     if method not in groups.METHODS:
         raise ValueError(f"unknown method {method!r}; use one of {', '.join(groups.METHODS)}")
     check_camera(scene.camera)
-    notes = merge_appended()
-    lights, skipped = fog_lights(scene)
+    skipped = merge_appended()   # first: the tables and groups are looked up by name below
+    lights, notes = fog_lights(scene)
     skipped += notes
-    imgs = images.all_table_images()
     groups.set_params(beta * scene_scale, tuple(albedo))
-    groups.build_light(imgs, method)
-    groups.build_background_light(imgs, method)
-    use_osl(scene, method == "osl")
+    set_method(scene, method)
     skipped += _build_scene_groups(scene, lights)
     for mat in scene_materials(scene, objects):
         why = wrap.wrap_material(mat)
@@ -166,19 +173,14 @@ def set_method(scene, method):
 def refresh_lights(scene):
     """Rebuild the scene groups if the fog lights or the camera changed; materials are not touched.
 
-    Returns True if something was rebuilt.  Called from the depsgraph handler.
+    Called from the depsgraph handler: when nothing changed it only compares names.
     """
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is None or surface.library is not None:
-        return False
+        return
     lights, _ = fog_lights(scene)
-    if surface.get(LIGHTS_KEY) == _signature(lights, scene.camera):
-        return False
-    _build_scene_groups(scene, lights)
-    for light in bpy.data.lights:
-        if light.users and light not in [o.data for o in lights] and wrap.is_fogged(light):
-            wrap.unwrap_light(light)
-    return True
+    if not _scene_groups_current(lights, scene.camera):
+        _build_scene_groups(scene, lights)
 
 
 def remove_fog(scene):
