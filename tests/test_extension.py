@@ -1,4 +1,5 @@
-"""The add-on as a Blender extension: the manifest validates, the built zip is clean,
+"""The add-on as a Blender extension: the manifest (at the repository root, which is the
+extension's source directory) validates, the built zip holds only the add-on,
 ``extensions.package_install_files`` installs and enables it so ``fog.add`` works, and
 enabling/disabling (or register()/unregister()) three times leaves nothing behind.
 
@@ -18,7 +19,8 @@ import pytest
 
 from conftest import ROOT
 
-SRC = ROOT / "fog_addon"
+SRC = ROOT                  # the extension's source directory: blender_manifest.toml, __init__.py
+ADDON = ROOT / "fog_addon"  # the add-on package the root __init__.py hands on
 SCRIPT = ROOT / "tests" / "scenes" / "extension_install.py"
 # Blender's extension CLI, found without importing bpy (find_spec only locates the package).
 _BPY = importlib.util.find_spec("bpy")
@@ -87,42 +89,81 @@ def _assert_cycles(res, where):
             assert c["off"][key] == empty, f"{where}: after disable #{i} {key} = {c['off'][key]!r}, expected {empty!r}"
 
 
-@pytest.fixture(scope="module")
-def built_zip(tmp_path_factory):
-    """Validate the manifest and build the extension zip with Blender's own blender_ext.py."""
-    base = tmp_path_factory.mktemp("ext_build")
+def _build(src, base):
+    """Validate ``src`` and build its zip with Blender's own blender_ext.py; return the zip's path."""
     env = _isolated_env(base)
-    r = _blender_ext("validate", str(SRC), env=env, cwd=base)
-    assert r.returncode == 0, f"blender_ext.py validate failed ({r.returncode}):\n{r.stdout}\n{r.stderr}"
+    r = _blender_ext("validate", str(src), env=env, cwd=base)
+    assert r.returncode == 0, f"blender_ext.py validate {src} failed ({r.returncode}):\n{r.stdout}\n{r.stderr}"
     out = base / "dist"
     out.mkdir()
-    r = _blender_ext("build", "--source-dir", str(SRC), "--output-dir", str(out), env=env, cwd=base)
+    r = _blender_ext("build", "--source-dir", str(src), "--output-dir", str(out), env=env, cwd=base)
     assert r.returncode == 0, f"blender_ext.py build failed ({r.returncode}):\n{r.stdout}\n{r.stderr}"
     zips = sorted(out.glob("*.zip"))
     assert len(zips) == 1, f"build should produce one zip, got {zips}; output:\n{r.stdout}\n{r.stderr}"
     return zips[0]
 
 
+@pytest.fixture(scope="module")
+def built_zip(tmp_path_factory):
+    """The extension zip built from the repository root, as scripts/build_extension.sh does."""
+    return _build(SRC, tmp_path_factory.mktemp("ext_build"))
+
+
+def _zip_names(path):
+    with zipfile.ZipFile(path) as z:
+        return set(z.namelist())
+
+
+def _addon_files(root=SRC):
+    """The add-on's python files under ``root`` as zip names: fog_addon/**/*.py (no bytecode, no hidden files)."""
+    return {p.relative_to(root).as_posix() for p in (root / "fog_addon").rglob("*.py")
+            if not any(part == "__pycache__" or part.startswith(".") for part in p.relative_to(root).parts)}
+
+
 def test_built_zip_contents(built_zip):
     manifest = tomllib.loads((SRC / "blender_manifest.toml").read_text())
     assert built_zip.name == f"{manifest['id']}-{manifest['version']}.zip", built_zip.name
+    names = _zip_names(built_zip)
     with zipfile.ZipFile(built_zip) as z:
-        names = set(z.namelist())
         zipped_manifest = tomllib.loads(z.read("blender_manifest.toml").decode())
-    assert zipped_manifest == manifest, "the zipped manifest differs from fog_addon/blender_manifest.toml"
-    expected = {"__init__.py", "blender_manifest.toml", "props.py", "ops/__init__.py", "ops/apply.py",
-                "precompute/__init__.py", "precompute/model.py", "nodes/groups.py"}
-    expected |= {p.relative_to(SRC).as_posix() for p in SRC.rglob("*.py") if "__pycache__" not in p.parts}
+        root_init = z.read("__init__.py").decode() if "__init__.py" in names else ""
+    assert zipped_manifest == manifest, "the zipped manifest differs from blender_manifest.toml"
+    assert "from .fog_addon import" in root_init, "the zip's root __init__.py does not hand on fog_addon"
+    addon = _addon_files()
+    assert {"fog_addon/__init__.py", "fog_addon/props.py", "fog_addon/ops/apply.py",
+            "fog_addon/precompute/model.py", "fog_addon/nodes/groups.py"} <= addon, sorted(addon)
+    expected = {"__init__.py", "blender_manifest.toml"} | addon
     missing = sorted(expected - names)
-    assert not missing, f"package files missing from {built_zip.name}: {missing}"
-    junk = sorted(n for n in names if "__pycache__" in n.split("/") or n.endswith((".pyc", ".pyo")))
-    assert not junk, (f"{built_zip.name} contains bytecode {junk}: add "
-                      '[build] paths_exclude_pattern = ["__pycache__/", "*.pyc"] to the manifest')
-    # A [build] paths_exclude_pattern *replaces* Blender's default list (which has ".*" and "/*.zip"),
-    # so editor swap files, .DS_Store or an old built zip in the source tree would ship too.
-    stray = sorted(n for n in names if any(part.startswith(".") for part in n.split("/")) or n.endswith(".zip"))
-    assert not stray, (f"{built_zip.name} contains hidden files or zips {stray}: add \".*\" and \"/*.zip\" "
-                       "to [build] paths_exclude_pattern in the manifest")
+    assert not missing, (f"add-on files missing from {built_zip.name}: {missing}; "
+                         "see [build] paths_exclude_pattern in blender_manifest.toml")
+    # Only the add-on ships: no tests, demo scenes, benchmarks, tools, docs, scripts, .venv, out/,
+    # bytecode, hidden files or built zips.
+    extra = sorted(names - expected)
+    assert not extra, f"{built_zip.name} holds files the add-on doesn't need: {extra}"
+
+
+def test_build_leaves_out_junk(tmp_path):
+    """A source tree littered with what development leaves behind still builds the add-on only."""
+    src = tmp_path / "src"
+    src.mkdir()
+    for name in ("__init__.py", "blender_manifest.toml"):
+        (src / name).write_bytes((SRC / name).read_bytes())
+    for py in _addon_files():
+        (src / py).parent.mkdir(parents=True, exist_ok=True)
+        (src / py).write_bytes((SRC / py).read_bytes())
+    junk = ["tests/test_x.py", "tests/conftest.py", "demo_scenes/__init__.py", "benchmarks/b.py", "tools/t.py",
+            "docs/figures/f.png", "scripts/s.sh", ".venv/lib/site.py", "out/analytic_fog-0.1.0.zip", "old.zip",
+            "README.md", "requirements-dev.txt", "setup.py", ".gitignore", ".git/HEAD", "scene.blend",
+            "fog_addon/__pycache__/cli.cpython-311.pyc", "fog_addon/nodes/__pycache__/groups.cpython-311.pyc",
+            "fog_addon/cli.pyc", "fog_addon/.cli.py.swp", "fog_addon/notes.txt", "fog_addon/nodes/fog.oso",
+            "fog_addon/ops/apply.py~", "fog_addon/precompute/table.npz", "fog_addon/test.blend1"]
+    for name in junk:
+        (src / name).parent.mkdir(parents=True, exist_ok=True)
+        (src / name).write_text("junk\n")
+    names = _zip_names(_build(src, tmp_path / "build"))
+    expected = {"__init__.py", "blender_manifest.toml"} | _addon_files(src)
+    assert names == expected, (f"zip built from a littered tree: extra {sorted(names - expected)}, "
+                               f"missing {sorted(expected - names)}")
 
 
 def test_install_enable_add_and_cycle(built_zip, tmp_path):
@@ -140,6 +181,10 @@ def test_install_enable_add_and_cycle(built_zip, tmp_path):
     after = res["after_install"]
     assert {"add", "remove"} <= set(after["fog_ops"]), f"after install bpy.ops.fog = {after['fog_ops']}"
     assert after["scene_prop"], "after install bpy.types.Scene.analytic_fog is missing"
+    # The operators come from the installed copy (the root package hands on fog_addon's register()).
+    for op in ("FOG_OT_add", "FOG_OT_remove"):
+        assert any(c.startswith(f"{res['module']}.fog_addon.") and c.endswith("." + op)
+                   for c in after["classes"]), f"{op} not registered from {res['module']}.fog_addon: {after['classes']}"
     assert res["add_result"] == ["FINISHED"], f"fog.add(density=0.1) returned {res['add_result']}:{_problems(res)}"
     assert res["surface_group"], "fog.add did not create the node group 'AnalyticFog Surface'"
     assert res["material_fogged"], "fog.add did not insert the fog into the plane's material"
@@ -154,10 +199,10 @@ def test_install_enable_add_and_cycle(built_zip, tmp_path):
 
 
 def test_source_register_unregister_cycle(tmp_path):
-    res = _run_script("source", SRC.parent, tmp_path)
+    res = _run_script("source", ADDON.parent, tmp_path)
     where = "fog_addon from source"
-    assert res["imported_file"] and pathlib.Path(res["imported_file"]).resolve().is_relative_to(SRC.resolve()), (
-        f"imported {res['imported_file']}, not the source tree {SRC}:{_problems(res)}")
+    assert res["imported_file"] and pathlib.Path(res["imported_file"]).resolve().is_relative_to(ADDON.resolve()), (
+        f"imported {res['imported_file']}, not the source tree {ADDON}:{_problems(res)}")
     assert res["before"]["fog_ops"] == [] and not res["before"]["scene_prop"], (
         f"registered before register(): {res['before']}")
     _assert_cycles(res, where)
