@@ -44,8 +44,9 @@ import bmesh  # noqa: E402
 
 import fog_addon  # noqa: E402
 from demo_scenes import add_camera, add_point_light, render_settings, set_world  # noqa: E402
-from fog_addon.nodes import groups, images, osl, wrap  # noqa: E402
+from fog_addon.nodes import groups, images, wrap  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
+from fog_addon.precompute import rungs  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "out"
 DENSITY = 0.05
@@ -89,8 +90,9 @@ def shared_ok(on):
     """Exactly one copy of each shared data-block when the fog is on, none when off."""
     names = [g.name for g in bpy.data.node_groups] + [i.name for i in bpy.data.images] + [t.name for t in bpy.data.texts]
     ours = sorted(n for n in names if n.startswith("AnalyticFog"))
-    want = sorted([groups.PARAMS, groups.LIGHT, groups.BACKGROUND_LIGHT, groups.SURFACE, groups.WORLD]
-                  + images.table_names() + ([osl.TEXT] if osl.TEXT in ours else [])) if on else []
+    models = rungs.choose("nodes")
+    want = sorted([groups.PARAMS, groups.SURFACE, groups.WORLD, groups.light_group_name(models),
+                   groups.background_group_name(models)] + images.table_names()) if on else []
     return ours == want
 
 

@@ -306,9 +306,8 @@ def airlight_float32(beta, d_sv, d_vp, gamma, table):
     along, h = d_sv * np.cos(gamma), d_sv * np.sin(gamma)
     finite = np.isfinite(d_vp)
     dvp = np.where(finite, d_vp, 0.0)
-    d_sp = np.hypot(dvp - along, h)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        seg = model.airlight_segment(m, f(beta), f(d_sv), f(along), f(h), f(dvp), f(d_sp))
+        seg = model.airlight_segment(m, f(beta), f(d_sv), f(along), f(h), f(dvp))
         bg = model.airlight_background(m, f(beta), f(d_sv), f(along), f(h))
     assert seg.dtype == np.float32 and bg.dtype == np.float32
     return np.where(finite, seg, bg)
@@ -343,9 +342,8 @@ def test_float32_from_vectors(cache, table, record_property):
     dirn = dirn.astype(f)
     m = Float32Ops({tables.AIRLIGHT.name: table})
     d_sv, along, h = model.ray_light_geometry(m, origin, dirn, light)
-    d_sp = m.length(light - (origin + dirn * v.astype(f)[:, None]))
     with np.errstate(over="ignore", invalid="ignore"):
-        got = model.airlight_segment(m, b.astype(f), d_sv, along, h, v.astype(f), d_sp)
+        got = model.airlight_segment(m, b.astype(f), d_sv, along, h, v.astype(f))
     assert got.dtype == np.float32
     o, d, li = origin.astype(float), dirn.astype(float), light.astype(float)
     d /= np.linalg.norm(d, axis=1, keepdims=True)

@@ -37,10 +37,9 @@ _SUFFIX = re.compile(r"^(?P<base>.+)\.(?P<num>\d{3,})$")
 def _shared():
     """(bpy.data collection name, canonical names, is-ours test) of every shared fog data-block."""
     return (
-        ("node_groups", (groups.PARAMS, groups.LIGHT, groups.BACKGROUND_LIGHT, groups.SURFACE, groups.WORLD),
-         lambda ng: bool(ng.get(groups.FOG_PROP))),
+        ("node_groups", tuple(groups.all_group_names()), lambda ng: bool(ng.get(groups.FOG_PROP))),
         ("images", tuple(images.table_names()), lambda img: images.VERSION_KEY in img),
-        ("texts", (osl.TEXT,), lambda text: text.as_string().startswith("// Analytic Fog")),
+        ("texts", tuple(osl.text_names()), lambda text: text.as_string().startswith("// Analytic Fog")),
     )
 
 

@@ -1,31 +1,35 @@
-"""Shader node groups of the fog, built from ``precompute/model.py`` via ``NodeOps``.
+"""Shader node groups of the fog: ``precompute/shading.py`` built as nodes via ``NodeOps``.
 
 One shared copy of each group per .blend:
 
-* ``AnalyticFog Params``: the fog's settings (density beta in 1/m, albedo colour).
-* ``AnalyticFog Light``: one point light seen from a surface point (airlight
-  along the camera ray, light scattered onto the surface, direct-light
-  attenuation), instanced once per light.
-* ``AnalyticFog Background Light``: one point light's airlight on a ray that
-  meets no surface (the World).
+* ``AnalyticFog Params``: the fog's settings (density beta per scene unit, albedo colour).
+* ``AnalyticFog Light [models]``: ``shading.shade_point`` — one light seen
+  from a surface point (airlight along the camera ray, fog light scattered
+  onto the surface, direct-light attenuation) with the rungs ``models``
+  (``rungs.LightModels``), instanced once per light that uses those models.
+* ``AnalyticFog Background Light [model]``: ``shading.background_point`` —
+  one light's airlight on a ray that meets no surface (the World).
 
-  These two hold the fog's method: with "nodes" the airlight comes from the N
-  table (Cycles and EEVEE), with "osl" from the Script node of ``osl.py``
-  (quadrature, Cycles only).  Switching rebuilds just these two.
-* ``AnalyticFog Surface`` / ``AnalyticFog World``: the sum over the scene's fog
-  lights, their positions and intensities fed by drivers (no Python expression,
-  so they evaluate with auto-run off and without the add-on).  Rebuilding these
-  two when lights change leaves every material untouched.
+  A rung that runs only in OSL becomes a Script node (``osl.py``, Cycles only).
+* ``AnalyticFog Surface`` / ``AnalyticFog World``: ``shading.shade_surface`` /
+  ``shade_background`` over the scene's fog lights, their positions and
+  intensities fed by drivers (no Python expression, so they evaluate with
+  auto-run off and without the add-on).  Rebuilding these two when lights or
+  their models change leaves every material untouched.
+
+Each group records the fingerprint of the code that built it
+(``BUILT``, from the source of the kernels, the shading and the builders): a
+saved file made by other code rebuilds it.
 """
 import math
+import sys
 
 import bpy
 
-from ..precompute import model, surface
-from . import images as table_images, osl
+from ..precompute import fingerprint, model, ops, rungs, shading, surface, tables
+from ..precompute.medium import Medium
+from . import osl, sockets
 from .sockets import NodeOps
-
-METHODS = ("nodes", "osl")
 
 PARAMS = "AnalyticFog Params"
 LIGHT = "AnalyticFog Light"
@@ -35,8 +39,31 @@ WORLD = "AnalyticFog World"
 
 FOG_PROP = "analytic_fog"   # custom-property key marking data the fog made or changed
 BUILDING = " (building)"     # name suffix of a group being built beside the one in use
-BUILT = "analytic_fog_built"   # on the per-light groups: the method and version they were built for
-VERSION = 2                    # bump when a group's content changes: files made by older versions rebuild it
+BUILT = "analytic_fog_built"   # on the per-light groups: the fingerprint of the code they were built by
+
+
+def code_fingerprint():
+    """Fingerprint of everything that decides a group's content (kernels, tables, shading, builders)."""
+    return fingerprint.source_fingerprint(model, surface, tables, shading, rungs, ops, sockets, osl,
+                                          sys.modules[__name__])
+
+
+def light_group_name(models):
+    """Name of the per-light surface group for ``models`` (rungs.LightModels)."""
+    return f"{LIGHT} [{models.airlight.name}, {models.scatter.name}, {models.direct.name}]"
+
+
+def background_group_name(models):
+    return f"{BACKGROUND_LIGHT} [{models.background.name}]"
+
+
+def all_group_names():
+    """Every group name the fog can make (for Remove and for merging appended copies)."""
+    names = [PARAMS, SURFACE, WORLD]
+    for pref in rungs.PREFERENCES:
+        models = rungs.choose(pref)
+        names += [light_group_name(models), background_group_name(models)]
+    return list(dict.fromkeys(names))
 
 
 def _new_group(name, inputs, outputs):
@@ -106,91 +133,56 @@ def set_params(beta, albedo):
     return ng
 
 
-def _colour_times(m, colour_sock, scalar):
-    """colour (socket) * scalar (Val) as a vector Val."""
-    return m.vmath("SCALE", m.wrap(colour_sock, vector=True), scalar)
-
-
-def _airlight_osl(m, beta, light, camera, direction, distance=None):
-    """The airlight Script node (``osl.airlight_source``) fed with these Vals; distance None: the background."""
-    node = osl.script_node(m.tree)
-    for name, v in (("Beta", beta), ("Light", light), ("Camera", camera), ("Direction", direction),
-                    ("Distance", distance)):
-        if v is not None:
-            m.feed(node.inputs[name], m.wrap(v))
-    return m.wrap(node.outputs["Airlight"])
-
-
-def _built_key(method):
-    return f"{method}/{VERSION}/tables {table_images.TABLE_VERSION}"
-
-
-def _up_to_date(name, method):
-    """The group ``name`` if it was built for ``method`` by this version and its tables are all there
-    (rebuilding costs seconds)."""
+def _up_to_date(name):
+    """The group ``name`` if this code built it and its tables are all there (rebuilding costs seconds)."""
     ng = bpy.data.node_groups.get(name)
-    if ng is None or ng.get(BUILT) != _built_key(method):
+    if ng is None or ng.get(BUILT) != code_fingerprint():
         return None
     return ng if all(n.image is not None for n in ng.nodes if n.bl_idname == "ShaderNodeTexImage") else None
 
 
-def build_light(images, method="nodes"):
-    """Per-light surface group: Sun et al. 2005 Eq. 11 (airlight), 14 (direct), 17-18 (scattered)."""
-    if (ng := _up_to_date(LIGHT, method)) is not None:
+def _medium(m, beta, albedo=None):
+    """The Medium of a group's sockets (the per-light groups need only beta)."""
+    return Medium(m.wrap(beta)) if albedo is None else Medium(m.wrap(beta), m.wrap(albedo, vector=True))
+
+
+def build_light(models, images):
+    """Per-light surface group: ``shading.shade_point`` (Sun et al. 2005 Eq. 11, 14, 17-18) with ``models``."""
+    name = light_group_name(models)
+    if (ng := _up_to_date(name)) is not None:
         return ng
-    ng, gin, gout = _new_group(LIGHT, [
+    ng, gin, gout = _new_group(name, [
         ("Beta", F), ("Light", V), ("Intensity", C), ("Position", V), ("Incoming", V),
         ("View Distance", F), ("Normal", V), ("Diffuse", C), ("Specular", C), ("Glossy Level", F),
     ], [("Airlight", C), ("Scattered", C), ("Attenuation", F), ("Weight", F)])
     m = NodeOps(ng, images)
-    g = {s.name: m.wrap(s) for s in gin.outputs if s.name}
-    beta, light, pos, incoming = g["Beta"], g["Light"], g["Position"], g["Incoming"]
-    d_vp = g["View Distance"]
-    camera = pos + incoming * d_vp
-    to_light = light - pos
-    d_sp = m.length(to_light)
-    if method == "osl":
-        air = _airlight_osl(m, beta, light, camera, -1.0 * incoming, d_vp)
-    else:
-        d_sv, along, h = model.ray_light_geometry(m, camera, -1.0 * incoming, light)
-        air = model.airlight_segment(m, beta, d_sv, along, h, d_vp, d_sp)
-    att = model.transmittance(m, beta, d_sp)
-    cos_n = m.dot(to_light, g["Normal"]) / m.maximum(d_sp, model.MIN_DISTANCE)
-    weight = m.maximum(cos_n, 0.0) / m.maximum(d_sp * d_sp, model.MIN_DISTANCE ** 2)
-    # mirror of the view direction about the normal: the axis of the glossy lobe (Sun App. B)
-    nrm = g["Normal"]
-    refl = nrm * (2.0 * m.dot(incoming, nrm)) - incoming
-    cos_r = m.dot(to_light, refl) / m.maximum(d_sp, model.MIN_DISTANCE)
-    diff = surface.surface_scatter(m, beta, d_sp, cos_n, 0.0)
-    gloss = surface.surface_scatter(m, beta, d_sp, cos_r, g["Glossy Level"])
-    scattered = (m.vmath("MULTIPLY", m.wrap(g["Diffuse"].sock, vector=True), m.combine(diff, diff, diff))
-                 + m.vmath("MULTIPLY", m.wrap(g["Specular"].sock, vector=True), m.combine(gloss, gloss, gloss)))
-    intensity = m.wrap(g["Intensity"].sock, vector=True)
-    ng.links.new(_colour_times(m, g["Intensity"].sock, air).sock, gout.inputs["Airlight"])
-    ng.links.new(m.vmath("MULTIPLY", intensity, scattered).sock, gout.inputs["Scattered"])
-    ng.links.new(att.sock, gout.inputs["Attenuation"])
-    ng.links.new(weight.sock, gout.inputs["Weight"])
-    ng[BUILT] = _built_key(method)
-    return _install(ng, LIGHT)
+    g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
+    pos, incoming, d_vp = g["Position"], g["Incoming"], g["View Distance"]
+    geo = shading.Geometry(pos + incoming * d_vp, pos, incoming, d_vp, g["Normal"])
+    material = shading.Material(g["Diffuse"], g["Specular"], g["Glossy Level"])
+    light = shading.Light(g["Light"], g["Intensity"])
+    terms = shading.shade_point(m, geo, material, light, _medium(m, g["Beta"]), models)
+    for key, v in terms._asdict().items():
+        m.feed(gout.inputs[key.title()], v)
+    ng[BUILT] = code_fingerprint()
+    return _install(ng, name)
 
 
-def build_background_light(images, method="nodes"):
-    """Per-light world group: Sun et al. 2005 Eq. 12 (airlight of a ray to infinity)."""
-    if (ng := _up_to_date(BACKGROUND_LIGHT, method)) is not None:
+def build_background_light(models, images):
+    """Per-light world group: ``shading.background_point`` (Sun et al. 2005 Eq. 12) with ``models``."""
+    name = background_group_name(models)
+    if (ng := _up_to_date(name)) is not None:
         return ng
-    ng, gin, gout = _new_group(BACKGROUND_LIGHT, [
+    ng, gin, gout = _new_group(name, [
         ("Beta", F), ("Light", V), ("Intensity", C), ("Camera", V), ("Direction", V),
     ], [("Airlight", C)])
     m = NodeOps(ng, images)
-    g = {s.name: m.wrap(s) for s in gin.outputs if s.name}
-    if method == "osl":
-        air = _airlight_osl(m, g["Beta"], g["Light"], g["Camera"], g["Direction"])
-    else:
-        d_sv, along, h = model.ray_light_geometry(m, g["Camera"], g["Direction"], g["Light"])
-        air = model.airlight_background(m, g["Beta"], d_sv, along, h)
-    ng.links.new(_colour_times(m, g["Intensity"].sock, air).sock, gout.inputs["Airlight"])
-    ng[BUILT] = _built_key(method)
-    return _install(ng, BACKGROUND_LIGHT)
+    g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
+    air = shading.background_point(m, g["Camera"], g["Direction"], shading.Light(g["Light"], g["Intensity"]),
+                                   _medium(m, g["Beta"]), models)
+    m.feed(gout.inputs["Airlight"], air)
+    ng[BUILT] = code_fingerprint()
+    return _install(ng, name)
 
 
 # --- scene-level sums over the fog lights -------------------------------------------
@@ -238,7 +230,7 @@ def _light_instance(ng, k, light, group_name, inputs):
     """Instance ``group_name`` for the ``k``-th light, its Light and Intensity inputs driven by ``light``.
 
     ``inputs``: (output socket, input name) pairs for the other inputs.
-    Returns (group node, intensity node).
+    Returns the group node.
     """
     loc = _driven_vector(ng, f"Light {k} Location", -600, -300 * k)
     _drive_location(loc, light)
@@ -250,19 +242,17 @@ def _light_instance(ng, k, light, group_name, inputs):
     node.location = (-300, -300 * k)
     for a, b in ((loc.outputs[0], "Light"), (inten.outputs[0], "Intensity"), *inputs):
         ng.links.new(a, node.inputs[b])
-    return node, inten
+    return node
 
 
-def build_surface(lights):
-    """Scene group for materials: Sun et al. 2005 Eq. 19, L = e^{-T_vp} L_p + L_a, summed over ``lights``.
+def build_surface(lights, models, images):
+    """Scene group for materials: ``shading.shade_surface`` (Sun et al. 2005 Eq. 19) over ``lights``.
 
-    Inputs mirror the Principled BSDF; outputs: Emission (airlight plus the
-    fog light the surface reflects, camera rays only), Transmittance
-    e^{-beta D_vp} to scale the material, Direct Attenuation (EEVEE's
-    stand-in for the per-light e^{-beta D_sp}: their average weighted by each
-    light's unshadowed irradiance), and per engine the Mix Factor 1 - scale
-    of the user's shader (Cycles: 1 - Transmittance; EEVEE: 1 - Transmittance
-    * Direct Attenuation).
+    ``models``: one rungs.LightModels per light.  Inputs mirror the Principled
+    BSDF; outputs are the fields of ``shading.SurfaceFog``: Emission (camera
+    rays only), Transmittance e^{-beta D_vp} to scale the material, Direct
+    Attenuation (EEVEE's stand-in for the per-light e^{-beta D_sp}) and per
+    engine the Mix Factor 1 - scale of the user's shader.
     """
     ng, gin, gout = _new_group(SURFACE, [
         ("Base Color", C), ("Metallic", F), ("Roughness", F), ("Specular IOR Level", F),
@@ -278,44 +268,24 @@ def build_surface(lights):
     diffuse, specular, level = surface.principled_to_phong(
         m, m.wrap(g["Base Color"], vector=True), m.wrap(g["Metallic"]), m.wrap(g["Roughness"]),
         m.wrap(g["Specular IOR Level"]))
-    beta = m.wrap(params.outputs["Beta"])
-    air_sum = scat_sum = num = den = None
-    for k, light in enumerate(lights):
-        node, inten = _light_instance(ng, k, light, LIGHT, (
-            (params.outputs["Beta"], "Beta"), (geo.outputs["Position"], "Position"),
-            (geo.outputs["Incoming"], "Incoming"), (cam.outputs["View Distance"], "View Distance"),
-            (geo.outputs["Normal"], "Normal"), (diffuse.sock, "Diffuse"), (specular.sock, "Specular"),
-            (level.sock, "Glossy Level")))
-        out = {s.name: m.wrap(s, vector=s.type != "VALUE") for s in node.outputs}
-        w = out["Weight"] * m.dot(m.wrap(inten.outputs[0]), m.const(1.0 / 3.0) * m.combine(1.0, 1.0, 1.0))
-        air_sum = out["Airlight"] if air_sum is None else air_sum + out["Airlight"]
-        scat_sum = out["Scattered"] if scat_sum is None else scat_sum + out["Scattered"]
-        num = w * out["Attenuation"] if num is None else num + w * out["Attenuation"]
-        den = w if den is None else den + w
-    is_cam = m.wrap(path.outputs["Is Camera Ray"])
-    t_vp = model.transmittance(m, beta, m.wrap(cam.outputs["View Distance"]))
-    albedo = m.wrap(params.outputs["Albedo"], vector=True)
-    if lights:
-        fog = m.vmath("MULTIPLY", albedo, air_sum + scat_sum * t_vp) * is_cam
-        direct = (num + 1e-30) / (den + 1e-30)
-    else:
-        fog, direct = m.combine(0.0, 0.0, 0.0), m.const(1.0)
-    ng.links.new(fog.sock, gout.inputs["Emission"])
-    transmit = 1.0 + is_cam * (t_vp - 1.0)
-    ng.links.new(transmit.sock, gout.inputs["Transmittance"])
-    if direct.sock is None:
-        gout.inputs["Direct Attenuation"].default_value = direct.const
-    else:
-        ng.links.new(direct.sock, gout.inputs["Direct Attenuation"])
-    # the factors of the materials' Mix Shaders (1 - scale of the user's shader), computed once here
-    # rather than by two Math nodes per engine in each of a scene's materials
-    ng.links.new((1.0 - transmit).sock, gout.inputs["Cycles Mix Factor"])
-    ng.links.new((1.0 - transmit * direct).sock, gout.inputs["EEVEE Mix Factor"])
+    terms = []
+    for k, (light, mod) in enumerate(zip(lights, models)):
+        node = _light_instance(ng, k, light, build_light(mod, images).name, (
+            (params.outputs["Beta"], "Beta"), (geo.outputs["Position"], "Position"), (geo.outputs["Incoming"], "Incoming"),
+            (cam.outputs["View Distance"], "View Distance"), (geo.outputs["Normal"], "Normal"),
+            (diffuse.sock, "Diffuse"), (specular.sock, "Specular"), (level.sock, "Glossy Level")))
+        terms.append(shading.LightTerms(*(m.wrap(node.outputs[f], vector=node.outputs[f].type != "VALUE")
+                                          for f in ("Airlight", "Scattered", "Attenuation", "Weight"))))
+    fog = shading.shade_surface(m, terms, _medium(m, params.outputs["Beta"], params.outputs["Albedo"]),
+                                m.wrap(cam.outputs["View Distance"]), m.wrap(path.outputs["Is Camera Ray"]))
+    for sock, v in zip(("Emission", "Transmittance", "Direct Attenuation", "Cycles Mix Factor", "EEVEE Mix Factor"),
+                       fog):
+        m.feed(gout.inputs[sock], m.wrap(v))
     return _install(ng, SURFACE)
 
 
-def build_world(lights, camera):
-    """Scene group for the World: airlight to infinity (Sun et al. 2005 Eq. 12) summed over ``lights``.
+def build_world(lights, models, camera, images):
+    """Scene group for the World: ``shading.shade_background`` (Sun et al. 2005 Eq. 12) over ``lights``.
 
     Camera position by TRANSFORMS drivers on ``camera`` (no node gives it in a
     world shader).  The background itself is seen through infinite fog:
@@ -332,15 +302,14 @@ def build_world(lights, camera):
     if camera is not None:
         _drive_location(cam, camera)
     direction = m.vmath("NORMALIZE", m.wrap(geo.outputs["Position"]))
-    total = None
-    for k, light in enumerate(lights):
-        node, _ = _light_instance(ng, k, light, BACKGROUND_LIGHT, (
+    airlights = []
+    for k, (light, mod) in enumerate(zip(lights, models)):
+        node = _light_instance(ng, k, light, build_background_light(mod, images).name, (
             (params.outputs["Beta"], "Beta"), (cam.outputs[0], "Camera"), (direction.sock, "Direction")))
-        a = m.wrap(node.outputs["Airlight"], vector=True)
-        total = a if total is None else total + a
-    is_cam = m.wrap(path.outputs["Is Camera Ray"])
-    albedo = m.wrap(params.outputs["Albedo"], vector=True)
-    fog = m.vmath("MULTIPLY", albedo, total) * is_cam if lights else m.combine(0.0, 0.0, 0.0)
-    ng.links.new(fog.sock, gout.inputs["Emission"])
-    ng.links.new((1.0 - is_cam).sock, gout.inputs["Transmittance"])
+        airlights.append(m.wrap(node.outputs["Airlight"], vector=True))
+    emission, transmittance = shading.shade_background(
+        m, airlights, _medium(m, params.outputs["Beta"], params.outputs["Albedo"]),
+        m.wrap(path.outputs["Is Camera Ray"]))
+    m.feed(gout.inputs["Emission"], m.wrap(emission))
+    m.feed(gout.inputs["Transmittance"], m.wrap(transmittance))
     return _install(ng, WORLD)

@@ -2,10 +2,9 @@
 import bpy
 import numpy as np
 
-from ..precompute import tables
+from ..precompute import fingerprint, tables
 
-VERSION_KEY = "analytic_fog_table_version"
-TABLE_VERSION = 2
+VERSION_KEY = "analytic_fog_table_version"   # on each image: the fingerprint of the code that baked it
 
 
 def _bakers():
@@ -16,6 +15,12 @@ def _bakers():
     }
 
 
+def table_version(spec):
+    """Fingerprint of the layouts and bakers of every table, and ``spec``: a changed bake rebakes."""
+    from ..precompute import airlight, surface
+    return fingerprint.source_fingerprint(tables, airlight, surface, extra=(spec,))
+
+
 def table_image(spec, bake):
     """The image holding ``spec``'s table, baked and packed if missing or stale.
 
@@ -23,8 +28,9 @@ def table_image(spec, bake):
     output (CHANNEL_PACKED keeps it independent of RGB).  ``use_half_precision``
     is off or EEVEE would upload half floats.
     """
+    version = table_version(spec)
     img = bpy.data.images.get(spec.name)
-    if (img is not None and img.get(VERSION_KEY) == TABLE_VERSION
+    if (img is not None and img.get(VERSION_KEY) == version
             and tuple(img.size) == (spec.width, spec.height) and img.packed_file is not None):
         return img
     if img is not None:
@@ -39,7 +45,7 @@ def table_image(spec, bake):
     img.update()
     img.pack()
     img.use_fake_user = True
-    img[VERSION_KEY] = TABLE_VERSION
+    img[VERSION_KEY] = version
     return img
 
 

@@ -4,22 +4,25 @@
 but each operation appends a line of OSL instead of computing a value, so
 the shader is the very code the numpy model runs.  Loops (``fori``) print as
 ``for`` loops; tables are not available (OSL's ``texture()`` cannot read images
-packed into the .blend), which is why the OSL method takes the airlight by
-quadrature (``model.airlight_quadrature``) rather than from the N table.
+packed into the .blend), so only table-free rungs (``rungs.py``) run here:
+the OSL method takes the airlight by quadrature (``model.airlight_quadrature``)
+rather than from the N table.  Each such rung becomes one shader whose float
+inputs are its kernel's arguments.
 
 The shader's text is an internal text data-block, compiled into the Script
 node (bytecode saved in the .blend): a saved file renders on a farm without
 the add-on.
 """
+import inspect
 import sys
 
 import bpy
 
-from ..precompute import model
+from ..precompute import fingerprint, rungs
 
-TEXT = "AnalyticFog Airlight.osl"
-SHADER = "analytic_fog_airlight"
-VERSION = 1   # bump when the printed shader changes: existing texts are then rewritten
+PREFIX = "AnalyticFog"
+SHADER_PREFIX = "analytic_fog_"
+OUTPUT = "result"
 
 
 class OslVal:
@@ -129,6 +132,9 @@ class OslOps:
     def scale(self, v, s):
         return self.wrap(v) * s
 
+    def combine(self, x, y, z):
+        return self.call("vector", x, y, z, vector=True)
+
     def fori(self, count, body, state, done=None):
         """A ``for`` loop of ``count`` passes over ``body``, leaving it once ``done`` is 1 (see NumpyOps.fori)."""
         state = [self.wrap(s) for s in state]
@@ -149,44 +155,56 @@ class OslOps:
         return tuple(names)
 
     def table(self, spec, x, y, row0=0, rows=None):
-        raise NotImplementedError("OSL cannot read packed images: the OSL method uses no tables")
+        """Not available: OSL's texture() cannot read images packed into the .blend (and a farm file
+        must not depend on files beside it), so OSL runs only table-free rungs."""
+        raise NotImplementedError("OSL cannot read packed images: only table-free models run in OSL")
+
+    def run(self, rung, *args):
+        """``rung.kernel`` printed into this shader (it must run in OSL)."""
+        if "osl" not in rung.backends:
+            raise ValueError(f"the {rung.name} model does not run in OSL")
+        return rung.kernel(self, *args)
 
 
-def airlight_source():
-    """OSL source of the per-light airlight: Sun et al. 2005 Eq. 5 by ``model.airlight_quadrature``.
+def kernel_inputs(rung):
+    """The names of ``rung.kernel``'s arguments after ``m``: the Script node's float inputs, in order."""
+    return list(inspect.signature(rung.kernel).parameters)[1:]
 
-    Inputs: Beta (1/m), Light and Camera positions (m), the ray's unit
-    Direction, Distance to the surface (m; model.FAR for the background).
-    Output: Airlight per unit intensity (1/m^2).
-    """
+
+def text_name(rung):
+    return f"{PREFIX} {rung.name}.osl"
+
+
+def kernel_source(rung):
+    """OSL source of ``rung.kernel``, printed by OslOps: one float output ``OUTPUT`` from float inputs."""
     m = OslOps()
-    beta, light, camera, direction, distance = (
-        OslVal(m, n, v) for n, v in (("Beta", False), ("Light", True), ("Camera", True),
-                                     ("Direction", True), ("Distance", False)))
-    d_sv, along, h = model.ray_light_geometry(m, camera, direction, light)
-    air = model.airlight_quadrature(m, beta, d_sv, along, h, distance)
+    names = kernel_inputs(rung)
+    result = m.wrap(rung.kernel(m, *(OslVal(m, n) for n in names)))
     body = "\n".join(m.lines)
-    return (f"// Analytic Fog v{VERSION}: airlight of one point light by quadrature of Sun et al. 2005 Eq. 5.\n"
-            f"// Printed by fog_addon/nodes/osl.py from fog_addon/precompute/model.py; do not edit.\n"
-            f"shader {SHADER}(\n"
-            f"    float Beta = 0.0,\n"
-            f"    vector Light = vector(0.0),\n"
-            f"    vector Camera = vector(0.0),\n"
-            f"    vector Direction = vector(0.0, 0.0, 1.0),\n"
-            f"    float Distance = {_literal(model.FAR)},\n"
-            f"    output float Airlight = 0.0)\n"
-            f"{{\n{body}\n    Airlight = {air.expr};\n}}\n")
+    params = "".join(f"    float {n} = 0.0,\n" for n in names)
+    version = fingerprint.source_fingerprint(sys.modules[rung.kernel.__module__], sys.modules[__name__])
+    return (f"// Analytic Fog {version}: {rung.name} ({rung.term}), {rung.kernel.__module__}.{rung.kernel.__name__}\n"
+            f"// Printed by fog_addon/nodes/osl.py from fog_addon/precompute; do not edit.\n"
+            f"shader {SHADER_PREFIX}{rung.name.replace(' ', '_')}(\n"
+            f"{params}"
+            f"    output float {OUTPUT} = 0.0)\n"
+            f"{{\n{body}\n    {OUTPUT} = {result.expr};\n}}\n")
 
 
-def airlight_text():
-    """The internal text holding the shader, (re)written when missing or outdated."""
-    src = airlight_source()
-    text = bpy.data.texts.get(TEXT)
+def kernel_text(rung):
+    """The internal text holding ``rung``'s shader, (re)written when missing or outdated."""
+    src = kernel_source(rung)
+    text = bpy.data.texts.get(text_name(rung))
     if text is None:
-        text = bpy.data.texts.new(TEXT)
+        text = bpy.data.texts.new(text_name(rung))
     if text.as_string() != src:
         text.from_string(src)
     return text
+
+
+def text_names():
+    """Names of the texts of every rung that runs in OSL (what ``remove`` and ``dedupe`` look for)."""
+    return [text_name(r) for r in rungs.RUNGS if "osl" in r.backends]
 
 
 def _oslquery_path():
@@ -199,12 +217,12 @@ def _oslquery_path():
             sys.path.append(p)
 
 
-def script_node(tree):
-    """A compiled Script node running the airlight shader, added to ``tree``."""
+def script_node(tree, rung):
+    """A compiled Script node running ``rung``'s shader, added to ``tree``."""
     _oslquery_path()   # setting the script below makes Cycles compile it (when Cycles is the engine)
     node = tree.nodes.new("ShaderNodeScript")
     node.mode = "INTERNAL"
-    node.script = airlight_text()
+    node.script = kernel_text(rung)
     if not node.bytecode:   # not compiled yet, or it failed: compile here to get the error
         compile_node(node)
     return node

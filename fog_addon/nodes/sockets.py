@@ -111,6 +111,8 @@ class NodeOps:
         if a.vector or b.vector:
             if op in ("ADD", "SUBTRACT") and a.vector and b.vector:
                 return self.vmath(op, a, b)
+            if op == "MULTIPLY" and a.vector and b.vector:
+                return self.vmath("MULTIPLY", a, b)   # elementwise, as numpy and OSL
             if op == "MULTIPLY":
                 return self.vmath("SCALE", a, b) if a.vector else self.vmath("SCALE", b, a)
             raise TypeError(f"unsupported vector operation {op}")
@@ -186,6 +188,23 @@ class NodeOps:
         for s, v in zip(n.inputs, vals):
             self.feed(s, v)
         return Val(self, sock=n.outputs[0], vector=True, col=col)
+
+    def fori(self, count, body, state, done=None):
+        """Not available: shader nodes have no loops (and unrolling a quadrature's 64 panels would blow
+        Cycles' SVM stack).  Kernels with loops run in OSL: ``run`` puts them in a Script node."""
+        raise NotImplementedError("shader nodes have no loops: run this kernel through NodeOps.run (OSL)")
+
+    def run(self, rung, *args):
+        """``rung.kernel`` as nodes if it runs in nodes, else as an OSL Script node fed with ``args``."""
+        if "nodes" in rung.backends:
+            return rung.kernel(self, *args)
+        if "osl" not in rung.backends:
+            raise ValueError(f"the {rung.name} model runs only in {', '.join(sorted(rung.backends))}")
+        from . import osl
+        node = osl.script_node(self.tree, rung)
+        for name, v in zip(osl.kernel_inputs(rung), args):
+            self.feed(node.inputs[name], self.wrap(v))
+        return Val(self, sock=node.outputs[osl.OUTPUT], col=1 + max(self.wrap(v).col for v in args))
 
     def table(self, spec, x, y, row0=0, rows=None):
         """Bilinear lookup from four Closest taps (EEVEE's Linear filter is not exact bilinear here)."""

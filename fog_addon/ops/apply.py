@@ -1,14 +1,13 @@
 """Adding, updating and removing the fog on a scene (what the operators, handlers and command line call)."""
-import math
-
 import bpy
 
 from ..nodes import dedupe, groups, images, osl, wrap
-from ..precompute import presets
+from ..precompute import medium, presets, rungs
 
 SUPPORTED_LIGHTS = ("POINT",)
 OSL_WAS = "analytic_fog_osl_was"   # scene custom property: Cycles' OSL switch before the OSL method set it
-LIGHTS_KEY = "analytic_fog_lights"  # on the Surface group: the lights and camera it was built for
+LIGHTS_KEY = "analytic_fog_lights"  # on the Surface group: the lights, their models and the camera it was built for
+PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method preference it was built with
 
 
 def fog_lights(scene):
@@ -75,30 +74,43 @@ def use_osl(scene, on):
         del scene[OSL_WAS]
 
 
-def _signature(lights, camera):
-    return "|".join([f"v{groups.VERSION}"] + [o.name_full for o in lights]
-                    + ["camera:" + (camera.name_full if camera else "")])
+def _signature(lights, models, camera):
+    return "|".join([groups.code_fingerprint()] + [f"{o.name_full}:{'/'.join(r.name for r in mod)}"
+                                                    for o, mod in zip(lights, models)]
+                     + ["camera:" + (camera.name_full if camera else "")])
 
 
-def _scene_groups_current(lights, camera):
-    """True if the Surface and World groups exist and were built for these lights and this camera."""
-    surface, world = (bpy.data.node_groups.get(n) for n in (groups.SURFACE, groups.WORLD))
-    return surface is not None and world is not None and surface.get(LIGHTS_KEY) == _signature(lights, camera)
+def light_models(lights, preference):
+    """The models (rungs.LightModels) of each light's terms, chosen per light honouring ``preference``."""
+    return [rungs.choose(preference, light) for light in lights]
 
 
-def _build_scene_groups(scene, lights):
-    """(Re)build the Surface and World groups for ``lights`` unless built for them already;
-    lights that no longer take part lose the fog's attenuation.
+def _build_scene_groups(scene, lights, preference):
+    """(Re)build the Surface and World groups for ``lights`` and their models unless built for them
+    already; per-light groups no longer used are deleted, lights that no longer take part lose the
+    fog's attenuation, and Cycles' OSL is switched on while some model needs it.
 
     Returns [(light, reason)] for lights left unfogged.
     """
-    if not _scene_groups_current(lights, scene.camera):
-        groups.build_surface(lights)[LIGHTS_KEY] = _signature(lights, scene.camera)
-        groups.build_world(lights, scene.camera)
+    models = light_models(lights, preference)
+    signature = _signature(lights, models, scene.camera)
+    surface = bpy.data.node_groups.get(groups.SURFACE)
+    if (surface is None or bpy.data.node_groups.get(groups.WORLD) is None
+            or surface.get(LIGHTS_KEY) != signature):
+        imgs = images.all_table_images()
+        surface = groups.build_surface(lights, models, imgs)
+        surface[LIGHTS_KEY] = signature
+        surface[PREFERENCE_KEY] = preference
+        groups.build_world(lights, models, scene.camera, imgs)
+        for name in groups.all_group_names():
+            ng = bpy.data.node_groups.get(name)
+            if ng is not None and ng.users == 0 and name not in (groups.PARAMS, groups.SURFACE, groups.WORLD):
+                bpy.data.node_groups.remove(ng)
         taking_part = {o.data for o in lights}
         for light in bpy.data.lights:
             if light.users and light not in taking_part and wrap.is_fogged(light):
                 wrap.unwrap_light(light)
+    use_osl(scene, any(rungs.needs_osl(mod) for mod in models))
     return [(light.data.name, why) for light in lights if (why := wrap.wrap_light(light.data))]
 
 
@@ -116,28 +128,23 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
               scene_scale=1.0):
     """Add (or update) the fog on ``scene``; adding twice is the same as once.
 
-    ``method``: "nodes" (node groups, Cycles and EEVEE) or "osl" (the airlight
-    by an OSL script, Cycles only; switches Cycles' OSL on).  ``objects``: fog
-    only their materials (default: all in the scene).  ``scene_scale``: real
-    metres per Blender unit (the groups get density * scene_scale per unit).
-    Returns a list of (data-block name, reason) for what was left out or
-    fogged with a caveat.  Raises ValueError for bad settings before anything
-    is changed.
+    ``method``: the user's preference for the models (``rungs.PREFERENCES``):
+    "nodes" (node-group tables, Cycles and EEVEE) or "osl" (the glow by
+    quadrature in an OSL script, Cycles only; switches Cycles' OSL on).
+    ``objects``: fog only their materials (default: all in the scene).
+    ``scene_scale``: real metres per Blender unit (the groups get density *
+    scene_scale per unit).  Returns a list of (data-block name, reason) for
+    what was left out or fogged with a caveat.  Raises ValueError for bad
+    settings before anything is changed.
     """
-    beta = presets.validate_density(density)
-    if not (math.isfinite(scene_scale) and scene_scale > 0.0):
-        raise ValueError(f"scene scale must be a positive number of metres per unit, got {scene_scale}")
-    if anisotropy != 0.0:
-        raise ValueError("anisotropic fog (anisotropy != 0) is not supported yet; use 0")
-    if method not in groups.METHODS:
-        raise ValueError(f"unknown method {method!r}; use one of {', '.join(groups.METHODS)}")
+    fog = medium.medium(density, albedo, anisotropy, scene_scale)
+    rungs.choose(method)   # an unknown preference raises here, before anything changes
     check_camera(scene.camera)
     skipped = merge_appended()   # first: the tables and groups are looked up by name below
     lights, notes = fog_lights(scene)
     skipped += notes
-    groups.set_params(beta * scene_scale, tuple(albedo))
-    set_method(scene, method)
-    skipped += _build_scene_groups(scene, lights)
+    groups.set_params(fog.beta, fog.albedo)
+    skipped += _build_scene_groups(scene, lights, method)
     for mat in scene_materials(scene, objects):
         why = wrap.wrap_material(mat)
         if why:
@@ -150,7 +157,7 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
             skipped.append((scene.world.name, why))
     if not lights:
         skipped.append((scene.name, "has no point light taking part: the fog only dims"))
-    note = presets.invisible_fog_note(beta * scene_scale, scene_size(scene))
+    note = presets.invisible_fog_note(fog.beta, scene_size(scene))
     if note:
         skipped.append((scene.name, note))
     return skipped
@@ -163,24 +170,18 @@ def update_params(scene):
 
 
 def set_method(scene, method):
-    """Switch between the node groups' tables and the OSL quadrature: rebuilds two shared groups only."""
-    imgs = images.all_table_images()
-    groups.build_light(imgs, method)
-    groups.build_background_light(imgs, method)
-    use_osl(scene, method == "osl")
+    """The user changed the method preference: re-choose every light's models (materials are not touched)."""
+    if bpy.data.node_groups.get(groups.SURFACE) is not None:
+        _build_scene_groups(scene, fog_lights(scene)[0], method)
 
 
 def refresh_lights(scene):
-    """Rebuild the scene groups if the fog lights or the camera changed; materials are not touched.
-
-    Called from the depsgraph handler: when nothing changed it only compares names.
-    """
+    """Rebuild the scene groups if the fog lights, their models or the camera changed; materials are not
+    touched.  Called from the depsgraph handler: when nothing changed it only compares names."""
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is None or surface.library is not None:
         return
-    lights, _ = fog_lights(scene)
-    if not _scene_groups_current(lights, scene.camera):
-        _build_scene_groups(scene, lights)
+    _build_scene_groups(scene, fog_lights(scene)[0], surface.get(PREFERENCE_KEY, "nodes"))
 
 
 def remove_fog(scene):
@@ -190,7 +191,7 @@ def remove_fog(scene):
             wrap.unwrap(idb)
     for light in bpy.data.lights:
         wrap.unwrap_light(light)
-    for name in (groups.SURFACE, groups.WORLD, groups.LIGHT, groups.BACKGROUND_LIGHT, groups.PARAMS):
+    for name in groups.all_group_names():
         ng = bpy.data.node_groups.get(name)
         if ng is not None:
             bpy.data.node_groups.remove(ng)
@@ -198,7 +199,8 @@ def remove_fog(scene):
         img = bpy.data.images.get(name)
         if img is not None:
             bpy.data.images.remove(img)
-    text = bpy.data.texts.get(osl.TEXT)
-    if text is not None:
-        bpy.data.texts.remove(text)
+    for name in osl.text_names():
+        text = bpy.data.texts.get(name)
+        if text is not None:
+            bpy.data.texts.remove(text)
     use_osl(scene, False)

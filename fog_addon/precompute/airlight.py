@@ -77,9 +77,8 @@ def airlight(beta, d_sv, d_vp, gamma, table=None, quadrature=False):
     table = bake_airlight_table() if table is None else table
     m = NumpyOps({tables.AIRLIGHT.name: table})
     dvp = np.where(finite, d_vp, 0.0)
-    d_sp = np.hypot(dvp - along, h)
     with np.errstate(over="ignore", invalid="ignore"):
-        seg = model.airlight_segment(m, beta, d_sv, along, h, dvp, d_sp)
+        seg = model.airlight_segment(m, beta, d_sv, along, h, dvp)
         bg = model.airlight_background(m, beta, d_sv, along, h)
     return np.where(finite, seg, bg)
 

@@ -69,15 +69,18 @@ def closest_point_q(m, d, along, h):
     return m.select(m.less(0.0, along), along + d, h * h / m.maximum(d + m.abs(along), 1e-30))
 
 
-def airlight_segment(m, beta, d_sv, along, h, d_vp, d_sp):
+def airlight_segment(m, beta, d_sv, along, h, d_vp):
     """Airlight per unit intensity, 1/m^2: Sun et al. 2005 Eq. 5 / Eq. 11, ray from the viewer to a surface.
 
     d_sv: viewer-light distance; along: D_sv cos(gamma); h: D_sv sin(gamma);
-    d_vp: viewer-surface distance; d_sp: light-surface distance (all m).
+    d_vp: viewer-surface distance (all m).  The light-surface distance is
+    D_sp = sqrt((d_vp - along)^2 + h^2).
     """
+    z1 = d_vp - along
+    d_sp = m.sqrt(z1 * z1 + h * h)
     h = m.maximum(h, MIN_ANGLE * d_sv)
     q0 = closest_point_q(m, d_sv, -along, h)
-    q1 = closest_point_q(m, d_sp, d_vp - along, h)
+    q1 = closest_point_q(m, d_sp, z1, h)
     r0 = m.sqrt(2.0 * q0 * d_sv)
     r1 = m.sqrt(2.0 * q1 * d_sp)
     xi0 = m.atan2(q0, h)
@@ -139,6 +142,11 @@ def airlight_quadrature(m, beta, d_sv, along, h, d_vp):
 
     _, total = m.fori(QUAD_PANELS, panel, (0.0, 0.0), done=lambda pa, total: 1.0 - m.less(pa, end))
     return (beta * INV_2PI) * m.exp(-beta * d_sv) * total
+
+
+def airlight_quadrature_background(m, beta, d_sv, along, h):
+    """:func:`airlight_quadrature` of a ray that meets no surface (Sun et al. 2005 Eq. 12), 1/m^2."""
+    return airlight_quadrature(m, beta, d_sv, along, h, FAR)
 
 
 def ray_light_geometry(m, origin, direction, light):

@@ -9,8 +9,47 @@ counterpart does, including how a select mixes both branches (so a NaN or Inf
 in the branch not taken poisons the numpy result just as it would the shader).
 
 Scalars are arrays of shape (...); vectors are arrays of shape (..., 3).
+
+:class:`ShaderOps` is the interface every backend implements.  A backend that
+cannot do an operation says why when it is called: shader nodes have no loops
+(``fori``), OSL cannot read packed images (``table``).  Kernels that need
+either run through :meth:`ShaderOps.run`, which sends a model (``rungs.py``) to
+a backend that can run it.
 """
+from typing import Any, Callable, Protocol
+
 import numpy as np
+
+
+class ShaderOps(Protocol):
+    """The operations per-pixel formulas may use (numpy, shader nodes, OSL).
+
+    Values are backend objects with + - * / (scalar or vector; vector * vector
+    is elementwise).  Semantics are those of Blender's Math / Vector Math nodes.
+    """
+
+    def const(self, x: float) -> Any: ...
+    def exp(self, x) -> Any: ...
+    def sqrt(self, x) -> Any: ...            # 0 below 0
+    def sin(self, x) -> Any: ...
+    def cos(self, x) -> Any: ...
+    def floor(self, x) -> Any: ...
+    def abs(self, x) -> Any: ...
+    def minimum(self, a, b) -> Any: ...
+    def maximum(self, a, b) -> Any: ...
+    def atan2(self, y, x) -> Any: ...
+    def power(self, x, y) -> Any: ...
+    def less(self, a, b) -> Any: ...          # 1.0 where a < b else 0.0
+    def select(self, cond, if_true, if_false) -> Any: ...
+    def clamp01(self, x) -> Any: ...
+    def dot(self, a, b) -> Any: ...
+    def cross(self, a, b) -> Any: ...
+    def length(self, a) -> Any: ...
+    def scale(self, v, s) -> Any: ...
+    def combine(self, x, y, z) -> Any: ...
+    def fori(self, count: int, body: Callable, state: tuple, done: Callable = None) -> tuple: ...
+    def table(self, spec, x, y, row0: int = 0, rows: int = None) -> Any: ...
+    def run(self, rung, *args) -> Any: ...    # a model's kernel on this backend (or one it delegates to)
 
 
 class NumpyOps:
@@ -73,6 +112,15 @@ class NumpyOps:
     @staticmethod
     def scale(v, s):
         return np.asarray(v) * np.asarray(s)[..., None]
+
+    @staticmethod
+    def combine(x, y, z):
+        return np.stack(np.broadcast_arrays(*(np.asarray(v, float) for v in (x, y, z))), axis=-1)
+
+    # -- models ------------------------------------------------------------------
+    def run(self, rung, *args):
+        """``rung.kernel`` on numpy (every kernel runs here: it is each model's reference twin)."""
+        return rung.kernel(self, *args)
 
     # -- loops -------------------------------------------------------------------
     @staticmethod

@@ -315,15 +315,9 @@ def principled_to_phong(m, base_color, metallic, roughness, specular_ior_level, 
     avg_d = m.minimum(f0_d * (20.0 / 21.0) + 1.0 / 21.0, f0_d * (1.0 + (1.0 - f0_d) * (1.0 / 0.84)))
     rho_d = m.scale(base_color, (1.0 - metallic) * (1.0 - avg_d))
     # rho_s = F_avg(mix(F0_d, base, metallic)) = (1 - metallic) avg_d + metallic (base 20/21 + 1/21)
-    rho_s = m.scale(base_color, metallic * (20.0 / 21.0)) + _grey(m, (1.0 - metallic) * avg_d + metallic * (1.0 / 21.0))
+    grey = (1.0 - metallic) * avg_d + metallic * (1.0 / 21.0)
+    rho_s = m.scale(base_color, metallic * (20.0 / 21.0)) + m.combine(grey, grey, grey)
     return rho_d, rho_s, phong_level(m, roughness)
-
-
-def _grey(m, s):
-    """The vector (s, s, s): Combine XYZ for nodes; numpy broadcasting for NumpyOps (which has no combine)."""
-    if hasattr(m, "combine"):
-        return m.combine(s, s, s)
-    return np.asarray(s, float)[..., None] * np.ones(3)
 
 
 # --------------------------------------------------------------------------------------------

@@ -10,6 +10,7 @@ if str(ROOT) not in sys.path:
 import bpy  # noqa: E402
 
 from fog_addon.nodes import groups, images, osl  # noqa: E402
+from fog_addon.precompute import rungs  # noqa: E402
 
 PREFIX = "AnalyticFog"
 SUFFIXED = re.compile(r"\.\d{3,}$")
@@ -38,12 +39,14 @@ def copies(ids=None):
 
 
 def expected_names(method):
-    """What one fogged file holds: the five groups, every table (apply_fog bakes both), the OSL text."""
-    names = [groups.PARAMS, groups.LIGHT, groups.BACKGROUND_LIGHT, groups.SURFACE, groups.WORLD]
+    """What one fogged file holds: the scene groups, the per-light groups of the method's models, every
+    table (apply_fog bakes both) and the OSL texts of the models that run in OSL."""
+    models = rungs.choose(method)
+    names = [groups.PARAMS, groups.SURFACE, groups.WORLD,
+             groups.light_group_name(models), groups.background_group_name(models)]
     names += images.table_names()
-    if method == "osl":
-        names.append(osl.TEXT)
-    return sorted(names)
+    names += [osl.text_name(r) for r in models if r.backends == {"numpy", "osl"}]
+    return sorted(set(names))
 
 
 def _group_nodes(tree):

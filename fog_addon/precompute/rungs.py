@@ -1,0 +1,111 @@
+"""Fog models as data: the rungs of each term's ladder, and the chooser that gives each light its models.
+
+A light's contribution to the picture has four terms (Sun et al. 2005):
+
+* ``airlight``   — the glow along a camera ray that ends on a surface (Eq. 5, 11);
+* ``background`` — the glow along a camera ray to infinity (Eq. 12);
+* ``scatter``    — the fog light a surface reflects, per unit albedo (Eq. 15, 17-18);
+* ``direct``     — the light's direct light dimmed on its way to the surface (Eq. 14).
+
+A :class:`Rung` is one model of one term: its kernel (a per-pixel formula
+written once against the ops of ``ops.ShaderOps``, with the term's uniform
+signature below), the backends that can run it, the tables it reads, its
+domain of validity and its error predictor.  Numpy runs every kernel (it is
+each rung's reference twin); shader nodes run kernels without loops; OSL runs
+kernels without tables.  ``ShaderOps.run`` sends a rung to a backend that can
+run it (the node builder puts an OSL Script node in the tree for a rung that
+only OSL can run).
+
+Term signatures (distances in m, beta in 1/m, results per unit radiant
+intensity of the light):
+
+* airlight(m, beta, d_sv, along, h, d_vp) -> 1/m^2
+* background(m, beta, d_sv, along, h) -> 1/m^2
+* scatter(m, beta, d_sp, cos_theta, level) -> 1/m^2 per unit albedo
+* direct(m, beta, d_sp) -> transmittance (dimensionless)
+"""
+from dataclasses import dataclass
+from typing import Callable, NamedTuple
+
+from . import model, surface, tables
+
+TERMS = ("airlight", "background", "scatter", "direct")
+BACKENDS = ("numpy", "nodes", "osl")
+PREFERENCES = ("nodes", "osl")   # the user's Method: node-group tables, or OSL quadrature where a rung has one
+
+
+@dataclass(frozen=True)
+class Rung:
+    name: str                 # unique, short: names node groups and OSL texts
+    term: str                 # one of TERMS
+    kernel: Callable          # the term's signature (module docstring)
+    backends: frozenset       # where the kernel runs (subset of BACKENDS)
+    tables: tuple = ()        # tables.TableSpec it reads
+    domain: str = "all inputs"   # where the error bound holds
+    max_error: float = 0.0    # max relative error over the domain against adaptive quadrature (measured; see tests)
+    evidence: str = ""        # the test that measures max_error
+
+    def predicted_error(self, *situation):
+        """Bound on the relative error this rung makes in any pixel of a situation (camera, light, medium).
+
+        Today every rung's bound is its measured maximum over its whole domain,
+        whatever the situation: a conservative predictor.
+        """
+        return self.max_error
+
+
+AIRLIGHT_TABLE = Rung(
+    "airlight table", "airlight", model.airlight_segment, frozenset({"numpy", "nodes"}), (tables.AIRLIGHT,),
+    "T_sv, T_vp in [0.01, 50] and infinity, gamma in (0, pi); exact limits beyond", 1.6e-4,
+    "tests/test_airlight.py: 44 000 samples of Eq. 5")
+BACKGROUND_TABLE = Rung(
+    "background table", "background", model.airlight_background, frozenset({"numpy", "nodes"}), (tables.AIRLIGHT,),
+    AIRLIGHT_TABLE.domain, 1.6e-4, AIRLIGHT_TABLE.evidence)
+AIRLIGHT_QUADRATURE = Rung(
+    "airlight quadrature", "airlight", model.airlight_quadrature, frozenset({"numpy", "osl"}), (),
+    "beta h >= 1e-16", 1.1e-6, AIRLIGHT_TABLE.evidence)
+BACKGROUND_QUADRATURE = Rung(
+    "background quadrature", "background", model.airlight_quadrature_background, frozenset({"numpy", "osl"}), (),
+    AIRLIGHT_QUADRATURE.domain, 1.1e-6, AIRLIGHT_TABLE.evidence)
+SCATTER_TABLE = Rung(
+    "scatter table", "scatter", surface.surface_scatter, frozenset({"numpy", "nodes"}), (tables.SURFACE,),
+    "T = beta D_sp in [0, 60] (clamped beyond, where e^-T < 1e-26), Phong n in [1, 1024]", 4.3e-3,
+    "tests/test_surface.py: Eq. 15 with Eq. 5 inside")
+DIRECT_EXACT = Rung(
+    "direct exact", "direct", model.transmittance, frozenset({"numpy", "nodes", "osl"}), (),
+    "all inputs", 0.0, "closed form (Eq. 14)")
+
+RUNGS = (AIRLIGHT_TABLE, BACKGROUND_TABLE, AIRLIGHT_QUADRATURE, BACKGROUND_QUADRATURE, SCATTER_TABLE, DIRECT_EXACT)
+
+
+class LightModels(NamedTuple):
+    """The rung of each term (TERMS) for one light."""
+    airlight: Rung
+    background: Rung
+    scatter: Rung
+    direct: Rung
+
+
+def choose(preference="nodes", light=None, medium=None):
+    """The models for one light's terms, honouring the user's ``preference`` (PREFERENCES).
+
+    "nodes": every term from the node groups' tables; "osl": the glow by
+    quadrature in OSL (Cycles only), the other terms as "nodes" (they have no
+    OSL rung).  ``light`` and ``medium`` are where a choice by predicted error
+    plugs in; today the choice depends on the preference alone.
+    """
+    if preference not in PREFERENCES:
+        raise ValueError(f"unknown method {preference!r}; use one of {', '.join(PREFERENCES)}")
+    if preference == "osl":
+        return LightModels(AIRLIGHT_QUADRATURE, BACKGROUND_QUADRATURE, SCATTER_TABLE, DIRECT_EXACT)
+    return LightModels(AIRLIGHT_TABLE, BACKGROUND_TABLE, SCATTER_TABLE, DIRECT_EXACT)
+
+
+def needs_osl(models):
+    """True if some rung in ``models`` runs only in OSL (Cycles with Open Shading Language on)."""
+    return any("nodes" not in r.backends for r in models)
+
+
+def tables_of(models):
+    """The TableSpecs the rungs of ``models`` read (each once)."""
+    return tuple(dict.fromkeys(t for r in models for t in r.tables))

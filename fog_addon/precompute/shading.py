@@ -1,0 +1,128 @@
+"""The shading of a point in fog, written once for every backend: Sun et al. 2005 Eq. 14-19 and 12.
+
+``shade_point`` is one light's contribution at a surface point seen by the
+camera; ``shade_surface`` sums the lights and applies Eq. 19; the background
+functions do the same for camera rays that meet no surface.  The node
+builder (``fog_addon/nodes/groups.py``) only connects sockets to these
+functions; numpy runs them as the shaders' twin (tests compare the two pixel
+by pixel).  Every term's formula is a rung of ``rungs.py``, run through
+``m.run`` so each light can get its own models.
+
+Units: positions and distances in m, beta in 1/m, light intensity I0 in W/sr
+(RGB: power * colour / 4 pi), radiances in W/(m^2 sr).
+"""
+from typing import Any, NamedTuple
+
+from . import model
+
+
+class Geometry(NamedTuple):
+    """A camera ray's surface hit: all vectors in world space."""
+    camera: Any          # camera position, m
+    position: Any        # surface point p, m
+    incoming: Any        # unit vector from p towards the camera
+    view_distance: Any   # D_vp, m
+    normal: Any          # unit shading normal
+
+
+class Material(NamedTuple):
+    """The BRDF as the fog light sees it (``surface.principled_to_phong``)."""
+    diffuse: Any         # rho_d, RGB albedo of the Lambertian lobe
+    specular: Any        # rho_s, RGB albedo of the Phong lobe about the mirrored view vector
+    level: Any           # table level 4 log2 n of the Phong exponent n
+
+
+class Light(NamedTuple):
+    position: Any        # m
+    intensity: Any       # RGB radiant intensity I0, W/sr
+
+
+class LightTerms(NamedTuple):
+    """One light's terms at a surface point (``shade_point``)."""
+    airlight: Any        # RGB glow along the camera ray (Eq. 11 times I0), W/(m^2 sr), before the albedo
+    scattered: Any       # RGB fog light the surface reflects (Eq. 17-18 times I0), leaving p
+    attenuation: Any     # e^{-beta D_sp}: the light's direct light at p is dimmed by this (Eq. 14)
+    weight: Any          # the light's unshadowed irradiance at p (grey), for EEVEE's shared attenuation
+
+
+class SurfaceFog(NamedTuple):
+    """What a fogged material needs (``shade_surface``)."""
+    emission: Any             # RGB: albedo * (sum airlight + e^{-beta D_vp} sum scattered), camera rays only
+    transmittance: Any        # e^{-beta D_vp} on camera rays, 1 on others: scales the user's shader
+    direct_attenuation: Any   # EEVEE: irradiance-weighted mean of the lights' e^{-beta D_sp}
+    cycles_mix: Any           # 1 - scale of the user's shader in Cycles (lights attenuate themselves)
+    eevee_mix: Any            # 1 - scale of the user's shader in EEVEE (light node trees are ignored there)
+
+
+def mirror(m, incoming, normal):
+    """The mirror direction of ``incoming`` about ``normal``: the glossy lobe's axis (Sun App. B)."""
+    return normal * (2.0 * m.dot(incoming, normal)) - incoming
+
+
+def shade_point(m, geo, material, light, medium, models):
+    """One light's terms at a surface point: Sun et al. 2005 Eq. 11 (glow), 14 (direct), 17-18 (fog light).
+
+    geo: Geometry; material: Material; light: Light; medium: ``medium.Medium``
+    (beta and albedo as backend values); models: ``rungs.LightModels``.
+    Returns LightTerms.
+    """
+    beta = medium.beta
+    to_light = light.position - geo.position
+    d_sp = m.length(to_light)
+    inv_d = 1.0 / m.maximum(d_sp, model.MIN_DISTANCE)
+    d_sv, along, h = model.ray_light_geometry(m, geo.camera, -1.0 * geo.incoming, light.position)
+    air = m.run(models.airlight, beta, d_sv, along, h, geo.view_distance)
+    cos_n = m.dot(to_light, geo.normal) * inv_d
+    cos_r = m.dot(to_light, mirror(m, geo.incoming, geo.normal)) * inv_d
+    diffuse = m.run(models.scatter, beta, d_sp, cos_n, 0.0)
+    glossy = m.run(models.scatter, beta, d_sp, cos_r, material.level)
+    reflected = m.scale(material.diffuse, diffuse) + m.scale(material.specular, glossy)
+    grey = m.dot(light.intensity, m.combine(1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))
+    weight = grey * m.maximum(cos_n, 0.0) * inv_d * inv_d
+    return LightTerms(airlight=m.scale(light.intensity, air),
+                      scattered=light.intensity * reflected,
+                      attenuation=m.run(models.direct, beta, d_sp),
+                      weight=weight)
+
+
+def shade_surface(m, terms, medium, view_distance, is_camera):
+    """Sum the lights' ``terms`` (LightTerms) at a surface point: Sun et al. 2005 Eq. 19.
+
+    L = e^{-beta D_vp} L_p + L_a: the user's shader (L_p, with Cycles' lights
+    attenuating their own direct light, Eq. 14) is scaled by the
+    transmittance, and the fog adds albedo * (airlight + e^{-beta D_vp} *
+    reflected fog light).  is_camera: 1 on camera rays, 0 on others (other
+    rays see the material unfogged).  Returns SurfaceFog.
+    """
+    t_vp = model.transmittance(m, medium.beta, view_distance)
+    transmit = 1.0 + is_camera * (t_vp - 1.0)
+    if not terms:
+        black = m.combine(0.0, 0.0, 0.0)
+        return SurfaceFog(black, transmit, m.const(1.0), 1.0 - transmit, 1.0 - transmit)
+    air = scat = num = den = None
+    for t in terms:
+        air = t.airlight if air is None else air + t.airlight
+        scat = t.scattered if scat is None else scat + t.scattered
+        num = t.weight * t.attenuation if num is None else num + t.weight * t.attenuation
+        den = t.weight if den is None else den + t.weight
+    albedo = medium.albedo
+    emission = m.scale(albedo * (air + m.scale(scat, t_vp)), is_camera)
+    direct = (num + 1e-30) / (den + 1e-30)
+    return SurfaceFog(emission, transmit, direct, 1.0 - transmit, 1.0 - transmit * direct)
+
+
+def background_point(m, camera, direction, light, medium, models):
+    """One light's RGB glow along a camera ray to infinity (Sun et al. 2005 Eq. 12 times I0), W/(m^2 sr)."""
+    d_sv, along, h = model.ray_light_geometry(m, camera, direction, light.position)
+    return m.scale(light.intensity, m.run(models.background, medium.beta, d_sv, along, h))
+
+
+def shade_background(m, airlights, medium, is_camera):
+    """(emission, transmittance) of the World: the sum of the lights' glows times the albedo on camera
+    rays, the background itself seen through infinite fog (transmittance 0 on camera rays, 1 on others)."""
+    if not airlights:
+        return m.combine(0.0, 0.0, 0.0), 1.0 - is_camera
+    total = airlights[0]
+    for a in airlights[1:]:
+        total = total + a
+    return m.scale(medium.albedo * total, is_camera), 1.0 - is_camera
