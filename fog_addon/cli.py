@@ -1,10 +1,14 @@
 """Command line: ``python -m fog_addon render|reference|compare ...``.
 
     render SCENE.blend --engine cycles|eevee [--method nodes|osl] [--preset NAME | --density BETA]
-           [--anisotropy G] [--samples N] [--resolution WxH] --out OUT.png|OUT.exr
+           [--color R,G,B] [--scene-scale S] [--anisotropy G] [--samples N] [--resolution WxH]
+           --out OUT.png|OUT.exr
     reference SCENE.blend [--preset NAME | --density BETA] [--anisotropy G] [--samples N]
            [--resolution WxH] --out OUT.exr
     compare TEST.exr REF.exr [--diff OUT.png]
+
+``render`` takes every fog setting the flags leave out from the file's own
+``scene.analytic_fog`` (and each light's Fog Glow toggle): see render.py.
 
 Exit codes: 0 success, 1 render/compare failure, 2 bad input (argparse errors too).
 Arguments are validated before Blender is imported, so bad input fails fast.
@@ -65,13 +69,34 @@ def _resolution(s):
     return (w, h)
 
 
-def _add_fog_flags(p):
+def _color(s):
+    try:
+        rgb = tuple(float(c) for c in s.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"color must look like 0.9,0.7,0.5, got {s!r}")
+    if len(rgb) != 3 or not all(0.0 <= c <= 1.0 for c in rgb):
+        raise argparse.ArgumentTypeError(f"color must be three numbers in [0, 1] like 0.9,0.7,0.5, got {s!r}")
+    return rgb
+
+
+def _positive_float(name):
+    finite = _finite_float(name)
+
+    def conv(s):
+        v = finite(s)
+        if v <= 0:
+            raise argparse.ArgumentTypeError(f"{name} must be > 0, got {s!r}")
+        return v
+    return conv
+
+
+def _add_fog_flags(p, file_default=""):
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--preset", help="named fog density: " + ", ".join(sorted(_presets())))
+    g.add_argument("--preset", help="named fog density: " + ", ".join(sorted(_presets())) + file_default)
     g.add_argument("--density", type=_finite_float("density"), metavar="BETA",
-                   help="extinction = scattering coefficient in 1/m (>= 0)")
-    p.add_argument("--anisotropy", type=_finite_float("anisotropy"), default=0.0, metavar="G",
-                   help="Henyey-Greenstein g; only 0 (isotropic) is supported")
+                   help="extinction = scattering coefficient in 1/m (>= 0)" + file_default)
+    p.add_argument("--anisotropy", type=_finite_float("anisotropy"), default=None, metavar="G",
+                   help="Henyey-Greenstein g; only 0 (isotropic) is supported" + (file_default or "; default 0"))
     p.add_argument("--samples", type=_positive_int("samples"), metavar="N", help="samples per pixel")
     p.add_argument("--resolution", type=_resolution, metavar="WxH", help="output size in pixels")
     p.add_argument("--out", required=True, help="output image (.exr = linear float, .png = display)")
@@ -89,8 +114,14 @@ def build_parser():
     r = sub.add_parser("render", help="render a scene with the analytic fog")
     r.add_argument("scene", metavar="SCENE.blend")
     r.add_argument("--engine", required=True, choices=["cycles", "eevee"])
-    r.add_argument("--method", choices=["nodes", "osl"], default="nodes")
-    _add_fog_flags(r)
+    from_file = " (default: the file's setting)"
+    r.add_argument("--method", choices=["nodes", "osl"], default=None,
+                   help="node groups (Cycles, EEVEE) or OSL (Cycles) (default: the file's Method)")
+    _add_fog_flags(r, from_file)
+    r.add_argument("--color", type=_color, metavar="R,G,B",
+                   help="the fog's colour (single-scattering albedo), each in [0, 1]" + from_file)
+    r.add_argument("--scene-scale", type=_positive_float("scene scale"), metavar="S",
+                   help="real metres per Blender unit" + from_file)
     r.add_argument("--pixel-centre", action="store_true",
                    help="sample pixel centres (Gaussian 0.01 px filter), as the reference does")
 
@@ -132,7 +163,7 @@ def _resolve_density(args, required):
 
 def _validate_common(args, density_required):
     _resolve_density(args, density_required)
-    if args.anisotropy != 0.0:
+    if args.anisotropy not in (None, 0.0):
         raise UsageError(f"anisotropy {args.anisotropy} is not supported: the analytic model "
                          "(Sun et al. 2005) is isotropic; use --anisotropy 0")
     if not os.path.isfile(args.scene):
@@ -165,7 +196,8 @@ def cmd_render(args):
     if not hasattr(render_mod, "apply_and_render"):
         print("error: fog_addon.render has no apply_and_render(scene, args)", file=sys.stderr)
         return EXIT_FAIL
-    from . import measure, reference
+    from . import reference
+    render_mod.ensure_properties()   # before loading: the file's fog settings and light toggles are read
     scene = _open(args)
     if args.no_cast_shadows:
         reference.disable_cast_shadows(scene)
@@ -183,7 +215,7 @@ def cmd_reference(args):
     import time
     from . import measure, reference
     scene = _open(args)
-    reference.configure_reference(scene, args.density, anisotropy=args.anisotropy,
+    reference.configure_reference(scene, args.density, anisotropy=args.anisotropy or 0.0,
                                   samples=args.samples or reference.DEFAULT_SAMPLES)
     if args.no_cast_shadows:
         reference.disable_cast_shadows(scene)
