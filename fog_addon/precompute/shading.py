@@ -56,7 +56,7 @@ class SurfaceFog(NamedTuple):
 
 def mirror(m, incoming, normal):
     """The mirror direction of ``incoming`` about ``normal``: the glossy lobe's axis (Sun App. B)."""
-    return normal * (2.0 * m.dot(incoming, normal)) - incoming
+    return m.scale(normal, 2.0 * m.dot(incoming, normal)) - incoming
 
 
 def shade_point(m, geo, material, light, medium, models):

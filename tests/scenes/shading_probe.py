@@ -1,0 +1,134 @@
+"""Tiny render of the whole fog on a lit plane and the background, against its numpy twin, per pixel.
+
+    python tests/scenes/shading_probe.py OUT_DIR ENGINE METHOD CASE
+
+The lights are kept out of the surfaces' direct lighting (Cycles: light ray
+visibility; EEVEE: diffuse and specular factors 0) and the world is black, so
+each pixel is exactly the fog's emission: the glow of two lights of different
+colours plus the fog light the plane reflects (Sun et al. 2005 Eq. 19).  The
+twin is ``precompute.shading`` run by numpy at each pixel centre's camera
+ray, with the models METHOD chooses.  CASE "principled" is a diffuse-and-glossy dielectric; "mirror" is a
+smooth metal (roughness 0: only the glossy fog light, Phong n = 1024).
+
+Prints JSON: ratio statistics over all pixels, and for the glossy term alone
+(render minus the twin's other terms, against the twin's glossy term) where
+it is at least 5 % of the pixel.
+"""
+import json
+import math
+import pathlib
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+from fog_addon import imageio, measure  # noqa: E402
+from fog_addon.ops import apply  # noqa: E402
+from fog_addon.precompute import airlight, rungs, shading, surface, tables  # noqa: E402
+from fog_addon.precompute.medium import Medium  # noqa: E402
+from fog_addon.precompute.ops import NumpyOps  # noqa: E402
+
+BETA, W, H = 0.2, 64, 48
+ALBEDO = (0.9, 0.8, 0.7)
+LIGHTS = (((0.5, 1.5, 0.6), 600.0, (1.0, 0.8, 0.6)), ((-2.0, 4.0, 1.0), 1500.0, (0.5, 0.7, 1.0)))
+CASES = {"principled": dict(base=(0.6, 0.5, 0.4), metallic=0.3, roughness=0.35, ior_level=0.5),
+         "mirror": dict(base=(0.9, 0.85, 0.8), metallic=1.0, roughness=0.0, ior_level=0.5)}
+
+
+def build(engine, method, case):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    s = bpy.context.scene
+    cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
+    s.collection.objects.link(cam)
+    s.camera = cam
+    cam.location = (0, -5, 2.5)
+    cam.rotation_euler = (math.radians(65), 0, 0)
+    cam.data.clip_start = 0.001
+    cam.data.lens = 30.0
+    for k, (loc, power, colour) in enumerate(LIGHTS):
+        ob = bpy.data.objects.new(f"L{k}", bpy.data.lights.new(f"L{k}", "POINT"))
+        ob.data.energy, ob.data.color, ob.data.shadow_soft_size = power, colour, 0.0
+        ob.data.diffuse_factor = ob.data.specular_factor = 0.0   # EEVEE: no direct light on surfaces
+        ob.visible_diffuse = ob.visible_glossy = False           # Cycles: the same
+        ob.location = loc
+        s.collection.objects.link(ob)
+    bpy.ops.mesh.primitive_plane_add(size=40, location=(0, 0, 0))
+    mat = bpy.data.materials.new("probe")
+    bpy.context.object.data.materials.append(mat)
+    c = CASES[case]
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (*c["base"], 1)
+    bsdf.inputs["Metallic"].default_value = c["metallic"]
+    bsdf.inputs["Roughness"].default_value = c["roughness"]
+    bsdf.inputs["Specular IOR Level"].default_value = c["ior_level"]
+    s.world = bpy.data.worlds.new("W")
+    s.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0, 0, 0, 1)
+    apply.apply_fog(s, BETA, albedo=ALBEDO, method=method)
+    s.render.engine = engine
+    measure.set_resolution(s, W, H)
+    measure.set_samples(s, 1)
+    measure.set_pixel_centre_filter(s)
+    s.cycles.max_bounces = 0
+    s.eevee.light_threshold = 1e-4
+    return s, cam
+
+
+def camera_rays(cam):
+    ys, xs = np.mgrid[0:H, 0:W]
+    sw, f = cam.data.sensor_width, cam.data.lens
+    d = np.stack([((xs + 0.5) / W - 0.5) * sw, (0.5 - (ys + 0.5) / H) * sw * H / W, -np.full(xs.shape, f)], -1)
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    return np.array(cam.location), d @ np.array(cam.matrix_world.to_3x3()).T
+
+
+def twin(c, d, case, method, without=None):
+    """The numpy twin of the fog's emission per pixel; ``without`` "glossy": that term zeroed."""
+    m = NumpyOps({tables.AIRLIGHT.name: airlight.bake_airlight_table(), tables.SURFACE.name: surface.surface_table()})
+    p = CASES[case]
+    rho_d, rho_s, level = surface.principled_to_phong(
+        m, np.asarray(p["base"], float), np.asarray(p["metallic"]), np.asarray(p["roughness"]),
+        np.asarray(p["ior_level"]))
+    if without == "glossy":
+        rho_s = 0.0 * rho_s
+    t = np.where(d[..., 2] < 0, -c[2] / np.minimum(d[..., 2], -1e-12), np.inf)
+    hit = np.isfinite(t) & np.all(np.abs(c[:2] + d[..., :2] * np.where(np.isfinite(t), t, 0)[..., None]) <= 20, -1)
+    t = np.where(hit, t, 1.0)
+    geo = shading.Geometry(c, c + d * t[..., None], -d, t, np.array([0.0, 0.0, 1.0]))
+    material = shading.Material(rho_d, rho_s, level)
+    med = Medium(BETA, np.asarray(ALBEDO))
+    models = rungs.choose(method)
+    lights = [shading.Light(np.asarray(loc, float), power / (4 * math.pi) * np.asarray(col)) for loc, power, col
+              in LIGHTS]
+    with np.errstate(over="ignore", invalid="ignore"):
+        terms = [shading.shade_point(m, geo, material, li, med, models) for li in lights]
+        surf = shading.shade_surface(m, terms, med, t, 1.0).emission
+        bg = shading.shade_background(m, [shading.background_point(m, c, d, li, med, models) for li in lights],
+                                      med, 1.0)[0]
+    return np.where(hit[..., None], surf, bg), hit
+
+
+def main(out_dir, engine="CYCLES", method="nodes", case="principled"):
+    s, cam = build(engine, method, case)
+    got = imageio.read_rgb(measure.render_to_file(s, str(pathlib.Path(out_dir) / "probe.exr")))
+    c, d = camera_rays(cam)
+    want, hit = twin(c, d, case, method)
+    r = got / want
+    res = {"median": float(np.median(r)), "max_dev": float(np.max(np.abs(r - 1))),
+           "p99_dev": float(np.percentile(np.abs(r - 1), 99)),
+           "surface_pixels": int(hit.sum()), "background_pixels": int((~hit).sum())}
+    rest, _ = twin(c, d, case, method, without="glossy")
+    glossy = want - rest
+    big = hit[..., None] & (glossy > 0.05 * want)
+    g_err = np.abs((got - rest)[big] / glossy[big] - 1)
+    res.update({"glossy_pixels": int(big[..., 0].sum()), "glossy_share_max": float(np.max(glossy / want)),
+                "glossy_median_dev": float(np.median(g_err)) if g_err.size else None,
+                "glossy_p99_dev": float(np.percentile(g_err, 99)) if g_err.size else None,
+                "glossy_max_dev": float(np.max(g_err)) if g_err.size else None})
+    print(json.dumps(res))
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:])
