@@ -44,7 +44,7 @@ import bmesh  # noqa: E402
 
 import fog_addon  # noqa: E402
 from demo_scenes import add_camera, add_point_light, render_settings, set_world  # noqa: E402
-from fog_addon.nodes import groups, images, wrap  # noqa: E402
+from fog_addon.nodes import groups, images, owned  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 from fog_addon.precompute import rungs  # noqa: E402
 
@@ -83,7 +83,7 @@ def build(scene, n):
 
 
 def fogged_count():
-    return sum(1 for m in bpy.data.materials if m.node_tree is not None and wrap.is_fogged(m))
+    return sum(1 for m in bpy.data.materials if m.node_tree is not None and owned.is_fogged(m))
 
 
 def shared_ok(on):
@@ -140,9 +140,9 @@ PHASES = (  # (label, module file, function): the phases of apply_fog, cumulativ
     ("Surface group (build_surface)", "groups.py", "build_surface"),
     ("World group (build_world)", "groups.py", "build_world"),
     ("scene_materials", "apply.py", "scene_materials"),
-    ("wrap_material (all)", "wrap.py", "wrap_material"),
-    ("wrap_world", "wrap.py", "wrap_world"),
-    ("wrap_light", "wrap.py", "wrap_light"),
+    ("wrap_material (all)", "material.py", "wrap_material"),
+    ("wrap_world", "world.py", "wrap_world"),
+    ("wrap_light", "light.py", "wrap_light"),
 )
 
 

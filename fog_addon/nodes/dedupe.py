@@ -29,7 +29,7 @@ import re
 
 import bpy
 
-from . import groups, images, osl, wrap
+from . import groups, images, osl, owned
 
 _SUFFIX = re.compile(r"^(?P<base>.+)\.(?P<num>\d{3,})$")
 
@@ -58,7 +58,7 @@ def _only_in_collections(obj):
 
 def pending():
     """True if some fog node group, table image or OSL text has a suffixed copy (cheap: names only)."""
-    return any(_SUFFIX.match(idb.name) and idb.name.startswith(wrap.PREFIX)
+    return any(_SUFFIX.match(idb.name) and idb.name.startswith(owned.PREFIX)
                for coll_name, _, _ in _shared() for idb in getattr(bpy.data, coll_name))
 
 

@@ -62,6 +62,8 @@ class NodeOps:
             return x
         if isinstance(x, bpy.types.NodeSocket):
             return Val(self, sock=x, vector=vector or x.type == "VECTOR", col=0)
+        if isinstance(x, tuple):   # a constant colour / vector (RGB)
+            return Val(self, const=tuple(float(c) for c in x[:3]), vector=True)
         return Val(self, const=float(x))
 
     def node(self, bl_idname, col, **props):
@@ -78,6 +80,8 @@ class NodeOps:
         """Connect Val ``v`` to input ``sock`` (or set its default value to the constant)."""
         if v.sock is not None:
             self.tree.links.new(v.sock, sock)
+        elif isinstance(v.const, tuple):   # a constant colour / vector (a colour socket gets alpha 1)
+            sock.default_value = (v.const + (1.0,))[:len(sock.default_value)]
         elif sock.type == "VECTOR":
             sock.default_value = (v.const, v.const, v.const)
         else:
@@ -108,6 +112,8 @@ class NodeOps:
 
     def binary(self, op, a, b):
         a, b = self.wrap(a), self.wrap(b)
+        if (a.vector or b.vector) and (v := self._vector_folded(op, a, b)) is not None:
+            return v
         if a.vector or b.vector:
             if op in ("ADD", "SUBTRACT") and a.vector and b.vector:
                 return self.vmath(op, a, b)
@@ -125,6 +131,26 @@ class NodeOps:
         if op == "MULTIPLY" and a.const == 1.0:
             return b
         return self.math(op, a, b)
+
+    def _vector_folded(self, op, a, b):
+        """A vector ``a op b`` needing no node (constant colours, identities) or a MAXIMUM node; None for the rest."""
+        black, white = (0.0, 0.0, 0.0), (1.0, 1.0, 1.0)
+        if op == "MULTIPLY" and a.vector != b.vector:   # a colour times a scalar
+            v, s = (a, b) if a.vector else (b, a)
+            if v.const is not None and s.const is not None:
+                return self.wrap(tuple(c * s.const for c in v.const))
+            if s.const == 0.0 or v.const == black:
+                return self.wrap(black)
+            return v if s.const == 1.0 else None
+        if not (a.vector and b.vector):
+            return None
+        if a.const is not None and b.const is not None and op in _FOLD:
+            return self.wrap(tuple(float(_FOLD[op](x, y)) for x, y in zip(a.const, b.const)))
+        if (op == "ADD" and a.const == black) or (op == "MULTIPLY" and a.const == white):
+            return b
+        if (op in ("ADD", "SUBTRACT") and b.const == black) or (op == "MULTIPLY" and b.const == white):
+            return a
+        return self.vmath("MAXIMUM", a, b) if op == "MAXIMUM" else None
 
     # -- the ops namespace (same names as NumpyOps) ----------------------------
     def const(self, x):
@@ -152,6 +178,8 @@ class NodeOps:
         return self.math("MINIMUM", a, b)
 
     def maximum(self, a, b):
+        if self.wrap(a).vector or self.wrap(b).vector:   # elementwise, e.g. a colour with black
+            return self.binary("MAXIMUM", a, b)
         return self.math("MAXIMUM", a, b)
 
     def atan2(self, y, x):
@@ -168,6 +196,16 @@ class NodeOps:
 
     def clamp01(self, x):
         return self.minimum(self.maximum(x, 0.0), 1.0)
+
+    def clamp(self, x, lo=0.0, hi=1.0):
+        """``x`` clamped to [lo, hi] by one Clamp node (folded for a constant)."""
+        x = self.wrap(x)
+        if x.const is not None:
+            return Val(self, const=min(max(x.const, lo), hi))
+        n = self.node("ShaderNodeClamp", x.col + 1)
+        self.feed(n.inputs["Value"], x)
+        n.inputs["Min"].default_value, n.inputs["Max"].default_value = lo, hi
+        return Val(self, sock=n.outputs[0], col=x.col + 1)
 
     def dot(self, a, b):
         return self.vmath("DOT_PRODUCT", a, b, out=1)

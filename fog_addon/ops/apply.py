@@ -1,7 +1,11 @@
 """Adding, updating and removing the fog on a scene (what the operators, handlers and command line call)."""
 import bpy
 
-from ..nodes import dedupe, groups, images, osl, wrap
+from ..nodes import dedupe, groups, images, osl
+from ..nodes.light import unwrap_light, wrap_light
+from ..nodes.material import unwrap_material, wrap_material
+from ..nodes.owned import is_fogged
+from ..nodes.world import unwrap_world, wrap_world
 from ..precompute import medium, presets, rungs
 
 SUPPORTED_LIGHTS = ("POINT",)
@@ -108,10 +112,10 @@ def _build_scene_groups(scene, lights, preference):
                 bpy.data.node_groups.remove(ng)
         taking_part = {o.data for o in lights}
         for light in bpy.data.lights:
-            if light.users and light not in taking_part and wrap.is_fogged(light):
-                wrap.unwrap_light(light)
+            if light.users and light not in taking_part and is_fogged(light):
+                unwrap_light(light)
     use_osl(scene, any(rungs.needs_osl(mod) for mod in models))
-    return [(light.data.name, why) for light in lights if (why := wrap.wrap_light(light.data))]
+    return [(light.data.name, why) for light in lights if (why := wrap_light(light.data))]
 
 
 def merge_appended():
@@ -146,13 +150,13 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     groups.set_params(fog.beta, fog.albedo)
     skipped += _build_scene_groups(scene, lights, method)
     for mat in scene_materials(scene, objects):
-        why = wrap.wrap_material(mat)
+        why = wrap_material(mat)
         if why:
             skipped.append((mat.name, why))
     if scene.world is None:
         skipped.append((scene.name, "has no World: no airlight on the background"))
     else:
-        why = wrap.wrap_world(scene.world)
+        why = wrap_world(scene.world)
         if why:
             skipped.append((scene.world.name, why))
     if not lights:
@@ -186,11 +190,12 @@ def refresh_lights(scene):
 
 def remove_fog(scene):
     """Take the fog out of every material, light and world, and delete its node groups and tables."""
-    for coll in (bpy.data.materials, bpy.data.worlds):
-        for idb in coll:
-            wrap.unwrap(idb)
+    for mat in bpy.data.materials:
+        unwrap_material(mat)
+    for world in bpy.data.worlds:
+        unwrap_world(world)
     for light in bpy.data.lights:
-        wrap.unwrap_light(light)
+        unwrap_light(light)
     for name in groups.all_group_names():
         ng = bpy.data.node_groups.get(name)
         if ng is not None:

@@ -146,8 +146,8 @@ def selected_only(scene):
     target.select_set(True)
     bpy.context.view_layer.objects.active = target
     assert add(density=0.1, selected_only="SELECTED")[0] == "FINISHED"
-    from fog_addon.nodes import wrap
-    R["fogged_selected"] = sorted(m.name for m in bpy.data.materials if wrap.is_fogged(m))
+    from fog_addon.nodes.owned import is_fogged
+    R["fogged_selected"] = sorted(m.name for m in bpy.data.materials if is_fogged(m))
     R["selected_materials"] = sorted(s.material.name for s in target.material_slots)
     bpy.ops.fog.remove()
 

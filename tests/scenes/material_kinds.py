@@ -34,7 +34,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 from fog_addon import imageio, measure  # noqa: E402
-from fog_addon.nodes import wrap  # noqa: E402
+from fog_addon.nodes import graph, owned  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 import add_remove  # noqa: E402  (snapshot, differing)
 
@@ -443,19 +443,19 @@ def rel_err(got, want):
 def snapshot():
     """tests/scenes/add_remove.py's snapshot, keyed by full names (a linked and a local "X" both exist)."""
     snap = add_remove.snapshot()
-    snap["materials"] = {m.name_full: add_remove.snapshot_tree(m.node_tree) for m in bpy.data.materials}
+    snap["materials"] = {m.name_full: add_remove.snapshot_material(m) for m in bpy.data.materials}
     snap["images"] = [n for n in snap["images"] if n != "Render Result"]
     return snap
 
 
 def fog_nodes(mat, bl_idname="ShaderNodeGroup"):
-    return [n for n in mat.node_tree.nodes if n.name.startswith(wrap.PREFIX) and n.bl_idname == bl_idname]
+    return [n for n in mat.node_tree.nodes if owned.is_ours(n) and n.bl_idname == bl_idname]
 
 
 def fed_by_fog(mat, target):
-    out = wrap.effective_output(mat.node_tree, target)
+    out = graph.effective_output(mat.node_tree, target)
     return bool(out is not None and out.inputs["Surface"].is_linked
-                and out.inputs["Surface"].links[0].from_node.name.startswith(wrap.PREFIX))
+                and owned.is_ours(out.inputs["Surface"].links[0].from_node))
 
 
 def structure():
@@ -464,12 +464,12 @@ def structure():
     vol = m["Volume"]
     vsrc = next(n for n in vol.node_tree.nodes if n.bl_idname == "ShaderNodeVolumePrincipled").outputs[0]
     res["volume_kept"] = all(
-        (o := wrap.effective_output(vol.node_tree, t)) is not None and o.inputs["Volume"].is_linked
-        and o.inputs["Volume"].links[0].from_socket == vsrc for t in wrap.TARGETS)
-    res["volume_surface_fogged"] = all(fed_by_fog(vol, t) for t in wrap.TARGETS)
+        (o := graph.effective_output(vol.node_tree, t)) is not None and o.inputs["Volume"].is_linked
+        and o.inputs["Volume"].links[0].from_socket == vsrc for t in graph.TARGETS)
+    res["volume_surface_fogged"] = all(fed_by_fog(vol, t) for t in graph.TARGETS)
     res["shared_fog_nodes"] = len(fog_nodes(m["Shared"]))
     res["shared_users"] = m["Shared"].users
-    res["multi_output_fogged"] = {t: fed_by_fog(m["Multi Output"], t) for t in wrap.TARGETS}
+    res["multi_output_fogged"] = {t: fed_by_fog(m["Multi Output"], t) for t in graph.TARGETS}
     g = m["Group Principled"]
     fog = fog_nodes(g)
     if fog:
@@ -535,7 +535,7 @@ def main(tmp, engine="CYCLES"):
     reasons = dict(skipped)
     once = snapshot()
     used = apply.scene_materials(scene)
-    res["materials"] = {m.name_full: {"fogged": wrap.is_fogged(m), "reason": reasons.get(m.name),
+    res["materials"] = {m.name_full: {"fogged": owned.is_fogged(m), "reason": reasons.get(m.name),
                                       "in_scene": m in used} for m in bpy.data.materials}
     res["skipped"] = skipped
     r1 = render(scene, os.path.join(tmp, f"{tag}_r1.exr"))

@@ -18,7 +18,8 @@ from shared_common import copies, driver_targets, expected_names, fog_groups_of,
 import bpy  # noqa: E402
 
 from demo_scenes import add_camera, add_plane, add_point_light, material, render_settings, set_world, spheres  # noqa: E402
-from fog_addon.nodes import dedupe, groups, wrap  # noqa: E402
+from fog_addon.nodes import dedupe, groups  # noqa: E402
+from fog_addon.nodes.material import unwrap_material, wrap_material  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 
 A_DENSITY, B_DENSITY = 0.05, 0.3
@@ -115,8 +116,8 @@ def main():
     if do_render:
         images["merged"] = render(scene, workdir, "merged")
         mat = bpy.data.materials["Diffuse"]
-        wrap.unwrap(mat)
-        assert wrap.wrap_material(mat) is None
+        unwrap_material(mat)
+        assert wrap_material(mat) is None
         images["native"] = render(scene, workdir, "native")
         ref = images["native"]
         scale = float(abs(ref).max())

@@ -1,0 +1,63 @@
+"""What belongs to the fog: the nodes it adds (by tag, never by name) and data it must not edit.
+
+Every node the fog adds to a user's material, World or light carries the
+custom property ``analytic_fog`` (``TAG``), whose value is the node's role
+("Surface", "CYCLES Attenuate", "Term 3", ...).  Ownership is decided by
+that tag alone, so a user's own node named "AnalyticFog ..." is never taken
+for the fog's, and the fog finds its nodes by role even if Blender had to
+rename them (a user node already held the name).  The tag is saved with the
+file and copied with the node.  The nodes keep readable names and labels
+(``AnalyticFog <role>``) for the artist.
+"""
+PREFIX = "AnalyticFog"   # of the names the fog gives: its nodes and its node groups, images and texts
+TAG = "analytic_fog"     # custom property on each node the fog adds: the node's role
+
+
+def mark(node, role):
+    """Make ``node`` the fog's, with ``role``; name and label it ``AnalyticFog <role>``."""
+    node[TAG] = role
+    node.name = node.label = f"{PREFIX} {role}"
+    return node
+
+
+def add(tree, bl_idname, role, location, **props):
+    """A new node of the fog's in ``tree`` (see ``mark``) at ``location``, with RNA properties ``props``."""
+    n = mark(tree.nodes.new(bl_idname), role)
+    n.location = location
+    for k, v in props.items():
+        setattr(n, k, v)
+    return n
+
+
+def is_ours(node):
+    return node.get(TAG) is not None
+
+
+def role_of(node):
+    """The fog's role for ``node`` ("" for a user's node)."""
+    return node.get(TAG, "")
+
+
+def find(tree, role):
+    """The fog's node with ``role`` in ``tree``, or None."""
+    return next((n for n in tree.nodes if n.get(TAG) == role), None)
+
+
+def is_fogged(idblock):
+    """True if the fog added nodes to ``idblock``'s (material, World, light) node tree."""
+    return idblock.node_tree is not None and any(is_ours(n) for n in idblock.node_tree.nodes)
+
+
+def remove_ours(tree):
+    """Delete every node the fog added to ``tree`` (and so every link touching them)."""
+    for n in [n for n in tree.nodes if is_ours(n)]:
+        tree.nodes.remove(n)
+
+
+def read_only(idblock):
+    """Why the fog must not edit ``idblock`` (linked or overridden library data), or None."""
+    if idblock.library is not None:
+        return f"is linked from the library {idblock.library.name!r}: read-only, left without fog"
+    if idblock.override_library is not None:
+        return "is a library override: the fog's nodes would not be saved, left without fog (make it local first)"
+    return None
