@@ -30,7 +30,7 @@ from . import groups, owned
 TARGETS = ("CYCLES", "EEVEE")
 WHITE = (1.0, 1.0, 1.0)
 BLACK = (0.0, 0.0, 0.0)
-PRINCIPLED_INPUTS = ("Base Color", "Metallic", "Roughness", "Specular IOR Level")
+_PRINCIPLED_INPUTS = ("Base Color", "Metallic", "Roughness", "Specular IOR Level")
 EMITTERS = ("ShaderNodeEmission", "ShaderNodeBackground")
 _OUTPUT_TYPES = ("ShaderNodeOutputMaterial", "ShaderNodeOutputWorld")
 _PASS_THROUGH = ("ShaderNodeBsdfTransparent", "ShaderNodeHoldout")
@@ -81,13 +81,13 @@ def source(sock):
     return None
 
 
-def value(sock):
+def _value(sock):
     """A scalar input: its source socket, or its value as a float."""
     src = source(sock)
     return src if src is not None else float(sock.default_value)
 
 
-def colour(sock):
+def _colour(sock):
     """A colour input: its source socket, or its value as an RGB 3-tuple."""
     src = source(sock)
     return src if src is not None else tuple(float(v) for v in tuple(sock.default_value)[:3])
@@ -95,7 +95,7 @@ def colour(sock):
 
 def _fraction(sock):
     """Input ``sock`` clamped to [0, 1] as a weight factor: a float, or (its source socket, False)."""
-    v = value(sock)
+    v = _value(sock)
     return min(max(v, 0.0), 1.0) if isinstance(v, float) else (v, False)
 
 
@@ -139,7 +139,7 @@ class Kinds:
             isinstance(c, bpy.types.NodeSocket) for _, _, c in self.passes)
 
 
-def analyse(sock, weight, ctx, kinds, depth=0):
+def _analyse(sock, weight, ctx, kinds, depth=0):
     """Walk the shader graph from output ``sock`` with ``weight``; ``ctx``: the group nodes we are inside."""
     if depth > 64:
         return
@@ -151,12 +151,12 @@ def analyse(sock, weight, ctx, kinds, depth=0):
         for inp, w in ((node.inputs[1], weight + (_complement(f),)), (node.inputs[2], weight + (f,))):
             src = source(inp)
             if src is not None and not is_zero(w):
-                analyse(src, w, ctx, kinds, depth + 1)
+                _analyse(src, w, ctx, kinds, depth + 1)
     elif kind == "ShaderNodeAddShader":
         for inp in node.inputs[:2]:
             src = source(inp)
             if src is not None:
-                analyse(src, weight, ctx, kinds, depth + 1)
+                _analyse(src, weight, ctx, kinds, depth + 1)
     elif kind == "ShaderNodeGroup":
         tree = node.node_tree
         out = None if tree is None else next(
@@ -164,12 +164,12 @@ def analyse(sock, weight, ctx, kinds, depth=0):
         inner = None if out is None else next((i for i in out.inputs if i.identifier == sock.identifier), None)
         src = None if inner is None else source(inner)
         if src is not None:
-            analyse(src, weight, ctx + (node,), kinds, depth + 1)
+            _analyse(src, weight, ctx + (node,), kinds, depth + 1)
         else:
             kinds.opaque = True
     elif kind in _PASS_THROUGH:
         if top:
-            kinds.passes.append((weight, sock, colour(node.inputs["Color"]) if "Color" in node.inputs else WHITE))
+            kinds.passes.append((weight, sock, _colour(node.inputs["Color"]) if "Color" in node.inputs else WHITE))
         else:
             kinds.hidden.append(ctx[0].node_tree.name)
     elif kind == "ShaderNodeBsdfPrincipled":
@@ -182,12 +182,12 @@ def analyse(sock, weight, ctx, kinds, depth=0):
                 kinds.passes.append((weight + (_complement(alpha),), None, WHITE))
             else:
                 kinds.hidden.append(ctx[0].node_tree.name)
-        c, s = colour(node.inputs["Emission Color"]), value(node.inputs["Emission Strength"])
+        c, s = _colour(node.inputs["Emission Color"]), _value(node.inputs["Emission Strength"])
         if top and not _is_black(c, s):
             kinds.emitters.append((weight + (alpha,), c, s))
     elif kind in EMITTERS:
         kinds.opaque = True
-        c, s = colour(node.inputs["Color"]), value(node.inputs["Strength"])
+        c, s = _colour(node.inputs["Color"]), _value(node.inputs["Strength"])
         if top and not _is_black(c, s):
             kinds.emitters.append((weight, c, s))
     else:
@@ -226,7 +226,7 @@ def plan(tree):
     for src in srcs.values():
         if src is not None and skey(src) not in kinds:
             kinds[skey(src)] = Kinds()
-            analyse(src, (), (), kinds[skey(src)])
+            _analyse(src, (), (), kinds[skey(src)])
     return outs, srcs, kinds
 
 
@@ -260,7 +260,7 @@ def bsdf_copies(reads):
         v, ok = _mirrored(node.inputs["Color"], ctx)
         return [("Base Color", v, ok), ("Metallic", 0.0, True), ("Roughness", 1.0, True),
                 ("Specular IOR Level", 0.0, True)]
-    return [(name, *_mirrored(node.inputs[name], ctx)) for name in PRINCIPLED_INPUTS if name in node.inputs]
+    return [(name, *_mirrored(node.inputs[name], ctx)) for name in _PRINCIPLED_INPUTS if name in node.inputs]
 
 
 # --- what the fog was built from -------------------------------------------------
