@@ -60,9 +60,11 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
         description="Henyey-Greenstein g of the fog's phase function (only isotropic fog, 0, so far)")
     method: bpy.props.EnumProperty(
         name="Method", default="NODES", update=_method_changed,
-        items=[("NODES", "Node Groups", "Shader node groups with packed tables: Cycles and EEVEE"),
-               ("OSL", "OSL", "Airlight by quadrature in an OSL script: Cycles only (switches Cycles' OSL on)")],
-        description="How the fog is evaluated")
+        items=[("NODES", "Node Groups", "Every model from shader node groups with packed tables: Cycles and EEVEE"),
+               ("OSL", "OSL", "Prefer OSL models where one exists (the glow by quadrature in an OSL script): "
+                              "Cycles only (switches Cycles' OSL on)")],
+        description="Preference for the fog's models: each light gets, per term, the model this preference "
+                    "chooses (shown below)")
     selected_only: bpy.props.BoolProperty(
         name="Selected Only", default=False,
         description="Add the fog only to the materials of the selected objects (the World and lights always)")

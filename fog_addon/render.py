@@ -10,7 +10,7 @@ import time
 import bpy
 
 from . import measure, props
-from .ops import apply
+from .ops import apply, progress
 
 DEFAULT_SAMPLES = {"CYCLES": 16, "BLENDER_EEVEE": 16}
 EEVEE_LIGHT_THRESHOLD = 1e-4   # EEVEE's default 0.01 windows point lights (ratio 0.92 at 4.5 m for 100 W)
@@ -87,7 +87,7 @@ def apply_and_render(scene, args):
     engine = args.engine_id
     kwargs, shown, notes = fog_settings(scene, args)
     t0 = time.perf_counter()
-    skipped = apply.apply_fog(scene, **kwargs)
+    skipped = apply.apply_fog(scene, **kwargs, progress=progress.ConsoleProgress())
     print(f"fog: {describe(shown)}")
     for name, why in notes + list(skipped):
         print(f"note: {name}: {why}")

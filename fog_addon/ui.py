@@ -2,12 +2,21 @@
 import bpy
 
 from .ops import FOG_MT_presets, apply
-from .precompute import presets
+from .precompute import presets, rungs
 
 ENGINE_NOTES = {
     "NODES": "Node groups: Cycles and EEVEE",
     "OSL": "OSL: Cycles only (EEVEE shows no glow)",
 }
+
+
+def _draw_models(layout, settings):
+    """The model of each term that the Method preference chooses, with its error bound."""
+    box = layout.box()
+    box.label(text="Models per light (max. relative error)")
+    col = box.column(align=True)
+    for rung in rungs.choose(settings.method.lower()):
+        col.label(text=f"{rung.term.title()}: {rung.name} ({rung.predicted_error():.1e})")
 
 
 def draw_fog(layout, context):
@@ -34,6 +43,7 @@ def draw_fog(layout, context):
     if s.method == "OSL" and scene.render.engine != "CYCLES":
         col.label(text="Switch the render engine to Cycles to see OSL fog", icon="ERROR")
     col.prop(s, "selected_only")
+    _draw_models(layout, s)
     note = presets.invisible_fog_note(s.density * s.scene_scale, apply.scene_size(scene))
     if note:
         box = layout.box()

@@ -42,6 +42,8 @@ def test_presets(flow):
 
 def test_method_switch_keeps_materials(flow):
     assert flow["osl_script_nodes"] == 2 and flow["osl_switch_on"] is True
+    assert flow["node_groups_left_after_switch"] == ["AnalyticFog Light [airlight quadrature, scatter table, "
+                                                     "direct exact]"]   # the table rung's group is gone
     assert flow["osl_switch_restored"] is False
     assert flow["materials_kept_by_method_switch"]
 
@@ -82,3 +84,6 @@ def test_invisible_fog_is_reported(flow):
 def test_panels_draw(flow):
     assert set(flow["panel_props"]) >= {"visibility", "density", "color", "scene_scale", "method", "selected_only",
                                         "use"}
+    labels = [p for p in flow["panel_props"] if p.startswith("label: ")]
+    assert "label: Airlight: airlight table (1.6e-04)" in labels       # the models the preference chooses
+    assert "label: Airlight: airlight quadrature (1.1e-06)" in labels  # ... drawn again with OSL preferred

@@ -4,7 +4,7 @@ import math
 import bpy
 from bl_operators.presets import AddPresetBase
 
-from . import apply
+from . import apply, progress
 from ..precompute import presets
 
 PRESET_SUBDIR = "analytic_fog"
@@ -53,8 +53,9 @@ class FOG_OT_add(bpy.types.Operator):
         only = settings.selected_only if self.selected_only == "SCENE" else self.selected_only == "SELECTED"
         objects = list(context.selected_objects) if only else None
         try:
-            skipped = apply.apply_fog(scene, density, tuple(settings.color), settings.anisotropy,
-                                      settings.method.lower(), objects, settings.scene_scale)
+            with progress.window_progress(context.window_manager) as report:
+                skipped = apply.apply_fog(scene, density, tuple(settings.color), settings.anisotropy,
+                                          settings.method.lower(), objects, settings.scene_scale, progress=report)
         except ValueError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
@@ -71,7 +72,8 @@ class FOG_OT_remove(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     def execute(self, context):
-        apply.remove_fog(context.scene)
+        with progress.window_progress(context.window_manager) as report:
+            apply.remove_fog(context.scene, progress=report)
         context.scene.analytic_fog.enabled = False
         return {"FINISHED"}
 

@@ -7,6 +7,7 @@ from ..nodes.material import unwrap_material, wrap_material
 from ..nodes.owned import is_fogged
 from ..nodes.world import unwrap_world, wrap_world
 from ..precompute import medium, presets, rungs
+from . import progress as progress_
 
 SUPPORTED_LIGHTS = ("POINT",)
 OSL_WAS = "analytic_fog_osl_was"   # scene custom property: Cycles' OSL switch before the OSL method set it
@@ -129,7 +130,7 @@ def merge_appended():
 
 
 def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="nodes", objects=None,
-              scene_scale=1.0):
+              scene_scale=1.0, progress=progress_.silent):
     """Add (or update) the fog on ``scene``; adding twice is the same as once.
 
     ``method``: the user's preference for the models (``rungs.PREFERENCES``):
@@ -139,20 +140,27 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     ``scene_scale``: real metres per Blender unit (the groups get density *
     scene_scale per unit).  Returns a list of (data-block name, reason) for
     what was left out or fogged with a caveat.  Raises ValueError for bad
-    settings before anything is changed.
+    settings before anything is changed.  ``progress(stage, done, total)``
+    is called as the work advances (``progress.py``).
     """
     fog = medium.medium(density, albedo, anisotropy, scene_scale)
     rungs.choose(method)   # an unknown preference raises here, before anything changes
     check_camera(scene.camera)
+    progress("appended fog", 0, 1)
     skipped = merge_appended()   # first: the tables and groups are looked up by name below
     lights, notes = fog_lights(scene)
     skipped += notes
+    progress("lights and tables", 0, 1)
     groups.set_params(fog.beta, fog.albedo)
     skipped += _build_scene_groups(scene, lights, method)
-    for mat in scene_materials(scene, objects):
+    mats = scene_materials(scene, objects)
+    for k, mat in enumerate(mats):
+        progress("materials", k, len(mats))
         why = wrap_material(mat)
         if why:
             skipped.append((mat.name, why))
+    progress("materials", len(mats), len(mats))
+    progress("world", 0, 1)
     if scene.world is None:
         skipped.append((scene.name, "has no World: no airlight on the background"))
     else:
@@ -188,12 +196,17 @@ def refresh_lights(scene):
     _build_scene_groups(scene, fog_lights(scene)[0], surface.get(PREFERENCE_KEY, "nodes"))
 
 
-def remove_fog(scene):
+def remove_fog(scene, progress=progress_.silent):
     """Take the fog out of every material, light and world, and delete its node groups and tables."""
-    for mat in bpy.data.materials:
+    mats = list(bpy.data.materials)
+    for k, mat in enumerate(mats):
+        progress("materials", k, len(mats))
         unwrap_material(mat)
+    progress("materials", len(mats), len(mats))
+    progress("world", 0, 1)
     for world in bpy.data.worlds:
         unwrap_world(world)
+    progress("lights", 0, 1)
     for light in bpy.data.lights:
         unwrap_light(light)
     for name in groups.all_group_names():

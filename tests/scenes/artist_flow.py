@@ -69,9 +69,14 @@ def settings_and_presets(scene):
 def method_switch(scene):
     mats = snapshot()["materials"]
     scene.analytic_fog.method = "OSL"
+    from fog_addon.nodes import groups
+    from fog_addon.precompute import rungs
+    osl = rungs.choose("osl")
     R["osl_script_nodes"] = sum(n.bl_idname == "ShaderNodeScript"
-                                for g in ("AnalyticFog Light", "AnalyticFog Background Light")
+                                for g in (groups.light_group_name(osl), groups.background_group_name(osl))
                                 for n in bpy.data.node_groups[g].nodes)
+    R["node_groups_left_after_switch"] = sorted(g.name for g in bpy.data.node_groups
+                                                if g.name.startswith("AnalyticFog Light"))
     R["osl_switch_on"] = scene.cycles.shading_system
     scene.analytic_fog.method = "NODES"
     R["osl_switch_restored"] = scene.cycles.shading_system
@@ -175,6 +180,8 @@ class FakeLayout:
             if name == "prop":
                 getattr(args[0], args[1])   # a wrong property name raises here, as it would in the panel
                 self.log.append(args[1])
+            if name == "label":
+                self.log.append("label: " + kw.get("text", ""))
             return FakeLayout(self.log)
         return call
 
