@@ -1,0 +1,55 @@
+"""Each physical term of the fog, and each Cycles setting Remove must give back, has a test that fails without it.
+
+tools/mutations.py removes one term at a time in a scratch copy of the
+repository and runs the tests meant to catch it (README, "Tests that fail
+when a term is missing").  A mutation that survives is a gap in the tests.
+The full run takes about 2 minutes on 2 cores (one pytest per mutation plus
+one unmutated baseline of all the killers); set FOG_SKIP_MUTATIONS=1 to skip it.
+"""
+import os
+import subprocess
+import sys
+
+import pytest
+
+from conftest import ROOT
+
+sys.path.insert(0, str(ROOT / "tools"))
+import mutations  # noqa: E402
+
+
+def test_every_mutation_still_applies():
+    """Each mutation's old text is in its file exactly once and its killers exist (cheap: no runs)."""
+    names = [mu.name for mu in mutations.MUTATIONS]
+    assert len(set(names)) == len(names)
+    for mu in mutations.MUTATIONS:
+        mutations.check(mu)
+        assert mu.killers and mu.old != mu.new, mu.name
+        for node in mu.killers:
+            path, _, func = node.partition("::")
+            name = func.split("[")[0]
+            assert (ROOT / path).is_file() and f"def {name}(" in (ROOT / path).read_text(), (mu.name, node)
+
+
+def test_readme_table_is_the_tools():
+    """README's list of mutations and killers is ``tools/mutations.py --markdown`` (fix: ``--update-readme``)."""
+    md = mutations.markdown(mutations.MUTATIONS)
+    assert all(f"`{mu.name}`" in md for mu in mutations.MUTATIONS)
+    assert mutations.readme_table((ROOT / "README.md").read_text()) == md, \
+        "README.md's mutation table is stale: run .venv/bin/python tools/mutations.py --update-readme"
+
+
+@pytest.mark.skipif(os.environ.get("FOG_SKIP_MUTATIONS") == "1", reason="FOG_SKIP_MUTATIONS=1")
+def test_every_mutation_is_killed():
+    """The killers pass on an unmutated copy, and each mutation makes one of them fail."""
+    try:
+        mutations.repo_files()
+    except (OSError, subprocess.CalledProcessError):
+        pytest.skip("not a git checkout: tools/mutations.py copies the files git ls-files lists")
+    results, base = mutations.run_all(mutations.MUTATIONS, with_baseline=True)
+    assert base["ok"], f"the killer tests fail without any mutation:\n{base['output']}"
+    report = mutations.table(results)
+    bad = [r for r in results if r["status"] != "killed"]
+    assert not bad, report + "".join(f"\n--- {r['name']} {r['status']} ---\n{r['output']}" for r in bad)
+    for r, mu in zip(results, mutations.MUTATIONS):   # killed by a test meant to kill it, not by something else
+        assert r["killed_by"] and r["killed_by"].split("[")[0] in {k.split("[")[0] for k in mu.killers}, report

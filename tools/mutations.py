@@ -1,0 +1,392 @@
+"""Mutation check: remove each physical term of the fog in turn and make sure some test fails.
+
+    .venv/bin/python tools/mutations.py [--list] [--markdown] [--update-readme] [--json] [--baseline] [--rev REV] [--keep] [NAME ...]
+
+Each mutation is data (``MUTATIONS``): a name, what it breaks, a file, the
+exact text it replaces (found exactly once, or the tool refuses, so the list
+cannot go stale silently), the new text and the test node ids that should
+kill it, cheapest first.  The tool snapshots the repository once into a
+scratch folder (the files ``git ls-files`` lists, tracked and untracked but
+not ignored, as they are in the working tree; or with ``--rev`` a commit's
+tree; ``.venv`` is symlinked, not copied), so edits made meanwhile do not
+mix in.  For each mutation it copies the snapshot, applies that ONE mutation
+and runs ``python -m pytest -x -q <killers>`` in the copy with a private
+TMPDIR.  Exit code 1 from pytest (a test failed or errored) kills the
+mutation; 0 means it survived (a test gap); anything else (no tests
+collected, a bad node id, an internal error, a timeout) is reported as an
+error, never as a kill.
+
+``--baseline`` first runs every killer on an unmutated copy: they must pass,
+or a kill proves nothing (no mutation runs then).  ``--list`` prints the
+mutations, ``--markdown`` the README's table (one source for both;
+``--update-readme`` writes it between the README's markers, and
+tests/test_mutations.py checks they agree), ``--json`` the results (with
+pytest's one-line reason for each kill).  Exit code 0 when every mutation
+was killed (and the baseline passed).
+
+A mutation of ``fog_addon/precompute/shading.py`` changes the shaders and
+their numpy twin alike, so a twin comparison (tests/test_nodes.py) cannot
+kill it: its killers have expected values of their own (quadrature of Sun et
+al. 2005's equations, Eq. 19 written out by hand, Cycles path tracing).  The
+twin comparisons kill mutations of the node wiring (``fog_addon/nodes``).
+"""
+import argparse
+import json
+import os
+import pathlib
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from typing import NamedTuple, Tuple
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+class Mutation(NamedTuple):
+    name: str
+    what: str                 # the physics (or the promise) the mutation removes
+    file: str                 # path from the repository root
+    old: str                  # exact text, present exactly once in ``file``
+    new: str
+    killers: Tuple[str, ...]  # pytest node ids from the repository root, cheapest first
+
+
+SHADING = "fog_addon/precompute/shading.py"
+SHADE_TEST = "tests/test_shading.py"
+
+MUTATIONS = [
+    Mutation("glow_on_surfaces", "glow (airlight) along camera rays that hit surfaces zeroed (Eq. 11)", SHADING,
+             "airlight=m.scale(light.intensity, air),",
+             "airlight=m.scale(light.intensity, 0.0 * air),",
+             (f"{SHADE_TEST}::test_shade_point_against_quadrature",)),
+    Mutation("view_attenuation", "the user's shader not dimmed by e^{−β D_vp} on camera rays", SHADING,
+             "transmit = 1.0 + is_camera * (t_vp - 1.0)",
+             "transmit = 1.0 + is_camera * (0.0 * t_vp)",
+             (f"{SHADE_TEST}::test_shade_surface_is_eq19",)),
+    Mutation("direct_attenuation_cycles", "Cycles: the light's node tree no longer multiplies by "
+             "e^{−β · Ray Length}", "fog_addon/nodes/light.py",
+             "neg.inputs[1].default_value = -1.0",
+             "neg.inputs[1].default_value = 0.0",
+             ("tests/test_render.py::test_cycles_nodes[spheres-0.15]",)),
+    Mutation("direct_attenuation_eevee", "EEVEE: the irradiance-weighted direct attenuation forced to 1", SHADING,
+             "direct = (num + 1e-30) / (den + 1e-30)",
+             "direct = (den + 1e-30) / (den + 1e-30)",
+             (f"{SHADE_TEST}::test_shade_surface_is_eq19",)),
+    Mutation("diffuse_fog_light", "fog light the diffuse lobe reflects (ρ_d M_1) zeroed", SHADING,
+             "reflected = m.scale(material.diffuse, diffuse) + ",
+             "reflected = m.scale(material.diffuse, 0.0 * diffuse) + ",
+             (f"{SHADE_TEST}::test_shade_point_against_quadrature",)),
+    Mutation("glossy_fog_light", "fog light the glossy lobe reflects (ρ_s M_n) zeroed", SHADING,
+             "+ m.scale(material.specular, glossy)",
+             "+ m.scale(material.specular, 0.0 * glossy)",
+             (f"{SHADE_TEST}::test_shade_point_against_quadrature",)),
+    Mutation("glossy_mirror_axis", "glossy lobe about the normal instead of the mirrored view vector", SHADING,
+             "cos_r = m.dot(to_light, mirror(m, geo.incoming, geo.normal)) * inv_d",
+             "cos_r = m.dot(to_light, geo.normal) * inv_d",
+             (f"{SHADE_TEST}::test_glossy_lobe_follows_the_mirror_direction",)),
+    Mutation("background_glow", "the background's fog (World airlight, Eq. 12) zeroed", SHADING,
+             "return m.scale(light.intensity, m.run(models.background, medium.beta, d_sv, along, h))",
+             "return m.scale(light.intensity, 0.0 * m.run(models.background, medium.beta, d_sv, along, h))",
+             (f"{SHADE_TEST}::test_background_against_quadrature",)),
+    Mutation("albedo_surface", "fog colour (albedo) ignored on surfaces", SHADING,
+             "    albedo = medium.albedo\n",
+             "    albedo = 0.0 * medium.albedo + 1.0\n",
+             (f"{SHADE_TEST}::test_shade_surface_is_eq19",)),
+    Mutation("albedo_nodes", "fog colour (albedo) not passed from the Params group to the shading",
+             "fog_addon/nodes/groups.py",
+             "Medium(m.wrap(beta), m.wrap(albedo, vector=True))",
+             "Medium(m.wrap(beta))",
+             ("tests/test_nodes.py::test_cycles_whole_fog_matches_numpy_twin[nodes]",)),
+    Mutation("view_attenuation_nodes", "material: the user's shader not scaled by the fog's mix factor "
+             "(Mix Shader factor 0)", "fog_addon/nodes/material.py",
+             "tree.links.new(mix_factor, mix.inputs[0])",
+             "mix.inputs[0].default_value = 0.0",
+             ("tests/test_render.py::test_cycles_nodes[spheres-0.15]",)),
+    Mutation("direct_attenuation_eevee_nodes", "material: EEVEE given the Cycles mix factor (direct light "
+             "not dimmed)", "fog_addon/nodes/material.py",
+             "f\"{'EEVEE' if target == 'EEVEE' else 'Cycles'} Mix Factor\"",
+             "\"Cycles Mix Factor\"",
+             ("tests/test_render.py::test_eevee_nodes[spheres-0.15]",)),
+    Mutation("fog_emission_nodes", "material: the fog's emission (glow and fog light) not added to the shader",
+             "fog_addon/nodes/material.py",
+             "tree.links.new(emit.outputs[0], add.inputs[1])",
+             "pass",
+             ("tests/test_nodes.py::test_cycles_whole_fog_matches_numpy_twin[nodes]",)),
+    Mutation("background_glow_nodes", "World: the fog group's glow not linked to the Background shader",
+             "fog_addon/nodes/world.py",
+             "tree.links.new(fog.outputs[\"Emission\"], bg.inputs[\"Color\"])",
+             "bg.inputs[\"Color\"].default_value = (0.0, 0.0, 0.0, 1.0)",
+             ("tests/test_nodes.py::test_cycles_whole_fog_matches_numpy_twin[nodes]",)),
+    Mutation("restore_emission_sampling", "fog.remove leaves the materials' `cycles.emission_sampling` off",
+             "fog_addon/nodes/overrides.py",
+             "    for path, value in dict(idblock.get(WAS, {})).items():\n",
+             "    for path, value in dict(idblock.get(WAS, {})).items():\n"
+             "        if path == \"cycles.emission_sampling\":\n            continue\n",
+             ("tests/test_ops.py::test_add_twice_remove_restores",)),
+    Mutation("restore_world_sampling", "fog.remove leaves the World's `cycles.sampling_method` off",
+             "fog_addon/nodes/overrides.py",
+             "    for path, value in dict(idblock.get(WAS, {})).items():\n",
+             "    for path, value in dict(idblock.get(WAS, {})).items():\n"
+             "        if path == \"cycles.sampling_method\":\n            continue\n",
+             ("tests/test_ops.py::test_add_twice_remove_restores",)),
+    Mutation("restore_osl_switch", "fog.remove leaves the scene's `cycles.shading_system` (OSL) on",
+             "fog_addon/ops/apply.py",
+             "scene.cycles.shading_system = bool(scene[OSL_WAS])",
+             "pass",
+             ("tests/test_artist.py::test_method_switch_keeps_materials",)),
+    Mutation("restore_light_use_nodes", "fog.remove leaves the light's `use_nodes` on",
+             "fog_addon/nodes/light.py",
+             "light_data.use_nodes = light_data[_USE_NODES]",
+             "pass",
+             ("tests/test_ops.py::test_add_twice_remove_restores",)),
+]
+
+
+# --- scratch copies ---------------------------------------------------------------------------------
+
+def repo_files(root=ROOT):
+    """The repository's files as in the working tree: tracked and untracked-but-not-ignored, minus deleted."""
+    out = subprocess.run(["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"], cwd=root,
+                         capture_output=True, check=True).stdout
+    names = sorted({n for n in out.decode().split("\0") if n})
+    return [n for n in names if (root / n).is_file() and not n.startswith(".venv/")]
+
+
+def snapshot(dest, rev=None, root=ROOT):
+    """Copy the repository into ``dest``: the working tree's files (``repo_files``), or commit ``rev``'s tree
+    (``git archive``); ``.venv`` is symlinked.  Returns ``dest``."""
+    dest = pathlib.Path(dest)
+    dest.mkdir(parents=True)
+    if rev:
+        tar = subprocess.run(["git", "archive", "--format=tar", rev], cwd=root, capture_output=True, check=True)
+        subprocess.run(["tar", "-x", "-C", str(dest)], input=tar.stdout, check=True)
+    else:
+        for name in repo_files(root):
+            target = dest / name
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(root / name, target)
+    venv = root / ".venv"
+    if venv.exists():
+        (dest / ".venv").symlink_to(venv.resolve(), target_is_directory=True)
+    return dest
+
+
+def copy_snapshot(src, dest):
+    """A fresh copy of a snapshot (its ``.venv`` stays a symlink)."""
+    return pathlib.Path(shutil.copytree(src, dest, symlinks=True))
+
+
+def check(mutation, root=ROOT):
+    """The file's text; raises ValueError unless ``mutation.old`` occurs in it exactly once."""
+    path = pathlib.Path(root) / mutation.file
+    if not path.is_file():
+        raise ValueError(f"mutation {mutation.name}: {mutation.file} does not exist")
+    text = path.read_text()
+    n = text.count(mutation.old)
+    if n != 1:
+        raise ValueError(f"mutation {mutation.name}: the old text occurs {n} times in {mutation.file} "
+                         f"(must be exactly once; update tools/mutations.py):\n{mutation.old!r}")
+    return text
+
+
+def apply(mutation, root):
+    path = pathlib.Path(root) / mutation.file
+    path.write_text(check(mutation, root).replace(mutation.old, mutation.new))
+
+
+# --- running ----------------------------------------------------------------------------------------
+
+def _python():
+    venv = ROOT / ".venv" / "bin" / "python"
+    return str(venv) if venv.exists() else sys.executable
+
+
+def run_pytest(repo, tests, tmpdir, stop_first=True, timeout=900):
+    """Run ``tests`` in the copy ``repo``; returns (exit code, failing node ids, output, seconds)."""
+    tmpdir = pathlib.Path(tmpdir)
+    tmpdir.mkdir(parents=True, exist_ok=True)
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("PYTHONPATH", "FOG_PYTHON", "PYTEST_ADDOPTS", "BLENDER_USER_RESOURCES")}
+    env.update(TMPDIR=str(tmpdir), PYTHONDONTWRITEBYTECODE="1", FOG_REGEN_REFERENCES="0",
+               COLUMNS="400")   # pytest cuts its one-line reasons at the terminal width
+    python = str(pathlib.Path(repo) / ".venv" / "bin" / "python")
+    if not os.path.exists(python):
+        python = _python()
+    cmd = [python, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-rfE"] + (["-x"] if stop_first else []) \
+        + list(tests)
+    t0 = time.perf_counter()
+    try:
+        p = subprocess.run(cmd, cwd=repo, env=env, capture_output=True, text=True, timeout=timeout)
+        code, output = p.returncode, p.stdout + p.stderr
+    except subprocess.TimeoutExpired as e:
+        code, output = -1, f"timed out after {timeout} s\n{e.stdout or ''}"
+    seconds = time.perf_counter() - t0
+    failed = []   # (node id, pytest's one-line reason)
+    for line in output.splitlines():
+        hit = re.match(r"(FAILED|ERROR) (\S+)(?: - (.*))?", line)
+        if hit:
+            node = hit.group(2)
+            failed.append((node if node.startswith("tests/") else "tests/" + node, hit.group(3) or ""))
+    details = [line[1:].strip() for line in output.splitlines() if line.startswith("E ") and line[1:].strip()]
+    if failed and len(failed[0][1].rstrip(": ")) < 20 and details:   # a bare "AssertionError": say more
+        failed[0] = (failed[0][0], "; ".join(details[:3]))
+    return code, failed, output, seconds
+
+
+def run_mutation(mutation, base, scratch, keep=False):
+    """Apply ``mutation`` to a fresh copy of snapshot ``base`` under ``scratch`` and run its killers."""
+    work = pathlib.Path(tempfile.mkdtemp(prefix=mutation.name + "-", dir=scratch))
+    try:
+        repo = copy_snapshot(base, work / "repo")
+        apply(mutation, repo)
+        code, failed, output, seconds = run_pytest(repo, mutation.killers, work / "tmp")
+    finally:
+        if not keep:
+            shutil.rmtree(work, ignore_errors=True)
+    status = {0: "SURVIVED", 1: "killed"}.get(code, "ERROR")
+    return {"name": mutation.name, "what": mutation.what, "file": mutation.file, "status": status,
+            "killed_by": failed[0][0] if (status == "killed" and failed) else None,
+            "reason": failed[0][1] if (status == "killed" and failed) else None, "exit_code": code,
+            "seconds": round(seconds, 1), "output": None if status == "killed" else output[-4000:]}
+
+
+def baseline(mutations, base, scratch):
+    """Every killer on an unmutated copy of ``base`` (all must pass): a result dict with ok, seconds, output."""
+    work = pathlib.Path(tempfile.mkdtemp(prefix="baseline-", dir=scratch))
+    try:
+        repo = copy_snapshot(base, work / "repo")
+        tests = list(dict.fromkeys(t for mu in mutations for t in mu.killers))
+        code, _, output, seconds = run_pytest(repo, tests, work / "tmp", stop_first=False)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    return {"ok": code == 0, "seconds": round(seconds, 1), "output": None if code == 0 else output[-4000:]}
+
+
+def run_all(mutations, keep=False, with_baseline=False, rev=None, log=None):
+    """Snapshot the repository once (working tree, or commit ``rev``), check every mutation applies to it,
+    then run the baseline (if asked) and each mutation on copies of it.
+
+    Returns (results, baseline result or None); raises ValueError if a mutation does not apply.
+    """
+    scratch = tempfile.mkdtemp(prefix="fog_mutations-", dir=os.environ.get("TMPDIR") or None)
+    try:
+        base = snapshot(pathlib.Path(scratch) / "snapshot", rev)
+        for mu in mutations:
+            check(mu, base)
+        base_result = None
+        if with_baseline:
+            base_result = baseline(mutations, base, scratch)
+            if log:
+                log(f"baseline: {'passed' if base_result['ok'] else 'FAILED'} in {base_result['seconds']} s")
+            if not base_result["ok"]:
+                return [], base_result   # a kill would prove nothing
+        results = []
+        for mu in mutations:
+            res = run_mutation(mu, base, scratch, keep)
+            results.append(res)
+            if log:
+                log(f"{res['name']}: {res['status']} by {res['killed_by']} in {res['seconds']} s")
+    finally:
+        if not keep:
+            shutil.rmtree(scratch, ignore_errors=True)
+    return results, base_result
+
+
+# --- output -----------------------------------------------------------------------------------------
+
+def _short(node):
+    return node.replace("tests/", "", 1)
+
+
+def list_text(mutations):
+    return "\n".join(f"{mu.name:32} {mu.file:34} {mu.what}\n{'':32} killers: {', '.join(mu.killers)}"
+                     for mu in mutations)
+
+
+def markdown(mutations):
+    rows = ["| mutation | what it removes | file | killed by |", "|---|---|---|---|"]
+    for mu in mutations:
+        rows.append(f"| `{mu.name}` | {mu.what} | `{mu.file}` | `{_short(mu.killers[0])}` |")
+    return "\n".join(rows)
+
+
+README = ROOT / "README.md"
+BEGIN, END = "<!-- tools/mutations.py --markdown: begin -->", "<!-- tools/mutations.py --markdown: end -->"
+
+
+def readme_table(text):
+    """The table between the markers in README text (None without the markers)."""
+    if BEGIN not in text or END not in text:
+        return None
+    return text.split(BEGIN, 1)[1].split(END, 1)[0].strip("\n")
+
+
+def update_readme(mutations, path=README):
+    """Write ``markdown(mutations)`` between the markers in the README; returns True if it changed."""
+    text = path.read_text()
+    if readme_table(text) is None:
+        raise ValueError(f"{path} has no {BEGIN} ... {END} markers")
+    head, rest = text.split(BEGIN, 1)
+    new = f"{head}{BEGIN}\n{markdown(mutations)}\n{END}{rest.split(END, 1)[1]}"
+    if new != text:
+        path.write_text(new)
+    return new != text
+
+
+def table(results):
+    rows = [f"{'mutation':32} {'status':9} {'time':>7}  killed by"]
+    for r in results:
+        rows.append(f"{r['name']:32} {r['status']:9} {r['seconds']:6.1f}s  {r['killed_by'] or '-'}")
+    rows.append(f"{'total':32} {'':9} {sum(r['seconds'] for r in results):6.1f}s")
+    return "\n".join(rows)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("names", nargs="*", help="run only these mutations")
+    ap.add_argument("--list", action="store_true", help="print the mutations and their killers")
+    ap.add_argument("--markdown", action="store_true", help="print the README table")
+    ap.add_argument("--update-readme", action="store_true", help="write that table into README.md")
+    ap.add_argument("--json", action="store_true", help="print the results as JSON")
+    ap.add_argument("--baseline", action="store_true", help="first check every killer passes unmutated")
+    ap.add_argument("--keep", action="store_true", help="keep the scratch copies")
+    ap.add_argument("--rev", help="mutate this commit's tree (git archive) instead of the working tree")
+    args = ap.parse_args(argv)
+    known = {mu.name: mu for mu in MUTATIONS}
+    unknown = [n for n in args.names if n not in known]
+    if unknown:
+        ap.error(f"unknown mutation(s) {unknown}; --list shows them")
+    chosen = [known[n] for n in args.names] if args.names else MUTATIONS
+    if args.list:
+        print(list_text(chosen))
+        return 0
+    if args.markdown:
+        print(markdown(chosen))
+        return 0
+    if args.update_readme:
+        print("README.md " + ("updated" if update_readme(MUTATIONS) else "already up to date"))
+        return 0
+    try:
+        results, base = run_all(chosen, args.keep, args.baseline, args.rev,
+                                log=None if args.json else lambda s: print(s, file=sys.stderr, flush=True))
+    except ValueError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    if args.json:
+        print(json.dumps({"baseline": base, "mutations": results}, indent=1))
+    else:
+        print(table(results))
+        for r in results:
+            if r["status"] != "killed":
+                print(f"\n--- {r['name']} {r['status']} (exit {r['exit_code']}) ---\n{r['output']}")
+        if base and not base["ok"]:
+            print(f"\n--- baseline FAILED ---\n{base['output']}")
+    ok = all(r["status"] == "killed" for r in results) and (base is None or base["ok"])
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
