@@ -77,7 +77,9 @@ def test_shade_point_against_quadrature(m, seed):
         np.testing.assert_allclose(got.scattered, want, rtol=SCATTER_TOL)
         assert got.attenuation == pytest.approx(math.exp(-t), rel=1e-12)
         cos_n = max(np.dot(normal, light_pos - pos) / d_sp, 0.0)
-        assert got.weight == pytest.approx(intensity.mean() * cos_n / d_sp ** 2, rel=1e-9)
+        cos_r = max(np.dot(mirror, light_pos - pos) / d_sp, 0.0)
+        lobe = rho_d.mean() * cos_n / math.pi + rho_s.mean() * (n + 1) / (2 * math.pi) * cos_r ** n
+        assert got.weight == pytest.approx(intensity.mean() * lobe / d_sp ** 2, rel=1e-6)
 
 
 def test_glossy_lobe_follows_the_mirror_direction(m):

@@ -11,9 +11,10 @@ by pixel).  Every term's formula is a rung of ``rungs.py``, run through
 Units: positions and distances in m, beta in 1/m, light intensity I0 in W/sr
 (RGB: power * colour / 4 pi), radiances in W/(m^2 sr).
 """
+import math
 from typing import Any, NamedTuple
 
-from . import model
+from . import model, tables
 
 
 class Geometry(NamedTuple):
@@ -42,14 +43,14 @@ class LightTerms(NamedTuple):
     airlight: Any        # RGB glow along the camera ray (Eq. 11 times I0), W/(m^2 sr), before the albedo
     scattered: Any       # RGB fog light the surface reflects (Eq. 17-18 times I0), leaving p
     attenuation: Any     # e^{-beta D_sp}: the light's direct light at p is dimmed by this (Eq. 14)
-    weight: Any          # the light's unshadowed irradiance at p (grey), for EEVEE's shared attenuation
+    weight: Any          # the light's unshadowed reflected radiance at p (grey), for EEVEE's shared attenuation
 
 
 class SurfaceFog(NamedTuple):
     """What a fogged material needs (``shade_surface``)."""
     emission: Any             # RGB: albedo * (sum airlight + e^{-beta D_vp} sum scattered), camera rays only
     transmittance: Any        # e^{-beta D_vp} on camera rays, 1 on others: scales the user's shader
-    direct_attenuation: Any   # EEVEE: irradiance-weighted mean of the lights' e^{-beta D_sp}
+    direct_attenuation: Any   # EEVEE: the lights' e^{-beta D_sp}, averaged with the weights of LightTerms
     cycles_mix: Any           # 1 - scale of the user's shader in Cycles (lights attenuate themselves)
     eevee_mix: Any            # 1 - scale of the user's shader in EEVEE (light node trees are ignored there)
 
@@ -57,6 +58,25 @@ class SurfaceFog(NamedTuple):
 def mirror(m, incoming, normal):
     """The mirror direction of ``incoming`` about ``normal``: the glossy lobe's axis (Sun App. B)."""
     return m.scale(normal, 2.0 * m.dot(incoming, normal)) - incoming
+
+
+def _grey(m, colour):
+    return m.dot(colour, m.combine(1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))
+
+
+def reflected_lobe(m, material, cos_n, cos_r):
+    """f_r cos(theta_i) toward a light (1/sr, grey): the diffuse lobe rho_d cos(theta_n) / pi plus the
+    energy-normalised Phong lobe rho_s (n + 1) / (2 pi) cos(theta_r)^n about the mirrored view vector
+    (the BRDF of ``surface.principled_to_phong``, Sun et al. 2005 Eq. 17-18's lobes).
+
+    cos_n: cosine between the normal and the direction to the light; cos_r: between the mirrored view
+    vector and the direction to the light.  Times I0 / D_sp^2 it is the radiance the light's direct
+    light reflects towards the camera, unshadowed and undimmed: EEVEE's weight for its shared
+    direct attenuation (``shade_surface``).
+    """
+    n = m.power(2.0, material.level * (1.0 / tables.PHONG_LEVELS_PER_OCTAVE))
+    glossy = (n + 1.0) * (0.5 / math.pi) * m.power(m.maximum(cos_r, 0.0), n)
+    return _grey(m, material.diffuse) * m.maximum(cos_n, 0.0) * (1.0 / math.pi) + _grey(m, material.specular) * glossy
 
 
 def shade_point(m, geo, material, light, medium, models):
@@ -77,8 +97,7 @@ def shade_point(m, geo, material, light, medium, models):
     diffuse = m.run(models.scatter, beta, d_sp, cos_n, 0.0)
     glossy = m.run(models.scatter, beta, d_sp, cos_r, material.level)
     reflected = m.scale(material.diffuse, diffuse) + m.scale(material.specular, glossy)
-    grey = m.dot(light.intensity, m.combine(1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))
-    weight = grey * m.maximum(cos_n, 0.0) * inv_d * inv_d
+    weight = _grey(m, light.intensity) * reflected_lobe(m, material, cos_n, cos_r) * inv_d * inv_d
     return LightTerms(airlight=m.scale(light.intensity, air),
                       scattered=light.intensity * reflected,
                       attenuation=m.run(models.direct, beta, d_sp),
