@@ -20,9 +20,10 @@ def test_eevee_glossy_two_lamps(tmp_path, regen):
 
 def test_cycles_glossy_two_lamps(tmp_path, regen):
     ref = h.ensure_reference(SCENE, DENSITY, regen, samples=SAMPLES)
-    out = h.render_test(SCENE, DENSITY, str(tmp_path / "cycles.exr"), engine="cycles")
-    # 3.6 % measured: the wet street's reflection of the glows at grazing angles is too dark, since the
-    # fog light's glossy albedo is the hemispherical average of Schlick's Fresnel (surface.principled_to_phong),
-    # not its value at the view angle (known limit, README)
-    m = h.assert_close(out, ref, f"{SCENE}_{DENSITY}_cycles", rel_rmse=0.04, mean_ratio_tol=0.015)
+    # 128 spp: the glossy street's own direct light (multiscatter GGX) is noisy at 16 spp (3.6 % there,
+    # 2.1 % at 256 spp); the fog is noise-free at any count
+    out = h.render_test(SCENE, DENSITY, str(tmp_path / "cycles.exr"), engine="cycles", samples=128)
+    # mean 1.1 % low: the fog light reflected by the glossy street (Phong stand-in for GGX, view-independent
+    # albedo) is too dark at grazing angles (a Schlick-at-view-angle albedo only moved it 3.6 -> 3.5 % at 16 spp)
+    m = h.assert_close(out, ref, f"{SCENE}_{DENSITY}_cycles", rel_rmse=0.03, mean_ratio_tol=0.015)
     print(f"Cycles relative RMSE {m['rel_rmse']:.4f}")
