@@ -44,7 +44,7 @@ import bmesh  # noqa: E402
 
 import fog_addon  # noqa: E402
 from demo_scenes import add_camera, add_point_light, render_settings, set_world  # noqa: E402
-from fog_addon.nodes import groups, images, owned  # noqa: E402
+from fog_addon.nodes import compositor, groups, images, owned  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 from fog_addon.precompute import rungs  # noqa: E402
 
@@ -93,6 +93,8 @@ def shared_ok(on):
     models = rungs.choose("nodes")
     want = sorted([groups.PARAMS, groups.SURFACE, groups.WORLD, groups.light_group_name(models),
                    groups.background_group_name(models)] + images.table_names()) if on else []
+    if on and compositor.is_set_up(bpy.context.scene):   # the scene's own denoising set-up (Cycles, denoiser on)
+        want = sorted(want + [compositor.GROUP])
     return ours == want
 
 
@@ -190,9 +192,10 @@ def main(argv=None):
     timed(rows, "apply_fog (again, bakes tables)", lambda: apply.apply_fog(scene, DENSITY), n, True)
     timed(rows, "apply_fog (fog already on)", lambda: apply.apply_fog(scene, DENSITY), n, True)
     lights, _ = apply.fog_lights(scene)
-    timed(rows, "what-if: build_surface in place", lambda: groups.build_surface(lights), n, True)
-    timed(rows, "what-if: build_surface side-built", lambda: side_built(groups.SURFACE, groups.build_surface, lights),
-          n, True)
+    surface_args = (lights, apply.light_models(lights, "nodes"), images.all_table_images())
+    timed(rows, "what-if: build_surface in place", lambda: groups.build_surface(*surface_args), n, True)
+    timed(rows, "what-if: build_surface side-built",
+          lambda: side_built(groups.SURFACE, groups.build_surface, *surface_args), n, True)
     fog_addon.register()
     try:
         timed(rows, "bpy.ops.fog.remove", lambda: bpy.ops.fog.remove(), n, False)

@@ -66,7 +66,7 @@ def read(path, subimage=0, channels=None):
         if subimage and not inp.seek_subimage(subimage, 0):
             raise IOError(f"{path}: no subimage {subimage}")
         spec = inp.spec()
-        data = inp.read_image(0, spec.nchannels, "float")
+        data = inp.read_image(subimage, 0, 0, spec.nchannels, "float")   # (chbegin, chend) alone reads part 0
         if data is None:
             raise IOError(f"cannot read {path}: {inp.geterror()}")
     finally:
@@ -75,6 +75,31 @@ def read(path, subimage=0, channels=None):
     if channels is not None:
         arr = arr[..., :channels]
     return np.ascontiguousarray(arr)
+
+
+def read_layers(path):
+    """Every part of a multilayer EXR as ``{name: float32 (H, W, C)}``, e.g. "ViewLayer.Fog Light",
+    "Composite.Combined" (Blender 5.0 writes one part per pass).
+
+    Call it from a process that has not rendered: in one that has, OpenImageIO crashed (segmentation
+    fault) reading multi-part files (bpy 5.0.1).
+    """
+    o = oiio()
+    path = os.fspath(path)
+    inp = o.ImageInput.open(path)
+    if inp is None:
+        raise IOError(f"cannot open image {path}: {o.geterror()}")
+    out, k = {}, 0
+    try:
+        while inp.seek_subimage(k, 0):
+            spec = inp.spec()
+            data = inp.read_image(k, 0, 0, spec.nchannels, "float")
+            name = spec.getattribute("name") or str(k)
+            out[name] = np.asarray(data, np.float32).reshape(spec.height, spec.width, spec.nchannels)
+            k += 1
+    finally:
+        inp.close()
+    return out
 
 
 def read_rgb(path):

@@ -86,11 +86,8 @@ def apply_and_render(scene, args):
     """
     engine = args.engine_id
     kwargs, shown, notes = fog_settings(scene, args)
-    t0 = time.perf_counter()
-    skipped = apply.apply_fog(scene, **kwargs, progress=progress.ConsoleProgress())
-    print(f"fog: {describe(shown)}")
-    for name, why in notes + list(skipped):
-        print(f"note: {name}: {why}")
+    # the render settings first: the fog keeps Cycles' denoiser off its light only if the scene
+    # still denoises once they are made (``nodes/compositor.py``)
     scene.render.engine = engine
     measure.set_samples(scene, args.samples or DEFAULT_SAMPLES[engine])
     measure.set_cycles_cpu(scene)
@@ -101,6 +98,11 @@ def apply_and_render(scene, args):
     if getattr(args, "no_interreflection", False):
         from . import reference
         reference.disable_interreflection(scene)
+    t0 = time.perf_counter()
+    skipped = apply.apply_fog(scene, **kwargs, progress=progress.ConsoleProgress())
+    print(f"fog: {describe(shown)}")
+    for name, why in notes + list(skipped):
+        print(f"note: {name}: {why}")
     t1 = time.perf_counter()
     measure.render_to_file(scene, args.out)
     print(f"fog added in {t1 - t0:.2f} s, rendered in {time.perf_counter() - t1:.2f} s")

@@ -28,7 +28,7 @@ import bpy
 
 from ..precompute import fingerprint, model, ops, rungs, shading, surface, tables
 from ..precompute.medium import Medium
-from . import osl, sockets
+from . import osl, passes, sockets
 from .sockets import NodeOps
 
 PARAMS = "AnalyticFog Params"
@@ -44,7 +44,7 @@ BUILT = "analytic_fog_built"   # on the per-light groups: the fingerprint of the
 
 def code_fingerprint():
     """Fingerprint of everything that decides a group's content (kernels, tables, shading, builders)."""
-    return fingerprint.source_fingerprint(model, surface, tables, shading, rungs, ops, sockets, osl,
+    return fingerprint.source_fingerprint(model, surface, tables, shading, rungs, ops, sockets, osl, passes,
                                           sys.modules[__name__])
 
 
@@ -252,12 +252,14 @@ def build_surface(lights, models, images):
     BSDF; outputs are the fields of ``shading.SurfaceFog``: Emission (camera
     rays only), Transmittance e^{-beta D_vp} to scale the material, Direct
     Attenuation (EEVEE's stand-in for the per-light e^{-beta D_sp}) and per
-    engine the Mix Factor 1 - scale of the user's shader.
+    engine the Mix Factor 1 - scale of the user's shader.  It writes the fog
+    passes (``passes.py``), weighted by its Opacity input (white: opaque).
     """
     ng, gin, gout = _new_group(SURFACE, [
-        ("Base Color", C), ("Metallic", F), ("Roughness", F), ("Specular IOR Level", F),
+        ("Base Color", C), ("Metallic", F), ("Roughness", F), ("Specular IOR Level", F), (passes.OPACITY, C),
     ], [("Emission", C), ("Transmittance", F), ("Direct Attenuation", F),
         ("Cycles Mix Factor", F), ("EEVEE Mix Factor", F)])
+    next(i for i in ng.interface.items_tree if i.name == passes.OPACITY).default_value = (1.0, 1.0, 1.0, 1.0)
     m = NodeOps(ng, {})
     params = ng.nodes.new("ShaderNodeGroup")
     params.node_tree = bpy.data.node_groups[PARAMS]
@@ -281,6 +283,8 @@ def build_surface(lights, models, images):
     for sock, v in zip(("Emission", "Transmittance", "Direct Attenuation", "Cycles Mix Factor", "EEVEE Mix Factor"),
                        fog):
         m.feed(gout.inputs[sock], m.wrap(v))
+    passes.write_group(m, ng, m.wrap(fog.emission, vector=True), m.wrap(fog.transmittance),
+                       m.wrap(g[passes.OPACITY], vector=True))
     return _install(ng, SURFACE)
 
 
@@ -302,14 +306,36 @@ def build_world(lights, models, camera, images):
     if camera is not None:
         _drive_location(cam, camera)
     direction = m.vmath("NORMALIZE", m.wrap(geo.outputs["Position"]))
-    airlights = []
+    airlights, nodes = [], []
     for k, (light, mod) in enumerate(zip(lights, models)):
         node = _light_instance(ng, k, light, build_background_light(mod, images).name, (
             (params.outputs["Beta"], "Beta"), (cam.outputs[0], "Camera"), (direction.sock, "Direction")))
+        nodes.append(node)
         airlights.append(m.wrap(node.outputs["Airlight"], vector=True))
-    emission, transmittance = shading.shade_background(
-        m, airlights, _medium(m, params.outputs["Beta"], params.outputs["Albedo"]),
-        m.wrap(path.outputs["Is Camera Ray"]))
+    medium = _medium(m, params.outputs["Beta"], params.outputs["Albedo"])
+    is_camera = m.wrap(path.outputs["Is Camera Ray"])
+    emission, transmittance = shading.shade_background(m, airlights, medium, is_camera)
     m.feed(gout.inputs["Emission"], m.wrap(emission))
     m.feed(gout.inputs["Transmittance"], m.wrap(transmittance))
+    # The fog passes.  Cycles runs whatever an AOV output reads on every evaluation of the shader
+    # (svm.cpp counts AOV dependencies as shared by both sides of a Mix Shader), which would undo the
+    # World's 0/1 mix: its importance map and every non-camera ray would run the fog (48x27, automatic
+    # map: 1.1 s -> 7.5 s per render).  So the Fog Light pass reads a second instance of each light's
+    # group, given the same direction another way (-Incoming): Cycles does not merge it with the first
+    # (node deduplication) and runs it on camera rays only (after NODE_AOV_START).
+    aov_direction = m.vmath("NORMALIZE", m.vmath("SCALE", m.wrap(geo.outputs["Incoming"]), -1.0))
+    twins = []
+    for k, node in enumerate(nodes):
+        twin = ng.nodes.new("ShaderNodeGroup")
+        twin.node_tree = node.node_tree
+        twin.name = twin.label = f"{node.name} (passes)"
+        twin.location = (-300, -300 * k - 150)
+        for sock in node.inputs:
+            src = aov_direction.sock if sock.name == "Direction" else (sock.links[0].from_socket if sock.is_linked
+                                                                         else None)
+            if src is not None:
+                ng.links.new(src, twin.inputs[sock.name])
+        twins.append(m.wrap(twin.outputs["Airlight"], vector=True))
+    light, _ = shading.shade_background(m, twins, medium, is_camera)
+    passes.write_group(m, ng, m.wrap(light, vector=True), m.wrap(transmittance))
     return _install(ng, WORLD)

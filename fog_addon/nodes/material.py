@@ -63,13 +63,16 @@ kind of material comes out (how the shader is read: ``graph.py``):
   fog and reported.
 * A fogged material without emission of its own gets Cycles' emission
   sampling off while fogged (``overrides.py``).
+* The fog passes (``passes.py``) are written inside the Surface group; a
+  material that lets light through gives the group its opacity o (input
+  ``Opacity``), so the passes hold what it adds.
 
 The weights, the opacity o and the emission given back are built by
 ``sockets.NodeOps``: constant parts fold in Python and make no nodes.
 """
 import bpy
 
-from . import graph, groups, overrides, owned
+from . import graph, groups, overrides, owned, passes
 from .graph import BLACK, TARGETS, WHITE
 from .sockets import NodeOps, Val
 
@@ -191,6 +194,7 @@ def wrap_material(mat):
     copies = graph.bsdf_copies(first.reads)
     lost = [name for name, _, ok in copies if not ok]
     built = graph.built_from(outs, srcs, kinds, copies)
+    built["passes"] = passes.VERSION   # a material fogged before the fog passes is rebuilt once
     fog = owned.find(tree, "Surface")
     if (fog is not None and fog.bl_idname == "ShaderNodeGroup"
             and fog.node_tree == bpy.data.node_groups.get(groups.SURFACE)
@@ -268,7 +272,10 @@ def _fog_light(ops, tree, kd, fog, n, origin):
     x0, y0 = origin
     emit = owned.add(tree, "ShaderNodeEmission", f"Emission{f' {n + 1}' if n else ''}", (x0 + 200, y0 - 120 * n))
     weights = [_weight(ops, w, ops.memo) for w, _, _ in kd.passes]
-    ops.feed(emit.inputs["Color"], _colour(ops, fog.outputs["Emission"]) * _opacity(ops, kd, weights))
+    opacity = _opacity(ops, kd, weights)
+    ops.feed(emit.inputs["Color"], _colour(ops, fog.outputs["Emission"]) * opacity)
+    if n == 0:   # the Surface group's fog passes hold what is added: weighted by (the first shader's) opacity
+        passes.weight_surface(ops, fog, opacity)
     passed = None
     for w, (_, shader, _) in zip(weights, kd.passes):
         if shader is None:   # Principled 1 - Alpha: a white Transparent BSDF

@@ -1,7 +1,7 @@
 """Adding, updating and removing the fog on a scene (what the operators, handlers and command line call)."""
 import bpy
 
-from ..nodes import dedupe, groups, images, osl
+from ..nodes import compositor, dedupe, groups, images, osl, passes
 from ..nodes.light import unwrap_light, wrap_light
 from ..nodes.material import unwrap_material, wrap_material
 from ..nodes.owned import is_fogged
@@ -167,6 +167,8 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
         why = wrap_world(scene.world)
         if why:
             skipped.append((scene.world.name, why))
+    skipped += passes.add_view_layer_aovs(scene)
+    skipped += compositor.follow(scene, rebuild=True)   # Cycles' denoiser kept off the fog's light
     if not lights:
         skipped.append((scene.name, "has no point light taking part: the fog only dims"))
     note = presets.invisible_fog_note(fog.beta, scene_size(scene))
@@ -185,6 +187,7 @@ def set_method(scene, method):
     """The user changed the method preference: re-choose every light's models (materials are not touched)."""
     if bpy.data.node_groups.get(groups.SURFACE) is not None:
         _build_scene_groups(scene, fog_lights(scene)[0], method)
+        compositor.follow(scene)   # OSL writes no AOVs: the set-up goes with it
 
 
 def refresh_lights(scene):
@@ -194,6 +197,7 @@ def refresh_lights(scene):
     if surface is None or surface.library is not None:
         return
     _build_scene_groups(scene, fog_lights(scene)[0], surface.get(PREFERENCE_KEY, "nodes"))
+    compositor.follow(scene)   # the engine, OSL or the denoiser flag may have changed
 
 
 def remove_fog(scene, progress=progress_.silent):
@@ -222,3 +226,6 @@ def remove_fog(scene, progress=progress_.silent):
         if text is not None:
             bpy.data.texts.remove(text)
     use_osl(scene, False)
+    for s in bpy.data.scenes:
+        compositor.teardown(s)
+        passes.remove_view_layer_aovs(s)

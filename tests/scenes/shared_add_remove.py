@@ -25,7 +25,7 @@ def record(label, method):
     steps.append({
         "step": label,
         "seconds": round(time.perf_counter() - _t[0], 2),
-        "expect": expected_names(method) if method else [],
+        "expect": expected_names(method, bpy.context.scene) if method else [],
         "names": sorted(n for names in ids.values() for n in names),
         "max_count": max(count.values(), default=0),
         "suffixed": suffixed,

@@ -92,7 +92,7 @@ def main():
     b_path = f"{workdir}/B_{method}.blend"
     build_b(b_path, method)
     scene = build_a(method)
-    res = {"mode": mode, "method": method, "expect": expected_names(method), "a": state(scene)}
+    res = {"mode": mode, "method": method, "expect": expected_names(method, scene), "a": state(scene)}
     if mode in ("append", "append_keep"):
         r = bpy.ops.wm.append(filepath=f"{b_path}/Object/{APPENDED}", directory=f"{b_path}/Object/",
                               filename=APPENDED)

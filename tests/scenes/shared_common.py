@@ -9,7 +9,7 @@ if str(ROOT) not in sys.path:
 
 import bpy  # noqa: E402
 
-from fog_addon.nodes import groups, images, osl  # noqa: E402
+from fog_addon.nodes import compositor, groups, images, osl, owned  # noqa: E402
 from fog_addon.precompute import rungs  # noqa: E402
 
 PREFIX = "AnalyticFog"
@@ -38,14 +38,18 @@ def copies(ids=None):
     return count, sorted(suffixed)
 
 
-def expected_names(method):
+def expected_names(method, scene=None):
     """What one fogged file holds: the scene groups, the per-light groups of the method's models, every
-    table (apply_fog bakes both) and the OSL texts of the models that run in OSL."""
+    table (apply_fog bakes both) and the OSL texts of the models that run in OSL; and ``scene``'s own
+    compositor group where the fog set one up (``nodes/compositor.py``: Cycles with its denoiser on)."""
     models = rungs.choose(method)
     names = [groups.PARAMS, groups.SURFACE, groups.WORLD,
              groups.light_group_name(models), groups.background_group_name(models)]
     names += images.table_names()
     names += [osl.text_name(r) for r in models if r.backends == {"numpy", "osl"}]
+    tree = scene.compositing_node_group if scene is not None and compositor.is_set_up(scene) else None
+    if tree is not None and tree.get(owned.TAG) is not None:
+        names.append(compositor.GROUP)
     return sorted(set(names))
 
 

@@ -1,0 +1,253 @@
+"""Keeping Cycles' denoiser off the fog: a compositor set-up that denoises only what is noisy.
+
+The fog is noise-free, but Cycles' denoiser (on in every new scene) takes its
+sharp glows for noise: on a one-lamp scene at 64x48 and 16 spp it made the
+lamp's peak pixel 35 % too dark and brightened its neighbours.  While the fog
+is on, a scene that Cycles renders with its denoiser on gets instead, after
+each of the scene's Render Layers nodes (view layers that denoise):
+
+    Image - Fog Light -> Denoise (Denoising Albedo - Fog Light and Denoising
+    Normal, as the scene's denoiser uses them) -> + Fog Light -> what the Image fed
+
+and the render denoiser off, so only the rest of the picture is denoised and
+the fog's light (the ``Fog Light`` pass, ``passes.py``) is added back as
+rendered.  The Denoise node takes the scene's prefilter, quality and input
+passes.  Cycles' Denoising Albedo counts emission, so the fog's light too (a
+black ground reads as bright as its airlight); the guide is that minus the Fog
+Light, the albedo of the picture being denoised (on tests/scenes/passes_probe.py
+it left the noise of a sphere at 0.26 of the raw render's, against 0.41 with
+the albedo as Cycles writes it).
+
+* A scene without a compositor node group gets the fog's own
+  (``AnalyticFog Compositor``: Render Layers -> chain -> Group Output), with
+  Compositing switched on; Remove unassigns and deletes it.
+* A scene with one of the user's has the chain spliced in front of it: the
+  Render Layers node's Image links go through the fog's nodes (tagged as its
+  own, ``owned.py``), nothing of the user's is edited, and Remove links the
+  Image back.  The user's graph is left alone (and the denoiser on, with a
+  note saying why) when it is linked from a library, Compositing is off,
+  Render Layers of the scene sit inside a nested group, a link reads Noisy
+  Image (gone with the render denoiser off) or a view layer has a clashing AOV.
+* Not for EEVEE (Cycles' denoiser flag does not apply) nor Cycles with OSL
+  (which writes no shader AOVs in Blender 5.0: the passes would be black).
+  ``follow`` sets the set-up up or takes it down as the engine, OSL and the
+  denoiser flag change.
+
+The settings changed (the scene's denoiser and Compositing flags, each view
+layer's Denoising Data passes) are recorded by ``overrides.py`` and restored
+exactly by ``teardown``; the scene's ``STATE`` names the tree the fog edited.
+"""
+import bpy
+
+from . import overrides, owned, passes
+
+STATE = "analytic_fog_compositor"   # on the scene: {"tree": name of the compositor tree the fog edited or made}
+GROUP = "AnalyticFog Compositor"
+_PREFILTER = {"NONE": "None", "FAST": "Fast", "ACCURATE": "Accurate"}
+_QUALITY = {"HIGH": "High", "BALANCED": "Balanced", "FAST": "Fast"}
+_MIX_A, _MIX_B, _MIX_OUT = "A_Color", "B_Color", "Result_Color"   # ShaderNodeMix (RGBA) socket identifiers
+
+
+def _sock(sockets, identifier):
+    return next(s for s in sockets if s.identifier == identifier)
+
+
+def is_set_up(scene):
+    return scene.get(STATE) is not None
+
+
+def wanted(scene):
+    """True if ``scene`` should have the set-up: Cycles (SVM) with its denoiser on (or set up already)."""
+    return (scene.render.engine == "CYCLES" and not scene.cycles.shading_system
+            and (scene.cycles.use_denoising or is_set_up(scene)))
+
+
+def follow(scene, rebuild=False):
+    """Set the set-up up or take it down as ``scene`` needs; returns [(name, note)].
+
+    Cheap when nothing changed (the depsgraph handler calls it).  ``rebuild``:
+    rebuild a set-up in place (it takes the scene's current denoiser settings).
+    """
+    if not wanted(scene):
+        teardown(scene)
+        c = scene.cycles
+        if scene.render.engine == "CYCLES" and c.shading_system and c.use_denoising:
+            return [(scene.name, "Cycles' OSL writes no shader AOVs (Blender 5.0), so the fog passes stay black "
+                                 "and the denoiser, left on, smears the fog's glows: use the Node Groups method "
+                                 "or turn the denoiser off")]
+        return []
+    if is_set_up(scene):
+        if not rebuild:
+            if scene.cycles.use_denoising:   # switched back on by hand: the fog's Denoise node does it
+                scene.cycles.use_denoising = False
+            return []
+        teardown(scene)
+    return setup(scene)
+
+
+# --- which Render Layers nodes -------------------------------------------------------------
+
+def _renders(scene, node):
+    return (node.bl_idname == "CompositorNodeRLayers" and not node.mute and not owned.is_ours(node)
+            and (node.scene is None or node.scene == scene))
+
+
+def _layer(scene, node):
+    return scene.view_layers.get(node.layer)
+
+
+def _denoised(scene, vl):
+    return vl is not None and vl.use and vl.cycles.use_denoising
+
+
+def _nested(tree, scene, seen=()):
+    """Names of node groups inside ``tree`` holding a Render Layers node of ``scene``."""
+    found = []
+    for n in tree.nodes:
+        g = getattr(n, "node_tree", None) if n.bl_idname == "CompositorNodeGroup" else None
+        if g is None or g in seen:
+            continue
+        if any(_renders(scene, m) for m in g.nodes) or _nested(g, scene, seen + (g,)):
+            found.append(g.name)
+    return found
+
+
+def _why_not(scene, tree, nodes):
+    """Why the user's compositor ``tree`` (with Render Layers ``nodes`` to splice) is left alone, or None."""
+    why = owned.read_only(tree)
+    if why:
+        return f"its compositor node group {tree.name!r} {why.split(':')[0]}"
+    if any(owned.is_ours(n) for n in tree.nodes):
+        return f"{tree.name!r} has the fog's set-up for another scene already"
+    if not scene.render.use_compositing:
+        return f"Compositing is off (Output properties > Post Processing) and {tree.name!r} is yours"
+    nested = _nested(tree, scene)
+    if nested:
+        return f"Render Layers inside node group {', '.join(map(repr, nested))} of {tree.name!r} cannot be spliced"
+    if any(n.outputs.get("Noisy Image") is not None and n.outputs["Noisy Image"].is_linked
+           for n in tree.nodes if _renders(scene, n)):
+        return f"{tree.name!r} reads Noisy Image, which Cycles writes only with its denoiser on"
+    for n in nodes:
+        if not passes.has_view_layer_aovs(_layer(scene, n)):
+            return f"view layer {n.layer!r} has an AOV clashing with the fog passes"
+    return None
+
+
+# --- building and taking apart ------------------------------------------------------------------
+
+def _chain(scene, tree, rl, k):
+    """Image - Fog Light -> Denoise -> + Fog Light after Render Layers ``rl``; returns the last output."""
+    rl.update()   # the view layer's AOVs and Denoising Data passes become outputs
+    c = scene.cycles
+    x, y = rl.location.x + 300, rl.location.y - 40 - 360 * k
+    role = f"Compositor {k}"
+    sub = owned.add(tree, "ShaderNodeMix", f"{role} Subtract", (x, y), data_type="RGBA", blend_type="SUBTRACT")
+    sub.inputs[0].default_value = 1.0
+    tree.links.new(rl.outputs["Image"], _sock(sub.inputs, _MIX_A))
+    tree.links.new(rl.outputs[passes.FOG_LIGHT], _sock(sub.inputs, _MIX_B))
+    den = owned.add(tree, "CompositorNodeDenoise", f"{role} Denoise", (x + 200, y))
+    den.inputs["HDR"].default_value = True
+    den.inputs["Prefilter"].default_value = _PREFILTER.get(c.denoising_prefilter, "Accurate")
+    den.inputs["Quality"].default_value = _QUALITY.get(c.denoising_quality, "High")
+    tree.links.new(_sock(sub.outputs, _MIX_OUT), den.inputs["Image"])
+    if c.denoising_input_passes in ("RGB_ALBEDO", "RGB_ALBEDO_NORMAL"):
+        # Cycles' Denoising Albedo counts emission, so the fog's light too (the black ground and the sky
+        # get an albedo equal to the fog light): the picture denoised has no fog light, nor should its guide
+        alb = owned.add(tree, "ShaderNodeMix", f"{role} Albedo", (x, y - 200), data_type="RGBA",
+                        blend_type="SUBTRACT", clamp_result=True)
+        alb.inputs[0].default_value = 1.0
+        tree.links.new(rl.outputs["Denoising Albedo"], _sock(alb.inputs, _MIX_A))
+        tree.links.new(rl.outputs[passes.FOG_LIGHT], _sock(alb.inputs, _MIX_B))
+        tree.links.new(_sock(alb.outputs, _MIX_OUT), den.inputs["Albedo"])
+    if c.denoising_input_passes == "RGB_ALBEDO_NORMAL":
+        tree.links.new(rl.outputs["Denoising Normal"], den.inputs["Normal"])
+    add = owned.add(tree, "ShaderNodeMix", f"{role} Add", (x + 400, y), data_type="RGBA", blend_type="ADD")
+    add.inputs[0].default_value = 1.0
+    tree.links.new(den.outputs["Image"], _sock(add.inputs, _MIX_A))
+    tree.links.new(rl.outputs[passes.FOG_LIGHT], _sock(add.inputs, _MIX_B))
+    return _sock(add.outputs, _MIX_OUT)
+
+
+def _store_passes(scene, layers):
+    """Cycles' Denoising Data passes on for ``layers`` if the Denoise node reads them."""
+    if scene.cycles.denoising_input_passes != "RGB":
+        for vl in layers:
+            overrides.override(vl, "cycles.denoising_store_passes", True)
+
+
+def setup(scene):
+    """Build the set-up on ``scene`` (see the module); returns [(name, note)] if it was left out."""
+    tree = scene.compositing_node_group
+    if tree is None:
+        vl = next((v for v in scene.view_layers if v.use), None)
+        if not _denoised(scene, vl):
+            return []
+        if not passes.has_view_layer_aovs(vl):
+            return [(scene.name, f"view layer {vl.name!r} has an AOV clashing with the fog passes: "
+                                 "Cycles' denoiser is left on and smears the fog's glows")]
+        _store_passes(scene, [vl])
+        tree = bpy.data.node_groups.new(GROUP, "CompositorNodeTree")
+        tree[owned.TAG] = "Compositor"   # the fog's own group
+        tree.interface.new_socket("Image", in_out="OUTPUT", socket_type="NodeSocketColor")
+        rl = owned.add(tree, "CompositorNodeRLayers", "Render Layers", (0, 0))
+        rl.scene, rl.layer = scene, vl.name
+        out = owned.add(tree, "NodeGroupOutput", "Group Output", (1000, 0))
+        tree.links.new(_chain(scene, tree, rl, 0), out.inputs["Image"])
+        scene.compositing_node_group = tree
+        overrides.override(scene, "render.use_compositing", True)
+    else:
+        nodes = [n for n in tree.nodes if _renders(scene, n) and n.outputs["Image"].is_linked
+                 and _denoised(scene, _layer(scene, n))]
+        if not nodes:
+            return []   # the compositor does not read the denoised picture
+        why = _why_not(scene, tree, nodes)
+        if why:
+            return [(scene.name, f"{why}: the compositor is left as it is and Cycles' denoiser on, which "
+                                 "smears the fog's glows (turn it off, or see README 'Fog passes')")]
+        _store_passes(scene, {_layer(scene, n) for n in nodes})
+        for k, rl in enumerate(nodes):
+            users = [link.to_socket for link in rl.outputs["Image"].links]
+            last = _chain(scene, tree, rl, k)
+            for sock in users:
+                tree.links.new(last, sock)
+    overrides.override(scene, "cycles.use_denoising", False)
+    scene[STATE] = {"tree": tree.name}
+    return []
+
+
+def teardown(scene):
+    """Take the set-up off ``scene``: the fog's compositor nodes (or group) go, the settings come back."""
+    state = scene.get(STATE)
+    if state is None:
+        return
+    trees = [t for t in (scene.compositing_node_group, bpy.data.node_groups.get(state.get("tree", "")))
+             if t is not None and t.bl_idname == "CompositorNodeTree" and not owned.read_only(t)]
+    for tree in dict.fromkeys(trees):   # the one the scene uses now, and the one set up (renamed: found anyway)
+        if tree.get(owned.TAG) is not None:   # the fog's own group
+            if scene.compositing_node_group == tree:
+                scene.compositing_node_group = None
+            if tree.users == 0:
+                bpy.data.node_groups.remove(tree)
+        elif any(owned.is_ours(n) for n in tree.nodes):
+            _unsplice(tree)
+    del scene[STATE]
+    overrides.restore(scene)
+    for vl in scene.view_layers:
+        overrides.restore(vl)
+
+
+def _unsplice(tree):
+    """Delete the fog's nodes from the user's ``tree``, linking each Render Layers Image back to where
+    the chain fed."""
+    back = []
+    for link in tree.links:
+        if owned.is_ours(link.from_node) and not owned.is_ours(link.to_node):
+            role = owned.role_of(link.from_node).rsplit(" ", 1)[0]   # "Compositor k"
+            sub = owned.find(tree, f"{role} Subtract")
+            src = next((l.from_socket for l in tree.links if sub is not None and l.to_node == sub
+                        and l.to_socket.identifier == _MIX_A and not owned.is_ours(l.from_node)), None)
+            if src is not None:
+                back.append((src.node.name, src.identifier, link.to_node.name, link.to_socket.identifier))
+    owned.remove_ours(tree)
+    for from_node, from_id, to_node, to_id in back:
+        tree.links.new(_sock(tree.nodes[from_node].outputs, from_id), _sock(tree.nodes[to_node].inputs, to_id))
