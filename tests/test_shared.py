@@ -7,10 +7,12 @@ import sys
 import pytest
 
 from conftest import ROOT
+from fog_addon.nodes import groups, osl
+from fog_addon.precompute import rungs
 
 SCENES = ROOT / "tests" / "scenes"
 A_DENSITY = 0.05           # shared_append.py: scene A's fog; B's is 0.3
-SURFACE = "AnalyticFog Surface"
+SURFACE = groups.SURFACE
 
 
 def _run(script, *args):
@@ -47,17 +49,20 @@ def test_append_from_fogged_file(tmp_path, mode, method, render):
 
     # What the append brings: B's copies of the fog under suffixed names, and B's lamp by the drivers.
     arrived = res["arrived"]
-    assert {f"{SURFACE}.001", "AnalyticFog Params.001", "AnalyticFog Light.001"} <= set(arrived["suffixed"]), arrived
+    models = rungs.choose(method)
+    assert {f"{SURFACE}.001", "AnalyticFog Params.001", f"{groups.light_group_name(models)}.001"} <= set(
+        arrived["suffixed"]), arrived
     assert arrived["appended_material_groups"] == [f"{SURFACE}.001"], arrived
     assert arrived["light_params"]["LampB"] == ["AnalyticFog Params.001"], arrived
     assert "LampB" in arrived["objects"], "B's lamp is expected to come along as a driver target"
     if mode == "load":
         assert "LampB" not in arrived["scene_objects"] and arrived["object_users"]["LampB"] == 0, arrived
-        assert {"AnalyticFog World.001", "AnalyticFog Background Light.001"} <= set(arrived["suffixed"]), arrived
+        assert {"AnalyticFog World.001", f"{groups.background_group_name(models)}.001"} <= set(
+            arrived["suffixed"]), arrived
     else:
         assert "LampB" in arrived["scene_objects"], "wm.append instantiates the driver-pulled lamp in A"
     if method == "osl":
-        assert "AnalyticFog Airlight.osl.001" in arrived["suffixed"], arrived
+        assert f"{osl.text_name(rungs.AIRLIGHT_QUADRATURE)}.001" in arrived["suffixed"], arrived
 
     # merge_duplicates folds every copy onto A's and reports the lamp (and B's camera) pulled in.
     assert sorted(res["merged"]) == arrived["suffixed"], res["merged"]

@@ -18,14 +18,15 @@ steps = []
 _t = [time.perf_counter()]
 
 
-def record(label, method):
-    """``method``: what the file should now hold ("nodes", "osl"), None: nothing of the fog."""
+def record(label, method, texts_of=None):
+    """``method``: what the file should now hold ("nodes", "osl"), None: nothing of the fog;
+    ``texts_of``: the method whose OSL texts it holds (default ``method``)."""
     ids = fog_ids()
     count, suffixed = copies(ids)
     steps.append({
         "step": label,
         "seconds": round(time.perf_counter() - _t[0], 2),
-        "expect": expected_names(method, bpy.context.scene) if method else [],
+        "expect": expected_names(method, bpy.context.scene, texts_of) if method else [],
         "names": sorted(n for names in ids.values() for n in names),
         "max_count": max(count.values(), default=0),
         "suffixed": suffixed,
@@ -53,7 +54,7 @@ def with_ops(scene):
     record("ops add osl again", "osl")
     settings.method = "NODES"
     assert bpy.ops.fog.add() == {"FINISHED"}
-    record("ops add nodes after osl", "osl")   # switching back keeps the text: still one copy
+    record("ops add nodes after osl", "nodes", "osl")   # the nodes models' groups; the OSL texts stay, one copy
 
 
 def with_apply(scene):

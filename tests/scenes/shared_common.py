@@ -38,15 +38,16 @@ def copies(ids=None):
     return count, sorted(suffixed)
 
 
-def expected_names(method, scene=None):
+def expected_names(method, scene=None, texts_of=None):
     """What one fogged file holds: the scene groups, the per-light groups of the method's models, every
-    table (apply_fog bakes both) and the OSL texts of the models that run in OSL; and ``scene``'s own
-    compositor group where the fog set one up (``nodes/compositor.py``: Cycles with its denoiser on)."""
+    table (apply_fog bakes both) and the OSL texts of the models that run in OSL (or of ``texts_of``'s
+    models: a text stays when the method switches back); and ``scene``'s own compositor group where
+    the fog set one up (``nodes/compositor.py``: Cycles with its denoiser on)."""
     models = rungs.choose(method)
     names = [groups.PARAMS, groups.SURFACE, groups.WORLD,
              groups.light_group_name(models), groups.background_group_name(models)]
     names += images.table_names()
-    names += [osl.text_name(r) for r in models if r.backends == {"numpy", "osl"}]
+    names += [osl.text_name(r) for r in rungs.choose(texts_of or method) if r.backends == {"numpy", "osl"}]
     tree = scene.compositing_node_group if scene is not None and compositor.is_set_up(scene) else None
     if tree is not None and tree.get(owned.TAG) is not None:
         names.append(compositor.GROUP)
