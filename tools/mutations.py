@@ -71,7 +71,7 @@ MUTATIONS = [
              "neg.inputs[1].default_value = -1.0",
              "neg.inputs[1].default_value = 0.0",
              ("tests/test_render.py::test_cycles_nodes[spheres-0.15]",)),
-    Mutation("direct_attenuation_eevee", "EEVEE: the irradiance-weighted direct attenuation forced to 1", SHADING,
+    Mutation("direct_attenuation_eevee", "EEVEE: the weighted direct attenuation forced to 1", SHADING,
              "direct = (num + 1e-30) / (den + 1e-30)",
              "direct = (den + 1e-30) / (den + 1e-30)",
              (f"{SHADE_TEST}::test_shade_surface_is_eq19",)),
