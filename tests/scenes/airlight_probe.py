@@ -20,6 +20,7 @@ import numpy as np  # noqa: E402
 from fog_addon import imageio, measure  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 from fog_addon.precompute import airlight  # noqa: E402
+import probe_common  # noqa: E402
 
 BETA, POWER, W, H = 0.2, 1000.0, 64, 48
 
@@ -48,21 +49,11 @@ def main(out_dir, engine="CYCLES", method="nodes"):
     s.world = bpy.data.worlds.new("W")
     s.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0, 0, 0, 1)
     apply.apply_fog(s, BETA, method=method)
-    s.render.engine = engine
-    measure.set_resolution(s, W, H)
-    measure.set_samples(s, 1)
-    measure.set_pixel_centre_filter(s)
-    s.cycles.max_bounces = 0
-    s.eevee.light_threshold = 1e-4
+    probe_common.tiny_render(s, engine, W, H)
     out = measure.render_to_file(s, str(pathlib.Path(out_dir) / "probe.exr"))
     got = imageio.read_rgb(out)[..., 0]
-    # the camera ray of each pixel centre
-    ys, xs = np.mgrid[0:H, 0:W]
-    sw, f = cam.data.sensor_width, cam.data.lens
-    d = np.stack([((xs + 0.5) / W - 0.5) * sw, (0.5 - (ys + 0.5) / H) * sw * H / W, -np.full(xs.shape, f)], -1)
-    d /= np.linalg.norm(d, axis=-1, keepdims=True)
-    d = d @ np.array(cam.matrix_world.to_3x3()).T
-    c, lp = np.array(cam.location), np.array(light.location)
+    c, d = probe_common.camera_rays(cam, W, H)
+    lp = np.array(light.location)
     to = lp - c
     gamma = np.arccos(np.clip(d @ to / np.linalg.norm(to), -1, 1))
     t = np.where(d[..., 2] < 0, -c[2] / np.minimum(d[..., 2], -1e-12), np.inf)

@@ -30,6 +30,7 @@ from fog_addon.ops import apply  # noqa: E402
 from fog_addon.precompute import airlight, rungs, shading, surface, tables  # noqa: E402
 from fog_addon.precompute.medium import Medium  # noqa: E402
 from fog_addon.precompute.ops import NumpyOps  # noqa: E402
+import probe_common  # noqa: E402
 
 BETA, W, H = 0.2, 64, 48
 ALBEDO = (0.9, 0.8, 0.7)
@@ -67,21 +68,8 @@ def build(engine, method, case):
     s.world = bpy.data.worlds.new("W")
     s.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0, 0, 0, 1)
     apply.apply_fog(s, BETA, albedo=ALBEDO, method=method)
-    s.render.engine = engine
-    measure.set_resolution(s, W, H)
-    measure.set_samples(s, 1)
-    measure.set_pixel_centre_filter(s)
-    s.cycles.max_bounces = 0
-    s.eevee.light_threshold = 1e-4
+    probe_common.tiny_render(s, engine, W, H)
     return s, cam
-
-
-def camera_rays(cam):
-    ys, xs = np.mgrid[0:H, 0:W]
-    sw, f = cam.data.sensor_width, cam.data.lens
-    d = np.stack([((xs + 0.5) / W - 0.5) * sw, (0.5 - (ys + 0.5) / H) * sw * H / W, -np.full(xs.shape, f)], -1)
-    d /= np.linalg.norm(d, axis=-1, keepdims=True)
-    return np.array(cam.location), d @ np.array(cam.matrix_world.to_3x3()).T
 
 
 def twin(c, d, case, method, without=None):
@@ -113,7 +101,7 @@ def twin(c, d, case, method, without=None):
 def main(out_dir, engine="CYCLES", method="nodes", case="principled"):
     s, cam = build(engine, method, case)
     got = imageio.read_rgb(measure.render_to_file(s, str(pathlib.Path(out_dir) / "probe.exr")))
-    c, d = camera_rays(cam)
+    c, d = probe_common.camera_rays(cam, W, H)
     want, hit = twin(c, d, case, method)
     r = got / want
     res = {"median": float(np.median(r)), "max_dev": float(np.max(np.abs(r - 1))),
