@@ -22,10 +22,10 @@ from conftest import ROOT
 
 sys.path.insert(0, str(ROOT / "tools"))
 import airlight_reference as ref  # noqa: E402
+from shader_float32 import Float32Ops, airlight_float32  # noqa: E402  (float32 as the shaders)
 
 from fog_addon.precompute import airlight as al  # noqa: E402
 from fog_addon.precompute import model, tables  # noqa: E402
-from fog_addon.precompute.ops import NumpyOps  # noqa: E402
 
 TOL = 5e-3            # the requirement: 0.5 % max relative error, sample by sample
 QUAD_TOL = 1e-5       # the OSL method's in-shader quadrature (model.airlight_quadrature) measured 1.1e-6
@@ -284,34 +284,6 @@ def test_table_bake_deterministic_and_in_range():
 
 
 # --- float32 (the shaders) -----------------------------------------------------------
-
-class Float32Ops(NumpyOps):
-    """NumpyOps that keeps every intermediate in float32, as a GPU/SVM shader does."""
-
-    def __init__(self, tables_):
-        super().__init__(tables_, dtype=np.float32)
-
-    @staticmethod
-    def less(a, b):
-        return (np.asarray(a) < np.asarray(b)).astype(np.float32)
-
-    def table(self, spec, x, y, row0=0, rows=None):
-        return np.asarray(super().table(spec, x, y, row0, rows), np.float32)
-
-
-def airlight_float32(beta, d_sv, d_vp, gamma, table):
-    f = lambda x: np.asarray(x, np.float32)
-    m = Float32Ops({tables.AIRLIGHT.name: table})
-    beta, d_sv, d_vp, gamma = (np.asarray(v, float) for v in (beta, d_sv, d_vp, gamma))
-    along, h = d_sv * np.cos(gamma), d_sv * np.sin(gamma)
-    finite = np.isfinite(d_vp)
-    dvp = np.where(finite, d_vp, 0.0)
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        seg = model.airlight_segment(m, f(beta), f(d_sv), f(along), f(h), f(dvp))
-        bg = model.airlight_background(m, f(beta), f(d_sv), f(along), f(h))
-    assert seg.dtype == np.float32 and bg.dtype == np.float32
-    return np.where(finite, seg, bg)
-
 
 def test_float32_evaluation(cache, table, record_property):
     p = _params(cache)

@@ -60,16 +60,19 @@ def sample_parameters(n, seed, background=False):
     return tuple(np.asarray(v, np.float32).astype(float) for v in (beta, t_sv / beta, d_vp, gamma))
 
 
-def _integrand(x, beta, d_sv, along, h):
+def _integrand(x, beta, d_sv, along, h, offset=0.0):
     z = x - along
     d2 = z * z + h * h
-    return math.exp(-beta * (math.sqrt(d2) + x)) / d2
+    return math.exp(-beta * (math.sqrt(d2) + x - offset)) / d2
 
 
-def eq5_quad(beta, d_sv, d_vp, gamma, epsrel=EPSREL):
+def eq5_quad(beta, d_sv, d_vp, gamma, epsrel=EPSREL, scaled=False):
     """Airlight per unit intensity (1/m^2) by adaptive quadrature of Eq. 5 in x; d_vp may be inf.
 
-    Returns (value, estimated absolute error).
+    Returns (value, estimated absolute error).  ``scaled``: both times
+    e^{beta D_sv} (the integrand's exponent taken relative to beta D_sv, which
+    it never falls below: d(x) + x >= D_sv), so optical depths beyond the
+    float64 range (T_sv > 700) stay representable (tools/stability_map.py).
     """
     beta, d_sv, d_vp, gamma = float(beta), float(d_sv), float(d_vp), float(gamma)
     along = d_sv * math.cos(gamma)
@@ -104,7 +107,7 @@ def eq5_quad(beta, d_sv, d_vp, gamma, epsrel=EPSREL):
     if far is not None:
         pts.append(far)
     total, err = 0.0, 0.0
-    args = (beta, d_sv, along, h)
+    args = (beta, d_sv, along, h, d_sv if scaled else 0.0)
     for a, b in zip(pts[:-1], pts[1:]):
         if b <= a:
             continue

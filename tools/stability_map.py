@@ -1,0 +1,436 @@
+"""Stability map of every airlight formulation over T_sv, T_vp in [1e-4, 1e3] (and T_vp = inf), gamma in [1e-7, pi - 1e-7].
+
+    .venv/bin/python tools/stability_map.py [--regen]
+
+Formulations (fog_addon/precompute/airlight.py, tools/shader_float32.py):
+  * ``sun_F64``: Sun et al.'s own F(u, v) table, 64 x 64 (as tools/figure6.py),
+    Eq. 11 / 12 with two bilinear lookups (``airlight_sun``), float64;
+  * ``table_f64`` / ``table_f32``: our N-table model as the node groups compute
+    it (``airlight.airlight``), float64 and every intermediate in float32;
+  * ``quad_f64`` / ``quad_f32``: the OSL method's in-shader quadrature
+    (``airlight.airlight(..., quadrature=True)``), float64 and float32.
+
+Grid: 25 x 25 log-spaced optical depths T_sv, T_vp from 1e-4 to 1e3 (cell
+centres, the extreme corners included) plus a T_vp = inf column (the
+background, Sun Eq. 12); in every cell 17 angles gamma = 1e-7, 1e-6, ..., 1e-1,
+0.5, pi/2, 2.5, pi - 1e-1, ..., pi - 1e-7 and 4 extinction coefficients
+beta = 1e-4, 1e-2, 1, 1e2 per metre: the model is a function of the optical
+depths alone only in exact arithmetic; its constants are absolute (distances
+clamped at 1 um, rays without a surface 1e15 m long) and float32 rounding
+depends on the distances themselves, D = T / beta from 1 um to 10 000 km here.
+Inputs are rounded to float32 first (beta, D = fl32(T / beta); gamma stays
+exact, the shader's along and h are rounded from it), so both precisions see
+the same numbers, and the reference is that of these numbers: its optical
+depths are the exact products beta * D.
+
+Reference: scipy adaptive quadrature of Sun Eq. 5
+(tools/airlight_reference.py ``eq5_quad``) at beta = 1 and those depths,
+scaled exactly, L(beta, D_sv, D_vp, gamma) = beta^2 L(1, beta D_sv, beta D_vp, gamma),
+with e^{T_sv} factored out (``scaled=True``) so that values below the float64
+range (T_sv > 700) are still known: ln L = 2 ln beta - T_sv + ln S.  It is
+cross-checked by an independent quadrature of Sun Eq. 9 in xi written
+without cancellation (``eq9_stable``; they agree to 5e-10 everywhere).
+Cached in tests/data/stability_reference.npz (tests/test_stability.py reads it);
+``--regen`` recomputes it (about a minute on one core).
+
+Error of a sample with model value L_m and true value L, in a format whose
+smallest normal number is ``tiny`` (float32: 1.2e-38, what a GPU flushes
+denormals to; float64: 2.2e-308):
+
+    err = |L_m - L| / max(L, tiny)
+
+i.e. relative error while L is representable, and absolute error in units of
+``tiny`` below (there 0 is the right answer).  Per cell: the maximum over its
+4 x 17 samples.  Marked: NaN / Inf output (any sample; magenta, hatched);
+catastrophic error, err >= 1: not one correct significant digit, what an
+exponentially amplified subtraction of two close lookups gives (white x);
+cells whose true values all lie below the format's range (grey, dotted).
+The N-table model reads its table at the radius R = sqrt(2 Q d) about the
+light clamped at model.MIN_DISTANCE = 1 um (``polar_radius``: rays passing
+within 1 um of the light toward it); those samples are left out of its colour
+and marked (red o) where they exceed the documented bound, because at
+beta = 1e2 they fill every cell a ray passes the light in and would hide the rest.
+
+Outputs: docs/figures/stability_map.png, benchmarks/out/stability_map.csv
+(one row per formulation and cell; the near-light samples in columns of their own).
+tests/test_stability.py asserts what the map shows for the shipped formulations.
+"""
+import argparse
+import csv
+import math
+import pathlib
+import sys
+import time
+import warnings
+
+import numpy as np
+from scipy import integrate
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tools"))
+
+import airlight_reference as ref  # noqa: E402
+import shader_float32 as f32  # noqa: E402
+from fog_addon.precompute import airlight as al  # noqa: E402
+from fog_addon.precompute import model  # noqa: E402
+
+CACHE = ROOT / "tests" / "data" / "stability_reference.npz"
+PNG = ROOT / "docs" / "figures" / "stability_map.png"
+CSV = ROOT / "benchmarks" / "out" / "stability_map.csv"
+
+N_T = 25
+T_RANGE = (1e-4, 1e3)
+T_GRID = np.geomspace(*T_RANGE, N_T)                 # nominal optical depths (cell centres)
+T_VP_GRID = np.concatenate([T_GRID, [np.inf]])
+GAMMAS = np.array([10.0 ** -k for k in range(7, 0, -1)] + [0.5, 0.5 * math.pi, 2.5]
+                  + [math.pi - 10.0 ** -k for k in range(1, 8)])
+BETAS = np.asarray([1e-4, 1e-2, 1.0, 1e2], np.float32).astype(float)      # per metre, float32-exact
+TINY = {"float64": np.finfo(np.float64).tiny, "float32": float(np.finfo(np.float32).tiny)}
+CATASTROPHIC = 1.0
+CLAMPS_R = ("table_f64", "table_f32")     # read the N table at R >= model.MIN_DISTANCE (``near_light``)
+
+# name -> (label, format, documented bound or None)
+FORMULATIONS = {
+    "sun_F64": ("Sun et al. F table 64x64, Eq. 11/12 (float64)", "float64", None),
+    "table_f64": ("ours: N table 128x64 (float64)", "float64", 1.6e-4),
+    "table_f32": ("ours: N table 128x64, float32 as the shader", "float32", 1.6e-4),
+    "quad_f64": ("ours: OSL quadrature (float64)", "float64", 1.1e-6),
+    "quad_f32": ("ours: OSL quadrature, float32 as the shader", "float32", 1.1e-6),
+}
+
+
+# --- reference ------------------------------------------------------------------------
+
+def eq9_stable(t_sv, t_vp, gamma, epsrel=1e-12):
+    """Cross-check: e^{T_sv} L(beta = 1) from Sun Eq. 9, written without cancellation (D_vp may be inf).
+
+    ``airlight_reference.eq9_quad`` integrates exp(-A1 (tan xi - tan(gamma/2)))
+    over [gamma/2, v1] with both ends computed separately; near gamma = 0 with
+    T_vp < T_sv, and near gamma = pi, the interval is a difference of two close
+    angles and loses digits (1.7e-2 at T_sv = 1e3, T_vp = 1e-4, gamma = 1e-7).
+    Here the variable is t = xi - gamma/2 on [0, W] with
+    W = (atan(z1/A1) - atan(z0/A1)) / 2 = atan2(A1 T_vp, A1^2 + z0 z1) / 2
+    (z0 = -T_sv cos gamma, z1 = z0 + T_vp), and
+    tan(gamma/2 + t) - tan(gamma/2) = sin t / (cos(gamma/2 + t) cos(gamma/2)),
+    cos(gamma/2 + t) = cos(gamma/2) cos t - sin(gamma/2) sin t.  Pieces split
+    where A1 (tan xi - tan(gamma/2)) = 2^k.  Agrees with eq5_quad to 5e-10 over the map.
+    """
+    a1 = t_sv * math.sin(gamma)
+    z0 = -t_sv * math.cos(gamma)
+    c0, s0 = math.cos(0.5 * gamma), math.sin(0.5 * gamma)
+    tv0 = s0 / c0
+    if math.isfinite(t_vp):
+        width = 0.5 * math.atan2(a1 * t_vp, a1 * a1 + z0 * (z0 + t_vp))
+    else:
+        width = 0.5 * (math.pi - gamma)                 # v1 = pi/2
+
+    def f(t):
+        den = (c0 * math.cos(t) - s0 * math.sin(t)) * c0
+        return math.exp(-a1 * math.sin(t) / den) if den > 0.0 else 0.0
+
+    pts = set()
+    for k in range(-6, 8):
+        s = 2.0 ** k / a1                              # tan(gamma/2 + t) - tan(gamma/2) = s
+        t = math.atan(s / (1.0 + tv0 * (tv0 + s)))
+        if 0.0 < t < width:
+            pts.add(t)
+    edges = [0.0] + sorted(pts) + [width]
+    v = sum(integrate.quad(f, lo, hi, epsabs=0.0, epsrel=epsrel, limit=400)[0]
+            for lo, hi in zip(edges[:-1], edges[1:]) if hi > lo)
+    return v / (2.0 * math.pi * a1)
+
+
+def distances():
+    """(d_sv[beta, i], d_vp[beta, j]) in m: T / beta rounded to float32, so float32 and float64 get the same inputs."""
+    d_sv = np.asarray(T_GRID[None, :] / BETAS[:, None], np.float32).astype(float)
+    d_vp = np.asarray(T_VP_GRID[None, :] / BETAS[:, None], np.float32).astype(float)
+    return d_sv, d_vp
+
+
+def true_depths():
+    """The optical depths the samples really have, beta * D (exact in float64: products of float32 numbers)."""
+    d_sv, d_vp = distances()
+    return BETAS[:, None] * d_sv, BETAS[:, None] * d_vp
+
+
+def compute_reference(log=print):
+    """S[b, i, j, k] = e^{T_sv} L(1, T_sv, T_vp, gamma[k]) at the true depths of beta[b], cell (i, j), by eq5_quad.
+
+    With its estimated error and the relative difference from eq9_stable.
+    """
+    t_sv, t_vp = true_depths()
+    shape = (len(BETAS), len(T_GRID), len(T_VP_GRID), len(GAMMAS))
+    s = np.empty(shape)
+    est = np.empty(shape)
+    check = np.empty(shape)
+    t0 = time.time()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for idx in np.ndindex(*shape):
+            b, i, j, k = idx
+            args = (float(t_sv[b, i]), float(t_vp[b, j]), float(GAMMAS[k]))
+            s[idx], est[idx] = ref.eq5_quad(1.0, *args, scaled=True)
+            check[idx] = eq9_stable(*args)
+    log(f"{s.size} reference values in {time.time() - t0:.1f} s")
+    return s, est, check
+
+
+def load_reference(regen=False, log=print):
+    """The cached reference (computed and written when missing, stale or ``regen``)."""
+    if not regen and CACHE.exists():
+        c = dict(np.load(CACHE))
+        if (np.array_equal(c["t_sv"], T_GRID) and np.array_equal(c["t_vp"], T_VP_GRID)
+                and np.array_equal(c["gamma"], GAMMAS) and np.array_equal(c["beta"], BETAS)):
+            return c
+        log(f"{CACHE} is for another grid: recomputing")
+    s, est, check = compute_reference(log)
+    CACHE.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(CACHE, beta=BETAS, t_sv=T_GRID, t_vp=T_VP_GRID, gamma=GAMMAS, scaled=s,
+                        est_rel=(est / s).astype(np.float32),
+                        check_rel=np.abs(check / s - 1.0).astype(np.float32))
+    return dict(np.load(CACHE))
+
+
+def samples():
+    """(beta, d_sv, d_vp, gamma) of every sample, each of shape (beta, T_sv, T_vp, gamma)."""
+    d_sv, d_vp = distances()
+    return tuple(np.broadcast_arrays(BETAS[:, None, None, None], d_sv[:, :, None, None],
+                                     d_vp[:, None, :, None], GAMMAS[None, None, None, :]))
+
+
+def log_truth(c):
+    """ln L of every sample (shape of ``samples``): 2 ln beta - T_sv + ln S."""
+    t_sv, _ = true_depths()
+    return 2.0 * np.log(BETAS)[:, None, None, None] - t_sv[:, :, None, None] + np.log(c["scaled"])
+
+
+def rel_error(value, ln_truth, tiny):
+    """|L_m - L| / max(L, tiny) from L_m and ln L (nan where L_m is not finite)."""
+    value = np.asarray(value, float)
+    with np.errstate(all="ignore"):
+        above = ln_truth >= math.log(tiny)
+        rel = np.abs(value * np.exp(-np.where(above, ln_truth, 0.0)) - 1.0)
+        absolute = np.abs(value - np.exp(np.minimum(ln_truth, 0.0))) / tiny
+        err = np.where(above, rel, absolute)
+    return np.where(np.isfinite(value), err, np.nan)
+
+
+# --- formulations ---------------------------------------------------------------------
+
+def evaluate(name, params, table=None, sun_table=None):
+    """The formulation's values at ``params`` (arrays of any shape), float64 array of that shape."""
+    shape = np.shape(params[0])
+    flat = [np.ravel(p) for p in params]
+    with np.errstate(all="ignore"):
+        if name == "sun_F64":
+            out = al.airlight_sun(*flat, al.bake_sun_f_table(64, 64) if sun_table is None else sun_table)
+        elif name == "table_f64":
+            out = al.airlight(*flat, table=table)
+        elif name == "table_f32":
+            out = f32.airlight_float32(*flat, al.bake_airlight_table() if table is None else table)
+        elif name == "quad_f64":
+            out = al.airlight(*flat, quadrature=True)
+        elif name == "quad_f32":
+            out = f32.airlight_quadrature_float32(*flat)
+        else:
+            raise KeyError(name)
+    return np.asarray(out, float).reshape(shape)
+
+
+def run(regen=False, log=print):
+    c = load_reference(regen, log)
+    log(f"reference: eq5 estimated rel. error max {c['est_rel'].max():.1e}; max rel. diff from Eq. 9 "
+        f"(eq9_stable) {c['check_rel'].max():.1e}")
+    params = samples()
+    ln_l = log_truth(c)
+    table = al.bake_airlight_table()
+    sun_table = al.bake_sun_f_table(64, 64)
+    results = {}
+    for name, (label, fmt, bound) in FORMULATIONS.items():
+        t0 = time.time()
+        val = evaluate(name, params, table, sun_table)
+        err = rel_error(val, ln_l, TINY[fmt])
+        results[name] = dict(value=val, err=err, seconds=time.time() - t0)
+        log(summary(name, err, ln_l, TINY[fmt], params))
+    return c, params, ln_l, results
+
+
+def polar_radius(d_sv, d_vp, gamma):
+    """min(R0, R1): the radius R = sqrt(2 Q d) about the light at which the N table is read, at the viewer
+    and at the surface (model.py; R ~ h on the way toward the light, ~ 2 d beyond it).  The table
+    model clamps it at model.MIN_DISTANCE (1 um): rays that pass within 1 um of the light toward
+    it, or end within 0.5 um of it."""
+    r0 = 2.0 * d_sv * np.sin(0.5 * gamma)
+    h = d_sv * np.sin(gamma)
+    with np.errstate(all="ignore"):
+        z1 = d_vp - d_sv * np.cos(gamma)
+        d_sp = np.hypot(z1, h)
+        q1 = np.where(z1 > 0, z1 + d_sp, h * h / (d_sp - z1))
+        r1 = np.where(np.isfinite(d_vp), np.sqrt(2.0 * q1 * d_sp), np.inf)
+    return np.minimum(r0, r1)
+
+
+def near_light(params):
+    """Samples whose ray the table model clamps at R = 1 um (``polar_radius``)."""
+    _, d_sv, d_vp, gamma = params
+    return polar_radius(d_sv, d_vp, gamma) < model.MIN_DISTANCE
+
+
+def _per_cell(x):
+    """(beta, T_sv, T_vp, gamma) -> (T_sv, T_vp, beta * gamma)."""
+    return np.moveaxis(x, 0, 2).reshape(len(T_GRID), len(T_VP_GRID), -1)
+
+
+def cell_stats(err, ln_l, tiny, excluded=None):
+    """Per (T_sv, T_vp) cell: max finite error over the samples not ``excluded``, its (beta, gamma) index,
+    counts, and the max over the excluded samples."""
+    e = _per_cell(err)
+    ex = np.zeros(e.shape, bool) if excluded is None else _per_cell(excluded)
+    nonfinite = np.isnan(e).sum(-1)
+    finite_e = np.where(np.isnan(e), -np.inf, e)
+    kept = np.where(ex, -np.inf, finite_e)
+    worst = np.argmax(kept, axis=-1)
+    mx = np.take_along_axis(kept, worst[..., None], -1)[..., 0]
+    ex_max = np.max(np.where(ex, finite_e, -np.inf), axis=-1)
+    under = _per_cell(ln_l) < math.log(tiny)
+    return dict(max=np.where(np.isfinite(mx), mx, np.nan), worst=worst, nonfinite=nonfinite,
+                catastrophic=(np.where(ex, 0.0, finite_e) >= CATASTROPHIC).sum(-1), underflow=under.sum(-1),
+                all_underflow=under.all(-1), excluded=ex.sum(-1), excluded_max=np.where(ex.any(-1), ex_max, np.nan))
+
+
+def stats_of(name, results, params, ln_l):
+    fmt = FORMULATIONS[name][1]
+    return cell_stats(results[name]["err"], ln_l, TINY[fmt], near_light(params) if name in CLAMPS_R else None)
+
+
+def summary(name, err, ln_l, tiny, params):
+    fin = np.isfinite(err)
+    rep = fin & (ln_l >= math.log(tiny))
+    out = f"{name:10s} NaN/Inf {int((~fin).sum()):5d}, err >= 1 {int((err >= CATASTROPHIC).sum()):5d} of {err.size}"
+    masks = [("", rep)]
+    if name in CLAMPS_R:
+        nl = near_light(params)
+        masks = [("; rays within 1 um of the light", rep & nl), ("; elsewhere", rep & ~nl)]
+    for label, m in masks:
+        e = np.where(m, err, -1.0)
+        i = np.unravel_index(int(np.argmax(e)), e.shape)
+        b, s, v, g = (float(p[i]) for p in params)
+        out += (f"{label}: max err where representable {e[i]:.3g} at beta={b:.3g} T_sv={b * s:.3g} "
+                f"T_vp={b * v:.3g} gamma={g:.3g}")
+    return out
+
+
+def write_csv(results, params, ln_l, path=CSV):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    nb, ng = len(BETAS), len(GAMMAS)
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["formulation", "format", "T_sv", "T_vp", "max_err", "worst_beta", "worst_gamma",
+                    "samples", "nonfinite", "catastrophic", "true_value_underflows",
+                    "near_light_samples_left_out", "near_light_max_err"])
+        for name in results:
+            st = stats_of(name, results, params, ln_l)
+            for i, t_sv in enumerate(T_GRID):
+                for j, t_vp in enumerate(T_VP_GRID):
+                    k = int(st["worst"][i, j])
+                    w.writerow([name, FORMULATIONS[name][1], f"{t_sv:.6g}", "inf" if np.isinf(t_vp) else f"{t_vp:.6g}",
+                                f"{st['max'][i, j]:.3e}", f"{BETAS[k // ng]:.6g}", f"{GAMMAS[k % ng]:.17g}",
+                                nb * ng, int(st["nonfinite"][i, j]), int(st["catastrophic"][i, j]),
+                                int(st["underflow"][i, j]), int(st["excluded"][i, j]),
+                                f"{st['excluded_max'][i, j]:.3e}"])
+
+
+def plot(c, results, params, ln_l, path=PNG):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch, Rectangle
+
+    vmin, vmax = -16.0, 2.0
+    cmap = plt.get_cmap("viridis")
+    nx, ny = len(T_GRID), len(T_VP_GRID)
+    gap = 0.45                                                    # the T_vp = inf row sits above a gap
+    yedges = np.concatenate([np.arange(ny) - 0.5, [ny - 0.5 + gap]])
+    yedges[-2] += gap
+    fig, axes = plt.subplots(2, 3, figsize=(17, 12.5), dpi=80)
+    fig.subplots_adjust(left=0.05, right=0.88, bottom=0.1, top=0.88, wspace=0.28, hspace=0.42)
+    decades = range(-4, 4)
+    pos = lambda t: (math.log10(t) - math.log10(T_RANGE[0])) / math.log10(T_RANGE[1] / T_RANGE[0]) * (N_T - 1)
+    im = None
+    for ax, name in zip(axes.ravel(), list(FORMULATIONS) + ["reference"]):
+        st = None
+        if name == "reference":
+            val = np.log10(np.maximum(np.max(np.maximum(c["check_rel"], c["est_rel"]), axis=(0, -1)), 1e-17))
+            title = ("reference: scipy quadrature of Sun Eq. 5\nvs an independent quadrature of Eq. 9 "
+                     f"(max {c['check_rel'].max():.1g})\nand its own error estimate (max {c['est_rel'].max():.1g})")
+        else:
+            label, fmt, bound = FORMULATIONS[name]
+            st = stats_of(name, results, params, ln_l)
+            val = np.log10(np.clip(st["max"], 10.0 ** vmin, None))
+            err = results[name]["err"]
+            fin = np.isfinite(err)
+            rep = fin & (ln_l >= math.log(TINY[fmt]))
+            keep = rep & ~near_light(params) if name in CLAMPS_R else rep
+            title = (f"{label}\nmax {np.max(np.where(keep, err, 0.0)):.2g}"
+                     + (" (R >= 1 um)" if name in CLAMPS_R else "")
+                     + (f", documented {bound:g}" if bound else ""))
+            if name in CLAMPS_R:
+                title += f"; R < 1 um: max {np.max(np.where(rep & ~keep, err, 0.0)):.2g}"
+            title += (f"\nNaN/Inf: {int((~fin).sum())}, error >= 1: {int((np.where(keep, err, 0) >= 1).sum())} "
+                      f"of {fin.size} samples")
+        im = ax.pcolormesh(np.arange(nx + 1) - 0.5, yedges, np.ma.masked_invalid(val.T), cmap=cmap,
+                           vmin=vmin, vmax=vmax, shading="flat")
+        ax.axhspan(ny - 1.5, ny - 1.5 + gap, color="white", zorder=2)
+        if st is not None:
+            bound = FORMULATIONS[name][2]
+            for i in range(nx):
+                for j in range(ny):
+                    y0, y1 = yedges[j], (ny - 1.5 if j == ny - 2 else yedges[j + 1])
+                    if st["nonfinite"][i, j]:
+                        ax.add_patch(Rectangle((i - 0.5, y0), 1, y1 - y0, facecolor="magenta", edgecolor="k",
+                                               hatch="xxx", lw=0.3, zorder=3))
+                    elif st["all_underflow"][i, j]:
+                        ax.add_patch(Rectangle((i - 0.5, y0), 1, y1 - y0, facecolor="0.85", edgecolor="0.6",
+                                               hatch="..", lw=0.0, zorder=3))
+                    elif st["catastrophic"][i, j]:
+                        ax.plot(i, 0.5 * (y0 + y1), marker="x", color="white", ms=4.5, mew=1.2, zorder=4)
+                    if bound and st["excluded_max"][i, j] > bound:
+                        ax.plot(i, 0.5 * (y0 + y1), marker="o", mfc="none", mec="red", ms=3.5, mew=0.9, zorder=5)
+        ax.set_xticks([pos(10.0 ** d) for d in decades])
+        ax.set_xticklabels([f"1e{d}" for d in decades], fontsize=8)
+        ax.set_yticks([pos(10.0 ** d) for d in decades] + [ny - 1 + 0.5 * gap])
+        ax.set_yticklabels([f"1e{d}" for d in decades] + ["inf"], fontsize=8)
+        ax.set_xlim(-0.5, nx - 0.5)
+        ax.set_ylim(-0.5, yedges[-1])
+        ax.set_xlabel("T_sv = beta D_sv (viewer - light)", fontsize=9)
+        ax.set_ylabel("T_vp = beta D_vp (viewer - surface)", fontsize=9)
+        ax.set_title(title, fontsize=9)
+    cb = fig.colorbar(im, cax=fig.add_axes([0.9, 0.25, 0.015, 0.5]))
+    cb.set_label("log10 of the max error per cell, |L - L_ref| / max(L_ref, smallest normal number)")
+    handles = [Patch(facecolor="magenta", edgecolor="k", hatch="xxx", label="NaN or Inf output"),
+               Line2D([], [], marker="x", color="k", ls="", label="catastrophic: error >= 1 (not one correct digit)"),
+               Patch(facecolor="0.85", edgecolor="0.6", hatch="..", label="true values below the format's range"),
+               Line2D([], [], marker="o", mfc="none", mec="red", ls="",
+                      label="N table: rays within 1 um of the light (R clamped), over the bound; left out of the colour")]
+    fig.legend(handles=handles, loc="lower center", ncol=2, fontsize=10, frameon=False, bbox_to_anchor=(0.47, 0.0))
+    fig.suptitle(f"Airlight stability map: per cell the max error over {len(GAMMAS)} angles gamma in [1e-7, pi - 1e-7]"
+                 f" and beta in {{1e-4, 1e-2, 1, 1e2}} /m\nreference: scipy quadrature of Sun Eq. 5 "
+                 f"(tools/stability_map.py)", fontsize=13)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, bbox_inches="tight")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--regen", action="store_true", help="recompute the cached reference values")
+    a = ap.parse_args(argv)
+    c, params, ln_l, results = run(a.regen)
+    write_csv(results, params, ln_l)
+    plot(c, results, params, ln_l)
+    print("wrote", PNG, CSV)
+
+
+if __name__ == "__main__":
+    main()
