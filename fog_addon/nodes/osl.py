@@ -115,7 +115,7 @@ class OslOps:
         return self.emit(f"{a.expr} < {b.expr} ? 1.0 : 0.0")
 
     def select(self, cond, if_true, if_false):
-        return if_false + cond * (if_true - if_false)
+        return cond * if_true + (1.0 - cond) * if_false
 
     def clamp01(self, x):
         return self.call("clamp", x, 0.0, 1.0)

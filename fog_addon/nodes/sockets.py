@@ -192,7 +192,7 @@ class NodeOps:
         return self.math("LESS_THAN", a, b)
 
     def select(self, cond, if_true, if_false):
-        return if_false + cond * (if_true - if_false)
+        return cond * if_true + (1.0 - cond) * if_false
 
     def clamp01(self, x):
         return self.minimum(self.maximum(x, 0.0), 1.0)

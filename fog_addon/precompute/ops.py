@@ -89,8 +89,12 @@ class NumpyOps:
 
     @staticmethod
     def select(cond, if_true, if_false):
-        """cond in {0, 1}: if_false + cond * (if_true - if_false), as the node tree does."""
-        return if_false + cond * (if_true - if_false)
+        """cond in {0, 1}: cond * if_true + (1 - cond) * if_false, as the node tree does.
+
+        The branch not taken is multiplied by exactly 0, so its rounding (a cancelled long-segment
+        airlight, say) never leaks into the result; an Inf or NaN there still poisons it.
+        """
+        return cond * if_true + (1.0 - cond) * if_false
 
     @staticmethod
     def clamp01(x):
