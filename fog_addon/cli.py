@@ -115,6 +115,8 @@ def build_parser():
     r.add_argument("scene", metavar="SCENE.blend")
     r.add_argument("--engine", required=True, choices=["cycles", "eevee"])
     from_file = " (default: the file's setting)"
+    r.add_argument("--passes", action="store_const", const=True, default=None,
+                   help="write the Fog Light and Fog Transmittance passes (default: the file's setting)")
     r.add_argument("--method", choices=["nodes", "osl"], default=None,
                    help="node groups (Cycles, EEVEE) or OSL (Cycles) (default: the file's Method)")
     _add_fog_flags(r, from_file)

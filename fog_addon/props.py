@@ -21,6 +21,12 @@ def _method_changed(self, context):
         apply.set_method(context.scene, self.method.lower())
 
 
+def _passes_changed(self, context):
+    from .ops import apply
+    if self.enabled:
+        apply.set_passes(context.scene, self.use_passes)
+
+
 def _light_changed(self, context):
     from .ops import apply
     apply.refresh_lights(context.scene)
@@ -65,6 +71,11 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
                               "Cycles only (switches Cycles' OSL on)")],
         description="Preference for the fog's models: each light gets, per term, the model this preference "
                     "chooses (shown below)")
+    use_passes: bpy.props.BoolProperty(
+        name="Fog Passes", default=False, update=_passes_changed,
+        description="Write the render passes Fog Light (the light the fog adds) and Fog Transmittance "
+                    "(e^-beta*distance) for compositing. They cost render time (about a quarter more in "
+                    "Cycles); the denoising set-up does not need them")
     selected_only: bpy.props.BoolProperty(
         name="Selected Only", default=False,
         description="Add the fog only to the materials of the selected objects (the World and lights always)")

@@ -54,6 +54,7 @@ def fog_settings(scene, args):
     scene_scale = pick("scene scale", "scene_scale", lambda: s.scene_scale)
     anisotropy = pick("anisotropy", "anisotropy", lambda: s.anisotropy)
     method = pick("method", "method", lambda: s.method.lower())
+    with_passes = bool(pick("fog passes", "passes", lambda: s.use_passes))
     if method == "osl" and args.engine_id != "CYCLES":
         if source["method"] == "flag":
             raise SystemExit("error: --method osl needs --engine cycles (EEVEE cannot run OSL); use --method nodes")
@@ -66,9 +67,9 @@ def fog_settings(scene, args):
         notes.append(("materials", f"the file's fog is Selected Only: fogging the materials of "
                                    f"{len(objects)} selected object(s) (and those fogged already)"))
     kwargs = dict(density=density, albedo=albedo, anisotropy=anisotropy, method=method, objects=objects,
-                  scene_scale=scene_scale)
+                  scene_scale=scene_scale, with_passes=with_passes)
     shown = {"density": density, "colour": albedo, "scene scale": scene_scale, "anisotropy": anisotropy,
-             "method": method}
+             "method": method, "fog passes": with_passes}
     return kwargs, {k: (v, source[k]) for k, v in shown.items()}, notes
 
 

@@ -6,17 +6,23 @@ lamp's peak pixel 35 % too dark and brightened its neighbours.  While the fog
 is on, a scene that Cycles renders with its denoiser on gets instead, after
 each of the scene's Render Layers nodes (view layers that denoise):
 
-    Image - Fog Light -> Denoise (Denoising Albedo - Fog Light and Denoising
-    Normal, as the scene's denoiser uses them) -> + Fog Light -> what the Image fed
+    Image - Emitted -> Denoise (Denoising Albedo - Emitted and Denoising
+    Normal, as the scene's denoiser uses them) -> + Emitted -> what the Image fed
 
 and the render denoiser off, so only the rest of the picture is denoised and
-the fog's light (the ``Fog Light`` pass, ``passes.py``) is added back as
-rendered.  The Denoise node takes the scene's prefilter, quality and input
-passes.  Cycles' Denoising Albedo counts emission, so the fog's light too (a
-black ground reads as bright as its airlight); the guide is that minus the Fog
-Light, the albedo of the picture being denoised (on tests/scenes/passes_probe.py
-it left the noise of a sphere at 0.26 of the raw render's, against 0.41 with
-the albedo as Cycles writes it).
+the light emitted toward the camera is added back as rendered.  Emitted is
+Cycles' own Emission plus Environment passes: every fogged material's fog
+light is emission on camera rays, and the World's glow is the background the
+camera sees, so Emitted holds the fog's light (plus the user's own emitters
+and sky seen directly, which are noise-free too).  Built-in passes cost
+nothing to render, unlike the shader AOVs of ``passes.py`` (+26 % render
+time on the street lamps), which stay the artist's choice.  The Denoise node
+takes the scene's prefilter, quality and input passes.  Cycles' Denoising
+Albedo counts emission, so the fog's light too (a black ground reads as
+bright as its airlight); the guide is that minus Emitted, the albedo of the
+picture being denoised (on tests/scenes/passes_probe.py it left the noise of
+a sphere at 0.26 of the raw render's, against 0.41 with the albedo as Cycles
+writes it).
 
 * A scene without a compositor node group gets the fog's own
   (``AnalyticFog Compositor``: Render Layers -> chain -> Group Output), with
@@ -27,20 +33,19 @@ the albedo as Cycles writes it).
   Image back.  The user's graph is left alone (and the denoiser on, with a
   note saying why) when it is linked from a library, Compositing is off,
   Render Layers of the scene sit inside a nested group, a link reads Noisy
-  Image (gone with the render denoiser off) or a view layer has a clashing AOV.
-* Not for EEVEE (Cycles' denoiser flag does not apply) nor Cycles with OSL
-  (which writes no shader AOVs in Blender 5.0: the passes would be black).
-  ``follow`` sets the set-up up or takes it down as the engine, OSL and the
-  denoiser flag change.
+  Image (gone with the render denoiser off).
+* Not for EEVEE (Cycles' denoiser flag does not apply).  ``follow`` sets the
+  set-up up or takes it down as the engine and the denoiser flag change.
 
 The settings changed (the scene's denoiser and Compositing flags, each view
-layer's Denoising Data passes) are recorded by ``overrides.py`` and restored
+layer's Emission, Environment and Denoising Data passes) are recorded by ``overrides.py`` and restored
 exactly by ``teardown``; the scene's ``STATE`` names the tree the fog edited.
 """
 import bpy
 
-from . import overrides, owned, passes
+from . import overrides, owned
 
+EMISSION, ENVIRONMENT = "Emission", "Environment"   # the Render Layers outputs of Cycles' Emit and Env passes
 STATE = "analytic_fog_compositor"   # on the scene: {"tree": name of the compositor tree the fog edited or made}
 GROUP = "AnalyticFog Compositor"
 _PREFILTER = {"NONE": "None", "FAST": "Fast", "ACCURATE": "Accurate"}
@@ -57,9 +62,8 @@ def is_set_up(scene):
 
 
 def wanted(scene):
-    """True if ``scene`` should have the set-up: Cycles (SVM) with its denoiser on (or set up already)."""
-    return (scene.render.engine == "CYCLES" and not scene.cycles.shading_system
-            and (scene.cycles.use_denoising or is_set_up(scene)))
+    """True if ``scene`` should have the set-up: Cycles with its denoiser on (or set up already)."""
+    return scene.render.engine == "CYCLES" and (scene.cycles.use_denoising or is_set_up(scene))
 
 
 def follow(scene, rebuild=False):
@@ -70,11 +74,6 @@ def follow(scene, rebuild=False):
     """
     if not wanted(scene):
         teardown(scene)
-        c = scene.cycles
-        if scene.render.engine == "CYCLES" and c.shading_system and c.use_denoising:
-            return [(scene.name, "Cycles' OSL writes no shader AOVs (Blender 5.0), so the fog passes stay black "
-                                 "and the denoiser, left on, smears the fog's glows: use the Node Groups method "
-                                 "or turn the denoiser off")]
         return []
     if is_set_up(scene):
         if not rebuild:
@@ -127,24 +126,26 @@ def _why_not(scene, tree, nodes):
     if any(n.outputs.get("Noisy Image") is not None and n.outputs["Noisy Image"].is_linked
            for n in tree.nodes if _renders(scene, n)):
         return f"{tree.name!r} reads Noisy Image, which Cycles writes only with its denoiser on"
-    for n in nodes:
-        if not passes.has_view_layer_aovs(_layer(scene, n)):
-            return f"view layer {n.layer!r} has an AOV clashing with the fog passes"
     return None
 
 
 # --- building and taking apart ------------------------------------------------------------------
 
 def _chain(scene, tree, rl, k):
-    """Image - Fog Light -> Denoise -> + Fog Light after Render Layers ``rl``; returns the last output."""
-    rl.update()   # the view layer's AOVs and Denoising Data passes become outputs
+    """Image - Emitted -> Denoise -> + Emitted after Render Layers ``rl``; returns the last output."""
+    rl.update()   # the view layer's Emission, Environment and Denoising Data passes become outputs
     c = scene.cycles
     x, y = rl.location.x + 300, rl.location.y - 40 - 360 * k
     role = f"Compositor {k}"
+    emitted = owned.add(tree, "ShaderNodeMix", f"{role} Emitted", (x, y + 160), data_type="RGBA", blend_type="ADD")
+    emitted.inputs[0].default_value = 1.0
+    tree.links.new(rl.outputs[EMISSION], _sock(emitted.inputs, _MIX_A))
+    tree.links.new(rl.outputs[ENVIRONMENT], _sock(emitted.inputs, _MIX_B))
+    fog_light = _sock(emitted.outputs, _MIX_OUT)
     sub = owned.add(tree, "ShaderNodeMix", f"{role} Subtract", (x, y), data_type="RGBA", blend_type="SUBTRACT")
     sub.inputs[0].default_value = 1.0
     tree.links.new(rl.outputs["Image"], _sock(sub.inputs, _MIX_A))
-    tree.links.new(rl.outputs[passes.FOG_LIGHT], _sock(sub.inputs, _MIX_B))
+    tree.links.new(fog_light, _sock(sub.inputs, _MIX_B))
     den = owned.add(tree, "CompositorNodeDenoise", f"{role} Denoise", (x + 200, y))
     den.inputs["HDR"].default_value = True
     den.inputs["Prefilter"].default_value = _PREFILTER.get(c.denoising_prefilter, "Accurate")
@@ -157,21 +158,24 @@ def _chain(scene, tree, rl, k):
                         blend_type="SUBTRACT", clamp_result=True)
         alb.inputs[0].default_value = 1.0
         tree.links.new(rl.outputs["Denoising Albedo"], _sock(alb.inputs, _MIX_A))
-        tree.links.new(rl.outputs[passes.FOG_LIGHT], _sock(alb.inputs, _MIX_B))
+        tree.links.new(fog_light, _sock(alb.inputs, _MIX_B))
         tree.links.new(_sock(alb.outputs, _MIX_OUT), den.inputs["Albedo"])
     if c.denoising_input_passes == "RGB_ALBEDO_NORMAL":
         tree.links.new(rl.outputs["Denoising Normal"], den.inputs["Normal"])
     add = owned.add(tree, "ShaderNodeMix", f"{role} Add", (x + 400, y), data_type="RGBA", blend_type="ADD")
     add.inputs[0].default_value = 1.0
     tree.links.new(den.outputs["Image"], _sock(add.inputs, _MIX_A))
-    tree.links.new(rl.outputs[passes.FOG_LIGHT], _sock(add.inputs, _MIX_B))
+    tree.links.new(fog_light, _sock(add.inputs, _MIX_B))
     return _sock(add.outputs, _MIX_OUT)
 
 
 def _store_passes(scene, layers):
-    """Cycles' Denoising Data passes on for ``layers`` if the Denoise node reads them."""
-    if scene.cycles.denoising_input_passes != "RGB":
-        for vl in layers:
+    """The Emission and Environment passes on for ``layers``, and Cycles' Denoising Data passes if the
+    Denoise node reads them."""
+    for vl in layers:
+        overrides.override(vl, "use_pass_emit", True)
+        overrides.override(vl, "use_pass_environment", True)
+        if scene.cycles.denoising_input_passes != "RGB":
             overrides.override(vl, "cycles.denoising_store_passes", True)
 
 
@@ -182,9 +186,6 @@ def setup(scene):
         vl = next((v for v in scene.view_layers if v.use), None)
         if not _denoised(scene, vl):
             return []
-        if not passes.has_view_layer_aovs(vl):
-            return [(scene.name, f"view layer {vl.name!r} has an AOV clashing with the fog passes: "
-                                 "Cycles' denoiser is left on and smears the fog's glows")]
         _store_passes(scene, [vl])
         tree = bpy.data.node_groups.new(GROUP, "CompositorNodeTree")
         tree[owned.TAG] = "Compositor"   # the fog's own group

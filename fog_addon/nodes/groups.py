@@ -245,15 +245,16 @@ def _light_instance(ng, k, light, group_name, inputs):
     return node
 
 
-def build_surface(lights, models, images):
+def build_surface(lights, models, images, with_passes=False):
     """Scene group for materials: ``shading.shade_surface`` (Sun et al. 2005 Eq. 19) over ``lights``.
 
     ``models``: one rungs.LightModels per light.  Inputs mirror the Principled
     BSDF; outputs are the fields of ``shading.SurfaceFog``: Emission (camera
     rays only), Transmittance e^{-beta D_vp} to scale the material, Direct
     Attenuation (EEVEE's stand-in for the per-light e^{-beta D_sp}) and per
-    engine the Mix Factor 1 - scale of the user's shader.  It writes the fog
-    passes (``passes.py``), weighted by its Opacity input (white: opaque).
+    engine the Mix Factor 1 - scale of the user's shader.  ``with_passes``: it
+    writes the fog passes (``passes.py``), weighted by its Opacity input
+    (white: opaque).
     """
     ng, gin, gout = _new_group(SURFACE, [
         ("Base Color", C), ("Metallic", F), ("Roughness", F), ("Specular IOR Level", F), (passes.OPACITY, C),
@@ -283,12 +284,13 @@ def build_surface(lights, models, images):
     for sock, v in zip(("Emission", "Transmittance", "Direct Attenuation", "Cycles Mix Factor", "EEVEE Mix Factor"),
                        fog):
         m.feed(gout.inputs[sock], m.wrap(v))
-    passes.write_group(m, ng, m.wrap(fog.emission, vector=True), m.wrap(fog.transmittance),
-                       m.wrap(g[passes.OPACITY], vector=True))
+    if with_passes:
+        passes.write_group(m, ng, m.wrap(fog.emission, vector=True), m.wrap(fog.transmittance),
+                           m.wrap(g[passes.OPACITY], vector=True))
     return _install(ng, SURFACE)
 
 
-def build_world(lights, models, camera, images):
+def build_world(lights, models, camera, images, with_passes=False):
     """Scene group for the World: ``shading.shade_background`` (Sun et al. 2005 Eq. 12) over ``lights``.
 
     Camera position by TRANSFORMS drivers on ``camera`` (no node gives it in a
@@ -317,6 +319,13 @@ def build_world(lights, models, camera, images):
     emission, transmittance = shading.shade_background(m, airlights, medium, is_camera)
     m.feed(gout.inputs["Emission"], m.wrap(emission))
     m.feed(gout.inputs["Transmittance"], m.wrap(transmittance))
+    if with_passes:
+        _write_world_passes(m, ng, geo, nodes, medium, is_camera, transmittance)
+    return _install(ng, WORLD)
+
+
+def _write_world_passes(m, ng, geo, nodes, medium, is_camera, transmittance):
+    """The World's fog passes (``passes.py``) from its own instances of the lights' groups ``nodes``."""
     # The fog passes.  Cycles runs whatever an AOV output reads on every evaluation of the shader
     # (svm.cpp counts AOV dependencies as shared by both sides of a Mix Shader), which would undo the
     # World's 0/1 mix: its importance map and every non-camera ray would run the fog (48x27, automatic
@@ -338,4 +347,3 @@ def build_world(lights, models, camera, images):
         twins.append(m.wrap(twin.outputs["Airlight"], vector=True))
     light, _ = shading.shade_background(m, twins, medium, is_camera)
     passes.write_group(m, ng, m.wrap(light, vector=True), m.wrap(transmittance))
-    return _install(ng, WORLD)

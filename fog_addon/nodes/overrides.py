@@ -16,10 +16,15 @@ override only, so overriding twice keeps the user's value) and put back by
 WAS = "analytic_fog_was"   # on a material or World: {"cycles.<setting>": the user's value} the fog changed
 
 
+def _owner(idblock, path):
+    """(the struct holding setting ``path`` of ``idblock``, the setting's name)."""
+    owner, _, attr = path.rpartition(".")
+    return (idblock.path_resolve(owner) if owner else idblock), attr
+
+
 def override(idblock, path, value):
     """Set ``idblock``'s setting ``path`` (e.g. "cycles.sampling_method") for the fog, keeping the user's value."""
-    owner, attr = path.rsplit(".", 1)
-    owner = idblock.path_resolve(owner)
+    owner, attr = _owner(idblock, path)
     was = idblock.get(WAS, {})
     if path not in was:
         was[path] = getattr(owner, attr)
@@ -30,6 +35,5 @@ def override(idblock, path, value):
 def restore(idblock):
     """Give every setting the fog overrode on ``idblock`` back its user's value."""
     for path, value in dict(idblock.get(WAS, {})).items():
-        owner, attr = path.rsplit(".", 1)
-        setattr(idblock.path_resolve(owner), attr, value)
+        setattr(*_owner(idblock, path), value)
     idblock.pop(WAS, None)

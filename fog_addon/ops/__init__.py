@@ -55,7 +55,8 @@ class FOG_OT_add(bpy.types.Operator):
         try:
             with progress.window_progress(context.window_manager) as report:
                 skipped = apply.apply_fog(scene, density, tuple(settings.color), settings.anisotropy,
-                                          settings.method.lower(), objects, settings.scene_scale, progress=report)
+                                          settings.method.lower(), objects, settings.scene_scale,
+                                          with_passes=settings.use_passes, progress=report)
         except ValueError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}

@@ -13,6 +13,7 @@ SUPPORTED_LIGHTS = ("POINT",)
 OSL_WAS = "analytic_fog_osl_was"   # scene custom property: Cycles' OSL switch before the OSL method set it
 LIGHTS_KEY = "analytic_fog_lights"  # on the Surface group: the lights, their models and the camera it was built for
 PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method preference it was built with
+PASSES_KEY = "analytic_fog_passes"   # on the Surface group: built with the fog passes (AOV outputs)
 
 
 def fog_lights(scene):
@@ -79,10 +80,10 @@ def use_osl(scene, on):
         del scene[OSL_WAS]
 
 
-def _signature(lights, models, camera):
+def _signature(lights, models, camera, with_passes):
     return "|".join([groups.code_fingerprint()] + [f"{o.name_full}:{'/'.join(r.name for r in mod)}"
                                                     for o, mod in zip(lights, models)]
-                     + ["camera:" + (camera.name_full if camera else "")])
+                     + ["camera:" + (camera.name_full if camera else ""), f"passes:{with_passes}"])
 
 
 def light_models(lights, preference):
@@ -90,23 +91,25 @@ def light_models(lights, preference):
     return [rungs.choose(preference, light) for light in lights]
 
 
-def _build_scene_groups(scene, lights, preference):
-    """(Re)build the Surface and World groups for ``lights`` and their models unless built for them
-    already; per-light groups no longer used are deleted, lights that no longer take part lose the
-    fog's attenuation, and Cycles' OSL is switched on while some model needs it.
+def _build_scene_groups(scene, lights, preference, with_passes):
+    """(Re)build the Surface and World groups for ``lights``, their models and the fog passes (on or off)
+    unless built for them already; per-light groups no longer used are deleted, lights that no longer
+    take part lose the fog's attenuation, Cycles' OSL is switched on while some model needs it, and the
+    view layers have the passes' AOVs while the passes are on.
 
-    Returns [(light, reason)] for lights left unfogged.
+    Returns [(name, reason)] for lights left unfogged and clashing AOVs.
     """
     models = light_models(lights, preference)
-    signature = _signature(lights, models, scene.camera)
+    signature = _signature(lights, models, scene.camera, with_passes)
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if (surface is None or bpy.data.node_groups.get(groups.WORLD) is None
             or surface.get(LIGHTS_KEY) != signature):
         imgs = images.all_table_images()
-        surface = groups.build_surface(lights, models, imgs)
+        surface = groups.build_surface(lights, models, imgs, with_passes)
         surface[LIGHTS_KEY] = signature
         surface[PREFERENCE_KEY] = preference
-        groups.build_world(lights, models, scene.camera, imgs)
+        surface[PASSES_KEY] = with_passes
+        groups.build_world(lights, models, scene.camera, imgs, with_passes)
         for name in groups.all_group_names():
             ng = bpy.data.node_groups.get(name)
             if ng is not None and ng.users == 0 and name not in (groups.PARAMS, groups.SURFACE, groups.WORLD):
@@ -116,7 +119,11 @@ def _build_scene_groups(scene, lights, preference):
             if light.users and light not in taking_part and is_fogged(light):
                 unwrap_light(light)
     use_osl(scene, any(rungs.needs_osl(mod) for mod in models))
-    return [(light.data.name, why) for light in lights if (why := wrap_light(light.data))]
+    notes = [(light.data.name, why) for light in lights if (why := wrap_light(light.data))]
+    if with_passes:
+        return notes + passes.add_view_layer_aovs(scene)
+    passes.remove_view_layer_aovs(scene)
+    return notes
 
 
 def merge_appended():
@@ -130,7 +137,7 @@ def merge_appended():
 
 
 def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="nodes", objects=None,
-              scene_scale=1.0, progress=progress_.silent):
+              scene_scale=1.0, with_passes=False, progress=progress_.silent):
     """Add (or update) the fog on ``scene``; adding twice is the same as once.
 
     ``method``: the user's preference for the models (``rungs.PREFERENCES``):
@@ -140,7 +147,8 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     ``scene_scale``: real metres per Blender unit (the groups get density *
     scene_scale per unit).  Returns a list of (data-block name, reason) for
     what was left out or fogged with a caveat.  Raises ValueError for bad
-    settings before anything is changed.  ``progress(stage, done, total)``
+    settings before anything is changed.  ``with_passes``: write the fog
+    passes (``passes.py``; they cost render time).  ``progress(stage, done, total)``
     is called as the work advances (``progress.py``).
     """
     fog = medium.medium(density, albedo, anisotropy, scene_scale)
@@ -152,7 +160,7 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     skipped += notes
     progress("lights and tables", 0, 1)
     groups.set_params(fog.beta, fog.albedo)
-    skipped += _build_scene_groups(scene, lights, method)
+    skipped += _build_scene_groups(scene, lights, method, with_passes)
     mats = scene_materials(scene, objects)
     for k, mat in enumerate(mats):
         progress("materials", k, len(mats))
@@ -167,7 +175,6 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
         why = wrap_world(scene.world)
         if why:
             skipped.append((scene.world.name, why))
-    skipped += passes.add_view_layer_aovs(scene)
     skipped += compositor.follow(scene, rebuild=True)   # Cycles' denoiser kept off the fog's light
     if not lights:
         skipped.append((scene.name, "has no point light taking part: the fog only dims"))
@@ -185,9 +192,16 @@ def update_params(scene):
 
 def set_method(scene, method):
     """The user changed the method preference: re-choose every light's models (materials are not touched)."""
-    if bpy.data.node_groups.get(groups.SURFACE) is not None:
-        _build_scene_groups(scene, fog_lights(scene)[0], method)
-        compositor.follow(scene)   # OSL writes no AOVs: the set-up goes with it
+    surface = bpy.data.node_groups.get(groups.SURFACE)
+    if surface is not None:
+        _build_scene_groups(scene, fog_lights(scene)[0], method, bool(surface.get(PASSES_KEY, False)))
+
+
+def set_passes(scene, with_passes):
+    """The user switched the fog passes on or off: rebuild the scene groups (materials are not touched)."""
+    surface = bpy.data.node_groups.get(groups.SURFACE)
+    if surface is not None:
+        _build_scene_groups(scene, fog_lights(scene)[0], surface.get(PREFERENCE_KEY, "nodes"), with_passes)
 
 
 def refresh_lights(scene):
@@ -196,8 +210,9 @@ def refresh_lights(scene):
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is None or surface.library is not None:
         return
-    _build_scene_groups(scene, fog_lights(scene)[0], surface.get(PREFERENCE_KEY, "nodes"))
-    compositor.follow(scene)   # the engine, OSL or the denoiser flag may have changed
+    _build_scene_groups(scene, fog_lights(scene)[0], surface.get(PREFERENCE_KEY, "nodes"),
+                        bool(surface.get(PASSES_KEY, False)))
+    compositor.follow(scene)   # the engine or the denoiser flag may have changed
 
 
 def remove_fog(scene, progress=progress_.silent):

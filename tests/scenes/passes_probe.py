@@ -128,7 +128,7 @@ def denoise(out, keep_setup=True):
     scene = bpy.context.scene
     info = one_lamp(scene)
     info["denoiser_before"] = scene.cycles.use_denoising
-    info["notes"] = apply.apply_fog(scene, BETA)
+    info["notes"] = apply.apply_fog(scene, BETA, with_passes=True)
     info["set_up"] = compositor.is_set_up(scene)
     if not keep_setup:
         compositor.teardown(scene)
@@ -219,7 +219,7 @@ def passes_scene(out, engine):
         scene.cycles.max_bounces = 0
         scene.eevee.taa_render_samples = 1
         scene.eevee.light_threshold = 1e-4
-        apply.apply_fog(scene, BETA, albedo=(0.9, 0.8, 0.7))
+        apply.apply_fog(scene, BETA, albedo=(0.9, 0.8, 0.7), with_passes=True)
         name = f"passes_{engine.lower()}_{'lit' if lit else 'unlit'}"
         multilayer(scene, out / f"{name}.exr")
         res[name] = {"camera": list(cam.location), "rotation": [list(v) for v in cam.matrix_world.to_3x3()],
@@ -278,7 +278,8 @@ def snapshot(scene):
     """What the fog's passes and compositor set-up may touch, for before/after comparison."""
     c = scene.cycles
     layers = {vl.name: {"aovs": [(a.name, a.type) for a in vl.aovs], "active_aov": vl.active_aov_index,
-                        "store_passes": vl.cycles.denoising_store_passes, "use_denoising": vl.cycles.use_denoising,
+                        "store_passes": vl.cycles.denoising_store_passes,
+                        "emit_env": [vl.use_pass_emit, vl.use_pass_environment], "use_denoising": vl.cycles.use_denoising,
                         "custom": _props(vl)} for vl in scene.view_layers}
     return {"use_denoising": c.use_denoising, "denoiser": c.denoiser, "input_passes": c.denoising_input_passes,
             "use_compositing": scene.render.use_compositing, "engine": scene.render.engine,
@@ -329,7 +330,7 @@ def remove(out):
         if case == "eevee_then_cycles":
             scene.render.engine = "BLENDER_EEVEE"
         before = snapshot(scene)
-        notes = apply.apply_fog(scene, BETA, method="osl" if case == "osl" else "nodes")
+        notes = apply.apply_fog(scene, BETA, method="osl" if case == "osl" else "nodes", with_passes=True)
         during = snapshot(scene)
         follow = {}
         if case == "eevee_then_cycles":   # the engine switched: what the depsgraph handler does
@@ -341,7 +342,7 @@ def remove(out):
             follow["eevee_again"] = snapshot(scene)
             scene.render.engine = "CYCLES"
             apply.refresh_lights(scene)
-        again = apply.apply_fog(scene, BETA, method="osl" if case == "osl" else "nodes")   # adding twice
+        again = apply.apply_fog(scene, BETA, method="osl" if case == "osl" else "nodes", with_passes=True)   # adding twice
         twice = snapshot(scene)
         path = out / f"remove_{case}.blend"
         bpy.ops.wm.save_as_mainfile(filepath=str(path))
@@ -376,7 +377,7 @@ def opacity():
     t.links.new(t.nodes["Principled BSDF"].outputs[0], mix.inputs[1])
     t.links.new(clear.outputs[0], mix.inputs[2])
     t.links.new(mix.outputs[0], t.nodes["Material Output"].inputs["Surface"])
-    apply.apply_fog(scene, BETA)
+    apply.apply_fog(scene, BETA, with_passes=True)
     res = {}
     for name, mat in mats.items():
         fog = owned.find(mat.node_tree, "Surface")
