@@ -249,16 +249,23 @@ def build_surface(lights, models, images, with_passes=False):
     """Scene group for materials: ``shading.shade_surface`` (Sun et al. 2005 Eq. 19) over ``lights``.
 
     ``models``: one rungs.LightModels per light.  Inputs mirror the Principled
-    BSDF; outputs are the fields of ``shading.SurfaceFog``: Emission (camera
-    rays only), Transmittance e^{-beta D_vp} to scale the material, Direct
-    Attenuation (EEVEE's stand-in for the per-light e^{-beta D_sp}) and per
-    engine the Mix Factor 1 - scale of the user's shader.  ``with_passes``: it
-    writes the fog passes (``passes.py``), weighted by its Opacity input
-    (white: opaque).
+    BSDF; outputs are the fields of ``shading.SurfaceFog``: Fog, the fog's
+    light as a shader (one Emission closure per light, times the Opacity
+    input), and Emission, the same as one colour (camera rays only),
+    Transmittance e^{-beta D_vp} to scale the material, Direct Attenuation
+    (EEVEE's stand-in for the per-light e^{-beta D_sp}) and per engine the
+    Mix Factor 1 - scale of the user's shader.  ``with_passes``: it writes the
+    fog passes (``passes.py``), weighted by the Opacity input (white: opaque).
+
+    Why closures: Cycles' SVM emits a shader's value nodes in the order of
+    their ids, so one colour summed over the lights keeps every light's values
+    on its stack of 255 floats at once (out of SVM stack space, every fogged
+    material black, at 4 lights), while each closure's inputs are compiled
+    and released before the next closure's.
     """
     ng, gin, gout = _new_group(SURFACE, [
         ("Base Color", C), ("Metallic", F), ("Roughness", F), ("Specular IOR Level", F), (passes.OPACITY, C),
-    ], [("Emission", C), ("Transmittance", F), ("Direct Attenuation", F),
+    ], [("Fog", "NodeSocketShader"), ("Emission", C), ("Transmittance", F), ("Direct Attenuation", F),
         ("Cycles Mix Factor", F), ("EEVEE Mix Factor", F)])
     next(i for i in ng.interface.items_tree if i.name == passes.OPACITY).default_value = (1.0, 1.0, 1.0, 1.0)
     m = NodeOps(ng, {})
@@ -281,12 +288,29 @@ def build_surface(lights, models, images, with_passes=False):
                                           for f in ("Airlight", "Scattered", "Attenuation", "Weight"))))
     fog = shading.shade_surface(m, terms, _medium(m, params.outputs["Beta"], params.outputs["Albedo"]),
                                 m.wrap(cam.outputs["View Distance"]), m.wrap(path.outputs["Is Camera Ray"]))
-    for sock, v in zip(("Emission", "Transmittance", "Direct Attenuation", "Cycles Mix Factor", "EEVEE Mix Factor"),
-                       fog):
+    opacity = m.wrap(g[passes.OPACITY], vector=True)
+    shader = None
+    for k, e in enumerate(fog.emissions):
+        emit = ng.nodes.new("ShaderNodeEmission")
+        emit.name = emit.label = f"Light {k} Fog"
+        emit.location = (3600, -300 * k)
+        m.feed(emit.inputs["Color"], m.wrap(e, vector=True) * opacity)
+        if shader is None:
+            shader = emit.outputs[0]
+        else:
+            add = ng.nodes.new("ShaderNodeAddShader")
+            add.location = (3800, -300 * k)
+            ng.links.new(shader, add.inputs[0])
+            ng.links.new(emit.outputs[0], add.inputs[1])
+            shader = add.outputs[0]
+    if shader is not None:
+        ng.links.new(shader, gout.inputs["Fog"])
+    for sock, v in (("Emission", fog.emission), ("Transmittance", fog.transmittance),
+                    ("Direct Attenuation", fog.direct_attenuation), ("Cycles Mix Factor", fog.cycles_mix),
+                    ("EEVEE Mix Factor", fog.eevee_mix)):
         m.feed(gout.inputs[sock], m.wrap(v))
     if with_passes:
-        passes.write_group(m, ng, m.wrap(fog.emission, vector=True), m.wrap(fog.transmittance),
-                           m.wrap(g[passes.OPACITY], vector=True))
+        passes.write_group(m, ng, m.wrap(fog.emission, vector=True), m.wrap(fog.transmittance), opacity)
     return _install(ng, SURFACE)
 
 
@@ -298,7 +322,7 @@ def build_world(lights, models, camera, images, with_passes=False):
     Transmittance is 0 on camera rays (1 on other rays, which keep the
     world's lighting).
     """
-    ng, gin, gout = _new_group(WORLD, [], [("Emission", C), ("Transmittance", F)])
+    ng, gin, gout = _new_group(WORLD, [], [("Fog", "NodeSocketShader"), ("Emission", C), ("Transmittance", F)])
     m = NodeOps(ng, {})
     params = ng.nodes.new("ShaderNodeGroup")
     params.node_tree = bpy.data.node_groups[PARAMS]
@@ -318,6 +342,22 @@ def build_world(lights, models, camera, images, with_passes=False):
     is_camera = m.wrap(path.outputs["Is Camera Ray"])
     emission, transmittance = shading.shade_background(m, airlights, medium, is_camera)
     m.feed(gout.inputs["Emission"], m.wrap(emission))
+    shader = None   # one Background closure per light: see build_surface for why
+    for k, a in enumerate(airlights):
+        bg = ng.nodes.new("ShaderNodeBackground")
+        bg.name = bg.label = f"Light {k} Fog"
+        bg.location = (3600, -300 * k)
+        m.feed(bg.inputs["Color"], m.wrap(shading.shade_background(m, [a], medium, is_camera)[0], vector=True))
+        if shader is None:
+            shader = bg.outputs[0]
+        else:
+            add = ng.nodes.new("ShaderNodeAddShader")
+            add.location = (3800, -300 * k)
+            ng.links.new(shader, add.inputs[0])
+            ng.links.new(bg.outputs[0], add.inputs[1])
+            shader = add.outputs[0]
+    if shader is not None:
+        ng.links.new(shader, gout.inputs["Fog"])
     m.feed(gout.inputs["Transmittance"], m.wrap(transmittance))
     if with_passes:
         _write_world_passes(m, ng, geo, nodes, medium, is_camera, transmittance)

@@ -221,7 +221,7 @@ def _build(tree, anchor, outs, srcs, kinds, copies):
     for name, v, _ in copies:
         _set_copy(tree, fog.inputs[name], v)
     transmittance = _scalar(ops, fog.outputs["Transmittance"])
-    shared = {}   # per shader source: (fog emission node, pass-through shader or None)
+    shared = {}   # per shader source: (the fog light as a shader, pass-through shader or None)
     for k, target in enumerate(TARGETS):
         out, src = outs[target], srcs[target]
         if src is None:
@@ -230,7 +230,7 @@ def _build(tree, anchor, outs, srcs, kinds, copies):
         kd = kinds[key]
         if key not in shared:
             shared[key] = _fog_light(ops, tree, kd, fog, len(shared), (x0, y0))
-        emit, passed = shared[key]
+        fog_shader, passed = shared[key]
         y = y0 - 250 * (k + 1)
         # 1 - scale of the user's shader: e^{-beta D_vp}, in EEVEE times the Direct Attenuation
         # (EEVEE ignores light node trees: direct light is attenuated here)
@@ -254,7 +254,7 @@ def _build(tree, anchor, outs, srcs, kinds, copies):
             last = add_back.outputs[0]
         add = owned.add(tree, "ShaderNodeAddShader", f"{target} Add", (x0 + 650, y))
         tree.links.new(last, add.inputs[0])
-        tree.links.new(emit.outputs[0], add.inputs[1])
+        tree.links.new(fog_shader, add.inputs[1])
         if out.target == target:   # the user's own output for this engine: route it through the fog
             tree.links.new(add.outputs[0], out.inputs["Surface"])
             continue
@@ -268,14 +268,22 @@ def _build(tree, anchor, outs, srcs, kinds, copies):
 
 
 def _fog_light(ops, tree, kd, fog, n, origin):
-    """(Emission node of o times the fog's light, the shader's pass-through part P or None) for shader ``kd``."""
+    """(the shader adding o times the fog's light, the shader's pass-through part P or None) for shader ``kd``.
+
+    The first shader source takes the Surface group's Fog shader (one Emission closure per light, which
+    keeps Cycles' SVM stack bounded whatever the number of lights), its opacity given to the group; a
+    second source (a material with other outputs per engine) gets an Emission of the summed colour.
+    """
     x0, y0 = origin
-    emit = owned.add(tree, "ShaderNodeEmission", f"Emission{f' {n + 1}' if n else ''}", (x0 + 200, y0 - 120 * n))
     weights = [_weight(ops, w, ops.memo) for w, _, _ in kd.passes]
     opacity = _opacity(ops, kd, weights)
-    ops.feed(emit.inputs["Color"], _colour(ops, fog.outputs["Emission"]) * opacity)
-    if n == 0:   # the Surface group's fog passes hold what is added: weighted by (the first shader's) opacity
+    if n == 0:   # the group's fog light and passes hold what is added: weighted by the first shader's opacity
         passes.weight_surface(ops, fog, opacity)
+        fog_shader = fog.outputs["Fog"]
+    else:
+        emit = owned.add(tree, "ShaderNodeEmission", f"Emission {n + 1}", (x0 + 200, y0 - 120 * n))
+        ops.feed(emit.inputs["Color"], _colour(ops, fog.outputs["Emission"]) * opacity)
+        fog_shader = emit.outputs[0]
     passed = None
     for w, (_, shader, _) in zip(weights, kd.passes):
         if shader is None:   # Principled 1 - Alpha: a white Transparent BSDF
@@ -294,7 +302,7 @@ def _fog_light(ops, tree, kd, fog, n, origin):
             tree.links.new(passed, add.inputs[0])
             tree.links.new(term, add.inputs[1])
             passed = add.outputs[0]
-    return emit, passed
+    return fog_shader, passed
 
 
 def _notes(mat, kinds, lost):

@@ -34,7 +34,7 @@ AOVS = ((FOG_LIGHT, "COLOR"), (TRANSMITTANCE, "VALUE"))
 ADDED = "analytic_fog_aovs"   # on a view layer: {"names": [AOV names the fog added], "active": the user's active index}
 ROLES = {FOG_LIGHT: "Fog Light AOV", TRANSMITTANCE: "Fog Transmittance AOV"}   # the AOV Output nodes' names
 OPACITY = "Opacity"   # the Surface group's input: the material's opacity, which weights the passes
-VERSION = 1           # in each material's stamp: materials fogged before the passes are rebuilt once
+VERSION = 2           # in each material's stamp: bumped when the material's fog nodes change (2: the Fog shader), so older ones are rebuilt once
 
 
 # --- the view layers' AOVs --------------------------------------------------------------------

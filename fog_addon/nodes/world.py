@@ -37,8 +37,6 @@ def wrap_world(world):
     x0 = max((n.location.x for n in tree.nodes), default=0) + 300
     fog = owned.add(tree, "ShaderNodeGroup", "World", (x0, -300))
     fog.node_tree = bpy.data.node_groups[groups.WORLD]
-    bg = owned.add(tree, "ShaderNodeBackground", "Airlight", (x0 + 200, -300))
-    tree.links.new(fog.outputs["Emission"], bg.inputs["Color"])
     inv = owned.add(tree, "ShaderNodeMath", "Mix Factor", (x0 + 200, -450), operation="SUBTRACT")
     inv.inputs[0].default_value = 1.0
     tree.links.new(fog.outputs["Transmittance"], inv.inputs[1])
@@ -50,7 +48,7 @@ def wrap_world(world):
         tree.links.new(inv.outputs[0], mix.inputs[0])
         if out is not None and out.inputs["Surface"].is_linked:
             tree.links.new(out.inputs["Surface"].links[0].from_socket, mix.inputs[1])
-        tree.links.new(bg.outputs[0], mix.inputs[2])
+        tree.links.new(fog.outputs["Fog"], mix.inputs[2])   # the glow: a Background closure per light
         new_out = owned.add(tree, "ShaderNodeOutputWorld", f"{target} Output", (x0 + 650, y), target=target)
         tree.links.new(mix.outputs[0], new_out.inputs["Surface"])
         if out is not None and out.inputs["Volume"].is_linked:

@@ -49,6 +49,7 @@ class LightTerms(NamedTuple):
 class SurfaceFog(NamedTuple):
     """What a fogged material needs (``shade_surface``)."""
     emission: Any             # RGB: albedo * (sum airlight + e^{-beta D_vp} sum scattered), camera rays only
+    emissions: list           # the same, light by light (their sum is ``emission``)
     transmittance: Any        # e^{-beta D_vp} on camera rays, 1 on others: scales the user's shader
     direct_attenuation: Any   # EEVEE: the lights' e^{-beta D_sp}, averaged with the weights of LightTerms
     cycles_mix: Any           # 1 - scale of the user's shader in Cycles (lights attenuate themselves)
@@ -117,17 +118,16 @@ def shade_surface(m, terms, medium, view_distance, is_camera):
     transmit = 1.0 + is_camera * (t_vp - 1.0)
     if not terms:
         black = m.combine(0.0, 0.0, 0.0)
-        return SurfaceFog(black, transmit, m.const(1.0), 1.0 - transmit, 1.0 - transmit)
-    air = scat = num = den = None
-    for t in terms:
-        air = t.airlight if air is None else air + t.airlight
-        scat = t.scattered if scat is None else scat + t.scattered
+        return SurfaceFog(black, [], transmit, m.const(1.0), 1.0 - transmit, 1.0 - transmit)
+    albedo = medium.albedo
+    emissions = [m.scale(albedo * (t.airlight + m.scale(t.scattered, t_vp)), is_camera) for t in terms]
+    emission = num = den = None
+    for e, t in zip(emissions, terms):
+        emission = e if emission is None else emission + e
         num = t.weight * t.attenuation if num is None else num + t.weight * t.attenuation
         den = t.weight if den is None else den + t.weight
-    albedo = medium.albedo
-    emission = m.scale(albedo * (air + m.scale(scat, t_vp)), is_camera)
     direct = (num + 1e-30) / (den + 1e-30)
-    return SurfaceFog(emission, transmit, direct, 1.0 - transmit, 1.0 - transmit * direct)
+    return SurfaceFog(emission, emissions, transmit, direct, 1.0 - transmit, 1.0 - transmit * direct)
 
 
 def background_point(m, camera, direction, light, medium, models):
