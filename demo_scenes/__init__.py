@@ -75,6 +75,16 @@ def add_sphere(scene, name, center, radius, mat, segments=64, rings=32):
     return ob
 
 
+def add_box(scene, name, center, half_extents, mat):
+    """An axis-aligned box of half extents (hx, hy, hz) centred at ``center``."""
+    bm = bmesh.new()
+    bmesh.ops.create_cube(bm, size=1.0)
+    bmesh.ops.scale(bm, vec=tuple(2.0 * h for h in half_extents), verts=bm.verts)
+    ob = _object_from_bmesh(scene, name, bm, mat)
+    ob.location = center
+    return ob
+
+
 def add_point_light(scene, name, location, power):
     """Point light of radius 0 (a true point: Sun's isotropic source, I0 = P / 4 pi)."""
     light = bpy.data.lights.new(name, 'POINT')
@@ -155,5 +165,5 @@ def script_path_setup():
         sys.path.insert(0, root)
 
 
-__all__ = ["material", "add_plane", "add_cylinder", "add_sphere", "add_point_light", "add_camera",
+__all__ = ["material", "add_plane", "add_cylinder", "add_sphere", "add_box", "add_point_light", "add_camera",
            "set_world", "render_settings", "clear_scene", "main", "math"]

@@ -1,0 +1,271 @@
+"""Many point lights: a tiny render of the whole fog against its numpy twin, per pixel.
+
+    python tests/scenes/many_lights.py OUT_DIR ENGINE METHOD N_LIGHTS [SAMPLES]
+
+ENGINE: CYCLES | BLENDER_EEVEE; METHOD: nodes | osl; N_LIGHTS: a square
+number (1, 4, 16, 64, 256) of point lights (radius 0, different powers and
+colours) on a grid 3.5 m above a ground plane with three spheres: matte
+(Principled roughness 0.9), glossy (dielectric roughness 0.2) and metallic
+(metallic 1, roughness 0.3); the ground is a rough dielectric.
+
+The lights are kept out of the surfaces' direct lighting (Cycles: light ray
+visibility; EEVEE: diffuse and specular factors 0), the world is black and
+there are no bounces, so each pixel is exactly the fog's emission: the glow
+of every light plus the fog light each surface reflects (Sun et al. 2005
+Eq. 19).  The twin is ``precompute.shading`` run by numpy at each pixel
+centre's camera ray (ray-plane / ray-sphere), with the models METHOD
+chooses -- as tests/scenes/shading_probe.py, for four surfaces and N lights.
+A material that renders black (shader too big for SVM, a GLSL compile or
+uniform-buffer failure, ...) shows as a ratio render / twin near 0 on its
+object's pixels.
+
+Prints one line ``MANY_LIGHTS_JSON {...}``: the times (fog added, first
+render), and per object (and "background") the pixel count, the median,
+min and max of render / twin and the relative RMSE, plus the relative RMSE
+over every pixel compared.  Pixels within 4 % of a sphere's silhouette or
+1 m of the ground's edge are not compared (the mesh is not the twin's exact
+sphere / plane there).
+"""
+import json
+import math
+import pathlib
+import sys
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+from fog_addon import imageio, measure  # noqa: E402
+from fog_addon.ops import apply  # noqa: E402
+from fog_addon.precompute import airlight, rungs, shading, surface, tables  # noqa: E402
+from fog_addon.precompute.medium import Medium  # noqa: E402
+from fog_addon.precompute.ops import NumpyOps  # noqa: E402
+
+BETA = 0.1                      # 1/m: optical thickness ~1.2 to the spheres, ~2 to the far lights
+ALBEDO = (0.9, 0.9, 0.85)
+W, H = 48, 27
+TOTAL_POWER = 6000.0            # W, shared by the lights (the picture's brightness does not grow with N)
+LIGHT_HEIGHT = 3.5
+GRID_X = (-8.0, 8.0)            # the lights' grid, m
+GRID_Y = (-4.0, 12.0)
+GROUND = (-30.0, 30.0, -20.0, 40.0)   # x0, x1, y0, y1 at z = 0
+CAMERA = ((0.0, -11.0, 3.0), (0.0, 2.0, 0.8), 30.0)   # location, target, lens (mm; sensor 36 mm)
+COLOURS = ((1.0, 0.62, 0.25),   # sodium
+           (1.0, 1.0, 1.0),     # white LED
+           (0.75, 0.85, 1.0),   # cold LED
+           (1.0, 0.85, 0.6))    # warm white
+# name: (base colour, roughness, metallic, specular IOR level); spheres: (centre, radius)
+MATERIALS = {"ground": ((0.35, 0.35, 0.35), 0.8, 0.0, 0.5),
+             "matte": ((0.8, 0.3, 0.2), 0.9, 0.0, 0.5),
+             "glossy": ((0.2, 0.4, 0.8), 0.2, 0.0, 0.5),
+             "metal": ((0.9, 0.7, 0.4), 0.3, 1.0, 0.5)}
+SPHERES = {"matte": ((-2.8, 0.0, 1.2), 1.2), "glossy": ((0.0, 0.0, 1.2), 1.2), "metal": ((2.8, 0.0, 1.2), 1.2)}
+SILHOUETTE_MARGIN = 0.04        # of the radius
+EDGE_MARGIN = 1.0               # m
+
+
+def lights(n):
+    """[(location, power W, colour)] of ``n`` (a square) lights on the grid, deterministic."""
+    k = math.isqrt(n)
+    if k * k != n:
+        raise ValueError(f"N_LIGHTS must be a square number, got {n}")
+    out = []
+    for j in range(k):
+        for i in range(k):
+            idx = j * k + i
+            x = GRID_X[0] + (GRID_X[1] - GRID_X[0]) * (i + 0.5) / k
+            y = GRID_Y[0] + (GRID_Y[1] - GRID_Y[0]) * (j + 0.5) / k
+            power = TOTAL_POWER / n * (0.4 + 1.2 * ((idx * 7) % 11) / 10.0)   # 0.4 ... 1.6 x the mean
+            out.append(((x, y, LIGHT_HEIGHT), power, COLOURS[idx % len(COLOURS)]))
+    return out
+
+
+def _material(name):
+    base, rough, metal, level = MATERIALS[name]
+    mat = bpy.data.materials.new(name)
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (*base, 1.0)
+    bsdf.inputs["Roughness"].default_value = rough
+    bsdf.inputs["Metallic"].default_value = metal
+    bsdf.inputs["Specular IOR Level"].default_value = level
+    return mat
+
+
+def build_scene(n, direct_light=False):
+    """A fresh file with the ground, the spheres, ``n`` lights, the camera and a black world; no fog.
+
+    ``direct_light`` False keeps the lights out of the surfaces' direct lighting (the test: each pixel
+    is the fog's emission alone); True is an ordinary scene (benchmarks/overhead.py).
+    """
+    import bmesh
+    from mathutils import Vector
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    s = bpy.context.scene
+    cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
+    s.collection.objects.link(cam)
+    s.camera = cam
+    loc, target, lens = CAMERA
+    cam.location = loc
+    cam.rotation_euler = (Vector(target) - Vector(loc)).to_track_quat('-Z', 'Y').to_euler()
+    cam.data.clip_start = 0.001
+    cam.data.lens = lens
+    cam.data.sensor_width = 36.0
+    cam.data.sensor_fit = 'AUTO'
+    for k, (where, power, colour) in enumerate(lights(n)):
+        ob = bpy.data.objects.new(f"L{k:03d}", bpy.data.lights.new(f"L{k:03d}", "POINT"))
+        ob.data.energy, ob.data.color, ob.data.shadow_soft_size = power, colour, 0.0
+        if not direct_light:
+            ob.data.diffuse_factor = ob.data.specular_factor = 0.0   # EEVEE: no direct light on surfaces
+            ob.visible_diffuse = ob.visible_glossy = False           # Cycles: the same
+        ob.location = where
+        s.collection.objects.link(ob)
+    x0, x1, y0, y1 = GROUND
+    bm = bmesh.new()
+    bm.faces.new([bm.verts.new(v) for v in ((x0, y0, 0), (x1, y0, 0), (x1, y1, 0), (x0, y1, 0))])
+    mesh = bpy.data.meshes.new("ground")
+    bm.to_mesh(mesh)
+    bm.free()
+    mesh.materials.append(_material("ground"))
+    ground = bpy.data.objects.new("ground", mesh)
+    s.collection.objects.link(ground)
+    for name, (centre, radius) in SPHERES.items():
+        bm = bmesh.new()
+        bmesh.ops.create_uvsphere(bm, u_segments=64, v_segments=32, radius=radius)
+        mesh = bpy.data.meshes.new(name)
+        bm.to_mesh(mesh)
+        bm.free()
+        mesh.shade_smooth()
+        mesh.materials.append(_material(name))
+        ob = bpy.data.objects.new(name, mesh)
+        ob.location = centre
+        s.collection.objects.link(ob)
+    s.world = bpy.data.worlds.new("W")
+    s.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0, 0, 0, 1)
+    return s, cam
+
+
+def build(engine, method, n):
+    """The test's scene: fog emission only, 1 spp at pixel centres, no bounces; (scene, camera, seconds to add
+    the fog)."""
+    s, cam = build_scene(n)
+    s.render.engine = engine
+    measure.set_resolution(s, W, H)
+    measure.set_samples(s, 1)
+    measure.set_cycles_cpu(s)
+    measure.set_pixel_centre_filter(s)
+    s.cycles.max_bounces = 0
+    s.eevee.light_threshold = 1e-4
+    t0 = time.perf_counter()
+    apply.apply_fog(s, BETA, albedo=ALBEDO, method=method)
+    measure.set_pixel_centre_filter(s)   # again: the fog may set up its own compositor
+    return s, cam, time.perf_counter() - t0
+
+
+def camera_rays(cam):
+    ys, xs = np.mgrid[0:H, 0:W]
+    sw, f = cam.data.sensor_width, cam.data.lens
+    d = np.stack([((xs + 0.5) / W - 0.5) * sw, (0.5 - (ys + 0.5) / H) * sw * H / W, -np.full(xs.shape, f)], -1)
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    return np.array(cam.location), d @ np.array(cam.matrix_world.to_3x3()).T
+
+
+def hits(c, d):
+    """(object index per pixel: 0 background, 1 ground, 2.. spheres; distance; valid mask; names)."""
+    names = ["background", "ground"] + list(SPHERES)
+    t_best = np.full(d.shape[:2], np.inf)
+    obj = np.zeros(d.shape[:2], int)
+    valid = np.ones(d.shape[:2], bool)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(d[..., 2] < 0, -c[2] / d[..., 2], np.inf)
+        p = c + d * np.where(np.isfinite(t), t, 0)[..., None]
+        x0, x1, y0, y1 = GROUND
+        inside = (p[..., 0] >= x0) & (p[..., 0] <= x1) & (p[..., 1] >= y0) & (p[..., 1] <= y1) & np.isfinite(t)
+        edge_dist = np.minimum.reduce([p[..., 0] - x0, x1 - p[..., 0], p[..., 1] - y0, y1 - p[..., 1]])
+        near_edge = np.isfinite(t) & (np.abs(edge_dist) < EDGE_MARGIN)
+    t_best = np.where(inside, t, t_best)
+    obj[inside] = 1
+    valid &= ~near_edge
+    for k, (centre, radius) in enumerate(SPHERES.values(), 2):
+        oc = c - np.asarray(centre)
+        b = np.einsum("ijk,k->ij", d, oc)
+        closest = np.sqrt(np.maximum(np.dot(oc, oc) - b * b, 0.0))     # ray's distance from the centre
+        disc = b * b - (np.dot(oc, oc) - radius * radius)
+        with np.errstate(invalid="ignore"):
+            ts = -b - np.sqrt(disc)
+        hit = (disc > 0) & (ts > 0) & (ts < t_best)
+        t_best = np.where(hit, ts, t_best)
+        obj[hit] = k
+        edge = np.abs(closest / radius - 1.0) < SILHOUETTE_MARGIN
+        valid &= ~(edge & (b < 0))   # a silhouette in front of the camera
+    return obj, t_best, valid, names
+
+
+def twin(c, d, method, n):
+    """The numpy twin of the fog's emission per pixel, and (object index, valid mask, names)."""
+    m = NumpyOps({tables.AIRLIGHT.name: airlight.bake_airlight_table(), tables.SURFACE.name: surface.surface_table()})
+    med = Medium(BETA, np.asarray(ALBEDO))
+    models = rungs.choose(method)
+    ls = [shading.Light(np.asarray(loc, float), power / (4 * math.pi) * np.asarray(col)) for loc, power, col
+          in lights(n)]
+    obj, t, valid, names = hits(c, d)
+    out = np.zeros(d.shape)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        for k, name in enumerate(names):
+            sel = obj == k
+            if not sel.any():
+                continue
+            dd = d[sel]
+            if name == "background":
+                out[sel] = shading.shade_background(
+                    m, [shading.background_point(m, c, dd, li, med, models) for li in ls], med, 1.0)[0]
+                continue
+            tt = t[sel]
+            p = c + dd * tt[:, None]
+            if name == "ground":
+                normal = np.array([0.0, 0.0, 1.0])
+            else:
+                centre, radius = SPHERES[name]
+                normal = (p - np.asarray(centre)) / radius
+            base, rough, metal, level = MATERIALS[name]
+            rho_d, rho_s, lev = surface.principled_to_phong(m, np.asarray(base, float), np.asarray(metal),
+                                                             np.asarray(rough), np.asarray(level))
+            geo = shading.Geometry(c, p, -dd, tt, normal)
+            terms = [shading.shade_point(m, geo, shading.Material(rho_d, rho_s, lev), li, med, models) for li in ls]
+            out[sel] = shading.shade_surface(m, terms, med, tt, 1.0).emission
+    return out, obj, valid, names
+
+
+def stats(got, want, mask):
+    if not mask.any():
+        return {"pixels": 0}
+    g, w = got[mask], want[mask]
+    r = np.mean(g, -1) / np.maximum(np.mean(w, -1), 1e-30)
+    rel = np.sqrt(np.sum((g - w) ** 2) / max(np.sum(w ** 2), 1e-30))
+    return {"pixels": int(mask.sum()), "median_ratio": float(np.median(r)), "min_ratio": float(np.min(r)),
+            "max_ratio": float(np.max(r)), "rel_rmse": float(rel), "mean_twin": float(np.mean(w))}
+
+
+def main(out_dir, engine="CYCLES", method="nodes", n="1", samples="1"):
+    n, samples = int(n), int(samples)
+    s, cam, t_apply = build(engine, method, n)
+    measure.set_samples(s, samples)
+    print(f"many_lights: {n} lights, {engine} {method}: fog added in {t_apply:.2f} s", flush=True)
+    t0 = time.perf_counter()
+    out = measure.render_to_file(s, str(pathlib.Path(out_dir) / f"many_{engine}_{method}_{n}.exr"))
+    t_render = time.perf_counter() - t0
+    print(f"many_lights: first render {t_render:.2f} s", flush=True)
+    got = imageio.read_rgb(out)
+    c, d = camera_rays(cam)
+    want, obj, valid, names = twin(c, d, method, n)
+    res = {"lights": n, "engine": engine, "method": method, "samples": samples, "apply_s": round(t_apply, 3),
+           "render_s": round(t_render, 3), "all": stats(got, want, valid),
+           "objects": {name: stats(got, want, valid & (obj == k)) for k, name in enumerate(names)}}
+    np.save(pathlib.Path(out_dir) / f"twin_{engine}_{method}_{n}.npy", want)
+    print("MANY_LIGHTS_JSON " + json.dumps(res), flush=True)
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:])
