@@ -289,22 +289,7 @@ def build_surface(lights, models, images, with_passes=False):
     fog = shading.shade_surface(m, terms, _medium(m, params.outputs["Beta"], params.outputs["Albedo"]),
                                 m.wrap(cam.outputs["View Distance"]), m.wrap(path.outputs["Is Camera Ray"]))
     opacity = m.wrap(g[passes.OPACITY], vector=True)
-    shader = None
-    for k, e in enumerate(fog.emissions):
-        emit = ng.nodes.new("ShaderNodeEmission")
-        emit.name = emit.label = f"Light {k} Fog"
-        emit.location = (3600, -300 * k)
-        m.feed(emit.inputs["Color"], m.wrap(e, vector=True) * opacity)
-        if shader is None:
-            shader = emit.outputs[0]
-        else:
-            add = ng.nodes.new("ShaderNodeAddShader")
-            add.location = (3800, -300 * k)
-            ng.links.new(shader, add.inputs[0])
-            ng.links.new(emit.outputs[0], add.inputs[1])
-            shader = add.outputs[0]
-    if shader is not None:
-        ng.links.new(shader, gout.inputs["Fog"])
+    _closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", [m.wrap(e, vector=True) * opacity for e in fog.emissions])
     for sock, v in (("Emission", fog.emission), ("Transmittance", fog.transmittance),
                     ("Direct Attenuation", fog.direct_attenuation), ("Cycles Mix Factor", fog.cycles_mix),
                     ("EEVEE Mix Factor", fog.eevee_mix)):
@@ -312,6 +297,26 @@ def build_surface(lights, models, images, with_passes=False):
     if with_passes:
         passes.write_group(m, ng, m.wrap(fog.emission, vector=True), m.wrap(fog.transmittance), opacity)
     return _install(ng, SURFACE)
+
+
+def _closure_sum(m, sock, bl_idname, colours):
+    """Link into ``sock`` the sum (Add Shader) of one ``bl_idname`` closure (Emission, Background) per colour."""
+    ng, shader = m.tree, None
+    for k, colour in enumerate(colours):
+        node = ng.nodes.new(bl_idname)
+        node.name = node.label = f"Light {k} Fog"
+        node.location = (3600, -300 * k)
+        m.feed(node.inputs["Color"], colour)
+        if shader is None:
+            shader = node.outputs[0]
+        else:
+            add = ng.nodes.new("ShaderNodeAddShader")
+            add.location = (3800, -300 * k)
+            ng.links.new(shader, add.inputs[0])
+            ng.links.new(node.outputs[0], add.inputs[1])
+            shader = add.outputs[0]
+    if shader is not None:
+        ng.links.new(shader, sock)
 
 
 def build_world(lights, models, camera, images, with_passes=False):
@@ -342,22 +347,8 @@ def build_world(lights, models, camera, images, with_passes=False):
     is_camera = m.wrap(path.outputs["Is Camera Ray"])
     emission, transmittance = shading.shade_background(m, airlights, medium, is_camera)
     m.feed(gout.inputs["Emission"], m.wrap(emission))
-    shader = None   # one Background closure per light: see build_surface for why
-    for k, a in enumerate(airlights):
-        bg = ng.nodes.new("ShaderNodeBackground")
-        bg.name = bg.label = f"Light {k} Fog"
-        bg.location = (3600, -300 * k)
-        m.feed(bg.inputs["Color"], m.wrap(shading.shade_background(m, [a], medium, is_camera)[0], vector=True))
-        if shader is None:
-            shader = bg.outputs[0]
-        else:
-            add = ng.nodes.new("ShaderNodeAddShader")
-            add.location = (3800, -300 * k)
-            ng.links.new(shader, add.inputs[0])
-            ng.links.new(bg.outputs[0], add.inputs[1])
-            shader = add.outputs[0]
-    if shader is not None:
-        ng.links.new(shader, gout.inputs["Fog"])
+    _closure_sum(m, gout.inputs["Fog"], "ShaderNodeBackground",   # see build_surface for why closures
+                 [m.wrap(shading.shade_background(m, [a], medium, is_camera)[0], vector=True) for a in airlights])
     m.feed(gout.inputs["Transmittance"], m.wrap(transmittance))
     if with_passes:
         _write_world_passes(m, ng, geo, nodes, medium, is_camera, transmittance)
