@@ -1,8 +1,8 @@
 """Command line: ``python -m fog_addon render|reference|compare ...``.
 
     render SCENE.blend --engine cycles|eevee [--method nodes|osl] [--preset NAME | --density BETA]
-           [--color R,G,B] [--scene-scale S] [--anisotropy G] [--samples N] [--resolution WxH]
-           --out OUT.png|OUT.exr
+           [--color R,G,B] [--scene-scale S] [--anisotropy G] [--error E|draft|final|exact] [--explain]
+           [--samples N] [--resolution WxH] --out OUT.png|OUT.exr
     reference SCENE.blend [--preset NAME | --density BETA] [--anisotropy G] [--samples N]
            [--resolution WxH] --out OUT.exr
     compare TEST.exr REF.exr [--diff OUT.png]
@@ -79,6 +79,20 @@ def _color(s):
     return rgb
 
 
+def _quality(s):
+    named = {"draft": "draft", "final": "final", "exact": "exact"}
+    if s.strip().lower() in named:
+        return named[s.strip().lower()]
+    try:
+        v = float(s)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--error must be a fraction such as 0.01, or draft, final or exact; "
+                                         f"got {s!r}")
+    if not (math.isfinite(v) and 0.0 < v < 1.0):
+        raise argparse.ArgumentTypeError(f"--error must be a fraction in (0, 1) such as 0.01 for 1 %, got {s!r}")
+    return v
+
+
 def _positive_float(name):
     finite = _finite_float(name)
 
@@ -124,6 +138,11 @@ def build_parser():
                    help="the fog's colour (single-scattering albedo), each in [0, 1]" + from_file)
     r.add_argument("--scene-scale", type=_positive_float("scene scale"), metavar="S",
                    help="real metres per Blender unit" + from_file)
+    r.add_argument("--error", type=_quality, metavar="E",
+                   help="Quality: the largest relative error of any pixel's fog light, a fraction such as 0.01, "
+                        "or draft (5 %%), final (1 %%), exact (every light fully modelled)" + from_file)
+    r.add_argument("--explain", action="store_true",
+                   help="print the models each light got and the error predicted for them")
     r.add_argument("--pixel-centre", action="store_true",
                    help="sample pixel centres (Gaussian 0.01 px filter), as the reference does")
 

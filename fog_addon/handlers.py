@@ -3,6 +3,10 @@ and fog appended from another file is folded onto this file's shared copies.
 
 Only the two scene groups are rebuilt (``apply.refresh_lights``), never the
 materials.  Positions, power and colour are followed by drivers without it.
+When the camera, lights or objects moved, the lights' models are chosen again
+for the Quality (``apply.choose_models``), RECHOOSE_DELAY_S after the scene
+stopped changing (not while rendering: a render keeps the stored choice, as a
+farm without the add-on does).
 """
 import bpy
 from bpy.app.handlers import persistent
@@ -20,10 +24,35 @@ def _merge_appended():
         apply.refresh_lights(scene)
 
 
+RECHOOSE_DELAY_S = 0.5
+_choosing = []   # non-empty while the timer re-chooses (its frame changes must not schedule it again)
+
+
+def _rechoose():
+    """Timer callback: choose every light's models again from the view, once the scene is still."""
+    scene = bpy.context.scene
+    if scene is None or not scene.analytic_fog.enabled:
+        return None
+    if bpy.app.is_job_running("RENDER"):
+        return RECHOOSE_DELAY_S
+    _choosing.append(True)
+    try:
+        apply.refresh_lights(scene, rechoose=True)
+    finally:
+        _choosing.clear()
+    return None
+
+
+def _schedule_rechoose():
+    if bpy.app.timers.is_registered(_rechoose):
+        bpy.app.timers.unregister(_rechoose)
+    bpy.app.timers.register(_rechoose, first_interval=RECHOOSE_DELAY_S)
+
+
 @persistent
 def on_depsgraph_update(scene, depsgraph):
     settings = getattr(scene, "analytic_fog", None)
-    if settings is None or not settings.enabled:
+    if settings is None or not settings.enabled or _choosing:
         return
     if depsgraph.id_type_updated("NODETREE") and dedupe.pending():
         if not bpy.app.timers.is_registered(_merge_appended):
@@ -31,6 +60,8 @@ def on_depsgraph_update(scene, depsgraph):
         return
     if any(depsgraph.id_type_updated(t) for t in ("OBJECT", "LIGHT", "SCENE", "COLLECTION")):
         apply.refresh_lights(scene)
+        if not bpy.app.is_job_running("RENDER"):
+            _schedule_rechoose()
 
 
 def register():
@@ -41,5 +72,6 @@ def register():
 def unregister():
     while on_depsgraph_update in bpy.app.handlers.depsgraph_update_post:
         bpy.app.handlers.depsgraph_update_post.remove(on_depsgraph_update)
-    if bpy.app.timers.is_registered(_merge_appended):
-        bpy.app.timers.unregister(_merge_appended)
+    for timer in (_merge_appended, _rechoose):
+        if bpy.app.timers.is_registered(timer):
+            bpy.app.timers.unregister(timer)

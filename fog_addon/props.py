@@ -5,7 +5,7 @@ once (the viewport follows); materials are never rebuilt for it.
 """
 import bpy
 
-from .precompute import presets
+from .precompute import predict, presets
 
 
 def _push(self, context):
@@ -19,6 +19,17 @@ def _method_changed(self, context):
     from .ops import apply
     if self.enabled:
         apply.set_method(context.scene, self.method.lower())
+
+
+def quality_setting(settings):
+    """The Quality as ``apply.apply_fog`` takes it: a preset name of ``predict.QUALITY`` or a target error."""
+    return settings.target_error if settings.quality == "CUSTOM" else settings.quality.lower()
+
+
+def _quality_changed(self, context):
+    from .ops import apply
+    if self.enabled:
+        apply.set_quality(context.scene, quality_setting(self))
 
 
 def _passes_changed(self, context):
@@ -71,6 +82,20 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
                               "Cycles only (switches Cycles' OSL on)")],
         description="Preference for the fog's models: each light gets, per term, the model this preference "
                     "chooses (shown below)")
+    quality: bpy.props.EnumProperty(
+        name="Quality", default=predict.DEFAULT_QUALITY.upper(), update=_quality_changed,
+        items=[("DRAFT", "Draft", f"Each light gets the cheapest models that keep the fog within "
+                                  f"{predict.QUALITY['draft']:.0%} of exact in every pixel the camera sees"),
+               ("FINAL", "Final", f"The fog within {predict.QUALITY['final']:.0%} of exact in every pixel"),
+               ("EXACT", "Exact", "Every light fully modelled"),
+               ("CUSTOM", "Custom", "Your own target error (Target Error)")],
+        description="Model no more than the picture needs: leave out the fog light a light adds where the "
+                    "error it makes stays under the target (predicted from the camera's view; see the list "
+                    "of lights below)")
+    target_error: bpy.props.FloatProperty(
+        name="Target Error", default=0.01, min=1e-4, max=0.5, subtype="FACTOR", precision=4,
+        update=_quality_changed,
+        description="Largest relative change of any pixel's fog light the Custom quality allows")
     use_passes: bpy.props.BoolProperty(
         name="Fog Passes", default=False, update=_passes_changed,
         description="Write the render passes Fog Light (the light the fog adds) and Fog Transmittance "

@@ -55,6 +55,7 @@ def fog_settings(scene, args):
     anisotropy = pick("anisotropy", "anisotropy", lambda: s.anisotropy)
     method = pick("method", "method", lambda: s.method.lower())
     with_passes = bool(pick("fog passes", "passes", lambda: s.use_passes))
+    quality = pick("quality", "error", lambda: props.quality_setting(s))
     if method == "osl" and args.engine_id != "CYCLES":
         if source["method"] == "flag":
             raise SystemExit("error: --method osl needs --engine cycles (EEVEE cannot run OSL); use --method nodes")
@@ -67,9 +68,9 @@ def fog_settings(scene, args):
         notes.append(("materials", f"the file's fog is Selected Only: fogging the materials of "
                                    f"{len(objects)} selected object(s) (and those fogged already)"))
     kwargs = dict(density=density, albedo=albedo, anisotropy=anisotropy, method=method, objects=objects,
-                  scene_scale=scene_scale, with_passes=with_passes)
+                  scene_scale=scene_scale, with_passes=with_passes, error=quality)
     shown = {"density": density, "colour": albedo, "scene scale": scene_scale, "anisotropy": anisotropy,
-             "method": method, "fog passes": with_passes}
+             "method": method, "fog passes": with_passes, "quality": quality}
     return kwargs, {k: (v, source[k]) for k, v in shown.items()}, notes
 
 
@@ -104,6 +105,9 @@ def apply_and_render(scene, args):
     print(f"fog: {describe(shown)}")
     for name, why in notes + list(skipped):
         print(f"note: {name}: {why}")
+    lines = apply.explain(scene)
+    for line in lines if getattr(args, "explain", False) else lines[:1]:
+        print(f"models: {line}")
     t1 = time.perf_counter()
     measure.render_to_file(scene, args.out)
     print(f"fog added in {t1 - t0:.2f} s, rendered in {time.perf_counter() - t1:.2f} s")

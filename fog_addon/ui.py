@@ -10,13 +10,31 @@ ENGINE_NOTES = {
 }
 
 
+MAX_LISTED = 12   # lights listed by name in the panel; the rest are counted
+
+
 def _draw_models(layout, settings):
-    """The model of each term that the Method preference chooses, with its error bound."""
+    """The Quality, and the models each light got with the error they are predicted to make."""
+    col = layout.column()
+    col.use_property_split = True
+    col.prop(settings, "quality")
+    if settings.quality == "CUSTOM":
+        col.prop(settings, "target_error")
     box = layout.box()
-    box.label(text="Models per light (max. relative error)")
-    col = box.column(align=True)
-    for rung in rungs.choose(settings.method.lower()):
-        col.label(text=f"{rung.term.title()}: {rung.name} ({rung.predicted_error():.1e})")
+    full = rungs.choose(settings.method.lower())
+    box.label(text="Full models: " + ", ".join(f"{r.name} ({r.predicted_error():.0e})" for r in full[:3]))
+    choice = apply.stored_choice() if settings.enabled else None
+    if choice is None:
+        box.label(text="Add the fog to see each light's models")
+        return
+    lines = apply.explain()
+    box.label(text=lines[0])
+    cheaper = [line for line in lines[1:] if not line.endswith(": full")]
+    for line in cheaper[:MAX_LISTED]:
+        box.label(text=line.strip(), icon="DOT")
+    if len(cheaper) > MAX_LISTED:
+        box.label(text=f"... and {len(cheaper) - MAX_LISTED} more lights with cheaper models")
+    box.label(text=f"{len(lines) - 1 - len(cheaper)} light(s) fully modelled")
 
 
 def draw_fog(layout, context):

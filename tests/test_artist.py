@@ -83,7 +83,9 @@ def test_invisible_fog_is_reported(flow):
 
 def test_panels_draw(flow):
     assert set(flow["panel_props"]) >= {"visibility", "density", "color", "scene_scale", "method", "selected_only",
-                                        "use"}
+                                        "use", "quality"}
     labels = [p for p in flow["panel_props"] if p.startswith("label: ")]
-    assert "label: Airlight: airlight table (1.6e-04)" in labels       # the models the preference chooses
-    assert "label: Airlight: airlight quadrature (1.1e-06)" in labels  # ... drawn again with OSL preferred
+    full = [p for p in labels if p.startswith("label: Full models: ")]
+    assert any("airlight table (2e-04)" in p for p in full), full           # the models the preference chooses
+    assert any("airlight quadrature (1e-06)" in p for p in full), full      # ... drawn again with OSL preferred
+    assert any(p.startswith("label: Quality 0.01: predicted error") for p in labels), labels   # the choice (Final)

@@ -9,6 +9,8 @@ import render_harness as h
     (["--engine", "cycles", "--preset", "smog"], "unknown preset"),
     (["--engine", "cycles", "--density", "nan"], "density"),
     (["--engine", "cycles", "--anisotropy", "0.5", "--density", "0.1"], "anisotropy"),
+    (["--engine", "cycles", "--error", "2"], "--error must be a fraction"),
+    (["--engine", "cycles", "--error", "best"], "--error must be a fraction"),
 ])
 def test_render_refuses(tmp_path, flags, message):
     blend = h.scene_blend("spheres", tmp_path)
@@ -16,3 +18,17 @@ def test_render_refuses(tmp_path, flags, message):
     r = h.run(["-m", "fog_addon", "render", blend, *flags, "--out", out], check=False)
     assert r.returncode != 0 and message in (r.stdout + r.stderr), (r.returncode, r.stdout[-500:], r.stderr[-500:])
     assert not out.exists()
+
+
+def test_render_explains_the_models(tmp_path):
+    """``--explain`` prints each light's models and the predicted error; ``--error`` sets the Quality."""
+    blend = h.scene_blend("street_lamps", tmp_path)
+    out = tmp_path / "out.png"
+    r = h.run(["-m", "fog_addon", "render", blend, "--engine", "cycles", "--samples", "1", "--resolution", "32x18",
+               "--error", "0.5", "--explain", "--out", out], check=False)
+    text = r.stdout + r.stderr
+    assert r.returncode == 0, text[-2000:]
+    lines = [line for line in text.splitlines() if line.startswith("models: ")]
+    assert lines[0].startswith("models: Quality 0.5: predicted error"), lines
+    assert len(lines) == 4 and all(": " in line for line in lines[1:]), lines   # the three lamps
+    assert "quality 0.5 (flag)" in text

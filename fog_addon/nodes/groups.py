@@ -123,6 +123,12 @@ def build_params(beta, albedo):
     return _install(ng, PARAMS)
 
 
+def get_beta():
+    """The fog's density per scene unit in the params group (1/unit), 0 if there is none."""
+    ng = bpy.data.node_groups.get(PARAMS)
+    return float(ng.nodes["Beta"].outputs[0].default_value) if ng is not None else 0.0
+
+
 def set_params(beta, albedo):
     """Write the fog's settings into the shared params group (creating it if needed)."""
     ng = bpy.data.node_groups.get(PARAMS)
@@ -289,7 +295,8 @@ def build_surface(lights, models, images, with_passes=False):
     fog = shading.shade_surface(m, terms, _medium(m, params.outputs["Beta"], params.outputs["Albedo"]),
                                 m.wrap(cam.outputs["View Distance"]), m.wrap(path.outputs["Is Camera Ray"]))
     opacity = m.wrap(g[passes.OPACITY], vector=True)
-    _closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", [m.wrap(e, vector=True) * opacity for e in fog.emissions])
+    _closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", [m.wrap(e, vector=True) * opacity
+                                                                for e, mod in zip(fog.emissions, models) if _lit(mod)])
     for sock, v in (("Emission", fog.emission), ("Transmittance", fog.transmittance),
                     ("Direct Attenuation", fog.direct_attenuation), ("Cycles Mix Factor", fog.cycles_mix),
                     ("EEVEE Mix Factor", fog.eevee_mix)):
@@ -297,6 +304,11 @@ def build_surface(lights, models, images, with_passes=False):
     if with_passes:
         passes.write_group(m, ng, m.wrap(fog.emission, vector=True), m.wrap(fog.transmittance), opacity)
     return _install(ng, SURFACE)
+
+
+def _lit(models):
+    """False for a light whose every fog term is off (``rungs.STEPS`` "off"): it adds no fog light."""
+    return models.airlight is not rungs.AIRLIGHT_OFF or models.scatter is not rungs.SCATTER_OFF
 
 
 def _closure_sum(m, sock, bl_idname, colours):
@@ -339,6 +351,8 @@ def build_world(lights, models, camera, images, with_passes=False):
     direction = m.vmath("NORMALIZE", m.wrap(geo.outputs["Position"]))
     airlights, nodes = [], []
     for k, (light, mod) in enumerate(zip(lights, models)):
+        if mod.background is rungs.BACKGROUND_OFF:
+            continue
         node = _light_instance(ng, k, light, build_background_light(mod, images).name, (
             (params.outputs["Beta"], "Beta"), (cam.outputs[0], "Camera"), (direction.sock, "Direction")))
         nodes.append(node)

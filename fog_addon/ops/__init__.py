@@ -5,6 +5,7 @@ import bpy
 from bl_operators.presets import AddPresetBase
 
 from . import apply, progress
+from .. import props
 from ..precompute import presets
 
 PRESET_SUBDIR = "analytic_fog"
@@ -56,13 +57,15 @@ class FOG_OT_add(bpy.types.Operator):
             with progress.window_progress(context.window_manager) as report:
                 skipped = apply.apply_fog(scene, density, tuple(settings.color), settings.anisotropy,
                                           settings.method.lower(), objects, settings.scene_scale,
-                                          with_passes=settings.use_passes, progress=report)
+                                          with_passes=settings.use_passes,
+                                          error=props.quality_setting(settings), progress=report)
         except ValueError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         settings.density = density
         settings.enabled = True
         _report_skipped(self, skipped)
+        self.report({"INFO"}, apply.explain(scene)[0])
         return {"FINISHED"}
 
 

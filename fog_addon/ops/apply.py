@@ -1,4 +1,6 @@
 """Adding, updating and removing the fog on a scene (what the operators, handlers and command line call)."""
+import json
+
 import bpy
 
 from ..nodes import compositor, dedupe, groups, images, osl, passes
@@ -6,14 +8,17 @@ from ..nodes.light import unwrap_light, wrap_light
 from ..nodes.material import unwrap_material, wrap_material
 from ..nodes.owned import is_fogged
 from ..nodes.world import unwrap_world, wrap_world
-from ..precompute import medium, presets, rungs
+from ..precompute import medium, predict, presets, rungs
 from . import progress as progress_
+from . import view
 
 SUPPORTED_LIGHTS = ("POINT",)
 OSL_WAS = "analytic_fog_osl_was"   # scene custom property: Cycles' OSL switch before the OSL method set it
 LIGHTS_KEY = "analytic_fog_lights"  # on the Surface group: the lights, their models and the camera it was built for
 PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method preference it was built with
 PASSES_KEY = "analytic_fog_passes"   # on the Surface group: built with the fog passes (AOV outputs)
+QUALITY_KEY = "analytic_fog_quality"   # on the Surface group: the Quality (target error) it was built for
+CHOICE_KEY = "analytic_fog_choice"   # on the Surface group: {light: [step, predicted error]} and the total
 
 
 def fog_lights(scene):
@@ -86,20 +91,74 @@ def _signature(lights, models, camera, with_passes):
                      + ["camera:" + (camera.name_full if camera else ""), f"passes:{with_passes}"])
 
 
-def light_models(lights, preference):
-    """The models (rungs.LightModels) of each light's terms, chosen per light honouring ``preference``."""
-    return [rungs.choose(preference, light) for light in lights]
+def quality_value(quality):
+    """The stored form of a Quality: a preset name ("draft", "final", "exact") or a number; raises ValueError."""
+    predict.target_error(quality)
+    return "exact" if quality is None else quality
 
 
-def _build_scene_groups(scene, lights, preference, with_passes):
+def choose_models(scene, lights, preference, quality):
+    """Each light's models (rungs.LightModels) at ``quality``, and the choice for reports.
+
+    The view is sampled by ray casts (``view.py``) and every light's step down
+    the ladder chosen by the predicted error (``predict.py``).  Returns
+    (models, choice) with choice = {"lights": {name: [step, error]}, "error": total, "target": t}.
+    """
+    target = predict.target_error(quality)
+    steps = [0] * len(lights)
+    choice = {"target": target, "error": 0.0, "lights": {}}
+    if lights and target is not None:
+        beta = groups.get_beta()
+        samples = view.view_samples(scene, lights)
+        pred = predict.predict(samples, view.light_intensities(lights), beta, target)
+        steps = [int(k) for k in pred.steps]
+        choice["error"] = pred.error
+        choice["lights"] = {o.name: [int(k), float(e)] for o, k, e in zip(lights, pred.steps, pred.light_error)}
+    else:
+        choice["lights"] = {o.name: [0, 0.0] for o in lights}
+    return [rungs.choose(preference, k) for k in steps], choice
+
+
+def stored_choice(scene=None):
+    """The choice the scene groups were last built with (see choose_models), or None."""
+    surface = bpy.data.node_groups.get(groups.SURFACE)
+    if surface is None or CHOICE_KEY not in surface:
+        return None
+    return json.loads(surface[CHOICE_KEY])
+
+
+def explain(scene=None):
+    """Lines that say which models each light got and the error predicted (panel, operator, ``--explain``)."""
+    choice = stored_choice(scene)
+    if choice is None:
+        return ["the fog is not on"]
+    target = choice["target"]
+    head = ("Quality Exact: every light fully modelled" if target is None else
+            f"Quality {target:.3g}: predicted error {choice['error']:.2%} (target {target:.2%})")
+    lines = [head]
+    for name, (step, err) in sorted(choice["lights"].items()):
+        lines.append(f"  {name}: {rungs.STEPS[step]}" + (f" (leaves out up to {err:.2%})" if step else ""))
+    return lines
+
+
+def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.DEFAULT_QUALITY, rechoose=True):
     """(Re)build the Surface and World groups for ``lights``, their models and the fog passes (on or off)
     unless built for them already; per-light groups no longer used are deleted, lights that no longer
     take part lose the fog's attenuation, Cycles' OSL is switched on while some model needs it, and the
     view layers have the passes' AOVs while the passes are on.
 
-    Returns [(name, reason)] for lights left unfogged and clashing AOVs.
+    ``quality``: the target error of the lights' models.  ``rechoose``: choose the lights' models again
+    from the view (``choose_models``); else keep the stored steps (lights new to the fog get the full
+    models).  Returns [(name, reason)] for lights left unfogged and clashing AOVs.
     """
-    models = light_models(lights, preference)
+    old = stored_choice(scene)
+    if rechoose or old is None or old.get("quality") != quality_value(quality):
+        models, choice = choose_models(scene, lights, preference, quality)
+    else:
+        steps = {name: step for name, (step, _) in old["lights"].items()}
+        models = [rungs.choose(preference, steps.get(o.name, 0)) for o in lights]
+        choice = dict(old, lights={o.name: old["lights"].get(o.name, [0, 0.0]) for o in lights})
+    choice["quality"] = quality_value(quality)
     signature = _signature(lights, models, scene.camera, with_passes)
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if (surface is None or bpy.data.node_groups.get(groups.WORLD) is None
@@ -118,6 +177,9 @@ def _build_scene_groups(scene, lights, preference, with_passes):
         for light in bpy.data.lights:
             if light.users and light not in taking_part and is_fogged(light):
                 unwrap_light(light)
+    for key, value in ((QUALITY_KEY, quality_value(quality)), (CHOICE_KEY, json.dumps(choice))):
+        if surface.get(key) != value:
+            surface[key] = value
     use_osl(scene, any(rungs.needs_osl(mod) for mod in models))
     notes = [(light.data.name, why) for light in lights if (why := wrap_light(light.data))]
     if with_passes:
@@ -137,7 +199,7 @@ def merge_appended():
 
 
 def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="nodes", objects=None,
-              scene_scale=1.0, with_passes=False, progress=progress_.silent):
+              scene_scale=1.0, with_passes=False, error=predict.DEFAULT_QUALITY, progress=progress_.silent):
     """Add (or update) the fog on ``scene``; adding twice is the same as once.
 
     ``method``: the user's preference for the models (``rungs.PREFERENCES``):
@@ -148,11 +210,15 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     scene_scale per unit).  Returns a list of (data-block name, reason) for
     what was left out or fogged with a caveat.  Raises ValueError for bad
     settings before anything is changed.  ``with_passes``: write the fog
-    passes (``passes.py``; they cost render time).  ``progress(stage, done, total)``
+    passes (``passes.py``; they cost render time).  ``error``: the Quality, a
+    target relative error or a preset name of ``predict.QUALITY`` ("exact" or
+    None: every light fully modelled); each light gets the cheapest models whose
+    predicted error stays within it (``choose_models``).  ``progress(stage, done, total)``
     is called as the work advances (``progress.py``).
     """
     fog = medium.medium(density, albedo, anisotropy, scene_scale)
     rungs.choose(method)   # an unknown preference raises here, before anything changes
+    predict.target_error(error)
     check_camera(scene.camera)
     progress("appended fog", 0, 1)
     skipped = merge_appended()   # first: the tables and groups are looked up by name below
@@ -160,7 +226,7 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     skipped += notes
     progress("lights and tables", 0, 1)
     groups.set_params(fog.beta, fog.albedo)
-    skipped += _build_scene_groups(scene, lights, method, with_passes)
+    skipped += _build_scene_groups(scene, lights, method, with_passes, error)
     mats = scene_materials(scene, objects)
     for k, mat in enumerate(mats):
         progress("materials", k, len(mats))
@@ -190,28 +256,45 @@ def update_params(scene):
     groups.set_params(s.density * s.scene_scale, tuple(s.color))
 
 
+def _stored(surface, key, default):
+    return surface.get(key, default) if surface is not None else default
+
+
 def set_method(scene, method):
     """The user changed the method preference: re-choose every light's models (materials are not touched)."""
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is not None:
-        _build_scene_groups(scene, fog_lights(scene)[0], method, bool(surface.get(PASSES_KEY, False)))
+        _build_scene_groups(scene, fog_lights(scene)[0], method, bool(surface.get(PASSES_KEY, False)),
+                            _stored(surface, QUALITY_KEY, predict.DEFAULT_QUALITY), rechoose=False)
 
 
 def set_passes(scene, with_passes):
     """The user switched the fog passes on or off: rebuild the scene groups (materials are not touched)."""
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is not None:
-        _build_scene_groups(scene, fog_lights(scene)[0], surface.get(PREFERENCE_KEY, "nodes"), with_passes)
+        _build_scene_groups(scene, fog_lights(scene)[0], surface.get(PREFERENCE_KEY, "nodes"), with_passes,
+                            _stored(surface, QUALITY_KEY, predict.DEFAULT_QUALITY), rechoose=False)
 
 
-def refresh_lights(scene):
+def set_quality(scene, quality):
+    """The user changed the Quality: choose every light's models again (materials are not touched)."""
+    surface = bpy.data.node_groups.get(groups.SURFACE)
+    if surface is not None and surface.library is None:
+        _build_scene_groups(scene, fog_lights(scene)[0], surface.get(PREFERENCE_KEY, "nodes"),
+                            bool(surface.get(PASSES_KEY, False)), quality)
+
+
+def refresh_lights(scene, rechoose=False):
     """Rebuild the scene groups if the fog lights, their models or the camera changed; materials are not
-    touched.  Called from the depsgraph handler: when nothing changed it only compares names."""
+    touched.  Called from the depsgraph handler: when nothing changed it only compares names.
+    ``rechoose``: also choose the lights' models again from the view (camera, lights or objects moved);
+    the handler does that after the scene has stopped changing (``handlers.py``)."""
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is None or surface.library is not None:
         return
     _build_scene_groups(scene, fog_lights(scene)[0], surface.get(PREFERENCE_KEY, "nodes"),
-                        bool(surface.get(PASSES_KEY, False)))
+                        bool(surface.get(PASSES_KEY, False)), _stored(surface, QUALITY_KEY, predict.DEFAULT_QUALITY),
+                        rechoose=rechoose)
     compositor.follow(scene)   # the engine or the denoiser flag may have changed
 
 

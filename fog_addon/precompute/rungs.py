@@ -75,7 +75,35 @@ DIRECT_EXACT = Rung(
     "direct exact", "direct", model.transmittance, frozenset({"numpy", "nodes", "osl"}), (),
     "all inputs", 0.0, "closed form (Eq. 14)")
 
-RUNGS = (AIRLIGHT_TABLE, BACKGROUND_TABLE, AIRLIGHT_QUADRATURE, BACKGROUND_QUADRATURE, SCATTER_TABLE, DIRECT_EXACT)
+
+
+def no_airlight(m, beta, d_sv, along, h, d_vp):
+    """The bottom rung of the airlight ladder: left out (0).  Its error is the term itself, which
+    ``predict.py`` bounds from the scene; so for the other two below."""
+    return m.const(0.0)
+
+
+def no_background(m, beta, d_sv, along, h):
+    return m.const(0.0)
+
+
+def no_scatter(m, beta, d_sp, cos_theta, level):
+    return m.const(0.0)
+
+
+_OFF = "the whole term (predict.py bounds it from the scene)"
+AIRLIGHT_OFF = Rung("airlight off", "airlight", no_airlight, frozenset(BACKENDS), (), _OFF, 1.0,
+                    "tests/test_predict.py, tests/test_quality.py")
+BACKGROUND_OFF = Rung("background off", "background", no_background, frozenset(BACKENDS), (), _OFF, 1.0,
+                      AIRLIGHT_OFF.evidence)
+SCATTER_OFF = Rung("scatter off", "scatter", no_scatter, frozenset(BACKENDS), (), _OFF, 1.0, AIRLIGHT_OFF.evidence)
+
+RUNGS = (AIRLIGHT_TABLE, BACKGROUND_TABLE, AIRLIGHT_QUADRATURE, BACKGROUND_QUADRATURE, SCATTER_TABLE, DIRECT_EXACT,
+         AIRLIGHT_OFF, BACKGROUND_OFF, SCATTER_OFF)
+
+# A light's steps down the ladder, cheapest last: 0 every term modelled; 1 the fog light it scatters onto
+# surfaces left out (the glow stays); 2 its glow left out too (its direct light still dims through the fog).
+STEPS = ("full", "glow only", "off")
 
 
 class LightModels(NamedTuple):
@@ -86,19 +114,28 @@ class LightModels(NamedTuple):
     direct: Rung
 
 
-def choose(preference="nodes", light=None, medium=None):
-    """The models for one light's terms, honouring the user's ``preference`` (PREFERENCES).
+def choose(preference="nodes", step=0):
+    """The models for one light's terms, honouring the user's ``preference`` (PREFERENCES), ``step``
+    (index into STEPS) rungs down the ladder.
 
     "nodes": every term from the node groups' tables; "osl": the glow by
     quadrature in OSL (Cycles only), the other terms as "nodes" (they have no
-    OSL rung).  ``light`` and ``medium`` are where a choice by predicted error
-    plugs in; today the choice depends on the preference alone.
+    OSL rung).  ``predict.choose_steps`` picks each light's step from the
+    error it would make in the camera's view.
     """
     if preference not in PREFERENCES:
         raise ValueError(f"unknown method {preference!r}; use one of {', '.join(PREFERENCES)}")
+    if step not in range(len(STEPS)):
+        raise ValueError(f"unknown ladder step {step!r}; use 0 to {len(STEPS) - 1}")
     if preference == "osl":
-        return LightModels(AIRLIGHT_QUADRATURE, BACKGROUND_QUADRATURE, SCATTER_TABLE, DIRECT_EXACT)
-    return LightModels(AIRLIGHT_TABLE, BACKGROUND_TABLE, SCATTER_TABLE, DIRECT_EXACT)
+        models = LightModels(AIRLIGHT_QUADRATURE, BACKGROUND_QUADRATURE, SCATTER_TABLE, DIRECT_EXACT)
+    else:
+        models = LightModels(AIRLIGHT_TABLE, BACKGROUND_TABLE, SCATTER_TABLE, DIRECT_EXACT)
+    if step >= 1:
+        models = models._replace(scatter=SCATTER_OFF)
+    if step >= 2:
+        models = models._replace(airlight=AIRLIGHT_OFF, background=BACKGROUND_OFF)
+    return models
 
 
 def needs_osl(models):

@@ -1,0 +1,203 @@
+"""What the camera sees, sampled by ray casts into the scene: the error predictor's input (``predict.py``).
+
+Rays through the pixel centres of the camera's frame (``sample_grid``) are cast with
+``Scene.ray_cast`` (Blender's own BVH, no render); each hit gives the
+distance, the normal (turned to face the camera, as a shader sees it) and
+the material, read as ``surface.principled_to_phong`` reads a Principled
+BSDF's own values.  A material without a Principled BSDF, or whose inputs
+are linked (textures), counts twice, as a pure diffuse and as a pure mirror
+(rho_s = 1 at the sharpest tabulated lobe): the error of a mix of the two
+lies between theirs.  For an animation every ``frames`` frame is sampled,
+so the choice holds for the whole range.
+"""
+import math
+
+import bpy
+import numpy as np
+
+from ..precompute import predict, surface, tables
+
+MAX_SAMPLES = 160 * 90          # rays per frame at most: one per pixel centre up to this, else a coarser grid
+MAX_FRAMES = 8                  # an animation: at most this many frames, evenly spread over the range
+SHARPEST_LEVEL = len(tables.PHONG_EXPONENTS) - 1.0   # the mirror stand-in's lobe (n = 1024)
+
+
+def _animated(scene):
+    """True if an object or its data is animated (an action or drivers): the view may change with the frame."""
+    for obj in scene.objects:
+        for idb in (obj, obj.data):
+            ad = getattr(idb, "animation_data", None)
+            if ad is not None and (ad.action is not None or len(ad.drivers)):
+                return True
+    return False
+
+
+def sample_frames(scene):
+    """The frames to sample: the current one for a still, up to MAX_FRAMES spread over an animation."""
+    first, last = scene.frame_start, scene.frame_end
+    if last <= first or not _animated(scene):
+        return [scene.frame_current]
+    count = min(MAX_FRAMES, last - first + 1)
+    return sorted({int(round(first + k * (last - first) / max(count - 1, 1))) for k in range(count)})
+
+
+def _principled(material):
+    """(rho_d, rho_s, level) of a material's Principled BSDF from its own values, or None."""
+    if material is None or not material.use_nodes or material.node_tree is None:
+        return None
+    for node in material.node_tree.nodes:
+        if node.bl_idname == "ShaderNodeBsdfPrincipled":
+            names = ("Base Color", "Metallic", "Roughness", "Specular IOR Level")
+            if any(node.inputs[n].is_linked for n in names):
+                return None
+            rho_d, rho_s, n = surface.principled_albedos(
+                tuple(node.inputs["Base Color"].default_value)[:3], node.inputs["Metallic"].default_value,
+                node.inputs["Roughness"].default_value, node.inputs["Specular IOR Level"].default_value,
+                node.inputs["IOR"].default_value)
+            return tuple(rho_d), tuple(rho_s), tables.PHONG_LEVELS_PER_OCTAVE * math.log2(n)
+    return None
+
+
+class _MeshInfo:
+    """An evaluated mesh object's materials and smooth normals (cached per sampling call)."""
+
+    def __init__(self, obj, depsgraph):
+        self.ev = obj.evaluated_get(depsgraph)
+        mesh = getattr(self.ev, "data", None)
+        self.mesh = mesh if isinstance(mesh, bpy.types.Mesh) else None
+        self.tris = None
+        self.inv = np.linalg.inv(np.array(self.ev.matrix_world))
+
+    def material(self, index):
+        try:
+            return self.ev.material_slots[self.mesh.polygons[index].material_index].material
+        except (AttributeError, IndexError, TypeError):
+            return None
+
+    def normal(self, index, location, face_normal):
+        """The shading normal at a hit: the face's, or on a smooth face the corner normals interpolated."""
+        try:
+            if not self.mesh.polygons[index].use_smooth:
+                return face_normal
+            if self.tris is None:
+                self.mesh.calc_loop_triangles()
+                self.tris = {}
+                for lt in self.mesh.loop_triangles:
+                    self.tris.setdefault(lt.polygon_index, []).append(tuple(lt.loops))
+            co = self.mesh.vertices
+            loops = self.mesh.loops
+            corner = self.mesh.corner_normals
+            p = (self.inv @ np.append(location, 1.0))[:3]
+            best, best_w = None, -np.inf
+            for tri in self.tris[index]:
+                a, b, c = (np.array(co[loops[k].vertex_index].co) for k in tri)
+                m = np.column_stack([b - a, c - a])
+                uv = np.linalg.lstsq(m, p - a, rcond=None)[0]
+                w = np.array([1.0 - uv.sum(), uv[0], uv[1]])
+                if w.min() > best_w:
+                    best, best_w = (tri, w), w.min()
+            tri, w = best
+            n_local = sum(wk * np.array(corner[k].vector) for wk, k in zip(w, tri))
+            n = self.inv[:3, :3].T @ n_local
+            return n / np.linalg.norm(n)
+        except (AttributeError, IndexError, KeyError, TypeError, np.linalg.LinAlgError):
+            return face_normal
+
+
+def _frame_rays(scene, camera, grid):
+    """(origin, unit directions (P, 3)) through the pixel centres of a grid over the camera's frame."""
+    frame = [np.array(v) for v in camera.data.view_frame(scene=scene)]   # top-right, bottom-right, bottom-left, top-left
+    nx, ny = grid
+    u = (np.arange(nx) + 0.5) / nx
+    v = (np.arange(ny) + 0.5) / ny
+    uu, vv = np.meshgrid(u, v)
+    local = (frame[2][None, None] + uu[..., None] * (frame[1] - frame[2])[None, None]
+             + vv[..., None] * (frame[3] - frame[2])[None, None]).reshape(-1, 3)
+    mw = np.array(camera.matrix_world)
+    d = local @ mw[:3, :3].T
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    return mw[:3, 3].copy(), d
+
+
+def _sample_frame(scene, depsgraph, lights, grid):
+    origin, dirs = _frame_rays(scene, scene.camera, grid)
+    rows = []
+    cache, meshes = {}, {}
+    for d in dirs:
+        hit, loc, normal, index, obj, _ = scene.ray_cast(depsgraph, origin.tolist(), d.tolist())
+        if not hit:
+            rows.append((d, math.inf, (0.0, 0.0, 1.0), _lambert()))
+            continue
+        if obj.name not in meshes:
+            meshes[obj.name] = _MeshInfo(obj, depsgraph)
+        info = meshes[obj.name]
+        n = info.normal(index, np.array(loc), np.array(normal))
+        if n @ d > 0.0:
+            n = -n
+        mat = info.material(index)
+        if mat not in cache:
+            cache[mat] = _principled(mat)
+        known = cache[mat]
+        dist = float(np.linalg.norm(np.array(loc) - origin))
+        for brdf in ([known] if known is not None else [_lambert(), _mirror()]):
+            rows.append((d, dist, n, brdf))
+    light_pos = np.array([np.array(o.matrix_world.translation) for o in lights]).reshape(-1, 3)
+    return origin, rows, light_pos
+
+
+def _lambert():
+    return (1.0, 1.0, 1.0), (0.0, 0.0, 0.0), 0.0
+
+
+def _mirror():
+    return (0.0, 0.0, 0.0), (1.0, 1.0, 1.0), SHARPEST_LEVEL
+
+
+def sample_grid(scene, max_samples=MAX_SAMPLES):
+    """(nx, ny): the render's pixels if they are at most ``max_samples``, else the largest grid of the
+    same aspect within it (then pixels between the rays are not judged: see the README's Quality)."""
+    r = scene.render
+    w = max(1, round(r.resolution_x * r.resolution_percentage / 100))
+    h = max(1, round(r.resolution_y * r.resolution_percentage / 100))
+    if w * h <= max_samples:
+        return w, h
+    k = math.sqrt(max_samples / (w * h))
+    return max(1, int(w * k)), max(1, int(h * k))
+
+
+def view_samples(scene, lights, frames=None, grid=None):
+    """:class:`predict.ViewSamples` of the scene's camera view over ``frames`` (default
+    :func:`sample_frames`).  Changes the current frame while sampling and restores it."""
+    frames = sample_frames(scene) if frames is None else frames
+    grid = sample_grid(scene) if grid is None else grid
+    current = scene.frame_current, scene.frame_subframe
+    cams, dirs, dists, normals, rds, rss, levels, lps, fr = [], [], [], [], [], [], [], [], []
+    try:
+        for f in frames:
+            if f != scene.frame_current:
+                scene.frame_set(f)
+            depsgraph = bpy.context.evaluated_depsgraph_get()
+            origin, rows, light_pos = _sample_frame(scene, depsgraph, lights, grid)
+            for d, dist, n, (rd, rs, lev) in rows:
+                cams.append(origin)
+                dirs.append(d)
+                dists.append(dist)
+                normals.append(n)
+                rds.append(rd)
+                rss.append(rs)
+                levels.append(lev)
+                lps.append(light_pos)
+                fr.append(f)
+    finally:
+        if (scene.frame_current, scene.frame_subframe) != current:
+            scene.frame_set(current[0], subframe=current[1])
+    n_lights = len(lights)
+    return predict.ViewSamples(np.array(cams).reshape(-1, 3), np.array(dirs).reshape(-1, 3), np.array(dists, float),
+                               np.array(normals).reshape(-1, 3), np.array(rds).reshape(-1, 3),
+                               np.array(rss).reshape(-1, 3), np.array(levels, float),
+                               np.array(lps).reshape(-1, n_lights, 3), np.array(fr))
+
+
+def light_intensities(lights):
+    """(N, 3) RGB radiant intensity I0 = power * colour / (4 pi) of point lights, W/sr."""
+    return np.array([[o.data.energy * c / (4.0 * math.pi) for c in o.data.color] for o in lights]).reshape(-1, 3)

@@ -1,0 +1,174 @@
+"""The error predictor of the model ladder, and the choice of each light's step by a target error.
+
+Issue 8 §2: for every light, the rungs below "full" (``rungs.STEPS``) leave
+terms out; the error a step makes in a pixel is the fog light it leaves out,
+relative to that pixel's fog value.  Both come from the scene, not from a
+render: the camera's view is sampled by rays (``ops/view.py`` casts them
+into the scene and reads each hit's position, normal and material), and the
+numpy twin of the shaders (the same rung kernels, ``shading.py``'s terms)
+gives every light's glow and scattered fog light there.
+
+Per sample p, channel c and light i (W/(m^2 sr), before the fog's albedo,
+which multiplies every term of a channel alike and so cancels):
+
+* glow_i = I_i * airlight (Sun et al. 2005 Eq. 11; Eq. 12 for a ray to the sky);
+* scatter_i = I_i * e^{-beta D_vp} (rho_d M_0 + rho_s M_n) (Eq. 17-18, 19);
+* fog_p = sum_i glow_i + scatter_i: the pixel's fog value, the denominator.
+
+Step 1 of light i drops scatter_i, step 2 drops glow_i too.  The error of a
+choice at p is sum over the lights of what they drop / fog_p: exactly the
+difference between the auto and the all-exact render's fog light at p, so
+the prediction is a bound for the sampled pixels and an estimate between
+them.  As in the proof protocol, only samples whose fog is at least
+``FLOOR`` of the view's peak count (a near-black pixel has no fog to be
+relative to).
+"""
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from . import airlight, model, rungs, shading, surface, tables
+from .ops import NumpyOps
+
+FLOOR = 1e-3          # samples below this fraction of the peak fog are not judged (issue 8 §2)
+QUALITY = {"draft": 0.05, "final": 0.01, "exact": None}   # Quality presets: target relative error (None: no step)
+DEFAULT_QUALITY = "final"
+
+
+class ViewSamples(NamedTuple):
+    """Points the camera sees (P samples; background rays have distance inf), world space, m."""
+    camera: Any       # (P, 3) camera position of each sample (animations: several frames)
+    direction: Any    # (P, 3) unit ray direction
+    distance: Any     # (P,) D_vp to the hit, inf for a ray to the background
+    normal: Any       # (P, 3) unit normal facing the camera (ignored for the background)
+    rho_d: Any        # (P, 3) diffuse albedo of the hit's material (surface.principled_to_phong)
+    rho_s: Any        # (P, 3) glossy albedo
+    level: Any        # (P,) table level of the glossy exponent
+    lights: Any       # (P, N, 3) each light's position when the sample was taken
+    frame: Any = None  # (P,) the frame of each sample (for reports)
+
+
+class Prediction(NamedTuple):
+    steps: Any         # (N,) int: each light's step (rungs.STEPS)
+    light_error: Any   # (N,) max over samples of what the light's step drops / fog
+    error: float       # max over samples of the sum over the lights: the predicted error of the choice
+    judged: int        # samples judged (fog >= FLOOR * peak)
+
+
+def target_error(quality):
+    """Target relative error from a Quality preset name or a number (None or "exact": no step taken)."""
+    if quality is None:
+        return None
+    if isinstance(quality, str):
+        key = quality.strip().lower()
+        if key not in QUALITY:
+            raise ValueError(f"unknown quality {quality!r}: use {', '.join(QUALITY)} or a relative error "
+                             "such as 0.01")
+        return QUALITY[key]
+    value = float(quality)
+    if not (np.isfinite(value) and 0.0 < value < 1.0):
+        raise ValueError(f"the target error must be a fraction in (0, 1), such as 0.01 for 1 %, got {quality!r}")
+    return value
+
+
+_TABLES = {}
+
+
+def _numpy_ops():
+    if not _TABLES:
+        _TABLES[tables.AIRLIGHT.name] = airlight.bake_airlight_table()
+        _TABLES[tables.SURFACE.name] = surface.surface_table()
+    return NumpyOps(_TABLES)
+
+
+def light_fog(samples, intensity, beta):
+    """(glow, scatter), each (P, N, 3) W/(m^2 sr): every light's terms at every sample (module docstring).
+
+    intensity: (N, 3) RGB radiant intensity I0, W/sr; beta: 1/m.  The full
+    rungs of the "nodes" preference (its tables), the shaders' twin.
+    """
+    m = _numpy_ops()
+    full = rungs.choose("nodes")
+    cam = np.asarray(samples.camera, float)[:, None, :]
+    d = np.asarray(samples.direction, float)[:, None, :]
+    lights = np.asarray(samples.lights, float)
+    dist = np.asarray(samples.distance, float)[:, None]
+    sky = ~np.isfinite(dist)
+    d_vp = np.where(sky, 0.0, dist)
+    to_light = lights - cam
+    d_sv = np.linalg.norm(to_light, axis=-1)
+    along = np.sum(to_light * d, axis=-1)
+    h = np.linalg.norm(np.cross(to_light, d), axis=-1)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        air = np.where(sky, m.run(full.background, beta, d_sv, along, h),
+                       m.run(full.airlight, beta, d_sv, along, h, d_vp))
+        p = cam + d * d_vp[..., None]
+        to_l = lights - p
+        d_sp = np.maximum(np.linalg.norm(to_l, axis=-1), model.MIN_DISTANCE)
+        n = np.asarray(samples.normal, float)[:, None, :]
+        incoming = -d
+        mirror = shading.mirror(_Vec, incoming, n)
+        cos_n = np.sum(to_l * n, axis=-1) / d_sp
+        cos_r = np.sum(to_l * mirror, axis=-1) / d_sp
+        level = np.broadcast_to(np.asarray(samples.level, float)[:, None], cos_r.shape)
+        diffuse = m.run(full.scatter, beta, d_sp, cos_n, np.zeros_like(level))
+        glossy = m.run(full.scatter, beta, d_sp, cos_r, level)
+    t_vp = np.exp(-beta * d_vp)[..., None]
+    reflected = (np.asarray(samples.rho_d, float)[:, None, :] * diffuse[..., None]
+                 + np.asarray(samples.rho_s, float)[:, None, :] * glossy[..., None])
+    intensity = np.asarray(intensity, float)[None, :, :]
+    glow = intensity * np.nan_to_num(air, nan=0.0, posinf=0.0)[..., None]
+    scatter = np.where(sky[..., None], 0.0, intensity * t_vp * np.nan_to_num(reflected, nan=0.0, posinf=0.0))
+    return glow, scatter
+
+
+class _Vec:
+    """The vector ops ``shading.mirror`` needs, on (..., 3) numpy arrays."""
+    @staticmethod
+    def scale(v, s):
+        return v * np.asarray(s)[..., None]
+
+    @staticmethod
+    def dot(a, b):
+        return np.sum(a * b, axis=-1)
+
+
+def choose_steps(glow, scatter, target):
+    """Each light's step down the ladder so that the predicted error stays within ``target``.
+
+    glow, scatter: (P, N, 3) from :func:`light_fog`; target: relative error
+    (None: every light full).  Greedy: the candidate drops (a light's scatter,
+    then its glow) are taken in order of the largest share of any judged
+    sample's fog they would leave out, each while the running sum of what is
+    dropped stays within ``target`` of the fog at every judged sample.
+    """
+    glow = np.asarray(glow, float)
+    scatter = np.asarray(scatter, float)
+    n = glow.shape[1]
+    fog = (glow + scatter).sum(axis=1)                 # (P, 3)
+    peak = fog.max() if fog.size else 0.0
+    judged = fog >= FLOOR * peak if peak > 0.0 else np.zeros(fog.shape, bool)
+    inv = np.where(judged, 1.0 / np.where(judged, fog, 1.0), 0.0)
+    steps = np.zeros(n, int)
+    dropped = np.zeros_like(fog)
+    if target is not None and peak > 0.0:
+        share_s = (scatter * inv[:, None, :]).max(axis=(0, 2))
+        share_g = ((glow + scatter) * inv[:, None, :]).max(axis=(0, 2))
+        candidates = sorted([(share_s[i], i, 1) for i in range(n)] + [(share_g[i], i, 2) for i in range(n)])
+        for _, i, step in candidates:
+            if steps[i] != step - 1:
+                continue
+            add = scatter[:, i] if step == 1 else glow[:, i]
+            trial = dropped + add
+            if (trial * inv).max() <= target:
+                dropped, steps[i] = trial, step
+    light_drop = np.where(steps[None, :, None] >= 1, scatter, 0.0) + np.where(steps[None, :, None] >= 2, glow, 0.0)
+    light_error = (light_drop * inv[:, None, :]).max(axis=(0, 2)) if fog.size else np.zeros(n)
+    error = float((dropped * inv).max()) if fog.size else 0.0
+    return Prediction(steps, light_error, error, int(judged.any(axis=1).sum()))
+
+
+def predict(samples, intensity, beta, quality):
+    """The choice for a view at a Quality (preset name, number or None): :class:`Prediction`."""
+    glow, scatter = light_fog(samples, intensity, beta)
+    return choose_steps(glow, scatter, target_error(quality))

@@ -1,0 +1,109 @@
+"""The Quality's proof scene: one scene fogged at a Quality and at Exact, the Fog Light pass of each written.
+
+    python tests/scenes/quality_probe.py OUT_DIR SCENE QUALITY [WIDTH HEIGHT]
+
+SCENE: a demo scene module name (street_lamps, boulevard, ...) at its default
+density, or ``random:SEED`` (a ground, boxes and spheres with random
+Principled materials, 2-40 point lights of random power and colour, a random
+camera, beta log-uniform in [0.005, 0.3] 1/m).  Cycles, 1 sample at each
+pixel centre.  The lights light only the fog (their diffuse and specular
+factors 0) and the World is black, so the picture is the fog's light alone,
+without noise (the Fog Light pass would be the same, but with many lights
+the World's pass runs out of SVM stack space: see the README's Known limits).
+
+Writes OUT_DIR/auto.exr and OUT_DIR/exact.exr and prints one JSON line: the
+predicted error of the choice, the steps, and the scene's lights and beta.
+"""
+import importlib
+import json
+import math
+import os
+import pathlib
+import random
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests" / "scenes"))
+
+import bpy  # noqa: E402
+
+import demo_scenes  # noqa: E402
+from fog_addon.ops import apply  # noqa: E402
+from probe_common import tiny_render  # noqa: E402
+
+
+def random_scene(scene, seed):
+    """A random fogged street-like scene; returns its beta (1/m)."""
+    rng = random.Random(seed)
+    demo_scenes.clear_scene(scene)
+    demo_scenes.set_world(scene)
+
+    def mat(k):
+        return demo_scenes.material(f"M{k}", tuple(rng.uniform(0.05, 0.9) for _ in range(3)),
+                                    roughness=rng.uniform(0.05, 1.0), metallic=rng.choice((0.0, 0.0, 1.0)))
+    demo_scenes.add_plane(scene, "Ground", -30, 30, -5, 60, 0.0, mat(0))
+    for k in range(rng.randint(3, 8)):
+        c = (rng.uniform(-10, 10), rng.uniform(3, 40), rng.uniform(0.3, 3))
+        if rng.random() < 0.5:
+            demo_scenes.add_box(scene, f"Box{k}", c, tuple(rng.uniform(0.3, 3) for _ in range(3)), mat(k + 1))
+        else:
+            demo_scenes.add_sphere(scene, f"Ball{k}", c, rng.uniform(0.3, 2.5), mat(k + 1), segments=24, rings=12)
+    for k in range(rng.randint(2, 40)):
+        ob = demo_scenes.add_point_light(scene, f"L{k:02d}", (rng.uniform(-15, 15), rng.uniform(-3, 50),
+                                                             rng.uniform(0.5, 8)), math.exp(rng.uniform(2.3, 8.5)))
+        ob.data.color = tuple(rng.uniform(0.3, 1.0) for _ in range(3))
+    demo_scenes.add_camera(scene, (rng.uniform(-3, 3), rng.uniform(-4, 0), rng.uniform(1, 3)),
+                           (rng.uniform(-6, 6), rng.uniform(15, 40), rng.uniform(0, 4)), lens=rng.uniform(20, 50))
+    return math.exp(rng.uniform(math.log(0.005), math.log(0.3)))
+
+
+def build(scene, name):
+    if name.startswith("random:"):
+        return random_scene(scene, int(name.split(":", 1)[1]))
+    mod = importlib.import_module(f"demo_scenes.{name}")
+    demo_scenes.clear_scene(scene)
+    mod.build(scene)
+    return mod.DEFAULT_DENSITY
+
+
+def fog_only(scene):
+    """Lights that light nothing but the fog, and a black World: the render is the fog's light."""
+    for ob in scene.objects:
+        if ob.type == "LIGHT":
+            ob.data.diffuse_factor = ob.data.specular_factor = 0.0
+    bg = next(n for n in scene.world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
+    bg.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+
+
+def render(scene, path):
+    im = scene.render.image_settings
+    im.file_format = "OPEN_EXR"
+    im.color_depth = "32"
+    scene.render.filepath = str(path)
+    scene.render.use_file_extension = False
+    bpy.ops.render.render(write_still=True, scene=scene.name)
+
+
+def main(out, name, quality, width=128, height=72):
+    out = pathlib.Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    scene = bpy.context.scene
+    beta = build(scene, name)
+    fog_only(scene)
+    tiny_render(scene, "CYCLES", width, height)
+    quality = None if quality == "exact" else (float(quality) if quality[0].isdigit() else quality)
+    apply.apply_fog(scene, beta, error=quality)
+    choice = apply.stored_choice(scene)
+    render(scene, out / "auto.exr")
+    apply.apply_fog(scene, beta, error=None)
+    render(scene, out / "exact.exr")
+    print(json.dumps({"scene": name, "beta": beta, "quality": quality, "predicted": choice["error"],
+                      "steps": {k: v[0] for k, v in choice["lights"].items()},
+                      "light_error": {k: v[1] for k, v in choice["lights"].items()},
+                      "lights": len(choice["lights"]), "explain": apply.explain(scene)}))
+
+
+if __name__ == "__main__":
+    os.environ.setdefault("TMPDIR", "/tmp")
+    main(sys.argv[1], sys.argv[2], sys.argv[3], *(int(a) for a in sys.argv[4:6]))

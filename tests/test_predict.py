@@ -1,0 +1,90 @@
+"""The error predictor and the chooser of the Quality (fog_addon/precompute/predict.py), numpy only.
+
+The renders that prove the prediction are in tests/test_quality.py; here:
+the predictor's terms are the shaders' twin (``shading.shade_point``), the
+chooser keeps the sum of what it drops within the target at every judged
+sample, and bad Quality values are refused with a clear message.
+"""
+import numpy as np
+import pytest
+
+from fog_addon.precompute import airlight, predict, rungs, shading, surface, tables
+from fog_addon.precompute.medium import Medium
+from fog_addon.precompute.ops import NumpyOps
+
+
+def _samples(rng, p=400, n=12):
+    cam = np.tile(rng.uniform(-1, 1, 3), (p, 1))
+    d = rng.normal(size=(p, 3))
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    dist = rng.uniform(0.5, 40.0, p)
+    dist[: p // 8] = np.inf
+    normal = -d + 0.5 * rng.normal(size=(p, 3))
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    lights = np.broadcast_to(rng.uniform(-25, 25, (n, 3)), (p, n, 3))
+    return predict.ViewSamples(cam, d, dist, normal, rng.uniform(0, 1, (p, 3)), rng.uniform(0, 0.3, (p, 3)),
+                               rng.uniform(0, 40, p), lights)
+
+
+def test_terms_are_the_shaders_twin():
+    rng = np.random.default_rng(3)
+    s = _samples(rng)
+    intensity = rng.uniform(1, 200, (s.lights.shape[1], 3))
+    glow, scatter = predict.light_fog(s, intensity, 0.07)
+    m = NumpyOps({tables.AIRLIGHT.name: airlight.bake_airlight_table(), tables.SURFACE.name: surface.surface_table()})
+    for p in range(0, len(s.distance), 37):
+        for i in range(0, s.lights.shape[1], 5):
+            light = shading.Light(s.lights[p, i], intensity[i])
+            if np.isfinite(s.distance[p]):
+                pos = s.camera[p] + s.direction[p] * s.distance[p]
+                geo = shading.Geometry(s.camera[p], pos, -s.direction[p], s.distance[p], s.normal[p])
+                mat = shading.Material(s.rho_d[p], s.rho_s[p], s.level[p])
+                t = shading.shade_point(m, geo, mat, light, Medium(0.07), rungs.choose("nodes"))
+                np.testing.assert_allclose(glow[p, i], t.airlight, rtol=1e-9)
+                np.testing.assert_allclose(scatter[p, i], t.scattered * np.exp(-0.07 * s.distance[p]), rtol=1e-9)
+            else:
+                want = shading.background_point(m, s.camera[p], s.direction[p], light, Medium(0.07),
+                                                rungs.choose("nodes"))
+                np.testing.assert_allclose(glow[p, i], want, rtol=1e-9)
+                assert not scatter[p, i].any()
+
+
+@pytest.mark.parametrize("target", [0.2, 0.05, 0.01, 0.001])
+def test_chooser_keeps_the_dropped_fog_within_the_target(target):
+    rng = np.random.default_rng(int(target * 1e4))
+    p, n = 300, 30
+    scale = rng.lognormal(0, 4, (1, n, 1))     # lights from very dim to very bright
+    glow = rng.lognormal(0, 0.5, (p, n, 3)) * scale
+    scatter = rng.lognormal(0, 0.5, (p, n, 3)) * scale * (rng.random((p, 1, 1)) < 0.7)
+    pred = predict.choose_steps(glow, scatter, target)
+    fog = (glow + scatter).sum(axis=1)
+    judged = fog >= predict.FLOOR * fog.max()
+    dropped = (np.where(pred.steps[None, :, None] >= 1, scatter, 0)
+               + np.where(pred.steps[None, :, None] >= 2, glow, 0)).sum(axis=1)
+    measured = (dropped / fog)[judged].max()
+    assert measured <= target * (1 + 1e-12)
+    assert pred.error == pytest.approx(measured, rel=1e-12)
+    assert (pred.steps > 0).any(), "nothing dropped: the test would prove nothing"
+
+
+def test_a_negligible_light_goes_off_and_exact_keeps_everything():
+    glow = np.ones((10, 3, 3))
+    glow[:, 2] = 1e-6          # light 2 adds a millionth of each pixel's fog
+    scatter = np.full((10, 3, 3), 0.5)
+    scatter[:, 2] = 1e-6
+    pred = predict.choose_steps(glow, scatter, 0.01)
+    assert list(pred.steps) == [0, 0, 2]
+    assert pred.error == pytest.approx(2e-6 / 3.000002, rel=1e-6)
+    assert list(predict.choose_steps(glow, scatter, None).steps) == [0, 0, 0]
+
+
+@pytest.mark.parametrize("bad", [0.0, -0.1, 1.0, float("nan"), float("inf"), "best", "1 %"])
+def test_bad_quality_is_refused(bad):
+    with pytest.raises(ValueError, match="quality|target error"):
+        predict.target_error(bad)
+
+
+def test_quality_presets():
+    assert predict.target_error("Draft") == 0.05 and predict.target_error("final") == 0.01
+    assert predict.target_error("exact") is None and predict.target_error(None) is None
+    assert predict.target_error(0.02) == 0.02
