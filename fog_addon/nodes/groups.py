@@ -302,8 +302,55 @@ def build_surface(lights, models, images, with_passes=False):
                     ("EEVEE Mix Factor", fog.eevee_mix)):
         m.feed(gout.inputs[sock], m.wrap(v))
     if with_passes:
-        passes.write_group(m, ng, m.wrap(fog.emission, vector=True), m.wrap(fog.transmittance), opacity)
+        passes.write_group(m, ng, _chained_closure_sum(m, gout.inputs["Fog"]), m.wrap(fog.transmittance), opacity,
+                           light_weighted=True)
     return _install(ng, SURFACE)
+
+
+def _exact_zero(m, v):
+    """(0, 0, 0) computed from the vector ``v``: max(min(v, 0), 0), exactly 0 for any v (NaN too), which
+    neither Blender's inlining nor Cycles' constant folding removes.  A data dependency on ``v`` only."""
+    black = (0.0, 0.0, 0.0)
+    return m.vmath("MAXIMUM", m.vmath("MINIMUM", v, black), black)
+
+
+def _chained_closure_sum(m, sock):
+    """The Fog Light pass of the Surface group: the sum of the colours of the closures linked into ``sock``
+    (the Fog shader's Emission closures under their Add Shader tree), each closure's Strength made to
+    depend on the running sum up to it (a Strength of exactly 1).
+
+    Why: Cycles' SVM compiles each closure with its own inputs' nodes, and the AOV outputs' nodes after
+    all closures (svm.cpp ``compile_type``).  A colour every closure computes and the AOV pass still
+    needs stays on SVM's stack of 255 floats until then: the pass's sum over the lights kept each
+    light's colour there, 3 floats a light (a glossy material of tests/scenes/passes_many_lights.py:
+    118 floats at 4 lights, 178 at 24, out of SVM stack space and black at 64).  With each closure's
+    Strength reading the running sum, the sum's Add of light k is compiled with closure k and only
+    the running sum is kept: 115 floats at 4 to 64 lights.  The leaves are taken in the order SVM
+    compiles them (each Add Shader's first input first).
+    """
+    leaves, todo = [], [sock]
+    while todo:
+        s = todo.pop()
+        if not s.is_linked:
+            continue
+        node = s.links[0].from_node
+        if node.bl_idname == "ShaderNodeAddShader":
+            todo += [node.inputs[1], node.inputs[0]]   # the first input is popped (compiled) first
+        else:
+            leaves.append(node)
+    total = None
+    for node in leaves:
+        colour = m.wrap(node.inputs["Color"].links[0].from_socket if node.inputs["Color"].is_linked
+                        else tuple(node.inputs["Color"].default_value), vector=True)
+        if total is None:
+            total = colour
+            continue
+        total = total + colour
+        # Strength = max(min(sum, 0), 1) = 1 (the sum's grey, implicitly converted)
+        if total.sock is not None and "Strength" in node.inputs:
+            one = m.math("MAXIMUM", m.math("MINIMUM", m.wrap(total.sock), 0.0), 1.0)
+            m.feed(node.inputs["Strength"], one)
+    return total if total is not None else m.wrap((0.0, 0.0, 0.0))
 
 
 def _lit(models):
@@ -377,18 +424,28 @@ def _write_world_passes(m, ng, geo, nodes, medium, is_camera, transmittance):
     # map: 1.1 s -> 7.5 s per render).  So the Fog Light pass reads a second instance of each light's
     # group, given the same direction another way (-Incoming): Cycles does not merge it with the first
     # (node deduplication) and runs it on camera rays only (after NODE_AOV_START).
+    #   Cycles compiles all of the AOV outputs' nodes in one go, a sweep over them in the order of their
+    # ids, a node as soon as its inputs are done.  Each table tap reads its coordinates through a
+    # conversion node (vector to point, a no-op) that Cycles adds after every other node, so one sweep ran
+    # every light's nodes up to its taps and kept their values (15 floats a light) on SVM's stack of 255:
+    # out of SVM stack space and the whole sky black from 17 lights on.  So light k's instance reads the
+    # direction plus an exact zero made from the running sum of lights 0..k-1 (``_exact_zero``): it
+    # starts once the light before it is summed, and one light's values are kept at a time (the
+    # World's peak: 33 floats at 4 to 64 lights, 71 at 4 before).
     aov_direction = m.vmath("NORMALIZE", m.vmath("SCALE", m.wrap(geo.outputs["Incoming"]), -1.0))
-    twins = []
+    total = None
     for k, node in enumerate(nodes):
         twin = ng.nodes.new("ShaderNodeGroup")
         twin.node_tree = node.node_tree
         twin.name = twin.label = f"{node.name} (passes)"
         twin.location = (-300, -300 * k - 150)
+        direction = aov_direction if total is None else m.vmath("ADD", aov_direction, _exact_zero(m, total))
         for sock in node.inputs:
-            src = aov_direction.sock if sock.name == "Direction" else (sock.links[0].from_socket if sock.is_linked
-                                                                         else None)
+            src = direction.sock if sock.name == "Direction" else (sock.links[0].from_socket if sock.is_linked
+                                                                     else None)
             if src is not None:
                 ng.links.new(src, twin.inputs[sock.name])
-        twins.append(m.wrap(twin.outputs["Airlight"], vector=True))
-    light, _ = shading.shade_background(m, twins, medium, is_camera)
+        airlight = m.wrap(twin.outputs["Airlight"], vector=True)
+        total = airlight if total is None else total + airlight
+    light, _ = shading.shade_background(m, [] if total is None else [total], medium, is_camera)
     passes.write_group(m, ng, m.wrap(light, vector=True), m.wrap(transmittance))

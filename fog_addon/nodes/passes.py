@@ -89,12 +89,12 @@ def has_view_layer_aovs(view_layer):
 
 # --- AOV Output nodes in the fog's Surface and World groups ------------------------------------------
 
-def write_group(m, ng, light, transmittance, opacity=None):
+def write_group(m, ng, light, transmittance, opacity=None, light_weighted=False):
     """AOV Output nodes in the fog's group ``ng`` (built by ``m``, its NodeOps): Fog Light = ``light``
     and Fog Transmittance = ``transmittance``, both times ``opacity`` (the Surface group's Opacity
-    input, a colour: its mean for the value) where given."""
+    input, a colour: its mean for the value) where given; ``light_weighted``: ``light`` already is."""
     if opacity is not None:
-        light = light * opacity
+        light = light if light_weighted else light * opacity
         transmittance = transmittance * m.vmath("DOT_PRODUCT", opacity, (1.0 / 3.0,) * 3, out=1)
     for k, (name, value, sock) in enumerate(((FOG_LIGHT, light, "Color"), (TRANSMITTANCE, transmittance, "Value"))):
         node = ng.nodes.new("ShaderNodeOutputAOV")
