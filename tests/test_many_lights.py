@@ -1,0 +1,169 @@
+"""Many lights: 1, 4, 16, 64 and 256 point lights, Cycles (node groups, OSL) and EEVEE, against the numpy twin.
+
+Each case runs tests/scenes/many_lights.py in a fresh process (48x27, 1 spp,
+pixel centres; a ground plane and matte, glossy and metallic spheres; the
+lights on a grid, out of the surfaces' direct light so each pixel is exactly
+the fog's emission) with a hard timeout, and
+
+* scans the process's stdout and stderr (``render_harness.log_errors``): any
+  line saying a shader is too big (Cycles: "out of SVM stack space, shader ...
+  too big"), a uniform block is too big (EEVEE: "Uniform block node_tree too
+  big"), a GPU shader error or a shader compile error fails the test;
+* checks the picture against the numpy twin (``fog_addon/precompute/shading.py``
+  per pixel): on every object, and on the background, the median of render /
+  twin is within 5 % of 1 (a material that renders black has 0, EEVEE's
+  fallback for a shader that failed to link 3-4.5), and the relative RMSE
+  over every pixel compared is at most 3 % (Cycles) / 5 % (EEVEE).  With one
+  light it is 0.2 % (the rest: spheres are meshes, the twin's are exact).
+
+Today (one ~490-node group per light inlined into every material, its light one
+emission closure per light, summed by a balanced tree of Add Shader nodes)
+Cycles' node groups and OSL pass up to 64 lights, EEVEE up to 4 (from 16 on its
+uniform block is too big), 256 lights are far too slow everywhere.
+``MEASURED`` holds what each case did on 2 CPU cores (bpy 5.0.1, other jobs
+running); failing cases that finish in about 2 minutes are
+``xfail(strict=True)``, so they turn into failures the day they pass (then
+drop their entry); slower ones are skipped with the measured time, passing or
+not.  ``FOG_SLOW_TESTS=1`` runs the skipped cases too (timeout
+``SLOW_TIMEOUT_S``): use it to re-measure.  ``test_closure_sum_renders_every_closure``
+checks the closure sum itself in SVM and OSL up to 256 closures in seconds.
+"""
+import json
+import os
+import subprocess
+
+import pytest
+
+import render_harness as h
+
+SCRIPT = h.ROOT / "tests" / "scenes" / "many_lights.py"
+LIGHTS = (1, 4, 16, 64, 256)
+METHODS = {"cycles_nodes": ("CYCLES", "nodes"), "cycles_osl": ("CYCLES", "osl"), "eevee": ("BLENDER_EEVEE", "nodes")}
+SAMPLES = 1
+TIMEOUT_S = 300              # hard limit of one case's process
+SLOW_TIMEOUT_S = 1800        # with FOG_SLOW_TESTS=1
+MEDIAN_TOL = 0.05            # |median(render / twin) - 1| per object
+REL_RMSE = {"CYCLES": 0.03, "BLENDER_EEVEE": 0.05}
+BLACK = 0.1                  # median render / twin below this: the material renders black
+
+# Re-measured with the balanced closure sum: wall time of the whole case (fog added + first render
+# + twin) with other jobs running (load 3-5 on the 2 cores; on a quiet machine about 2.5x less; in a
+# full-suite run at load 7-8 up to 2.3x more).  Cases not listed pass: median render / twin within
+# 0.07 % of 1 per object (64 lights: 0.3 %, since 4348f61's default Quality "final" leaves some
+# lights' scattered fog out; 0.02 % with every light), relative RMSE 0.02-0.2 %:
+# Cycles nodes 1 / 4 / 16 / 64 lights in 5 / 5 / 9 / 79 s (64: fog added in 16 s, first render 61 s),
+# OSL 1 / 4 / 16 in 6 / 12 / 47 s, EEVEE 1 / 4 in 9 / 11 s.  (Before 85e9c66 Cycles nodes rendered
+# every fogged material black from 4 lights on: out of SVM stack space; from 85e9c66 to the balanced
+# sum OSL dropped all but 16 lights' closures: 25 lights 25 %, 64 lights 2-7 % of the twin.)
+# The 256-light and EEVEE 64-light entries were measured at 8ca53cb and not re-measured (the
+# closure sum changes neither the fog's set-up nor EEVEE).
+MEASURED = {
+    (256, "cycles_nodes"): ("skip", "too slow: fog added in 221 s, first render not finished at 300 s (killed)"),
+    (64, "cycles_osl"): ("skip", "passes (relative RMSE 0.019 %, median render / twin 1.0000-1.0002) but too "
+                                 "slow for CI: 140-299 s (fog added in 9-19 s, first render 129-277 s; "
+                                 "163 s CPU); test_closure_sum_renders_every_closure checks OSL's closure "
+                                 "sum in seconds"),
+    (256, "cycles_osl"): ("skip", "too slow: fog added in 203 s, first render not finished at 300 s (killed)"),
+    (16, "eevee"): ("xfail", "EEVEE: gpu.shader ERROR Linking: Uniform block node_tree too big (78800/65536): "
+                             "materials render EEVEE's fallback, median render / twin 3.0-4.5 per object "
+                             "(relative RMSE 128 %), the world is right; 74-79 s (38 s CPU)"),
+    (64, "eevee"): ("skip", "too slow and wrong: gpu.shader ERROR Linking: Uniform block node_tree too big "
+                            "(314384/65536) after 194 s, first render not finished at 300 s (killed, 4.4 GB)"),
+    (256, "eevee"): ("skip", "too slow and wrong: fog added in 253 s, world shader: Uniform block node_tree too "
+                             "big (239728/65536) at 281 s, first render not finished at 300 s (killed)"),
+}
+
+
+def _params():
+    out = []
+    for n in LIGHTS:
+        for method in METHODS:
+            kind, why = MEASURED.get((n, method), (None, None))
+            marks = []
+            if kind == "xfail":
+                marks.append(pytest.mark.xfail(strict=True, reason=why))
+            elif kind == "skip" and os.environ.get("FOG_SLOW_TESTS") != "1":
+                marks.append(pytest.mark.skip(reason=why + " (FOG_SLOW_TESTS=1 runs it)"))
+            out.append(pytest.param(n, method, marks=marks, id=f"{n}-{method}"))
+    return out
+
+
+def run_case(tmp_path, n, method, timeout):
+    """Run the scene script for ``n`` lights and ``method``; (result dict or None, log text, problems)."""
+    engine, preference = METHODS[method]
+    try:
+        proc = h.run([SCRIPT, tmp_path, engine, preference, n, SAMPLES], timeout=timeout, check=False)
+    except subprocess.TimeoutExpired as exc:
+        out = (exc.stdout or b"") + (exc.stderr or b"")
+        text = out.decode(errors="replace") if isinstance(out, bytes) else out
+        return None, text, [f"timed out after {timeout} s"] + h.log_errors(text)
+    text = proc.stdout + "\n" + proc.stderr
+    problems = h.log_errors(text)
+    if proc.returncode != 0:
+        problems.append(f"exit code {proc.returncode}: {text[-2000:]}")
+    line = next((ln for ln in proc.stdout.splitlines() if ln.startswith("MANY_LIGHTS_JSON ")), None)
+    if line is None:
+        return None, text, problems + ["no result line"]
+    return json.loads(line.split(" ", 1)[1]), text, problems
+
+
+def picture_problems(res):
+    engine = res["engine"]
+    problems = []
+    for name, st in res["objects"].items():
+        if not st.get("pixels"):
+            continue
+        med = st["median_ratio"]
+        if med < BLACK:
+            problems.append(f"{name} renders black (median render / twin {med:.3g})")
+        elif abs(med - 1.0) > MEDIAN_TOL:
+            problems.append(f"{name}: median render / twin {med:.4g}")
+    if not res["all"]["rel_rmse"] <= REL_RMSE[engine]:
+        problems.append(f"relative RMSE {res['all']['rel_rmse']:.4g} > {REL_RMSE[engine]}")
+    return problems
+
+
+@pytest.mark.parametrize("n,method", _params())
+def test_many_lights(tmp_path, n, method):
+    slow = MEASURED.get((n, method), (None,))[0] == "skip"
+    res, text, problems = run_case(tmp_path, n, method, SLOW_TIMEOUT_S if slow else TIMEOUT_S)
+    if res is not None:
+        problems += picture_problems(res)
+        medians = ", ".join(f"{k} {st['median_ratio']:.5g}" for k, st in res["objects"].items() if st.get("pixels"))
+        print(f"{n} lights, {method}: fog added in {res['apply_s']:.1f} s, first render {res['render_s']:.1f} s, "
+              f"rel RMSE {res['all']['rel_rmse']:.3g}; median render / twin: {medians}")
+    assert not problems, f"{n} lights, {method}:\n  " + "\n  ".join(problems)
+
+
+def test_log_scan_catches_known_errors():
+    """The scan flags the messages seen today and leaves the harmless ones alone."""
+    bad = ['00:02.812  cycles           | ERROR Shader graph: out of SVM stack space, shader "ground" too big.',
+           '00:14.238  gpu.shader       | ERROR MAground Linking: ',
+           '                            |       | Error: Uniform block node_tree too big (76960/65536)',
+           'Error: Uniform block node_tree too big (76128/65536)',
+           'ERROR: shader compilation failed']
+    good = ['EGL Error (0x3009): EGL_BAD_MATCH: Arguments are inconsistent (for example, a valid context requires '
+            'buffers not supplied by a valid surface).',
+            'Error: Not freed memory blocks: 4, total unfreed memory 0.293579 MB',
+            "00:02.964  render           | Saved: '/tmp/out/many_CYCLES_nodes_1.exr'",
+            'many_lights: 4 lights, CYCLES nodes: fog added in 2.09 s']
+    assert len(h.log_errors("\n".join(bad))) == len(bad)
+    assert h.log_errors("\n".join(good)) == []
+
+
+def test_closure_sum_renders_every_closure(tmp_path):
+    """The fog's per-light closure sum (``groups._closure_sum``, surfaces' Emission and the World's
+    Background) renders whole in SVM and OSL, for 1 to 256 closures, in a few seconds.
+
+    Cycles' OSL flattens a closure tree with a 16-entry stack (``flatten_closure_tree``,
+    intern/cycles/kernel/osl/osl.h: at an Add it walks the first input with the second pushed) and drops,
+    without a word, whatever lies below a full stack: the left-deep chain of Add Shader nodes of 85e9c66
+    kept the last 16 closures (64 -> 16/64, 256 -> 16/256), the 64-light scene rendered 2-7 % of the
+    twin.  The balanced tree needs ceil(log2 N) entries."""
+    proc = h.run([h.ROOT / "tests" / "scenes" / "closure_sum_probe.py", tmp_path, 1, 17, 64, 256], timeout=300)
+    line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("CLOSURE_SUM_JSON "))
+    res = json.loads(line.split(" ", 1)[1])
+    for n, r in res.items():
+        assert r["osl_stack_depth"] <= max(0, (int(n) - 1).bit_length()), (n, r)
+        for key in ("svm_surface", "svm_world", "osl_surface", "osl_world"):
+            assert all(abs(x - 1.0) < 1e-5 for x in r[key]), (n, key, r[key])
