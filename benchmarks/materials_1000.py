@@ -108,7 +108,7 @@ def shared_ok(on):
     names = [g.name for g in bpy.data.node_groups] + [i.name for i in bpy.data.images] + [t.name for t in bpy.data.texts]
     ours = sorted(n for n in names if n.startswith("AnalyticFog"))
     lights, _ = apply.fog_lights(bpy.context.scene)
-    models = set(apply.light_models(lights, "nodes")) if lights else {rungs.choose("nodes")}
+    models = {rungs.choose("nodes")}
     want = sorted({groups.PARAMS, groups.SURFACE, groups.WORLD}
                   | {groups.light_group_name(m) for m in models} | {groups.background_group_name(m) for m in models}
                   | set(images.table_names())) if on else []
@@ -227,7 +227,7 @@ def main(argv=None):
     timed(rows, "apply_fog (again, bakes tables)", lambda: apply.apply_fog(scene, DENSITY, **KW), n, True)
     timed(rows, "apply_fog (fog already on)", lambda: apply.apply_fog(scene, DENSITY, **KW), n, True)
     lights, _ = apply.fog_lights(scene)
-    surface_args = (lights, apply.light_models(lights, "nodes"), images.all_table_images())
+    surface_args = (lights, [rungs.choose("nodes")] * len(lights), images.all_table_images())
     timed(rows, "what-if: build_surface in place", lambda: groups.build_surface(*surface_args), n, True)
     timed(rows, "what-if: build_surface side-built",
           lambda: side_built(groups.SURFACE, groups.build_surface, *surface_args), n, True)

@@ -304,7 +304,31 @@ def build_surface(lights, models, images, with_passes=False):
     if with_passes:
         passes.write_group(m, ng, _chained_closure_sum(m, gout.inputs["Fog"]), m.wrap(fog.transmittance), opacity,
                            light_weighted=True)
+    else:
+        _camera_rays_only(ng, gout.inputs["Fog"], path.outputs["Is Camera Ray"])
     return _install(ng, SURFACE)
+
+
+def _camera_rays_only(ng, sock, is_camera):
+    """Put the shader linked into ``sock`` behind a Mix Shader whose factor is Is Camera Ray.
+
+    The fog's light is added on camera rays only (``shading.shade_surface``); on every other ray the
+    Mix Shader's factor is exactly 0 and Cycles' SVM jumps over the nodes that feed only its second
+    input (svm.cpp, NODE_JUMP_IF_ZERO): bounce rays hitting fogged surfaces then skip every light's
+    glow and scattered fog light (boulevard, 45 lamps, 160x90, 4 spp: 270 -> 132 us of render CPU
+    per sample).  Not with the Fog Passes: an AOV reads those nodes too, so SVM runs them on every
+    ray anyway, and the Mix would undo the compile order that keeps the passes' sums off SVM's stack
+    (``_chained_closure_sum``: 24 lights overflowed with it).
+    """
+    if not sock.is_linked:
+        return
+    src = sock.links[0].from_socket
+    mix = ng.nodes.new("ShaderNodeMixShader")
+    mix.name = mix.label = "Camera Rays Only"
+    mix.location = (sock.node.location.x - 200, sock.node.location.y)
+    ng.links.new(is_camera, mix.inputs[0])
+    ng.links.new(src, mix.inputs[2])
+    ng.links.new(mix.outputs[0], sock)
 
 
 def _exact_zero(m, v):

@@ -6,10 +6,10 @@ SCENE: a demo scene module name (street_lamps, boulevard, ...) at its default
 density, or ``random:SEED`` (a ground, boxes and spheres with random
 Principled materials, 2-40 point lights of random power and colour, a random
 camera, beta log-uniform in [0.005, 0.3] 1/m).  Cycles, 1 sample at each
-pixel centre.  The lights light only the fog (their diffuse and specular
-factors 0) and the World is black, so the picture is the fog's light alone,
-without noise (the Fog Light pass would be the same, but with many lights
-the World's pass runs out of SVM stack space: see the README's Known limits).
+pixel centre.  The lights light only the fog (hidden from diffuse and
+glossy rays: in Cycles their diffuse and specular factors alone still let
+them light surfaces) and the World is black, so the picture is the fog's
+light alone, without noise and without the Fog Passes' cost.
 
 Writes OUT_DIR/auto.exr and OUT_DIR/exact.exr and prints one JSON line: the
 predicted error of the choice, the steps, and the scene's lights and beta.
@@ -72,6 +72,7 @@ def fog_only(scene):
     for ob in scene.objects:
         if ob.type == "LIGHT":
             ob.data.diffuse_factor = ob.data.specular_factor = 0.0
+            ob.visible_diffuse = ob.visible_glossy = False
     bg = next(n for n in scene.world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
     bg.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
 
