@@ -95,21 +95,15 @@ def light_fog(samples, intensity, beta):
     dist = np.asarray(samples.distance, float)[:, None]
     sky = ~np.isfinite(dist)
     d_vp = np.where(sky, 0.0, dist)
-    to_light = lights - cam
-    d_sv = np.linalg.norm(to_light, axis=-1)
-    along = np.sum(to_light * d, axis=-1)
-    h = np.linalg.norm(np.cross(to_light, d), axis=-1)
+    d_sv, along, h = model.ray_light_geometry(m, cam, d, lights)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         air = np.where(sky, m.run(full.background, beta, d_sv, along, h),
                        m.run(full.airlight, beta, d_sv, along, h, d_vp))
-        p = cam + d * d_vp[..., None]
-        to_l = lights - p
-        d_sp = np.maximum(np.linalg.norm(to_l, axis=-1), model.MIN_DISTANCE)
+        to_l = lights - (cam + m.scale(d, d_vp))
+        d_sp = np.maximum(m.length(to_l), model.MIN_DISTANCE)
         n = np.asarray(samples.normal, float)[:, None, :]
-        incoming = -d
-        mirror = shading.mirror(_Vec, incoming, n)
-        cos_n = np.sum(to_l * n, axis=-1) / d_sp
-        cos_r = np.sum(to_l * mirror, axis=-1) / d_sp
+        cos_n = m.dot(to_l, n) / d_sp
+        cos_r = m.dot(to_l, shading.mirror(m, -d, n)) / d_sp
         level = np.broadcast_to(np.asarray(samples.level, float)[:, None], cos_r.shape)
         diffuse = m.run(full.scatter, beta, d_sp, cos_n, np.zeros_like(level))
         glossy = m.run(full.scatter, beta, d_sp, cos_r, level)
@@ -120,17 +114,6 @@ def light_fog(samples, intensity, beta):
     glow = intensity * np.nan_to_num(air, nan=0.0, posinf=0.0)[..., None]
     scatter = np.where(sky[..., None], 0.0, intensity * t_vp * np.nan_to_num(reflected, nan=0.0, posinf=0.0))
     return glow, scatter
-
-
-class _Vec:
-    """The vector ops ``shading.mirror`` needs, on (..., 3) numpy arrays."""
-    @staticmethod
-    def scale(v, s):
-        return v * np.asarray(s)[..., None]
-
-    @staticmethod
-    def dot(a, b):
-        return np.sum(a * b, axis=-1)
 
 
 def choose_steps(glow, scatter, target):
