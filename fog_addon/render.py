@@ -105,7 +105,7 @@ def apply_and_render(scene, args):
     print(f"fog: {describe(shown)}")
     for name, why in notes + list(skipped):
         print(f"note: {name}: {why}")
-    lines = apply.explain(scene)
+    lines = apply.explain()
     for line in lines if getattr(args, "explain", False) else lines[:1]:
         print(f"models: {line}")
     t1 = time.perf_counter()

@@ -65,7 +65,7 @@ class FOG_OT_add(bpy.types.Operator):
         settings.density = density
         settings.enabled = True
         _report_skipped(self, skipped)
-        self.report({"INFO"}, apply.explain(scene)[0])
+        self.report({"INFO"}, apply.explain()[0])
         return {"FINISHED"}
 
 

@@ -17,8 +17,7 @@ OSL_WAS = "analytic_fog_osl_was"   # scene custom property: Cycles' OSL switch b
 LIGHTS_KEY = "analytic_fog_lights"  # on the Surface group: the lights, their models and the camera it was built for
 PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method preference it was built with
 PASSES_KEY = "analytic_fog_passes"   # on the Surface group: built with the fog passes (AOV outputs)
-QUALITY_KEY = "analytic_fog_quality"   # on the Surface group: the Quality (target error) it was built for
-CHOICE_KEY = "analytic_fog_choice"   # on the Surface group: {light: [step, predicted error]} and the total
+CHOICE_KEY = "analytic_fog_choice"   # on the Surface group: the Quality, {light: [step, predicted error]}, the total
 
 
 def fog_lights(scene):
@@ -119,17 +118,17 @@ def choose_models(scene, lights, preference, quality):
     return [rungs.choose(preference, k) for k in steps], choice
 
 
-def stored_choice(scene=None):
-    """The choice the scene groups were last built with (see choose_models), or None."""
+def stored_choice():
+    """The choice the scene groups were last built with (see choose_models, plus its "quality"), or None."""
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is None or CHOICE_KEY not in surface:
         return None
     return json.loads(surface[CHOICE_KEY])
 
 
-def explain(scene=None):
+def explain():
     """Lines that say which models each light got and the error predicted (panel, operator, ``--explain``)."""
-    choice = stored_choice(scene)
+    choice = stored_choice()
     if choice is None:
         return ["the fog is not on"]
     target = choice["target"]
@@ -151,7 +150,7 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
     from the view (``choose_models``); else keep the stored steps (lights new to the fog get the full
     models).  Returns [(name, reason)] for lights left unfogged and clashing AOVs.
     """
-    old = stored_choice(scene)
+    old = stored_choice()
     if rechoose or old is None or old.get("quality") != quality_value(quality):
         models, choice = choose_models(scene, lights, preference, quality)
     else:
@@ -177,9 +176,8 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
         for light in bpy.data.lights:
             if light.users and light not in taking_part and is_fogged(light):
                 unwrap_light(light)
-    for key, value in ((QUALITY_KEY, quality_value(quality)), (CHOICE_KEY, json.dumps(choice))):
-        if surface.get(key) != value:
-            surface[key] = value
+    if surface.get(CHOICE_KEY) != json.dumps(choice):
+        surface[CHOICE_KEY] = json.dumps(choice)
     use_osl(scene, any(rungs.needs_osl(mod) for mod in models))
     notes = [(light.data.name, why) for light in lights if (why := wrap_light(light.data))]
     if with_passes:
@@ -262,32 +260,39 @@ def update_params(scene):
     groups.set_params(s.density * s.scene_scale, tuple(s.color))
 
 
-def _stored(surface, key, default):
-    return surface.get(key, default) if surface is not None else default
+_KEEP = object()   # _rebuild: keep the setting the scene groups were built with
+
+
+def _rebuild(scene, surface, preference=_KEEP, with_passes=_KEEP, quality=_KEEP, rechoose=False):
+    """Rebuild the scene groups (materials are not touched) for the settings given, keeping the rest as
+    ``surface`` (the Surface group) was built."""
+    choice = stored_choice() or {}
+    _build_scene_groups(scene, fog_lights(scene)[0],
+                        surface.get(PREFERENCE_KEY, "nodes") if preference is _KEEP else preference,
+                        bool(surface.get(PASSES_KEY, False)) if with_passes is _KEEP else with_passes,
+                        choice.get("quality", predict.DEFAULT_QUALITY) if quality is _KEEP else quality,
+                        rechoose=rechoose)
 
 
 def set_method(scene, method):
-    """The user changed the method preference: re-choose every light's models (materials are not touched)."""
+    """The user changed the method preference: the lights keep their steps, now with ``method``'s models."""
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is not None:
-        _build_scene_groups(scene, fog_lights(scene)[0], method, bool(surface.get(PASSES_KEY, False)),
-                            _stored(surface, QUALITY_KEY, predict.DEFAULT_QUALITY), rechoose=False)
+        _rebuild(scene, surface, preference=method)
 
 
 def set_passes(scene, with_passes):
     """The user switched the fog passes on or off: rebuild the scene groups (materials are not touched)."""
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is not None:
-        _build_scene_groups(scene, fog_lights(scene)[0], surface.get(PREFERENCE_KEY, "nodes"), with_passes,
-                            _stored(surface, QUALITY_KEY, predict.DEFAULT_QUALITY), rechoose=False)
+        _rebuild(scene, surface, with_passes=with_passes)
 
 
 def set_quality(scene, quality):
     """The user changed the Quality: choose every light's models again (materials are not touched)."""
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is not None and surface.library is None:
-        _build_scene_groups(scene, fog_lights(scene)[0], surface.get(PREFERENCE_KEY, "nodes"),
-                            bool(surface.get(PASSES_KEY, False)), quality)
+        _rebuild(scene, surface, quality=quality, rechoose=True)
 
 
 def refresh_lights(scene, rechoose=False):
@@ -298,9 +303,7 @@ def refresh_lights(scene, rechoose=False):
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is None or surface.library is not None:
         return
-    _build_scene_groups(scene, fog_lights(scene)[0], surface.get(PREFERENCE_KEY, "nodes"),
-                        bool(surface.get(PASSES_KEY, False)), _stored(surface, QUALITY_KEY, predict.DEFAULT_QUALITY),
-                        rechoose=rechoose)
+    _rebuild(scene, surface, rechoose=rechoose)
     compositor.follow(scene)   # the engine or the denoiser flag may have changed
 
 

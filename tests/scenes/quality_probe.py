@@ -95,14 +95,14 @@ def main(out, name, quality, width=128, height=72):
     tiny_render(scene, "CYCLES", width, height)
     quality = None if quality == "exact" else (float(quality) if quality[0].isdigit() else quality)
     apply.apply_fog(scene, beta, error=quality)
-    choice = apply.stored_choice(scene)
+    choice = apply.stored_choice()
     render(scene, out / "auto.exr")
     apply.apply_fog(scene, beta, error=None)
     render(scene, out / "exact.exr")
     print(json.dumps({"scene": name, "beta": beta, "quality": quality, "predicted": choice["error"],
                       "steps": {k: v[0] for k, v in choice["lights"].items()},
                       "light_error": {k: v[1] for k, v in choice["lights"].items()},
-                      "lights": len(choice["lights"]), "explain": apply.explain(scene)}))
+                      "lights": len(choice["lights"]), "explain": apply.explain()}))
 
 
 if __name__ == "__main__":
