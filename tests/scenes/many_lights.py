@@ -34,6 +34,7 @@ import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests" / "scenes"))
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
@@ -43,6 +44,7 @@ from fog_addon.ops import apply  # noqa: E402
 from fog_addon.precompute import airlight, rungs, shading, surface, tables  # noqa: E402
 from fog_addon.precompute.medium import Medium  # noqa: E402
 from fog_addon.precompute.ops import NumpyOps  # noqa: E402
+from probe_common import add_point_lights, camera_rays, look_at, tiny_render  # noqa: E402
 
 BETA = 0.1                      # 1/m: optical thickness ~1.2 to the spheres, ~2 to the far lights
 ALBEDO = (0.9, 0.9, 0.85)
@@ -101,27 +103,10 @@ def build_scene(n, direct_light=False):
     is the fog's emission alone); True is an ordinary scene (benchmarks/overhead.py).
     """
     import bmesh
-    from mathutils import Vector
     bpy.ops.wm.read_factory_settings(use_empty=True)
     s = bpy.context.scene
-    cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
-    s.collection.objects.link(cam)
-    s.camera = cam
-    loc, target, lens = CAMERA
-    cam.location = loc
-    cam.rotation_euler = (Vector(target) - Vector(loc)).to_track_quat('-Z', 'Y').to_euler()
-    cam.data.clip_start = 0.001
-    cam.data.lens = lens
-    cam.data.sensor_width = 36.0
-    cam.data.sensor_fit = 'AUTO'
-    for k, (where, power, colour) in enumerate(lights(n)):
-        ob = bpy.data.objects.new(f"L{k:03d}", bpy.data.lights.new(f"L{k:03d}", "POINT"))
-        ob.data.energy, ob.data.color, ob.data.shadow_soft_size = power, colour, 0.0
-        if not direct_light:
-            ob.data.diffuse_factor = ob.data.specular_factor = 0.0   # EEVEE: no direct light on surfaces
-            ob.visible_diffuse = ob.visible_glossy = False           # Cycles: the same
-        ob.location = where
-        s.collection.objects.link(ob)
+    cam = look_at(s, *CAMERA)
+    add_point_lights(s, lights(n), fog_only=not direct_light)
     x0, x1, y0, y1 = GROUND
     bm = bmesh.new()
     bm.faces.new([bm.verts.new(v) for v in ((x0, y0, 0), (x1, y0, 0), (x1, y1, 0), (x0, y1, 0))])
@@ -151,25 +136,12 @@ def build(engine, method, n):
     """The test's scene: fog emission only, 1 spp at pixel centres, no bounces; (scene, camera, seconds to add
     the fog)."""
     s, cam = build_scene(n)
-    s.render.engine = engine
-    measure.set_resolution(s, W, H)
-    measure.set_samples(s, 1)
+    tiny_render(s, engine, W, H)
     measure.set_cycles_cpu(s)
-    measure.set_pixel_centre_filter(s)
-    s.cycles.max_bounces = 0
-    s.eevee.light_threshold = 1e-4
     t0 = time.perf_counter()
     apply.apply_fog(s, BETA, albedo=ALBEDO, method=method)
     measure.set_pixel_centre_filter(s)   # again: the fog may set up its own compositor
     return s, cam, time.perf_counter() - t0
-
-
-def camera_rays(cam):
-    ys, xs = np.mgrid[0:H, 0:W]
-    sw, f = cam.data.sensor_width, cam.data.lens
-    d = np.stack([((xs + 0.5) / W - 0.5) * sw, (0.5 - (ys + 0.5) / H) * sw * H / W, -np.full(xs.shape, f)], -1)
-    d /= np.linalg.norm(d, axis=-1, keepdims=True)
-    return np.array(cam.location), d @ np.array(cam.matrix_world.to_3x3()).T
 
 
 def hits(c, d):
@@ -258,7 +230,7 @@ def main(out_dir, engine="CYCLES", method="nodes", n="1", samples="1"):
     t_render = time.perf_counter() - t0
     print(f"many_lights: first render {t_render:.2f} s", flush=True)
     got = imageio.read_rgb(out)
-    c, d = camera_rays(cam)
+    c, d = camera_rays(cam, W, H)
     want, obj, valid, names = twin(c, d, method, n)
     res = {"lights": n, "engine": engine, "method": method, "samples": samples, "apply_s": round(t_apply, 3),
            "render_s": round(t_render, 3), "all": stats(got, want, valid),

@@ -36,6 +36,7 @@ import numpy as np  # noqa: E402
 from fog_addon import imageio, measure  # noqa: E402
 from fog_addon.nodes import graph, owned  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
+from probe_common import tiny_render  # noqa: E402
 import add_remove  # noqa: E402  (snapshot, differing)
 
 DENSITY = 0.1                 # 1/m
@@ -262,13 +263,8 @@ def add_tile(scene, name, mat, x, z, y=TILE_Y, size=TILE):
 
 
 def build(scene, tmp, engine):
-    scene.render.engine = engine
-    measure.set_resolution(scene, W, H)
-    measure.set_samples(scene, 1)
-    measure.set_pixel_centre_filter(scene)
+    tiny_render(scene, engine, W, H)
     measure.set_cycles_cpu(scene)
-    scene.cycles.max_bounces = 0
-    scene.eevee.light_threshold = 1e-4
     scene.view_settings.view_transform = "Standard"
     cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
     cam.data.lens, cam.data.sensor_width, cam.data.sensor_fit = LENS, SENSOR, "HORIZONTAL"

@@ -33,7 +33,7 @@ import numpy as np  # noqa: E402
 
 import cycles_debug_log  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
-from probe_common import camera_rays, tiny_render  # noqa: E402
+from probe_common import add_point_lights, camera_rays, look_at, tiny_render  # noqa: E402
 
 W, H = 64, 36
 BETA = 0.05
@@ -63,23 +63,10 @@ def _material(name, base, roughness):
 
 
 def build(n):
-    from mathutils import Vector
     bpy.ops.wm.read_factory_settings(use_empty=True)
     s = bpy.context.scene
-    cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
-    s.collection.objects.link(cam)
-    s.camera = cam
-    loc, target, lens = CAMERA
-    cam.location = loc
-    cam.rotation_euler = (Vector(target) - Vector(loc)).to_track_quat("-Z", "Y").to_euler()
-    cam.data.clip_start = 0.001
-    cam.data.lens, cam.data.sensor_width, cam.data.sensor_fit = lens, 36.0, "HORIZONTAL"
-    for k, (where, power, colour) in enumerate(lights(n)):
-        ob = bpy.data.objects.new(f"L{k:03d}", bpy.data.lights.new(f"L{k:03d}", "POINT"))
-        ob.data.energy, ob.data.color, ob.data.shadow_soft_size = power, colour, 0.0
-        ob.visible_diffuse = ob.visible_glossy = False   # the lights light the fog only
-        ob.location = where
-        s.collection.objects.link(ob)
+    cam = look_at(s, *CAMERA)
+    add_point_lights(s, lights(n))   # the lights light the fog only
     bpy.ops.mesh.primitive_plane_add(size=2 * GROUND)
     bpy.context.object.data.materials.append(_material("ground", (0.35, 0.35, 0.35), 0.8))
     bpy.ops.mesh.primitive_uv_sphere_add(radius=SPHERE[1], location=SPHERE[0], segments=32, ring_count=16)

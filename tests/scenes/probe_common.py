@@ -1,4 +1,6 @@
-"""What the per-pixel probes share: the tiny render set-up and the camera ray of each pixel centre."""
+"""What the per-pixel probes share: the tiny render set-up, the camera and its ray of each pixel centre, and
+point lights that light only the fog."""
+import bpy
 import numpy as np
 
 from fog_addon import measure
@@ -23,3 +25,36 @@ def camera_rays(cam, width, height):
                   -np.full(xs.shape, f)], -1)
     d /= np.linalg.norm(d, axis=-1, keepdims=True)
     return np.array(cam.location), d @ np.array(cam.matrix_world.to_3x3()).T
+
+
+def look_at(scene, location, target, lens, name="cam"):
+    """The scene's camera at ``location`` looking at ``target``: perspective, ``lens`` mm on a 36 mm sensor
+    fitted horizontally (as ``camera_rays`` assumes), clip start 1 mm (the fog starts there in Cycles)."""
+    from mathutils import Vector
+    cam = bpy.data.objects.new(name, bpy.data.cameras.new(name))
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    cam.location = location
+    cam.rotation_euler = (Vector(target) - Vector(location)).to_track_quat("-Z", "Y").to_euler()
+    cam.data.clip_start = 0.001
+    cam.data.lens, cam.data.sensor_width, cam.data.sensor_fit = lens, 36.0, "HORIZONTAL"
+    return cam
+
+
+def light_fog_only(ob):
+    """Make the light object ``ob`` light nothing but the fog: EEVEE by its diffuse and specular factors,
+    Cycles by hiding it from diffuse and glossy rays (the factors alone still let it light surfaces)."""
+    ob.data.diffuse_factor = ob.data.specular_factor = 0.0
+    ob.visible_diffuse = ob.visible_glossy = False
+
+
+def add_point_lights(scene, specs, fog_only=True):
+    """Point lights of radius 0 named L000, L001, ... from [(location, power W, RGB colour)];
+    ``fog_only``: see ``light_fog_only``."""
+    for k, (where, power, colour) in enumerate(specs):
+        ob = bpy.data.objects.new(f"L{k:03d}", bpy.data.lights.new(f"L{k:03d}", "POINT"))
+        ob.data.energy, ob.data.color, ob.data.shadow_soft_size = power, colour, 0.0
+        if fog_only:
+            light_fog_only(ob)
+        ob.location = where
+        scene.collection.objects.link(ob)

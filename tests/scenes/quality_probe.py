@@ -30,7 +30,7 @@ import bpy  # noqa: E402
 
 import demo_scenes  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
-from probe_common import tiny_render  # noqa: E402
+from probe_common import light_fog_only, tiny_render  # noqa: E402
 
 
 def random_scene(scene, seed):
@@ -68,11 +68,10 @@ def build(scene, name):
 
 
 def fog_only(scene):
-    """Lights that light nothing but the fog, and a black World: the render is the fog's light."""
+    """Lights that light nothing but the fog (``light_fog_only``), and a black World: the render is the fog's light."""
     for ob in scene.objects:
         if ob.type == "LIGHT":
-            ob.data.diffuse_factor = ob.data.specular_factor = 0.0
-            ob.visible_diffuse = ob.visible_glossy = False
+            light_fog_only(ob)
     bg = next(n for n in scene.world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
     bg.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
 
