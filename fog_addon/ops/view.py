@@ -19,7 +19,10 @@ from ..precompute import predict, surface, tables
 
 MAX_SAMPLES = 160 * 90          # rays per frame at most: one per pixel centre up to this, else a coarser grid
 MAX_FRAMES = 8                  # an animation: at most this many frames, evenly spread over the range
-SHARPEST_LEVEL = len(tables.PHONG_EXPONENTS) - 1.0   # the mirror stand-in's lobe (n = 1024)
+# (rho_d, rho_s, level) stand-ins for a material whose Principled values can't be read: each of the two
+# counts (a mix of them errs between them); the mirror has the sharpest tabulated lobe (n = 1024).
+LAMBERT = ((1.0, 1.0, 1.0), (0.0, 0.0, 0.0), 0.0)
+MIRROR = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), len(tables.PHONG_EXPONENTS) - 1.0)
 
 
 def _animated(scene):
@@ -126,7 +129,7 @@ def _sample_frame(scene, depsgraph, lights, grid):
     for d in dirs:
         hit, loc, normal, index, obj, _ = scene.ray_cast(depsgraph, origin.tolist(), d.tolist())
         if not hit:
-            rows.append((d, math.inf, (0.0, 0.0, 1.0), _lambert()))
+            rows.append((d, math.inf, (0.0, 0.0, 1.0), LAMBERT))
             continue
         if obj.name not in meshes:
             meshes[obj.name] = _MeshInfo(obj, depsgraph)
@@ -139,18 +142,10 @@ def _sample_frame(scene, depsgraph, lights, grid):
             cache[mat] = _principled(mat)
         known = cache[mat]
         dist = float(np.linalg.norm(np.array(loc) - origin))
-        for brdf in ([known] if known is not None else [_lambert(), _mirror()]):
+        for brdf in ([known] if known is not None else [LAMBERT, MIRROR]):
             rows.append((d, dist, n, brdf))
     light_pos = np.array([np.array(o.matrix_world.translation) for o in lights]).reshape(-1, 3)
     return origin, rows, light_pos
-
-
-def _lambert():
-    return (1.0, 1.0, 1.0), (0.0, 0.0, 0.0), 0.0
-
-
-def _mirror():
-    return (0.0, 0.0, 0.0), (1.0, 1.0, 1.0), SHARPEST_LEVEL
 
 
 def sample_grid(scene, max_samples=MAX_SAMPLES):
