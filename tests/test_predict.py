@@ -88,3 +88,46 @@ def test_quality_presets():
     assert predict.target_error("Draft") == 0.05 and predict.target_error("final") == 0.01
     assert predict.target_error("exact") is None and predict.target_error(None) is None
     assert predict.target_error(0.02) == 0.02
+
+
+def test_a_budget_steps_lights_down_beyond_the_target_least_error_first():
+    """EEVEE's uniform block as a budget: the steps fit it, the lights that leave out least go first, and the
+    error is still the one predicted (above the target when the budget forced it)."""
+    rng = np.random.default_rng(7)
+    p, n = 200, 12
+    scale = np.linspace(1.0, 12.0, n)[None, :, None]          # light i matters more as i grows
+    glow = rng.lognormal(0, 0.3, (p, n, 3)) * scale
+    scatter = rng.lognormal(0, 0.3, (p, n, 3)) * scale
+    budget = predict.Budget(cost=((10, 5, 1),), limit=(60,), name="test")   # full 10, glow only 5, off 1
+    free = predict.choose_steps(glow, scatter, 1e-9)
+    assert not free.steps.any(), "the target alone would keep every light: the budget must do the work"
+    pred = predict.choose_steps(glow, scatter, 1e-9, budget)
+    cost = np.array((10, 5, 1))[pred.steps].sum()
+    assert cost <= 60 and pred.fits and pred.limited
+    assert cost + 4 > 60 or (pred.steps == 2).all(), "stepped further down than the budget needs"
+    assert pred.steps[0] >= pred.steps[-1], "the brightest light stepped down before the dimmest"
+    fog = (glow + scatter).sum(axis=1)
+    dropped = (np.where(pred.steps[None, :, None] >= 1, scatter, 0)
+               + np.where(pred.steps[None, :, None] >= 2, glow, 0)).sum(axis=1)
+    assert pred.error == pytest.approx((dropped / fog).max(), rel=1e-12)
+    assert pred.error > 1e-9
+    exact = predict.choose_steps(glow, scatter, None, budget)      # Quality Exact too must fit
+    assert np.array((10, 5, 1))[exact.steps].sum() <= 60 and exact.limited
+    roomy = predict.choose_steps(glow, scatter, 1e-9, predict.Budget(((10, 5, 1),), (1000,), "roomy"))
+    assert not roomy.steps.any() and not roomy.limited
+
+
+def test_a_budget_too_small_even_for_every_light_off_says_so():
+    glow = np.ones((5, 4, 3))
+    pred = predict.choose_steps(glow, glow, 0.01, predict.Budget(((10, 5, 2),), (7,), "tiny"))
+    assert list(pred.steps) == [2, 2, 2, 2] and not pred.fits
+
+
+def test_eevee_budget_holds_fewer_full_lights_than_glow_only_ones():
+    """The measured EEVEE constants: full lights fit about a dozen times into the block, glow-only ones about
+    twenty (tests/test_many_lights.py renders 16 lights in EEVEE with the choice they make)."""
+    from fog_addon.nodes import groups  # noqa: PLC0415 (bpy)
+    b = groups.eevee_budget()
+    assert b.fits([0] * 11) and not b.fits([0] * 14)
+    assert b.fits([1] * 20) and not b.fits([1] * 23)
+    assert b.fits([2] * 160)

@@ -100,19 +100,26 @@ def choose_models(scene, lights, preference, quality):
     """Each light's models (rungs.LightModels) at ``quality``, and the choice for reports.
 
     The view is sampled by ray casts (``view.py``) and every light's step down
-    the ladder chosen by the predicted error (``predict.py``).  Returns
-    (models, choice) with choice = {"lights": {name: [step, error]}, "error": total, "target": t}.
+    the ladder chosen by the predicted error (``predict.py``).  In EEVEE the
+    steps must also fit its uniform block (``groups.eevee_budget``): lights
+    step down beyond the target, least error first, until they do.  Returns
+    (models, choice) with choice = {"lights": {name: [step, error]}, "error":
+    total, "target": t, "engine": the render engine chosen for, "limited":
+    what forced steps beyond the target, or None}.
     """
     target = predict.target_error(quality)
+    engine = scene.render.engine
+    budget = groups.eevee_budget() if engine in groups.EEVEE_ENGINES else None
     steps = [0] * len(lights)
-    choice = {"target": target, "error": 0.0, "lights": {}}
-    if lights and target is not None:
-        beta = groups.get_beta()
+    choice = {"target": target, "error": 0.0, "lights": {}, "engine": engine, "limited": None}
+    if lights and (target is not None or (budget is not None and not budget.fits(steps))):
         samples = view.view_samples(scene, lights)
-        pred = predict.predict(samples, view.light_intensities(lights), beta, target)
+        pred = predict.predict(samples, view.light_intensities(lights), groups.get_beta(), target, budget)
         steps = [int(k) for k in pred.steps]
         choice["error"] = pred.error
         choice["lights"] = {o.name: [int(k), float(e)] for o, k, e in zip(lights, pred.steps, pred.light_error)}
+        if pred.limited or not pred.fits:
+            choice["limited"] = budget.name + ("" if pred.fits else ": too many lights even with every light off")
     else:
         choice["lights"] = {o.name: [0, 0.0] for o in lights}
     return [rungs.choose(preference, k) for k in steps], choice
@@ -132,8 +139,11 @@ def explain():
     if choice is None:
         return ["the fog is not on"]
     target = choice["target"]
-    head = ("Quality Exact: every light fully modelled" if target is None else
-            f"Quality {target:.3g}: predicted error {choice['error']:.2%} (target {target:.2%})")
+    head = ("Quality Exact: every light fully modelled" if target is None and not choice.get("limited") else
+            f"Quality {'Exact' if target is None else format(target, '.3g')}: predicted error "
+            f"{choice['error']:.2%}" + ("" if target is None else f" (target {target:.2%})"))
+    if choice.get("limited"):
+        head += f"; limited by {choice['limited']}: lights step down beyond the target"
     lines = [head]
     for name, (step, err) in sorted(choice["lights"].items()):
         lines.append(f"  {name}: {rungs.STEPS[step]}" + (f" (leaves out up to {err:.2%})" if step else ""))
@@ -148,10 +158,12 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
 
     ``quality``: the target error of the lights' models.  ``rechoose``: choose the lights' models again
     from the view (``choose_models``); else keep the stored steps (lights new to the fog get the full
-    models).  Returns [(name, reason)] for lights left unfogged and clashing AOVs.
+    models).  Returns [(name, reason)] for lights left unfogged, clashing AOVs and a choice the render
+    engine limited (EEVEE's uniform block).
     """
     old = stored_choice()
-    if rechoose or old is None or old.get("quality") != quality_value(quality):
+    if (rechoose or old is None or old.get("quality") != quality_value(quality)
+            or (old.get("engine") in groups.EEVEE_ENGINES) != (scene.render.engine in groups.EEVEE_ENGINES)):
         models, choice = choose_models(scene, lights, preference, quality)
     else:
         steps = {name: step for name, (step, _) in old["lights"].items()}
@@ -180,6 +192,9 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
         surface[CHOICE_KEY] = json.dumps(choice)
     use_osl(scene, any(rungs.needs_osl(mod) for mod in models))
     notes = [(light.data.name, why) for light in lights if (why := wrap_light(light.data))]
+    if choice.get("limited"):
+        notes.append((scene.render.engine, f"limited by {choice['limited']}: predicted error "
+                                           f"{choice['error']:.2%} (render --explain lists each light's models)"))
     if with_passes:
         return notes + passes.add_view_layer_aovs(scene)
     passes.remove_view_layer_aovs(scene)

@@ -53,6 +53,19 @@ class Prediction(NamedTuple):
     light_error: Any   # (N,) max over samples of what the light's step drops / fog
     error: float       # max over samples of the sum over the lights: the predicted error of the choice
     judged: int        # samples judged (fog >= FLOOR * peak)
+    limited: bool = False   # the budget took steps beyond the target (error may exceed it)
+    fits: bool = True       # the steps fit the budget (False: even every light off does not)
+
+
+class Budget(NamedTuple):
+    """What a renderer can hold, per resource k: sum over the lights of ``cost[k][step]`` <= ``limit[k]``."""
+    cost: Any          # (K, len(rungs.STEPS)): each resource's cost of one light at each step
+    limit: Any         # (K,)
+    name: str          # what runs out (for reports)
+
+    def fits(self, steps):
+        cost = np.asarray(self.cost, float)
+        return bool((cost[:, np.asarray(steps, int)].sum(axis=1) <= np.asarray(self.limit, float)).all())
 
 
 def target_error(quality):
@@ -116,7 +129,7 @@ def light_fog(samples, intensity, beta):
     return glow, scatter
 
 
-def choose_steps(glow, scatter, target):
+def choose_steps(glow, scatter, target, budget=None):
     """Each light's step down the ladder so that the predicted error stays within ``target``.
 
     glow, scatter: (P, N, 3) from :func:`light_fog`; target: relative error
@@ -124,6 +137,11 @@ def choose_steps(glow, scatter, target):
     then its glow) are taken in order of the largest share of any judged
     sample's fog they would leave out, each while the running sum of what is
     dropped stays within ``target`` of the fog at every judged sample.
+
+    ``budget`` (:class:`Budget`, e.g. EEVEE's uniform block): if the steps
+    don't fit it, more drops are taken in the same order, whatever they
+    cost in error, until they do (``limited``; the error is still predicted
+    the same way, and may exceed the target).
     """
     glow = np.asarray(glow, float)
     scatter = np.asarray(scatter, float)
@@ -134,24 +152,31 @@ def choose_steps(glow, scatter, target):
     inv = np.where(judged, 1.0 / np.where(judged, fog, 1.0), 0.0)
     steps = np.zeros(n, int)
     dropped = np.zeros_like(fog)
+    share_s = (scatter * inv[:, None, :]).max(axis=(0, 2)) if fog.size else np.zeros(n)
+    share_g = ((glow + scatter) * inv[:, None, :]).max(axis=(0, 2)) if fog.size else np.zeros(n)
+    # a light's scatter drop sorts before its glow drop (share_g >= share_s, ties by step)
+    candidates = sorted([(share_s[i], i, 1) for i in range(n)] + [(share_g[i], i, 2) for i in range(n)])
     if target is not None and peak > 0.0:
-        share_s = (scatter * inv[:, None, :]).max(axis=(0, 2))
-        share_g = ((glow + scatter) * inv[:, None, :]).max(axis=(0, 2))
-        candidates = sorted([(share_s[i], i, 1) for i in range(n)] + [(share_g[i], i, 2) for i in range(n)])
         for _, i, step in candidates:
             if steps[i] != step - 1:
                 continue
-            add = scatter[:, i] if step == 1 else glow[:, i]
-            trial = dropped + add
+            trial = dropped + (scatter[:, i] if step == 1 else glow[:, i])
             if (trial * inv).max() <= target:
                 dropped, steps[i] = trial, step
+    limited = False
+    for _, i, step in candidates if budget is not None else ():
+        if budget.fits(steps):
+            break
+        if steps[i] == step - 1:
+            dropped, steps[i], limited = dropped + (scatter[:, i] if step == 1 else glow[:, i]), step, True
     light_drop = np.where(steps[None, :, None] >= 1, scatter, 0.0) + np.where(steps[None, :, None] >= 2, glow, 0.0)
     light_error = (light_drop * inv[:, None, :]).max(axis=(0, 2)) if fog.size else np.zeros(n)
     error = float((dropped * inv).max()) if fog.size else 0.0
-    return Prediction(steps, light_error, error, int(judged.any(axis=1).sum()))
+    fits = budget is None or budget.fits(steps)
+    return Prediction(steps, light_error, error, int(judged.any(axis=1).sum()), limited, fits)
 
 
-def predict(samples, intensity, beta, quality):
+def predict(samples, intensity, beta, quality, budget=None):
     """The choice for a view at a Quality (preset name, number or None): :class:`Prediction`."""
     glow, scatter = light_fog(samples, intensity, beta)
-    return choose_steps(glow, scatter, target_error(quality))
+    return choose_steps(glow, scatter, target_error(quality), budget)

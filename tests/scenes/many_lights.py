@@ -13,7 +13,7 @@ visibility; EEVEE: diffuse and specular factors 0), the world is black and
 there are no bounces, so each pixel is exactly the fog's emission: the glow
 of every light plus the fog light each surface reflects (Sun et al. 2005
 Eq. 19).  The twin is ``precompute.shading`` run by numpy at each pixel
-centre's camera ray (ray-plane / ray-sphere), with the models METHOD
+centre's camera ray (ray-plane / ray-sphere), with each light's models as the add-on chose them (METHOD, its stored steps)
 chooses -- as tests/scenes/shading_probe.py, for four surfaces and N lights.
 A material that renders black (shader too big for SVM, a GLSL compile or
 uniform-buffer failure, ...) shows as a ratio render / twin near 0 on its
@@ -175,11 +175,13 @@ def hits(c, d):
     return obj, t_best, valid, names
 
 
-def twin(c, d, method, n):
-    """The numpy twin of the fog's emission per pixel, and (object index, valid mask, names)."""
+def twin(c, d, method, n, steps=None):
+    """The numpy twin of the fog's emission per pixel, and (object index, valid mask, names).
+
+    ``steps``: each light's step down the ladder (rungs.STEPS) as the add-on chose it; default all full."""
     m = NumpyOps({tables.AIRLIGHT.name: airlight.bake_airlight_table(), tables.SURFACE.name: surface.surface_table()})
     med = Medium(BETA, np.asarray(ALBEDO))
-    models = rungs.choose(method)
+    steps = [0] * n if steps is None else steps
     ls = [shading.Light(np.asarray(loc, float), power / (4 * math.pi) * np.asarray(col)) for loc, power, col
           in lights(n)]
     obj, t, valid, names = hits(c, d)
@@ -192,7 +194,8 @@ def twin(c, d, method, n):
             dd = d[sel]
             if name == "background":
                 out[sel] = shading.shade_background(
-                    m, [shading.background_point(m, c, dd, li, med, models) for li in ls], med, 1.0)[0]
+                    m, [shading.background_point(m, c, dd, li, med, rungs.choose(method, k))
+                        for li, k in zip(ls, steps)], med, 1.0)[0]
                 continue
             tt = t[sel]
             p = c + dd * tt[:, None]
@@ -205,7 +208,8 @@ def twin(c, d, method, n):
             rho_d, rho_s, lev = surface.principled_to_phong(m, np.asarray(base, float), np.asarray(metal),
                                                              np.asarray(rough), np.asarray(level))
             geo = shading.Geometry(c, p, -dd, tt, normal)
-            terms = [shading.shade_point(m, geo, shading.Material(rho_d, rho_s, lev), li, med, models) for li in ls]
+            terms = [shading.shade_point(m, geo, shading.Material(rho_d, rho_s, lev), li, med, rungs.choose(method, k))
+                     for li, k in zip(ls, steps)]
             out[sel] = shading.shade_surface(m, terms, med, tt, 1.0).emission
     return out, obj, valid, names
 
@@ -231,9 +235,12 @@ def main(out_dir, engine="CYCLES", method="nodes", n="1", samples="1"):
     print(f"many_lights: first render {t_render:.2f} s", flush=True)
     got = imageio.read_rgb(out)
     c, d = camera_rays(cam, W, H)
-    want, obj, valid, names = twin(c, d, method, n)
+    choice = apply.stored_choice()
+    steps = [choice["lights"][f"L{k:03d}"][0] for k in range(n)]
+    want, obj, valid, names = twin(c, d, method, n, steps)
     res = {"lights": n, "engine": engine, "method": method, "samples": samples, "apply_s": round(t_apply, 3),
-           "render_s": round(t_render, 3), "all": stats(got, want, valid),
+           "render_s": round(t_render, 3), "steps": steps, "predicted_error": choice["error"],
+           "limited": choice.get("limited"), "all": stats(got, want, valid),
            "objects": {name: stats(got, want, valid & (obj == k)) for k, name in enumerate(names)}}
     np.save(pathlib.Path(out_dir) / f"twin_{engine}_{method}_{n}.npy", want)
     print("MANY_LIGHTS_JSON " + json.dumps(res), flush=True)
