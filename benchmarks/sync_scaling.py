@@ -5,7 +5,7 @@
     .venv/bin/python benchmarks/sync_scaling.py --chart-only [--out CSV] [--chart PNG]
 
 Every fogged material inlines one copy of a light's node group per fog light
-(``nodes/groups.py``: about 500 nodes a light).  Before Cycles compiles a
+(``nodes/groups.py``: about 450 nodes a light).  Before Cycles compiles a
 material to SVM it simplifies the inlined graph, and its node deduplication
 (``ShaderGraph::deduplicate_nodes``, intern/cycles/scene/shader_graph.cpp)
 compares every node with every earlier node of the same type: a profile of

@@ -112,16 +112,17 @@ F, V, C = "NodeSocketFloat", "NodeSocketVector", "NodeSocketColor"
 # EEVEE keeps a material's node constants, its inlined groups' included, in one uniform block of at most
 # 64 KiB; beyond it the material fails to link ("Uniform block node_tree too big (78832/65536)") and
 # renders EEVEE's fallback.  What one light's group costs there, by ladder step (rungs.STEPS), from the
-# overflow messages of tests/scenes/many_lights.py in EEVEE (bpy 5.0.1): full 4 910 bytes (16 lights:
-# 78 832, 64: 314 384), glow only 2 649 (25: 66 496, 36: 95 632), off at most 334 (196 lights fit);
-# the World 936 per light whose glow is on (256 lights: 239 728).  About 10 bytes per node: a group's
-# constants become uniforms of every instance (1 000 Multiply-by-a-constant nodes in a group used 20
-# times: 240 032 bytes), and linking them from shared Value nodes in the group changed nothing.
+# overflow messages of tests/scenes/many_lights.py in EEVEE (bpy 5.0.1): full 4 610 bytes (16 lights:
+# 74 032), glow only 2 517 (36: 90 880), off at most 334 (196 lights fit); the World 936 per light whose
+# glow is on (256 lights: 239 728).  About 10 bytes per node: a group's constants become uniforms of
+# every instance (1 000 Multiply-by-a-constant nodes in a group used 20 times: 240 032 bytes), and
+# linking them from shared Value nodes in the group changed nothing.  (Before the lighter table lookup
+# of ``sockets.NodeOps.table``: 4 910 and 2 649.)
 EEVEE_ENGINES = ("BLENDER_EEVEE", "BLENDER_EEVEE_NEXT")
 EEVEE_UNIFORM_LIMIT = 65536
 EEVEE_UNIFORM_RESERVE = 8192    # the material's own nodes and the Surface group's shared ones (272 measured
                                 # for a bare Principled BSDF)
-EEVEE_MATERIAL_BYTES = (4910, 2649, 334)
+EEVEE_MATERIAL_BYTES = (4610, 2517, 334)
 EEVEE_WORLD_BYTES = (936, 936, 0)
 
 

@@ -76,6 +76,7 @@ def airlight_segment(m, beta, d_sv, along, h, d_vp):
     d_vp: viewer-surface distance (all m).  The light-surface distance is
     D_sp = sqrt((d_vp - along)^2 + h^2).
     """
+    neg_beta = -beta   # once, not per use: every material inlines this per light
     z1 = d_vp - along
     d_sp = m.sqrt(z1 * z1 + h * h)
     h = m.maximum(h, MIN_ANGLE * d_sv)
@@ -87,15 +88,16 @@ def airlight_segment(m, beta, d_sv, along, h, d_vp):
     xi1 = m.atan2(q1, h)
     # P = Q1 - Q0 = d_vp + d_sp - d_sv = d_vp (q0 + q1) / (d_sv + d_sp), without cancellation.
     seg = d_vp * (q0 + q1) / m.maximum(d_sp + d_sv, 1e-30)
-    long_ = airlight_tail(m, beta, r0, xi0) - m.exp(-beta * seg) * airlight_tail(m, beta, r1, xi1)
+    long_ = airlight_tail(m, beta, r0, xi0) - m.exp(neg_beta * seg) * airlight_tail(m, beta, r1, xi1)
     short = 0.0
+    h2 = h * h
     for x, w in zip(_GL_X, _GL_W):
         p = seg * x
         q = q0 + p
-        short = short + w * m.exp(-beta * p) / m.maximum(q * q + h * h, 1e-30)
+        short = short + w * m.exp(neg_beta * p) / m.maximum(q * q + h2, 1e-30)
     short = short * seg
     is_short = m.less(beta * seg, SHORT_SEGMENT * m.minimum(1.0, beta * r0))
-    return (beta * INV_2PI) * m.exp(-beta * d_sv) * m.select(is_short, short, long_)
+    return (beta * INV_2PI) * m.exp(neg_beta * d_sv) * m.select(is_short, short, long_)
 
 
 def airlight_background(m, beta, d_sv, along, h):
