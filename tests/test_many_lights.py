@@ -175,3 +175,16 @@ def test_closure_sum_renders_every_closure(tmp_path):
         assert r["osl_stack_depth"] <= max(0, (int(n) - 1).bit_length()), (n, r)
         for key in ("svm_surface", "svm_world", "osl_surface", "osl_world"):
             assert all(abs(x - 1.0) < 1e-5 for x in r[key]), (n, key, r[key])
+
+
+def test_switching_to_eevee_rechooses_within_its_budget():
+    """16 lights fit Cycles fully modelled but not EEVEE's uniform block: switching the engine makes the
+    add-on's handler choose again (EEVEE: within the block, saying it is limited), and back."""
+    proc = h.run([h.ROOT / "tests" / "scenes" / "engine_switch.py"], timeout=300)
+    line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("ENGINE_SWITCH_JSON "))
+    res = json.loads(line.split(" ", 1)[1])
+    assert res["cycles"]["engine"] == "CYCLES" and not res["cycles"]["fits_eevee"], res["cycles"]
+    assert res["eevee"]["engine"] == "BLENDER_EEVEE" and res["eevee"]["fits_eevee"], res["eevee"]
+    assert res["eevee"]["limited"] and res["eevee"]["error"] > 0.0, res["eevee"]
+    assert res["cycles_again"]["engine"] == "CYCLES" and res["cycles_again"]["limited"] is None, res["cycles_again"]
+    assert res["cycles_again"]["steps"] == res["cycles"]["steps"], res
