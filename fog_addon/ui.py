@@ -28,7 +28,10 @@ def _draw_models(layout, settings):
         box.label(text="Add the fog to see each light's models")
         return
     lines = apply.explain()
-    box.label(text=lines[0])
+    head, *limit = lines[0].split("; limited by ")   # EEVEE's uniform block: a warning of its own
+    box.label(text=head)
+    for why in limit:
+        box.label(text="Limited by " + why, icon="ERROR")
     cheaper = [line for line in lines[1:] if not line.endswith(": full")]
     for line in cheaper[:MAX_LISTED]:
         box.label(text=line.strip(), icon="DOT")
