@@ -283,6 +283,16 @@ def stats(cached, exact, floor=1e-3):
     return out
 
 
+def centre_and_default(scene, stem):
+    """Render at pixel centres (1 spp) and with the default filter (SPP, 64): {name: (cpu s, wall s)}."""
+    set_filter(scene, "centre", 1)
+    info = {"centre_1": timed_render(scene, f"{stem}_centre.exr")}
+    spp = int(os.environ.get("SPP", 64))
+    set_filter(scene, "default", spp)
+    info[f"default_{spp}"] = timed_render(scene, f"{stem}_default{spp}.exr")
+    return info
+
+
 def main():
     if sys.argv[1] == "compare":
         print(json.dumps(stats(read(sys.argv[2]), read(sys.argv[3])), indent=1))
@@ -295,22 +305,14 @@ def main():
         t0 = time.process_time()
         apply.apply_fog(scene, beta, albedo=albedo, error="exact")
         info["apply"] = time.process_time() - t0
-        set_filter(scene, "centre", 1)
-        info["centre_1"] = timed_render(scene, f"{out}/exact_centre.exr")
-        spp = int(os.environ.get("SPP", 64))
-        set_filter(scene, "default", spp)
-        info[f"default_{spp}"] = timed_render(scene, f"{out}/exact_default{spp}.exr")
+        info.update(centre_and_default(scene, f"{out}/exact"))
     elif mode == "cached":
         scale, interp = int(sys.argv[4]), sys.argv[5]
         img, info["bake"] = bake(scene, beta, albedo, scale)
         rewire(scene, img, interp)
         info["lookup_nodes"] = LOOKUP_NODES[0]
         tag = f"s{scale}_{interp}"
-        set_filter(scene, "centre", 1)
-        info["centre_1"] = timed_render(scene, f"{out}/cached_{tag}_centre.exr")
-        spp = int(os.environ.get("SPP", 64))
-        set_filter(scene, "default", spp)
-        info[f"default_{spp}"] = timed_render(scene, f"{out}/cached_{tag}_default{spp}.exr")
+        info.update(centre_and_default(scene, f"{out}/cached_{tag}"))
     elif mode == "time":
         kind = sys.argv[4]
         set_filter(scene, "default", 16)
