@@ -27,11 +27,10 @@ def _draw_models(layout, settings):
     if choice is None:
         box.label(text="Add the fog to see each light's models")
         return
-    lines = apply.explain()
-    head, *limit = lines[0].split("; limited by ")   # EEVEE's uniform block: a warning of its own
-    box.label(text=head)
-    for why in limit:
-        box.label(text="Limited by " + why, icon="ERROR")
+    box.label(text=apply.quality_head(choice))
+    if (limit := apply.limit_text(choice)) is not None:   # EEVEE's uniform block: a warning of its own
+        box.label(text=limit[0].upper() + limit[1:], icon="ERROR")
+    lines = apply.explain(choice)
     cheaper = [line for line in lines[1:] if not line.endswith(": full")]
     for line in cheaper[:MAX_LISTED]:
         box.label(text=line.strip(), icon="DOT")

@@ -154,7 +154,8 @@ def test_log_scan_catches_known_errors():
             "00:02.964  render           | Saved: '/tmp/out/many_CYCLES_nodes_1.exr'",
             'many_lights: 4 lights, CYCLES nodes: fog added in 2.09 s',
             "note: BLENDER_EEVEE: limited by EEVEE's uniform block (64 KiB of node constants per material): "
-            "predicted error 33.48 % (render --explain lists each light's models)"]
+            "lights step down beyond the target, predicted error 15.16% (render --explain lists each light's "
+            "models)"]
     assert len(h.log_errors("\n".join(bad))) == len(bad)
     assert h.log_errors("\n".join(good)) == []
 

@@ -118,7 +118,7 @@ F, V, C = "NodeSocketFloat", "NodeSocketVector", "NodeSocketColor"
 # every instance (1 000 Multiply-by-a-constant nodes in a group used 20 times: 240 032 bytes), and
 # linking them from shared Value nodes in the group changed nothing.  (Before the lighter table lookup
 # of ``sockets.NodeOps.table``: 4 910 and 2 649.)
-EEVEE_ENGINES = ("BLENDER_EEVEE", "BLENDER_EEVEE_NEXT")
+EEVEE_ENGINE = "BLENDER_EEVEE"
 EEVEE_UNIFORM_LIMIT = 65536
 EEVEE_UNIFORM_RESERVE = 8192    # the material's own nodes and the Surface group's shared ones (272 measured
                                 # for a bare Principled BSDF)

@@ -109,7 +109,7 @@ def choose_models(scene, lights, preference, quality):
     """
     target = predict.target_error(quality)
     engine = scene.render.engine
-    budget = groups.eevee_budget() if engine in groups.EEVEE_ENGINES else None
+    budget = groups.eevee_budget() if engine == groups.EEVEE_ENGINE else None
     steps = [0] * len(lights)
     choice = {"target": target, "error": 0.0, "lights": {}, "engine": engine, "limited": None}
     if lights and (target is not None or (budget is not None and not budget.fits(steps))):
@@ -133,18 +133,29 @@ def stored_choice():
     return json.loads(surface[CHOICE_KEY])
 
 
-def explain():
-    """Lines that say which models each light got and the error predicted (panel, operator, ``--explain``)."""
-    choice = stored_choice()
+def quality_head(choice):
+    """One line: the Quality of ``choice`` (see choose_models) and the error it is predicted to make."""
+    target = choice["target"]
+    if target is None and not choice.get("limited"):
+        return "Quality Exact: every light fully modelled"
+    if target is None:
+        return f"Quality Exact: predicted error {choice['error']:.2%}"
+    return f"Quality {target:.3g}: predicted error {choice['error']:.2%} (target {target:.2%})"
+
+
+def limit_text(choice):
+    """What limited ``choice`` beyond its target (EEVEE's uniform block), as a phrase, or None."""
+    return f"limited by {choice['limited']}: lights step down beyond the target" if choice.get("limited") else None
+
+
+def explain(choice=None):
+    """Lines that say which models each light got and the error predicted (panel, operator, ``--explain``):
+    the Quality (and what limited it), then one line per light.  ``choice``: default the stored one."""
+    choice = stored_choice() if choice is None else choice
     if choice is None:
         return ["the fog is not on"]
-    target = choice["target"]
-    head = ("Quality Exact: every light fully modelled" if target is None and not choice.get("limited") else
-            f"Quality {'Exact' if target is None else format(target, '.3g')}: predicted error "
-            f"{choice['error']:.2%}" + ("" if target is None else f" (target {target:.2%})"))
-    if choice.get("limited"):
-        head += f"; limited by {choice['limited']}: lights step down beyond the target"
-    lines = [head]
+    limit = limit_text(choice)
+    lines = [quality_head(choice) + (f"; {limit}" if limit else "")]
     for name, (step, err) in sorted(choice["lights"].items()):
         lines.append(f"  {name}: {rungs.STEPS[step]}" + (f" (leaves out up to {err:.2%})" if step else ""))
     return lines
@@ -163,7 +174,7 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
     """
     old = stored_choice()
     if (rechoose or old is None or old.get("quality") != quality_value(quality)
-            or (old.get("engine") in groups.EEVEE_ENGINES) != (scene.render.engine in groups.EEVEE_ENGINES)):
+            or (old.get("engine") == groups.EEVEE_ENGINE) != (scene.render.engine == groups.EEVEE_ENGINE)):
         models, choice = choose_models(scene, lights, preference, quality)
     else:
         steps = {name: step for name, (step, _) in old["lights"].items()}
@@ -192,9 +203,9 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
         surface[CHOICE_KEY] = json.dumps(choice)
     use_osl(scene, any(rungs.needs_osl(mod) for mod in models))
     notes = [(light.data.name, why) for light in lights if (why := wrap_light(light.data))]
-    if choice.get("limited"):
-        notes.append((scene.render.engine, f"limited by {choice['limited']}: predicted error "
-                                           f"{choice['error']:.2%} (render --explain lists each light's models)"))
+    if (limit := limit_text(choice)) is not None:
+        notes.append((scene.render.engine, f"{limit}, predicted error {choice['error']:.2%} "
+                                           "(render --explain lists each light's models)"))
     if with_passes:
         return notes + passes.add_view_layer_aovs(scene)
     passes.remove_view_layer_aovs(scene)

@@ -147,8 +147,8 @@ class NumpyOps:
         """Bilinear lookup of table ``spec`` at grid coordinates x, y in [0, 1].
 
         ``row0``/``rows`` select a horizontal band of the image (stacked tables).
-        The same interpolation as the four Closest taps of the node version (a + t (b - a) here, Mix nodes
-        there: equal but for rounding).
+        The same interpolation as the four Closest taps of the node version (a + t (b - a) here, a Multiply
+        Add node there: equal but for rounding).
         """
         arr = self.tables[spec.name]
         rows = arr.shape[0] if rows is None else rows

@@ -156,11 +156,14 @@ def choose_steps(glow, scatter, target, budget=None):
     share_g = ((glow + scatter) * inv[:, None, :]).max(axis=(0, 2)) if fog.size else np.zeros(n)
     # a light's scatter drop sorts before its glow drop (share_g >= share_s, ties by step)
     candidates = sorted([(share_s[i], i, 1) for i in range(n)] + [(share_g[i], i, 2) for i in range(n)])
+    def drop(i, step):   # what light i's step leaves out, (P, 3)
+        return scatter[:, i] if step == 1 else glow[:, i]
+
     if target is not None and peak > 0.0:
         for _, i, step in candidates:
             if steps[i] != step - 1:
                 continue
-            trial = dropped + (scatter[:, i] if step == 1 else glow[:, i])
+            trial = dropped + drop(i, step)
             if (trial * inv).max() <= target:
                 dropped, steps[i] = trial, step
     limited = False
@@ -168,7 +171,7 @@ def choose_steps(glow, scatter, target, budget=None):
         if budget.fits(steps):
             break
         if steps[i] == step - 1:
-            dropped, steps[i], limited = dropped + (scatter[:, i] if step == 1 else glow[:, i]), step, True
+            dropped, steps[i], limited = dropped + drop(i, step), step, True
     light_drop = np.where(steps[None, :, None] >= 1, scatter, 0.0) + np.where(steps[None, :, None] >= 2, glow, 0.0)
     light_error = (light_drop * inv[:, None, :]).max(axis=(0, 2)) if fog.size else np.zeros(n)
     error = float((dropped * inv).max()) if fog.size else 0.0

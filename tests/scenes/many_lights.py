@@ -13,8 +13,9 @@ visibility; EEVEE: diffuse and specular factors 0), the world is black and
 there are no bounces, so each pixel is exactly the fog's emission: the glow
 of every light plus the fog light each surface reflects (Sun et al. 2005
 Eq. 19).  The twin is ``precompute.shading`` run by numpy at each pixel
-centre's camera ray (ray-plane / ray-sphere), with each light's models as the add-on chose them (METHOD, its stored steps)
-chooses -- as tests/scenes/shading_probe.py, for four surfaces and N lights.
+centre's camera ray (ray-plane / ray-sphere), with each light's models as the
+add-on chose them (METHOD and its stored steps) -- as tests/scenes/shading_probe.py,
+for four surfaces and N lights.
 A material that renders black (shader too big for SVM, a GLSL compile or
 uniform-buffer failure, ...) shows as a ratio render / twin near 0 on its
 object's pixels.
@@ -181,7 +182,7 @@ def twin(c, d, method, n, steps=None):
     ``steps``: each light's step down the ladder (rungs.STEPS) as the add-on chose it; default all full."""
     m = NumpyOps({tables.AIRLIGHT.name: airlight.bake_airlight_table(), tables.SURFACE.name: surface.surface_table()})
     med = Medium(BETA, np.asarray(ALBEDO))
-    steps = [0] * n if steps is None else steps
+    models = [rungs.choose(method, k) for k in ([0] * n if steps is None else steps)]
     ls = [shading.Light(np.asarray(loc, float), power / (4 * math.pi) * np.asarray(col)) for loc, power, col
           in lights(n)]
     obj, t, valid, names = hits(c, d)
@@ -194,8 +195,8 @@ def twin(c, d, method, n, steps=None):
             dd = d[sel]
             if name == "background":
                 out[sel] = shading.shade_background(
-                    m, [shading.background_point(m, c, dd, li, med, rungs.choose(method, k))
-                        for li, k in zip(ls, steps)], med, 1.0)[0]
+                    m, [shading.background_point(m, c, dd, li, med, mod) for li, mod in zip(ls, models)],
+                    med, 1.0)[0]
                 continue
             tt = t[sel]
             p = c + dd * tt[:, None]
@@ -208,8 +209,8 @@ def twin(c, d, method, n, steps=None):
             rho_d, rho_s, lev = surface.principled_to_phong(m, np.asarray(base, float), np.asarray(metal),
                                                              np.asarray(rough), np.asarray(level))
             geo = shading.Geometry(c, p, -dd, tt, normal)
-            terms = [shading.shade_point(m, geo, shading.Material(rho_d, rho_s, lev), li, med, rungs.choose(method, k))
-                     for li, k in zip(ls, steps)]
+            terms = [shading.shade_point(m, geo, shading.Material(rho_d, rho_s, lev), li, med, mod)
+                     for li, mod in zip(ls, models)]
             out[sel] = shading.shade_surface(m, terms, med, tt, 1.0).emission
     return out, obj, valid, names
 
