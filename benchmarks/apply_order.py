@@ -19,13 +19,14 @@ time of each step; not the add-on's code path (a what-if for a fix in
 ``ops/apply.py``).  Output: benchmarks/out/apply_order.csv.
 """
 import argparse
-import csv
 import json
 import os
 import pathlib
 import subprocess
 import sys
 import time
+
+import csv_rows
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "out"
@@ -101,11 +102,7 @@ def main(argv=None):
                      "cpu_seconds": round(total, 3), "materials": args.materials, "lights": args.lights,
                      "fogged": fogged, "load_avg": load_avg()})
         print(f"{order}  {'total':52s} {'':16s} {total:7.2f} s cpu, {fogged} materials fogged", flush=True)
-    OUT.mkdir(parents=True, exist_ok=True)
-    with open(OUT / "apply_order.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    csv_rows.write(OUT / "apply_order.csv", rows)
     print(f"wrote {OUT / 'apply_order.csv'}")
     return 0
 

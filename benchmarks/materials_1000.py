@@ -35,7 +35,6 @@ benchmarks/out/materials_1000_profile.txt.
 """
 import argparse
 import cProfile
-import csv
 import inspect
 import io
 import os
@@ -43,6 +42,8 @@ import pathlib
 import pstats
 import sys
 import time
+
+import csv_rows
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -243,11 +244,7 @@ def main(argv=None):
     finally:
         fog_addon.unregister()
 
-    OUT.mkdir(parents=True, exist_ok=True)
-    with open(OUT / "materials_1000.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    csv_rows.write(OUT / "materials_1000.csv", rows)
     print(f"wrote {OUT / 'materials_1000.csv'}")
     adds = [r for r in rows if "apply_fog" in r["step"] or r["step"].startswith("bpy.ops.fog.add")]
     for key in ("seconds", "cpu_seconds"):

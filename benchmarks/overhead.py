@@ -100,6 +100,8 @@ import sys
 import tempfile
 import time
 
+import csv_rows
+
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
@@ -499,15 +501,6 @@ def merged(new, old):
     return sorted(rows, key=lambda r: (order.index(r["method"]) if r["method"] in order else 99, int(r["lights"])))
 
 
-def write_csv(rows, path):
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=FIELDS)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in r.items() if k in FIELDS})
-
-
 def read_csv(path):
     with open(path) as f:
         rows = list(csv.DictReader(f))
@@ -696,10 +689,10 @@ def main(argv=None):
             elif row["status"] == "timeout" and stopped_at is None:
                 stopped_at = n
             cross_check(rows)
-            write_csv(merged(rows, kept), csv_path)
+            csv_rows.write(csv_path, merged(rows, kept), FIELDS, digits=4)
     rows = merged(rows, kept)
     cross_check(rows)
-    write_csv(rows, csv_path)
+    csv_rows.write(csv_path, rows, FIELDS, digits=4)
     chart(rows, png_path)
     print_table(rows)
     print(f"\nwrote {csv_path}, {png_path} in {time.perf_counter() - t0:.0f} s")

@@ -92,6 +92,8 @@ import time
 
 import numpy as np
 
+import csv_rows
+
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
@@ -381,16 +383,6 @@ def equal_error(rows, gt_spp, key="render_cpu_s"):
     return summary
 
 
-def write_csv(path, fields, rows):
-    """Write ``rows`` (dicts) with floats to 6 significant digits."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=fields)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
-
-
 QUALITY_MARKERS = {"draft": "v", "final": "o", "exact": "D"}
 ANALYTIC_COLOURS = {("nodes", "cycles"): "C0", ("osl", "cycles"): "C1", ("nodes", "eevee"): "C2"}
 
@@ -515,7 +507,7 @@ def replot(key):
            "threads": ok[0]["threads"], "qualities": tuple(q for q in QUALITIES
                                                             if any(r["setting"] == q for r in ok))}
     summary = equal_error(rows, cfg["gt_samples"], key)
-    write_csv(SUMMARY_CSV, SUMMARY_FIELDS, summary)
+    csv_rows.write(SUMMARY_CSV, summary, SUMMARY_FIELDS, digits=6)
     chart(rows, summary, cfg, key)
     print_summary(summary)
     print(f"\nwrote {SUMMARY_CSV.relative_to(ROOT)}, {PNG.relative_to(ROOT)} from {CSV.relative_to(ROOT)}")
@@ -572,9 +564,9 @@ def main(argv=None):
             gt = ground_truth(scene, beta, blend, cfg, args.regen, scratch)
             for case in cases(cfg, beta):
                 rows += measure_case(case, scene, beta, blend, gt, cfg, scratch)
-    write_csv(CSV, FIELDS, rows)
+    csv_rows.write(CSV, rows, FIELDS, digits=6)
     summary = equal_error(rows, cfg["gt_samples"], key)
-    write_csv(SUMMARY_CSV, SUMMARY_FIELDS, summary)
+    csv_rows.write(SUMMARY_CSV, summary, SUMMARY_FIELDS, digits=6)
     chart(rows, summary, cfg, key)
     print_summary(summary)
     print(f"\nwrote {CSV.relative_to(ROOT)}, {SUMMARY_CSV.relative_to(ROOT)}, {PNG.relative_to(ROOT)} "

@@ -38,12 +38,13 @@ exponent of sync time against lights over N >= 9).
 import argparse
 import csv
 import json
-import math
 import os
 import pathlib
 import subprocess
 import sys
 import time
+
+import csv_rows
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "out"
@@ -203,13 +204,7 @@ def main(argv=None):
             row = run_case(n, m, a.budget, tmp)
             print(json.dumps(row), flush=True)
             rows.append(row)
-    a.out.parent.mkdir(parents=True, exist_ok=True)
-    with open(a.out, "w", newline="") as f:
-        w = csv.DictWriter(f, FIELDS)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{v:.4g}" if isinstance(v, float) and math.isfinite(v) else v)
-                        for k, v in r.items() if k in FIELDS})
+    csv_rows.write(a.out, rows, FIELDS, digits=4)
     k = fit_exponent(rows)
     print(f"sync time ~ lights^{k:.2f} (N >= {FIT_FROM}, 4 materials)" if k else "too few cases to fit")
     chart(rows, a.chart)
