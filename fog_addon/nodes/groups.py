@@ -22,6 +22,7 @@ Each group records the fingerprint of the code that built it
 saved file made by other code rebuilds it.
 """
 import math
+import re
 import sys
 
 import bpy
@@ -36,6 +37,10 @@ LIGHT = "AnalyticFog Light"
 BACKGROUND_LIGHT = "AnalyticFog Background Light"
 SURFACE = "AnalyticFog Surface"
 WORLD = "AnalyticFog World"
+SURFACE_LIGHTS = SURFACE + " Lights"   # bundles: "AnalyticFog Surface Lights 1-8", ... (``_bundles``)
+WORLD_LIGHTS = WORLD + " Lights"
+BUNDLE = 8   # lights per bundle group (``_bundles``)
+_BUNDLE_NAME = re.compile(rf"^({re.escape(SURFACE_LIGHTS)}|{re.escape(WORLD_LIGHTS)}) \d+-\d+$")
 
 FOG_PROP = "analytic_fog"   # custom-property key marking data the fog made or changed
 BUILDING = " (building)"     # name suffix of a group being built beside the one in use
@@ -58,11 +63,14 @@ def background_group_name(models):
 
 
 def all_group_names():
-    """Every group name the fog can make (for Remove and for merging appended copies)."""
+    """Every group name the fog can make (for Remove and for merging appended copies): the fixed ones and
+    the light bundles this file has (their names without a ``.NNN`` suffix)."""
     names = [PARAMS, SURFACE, WORLD]
     for pref in rungs.PREFERENCES:
         models = rungs.choose(pref)
         names += [light_group_name(models), background_group_name(models)]
+    names += sorted(base for ng in bpy.data.node_groups
+                    if _BUNDLE_NAME.match(base := re.sub(r"\.\d{3,}$", "", ng.name)))
     return list(dict.fromkeys(names))
 
 
@@ -274,6 +282,74 @@ def _light_instance(ng, k, light, group_name, inputs):
     return node
 
 
+def _bundles(lights, models):
+    """[(index of the first light, lights, models)] in runs of at most ``BUNDLE`` lights.
+
+    Why bundles: Blender updates the whole node tree on every edit through its Python API (about 1 us
+    per node already in the tree for each node added, link made or value set), so a Surface group
+    holding every light's nodes took time growing with the square of the lights to build (64 lights:
+    13 s; 256: minutes).  Each bundle is a group of its own, small while it is built, and the Surface
+    and World groups hold one node per bundle.  Cycles and EEVEE inline groups, so what they compile
+    is the same graph.
+    """
+    return [(k, lights[k:k + BUNDLE], models[k:k + BUNDLE]) for k in range(0, len(lights), BUNDLE)]
+
+
+def _bundle_name(prefix, first, lights):
+    return f"{prefix} {first + 1}-{first + len(lights)}"
+
+
+def _group_node(ng, tree, name, x, y, links=()):
+    """A group node for ``tree`` in ``ng``, its inputs linked from ``links`` ((output socket, input name))."""
+    node = ng.nodes.new("ShaderNodeGroup")
+    node.node_tree = tree
+    node.name = node.label = name
+    node.location = (x, y)
+    for src, dst in links:
+        ng.links.new(src, node.inputs[dst])
+    return node
+
+
+_SURFACE_SHARED = (("Beta", F), ("Position", V), ("Incoming", V), ("View Distance", F), ("Normal", V),
+                   ("Diffuse", C), ("Specular", C), ("Glossy Level", F))   # a light group's inputs but its own
+RUNNING = "Running Sum"   # a bundle's input and output with the fog passes: the Fog Light pass so far
+
+
+def build_surface_bundle(first, lights, models, images, with_passes, chained):
+    """One bundle of the Surface group (``_bundles``): ``shading.sum_lights`` over ``lights``
+    (Sun et al. 2005 Eq. 19's L_a) from their per-light groups (``build_light``).
+
+    Outputs: Fog (one Emission closure per lit light, times the Opacity input), Emission (their colours'
+    sum), Weighted and Weight (``shading.LightSums``).  ``with_passes``: Running Sum out is Running Sum in
+    (``chained``; else nothing) plus this bundle's Fog Light (``_chained_closure_sum``).
+    """
+    name = _bundle_name(SURFACE_LIGHTS, first, lights)
+    inputs = [*_SURFACE_SHARED, ("Albedo", C), ("View Transmittance", F), ("Is Camera", F), (passes.OPACITY, C)]
+    outputs = [("Fog", "NodeSocketShader"), ("Emission", C), ("Weighted", F), ("Weight", F)]
+    if with_passes:
+        inputs, outputs = inputs + [(RUNNING, C)], outputs + [(RUNNING, C)]
+    ng, gin, gout = _new_group(name, inputs, outputs)
+    m = NodeOps(ng, {})
+    g = {s.name: s for s in gin.outputs if s.name}
+    terms = []
+    for k, (light, mod) in enumerate(zip(lights, models)):
+        node = _light_instance(ng, first + k, light, build_light(mod, images).name,
+                               [(g[n], n) for n, _ in _SURFACE_SHARED])
+        terms.append(shading.LightTerms(*(m.wrap(node.outputs[f], vector=node.outputs[f].type != "VALUE")
+                                          for f in ("Airlight", "Scattered", "Attenuation", "Weight"))))
+    sums = shading.sum_lights(m, terms, _medium(m, g["Beta"], g["Albedo"]), m.wrap(g["View Transmittance"]),
+                              m.wrap(g["Is Camera"]))
+    opacity = m.wrap(g[passes.OPACITY], vector=True)
+    _closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", [m.wrap(e, vector=True) * opacity
+                                                                for e, mod in zip(sums.emissions, models) if _lit(mod)])
+    for sock, v in (("Emission", sums.emission), ("Weighted", sums.weighted), ("Weight", sums.weight)):
+        m.feed(gout.inputs[sock], m.wrap(v))
+    if with_passes:
+        start = m.wrap(g[RUNNING], vector=True) if chained else None
+        m.feed(gout.inputs[RUNNING], _chained_closure_sum(m, gout.inputs["Fog"], start))
+    return _install(ng, name)
+
+
 def build_surface(lights, models, images, with_passes=False):
     """Scene group for materials: ``shading.shade_surface`` (Sun et al. 2005 Eq. 19) over ``lights``.
 
@@ -285,6 +361,7 @@ def build_surface(lights, models, images, with_passes=False):
     (EEVEE's stand-in for the per-light e^{-beta D_sp}) and per engine the
     Mix Factor 1 - scale of the user's shader.  ``with_passes``: it writes the
     fog passes (``passes.py``), weighted by the Opacity input (white: opaque).
+    The lights sit in bundle groups (``_bundles``, ``build_surface_bundle``).
 
     Why closures: Cycles' SVM emits a shader's value nodes in the order of
     their ids, so one colour summed over the lights keeps every light's values
@@ -307,25 +384,33 @@ def build_surface(lights, models, images, with_passes=False):
     diffuse, specular, level = surface.principled_to_phong(
         m, m.wrap(g["Base Color"], vector=True), m.wrap(g["Metallic"]), m.wrap(g["Roughness"]),
         m.wrap(g["Specular IOR Level"]))
-    terms = []
-    for k, (light, mod) in enumerate(zip(lights, models)):
-        node = _light_instance(ng, k, light, build_light(mod, images).name, (
-            (params.outputs["Beta"], "Beta"), (geo.outputs["Position"], "Position"), (geo.outputs["Incoming"], "Incoming"),
-            (cam.outputs["View Distance"], "View Distance"), (geo.outputs["Normal"], "Normal"),
-            (diffuse.sock, "Diffuse"), (specular.sock, "Specular"), (level.sock, "Glossy Level")))
-        terms.append(shading.LightTerms(*(m.wrap(node.outputs[f], vector=node.outputs[f].type != "VALUE")
-                                          for f in ("Airlight", "Scattered", "Attenuation", "Weight"))))
-    fog = shading.shade_surface(m, terms, _medium(m, params.outputs["Beta"], params.outputs["Albedo"]),
-                                m.wrap(cam.outputs["View Distance"]), m.wrap(path.outputs["Is Camera Ray"]))
-    opacity = m.wrap(g[passes.OPACITY], vector=True)
-    _closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", [m.wrap(e, vector=True) * opacity
-                                                                for e, mod in zip(fog.emissions, models) if _lit(mod)])
+    is_camera = m.wrap(path.outputs["Is Camera Ray"])
+    t_vp, transmit = shading.view_transmittance(m, m.wrap(params.outputs["Beta"]),
+                                                m.wrap(cam.outputs["View Distance"]), is_camera)
+    shared = {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"], "Position": geo.outputs["Position"],
+              "Incoming": geo.outputs["Incoming"], "View Distance": cam.outputs["View Distance"],
+              "Normal": geo.outputs["Normal"], "Diffuse": diffuse.sock, "Specular": specular.sock,
+              "Glossy Level": level.sock, "View Transmittance": t_vp.sock, "Is Camera": is_camera.sock,
+              passes.OPACITY: g[passes.OPACITY]}
+    sums, fogs, running = None, [], None
+    for first, some, mods in _bundles(lights, models):
+        tree = build_surface_bundle(first, some, mods, images, with_passes, running is not None)
+        node = _group_node(ng, tree, tree.name, -300, -300 * len(fogs), [
+            *((src, n) for n, src in shared.items()), *(((running, RUNNING),) if running is not None else ())])
+        sums = shading.merge_sums(sums, shading.LightSums(
+            [], *(m.wrap(node.outputs[f], vector=f == "Emission") for f in ("Emission", "Weighted", "Weight"))))
+        if any(_lit(mod) for mod in mods):
+            fogs.append(node.outputs["Fog"])
+        running = node.outputs[RUNNING] if with_passes else None
+    fog = shading.surface_fog(m, sums, transmit)
+    _shader_tree(ng, gout.inputs["Fog"], fogs)
     for sock, v in (("Emission", fog.emission), ("Transmittance", fog.transmittance),
                     ("Direct Attenuation", fog.direct_attenuation), ("Cycles Mix Factor", fog.cycles_mix),
                     ("EEVEE Mix Factor", fog.eevee_mix)):
         m.feed(gout.inputs[sock], m.wrap(v))
     if with_passes:
-        passes.write_group(m, ng, _chained_closure_sum(m, gout.inputs["Fog"]), m.wrap(fog.transmittance), opacity,
+        light = m.wrap(running, vector=True) if running is not None else m.wrap((0.0, 0.0, 0.0))
+        passes.write_group(m, ng, light, m.wrap(fog.transmittance), m.wrap(g[passes.OPACITY], vector=True),
                            light_weighted=True)
     else:
         _camera_rays_only(ng, gout.inputs["Fog"], path.outputs["Is Camera Ray"])
@@ -361,7 +446,7 @@ def _exact_zero(m, v):
     return m.vmath("MAXIMUM", m.vmath("MINIMUM", v, black), black)
 
 
-def _chained_closure_sum(m, sock):
+def _chained_closure_sum(m, sock, total=None):
     """The Fog Light pass of the Surface group: the sum of the colours of the closures linked into ``sock``
     (the Fog shader's Emission closures under their Add Shader tree), each closure's Strength made to
     depend on the running sum up to it (a Strength of exactly 1).
@@ -373,7 +458,8 @@ def _chained_closure_sum(m, sock):
     118 floats at 4 lights, 178 at 24, out of SVM stack space and black at 64).  With each closure's
     Strength reading the running sum, the sum's Add of light k is compiled with closure k and only
     the running sum is kept: 115 floats at 4 to 64 lights.  The leaves are taken in the order SVM
-    compiles them (each Add Shader's first input first).
+    compiles them (each Add Shader's first input first).  ``total``: the sum so far (the bundles before
+    this one, ``build_surface_bundle``), or None.
     """
     leaves, todo = [], [sock]
     while todo:
@@ -385,7 +471,6 @@ def _chained_closure_sum(m, sock):
             todo += [node.inputs[1], node.inputs[0]]   # the first input is popped (compiled) first
         else:
             leaves.append(node)
-    total = None
     for node in leaves:
         colour = m.wrap(node.inputs["Color"].links[0].from_socket if node.inputs["Color"].is_linked
                         else tuple(node.inputs["Color"].default_value), vector=True)
@@ -406,31 +491,40 @@ def _lit(models):
 
 
 def _closure_sum(m, sock, bl_idname, colours):
-    """Link into ``sock`` the sum of one ``bl_idname`` closure (Emission, Background) per colour.
+    """Link into ``sock`` the sum of one ``bl_idname`` closure (Emission, Background) per colour
+    (``_shader_tree``)."""
+    ng = m.tree
+    leaves = []
+    for k, colour in enumerate(colours):
+        node = ng.nodes.new(bl_idname)
+        node.name = node.label = f"Light {k} Fog"
+        node.location = (3600, -300 * k)
+        m.feed(node.inputs["Color"], colour)
+        leaves.append(node.outputs[0])
+    _shader_tree(ng, sock, leaves)
+
+
+def _shader_tree(ng, sock, shaders):
+    """Link into ``sock`` the sum of the shader outputs ``shaders`` by Add Shader nodes.
 
     The Add Shader nodes form a balanced (pairwise) tree, depth ceil(log2 N), not a chain: Cycles' OSL
     flattens a shader's closure tree with a fixed 16-entry stack (``flatten_closure_tree``,
     intern/cycles/kernel/osl/osl.h), one entry per Add whose first input it is still walking, and
     silently drops whatever lies below once the stack is full.  A left-deep chain of N - 1 Adds kept
     the last 16 closures only (tests/scenes/closure_sum_probe.py): 25 lights rendered 25 % of the
-    twin, 64 lights 2-7 %, no error in the log.  The leaves keep their order (light 0 first), which
-    is the order SVM compiles them in, so SVM's stack use is the chain's (one light's values at a time).
+    twin, 64 lights 2-7 %, no error in the log.  (Bundles of 8 lights under a tree of bundles: depth
+    3 + log2 of the bundles.)  The leaves keep their order (light 0 first), which is the order SVM
+    compiles them in, so SVM's stack use is the chain's (one light's values at a time).
     """
-    ng = m.tree
-    level = []                                  # [(output socket, y)] of the tree's current level
-    for k, colour in enumerate(colours):
-        node = ng.nodes.new(bl_idname)
-        node.name = node.label = f"Light {k} Fog"
-        node.location = (3600, -300 * k)
-        m.feed(node.inputs["Color"], colour)
-        level.append((node.outputs[0], -300.0 * k))
+    x = max((s.node.location.x for s in shaders), default=3400.0) + 200
+    level = [(s, -300.0 * k) for k, s in enumerate(shaders)]   # [(output socket, y)] of the tree's current level
     depth = 0
     while len(level) > 1:
         depth += 1
         pairs = []
         for (a, ya), (b, yb) in zip(level[0::2], level[1::2]):
             add = ng.nodes.new("ShaderNodeAddShader")
-            add.location = (3600 + 200 * depth, 0.5 * (ya + yb))
+            add.location = (x + 200 * depth, 0.5 * (ya + yb))
             ng.links.new(a, add.inputs[0])
             ng.links.new(b, add.inputs[1])
             pairs.append((add.outputs[0], 0.5 * (ya + yb)))
@@ -439,13 +533,50 @@ def _closure_sum(m, sock, bl_idname, colours):
         ng.links.new(level[0][0], sock)
 
 
+def build_world_bundle(first, lights, models, images, with_passes, chained):
+    """One bundle of the World group (``_bundles``): the lights' glows to infinity (Sun et al. 2005
+    Eq. 12) from their per-light groups (``build_background_light``).
+
+    Outputs: Fog (one Background closure per light: its glow times the albedo on camera rays) and
+    Airlight (the glows' sum).  ``with_passes``: Running Sum out is Running Sum in (``chained``; else
+    nothing) plus the glows read by the pass's own instances of the light groups
+    (``_world_pass_instances``).
+    """
+    name = _bundle_name(WORLD_LIGHTS, first, lights)
+    inputs = [("Beta", F), ("Albedo", C), ("Camera", V), ("Direction", V), ("Is Camera", F)]
+    outputs = [("Fog", "NodeSocketShader"), ("Airlight", C)]
+    if with_passes:
+        inputs, outputs = inputs + [("Pass Direction", V), (RUNNING, C)], outputs + [(RUNNING, C)]
+    ng, gin, gout = _new_group(name, inputs, outputs)
+    m = NodeOps(ng, {})
+    g = {s.name: s for s in gin.outputs if s.name}
+    medium, is_camera = _medium(m, g["Beta"], g["Albedo"]), m.wrap(g["Is Camera"])
+    nodes, airlights = [], []
+    for k, (light, mod) in enumerate(zip(lights, models)):
+        node = _light_instance(ng, first + k, light, build_background_light(mod, images).name,
+                               [(g[n], n) for n in ("Beta", "Camera", "Direction")])
+        nodes.append(node)
+        airlights.append(m.wrap(node.outputs["Airlight"], vector=True))
+    _closure_sum(m, gout.inputs["Fog"], "ShaderNodeBackground",   # see build_surface for why closures
+                 [m.wrap(shading.shade_background(m, [a], medium, is_camera)[0], vector=True) for a in airlights])
+    total = airlights[0]
+    for a in airlights[1:]:
+        total = total + a
+    m.feed(gout.inputs["Airlight"], total)
+    if with_passes:
+        start = m.wrap(g[RUNNING], vector=True) if chained else None
+        m.feed(gout.inputs[RUNNING], _world_pass_instances(m, ng, nodes, m.wrap(g["Pass Direction"]), start))
+    return _install(ng, name)
+
+
 def build_world(lights, models, camera, images, with_passes=False):
     """Scene group for the World: ``shading.shade_background`` (Sun et al. 2005 Eq. 12) over ``lights``.
 
     Camera position by TRANSFORMS drivers on ``camera`` (no node gives it in a
     world shader).  The background itself is seen through infinite fog:
     Transmittance is 0 on camera rays (1 on other rays, which keep the
-    world's lighting).
+    world's lighting).  The lights whose glow is on sit in bundle groups
+    (``_bundles``, ``build_world_bundle``).
     """
     ng, gin, gout = _new_group(WORLD, [], [("Fog", "NodeSocketShader"), ("Emission", C), ("Transmittance", F)])
     m = NodeOps(ng, {})
@@ -457,28 +588,36 @@ def build_world(lights, models, camera, images, with_passes=False):
     if camera is not None:
         _drive_location(cam, camera)
     direction = m.vmath("NORMALIZE", m.wrap(geo.outputs["Position"]))
-    airlights, nodes = [], []
-    for k, (light, mod) in enumerate(zip(lights, models)):
-        if mod.background is rungs.BACKGROUND_OFF:
-            continue
-        node = _light_instance(ng, k, light, build_background_light(mod, images).name, (
-            (params.outputs["Beta"], "Beta"), (cam.outputs[0], "Camera"), (direction.sock, "Direction")))
-        nodes.append(node)
-        airlights.append(m.wrap(node.outputs["Airlight"], vector=True))
+    shared = {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"], "Camera": cam.outputs[0],
+              "Direction": direction.sock, "Is Camera": path.outputs["Is Camera Ray"]}
+    if with_passes:   # the pass's direction, given another way (``_world_pass_instances``)
+        shared["Pass Direction"] = m.vmath("NORMALIZE", m.vmath("SCALE", m.wrap(geo.outputs["Incoming"]), -1.0)).sock
+    kept = [(light, mod) for light, mod in zip(lights, models) if mod.background is not rungs.BACKGROUND_OFF]
+    airlight, fogs, running = None, [], None
+    for first, some, mods in _bundles([light for light, _ in kept], [mod for _, mod in kept]):
+        tree = build_world_bundle(first, some, mods, images, with_passes, running is not None)
+        node = _group_node(ng, tree, tree.name, -300, -300 * len(fogs), [
+            *((src, n) for n, src in shared.items()), *(((running, RUNNING),) if running is not None else ())])
+        part = m.wrap(node.outputs["Airlight"], vector=True)
+        airlight = part if airlight is None else airlight + part
+        fogs.append(node.outputs["Fog"])
+        running = node.outputs[RUNNING] if with_passes else None
     medium = _medium(m, params.outputs["Beta"], params.outputs["Albedo"])
     is_camera = m.wrap(path.outputs["Is Camera Ray"])
-    emission, transmittance = shading.shade_background(m, airlights, medium, is_camera)
+    emission, transmittance = shading.shade_background(m, [] if airlight is None else [airlight], medium, is_camera)
     m.feed(gout.inputs["Emission"], m.wrap(emission))
-    _closure_sum(m, gout.inputs["Fog"], "ShaderNodeBackground",   # see build_surface for why closures
-                 [m.wrap(shading.shade_background(m, [a], medium, is_camera)[0], vector=True) for a in airlights])
+    _shader_tree(ng, gout.inputs["Fog"], fogs)
     m.feed(gout.inputs["Transmittance"], m.wrap(transmittance))
     if with_passes:
-        _write_world_passes(m, ng, geo, nodes, medium, is_camera, transmittance)
+        light, _ = shading.shade_background(m, [] if running is None else [m.wrap(running, vector=True)], medium,
+                                            is_camera)
+        passes.write_group(m, ng, m.wrap(light, vector=True), m.wrap(transmittance))
     return _install(ng, WORLD)
 
 
-def _write_world_passes(m, ng, geo, nodes, medium, is_camera, transmittance):
-    """The World's fog passes (``passes.py``) from its own instances of the lights' groups ``nodes``."""
+def _world_pass_instances(m, ng, nodes, direction, total):
+    """The World's Fog Light pass in a bundle: ``total`` (the bundles before, or None) plus the glows of
+    the pass's own instances of the light groups ``nodes`` (group nodes in ``ng``); returns the sum."""
     # The fog passes.  Cycles runs whatever an AOV output reads on every evaluation of the shader
     # (svm.cpp counts AOV dependencies as shared by both sides of a Mix Shader), which would undo the
     # World's 0/1 mix: its importance map and every non-camera ray would run the fog (48x27, automatic
@@ -493,20 +632,17 @@ def _write_world_passes(m, ng, geo, nodes, medium, is_camera, transmittance):
     # direction plus an exact zero made from the running sum of lights 0..k-1 (``_exact_zero``): it
     # starts once the light before it is summed, and one light's values are kept at a time (the
     # World's peak: 33 floats at 4 to 64 lights, 71 at 4 before).
-    aov_direction = m.vmath("NORMALIZE", m.vmath("SCALE", m.wrap(geo.outputs["Incoming"]), -1.0))
-    total = None
-    for k, node in enumerate(nodes):
+    for node in nodes:
         twin = ng.nodes.new("ShaderNodeGroup")
         twin.node_tree = node.node_tree
         twin.name = twin.label = f"{node.name} (passes)"
-        twin.location = (-300, -300 * k - 150)
-        direction = aov_direction if total is None else m.vmath("ADD", aov_direction, _exact_zero(m, total))
+        twin.location = (node.location.x, node.location.y - 150)
+        along = direction if total is None else m.vmath("ADD", direction, _exact_zero(m, total))
         for sock in node.inputs:
-            src = direction.sock if sock.name == "Direction" else (sock.links[0].from_socket if sock.is_linked
-                                                                     else None)
+            src = along.sock if sock.name == "Direction" else (sock.links[0].from_socket if sock.is_linked
+                                                                 else None)
             if src is not None:
                 ng.links.new(src, twin.inputs[sock.name])
         airlight = m.wrap(twin.outputs["Airlight"], vector=True)
         total = airlight if total is None else total + airlight
-    light, _ = shading.shade_background(m, [] if total is None else [total], medium, is_camera)
-    passes.write_group(m, ng, m.wrap(light, vector=True), m.wrap(transmittance))
+    return total

@@ -105,20 +105,24 @@ def shade_point(m, geo, material, light, medium, models):
                       weight=weight)
 
 
-def shade_surface(m, terms, medium, view_distance, is_camera):
-    """Sum the lights' ``terms`` (LightTerms) at a surface point: Sun et al. 2005 Eq. 19.
+class LightSums(NamedTuple):
+    """Some lights' share of Eq. 19 at a surface point (``sum_lights``); ``merge_sums`` adds two."""
+    emissions: list           # each light's albedo * (airlight + e^{-beta D_vp} scattered), camera rays only
+    emission: Any             # their sum (RGB)
+    weighted: Any             # sum of weight * attenuation (LightTerms), for EEVEE's shared attenuation
+    weight: Any               # sum of weight
 
-    L = e^{-beta D_vp} L_p + L_a: the user's shader (L_p, with Cycles' lights
-    attenuating their own direct light, Eq. 14) is scaled by the
-    transmittance, and the fog adds albedo * (airlight + e^{-beta D_vp} *
-    reflected fog light).  is_camera: 1 on camera rays, 0 on others (other
-    rays see the material unfogged).  Returns SurfaceFog.
-    """
-    t_vp = model.transmittance(m, medium.beta, view_distance)
+
+def view_transmittance(m, beta, view_distance, is_camera):
+    """(e^{-beta D_vp}, the factor on the user's shader): the transmittance on camera rays, 1 on others."""
+    t_vp = model.transmittance(m, beta, view_distance)
     transmit = 1.0 + is_camera * (t_vp - 1.0)
-    if not terms:
-        black = m.combine(0.0, 0.0, 0.0)
-        return SurfaceFog(black, [], transmit, m.const(1.0), 1.0 - transmit, 1.0 - transmit)
+    return t_vp, transmit
+
+
+def sum_lights(m, terms, medium, t_vp, is_camera):
+    """LightSums of the lights' ``terms`` (LightTerms, at least one): each light's fog light on camera rays
+    (Eq. 19's L_a: albedo * (airlight + e^{-beta D_vp} * reflected fog light)) and EEVEE's weights."""
     albedo = medium.albedo
     emissions = [m.scale(albedo * (t.airlight + m.scale(t.scattered, t_vp)), is_camera) for t in terms]
     emission = num = den = None
@@ -126,8 +130,39 @@ def shade_surface(m, terms, medium, view_distance, is_camera):
         emission = e if emission is None else emission + e
         num = t.weight * t.attenuation if num is None else num + t.weight * t.attenuation
         den = t.weight if den is None else den + t.weight
+    return LightSums(emissions, emission, num, den)
+
+
+def merge_sums(a, b):
+    """The LightSums of two sets of lights (either may be None)."""
+    if a is None or b is None:
+        return a if b is None else b
+    return LightSums(a.emissions + b.emissions, a.emission + b.emission, a.weighted + b.weighted,
+                     a.weight + b.weight)
+
+
+def surface_fog(m, sums, transmit):
+    """SurfaceFog from the lights' LightSums (None: no light) and the factor on the user's shader."""
+    if sums is None:
+        black = m.combine(0.0, 0.0, 0.0)
+        return SurfaceFog(black, [], transmit, m.const(1.0), 1.0 - transmit, 1.0 - transmit)
+    num, den = sums.weighted, sums.weight
     direct = (num + 1e-30) / (den + 1e-30)
-    return SurfaceFog(emission, emissions, transmit, direct, 1.0 - transmit, 1.0 - transmit * direct)
+    return SurfaceFog(sums.emission, sums.emissions, transmit, direct, 1.0 - transmit, 1.0 - transmit * direct)
+
+
+def shade_surface(m, terms, medium, view_distance, is_camera):
+    """Sum the lights' ``terms`` (LightTerms) at a surface point: Sun et al. 2005 Eq. 19.
+
+    L = e^{-beta D_vp} L_p + L_a: the user's shader (L_p, with Cycles' lights
+    attenuating their own direct light, Eq. 14) is scaled by the
+    transmittance, and the fog adds albedo * (airlight + e^{-beta D_vp} *
+    reflected fog light).  is_camera: 1 on camera rays, 0 on others (other
+    rays see the material unfogged).  Returns SurfaceFog.  The node builder
+    sums the lights in bundles (``sum_lights``, ``merge_sums``, ``surface_fog``).
+    """
+    t_vp, transmit = view_transmittance(m, medium.beta, view_distance, is_camera)
+    return surface_fog(m, sum_lights(m, terms, medium, t_vp, is_camera) if terms else None, transmit)
 
 
 def background_point(m, camera, direction, light, medium, models):

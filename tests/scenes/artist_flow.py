@@ -26,7 +26,9 @@ def beta_in_groups():
 
 
 def light_instances():
-    return sorted(n.label.split(": ", 1)[1] for n in bpy.data.node_groups["AnalyticFog Surface"].nodes
+    bundles = [n.node_tree for n in bpy.data.node_groups["AnalyticFog Surface"].nodes
+               if n.bl_idname == "ShaderNodeGroup" and n.node_tree.name.startswith("AnalyticFog Surface Lights")]
+    return sorted(n.label.split(": ", 1)[1] for b in bundles for n in b.nodes
                   if n.bl_idname == "ShaderNodeGroup" and n.label.startswith("Light "))
 
 

@@ -393,18 +393,27 @@ def opacity():
 
 
 def _upstream_groups(sock):
-    """Names of the group nodes that input ``sock`` depends on."""
-    seen, todo, found = set(), [sock], set()
+    """Names of the group nodes that input ``sock`` depends on, inside the light bundles too (a bundle's
+    output is followed into the bundle, whose light instances are named by the light's index)."""
+    seen, todo, found = set(), [("", sock)], set()
     while todo:
-        s = todo.pop()
+        where, s = todo.pop()
         for link in s.links:
             n = link.from_node
-            if n.name in seen:
+            key = where + n.name
+            if n.bl_idname == "NodeGroupInput":   # a bundle's input: what feeds it outside is followed already
                 continue
-            seen.add(n.name)
+            if n.bl_idname == "ShaderNodeGroup" and " Lights " in n.node_tree.name:
+                out = next(o for o in n.node_tree.nodes if o.bl_idname == "NodeGroupOutput")
+                todo.append((f"{key}/", out.inputs[link.from_socket.name]))
+                todo.extend((where, i) for i in n.inputs)
+                continue
+            if key in seen:
+                continue
+            seen.add(key)
             if n.bl_idname == "ShaderNodeGroup":
                 found.add(n.name)
-            todo.extend(n.inputs)
+            todo.extend((where, i) for i in n.inputs)
     return sorted(found)
 
 

@@ -13,7 +13,7 @@ material re-wrapped natively in A; report the differences.
 import json
 import sys
 
-from shared_common import copies, driver_targets, expected_names, fog_groups_of, fog_ids, fog_references, beta
+from shared_common import bundle_driver_targets, copies, driver_targets, expected_names, fog_groups_of, fog_ids, fog_references, beta
 
 import bpy  # noqa: E402
 
@@ -66,8 +66,8 @@ def state(scene):
         "lights": sorted(l.name for l in bpy.data.lights),
         "object_users": {o.name: o.users for o in bpy.data.objects},
         "appended_material_groups": fog_groups_of(mat) if mat else None,
-        "surface_drivers": driver_targets(bpy.data.node_groups.get(groups.SURFACE)),
-        "world_drivers": driver_targets(bpy.data.node_groups.get(groups.WORLD)),
+        "surface_drivers": bundle_driver_targets(groups.SURFACE),
+        "world_drivers": bundle_driver_targets(groups.WORLD),
         "beta": beta(),
         "light_params": {l.name: sorted(n.node_tree.name for n in l.node_tree.nodes
                                         if n.bl_idname == "ShaderNodeGroup" and n.node_tree)
@@ -113,6 +113,7 @@ def main():
     res["merge_again"] = dedupe.merge_duplicates(remove_pulled=mode != "append_keep")
     apply.apply_fog(scene, A_DENSITY, method=method)
     res["after_apply"] = state(scene)
+    res["expect_after_apply"] = expected_names(method, scene)
     if do_render:
         images["merged"] = render(scene, workdir, "merged")
         mat = bpy.data.materials["Diffuse"]

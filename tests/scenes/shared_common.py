@@ -11,6 +11,7 @@ import bpy  # noqa: E402
 
 from fog_addon.nodes import compositor, groups, images, osl, owned  # noqa: E402
 from fog_addon.precompute import rungs  # noqa: E402
+from fog_addon.ops import apply  # noqa: E402
 
 PREFIX = "AnalyticFog"
 SUFFIXED = re.compile(r"\.\d{3,}$")
@@ -46,6 +47,10 @@ def expected_names(method, scene=None, texts_of=None):
     models = rungs.choose(method)
     names = [groups.PARAMS, groups.SURFACE, groups.WORLD,
              groups.light_group_name(models), groups.background_group_name(models)]
+    if scene is not None:   # the lights' bundles: every light full (these files' Quality keeps them all)
+        n = len(apply.fog_lights(scene)[0])
+        names += [f"{prefix} {k + 1}-{min(k + groups.BUNDLE, n)}" for prefix in (groups.SURFACE_LIGHTS, groups.WORLD_LIGHTS)
+                  for k in range(0, n, groups.BUNDLE)]
     names += images.table_names()
     names += [osl.text_name(r) for r in rungs.choose(texts_of or method) if r.backends == {"numpy", "osl"}]
     tree = scene.compositing_node_group if scene is not None and compositor.is_set_up(scene) else None
@@ -83,6 +88,15 @@ def driver_targets(idblock):
     if ad is None:
         return []
     return sorted({t.id.name for fc in ad.drivers for v in fc.driver.variables for t in v.targets if t.id})
+
+
+def bundle_driver_targets(name):
+    """What the drivers of the scene group ``name`` and of the light bundles it holds read from."""
+    ng = bpy.data.node_groups.get(name)
+    if ng is None:
+        return []
+    trees = [ng] + [n.node_tree for n in _group_nodes(ng) if n.node_tree.name.startswith(name + " Lights")]
+    return sorted(set().union(*(driver_targets(t) for t in trees)))
 
 
 def fog_groups_of(mat):
