@@ -112,7 +112,10 @@ def shared_ok(on):
     models = {rungs.choose("nodes")}
     want = sorted({groups.PARAMS, groups.SURFACE, groups.WORLD}
                   | {groups.light_group_name(m) for m in models} | {groups.background_group_name(m) for m in models}
-                  | set(images.table_names())) if on else []
+                  | set(images.table_names())
+                  | {f"{prefix} {k + 1}-{min(k + groups.BUNDLE, len(lights))}"   # the lights' bundles
+                     for prefix in (groups.SURFACE_LIGHTS, groups.WORLD_LIGHTS) for k in range(0, len(lights), groups.BUNDLE)}
+                  ) if on else []
     if on and compositor.is_set_up(bpy.context.scene):   # the scene's own denoising set-up (Cycles, denoiser on)
         want = sorted(want + [compositor.GROUP])
     return ours == want

@@ -1,7 +1,8 @@
 """What the camera sees, sampled by ray casts into the scene: the error predictor's input (``predict.py``).
 
-Rays through the pixel centres of the camera's frame (``sample_grid``) are cast with
-``Scene.ray_cast`` (Blender's own BVH, no render); each hit gives the
+Rays through the pixel centres of the camera's frame (``sample_grid``) are cast into one
+``mathutils.bvhtree.BVHTree`` of the view's mesh triangles in world space (``_SceneMesh``, no
+render); each hit gives the
 distance, the normal (turned to face the camera, as a shader sees it) and
 the material, read as ``surface.principled_to_phong`` reads a Principled
 BSDF's own values.  A material without a Principled BSDF, or whose inputs
@@ -14,6 +15,7 @@ import math
 
 import bpy
 import numpy as np
+from mathutils.bvhtree import BVHTree
 
 from ..precompute import predict, surface, tables
 
@@ -62,14 +64,14 @@ def _principled(material):
 
 
 class _MeshInfo:
-    """An evaluated mesh object's materials and smooth normals (cached per sampling call)."""
+    """An evaluated mesh instance's materials and smooth normals."""
 
-    def __init__(self, obj, depsgraph):
-        self.ev = obj.evaluated_get(depsgraph)
-        mesh = getattr(self.ev, "data", None)
+    def __init__(self, ev, matrix):
+        self.ev = ev
+        mesh = getattr(ev, "data", None)
         self.mesh = mesh if isinstance(mesh, bpy.types.Mesh) else None
         self.tris = None
-        self.inv = np.linalg.inv(np.array(self.ev.matrix_world))
+        self.inv = np.linalg.inv(matrix)
 
     def material(self, index):
         try:
@@ -122,26 +124,70 @@ def _frame_rays(scene, camera, grid):
     return mw[:3, 3].copy(), d
 
 
+class _SceneMesh:
+    """Every mesh triangle of the evaluated view (instances included) in world space, in one BVH tree.
+
+    ``Scene.ray_cast`` tests every object's bounds on every ray: 0.47 ms a ray with 1 000 objects,
+    7 s of the 8 s the 1 000-material scene spent choosing the lights' models.  One tree over
+    all triangles answers a ray in microseconds.
+    """
+
+    def __init__(self, depsgraph):
+        verts, tris, self.owners, self.first_tri, self.polygon, n_verts, n_tris = [], [], [], [], [], 0, 0
+        for inst in depsgraph.object_instances:
+            ev = inst.object
+            mesh = getattr(ev, "data", None)
+            if ev.type != "MESH" or not isinstance(mesh, bpy.types.Mesh) or not len(mesh.polygons):
+                continue
+            matrix = np.array(inst.matrix_world)
+            mesh.calc_loop_triangles()
+            co = np.empty(3 * len(mesh.vertices))
+            mesh.vertices.foreach_get("co", co)
+            co = co.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3]
+            lt = np.empty(3 * len(mesh.loop_triangles), dtype=np.int64)
+            mesh.loop_triangles.foreach_get("vertices", lt)
+            poly = np.empty(len(mesh.loop_triangles), dtype=np.int64)
+            mesh.loop_triangles.foreach_get("polygon_index", poly)
+            self.first_tri.append(n_tris)
+            n_tris += len(poly)
+            self.owners.append(_MeshInfo(ev, matrix))
+            self.polygon.append(poly)
+            verts.append(co)
+            tris.append(lt.reshape(-1, 3) + n_verts)
+            n_verts += len(co)
+        self.tree = (BVHTree.FromPolygons(np.concatenate(verts).tolist(), np.concatenate(tris).tolist(),
+                                          all_triangles=True) if verts else None)
+
+    def ray_cast(self, origin, direction):
+        """(location, face normal, owner _MeshInfo, polygon index) of the first hit, or None."""
+        if self.tree is None:
+            return None
+        loc, normal, index, _ = self.tree.ray_cast(origin, direction)
+        if loc is None:
+            return None
+        k = int(np.searchsorted(self.first_tri, index, side="right")) - 1
+        return np.array(loc), np.array(normal), self.owners[k], int(self.polygon[k][index - self.first_tri[k]])
+
+
 def _sample_frame(scene, depsgraph, lights, grid):
     origin, dirs = _frame_rays(scene, scene.camera, grid)
     rows = []
-    cache, meshes = {}, {}
+    cache = {}
+    world = _SceneMesh(depsgraph)
     for d in dirs:
-        hit, loc, normal, index, obj, _ = scene.ray_cast(depsgraph, origin.tolist(), d.tolist())
-        if not hit:
+        hit = world.ray_cast(origin, d)
+        if hit is None:
             rows.append((d, math.inf, (0.0, 0.0, 1.0), LAMBERT))
             continue
-        if obj.name not in meshes:
-            meshes[obj.name] = _MeshInfo(obj, depsgraph)
-        info = meshes[obj.name]
-        n = info.normal(index, np.array(loc), np.array(normal))
+        loc, normal, info, index = hit
+        n = info.normal(index, loc, normal)
         if n @ d > 0.0:
             n = -n
         mat = info.material(index)
         if mat not in cache:
             cache[mat] = _principled(mat)
         known = cache[mat]
-        dist = float(np.linalg.norm(np.array(loc) - origin))
+        dist = float(np.linalg.norm(loc - origin))
         for brdf in ([known] if known is not None else [LAMBERT, MIRROR]):
             rows.append((d, dist, n, brdf))
     light_pos = np.array([np.array(o.matrix_world.translation) for o in lights]).reshape(-1, 3)
