@@ -120,19 +120,24 @@ F, V, C = "NodeSocketFloat", "NodeSocketVector", "NodeSocketColor"
 
 # EEVEE keeps a material's node constants, its inlined groups' included, in one uniform block of at most
 # 64 KiB; beyond it the material fails to link ("Uniform block node_tree too big (78832/65536)") and
-# renders EEVEE's fallback.  What one light's group costs there, by ladder step (rungs.STEPS), from the
-# overflow messages of tests/scenes/many_lights.py in EEVEE (bpy 5.0.1): full 4 610 bytes (16 lights:
-# 74 032), glow only 2 517 (36: 90 880), off at most 334 (196 lights fit); the World 936 per light whose
-# glow is on (256 lights: 239 728).  About 10 bytes per node: a group's constants become uniforms of
-# every instance (1 000 Multiply-by-a-constant nodes in a group used 20 times: 240 032 bytes), and
-# linking them from shared Value nodes in the group changed nothing.  (Before the lighter table lookup
-# of ``sockets.NodeOps.table``: 4 910 and 2 649.)
+# renders EEVEE's fallback.  Every unlinked float, vector or colour input is such a constant, the inputs
+# a node's operation leaves unused too, and a group's constants are uniforms of every instance (1 000
+# Multiply-by-a-constant nodes in a group used 20 times: 240 032 bytes).  The fog's math nodes mark
+# theirs as constants to compile in (``sockets.NodeOps.inline``), but Blender does not save that mark:
+# a saved file, as a farm renders it, has them all again.  So the budget counts what a light's group
+# costs in a saved and reopened file, by ladder step (rungs.STEPS), from the overflow messages of the
+# many-lights scene in EEVEE (bpy 5.0.1, at 709fad8): full 2 848 bytes (24 and 36 lights: 68 656,
+# 102 832), glow only 1 812 (40, 48, 72 lights: 72 784, 87 280, 130 768), off at most 334 (196 lights
+# fit, measured before the tables' identity mapping, which off does not use); the World at most 936
+# per light whose glow is on (256 lights: 239 728, before that mapping).  As built (until the file is
+# reopened) a light costs 112 / 80 / 16 bytes and the World 48.  (Before the tables' identity mapping
+# of ``sockets.NodeOps._tap``: 4 610 and 2 517; before the lighter table lookup: 4 910 and 2 649.)
 EEVEE_ENGINE = "BLENDER_EEVEE"
 EEVEE_UNIFORM_LIMIT = 65536
 EEVEE_UNIFORM_RESERVE = 8192    # the material's own nodes and the Surface group's shared ones (272 measured
                                 # for a bare Principled BSDF)
-EEVEE_MATERIAL_BYTES = (4610, 2517, 334)
-EEVEE_WORLD_BYTES = (936, 936, 0)
+EEVEE_MATERIAL_BYTES = (2848, 1812, 334, 0)   # by rungs.STEPS (LEFT_OUT: not in the groups)
+EEVEE_WORLD_BYTES = (936, 936, 0, 0)
 
 
 def eevee_budget():

@@ -181,16 +181,19 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
         models = [rungs.choose(preference, steps.get(o.name, 0)) for o in lights]
         choice = dict(old, lights={o.name: old["lights"].get(o.name, [0, 0.0]) for o in lights})
     choice["quality"] = quality_value(quality)
-    signature = _signature(lights, models, scene.camera, with_passes)
+    # lights stepped out of the groups to fit a budget (rungs.LEFT_OUT) keep their own dimming (wrap_light)
+    grouped = [(o, mod) for o, mod in zip(lights, models) if choice["lights"][o.name][0] != rungs.LEFT_OUT]
+    in_groups, grouped_models = [o for o, _ in grouped], [mod for _, mod in grouped]
+    signature = _signature(in_groups, grouped_models, scene.camera, with_passes)
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if (surface is None or bpy.data.node_groups.get(groups.WORLD) is None
             or surface.get(LIGHTS_KEY) != signature):
         imgs = images.all_table_images()
-        surface = groups.build_surface(lights, models, imgs, with_passes)
+        surface = groups.build_surface(in_groups, grouped_models, imgs, with_passes)
         surface[LIGHTS_KEY] = signature
         surface[PREFERENCE_KEY] = preference
         surface[PASSES_KEY] = with_passes
-        groups.build_world(lights, models, scene.camera, imgs, with_passes)
+        groups.build_world(in_groups, grouped_models, scene.camera, imgs, with_passes)
         for name in groups.all_group_names():
             ng = bpy.data.node_groups.get(name)
             if ng is not None and ng.users == 0 and name not in (groups.PARAMS, groups.SURFACE, groups.WORLD):

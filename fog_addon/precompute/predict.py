@@ -141,7 +141,8 @@ def choose_steps(glow, scatter, target, budget=None):
     ``budget`` (:class:`Budget`, e.g. EEVEE's uniform block): if the steps
     don't fit it, more drops are taken in the same order, whatever they
     cost in error, until they do (``limited``; the error is still predicted
-    the same way, and may exceed the target).
+    the same way, and may exceed the target); a light off is then left out
+    (``rungs.LEFT_OUT``, no fog error of its own) right after it is switched off.
     """
     glow = np.asarray(glow, float)
     scatter = np.asarray(scatter, float)
@@ -155,13 +156,14 @@ def choose_steps(glow, scatter, target, budget=None):
     share_s = (scatter * inv[:, None, :]).max(axis=(0, 2)) if fog.size else np.zeros(n)
     share_g = ((glow + scatter) * inv[:, None, :]).max(axis=(0, 2)) if fog.size else np.zeros(n)
     # a light's scatter drop sorts before its glow drop (share_g >= share_s, ties by step)
-    candidates = sorted([(share_s[i], i, 1) for i in range(n)] + [(share_g[i], i, 2) for i in range(n)])
+    candidates = sorted([(share_s[i], i, 1) for i in range(n)] + [(share_g[i], i, 2) for i in range(n)]
+                        + [(share_g[i], i, rungs.LEFT_OUT) for i in range(n)])
     def drop(i, step):   # what light i's step leaves out, (P, 3)
-        return scatter[:, i] if step == 1 else glow[:, i]
+        return scatter[:, i] if step == 1 else glow[:, i] if step == 2 else np.zeros_like(fog)
 
     if target is not None and peak > 0.0:
         for _, i, step in candidates:
-            if steps[i] != step - 1:
+            if steps[i] != step - 1 or step == rungs.LEFT_OUT:
                 continue
             trial = dropped + drop(i, step)
             if (trial * inv).max() <= target:

@@ -102,8 +102,12 @@ RUNGS = (AIRLIGHT_TABLE, BACKGROUND_TABLE, AIRLIGHT_QUADRATURE, BACKGROUND_QUADR
          AIRLIGHT_OFF, BACKGROUND_OFF, SCATTER_OFF)
 
 # A light's steps down the ladder, cheapest last: 0 every term modelled; 1 the fog light it scatters onto
-# surfaces left out (the glow stays); 2 its glow left out too (its direct light still dims through the fog).
-STEPS = ("full", "glow only", "off")
+# surfaces left out (the glow stays); 2 its glow left out too (its direct light still dims through the fog);
+# 3 (LEFT_OUT) as 2, and the light not in the fog's groups at all, taken only to fit a budget (EEVEE's
+# uniform block, ``predict.choose_steps``): Cycles dims its direct light in its own node tree as at 2,
+# EEVEE by the other lights' shared attenuation instead of its own.
+STEPS = ("full", "glow only", "off", "off, not in EEVEE's shared dimming")
+LEFT_OUT = 3
 
 
 class LightModels(NamedTuple):
@@ -135,7 +139,7 @@ def choose(preference="nodes", step=0):
         models = models._replace(scatter=SCATTER_OFF)
     if step >= 2:
         models = models._replace(airlight=AIRLIGHT_OFF, background=BACKGROUND_OFF)
-    return models
+    return models   # LEFT_OUT: the models of "off"; the builders leave the light out
 
 
 def needs_osl(models):

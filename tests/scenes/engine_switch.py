@@ -2,7 +2,7 @@
 
     python tests/scenes/engine_switch.py
 
-The many-lights scene with 16 lights, the fog added in Cycles with the add-on registered (its
+The many-lights scene with 25 lights, the fog added in Cycles with the add-on registered (its
 depsgraph handler on); the engine switched to EEVEE, then back to Cycles.  Prints one line
 ``ENGINE_SWITCH_JSON {...}``: after each step the stored choice's engine, steps, "limited" and
 whether its steps fit EEVEE's budget (``groups.eevee_budget``).
@@ -32,7 +32,7 @@ def state():
 
 def main():
     fog_addon.register()
-    scene, _ = many_lights.build_scene(16, direct_light=True)
+    scene, _ = many_lights.build_scene(25, direct_light=True)
     scene.render.engine = "CYCLES"
     scene.render.resolution_x, scene.render.resolution_y = many_lights.W, many_lights.H
     apply.apply_fog(scene, many_lights.BETA)
