@@ -110,7 +110,8 @@ def _add_fog_flags(p, file_default=""):
     g.add_argument("--density", type=_finite_float("density"), metavar="BETA",
                    help="extinction = scattering coefficient in 1/m (>= 0)" + file_default)
     p.add_argument("--anisotropy", type=_finite_float("anisotropy"), default=None, metavar="G",
-                   help="Henyey-Greenstein g; only 0 (isotropic) is supported" + (file_default or "; default 0"))
+                   help="Henyey-Greenstein g in [-0.95, 0.95]: 0 isotropic, > 0 forward scattering (haze ~0.7, "
+                        "fog ~0.85); below -0.8 only with --method osl" + (file_default or "; default 0"))
     p.add_argument("--samples", type=_positive_int("samples"), metavar="N", help="samples per pixel")
     p.add_argument("--resolution", type=_resolution, metavar="WxH", help="output size in pixels")
     p.add_argument("--out", required=True, help="output image (.exr = linear float, .png = display)")
@@ -184,9 +185,10 @@ def _resolve_density(args, required):
 
 def _validate_common(args, density_required):
     _resolve_density(args, density_required)
-    if args.anisotropy not in (None, 0.0):
-        raise UsageError(f"anisotropy {args.anisotropy} is not supported: the analytic model "
-                         "(Sun et al. 2005) is isotropic; use --anisotropy 0")
+    from .precompute import tables
+    if args.anisotropy is not None and abs(args.anisotropy) > tables.MAX_ANISOTROPY:
+        raise UsageError(f"anisotropy {args.anisotropy} is outside [-{tables.MAX_ANISOTROPY}, "
+                         f"{tables.MAX_ANISOTROPY}] (Henyey-Greenstein g)")
     if not os.path.isfile(args.scene):
         raise UsageError(f"scene file not found: {args.scene}")
     if not args.scene.lower().endswith(".blend"):

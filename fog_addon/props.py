@@ -5,7 +5,7 @@ once (the viewport follows); materials are never rebuilt for it.
 """
 import bpy
 
-from .precompute import predict, presets
+from .precompute import predict, presets, tables
 
 
 def _push(self, context):
@@ -18,7 +18,19 @@ def _push(self, context):
 def _method_changed(self, context):
     from .ops import apply
     if self.enabled:
-        apply.set_method(context.scene, self.method.lower())
+        try:
+            apply.set_method(context.scene, self.method.lower())
+        except ValueError as e:
+            print(f"Analytic Fog: the fog keeps its method: {e}")
+
+
+def _anisotropy_changed(self, context):
+    from .ops import apply
+    if self.enabled:
+        try:
+            apply.set_anisotropy(context.scene, self.anisotropy)
+        except ValueError as e:
+            print(f"Analytic Fog: the fog keeps its anisotropy: {e}")
 
 
 def quality_setting(settings):
@@ -73,8 +85,11 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
         name="Color", subtype="COLOR", size=3, default=(1.0, 1.0, 1.0), min=0.0, max=1.0, update=_push,
         description="Single-scattering albedo of the fog: the fraction of extinguished light it scatters")
     anisotropy: bpy.props.FloatProperty(
-        name="Anisotropy", default=0.0, min=0.0, max=0.0,
-        description="Henyey-Greenstein g of the fog's phase function (only isotropic fog, 0, so far)")
+        name="Anisotropy", default=0.0, min=-tables.MAX_ANISOTROPY, max=tables.MAX_ANISOTROPY,
+        update=_anisotropy_changed,
+        description="Henyey-Greenstein g of the fog's phase function: 0 isotropic, > 0 forward scattering "
+                    "(droplets: haze about 0.7, fog about 0.85), so lamps glow brighter seen against their "
+                    "light. Below -0.8 only the OSL method serves it")
     method: bpy.props.EnumProperty(
         name="Method", default="NODES", update=_method_changed,
         items=[("NODES", "Node Groups", "Every model from shader node groups with packed tables: Cycles and EEVEE"),

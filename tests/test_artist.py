@@ -48,6 +48,18 @@ def test_method_switch_keeps_materials(flow):
     assert flow["materials_kept_by_method_switch"]
 
 
+def test_anisotropy_switch(flow):
+    """Issue 9: the panel's Anisotropy rebuilds the lights' groups with g's models and tables."""
+    at = flow["names_at_g085"]
+    assert "AnalyticFog Airlight N (g +0.850)" in at and "AnalyticFog Surface M (g +0.850)" in at, at
+    assert any(n.startswith("AnalyticFog Light [airlight table (g +0.850)") for n in at), at
+    assert "AnalyticFog Airlight N" not in at   # the isotropic table is not kept beside it
+    assert flow["names_after_refused_g"] == at   # -0.9 needs OSL: refused, nothing changed
+    back = flow["names_back_at_g0"]
+    assert "AnalyticFog Airlight N" in back and not any("(g +0.850)" in n for n in back), back
+    assert flow["materials_kept_by_anisotropy"]
+
+
 def test_lights_followed_without_touching_materials(flow):
     assert flow["lights_start"] == ["Lamp"]
     assert flow["lights_after_add"] == ["Extra", "Lamp"]

@@ -8,7 +8,8 @@ import render_harness as h
     (["--engine", "eevee", "--method", "osl", "--density", "0.1"], "needs --engine cycles"),
     (["--engine", "cycles", "--preset", "smog"], "unknown preset"),
     (["--engine", "cycles", "--density", "nan"], "density"),
-    (["--engine", "cycles", "--anisotropy", "0.5", "--density", "0.1"], "anisotropy"),
+    (["--engine", "cycles", "--anisotropy", "0.96", "--density", "0.1"], "anisotropy"),
+    (["--engine", "cycles", "--anisotropy", "-0.9", "--density", "0.1"], "use the OSL method"),
     (["--engine", "cycles", "--error", "2"], "--error must be a fraction"),
     (["--engine", "cycles", "--error", "best"], "--error must be a fraction"),
 ])

@@ -199,7 +199,7 @@ def tiny_blend(tmp_path_factory):
     (["--density", "-0.1"], ">= 0"),
     (["--density", "abc"], "number"),
     (["--preset", "smog"], "unknown preset"),
-    (["--density", "0.1", "--anisotropy", "0.3"], "anisotropy"),
+    (["--density", "0.1", "--anisotropy", "1.3"], "anisotropy"),
     (["--density", "0.1", "--samples", "0"], "positive"),
     (["--density", "0.1", "--resolution", "64by36"], "resolution"),
     ([], "--density"),
@@ -222,7 +222,7 @@ def test_cli_missing_files(tmp_path):
 
 
 def test_render_cli_bad_input(tiny_blend, tmp_path):
-    p = _cli("render", tiny_blend, "--engine", "cycles", "--density", "0.1", "--anisotropy", "-0.5",
+    p = _cli("render", tiny_blend, "--engine", "cycles", "--density", "0.1", "--anisotropy", "-1.5",
              "--out", tmp_path / "o.png")
     assert p.returncode == 2 and "anisotropy" in p.stderr
     p = _cli("render", tiny_blend, "--engine", "luxcore", "--density", "0.1", "--out", tmp_path / "o.png")

@@ -143,11 +143,13 @@ _SIGNATURES = {"airlight": ["beta", "d_sv", "along", "h", "d_vp"], "background":
 
 
 def test_rungs_declare_what_they_need():
-    names = [r.name for r in rungs.RUNGS]
+    every = list(rungs.RUNGS) + list(rungs.anisotropic_rungs(0.7))
+    names = [r.name for r in every]
     assert len(set(names)) == len(names)
-    for r in rungs.RUNGS:
+    for r in every:
         assert r.term in rungs.TERMS and r.backends <= set(rungs.BACKENDS) and "numpy" in r.backends
-        params = list(inspect.signature(r.kernel).parameters)
+        # the term's signature; anisotropy g is a keyword with a default, bound per g (rungs.anisotropic_rungs)
+        params = [p.name for p in inspect.signature(r.kernel).parameters.values() if p.default is p.empty]
         assert params[0] == "m" and len(params[1:]) == len(_SIGNATURES[r.term]), (r.name, params)
         assert r.max_error >= 0 and r.predicted_error() == r.max_error and r.evidence
         if r.tables:
@@ -165,7 +167,8 @@ def test_chooser_honours_the_preference():
 
 
 @pytest.mark.parametrize("bad, msg", [(dict(beta=float("nan")), "density"), (dict(beta=-1), "density"),
-                                      (dict(beta=0.1, g=0.5), "anisotropic"),
+                                      (dict(beta=0.1, g=0.97), "anisotropy"),
+                                      (dict(beta=0.1, g=float("nan")), "anisotropy"),
                                       (dict(beta=0.1, albedo=(1, 2, 1)), "colour"),
                                       (dict(beta=0.1, scene_scale=0), "scene scale")])
 def test_medium_refuses_bad_input(bad, msg):

@@ -60,14 +60,25 @@ def sample_parameters(n, seed, background=False):
     return tuple(np.asarray(v, np.float32).astype(float) for v in (beta, t_sv / beta, d_vp, gamma))
 
 
-def _integrand(x, beta, d_sv, along, h, offset=0.0):
+def hg_4pi(g, cos_theta):
+    """4 pi times the Henyey-Greenstein phase function at scattering angle theta (1 when g = 0)."""
+    return (1.0 - g * g) / (1.0 + g * g - 2.0 * g * cos_theta) ** 1.5
+
+
+def _integrand(x, beta, d_sv, along, h, offset=0.0, g=0.0):
     z = x - along
     d2 = z * z + h * h
-    return math.exp(-beta * (math.sqrt(d2) + x - offset)) / d2
+    d = math.sqrt(d2)
+    # the scattering angle at x: light going from the light to x, then from x back to the viewer
+    phase = hg_4pi(g, -z / d) if g else 1.0
+    return phase * math.exp(-beta * (d + x - offset)) / d2
 
 
-def eq5_quad(beta, d_sv, d_vp, gamma, epsrel=EPSREL, scaled=False):
+def eq5_quad(beta, d_sv, d_vp, gamma, epsrel=EPSREL, scaled=False, g=0.0):
     """Airlight per unit intensity (1/m^2) by adaptive quadrature of Eq. 5 in x; d_vp may be inf.
+
+    ``g``: Henyey-Greenstein anisotropy; the integrand is then multiplied by 4 pi p(theta) (Sun's
+    Eq. 5 with a general phase function, Sun Appendix D; Pegoraro et al. Eq. 4).
 
     Returns (value, estimated absolute error).  ``scaled``: both times
     e^{beta D_sv} (the integrand's exponent taken relative to beta D_sv, which
@@ -107,7 +118,7 @@ def eq5_quad(beta, d_sv, d_vp, gamma, epsrel=EPSREL, scaled=False):
     if far is not None:
         pts.append(far)
     total, err = 0.0, 0.0
-    args = (beta, d_sv, along, h, d_sv if scaled else 0.0)
+    args = (beta, d_sv, along, h, d_sv if scaled else 0.0, float(g))
     for a, b in zip(pts[:-1], pts[1:]):
         if b <= a:
             continue
@@ -122,11 +133,12 @@ def eq5_quad(beta, d_sv, d_vp, gamma, epsrel=EPSREL, scaled=False):
     return c * total, c * err
 
 
-def eq9_quad(beta, d_sv, d_vp, gamma, epsrel=1e-12):
+def eq9_quad(beta, d_sv, d_vp, gamma, epsrel=1e-12, g=0.0):
     """Second reference: Sun's Eq. 9 integrated in xi with scipy quad (needs 0 < gamma < pi, beta > 0).
 
     L_a / I0 = beta / (2 pi h) int_{gamma/2}^{v1} exp(-T_sv cos gamma - A1 tan xi) dxi,
     v1 = pi/4 + atan((T_vp - T_sv cos gamma) / A1) / 2 (pi/2 for d_vp = inf).
+    ``g``: the integrand times 4 pi p_HG at the scattering angle 2 xi (Pegoraro et al. Eq. 8).
     """
     beta, d_sv, d_vp, gamma = float(beta), float(d_sv), float(d_vp), float(gamma)
     t_sv = beta * d_sv
@@ -138,7 +150,8 @@ def eq9_quad(beta, d_sv, d_vp, gamma, epsrel=1e-12):
         0.25 * math.pi + 0.5 * math.atan2(beta * d_vp - c0, a1)
     # exponent written relative to its value at xi = gamma/2 (= -T_sv) to keep it O(1)
     t0 = math.tan(v0)
-    f = lambda xi: math.exp(-a1 * (math.tan(xi) - t0)) if xi < 0.5 * math.pi else 0.0
+    f = lambda xi: (math.exp(-a1 * (math.tan(xi) - t0)) * (hg_4pi(g, math.cos(2.0 * xi)) if g else 1.0)
+                    if xi < 0.5 * math.pi else 0.0)
     pts = [v0 + (v1 - v0) * k for k in (0.25, 0.5, 0.75)]
     v, _ = integrate.quad(f, v0, v1, epsabs=0.0, epsrel=epsrel, limit=400, points=pts)
     return beta / (2.0 * math.pi * h) * math.exp(-t_sv) * v
@@ -185,17 +198,17 @@ def _quiet(fn, row):
 
 
 def _work(row):
-    return _quiet(eq5_quad, row)
+    return _quiet(lambda *r: eq5_quad(*r[:4], g=r[4]), row)
 
 
 def _work_check(row):
-    v, e = _quiet(eq5_quad, row)
-    return v, e, _quiet(eq9_quad, row)
+    v, e = _work(row)
+    return v, e, _quiet(lambda *r: eq9_quad(*r[:4], g=r[4]), row)
 
 
-def reference_values(beta, d_sv, d_vp, gamma, processes=None, check=False):
-    """eq5_quad over arrays, in parallel.  check=True also returns eq9_quad values."""
-    rows = list(zip(*(np.broadcast_arrays(*(np.asarray(v, float) for v in (beta, d_sv, d_vp, gamma))))))
+def reference_values(beta, d_sv, d_vp, gamma, processes=None, check=False, g=0.0):
+    """eq5_quad over arrays (``g`` too), in parallel.  check=True also returns eq9_quad values."""
+    rows = list(zip(*(np.broadcast_arrays(*(np.asarray(v, float) for v in (beta, d_sv, d_vp, gamma, g))))))
     rows = [tuple(float(x) for x in r) for r in rows]
     fn = _work_check if check else _work
     processes = processes or mp.cpu_count()

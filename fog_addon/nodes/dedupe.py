@@ -39,7 +39,7 @@ def _shared():
     return (
         ("node_groups", tuple(groups.all_group_names()), lambda ng: bool(ng.get(groups.FOG_PROP))),
         ("images", tuple(images.table_names()), lambda img: images.VERSION_KEY in img),
-        ("texts", tuple(osl.text_names()), lambda text: text.as_string().startswith("// Analytic Fog")),
+        ("texts", tuple(osl.text_names()), lambda text: text.as_string().startswith(osl.HEADER)),
     )
 
 

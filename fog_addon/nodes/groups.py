@@ -21,6 +21,7 @@ Each group records the fingerprint of the code that built it
 (``BUILT``, from the source of the kernels, the shading and the builders): a
 saved file made by other code rebuilds it.
 """
+import functools
 import math
 import re
 import sys
@@ -72,6 +73,8 @@ def all_group_names():
     for pref in rungs.PREFERENCES:
         models = rungs.choose(pref)
         names += [light_group_name(models), background_group_name(models)]
+    names += sorted(base for ng in bpy.data.node_groups if ng.get(FOG_PROP)   # another anisotropy's
+                    and (base := re.sub(r"\.\d{3,}$", "", ng.name)).startswith((f"{LIGHT} [", f"{BACKGROUND_LIGHT} [")))
     return list(dict.fromkeys(names))
 
 
@@ -160,17 +163,35 @@ def build_params(beta, albedo):
     return _install(ng, PARAMS)
 
 
+ANISOTROPY_KEY = "analytic_fog_anisotropy"   # on the params group: the g the lights' models are built for
+
+
 def get_beta():
     """The fog's density per scene unit in the params group (1/unit), 0 if there is none."""
     ng = bpy.data.node_groups.get(PARAMS)
     return float(ng.nodes["Beta"].outputs[0].default_value) if ng is not None else 0.0
 
 
-def set_params(beta, albedo):
-    """Write the fog's settings into the shared params group (creating it if needed)."""
+def get_anisotropy():
+    """The fog's Henyey-Greenstein g in the params group (0 if there is none): the rungs' g
+    (``rungs.choose``); unlike beta it is folded into the groups, which change with it."""
+    ng = bpy.data.node_groups.get(PARAMS)
+    return float(ng.get(ANISOTROPY_KEY, 0.0)) if ng is not None else 0.0
+
+
+def set_anisotropy(g):
+    """Store the fog's anisotropy g in the params group (which must exist)."""
+    bpy.data.node_groups[PARAMS][ANISOTROPY_KEY] = float(g)
+
+
+def set_params(beta, albedo, g=None):
+    """Write the fog's settings into the shared params group (creating it if needed); ``g``: the
+    anisotropy to store (None: keep it)."""
     ng = bpy.data.node_groups.get(PARAMS)
     if ng is None:
-        return build_params(beta, albedo)
+        ng = build_params(beta, albedo)
+    if g is not None and ng.get(ANISOTROPY_KEY, 0.0) != float(g):
+        ng[ANISOTROPY_KEY] = float(g)
     ng.nodes["Beta"].outputs[0].default_value = beta
     ng.nodes["Albedo"].outputs[0].default_value = (*albedo, 1.0)
     return ng
@@ -331,12 +352,30 @@ def _group_node(ng, tree, name, x, y, links=()):
     return node
 
 
+def _place_bundles(ng, lights, models, build, shared, with_passes):
+    """Build ``lights``' bundles with ``build`` (``build_surface_bundle`` or ``build_world_bundle``, its
+    images given) and put one group node per bundle in ``ng``, its inputs linked from ``shared`` (input name:
+    output socket) and, with the passes, from the bundle before's Running Sum.
+
+    Returns ([(group node, the bundle's models)], bundle trees for ``_name_bundles``, the last Running Sum
+    output or None)."""
+    placed, trees, running = [], [], None
+    for first, some, mods in _bundles(lights, models):
+        tree = build(first, some, mods, with_passes, running is not None)
+        trees.append(tree)
+        node = _group_node(ng, tree, tree.name.removesuffix(BUILDING), -300, -300 * len(placed), [
+            *((src, n) for n, src in shared.items()), *(((running, RUNNING),) if running is not None else ())])
+        placed.append((node, mods))
+        running = node.outputs[RUNNING] if with_passes else None
+    return placed, trees, running
+
+
 _SURFACE_SHARED = (("Beta", F), ("Position", V), ("Incoming", V), ("View Distance", F), ("Normal", V),
                    ("Diffuse", C), ("Specular", C), ("Glossy Level", F))   # a light group's inputs but its own
 RUNNING = "Running Sum"   # a bundle's input and output with the fog passes: the Fog Light pass so far
 
 
-def build_surface_bundle(first, lights, models, images, with_passes, chained):
+def build_surface_bundle(images, first, lights, models, with_passes, chained):
     """One bundle of the Surface group (``_bundles``): ``shading.sum_lights`` over ``lights``
     (Sun et al. 2005 Eq. 19's L_a) from their per-light groups (``build_light``).
 
@@ -413,17 +452,13 @@ def build_surface(lights, models, images, with_passes=False):
               "Normal": geo.outputs["Normal"], "Diffuse": diffuse.sock, "Specular": specular.sock,
               "Glossy Level": level.sock, "View Transmittance": t_vp.sock, "Is Camera": is_camera.sock,
               passes.OPACITY: g[passes.OPACITY]}
-    sums, fogs, running, bundles = None, [], None, []
-    for first, some, mods in _bundles(lights, models):
-        tree = build_surface_bundle(first, some, mods, images, with_passes, running is not None)
-        bundles.append(tree)
-        node = _group_node(ng, tree, tree.name.removesuffix(BUILDING), -300, -300 * len(fogs), [
-            *((src, n) for n, src in shared.items()), *(((running, RUNNING),) if running is not None else ())])
+    placed, bundles, running = _place_bundles(
+        ng, lights, models, functools.partial(build_surface_bundle, images), shared, with_passes)
+    sums = None
+    for node, _ in placed:
         sums = shading.merge_sums(sums, shading.LightSums(
             [], *(m.wrap(node.outputs[f], vector=f == "Emission") for f in ("Emission", "Weighted", "Weight"))))
-        if any(_lit(mod) for mod in mods):
-            fogs.append(node.outputs["Fog"])
-        running = node.outputs[RUNNING] if with_passes else None
+    fogs = [node.outputs["Fog"] for node, mods in placed if any(_lit(mod) for mod in mods)]
     fog = shading.surface_fog(m, sums, transmit)
     _shader_tree(ng, gout.inputs["Fog"], fogs)
     for sock, v in (("Emission", fog.emission), ("Transmittance", fog.transmittance),
@@ -557,7 +592,7 @@ def _shader_tree(ng, sock, shaders):
         ng.links.new(level[0][0], sock)
 
 
-def build_world_bundle(first, lights, models, images, with_passes, chained):
+def build_world_bundle(images, first, lights, models, with_passes, chained):
     """One bundle of the World group (``_bundles``): the lights' glows to infinity (Sun et al. 2005
     Eq. 12) from their per-light groups (``build_background_light``).
 
@@ -583,10 +618,7 @@ def build_world_bundle(first, lights, models, images, with_passes, chained):
         airlights.append(m.wrap(node.outputs["Airlight"], vector=True))
     _closure_sum(m, gout.inputs["Fog"], "ShaderNodeBackground",   # see build_surface for why closures
                  [m.wrap(shading.shade_background(m, [a], medium, is_camera)[0], vector=True) for a in airlights])
-    total = airlights[0]
-    for a in airlights[1:]:
-        total = total + a
-    m.feed(gout.inputs["Airlight"], total)
+    m.feed(gout.inputs["Airlight"], shading.total(airlights))
     if with_passes:
         start = m.wrap(g[RUNNING], vector=True) if chained else None
         m.feed(gout.inputs[RUNNING], _world_pass_instances(m, ng, nodes, m.wrap(g["Pass Direction"]), start))
@@ -617,19 +649,14 @@ def build_world(lights, models, camera, images, with_passes=False):
     if with_passes:   # the pass's direction, given another way (``_world_pass_instances``)
         shared["Pass Direction"] = m.vmath("NORMALIZE", m.vmath("SCALE", m.wrap(geo.outputs["Incoming"]), -1.0)).sock
     kept = [(light, mod) for light, mod in zip(lights, models) if mod.background is not rungs.BACKGROUND_OFF]
-    airlight, fogs, running, bundles = None, [], None, []
-    for first, some, mods in _bundles([light for light, _ in kept], [mod for _, mod in kept]):
-        tree = build_world_bundle(first, some, mods, images, with_passes, running is not None)
-        bundles.append(tree)
-        node = _group_node(ng, tree, tree.name.removesuffix(BUILDING), -300, -300 * len(fogs), [
-            *((src, n) for n, src in shared.items()), *(((running, RUNNING),) if running is not None else ())])
-        part = m.wrap(node.outputs["Airlight"], vector=True)
-        airlight = part if airlight is None else airlight + part
-        fogs.append(node.outputs["Fog"])
-        running = node.outputs[RUNNING] if with_passes else None
+    placed, bundles, running = _place_bundles(
+        ng, [light for light, _ in kept], [mod for _, mod in kept],
+        functools.partial(build_world_bundle, images), shared, with_passes)
+    fogs = [node.outputs["Fog"] for node, _ in placed]
     medium = _medium(m, params.outputs["Beta"], params.outputs["Albedo"])
     is_camera = m.wrap(path.outputs["Is Camera Ray"])
-    emission, transmittance = shading.shade_background(m, [] if airlight is None else [airlight], medium, is_camera)
+    emission, transmittance = shading.shade_background(
+        m, [m.wrap(node.outputs["Airlight"], vector=True) for node, _ in placed], medium, is_camera)
     m.feed(gout.inputs["Emission"], m.wrap(emission))
     _shader_tree(ng, gout.inputs["Fog"], fogs)
     m.feed(gout.inputs["Transmittance"], m.wrap(transmittance))

@@ -1,4 +1,6 @@
 """Tables as packed 32-bit float images (one shared copy per table)."""
+import re
+
 import bpy
 import numpy as np
 
@@ -7,11 +9,13 @@ from ..precompute import fingerprint, tables
 VERSION_KEY = "analytic_fog_table_version"   # on each image: the fingerprint of the code that baked it
 
 
-def _bakers():
+def _bakers(g=0.0):
+    """{name: (TableSpec, baker)} of the tables the node groups read for anisotropy g."""
     from ..precompute import airlight, surface
+    air, surf = tables.anisotropic(tables.AIRLIGHT, g), tables.anisotropic(tables.SURFACE, g)
     return {
-        tables.AIRLIGHT.name: (tables.AIRLIGHT, airlight.bake_airlight_table),
-        tables.SURFACE.name: (tables.SURFACE, surface.bake_surface_table),
+        air.name: (air, lambda: airlight.bake_airlight_table(air)),
+        surf.name: (surf, lambda: surface.bake_surface_table(surf)),
     }
 
 
@@ -49,10 +53,13 @@ def table_image(spec, bake):
     return img
 
 
-def all_table_images():
-    """{TableSpec.name: image} for every table the node groups use."""
-    return {name: table_image(spec, bake) for name, (spec, bake) in _bakers().items()}
+def all_table_images(g=0.0):
+    """{TableSpec.name: image} for every table the node groups use with Henyey-Greenstein anisotropy g."""
+    return {name: table_image(spec, bake) for name, (spec, bake) in _bakers(g).items()}
 
 
 def table_names():
-    return list(_bakers())
+    """The tables' image names: the isotropic ones and every other table image in the file (another g's)."""
+    names = list(_bakers())
+    return names + sorted({re.sub(r"\.\d{3,}$", "", img.name) for img in bpy.data.images
+                           if VERSION_KEY in img} - set(names))

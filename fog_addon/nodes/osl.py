@@ -14,6 +14,7 @@ node (bytecode saved in the .blend): a saved file renders on a farm without
 the add-on.
 """
 import inspect
+import re
 import sys
 
 import bpy
@@ -168,7 +169,8 @@ class OslOps:
 
 def kernel_inputs(rung):
     """The names of ``rung.kernel``'s arguments after ``m``: the Script node's float inputs, in order."""
-    return list(inspect.signature(rung.kernel).parameters)[1:]
+    return [p.name for p in inspect.signature(rung.kernel).parameters.values()
+            if p.default is p.empty][1:]   # not the anisotropy g (a default, or bound per g: rungs.anisotropic_rungs)
 
 
 def text_name(rung):
@@ -182,10 +184,11 @@ def kernel_source(rung):
     result = m.wrap(rung.kernel(m, *(OslVal(m, n) for n in names)))
     body = "\n".join(m.lines)
     params = "".join(f"    float {n} = 0.0,\n" for n in names)
-    version = fingerprint.source_fingerprint(sys.modules[rung.kernel.__module__], sys.modules[__name__])
-    return (f"// Analytic Fog {version}: {rung.name} ({rung.term}), {rung.kernel.__module__}.{rung.kernel.__name__}\n"
+    fn = getattr(rung.kernel, "func", rung.kernel)   # a kernel with g bound (rungs.anisotropic_rungs)
+    version = fingerprint.source_fingerprint(sys.modules[fn.__module__], sys.modules[__name__])
+    return (f"{HEADER} {version}: {rung.name} ({rung.term}), {fn.__module__}.{fn.__name__}\n"
             f"// Printed by fog_addon/nodes/osl.py from fog_addon/precompute; do not edit.\n"
-            f"shader {SHADER_PREFIX}{rung.name.replace(' ', '_')}(\n"
+            f"shader {SHADER_PREFIX}{re.sub(r'[^A-Za-z0-9_]', '_', rung.name)}(\n"
             f"{params}"
             f"    output float {OUTPUT} = 0.0)\n"
             f"{{\n{body}\n    {OUTPUT} = {result.expr};\n}}\n")
@@ -202,9 +205,15 @@ def kernel_text(rung):
     return text
 
 
+HEADER = "// Analytic Fog"   # every text kernel_source writes starts with this
+
+
 def text_names():
-    """Names of the texts of every rung that runs in OSL (what ``remove`` and ``dedupe`` look for)."""
-    return [text_name(r) for r in rungs.RUNGS if "osl" in r.backends]
+    """Names of the texts of every rung that runs in OSL (what ``remove`` and ``dedupe`` look for): the
+    isotropic rungs' and those of anisotropic rungs (``rungs.anisotropic_rungs``) in the file."""
+    names = [text_name(r) for r in rungs.RUNGS if "osl" in r.backends]
+    return names + sorted({re.sub(r"\.\d{3,}$", "", t.name) for t in bpy.data.texts
+                           if t.name.startswith(PREFIX) and t.as_string().startswith(HEADER)} - set(names))
 
 
 def _oslquery_path():

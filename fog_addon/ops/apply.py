@@ -114,7 +114,8 @@ def choose_models(scene, lights, preference, quality):
     choice = {"target": target, "error": 0.0, "lights": {}, "engine": engine, "limited": None}
     if lights and (target is not None or (budget is not None and not budget.fits(steps))):
         samples = view.view_samples(scene, lights)
-        pred = predict.predict(samples, view.light_intensities(lights), groups.get_beta(), target, budget)
+        pred = predict.predict(samples, view.light_intensities(lights), groups.get_beta(), target, budget,
+                               groups.get_anisotropy())
         steps = [int(k) for k in pred.steps]
         choice["error"] = pred.error
         choice["lights"] = {o.name: [int(k), float(e)] for o, k, e in zip(lights, pred.steps, pred.light_error)}
@@ -122,7 +123,7 @@ def choose_models(scene, lights, preference, quality):
             choice["limited"] = budget.name + ("" if pred.fits else ": too many lights even with every light off")
     else:
         choice["lights"] = {o.name: [0, 0.0] for o in lights}
-    return [rungs.choose(preference, k) for k in steps], choice
+    return [rungs.choose(preference, k, groups.get_anisotropy()) for k in steps], choice
 
 
 def stored_choice():
@@ -178,7 +179,7 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
         models, choice = choose_models(scene, lights, preference, quality)
     else:
         steps = {name: step for name, (step, _) in old["lights"].items()}
-        models = [rungs.choose(preference, steps.get(o.name, 0)) for o in lights]
+        models = [rungs.choose(preference, steps.get(o.name, 0), groups.get_anisotropy()) for o in lights]
         choice = dict(old, lights={o.name: old["lights"].get(o.name, [0, 0.0]) for o in lights})
     choice["quality"] = quality_value(quality)
     # lights stepped out of the groups to fit a budget (rungs.LEFT_OUT) keep their own dimming (wrap_light)
@@ -188,7 +189,7 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if (surface is None or bpy.data.node_groups.get(groups.WORLD) is None
             or surface.get(LIGHTS_KEY) != signature):
-        imgs = images.all_table_images()
+        imgs = images.all_table_images(groups.get_anisotropy())
         surface = groups.build_surface(in_groups, grouped_models, imgs, with_passes)
         surface[LIGHTS_KEY] = signature
         surface[PREFERENCE_KEY] = preference
@@ -198,6 +199,10 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
             ng = bpy.data.node_groups.get(name)
             if ng is not None and ng.users == 0 and name not in (groups.PARAMS, groups.SURFACE, groups.WORLD):
                 bpy.data.node_groups.remove(ng)
+        for name in images.table_names():   # another anisotropy's tables (one g per file: the params group's)
+            img = bpy.data.images.get(name)
+            if img is not None and name not in imgs:
+                bpy.data.images.remove(img)
         taking_part = {o.data for o in lights}
         for light in bpy.data.lights:
             if light.users and light not in taking_part and is_fogged(light):
@@ -244,7 +249,7 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     is called as the work advances (``progress.py``).
     """
     fog = medium.medium(density, albedo, anisotropy, scene_scale)
-    rungs.choose(method)   # an unknown preference raises here, before anything changes
+    rungs.choose(method, 0, fog.g)   # an unknown preference or unserved g raises here, before anything changes
     predict.target_error(error)
     check_camera(scene.camera)
     progress("appended fog", 0, 1)
@@ -252,13 +257,13 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     lights, notes = fog_lights(scene)
     skipped += notes
     progress("lights and tables", 0, 1)
-    groups.set_params(fog.beta, fog.albedo)
+    groups.set_params(fog.beta, fog.albedo, fog.g)
     if bpy.data.node_groups.get(groups.SURFACE) is None:
         # The materials are wrapped around a Surface group without lights, which the lights' group then
         # replaces (``groups._install``): every node Blender's API adds to a material costs more the
         # bigger the groups it links (1 000 materials, 64 lights: 25.9 -> 16.1 s CPU,
         # benchmarks/apply_order.py).
-        groups.build_surface([], [], images.all_table_images(), with_passes)
+        groups.build_surface([], [], images.all_table_images(fog.g), with_passes)
     mats = scene_materials(scene, objects)
     for k, mat in enumerate(mats):
         progress("materials", k, len(mats))
@@ -303,10 +308,24 @@ def _rebuild(scene, surface, preference=_KEEP, with_passes=_KEEP, quality=_KEEP,
                         rechoose=rechoose)
 
 
+def set_anisotropy(scene, g):
+    """The user changed the anisotropy: the lights keep their steps, now with g's models (materials are not
+    touched).  Raises ValueError, changing nothing, for a g outside the range or one the method's models
+    don't serve."""
+    fog = medium.medium(1.0, (1.0, 1.0, 1.0), g)
+    surface = bpy.data.node_groups.get(groups.SURFACE)
+    if surface is None or fog.g == groups.get_anisotropy():
+        return
+    rungs.choose(surface.get(PREFERENCE_KEY, "nodes"), 0, fog.g)
+    groups.set_anisotropy(fog.g)
+    _rebuild(scene, surface)
+
+
 def set_method(scene, method):
     """The user changed the method preference: the lights keep their steps, now with ``method``'s models."""
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is not None:
+        rungs.choose(method, 0, groups.get_anisotropy())   # raises (nothing changed) for a g it can't serve
         _rebuild(scene, surface, preference=method)
 
 

@@ -64,13 +64,12 @@ def _principled(material):
 
 
 class _MeshInfo:
-    """An evaluated mesh instance's materials and smooth normals."""
+    """An evaluated mesh instance's materials and smooth normals; ``loops``: its loop triangles' corners."""
 
-    def __init__(self, ev, matrix):
+    def __init__(self, ev, matrix, loops):
         self.ev = ev
-        mesh = getattr(ev, "data", None)
-        self.mesh = mesh if isinstance(mesh, bpy.types.Mesh) else None
-        self.tris = None
+        self.mesh = ev.data
+        self.loops = loops
         self.inv = np.linalg.inv(matrix)
 
     def material(self, index):
@@ -79,34 +78,22 @@ class _MeshInfo:
         except (AttributeError, IndexError, TypeError):
             return None
 
-    def normal(self, index, location, face_normal):
-        """The shading normal at a hit: the face's, or on a smooth face the corner normals interpolated."""
-        try:
-            if not self.mesh.polygons[index].use_smooth:
-                return face_normal
-            if self.tris is None:
-                self.mesh.calc_loop_triangles()
-                self.tris = {}
-                for lt in self.mesh.loop_triangles:
-                    self.tris.setdefault(lt.polygon_index, []).append(tuple(lt.loops))
-            co = self.mesh.vertices
-            loops = self.mesh.loops
-            corner = self.mesh.corner_normals
-            p = (self.inv @ np.append(location, 1.0))[:3]
-            best, best_w = None, -np.inf
-            for tri in self.tris[index]:
-                a, b, c = (np.array(co[loops[k].vertex_index].co) for k in tri)
-                m = np.column_stack([b - a, c - a])
-                uv = np.linalg.lstsq(m, p - a, rcond=None)[0]
-                w = np.array([1.0 - uv.sum(), uv[0], uv[1]])
-                if w.min() > best_w:
-                    best, best_w = (tri, w), w.min()
-            tri, w = best
-            n_local = sum(wk * np.array(corner[k].vector) for wk, k in zip(w, tri))
-            n = self.inv[:3, :3].T @ n_local
-            return n / np.linalg.norm(n)
-        except (AttributeError, IndexError, KeyError, TypeError, np.linalg.LinAlgError):
+    def normal(self, tri, index, location, face_normal):
+        """The shading normal at a hit on loop triangle ``tri`` of polygon ``index``: the face's, or on a
+        smooth face the triangle's corner normals interpolated at the hit."""
+        if not self.mesh.polygons[index].use_smooth:
             return face_normal
+        corners = self.loops[tri]
+        a, b, c = (np.array(self.mesh.vertices[self.mesh.loops[k].vertex_index].co) for k in corners)
+        p = (self.inv @ np.append(location, 1.0))[:3]
+        try:
+            u, v = np.linalg.lstsq(np.column_stack([b - a, c - a]), p - a, rcond=None)[0]
+        except np.linalg.LinAlgError:
+            return face_normal
+        n_local = sum(w * np.array(self.mesh.corner_normals[k].vector) for w, k in zip((1.0 - u - v, u, v), corners))
+        n = self.inv[:3, :3].T @ n_local
+        length = np.linalg.norm(n)
+        return n / length if length > 0.0 else face_normal
 
 
 def _frame_rays(scene, camera, grid):
@@ -148,9 +135,11 @@ class _SceneMesh:
             mesh.loop_triangles.foreach_get("vertices", lt)
             poly = np.empty(len(mesh.loop_triangles), dtype=np.int64)
             mesh.loop_triangles.foreach_get("polygon_index", poly)
+            loops = np.empty(3 * len(poly), dtype=np.int64)
+            mesh.loop_triangles.foreach_get("loops", loops)
             self.first_tri.append(n_tris)
             n_tris += len(poly)
-            self.owners.append(_MeshInfo(ev, matrix))
+            self.owners.append(_MeshInfo(ev, matrix, loops.reshape(-1, 3)))
             self.polygon.append(poly)
             verts.append(co)
             tris.append(lt.reshape(-1, 3) + n_verts)
@@ -159,14 +148,15 @@ class _SceneMesh:
                                           all_triangles=True) if verts else None)
 
     def ray_cast(self, origin, direction):
-        """(location, face normal, owner _MeshInfo, polygon index) of the first hit, or None."""
+        """(location, face normal, owner _MeshInfo, its loop triangle, polygon index) of the first hit, or None."""
         if self.tree is None:
             return None
         loc, normal, index, _ = self.tree.ray_cast(origin, direction)
         if loc is None:
             return None
         k = int(np.searchsorted(self.first_tri, index, side="right")) - 1
-        return np.array(loc), np.array(normal), self.owners[k], int(self.polygon[k][index - self.first_tri[k]])
+        tri = index - self.first_tri[k]
+        return np.array(loc), np.array(normal), self.owners[k], tri, int(self.polygon[k][tri])
 
 
 def _sample_frame(scene, depsgraph, lights, grid):
@@ -179,8 +169,8 @@ def _sample_frame(scene, depsgraph, lights, grid):
         if hit is None:
             rows.append((d, math.inf, (0.0, 0.0, 1.0), LAMBERT))
             continue
-        loc, normal, info, index = hit
-        n = info.normal(index, loc, normal)
+        loc, normal, info, tri, index = hit
+        n = info.normal(tri, index, loc, normal)
         if n @ d > 0.0:
             n = -n
         mat = info.material(index)

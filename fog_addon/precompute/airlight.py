@@ -17,13 +17,15 @@ from . import model
 _GL8_X, _GL8_W = np.polynomial.legendre.leggauss(8)
 
 
-def k_inf(u, a, panels=48):
-    """Optical tail K(u, a) = int_0^inf exp(-p) / ((a + p)^2 + u^2) dp (dimensionless).
+def k_inf(u, a, panels=48, g=0.0):
+    """Optical tail K(u, a) = int_0^inf exp(-p) w / ((a + p)^2 + u^2) dp (dimensionless).
 
-    u = beta h, a = beta Q (see model.py).  Composite 8-point Gauss-Legendre on
-    geometrically graded panels from min(rho, 1) * 1e-3 to 60 plus [0, first
-    edge]; relative error below 1e-10 against the closed form
-    Im(e^c E1(c)) / u, c = a - iu (checked in the tests with scipy).
+    u = beta h, a = beta Q (see model.py); w = 1, or for Henyey-Greenstein anisotropy g
+    ``model.hg_weight`` at (a + p, u) (Pegoraro et al. Eq. 8).  Composite 8-point
+    Gauss-Legendre on geometrically graded panels from min(rho, 1) * 1e-3 to 60
+    plus [0, first edge]; relative error below 1e-10 against the closed form
+    Im(e^c E1(c)) / u, c = a - iu (checked in the tests with scipy), and against
+    scipy quadrature for g != 0.
     """
     u = np.asarray(u, float)
     a = np.asarray(a, float)
@@ -35,51 +37,60 @@ def k_inf(u, a, panels=48):
     lo, hi = edges[..., :-1], edges[..., 1:]
     half = 0.5 * (hi - lo)
     p = half[..., None] * _GL8_X + (0.5 * (hi + lo))[..., None]
-    f = np.exp(-p) / ((a[..., None, None] + p) ** 2 + u[..., None, None] ** 2)
+    q, uu = a[..., None, None] + p, u[..., None, None]
+    f = np.exp(-p) / (q ** 2 + uu ** 2)
+    if g:
+        f = f * model.hg_weight(NumpyOps(), g, q, uu)
     return np.sum(f * _GL8_W * half[..., None], axis=(-1, -2))
 
 
-def normalised_tail(rho, xi):
-    """N(rho, xi) = K * (rho / h(xi) + rho^2), K at u = rho cos xi, a = rho sin xi.
+def normalised_tail(rho, xi, g=0.0):
+    """N(rho, xi) = K * (rho / h(xi) + rho^2 / w(xi)), K at u = rho cos xi, a = rho sin xi.
 
     h(xi) = (pi/2 - xi) / cos xi, so rho / h is the reciprocal of K without
-    extinction (rho -> 0) and rho^2 its far-field reciprocal; N -> 1 at both ends.
+    extinction and phase weight (rho -> 0) and rho^2 / w its far-field reciprocal, w the
+    Henyey-Greenstein weight at the angle xi (1 for g = 0); N -> 1 at both ends for g = 0,
+    and to the mean of w over [xi, pi/2] as rho -> 0 for g != 0.
     """
     rho = np.maximum(np.asarray(rho, float), 1e-12)
     xi = np.asarray(xi, float)
     c = tables.HALF_PI - xi
     h = np.where(c > 1e-6, c / np.maximum(np.sin(c), 1e-300), 1.0)
-    return k_inf(rho * np.cos(xi), rho * np.sin(xi)) * (rho / h + rho * rho)
+    u, a = rho * np.cos(xi), rho * np.sin(xi)
+    w = model.hg_weight(NumpyOps(), g, a, u) if g else 1.0
+    return k_inf(u, a, g=g) * (rho / h + rho * rho / w)
 
 
 def bake_airlight_table(spec=tables.AIRLIGHT):
-    """The N table as float32, layout of tables.py (rows: xi, columns: rho)."""
+    """The N table of ``spec.g`` as float32, layout of tables.py (rows: xi, columns: rho)."""
     x = np.linspace(0.0, 1.0, spec.width)
     y = np.linspace(0.0, 1.0, spec.height)
-    rho = tables.airlight_rho(x)
-    xi = y * tables.HALF_PI
-    return normalised_tail(rho[None, :], xi[:, None]).astype(np.float32)
+    rho = tables.airlight_rho(x, spec.g)
+    xi = tables.airlight_xi(y, spec.g)
+    return normalised_tail(rho[None, :], xi[:, None], spec.g).astype(np.float32)
 
 
-def airlight(beta, d_sv, d_vp, gamma, table=None, quadrature=False):
+def airlight(beta, d_sv, d_vp, gamma, table=None, quadrature=False, g=0.0):
     """Airlight per unit intensity (1/m^2) of our model, in numpy, exactly as the shaders compute it.
 
     beta (1/m), d_sv, d_vp (m, ``np.inf`` for the background), gamma (rad); arrays broadcast.
     ``quadrature``: the in-shader quadrature of the OSL method (no table) instead
-    of the table lookups of the node groups.
+    of the table lookups of the node groups.  ``g``: Henyey-Greenstein anisotropy
+    (``table``, if given, baked for it).
     """
     beta, d_sv, d_vp, gamma = np.broadcast_arrays(*(np.asarray(v, float) for v in (beta, d_sv, d_vp, gamma)))
     along = d_sv * np.cos(gamma)
     h = d_sv * np.sin(gamma)
     finite = np.isfinite(d_vp)
     if quadrature:
-        return model.airlight_quadrature(NumpyOps(), beta, d_sv, along, h, np.where(finite, d_vp, model.FAR))
-    table = bake_airlight_table() if table is None else table
-    m = NumpyOps({tables.AIRLIGHT.name: table})
+        return model.airlight_quadrature(NumpyOps(), beta, d_sv, along, h, np.where(finite, d_vp, model.FAR), g)
+    spec = tables.anisotropic(tables.AIRLIGHT, g)
+    table = bake_airlight_table(spec) if table is None else table
+    m = NumpyOps({spec.name: table})
     dvp = np.where(finite, d_vp, 0.0)
     with np.errstate(over="ignore", invalid="ignore"):
-        seg = model.airlight_segment(m, beta, d_sv, along, h, dvp)
-        bg = model.airlight_background(m, beta, d_sv, along, h)
+        seg = model.airlight_segment(m, beta, d_sv, along, h, dvp, g)
+        bg = model.airlight_background(m, beta, d_sv, along, h, g)
     return np.where(finite, seg, bg)
 
 

@@ -10,7 +10,7 @@ holds floats or arrays.
 import math
 from typing import Any, NamedTuple
 
-from . import presets
+from . import presets, tables
 
 
 class Medium(NamedTuple):
@@ -36,6 +36,7 @@ def medium(beta, albedo=(1.0, 1.0, 1.0), g=0.0, scene_scale=1.0):
         raise ValueError(f"scene scale must be a positive number of metres per unit, got {scene_scale}")
     if len(albedo) != 3 or not all(math.isfinite(a) and 0.0 <= a <= 1.0 for a in albedo):
         raise ValueError(f"the fog colour (albedo) needs three values in [0, 1], got {albedo}")
-    if not math.isfinite(g) or g != 0.0:
-        raise ValueError("anisotropic fog (anisotropy != 0) is not supported yet; use 0")
+    if not (math.isfinite(g) and abs(g) <= tables.MAX_ANISOTROPY):
+        raise ValueError(f"anisotropy (Henyey-Greenstein g) must be between {-tables.MAX_ANISOTROPY} and "
+                         f"{tables.MAX_ANISOTROPY}, got {g}")
     return Medium(beta * scene_scale, albedo, g)

@@ -43,7 +43,7 @@ MIN_ANGLE = 1e-7     # rad; rays closer than this to a light are taken at this a
 MIN_DISTANCE = 1e-6   # m; distances to the light are clamped here (the glow of a point light is infinite on it)
 INV_4PI = 1.0 / (4.0 * math.pi)
 # In-shader quadrature of the airlight (airlight_quadrature, the OSL method):
-QUAD_PANELS = 64      # panels at most (enough down to beta h = 1e-16, see airlight_quadrature)
+QUAD_PANELS = 72      # panels at most (enough down to beta h = 1e-16 at |g| <= 0.95, see airlight_quadrature)
 QUAD_GROWTH = 1.0     # a panel is at most this times sqrt(Q^2 + h^2) long (its distance to the poles Q = +-ih)
 QUAD_DEPTH = 4.0      # ... and at most this optical depth thick
 QUAD_END = 30.0       # the integral stops at optical depth 30 from Q0 (e^-30 = 1e-13)
@@ -57,11 +57,40 @@ def xi_over_cos(m, xi):
     return (c + 1e-7) / (m.sin(c) + 1e-7)
 
 
-def airlight_tail(m, beta, r, xi):
-    """K(Q) in 1/m for a point at polar coordinates (r, xi) about the light (module docstring)."""
-    r = m.maximum(r, MIN_DISTANCE)
-    n = m.table(tables.AIRLIGHT, tables.airlight_x(m, beta * r), tables.airlight_y(m, xi))
-    return n / (r / xi_over_cos(m, xi) + beta * r * r)
+def hg_weight(m, g, q, h):
+    """4 pi p_HG(cos theta): the Henyey-Greenstein phase function's weight on the airlight integrand at
+    the ray point Q = q (dimensionless; 1 for g = 0, Sun's isotropic 1/(4 pi)).
+
+    With v = Q/h the scattering angle there has cos theta = (1 - v^2) / (1 + v^2) (Pegoraro et al.,
+    Eq. 8 with Eq. 9: theta = 2 xi, forward scattering towards the viewer at Q -> 0), so
+    4 pi p = (1 - g^2) ((Q^2 + h^2) / ((1 - g)^2 h^2 + (1 + g)^2 Q^2))^{3/2}, finite for |g| < 1.
+    """
+    if not g:
+        return 1.0
+    a, b = (1.0 - g) * h, (1.0 + g) * q
+    ratio = (q * q + h * h) / m.maximum(a * a + b * b, 1e-300)
+    return (1.0 - g * g) * ratio * m.sqrt(ratio)
+
+
+def phase_scale(m, g, q, h):
+    """Distance (m) from Q = q to the nearest singularity of the airlight integrand in the complex
+    plane: sqrt(q^2 + h^2), or with a forward phase peak (g > 0) sqrt(q^2 + (h / s)^2)
+    (``tables.hg_stretch``): the length over which the integrand changes."""
+    h_eff = h * (1.0 / tables.hg_stretch(g)) if g > 0.0 else h
+    return m.sqrt(q * q + h_eff * h_eff)
+
+
+def airlight_tail(m, beta, q, h, d, g=0.0):
+    """K(Q) in 1/m at Q = q on a ray at distance h from the light, the point d from the light (module
+    docstring): the table of anisotropy g (``airlight.normalised_tail``) divided by its limits."""
+    r = m.maximum(m.sqrt(2.0 * q * d), MIN_DISTANCE)   # = sqrt(q^2 + h^2), without squaring q
+    xi = m.atan2(q, h)
+    n = m.table(tables.anisotropic(tables.AIRLIGHT, g), tables.airlight_x(m, beta * r, g),
+                tables.airlight_y(m, q, h, g, xi))
+    far = beta * r * r
+    if g:
+        far = far / hg_weight(m, g, q, h)
+    return n / (r / xi_over_cos(m, xi) + far)
 
 
 def closest_point_q(m, d, along, h):
@@ -69,12 +98,13 @@ def closest_point_q(m, d, along, h):
     return m.select(m.less(0.0, along), along + d, h * h / m.maximum(d + m.abs(along), 1e-30))
 
 
-def airlight_segment(m, beta, d_sv, along, h, d_vp):
+def airlight_segment(m, beta, d_sv, along, h, d_vp, g=0.0):
     """Airlight per unit intensity, 1/m^2: Sun et al. 2005 Eq. 5 / Eq. 11, ray from the viewer to a surface.
 
     d_sv: viewer-light distance; along: D_sv cos(gamma); h: D_sv sin(gamma);
     d_vp: viewer-surface distance (all m).  The light-surface distance is
-    D_sp = sqrt((d_vp - along)^2 + h^2).
+    D_sp = sqrt((d_vp - along)^2 + h^2).  g: Henyey-Greenstein anisotropy (a Python
+    float: the integrand times ``hg_weight``, Pegoraro et al. Eq. 8; tables per g, Biri 2006).
     """
     neg_beta = -beta   # once, not per use: every material inlines this per light
     z1 = d_vp - along
@@ -82,34 +112,29 @@ def airlight_segment(m, beta, d_sv, along, h, d_vp):
     h = m.maximum(h, MIN_ANGLE * d_sv)
     q0 = closest_point_q(m, d_sv, -along, h)
     q1 = closest_point_q(m, d_sp, z1, h)
-    r0 = m.sqrt(2.0 * q0 * d_sv)
-    r1 = m.sqrt(2.0 * q1 * d_sp)
-    xi0 = m.atan2(q0, h)
-    xi1 = m.atan2(q1, h)
     # P = Q1 - Q0 = d_vp + d_sp - d_sv = d_vp (q0 + q1) / (d_sv + d_sp), without cancellation.
     seg = d_vp * (q0 + q1) / m.maximum(d_sp + d_sv, 1e-30)
-    long_ = airlight_tail(m, beta, r0, xi0) - m.exp(neg_beta * seg) * airlight_tail(m, beta, r1, xi1)
+    long_ = airlight_tail(m, beta, q0, h, d_sv, g) - m.exp(neg_beta * seg) * airlight_tail(m, beta, q1, h, d_sp, g)
     short = 0.0
     h2 = h * h
     for x, w in zip(_GL_X, _GL_W):
         p = seg * x
         q = q0 + p
-        short = short + w * m.exp(neg_beta * p) / m.maximum(q * q + h2, 1e-30)
+        short = short + w * hg_weight(m, g, q, h) * m.exp(neg_beta * p) / m.maximum(q * q + h2, 1e-30)
     short = short * seg
-    is_short = m.less(beta * seg, SHORT_SEGMENT * m.minimum(1.0, beta * r0))
+    is_short = m.less(beta * seg, SHORT_SEGMENT * m.minimum(1.0, beta * phase_scale(m, g, q0, h)))
     return (beta * INV_2PI) * m.exp(neg_beta * d_sv) * m.select(is_short, short, long_)
 
 
-def airlight_background(m, beta, d_sv, along, h):
-    """Airlight per unit intensity, 1/m^2, of a ray that meets no surface: Sun et al. 2005 Eq. 12."""
+def airlight_background(m, beta, d_sv, along, h, g=0.0):
+    """Airlight per unit intensity, 1/m^2, of a ray that meets no surface: Sun et al. 2005 Eq. 12
+    (g: as in ``airlight_segment``)."""
     h = m.maximum(h, MIN_ANGLE * d_sv)
     q0 = closest_point_q(m, d_sv, -along, h)
-    r0 = m.sqrt(2.0 * q0 * d_sv)
-    xi0 = m.atan2(q0, h)
-    return (beta * INV_2PI) * m.exp(-beta * d_sv) * airlight_tail(m, beta, r0, xi0)
+    return (beta * INV_2PI) * m.exp(-beta * d_sv) * airlight_tail(m, beta, q0, h, d_sv, g)
 
 
-def airlight_quadrature(m, beta, d_sv, along, h, d_vp):
+def airlight_quadrature(m, beta, d_sv, along, h, d_vp, g=0.0):
     """Airlight per unit intensity, 1/m^2, by quadrature of Sun et al. 2005 Eq. 5 in the shader: no tables.
 
     Same integral as ``airlight_segment`` (module docstring), in P = Q - Q0,
@@ -119,9 +144,11 @@ def airlight_quadrature(m, beta, d_sv, along, h, d_vp):
     outside the panel's convergence ellipse) and QUAD_DEPTH optical depths
     thick, up to Q1 or optical depth QUAD_END.  Panels grow geometrically
     (x2) until Q ~ 4/beta, so 1 + log2(4 / (beta h)) + QUAD_END / QUAD_DEPTH
-    panels suffice: QUAD_PANELS = 64 covers beta h >= 1e-16.  Against scipy
+    panels suffice (4 more with a forward peak of g = 0.95): QUAD_PANELS = 72 covers beta h >= 1e-16.  Against scipy
     quadrature of Eq. 5 (tests/test_airlight.py): max relative error 1.1e-6.
-    A ray that meets no surface (Eq. 12) has d_vp = FAR.
+    A ray that meets no surface (Eq. 12) has d_vp = FAR.  ``g``: Henyey-Greenstein
+    anisotropy, the integrand times ``hg_weight`` (Pegoraro et al. Eq. 8); panels are then
+    at most QUAD_GROWTH ``phase_scale`` long (the weight's poles at Q = +-ih/s).
     """
     h = m.maximum(h, MIN_ANGLE * m.maximum(d_sv, MIN_DISTANCE))
     z1 = d_vp - along
@@ -133,22 +160,22 @@ def airlight_quadrature(m, beta, d_sv, along, h, d_vp):
 
     def panel(pa, total):
         qa = q0 + pa
-        pb = m.minimum(pa + m.minimum(QUAD_GROWTH * m.sqrt(qa * qa + h * h), QUAD_DEPTH / beta), end)
+        pb = m.minimum(pa + m.minimum(QUAD_GROWTH * phase_scale(m, g, qa, h), QUAD_DEPTH / beta), end)
         width = pb - pa
         s = 0.0
         for x, w in zip(_GL_X, _GL_W):
             p = pa + width * x
             q = q0 + p
-            s = s + w * m.exp(-beta * p) / (q * q + h * h)
+            s = s + w * hg_weight(m, g, q, h) * m.exp(-beta * p) / (q * q + h * h)
         return pb, total + s * width
 
     _, total = m.fori(QUAD_PANELS, panel, (0.0, 0.0), done=lambda pa, total: 1.0 - m.less(pa, end))
     return (beta * INV_2PI) * m.exp(-beta * d_sv) * total
 
 
-def airlight_quadrature_background(m, beta, d_sv, along, h):
+def airlight_quadrature_background(m, beta, d_sv, along, h, g=0.0):
     """:func:`airlight_quadrature` of a ray that meets no surface (Sun et al. 2005 Eq. 12), 1/m^2."""
-    return airlight_quadrature(m, beta, d_sv, along, h, FAR)
+    return airlight_quadrature(m, beta, d_sv, along, h, FAR, g)
 
 
 def ray_light_geometry(m, origin, direction, light):

@@ -87,21 +87,23 @@ def target_error(quality):
 _TABLES = {}
 
 
-def _numpy_ops():
-    if not _TABLES:
-        _TABLES[tables.AIRLIGHT.name] = airlight.bake_airlight_table()
-        _TABLES[tables.SURFACE.name] = surface.surface_table()
+def _numpy_ops(g):
+    air, surf = tables.anisotropic(tables.AIRLIGHT, g), tables.anisotropic(tables.SURFACE, g)
+    if air.name not in _TABLES:
+        _TABLES[air.name] = airlight.bake_airlight_table(air)
+        _TABLES[surf.name] = surface.surface_table(g)
     return NumpyOps(_TABLES)
 
 
-def light_fog(samples, intensity, beta):
+def light_fog(samples, intensity, beta, g=0.0):
     """(glow, scatter), each (P, N, 3) W/(m^2 sr): every light's terms at every sample (module docstring).
 
-    intensity: (N, 3) RGB radiant intensity I0, W/sr; beta: 1/m.  The full
-    rungs of the "nodes" preference (its tables), the shaders' twin.
+    intensity: (N, 3) RGB radiant intensity I0, W/sr; beta: 1/m; g: Henyey-Greenstein anisotropy.
+    The full rungs of the "nodes" preference (its tables; the quadrature where g is below the
+    tables' range), the shaders' twin.
     """
-    m = _numpy_ops()
-    full = rungs.choose("nodes")
+    m = _numpy_ops(g)
+    full = rungs.choose("nodes" if g >= rungs.MIN_TABLE_ANISOTROPY else "osl", 0, g)
     cam = np.asarray(samples.camera, float)[:, None, :]
     d = np.asarray(samples.direction, float)[:, None, :]
     lights = np.asarray(samples.lights, float)
@@ -181,7 +183,7 @@ def choose_steps(glow, scatter, target, budget=None):
     return Prediction(steps, light_error, error, int(judged.any(axis=1).sum()), limited, fits)
 
 
-def predict(samples, intensity, beta, quality, budget=None):
+def predict(samples, intensity, beta, quality, budget=None, g=0.0):
     """The choice for a view at a Quality (preset name, number or None): :class:`Prediction`."""
-    glow, scatter = light_fog(samples, intensity, beta)
+    glow, scatter = light_fog(samples, intensity, beta, g)
     return choose_steps(glow, scatter, target_error(quality), budget)

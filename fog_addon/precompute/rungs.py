@@ -24,7 +24,8 @@ intensity of the light):
 * scatter(m, beta, d_sp, cos_theta, level) -> 1/m^2 per unit albedo
 * direct(m, beta, d_sp) -> transmittance (dimensionless)
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+import functools
 from typing import Callable, NamedTuple
 
 from . import model, surface, tables
@@ -118,23 +119,66 @@ class LightModels(NamedTuple):
     direct: Rung
 
 
-def choose(preference="nodes", step=0):
+# Henyey-Greenstein anisotropy g: the glow's rungs integrate 4 pi p_HG along the ray (model.hg_weight), from
+# a table baked for g (tables.anisotropic) or by quadrature; the scatter table is baked for g the same way
+# (surface.radiance_profile), its bound hg_scatter_error(g) (measured: tests/test_surface.py).  Measured against scipy quadrature of Eq. 5 with
+# the phase function (tests/test_airlight.py); the table's cancellation between the two tails grows as
+# g -> -1 (the back-scatter peak far beyond the light), so tables serve g >= MIN_TABLE_ANISOTROPY.
+MIN_TABLE_ANISOTROPY = -0.8
+HG_TABLE_ERROR = 1.6e-3      # max relative error of the g != 0 airlight tables over g in [-0.8, 0.95]
+HG_QUADRATURE_ERROR = 1e-5
+
+
+def hg_scatter_error(g):
+    """Bound on the relative error of the scatter table baked for g: its maximum against scipy quadrature
+    of Eq. 15 with the phase function over the points of tests/test_surface.py (grazing light sharpens
+    the table's theta structure as g grows: 0.31 % at g = -0.5, 0.91 % at 0.85, 2.8 % at 0.95)."""
+    g = abs(float(g))
+    return SCATTER_TABLE.max_error if g == 0.0 else 5e-3 if g <= 0.5 else 1e-2 if g <= 0.85 else 3e-2
+
+
+@functools.lru_cache(maxsize=None)
+def anisotropic_rungs(g):
+    """(airlight table, background table, airlight quadrature, background quadrature, scatter table) rungs
+    for Henyey-Greenstein anisotropy g (the isotropic rungs themselves at g = 0)."""
+    g = float(g)
+    if g == 0.0:
+        return AIRLIGHT_TABLE, BACKGROUND_TABLE, AIRLIGHT_QUADRATURE, BACKGROUND_QUADRATURE, SCATTER_TABLE
+    spec = tables.anisotropic(tables.AIRLIGHT, g)
+    tag = f" (g {g:+.3f})"
+    table_domain = f"{AIRLIGHT_TABLE.domain}; Henyey-Greenstein g in [{MIN_TABLE_ANISOTROPY}, {tables.MAX_ANISOTROPY}]"
+    return tuple(replace(r, name=r.name + tag, kernel=functools.partial(r.kernel, g=g), tables=t, domain=d,
+                         max_error=e)
+                 for r, t, d, e in ((AIRLIGHT_TABLE, (spec,), table_domain, HG_TABLE_ERROR),
+                                    (BACKGROUND_TABLE, (spec,), table_domain, HG_TABLE_ERROR),
+                                    (AIRLIGHT_QUADRATURE, (), AIRLIGHT_QUADRATURE.domain, HG_QUADRATURE_ERROR),
+                                    (BACKGROUND_QUADRATURE, (), AIRLIGHT_QUADRATURE.domain, HG_QUADRATURE_ERROR),
+                                    (SCATTER_TABLE, (tables.anisotropic(tables.SURFACE, g),), SCATTER_TABLE.domain,
+                                     hg_scatter_error(g))))
+
+
+def choose(preference="nodes", step=0, g=0.0):
     """The models for one light's terms, honouring the user's ``preference`` (PREFERENCES), ``step``
-    (index into STEPS) rungs down the ladder.
+    (index into STEPS) rungs down the ladder, for Henyey-Greenstein anisotropy ``g``.
 
     "nodes": every term from the node groups' tables; "osl": the glow by
     quadrature in OSL (Cycles only), the other terms as "nodes" (they have no
     OSL rung).  ``predict.choose_steps`` picks each light's step from the
-    error it would make in the camera's view.
+    error it would make in the camera's view.  Raises ValueError for what no rung
+    serves (tables below MIN_TABLE_ANISOTROPY).
     """
     if preference not in PREFERENCES:
         raise ValueError(f"unknown method {preference!r}; use one of {', '.join(PREFERENCES)}")
     if step not in range(len(STEPS)):
         raise ValueError(f"unknown ladder step {step!r}; use 0 to {len(STEPS) - 1}")
+    air_table, bg_table, air_quad, bg_quad, scatter = anisotropic_rungs(g)
     if preference == "osl":
-        models = LightModels(AIRLIGHT_QUADRATURE, BACKGROUND_QUADRATURE, SCATTER_TABLE, DIRECT_EXACT)
+        models = LightModels(air_quad, bg_quad, scatter, DIRECT_EXACT)
+    elif g < MIN_TABLE_ANISOTROPY:
+        raise ValueError(f"anisotropy {g} is below {MIN_TABLE_ANISOTROPY}: the node groups' tables lose accuracy "
+                         "with so much back-scattering; use the OSL method (Cycles)")
     else:
-        models = LightModels(AIRLIGHT_TABLE, BACKGROUND_TABLE, SCATTER_TABLE, DIRECT_EXACT)
+        models = LightModels(air_table, bg_table, scatter, DIRECT_EXACT)
     if step >= 1:
         models = models._replace(scatter=SCATTER_OFF)
     if step >= 2:

@@ -120,17 +120,21 @@ def view_transmittance(m, beta, view_distance, is_camera):
     return t_vp, transmit
 
 
+def total(values):
+    """The sum of a non-empty list of values (numbers, arrays or shader values), left to right."""
+    result = values[0]
+    for v in values[1:]:
+        result = result + v
+    return result
+
+
 def sum_lights(m, terms, medium, t_vp, is_camera):
     """LightSums of the lights' ``terms`` (LightTerms, at least one): each light's fog light on camera rays
     (Eq. 19's L_a: albedo * (airlight + e^{-beta D_vp} * reflected fog light)) and EEVEE's weights."""
     albedo = medium.albedo
     emissions = [m.scale(albedo * (t.airlight + m.scale(t.scattered, t_vp)), is_camera) for t in terms]
-    emission = num = den = None
-    for e, t in zip(emissions, terms):
-        emission = e if emission is None else emission + e
-        num = t.weight * t.attenuation if num is None else num + t.weight * t.attenuation
-        den = t.weight if den is None else den + t.weight
-    return LightSums(emissions, emission, num, den)
+    return LightSums(emissions, total(emissions), total([t.weight * t.attenuation for t in terms]),
+                     total([t.weight for t in terms]))
 
 
 def merge_sums(a, b):
@@ -176,7 +180,4 @@ def shade_background(m, airlights, medium, is_camera):
     rays, the background itself seen through infinite fog (transmittance 0 on camera rays, 1 on others)."""
     if not airlights:
         return m.combine(0.0, 0.0, 0.0), 1.0 - is_camera
-    total = airlights[0]
-    for a in airlights[1:]:
-        total = total + a
-    return m.scale(medium.albedo * total, is_camera), 1.0 - is_camera
+    return m.scale(medium.albedo * total(airlights), is_camera), 1.0 - is_camera

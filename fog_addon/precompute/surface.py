@@ -96,20 +96,21 @@ def gamma_nodes(h=_GAMMA_H, g0=_GAMMA_G0, g1=_GAMMA_G1, graded=_GAMMA_GRADED, or
     return (0.5 * (hi - lo) * x + 0.5 * (hi + lo)).ravel(), (0.5 * (hi - lo) * w).ravel()
 
 
-def radiance_profile(t, gamma, panels=_K_PANELS):
+def radiance_profile(t, gamma, panels=_K_PANELS, g=0.0):
     """T K_inf(T sin gamma', T (1 - cos gamma')) sin gamma', shape (len t, len gamma) (dimensionless).
 
     The airlight reaching p from direction gamma' is beta/(2 pi D_sp) exp(-T) times
-    this / sin gamma'.  T = 0 gives the exact limit (pi - gamma') / 2.
+    this / sin gamma'.  T = 0 gives the exact limit (pi - gamma') / 2; with Henyey-Greenstein
+    anisotropy g (K_inf weighted by the phase function, ``airlight.k_inf``) T = 0 is taken at T = 1e-9.
     """
     t = np.asarray(t, float).reshape(-1, 1)
     s = np.sin(gamma)
     c1 = 2.0 * np.sin(0.5 * gamma) ** 2          # 1 - cos gamma' without cancellation
-    ts = np.where(t > 0.0, t, 1.0)
+    ts = np.where(t > 0.0, t, 1.0 if not g else 1e-9)
     # a few T at a time: k_inf's (T, gamma', panel, node) temporaries then stay in cache
-    out = np.concatenate([k_inf(ts[i:i + 4] * s, ts[i:i + 4] * c1, panels) for i in range(0, len(ts), 4)])
+    out = np.concatenate([k_inf(ts[i:i + 4] * s, ts[i:i + 4] * c1, panels, g) for i in range(0, len(ts), 4)])
     out *= ts * s
-    return np.where(t > 0.0, out, 0.5 * (math.pi - gamma))
+    return np.where((t > 0.0) | bool(g), out, 0.5 * (math.pi - gamma))
 
 
 def phi_integral(theta, gamma, n, nodes=_PHI_NODES, cut=_PHI_CUT):
@@ -163,7 +164,8 @@ def surface_m_t0(theta, n, h=None):
 
 
 def bake_surface_table(spec=tables.SURFACE):
-    """ln M_n(T, theta) for every exponent of tables.PHONG_EXPONENTS, float32, layout of tables.SURFACE.
+    """ln M_n(T, theta) for every exponent of tables.PHONG_EXPONENTS, float32, layout of tables.SURFACE,
+    for the anisotropy ``spec.g`` (``tables.anisotropic``).
 
     Level k occupies rows [k R, (k + 1) R), R = tables.SURFACE_THETA; entry
     [k R + j, i] holds ln M at T = surface_t(i / (W - 1)), theta = surface_theta(j / (R - 1), k).
@@ -172,7 +174,7 @@ def bake_surface_table(spec=tables.SURFACE):
     assert spec.height == rows * len(tables.PHONG_EXPONENTS)
     t = tables.surface_t(np.linspace(0.0, 1.0, spec.width))
     g, wg = gamma_nodes()
-    profile = radiance_profile(t, g) * wg
+    profile = radiance_profile(t, g, g=spec.g) * wg
     y = np.linspace(0.0, 1.0, rows)
     out = np.empty((spec.height, spec.width), np.float32)
     for k, n in enumerate(tables.PHONG_EXPONENTS):
@@ -205,7 +207,7 @@ def log2_approx(m, x):
     return (m.power(x, _LOG_EPS) - m.power(x, -_LOG_EPS)) * (0.5 / (_LOG_EPS * math.log(2.0)))
 
 
-def surface_log_m(m, t, theta, level):
+def surface_log_m(m, t, theta, level, g=0.0):
     """ln M of one table level at optical distance t and lobe angle theta (rad): one bilinear lookup.
 
     ``level``: Python int or an ``m`` value holding an integer in [0, len(PHONG_EXPONENTS) - 1].
@@ -215,10 +217,10 @@ def surface_log_m(m, t, theta, level):
     rows = tables.SURFACE_THETA
     y = m.minimum(m.maximum(tables.surface_y(m, theta, level), _ROW_EDGE), 1.0 - _ROW_EDGE)
     y_image = (level * float(rows) + y * float(rows - 1)) * (1.0 / (tables.SURFACE.height - 1))
-    return m.table(tables.SURFACE, tables.surface_x(m, t), y_image)
+    return m.table(tables.anisotropic(tables.SURFACE, g), tables.surface_x(m, t), y_image)
 
 
-def surface_factor(m, t, theta, level):
+def surface_factor(m, t, theta, level, g=0.0):
     """M_n(T, theta) (dimensionless) from the table, ln M interpolated linearly in the level (= 4 log2 n).
 
     ``level``: a Python float (per-material constant: 1 lookup on a level, else 2)
@@ -229,19 +231,19 @@ def surface_factor(m, t, theta, level):
         k0 = min(int(math.floor(level)), _LEVELS - 2)
         f = level - k0
         if f < 1e-6:
-            return m.exp(surface_log_m(m, t, theta, k0))
+            return m.exp(surface_log_m(m, t, theta, k0, g))
         if f > 1.0 - 1e-6:
-            return m.exp(surface_log_m(m, t, theta, k0 + 1))
-        return m.exp((1.0 - f) * surface_log_m(m, t, theta, k0) + f * surface_log_m(m, t, theta, k0 + 1))
+            return m.exp(surface_log_m(m, t, theta, k0 + 1, g))
+        return m.exp((1.0 - f) * surface_log_m(m, t, theta, k0, g) + f * surface_log_m(m, t, theta, k0 + 1, g))
     level = m.minimum(m.maximum(level, 0.0), _LEVELS - 1.0)
     k0 = m.minimum(m.floor(level), _LEVELS - 2.0)
     f = level - k0
-    a = surface_log_m(m, t, theta, k0)
-    b = surface_log_m(m, t, theta, k0 + 1.0)
+    a = surface_log_m(m, t, theta, k0, g)
+    b = surface_log_m(m, t, theta, k0 + 1.0, g)
     return m.exp(a + f * (b - a))
 
 
-def surface_scatter(m, beta, d_sp, cos_theta, level):
+def surface_scatter(m, beta, d_sp, cos_theta, level, g=0.0):
     """Reflected airlight per unit intensity and unit albedo, 1/m^2: Sun et al. 2005 Eq. 15 (Eq. 17-18).
 
     L_{p,a} / (I0 rho) = beta exp(-beta D_sp) / (2 pi D_sp) * M_n(beta D_sp, theta).
@@ -253,16 +255,18 @@ def surface_scatter(m, beta, d_sp, cos_theta, level):
     level of the Phong exponent, 4 log2 n (0.0 = Lambert, see ``exponent_level``
     / ``principled_to_phong``), Python float or ``m`` value.  Multiply by I0 (W/sr)
     and the albedo (rho_d or rho_s) for W/(m^2 sr) leaving the surface, then by
-    exp(-beta D_vp) towards the viewer (Eq. 19).  beta = 0 gives exactly 0.
+    exp(-beta D_vp) towards the viewer (Eq. 19).  beta = 0 gives exactly 0.  g: Henyey-Greenstein
+    anisotropy (a Python float): the airlight inside Eq. 15 weighted by the phase function, from the
+    table baked for g.
     """
-    return surface_scatter_angle(m, beta, d_sp, angle_from_cos(m, cos_theta), level)
+    return surface_scatter_angle(m, beta, d_sp, angle_from_cos(m, cos_theta), level, g)
 
 
-def surface_scatter_angle(m, beta, d_sp, theta, level):
+def surface_scatter_angle(m, beta, d_sp, theta, level, g=0.0):
     """:func:`surface_scatter` with the angle theta (rad, [0, pi]) instead of its cosine."""
     d = m.maximum(d_sp, MIN_DISTANCE)
     t = beta * d
-    return (beta * INV_2PI) * m.exp(-t) / d * surface_factor(m, t, theta, level)
+    return (beta * INV_2PI) * m.exp(-t) / d * surface_factor(m, t, theta, level, g)
 
 
 def lobe_angle(m, axis, to_light):
@@ -327,11 +331,12 @@ def principled_to_phong(m, base_color, metallic, roughness, specular_ior_level, 
 _TABLE_CACHE = {}
 
 
-def surface_table():
-    """The baked table (cached per process)."""
-    if "t" not in _TABLE_CACHE:
-        _TABLE_CACHE["t"] = bake_surface_table()
-    return _TABLE_CACHE["t"]
+def surface_table(g=0.0):
+    """The baked table for anisotropy g (cached per process)."""
+    spec = tables.anisotropic(tables.SURFACE, g)
+    if spec.name not in _TABLE_CACHE:
+        _TABLE_CACHE[spec.name] = bake_surface_table(spec)
+    return _TABLE_CACHE[spec.name]
 
 
 def surface_radiance_scattered(beta, d_sp, theta, n, rho=1.0, table=None):

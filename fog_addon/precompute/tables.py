@@ -24,10 +24,32 @@ class TableSpec:
     name: str          # Blender image name
     width: int         # samples along X
     height: int        # samples along Y
+    g: float = 0.0     # the Henyey-Greenstein anisotropy the table is baked for (a table per g, Biri 2006)
 
 
 # Normalised airlight kernel N(rho, xi); see airlight.py.
 AIRLIGHT = TableSpec("AnalyticFog Airlight N", 128, 64)
+MAX_ANISOTROPY = 0.95   # |g| up to this: the Henyey-Greenstein range the tables are baked and tested for
+
+
+# The airlight table of an anisotropic medium: its phase peak adds structure; 256 x 256 keeps bilinear
+# interpolation within 1e-3 up to |g| = 0.95 (128 x 64: 1.5e-2).
+AIRLIGHT_HG_SIZE = (256, 256)
+
+
+def anisotropic(spec, g):
+    """``spec`` baked for Henyey-Greenstein anisotropy g, under its own name (``spec`` itself at g = 0)."""
+    g = float(g)
+    if g == 0.0:
+        return spec
+    width, height = AIRLIGHT_HG_SIZE if spec == AIRLIGHT else (spec.width, spec.height)
+    return TableSpec(f"{spec.name} (g {g:+.3f})", width, height, g)
+
+
+def hg_stretch(g):
+    """s = (1 + g) / (1 - g): the Henyey-Greenstein weight of the airlight integrand depends on s Q / h
+    (``model.hg_weight``), so its forward (g > 0) or backward (g < 0) peak is 1/s or s times as wide."""
+    return (1.0 + g) / (1.0 - g)
 
 # Surface-scattering factor M_n(T, theta) of surface.py (Sun et al. 2005 Eq. 15-18),
 # stored as ln M_n for the Phong exponents below, stacked along Y: level k
@@ -50,21 +72,54 @@ SURFACE_THETA_WIDTH = 0.7     # theta0 = 0.7 / sqrt(n) of the graded levels
 SURFACE_THETA_POWER = 0.1     # q of the graded levels
 
 
-def airlight_x(m, rho):
-    """Grid X of the airlight table for optical radius rho >= 0: sqrt(rho/(1+rho))."""
-    return m.sqrt(rho / (rho + 1.0))
+def airlight_x(m, rho, g=0.0):
+    """Grid X of the airlight table for optical radius rho >= 0: sqrt(rho / (1 + rho)), for a forward
+    peak (g > 0) the mean of that and sqrt(rho / (s + rho)) (``hg_stretch``: the far field starts only
+    where beta h / s passes 1)."""
+    x = m.sqrt(rho / (rho + 1.0))
+    if g <= 0.0:
+        return x
+    return 0.5 * (x + m.sqrt(rho / (rho + hg_stretch(g))))
 
 
-def airlight_rho(x):
+def airlight_rho(x, g=0.0):
     """Inverse of :func:`airlight_x` (numpy floats); x = 1 maps to a large finite rho."""
     import numpy as np
-    s = np.minimum(np.asarray(x, float) ** 2, 1.0 - 1e-12)
-    return s / (1.0 - s)
+    x = np.minimum(np.asarray(x, float), 1.0 - 1e-12)
+    if g <= 0.0:
+        return x * x / (1.0 - x * x)
+    lo, hi = np.zeros_like(x), np.full_like(x, 1.0)   # in sqrt(rho / (1 + rho)), increasing with rho
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        rho = mid * mid / (1.0 - mid * mid)
+        below = 0.5 * (mid + np.sqrt(rho / (rho + hg_stretch(g)))) < x
+        lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+    mid = 0.5 * (lo + hi)
+    return mid * mid / (1.0 - mid * mid)
 
 
-def airlight_y(m, xi):
-    """Grid Y of the airlight table for the angle xi in [0, pi/2]."""
-    return xi * (1.0 / HALF_PI)
+def airlight_y(m, q, h, g=0.0, xi=None):
+    """Grid Y of the airlight table for the point Q = q on a ray at distance h from the light (``xi`` =
+    atan2(q, h) if already known): xi / (pi/2), for g != 0 the mean of that and atan2(s q, h) / (pi/2)
+    (``hg_stretch``: half the rows graded on the phase function's peak, half uniform)."""
+    xi = m.atan2(q, h) if xi is None else xi
+    if not g:
+        return xi * (1.0 / HALF_PI)
+    return (xi + m.atan2(q * hg_stretch(g), h)) * (0.5 / HALF_PI)
+
+
+def airlight_xi(y, g=0.0):
+    """Inverse of :func:`airlight_y` (numpy floats): xi at grid Y in [0, 1] (bisection for g != 0)."""
+    import numpy as np
+    y = np.clip(np.asarray(y, float), 0.0, 1.0)
+    if not g:
+        return y * HALF_PI
+    lo, hi = np.zeros_like(y), np.full_like(y, HALF_PI)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        below = (mid + np.arctan(np.tan(mid) * hg_stretch(g))) * (0.5 / HALF_PI) < y
+        lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+    return 0.5 * (lo + hi)
 
 
 def surface_x(m, t):

@@ -85,6 +85,25 @@ def method_switch(scene):
     R["materials_kept_by_method_switch"] = snapshot()["materials"] == mats
 
 
+def anisotropy_switch(scene):
+    """The panel's Anisotropy: g's models and tables replace the isotropic ones; a g the method can't serve
+    is refused and changes nothing; back to 0 leaves no table or group of g behind."""
+    mats = snapshot()["materials"]
+    s = scene.analytic_fog
+
+    def fog_names():
+        return sorted([g.name for g in bpy.data.node_groups if g.name.startswith("AnalyticFog Light")]
+                      + [i.name for i in bpy.data.images if i.name.startswith("AnalyticFog")])
+
+    s.anisotropy = 0.85
+    R["names_at_g085"] = fog_names()
+    s.anisotropy = -0.9   # node groups: below rungs.MIN_TABLE_ANISOTROPY
+    R["names_after_refused_g"] = fog_names()
+    s.anisotropy = 0.0
+    R["names_back_at_g0"] = fog_names()
+    R["materials_kept_by_anisotropy"] = snapshot()["materials"] == mats
+
+
 def lights_follow(scene):
     mats = snapshot()["materials"]
     R["lights_start"] = light_instances()
@@ -213,6 +232,7 @@ def main():
     spheres.build(scene)
     settings_and_presets(scene)
     method_switch(scene)
+    anisotropy_switch(scene)
     lights_follow(scene)
     bad_input(scene)
     light_notes(scene)

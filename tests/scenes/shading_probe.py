@@ -1,6 +1,6 @@
 """Tiny render of the whole fog on a lit plane and the background, against its numpy twin, per pixel.
 
-    python tests/scenes/shading_probe.py OUT_DIR ENGINE METHOD CASE
+    python tests/scenes/shading_probe.py OUT_DIR ENGINE METHOD CASE [G]
 
 The lights are kept out of the surfaces' direct lighting (Cycles: light ray
 visibility; EEVEE: diffuse and specular factors 0) and the world is black, so
@@ -8,7 +8,8 @@ each pixel is exactly the fog's emission: the glow of two lights of different
 colours plus the fog light the plane reflects (Sun et al. 2005 Eq. 19).  The
 twin is ``precompute.shading`` run by numpy at each pixel centre's camera
 ray, with the models METHOD chooses.  CASE "principled" is a diffuse-and-glossy dielectric; "mirror" is a
-smooth metal (roughness 0: only the glossy fog light, Phong n = 1024).
+smooth metal (roughness 0: only the glossy fog light, Phong n = 1024).  G: the fog's
+Henyey-Greenstein anisotropy (default 0), the twin's models and tables baked for it.
 
 Prints JSON: ratio statistics over all pixels, and for the glossy term alone
 (render minus the twin's other terms, against the twin's glossy term) where
@@ -39,7 +40,7 @@ CASES = {"principled": dict(base=(0.6, 0.5, 0.4), metallic=0.3, roughness=0.35, 
          "mirror": dict(base=(0.9, 0.85, 0.8), metallic=1.0, roughness=0.0, ior_level=0.5)}
 
 
-def build(engine, method, case):
+def build(engine, method, case, g=0.0):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     s = bpy.context.scene
     cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
@@ -67,14 +68,16 @@ def build(engine, method, case):
     bsdf.inputs["Specular IOR Level"].default_value = c["ior_level"]
     s.world = bpy.data.worlds.new("W")
     s.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0, 0, 0, 1)
-    apply.apply_fog(s, BETA, albedo=ALBEDO, method=method)
+    apply.apply_fog(s, BETA, albedo=ALBEDO, method=method, anisotropy=g)
     probe_common.tiny_render(s, engine, W, H)
     return s, cam
 
 
-def twin(c, d, case, method, without=None):
+def twin(c, d, case, method, without=None, g=0.0):
     """The numpy twin of the fog's emission per pixel; ``without`` "glossy": that term zeroed."""
-    m = NumpyOps({tables.AIRLIGHT.name: airlight.bake_airlight_table(), tables.SURFACE.name: surface.surface_table()})
+    spec = tables.anisotropic(tables.AIRLIGHT, g)
+    m = NumpyOps({spec.name: airlight.bake_airlight_table(spec),
+                  tables.anisotropic(tables.SURFACE, g).name: surface.surface_table(g)})
     p = CASES[case]
     rho_d, rho_s, level = surface.principled_to_phong(
         m, np.asarray(p["base"], float), np.asarray(p["metallic"]), np.asarray(p["roughness"]),
@@ -87,7 +90,7 @@ def twin(c, d, case, method, without=None):
     geo = shading.Geometry(c, c + d * t[..., None], -d, t, np.array([0.0, 0.0, 1.0]))
     material = shading.Material(rho_d, rho_s, level)
     med = Medium(BETA, np.asarray(ALBEDO))
-    models = rungs.choose(method)
+    models = rungs.choose(method, 0, g)
     lights = [shading.Light(np.asarray(loc, float), power / (4 * math.pi) * np.asarray(col)) for loc, power, col
               in LIGHTS]
     with np.errstate(over="ignore", invalid="ignore"):
@@ -98,16 +101,17 @@ def twin(c, d, case, method, without=None):
     return np.where(hit[..., None], surf, bg), hit
 
 
-def main(out_dir, engine="CYCLES", method="nodes", case="principled"):
-    s, cam = build(engine, method, case)
+def main(out_dir, engine="CYCLES", method="nodes", case="principled", g="0"):
+    g = float(g)
+    s, cam = build(engine, method, case, g)
     got = imageio.read_rgb(measure.render_to_file(s, str(pathlib.Path(out_dir) / "probe.exr")))
     c, d = probe_common.camera_rays(cam, W, H)
-    want, hit = twin(c, d, case, method)
+    want, hit = twin(c, d, case, method, g=g)
     r = got / want
     res = {"median": float(np.median(r)), "max_dev": float(np.max(np.abs(r - 1))),
            "p99_dev": float(np.percentile(np.abs(r - 1), 99)),
            "surface_pixels": int(hit.sum()), "background_pixels": int((~hit).sum())}
-    rest, _ = twin(c, d, case, method, without="glossy")
+    rest, _ = twin(c, d, case, method, without="glossy", g=g)
     glossy = want - rest
     big = hit[..., None] & (glossy > 0.05 * want)
     g_err = np.abs((got - rest)[big] / glossy[big] - 1)
