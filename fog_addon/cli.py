@@ -106,7 +106,8 @@ def _positive_float(name):
 
 def _add_fog_flags(p, file_default=""):
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--preset", help="named fog density: " + ", ".join(sorted(_presets())) + file_default)
+    g.add_argument("--preset", help="named fog: its density and (unless --anisotropy) its particles' anisotropy: "
+                   + ", ".join(sorted(_presets())) + file_default)
     g.add_argument("--density", type=_finite_float("density"), metavar="BETA",
                    help="extinction = scattering coefficient in 1/m (>= 0)" + file_default)
     p.add_argument("--anisotropy", type=_finite_float("anisotropy"), default=None, metavar="G",
@@ -167,6 +168,12 @@ def _resolve_density(args, required):
         if args.preset not in presets:
             raise UsageError(f"unknown preset {args.preset!r}; choose one of: {', '.join(sorted(presets))}")
         args.density = float(presets[args.preset])
+        if args.anisotropy is None:
+            try:
+                from .precompute.presets import ANISOTROPY
+                args.anisotropy = ANISOTROPY[args.preset]
+            except ImportError:
+                pass
     if args.density is None:
         if required:
             raise UsageError("give the fog density with --density BETA (1/m) or --preset NAME")

@@ -48,6 +48,10 @@ def test_method_switch_keeps_materials(flow):
     assert flow["materials_kept_by_method_switch"]
 
 
+def test_haze_preset_sets_its_anisotropy(flow):
+    assert flow["haze_anisotropy"] == pytest.approx([0.7, 0.7], abs=1e-6)
+
+
 def test_anisotropy_switch(flow):
     """Issue 9: the panel's Anisotropy rebuilds the lights' groups with g's models and tables."""
     at = flow["names_at_g085"]

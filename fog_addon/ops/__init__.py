@@ -83,7 +83,7 @@ class FOG_OT_remove(bpy.types.Operator):
 
 
 class FOG_OT_preset_builtin(bpy.types.Operator):
-    """Set the fog's density from a visibility class of atmospheric optics"""
+    """Set the fog's density from a visibility class of atmospheric optics, and its particles' anisotropy"""
     bl_idname = "fog.preset_builtin"
     bl_label = "Fog Preset"
     bl_options = {"REGISTER", "UNDO"}
@@ -96,6 +96,7 @@ class FOG_OT_preset_builtin(bpy.types.Operator):
         settings = context.scene.analytic_fog
         settings.density = presets.PRESETS[self.name]
         settings.color = (1.0, 1.0, 1.0)
+        settings.anisotropy = presets.ANISOTROPY[self.name]
         return {"FINISHED"}
 
 
@@ -115,13 +116,13 @@ class FOG_MT_presets(bpy.types.Menu):
 
 
 class FOG_OT_preset_add(AddPresetBase, bpy.types.Operator):
-    """Save the fog's density and colour as a preset (or remove the active one)"""
+    """Save the fog's density, colour and anisotropy as a preset (or remove the active one)"""
     bl_idname = "fog.preset_add"
     bl_label = "Add Fog Preset"
     preset_menu = "FOG_MT_presets"
     preset_subdir = PRESET_SUBDIR
     preset_defines = ["fog = bpy.context.scene.analytic_fog"]
-    preset_values = ["fog.density", "fog.color"]
+    preset_values = ["fog.density", "fog.color", "fog.anisotropy"]
 
 
 CLASSES = (FOG_OT_add, FOG_OT_remove, FOG_OT_preset_builtin, FOG_MT_presets, FOG_OT_preset_add)

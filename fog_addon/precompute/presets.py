@@ -4,6 +4,12 @@ Koschmieder's law (1924): meteorological visibility V = ln(1/0.02) / beta
 = 3.912 / beta, the distance at which a black object's contrast drops to 2 %.
 Visibility classes: haze 5-10 km, mist 1-5 km, fog 0.2-1 km, dense fog < 180 m;
 each preset takes a representative visibility inside its class.
+
+Each preset also carries the Henyey-Greenstein asymmetry g of its particles at visible wavelengths
+(the mean cosine of the scattering angle, from Mie theory): continental haze aerosol (sub-micron
+particles) g = 0.6-0.75 (Hess, Koepke, Schult 1998, OPAC; d'Almeida et al. 1991), 0.7 here; mist of
+small droplets about 0.8; fog droplets (radii 2-20 um) g = 0.8-0.9 (Deirmendjian 1969's fog models;
+Hale and Querry 1973 water), 0.85 here.
 """
 import math
 
@@ -31,6 +37,7 @@ def visibility_from_density(beta):
 
 
 PRESETS = {name: density_from_visibility(v) for name, v in VISIBILITY_M.items()}
+ANISOTROPY = {"haze": 0.7, "mist": 0.8, "fog": 0.85, "dense_fog": 0.85}   # Henyey-Greenstein g (docstring)
 
 
 def validate_density(beta):

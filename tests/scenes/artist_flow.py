@@ -54,6 +54,8 @@ def settings_and_presets(scene):
     bpy.ops.fog.preset_builtin(name="haze")
     R["haze_density"] = s.density
     R["haze_beta_in_groups"] = beta_in_groups()
+    R["haze_anisotropy"] = [s.anisotropy, bpy.data.node_groups["AnalyticFog Params"]["analytic_fog_anisotropy"]]
+    s.anisotropy = 0.0
     # a user preset through Blender's preset system: save, change, apply, remove
     s.density, s.color = 0.0123, (0.9, 0.8, 0.7)
     R["preset_add"] = sorted(bpy.ops.fog.preset_add(name="Harbour Fog"))[0]
