@@ -20,12 +20,12 @@ convex, so a ray meets the set where c >= k in one interval (``cone_interval``):
 * on the blend rim (c_h < c < c_in, at most two intervals) f varies smoothly and the integral is taken
   by Gauss-Legendre quadrature (``RIM_NODES`` points per interval).
 """
-import math
+import numpy as np
 
 from . import model
 
 RIM_NODES = 12    # Gauss-Legendre points per rim interval (tests/test_spot.py measures the error)
-_GL = tuple(zip(*__import__("numpy").polynomial.legendre.leggauss(RIM_NODES)))
+_GL = tuple((float(x), float(w)) for x, w in zip(*np.polynomial.legendre.leggauss(RIM_NODES)))
 
 
 def spot_falloff(m, c, cos_half, blend):
@@ -118,12 +118,12 @@ def _rim(m, beta, origin, direction, light, rows, t0, t1, cos_half, blend, g):
     half, centre = 0.5 * (xb - xa), 0.5 * (xb + xa)
     total = 0.0
     for x, w in _GL:
-        xi = centre + half * float(x)
+        xi = centre + half * x
         q = h * m.sin(xi) / m.maximum(m.cos(xi), 1e-30)
         t = along + (q * q - h * h) / m.maximum(2.0 * q, 1e-300)   # z = (Q^2 - h^2) / 2Q
         lx, ly, lz = _local(m, rows, origin + m.scale(direction, t) - light)
         c = -lz / m.maximum(m.sqrt(lx * lx + ly * ly + lz * lz), 1e-300)
-        total = total + float(w) * spot_falloff(m, c, cos_half, blend) * model.hg_weight(m, g, q, h) * m.exp(
+        total = total + w * spot_falloff(m, c, cos_half, blend) * model.hg_weight(m, g, q, h) * m.exp(
             -beta * (q - q0))
     value = (beta * model.INV_2PI) * m.exp(-beta * d_sv) / h * half * total
     return m.select(m.less(t0, t1), value, 0.0)
