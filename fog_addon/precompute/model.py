@@ -115,6 +115,10 @@ def airlight_segment(m, beta, d_sv, along, h, d_vp, g=0.0):
     # P = Q1 - Q0 = d_vp + d_sp - d_sv = d_vp (q0 + q1) / (d_sv + d_sp), without cancellation.
     seg = d_vp * (q0 + q1) / m.maximum(d_sp + d_sv, 1e-30)
     long_ = airlight_tail(m, beta, q0, h, d_sv, g) - m.exp(neg_beta * seg) * airlight_tail(m, beta, q1, h, d_sp, g)
+    if g < 0.0:
+        # back-scatter: both tails are dominated by the peak far beyond the light, and on rays within a few
+        # MIN_DISTANCE of it their difference cancels below zero (tests/test_stability.py): no negative glow
+        long_ = m.maximum(long_, 0.0)
     short = 0.0
     h2 = h * h
     for x, w in zip(_GL_X, _GL_W):
