@@ -142,3 +142,7 @@ def test_eevee_budget_holds_fewer_full_lights_than_glow_only_ones():
     assert b.fits([1] * 29) and not b.fits([1] * 33)
     assert b.fits([2] * 160) and not b.fits([2] * 180)
     assert b.fits([3] * 10000)
+    # anisotropic fog: the phase weight's constants (measured +712 bytes a full light at g = 0.85)
+    hg = groups.eevee_budget(0.85)
+    assert hg.fits([0] * 16) and not hg.fits([0] * 17)
+    assert hg.fits([1] * 22) and not hg.fits([1] * 23)

@@ -109,7 +109,7 @@ def choose_models(scene, lights, preference, quality):
     """
     target = predict.target_error(quality)
     engine = scene.render.engine
-    budget = groups.eevee_budget() if engine == groups.EEVEE_ENGINE else None
+    budget = groups.eevee_budget(groups.get_anisotropy()) if engine == groups.EEVEE_ENGINE else None
     steps = [0] * len(lights)
     choice = {"target": target, "error": 0.0, "lights": {}, "engine": engine, "limited": None}
     if lights and (target is not None or (budget is not None and not budget.fits(steps))):
