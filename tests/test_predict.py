@@ -146,3 +146,12 @@ def test_eevee_budget_holds_fewer_full_lights_than_glow_only_ones():
     hg = groups.eevee_budget(0.85)
     assert hg.fits([0] * 16) and not hg.fits([0] * 17)
     assert hg.fits([1] * 22) and not hg.fits([1] * 23)
+
+
+def test_osl_budget_keeps_a_material_under_osl_group_limit():
+    """Cycles' OSL crashed on a 256-light material (53 195 nodes > 32 767 layers): full lights fit about
+    120 times, glow-only ones about 475, and 256 lights fit with most of them glow only."""
+    from fog_addon.nodes import groups  # noqa: PLC0415 (bpy)
+    b = groups.osl_budget()
+    assert b.fits([0] * 120) and not b.fits([0] * 121)
+    assert b.fits([1] * 256) and b.fits([0] * 70 + [1] * 186) and not b.fits([0] * 256)

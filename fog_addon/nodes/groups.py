@@ -148,6 +148,24 @@ EEVEE_WORLD_BYTES = (936, 936, 0, 0)
 EEVEE_ANISOTROPIC_EXTRA = ((712, 712, 0, 0), (150, 150, 0, 0))
 
 
+# Cycles' OSL: every node of a material becomes a layer of its OSL shader group, and liboslexec indexes
+# the layers with a signed 16-bit integer: a 256-light material (53 195 nodes) crashed (SIGSEGV) while OSL
+# optimised its groups (the index read as -32 763; no stack or memory exhaustion: helper's core dump, this
+# stop).  Nodes a light adds to a material, inlined (counted at 16 lights; Cycles' own simplification only
+# removes some): 248 full, 63 glow only, 59 off; the World 15 with the glow on.
+OSL_LAYER_LIMIT = 32767
+OSL_LAYER_RESERVE = 2767   # the material's own nodes and the Surface group's shared ones (48 with no light)
+OSL_MATERIAL_LAYERS = (248, 63, 59, 0)
+OSL_WORLD_LAYERS = (15, 15, 0, 0)
+
+
+def osl_budget():
+    """What a fogged material and the World can hold as one OSL shader group (predict.Budget)."""
+    room = OSL_LAYER_LIMIT - OSL_LAYER_RESERVE
+    return predict.Budget((OSL_MATERIAL_LAYERS, OSL_WORLD_LAYERS), (room, room),
+                          "OSL's shader group size (32 767 nodes per material)")
+
+
 def eevee_budget(g=0.0):
     """What a fogged material and the World can hold in EEVEE (predict.Budget over the lights' steps) for
     fog of anisotropy g."""

@@ -96,12 +96,23 @@ def quality_value(quality):
     return "exact" if quality is None else quality
 
 
+def _budget(scene, preference):
+    """What the renderer can hold (predict.Budget), or None: EEVEE's uniform block, Cycles OSL's shader
+    group layers."""
+    if scene.render.engine == groups.EEVEE_ENGINE:
+        return groups.eevee_budget(groups.get_anisotropy())
+    if preference == "osl":
+        return groups.osl_budget()
+    return None
+
+
 def choose_models(scene, lights, preference, quality):
     """Each light's models (rungs.LightModels) at ``quality``, and the choice for reports.
 
     The view is sampled by ray casts (``view.py``) and every light's step down
     the ladder chosen by the predicted error (``predict.py``).  In EEVEE the
-    steps must also fit its uniform block (``groups.eevee_budget``): lights
+    steps must also fit its uniform block (``groups.eevee_budget``), with Cycles' OSL its shader group's
+    layers (``groups.osl_budget``): lights
     step down beyond the target, least error first, until they do.  Returns
     (models, choice) with choice = {"lights": {name: [step, error]}, "error":
     total, "target": t, "engine": the render engine chosen for, "limited":
@@ -109,7 +120,7 @@ def choose_models(scene, lights, preference, quality):
     """
     target = predict.target_error(quality)
     engine = scene.render.engine
-    budget = groups.eevee_budget(groups.get_anisotropy()) if engine == groups.EEVEE_ENGINE else None
+    budget = _budget(scene, preference)
     steps = [0] * len(lights)
     choice = {"target": target, "error": 0.0, "lights": {}, "engine": engine, "limited": None}
     if lights and (target is not None or (budget is not None and not budget.fits(steps))):
@@ -145,7 +156,7 @@ def quality_head(choice):
 
 
 def limit_text(choice):
-    """What limited ``choice`` beyond its target (EEVEE's uniform block), as a phrase, or None."""
+    """What limited ``choice`` beyond its target (EEVEE's uniform block, OSL's group size), as a phrase, or None."""
     return f"limited by {choice['limited']}: lights step down beyond the target" if choice.get("limited") else None
 
 
@@ -174,12 +185,17 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
     engine limited (EEVEE's uniform block).
     """
     old = stored_choice()
-    if (rechoose or old is None or old.get("quality") != quality_value(quality)
+    kept = None
+    if not (rechoose or old is None or old.get("quality") != quality_value(quality)
             or (old.get("engine") == groups.EEVEE_ENGINE) != (scene.render.engine == groups.EEVEE_ENGINE)):
+        kept = [old["lights"].get(o.name, [0, 0.0])[0] for o in lights]
+        budget = _budget(scene, preference)
+        if budget is not None and not budget.fits(kept):   # e.g. the method switched to OSL: choose again
+            kept = None
+    if kept is None:
         models, choice = choose_models(scene, lights, preference, quality)
     else:
-        steps = {name: step for name, (step, _) in old["lights"].items()}
-        models = [rungs.choose(preference, steps.get(o.name, 0), groups.get_anisotropy()) for o in lights]
+        models = [rungs.choose(preference, step, groups.get_anisotropy()) for step in kept]
         choice = dict(old, lights={o.name: old["lights"].get(o.name, [0, 0.0]) for o in lights})
     choice["quality"] = quality_value(quality)
     # lights stepped out of the groups to fit a budget (rungs.LEFT_OUT) keep their own dimming (wrap_light)
