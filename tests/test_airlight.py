@@ -340,7 +340,7 @@ HG_SEED = 909090
 def test_anisotropic_random_rays(g):
     """300 random rays (250 to a surface, 50 to the sky) per g: scipy quadrature of Eq. 5 with the phase
     function (checked by a second quadrature of Eq. 9 in xi) against the table baked for g (0.5 %, the
-    strict bound; rungs.HG_TABLE_ERROR is the measured maximum) and the OSL method's quadrature."""
+    strict bound; rungs.hg_table_error is the measured maximum) and the OSL method's quadrature."""
     seed = HG_SEED + int(round(100 * (g + 1)))
     fin = ref.sample_parameters(250, seed)
     bg = ref.sample_parameters(50, seed + 1, background=True)
@@ -353,7 +353,7 @@ def test_anisotropic_random_rays(g):
         err = _rel(al.airlight(*p, table=table, g=g), r5)
         err_q = _rel(al.airlight(*p, quadrature=True, g=g), r5)
     i = int(np.argmax(err))
-    assert np.all(np.isfinite(err)) and err[i] < rungs.HG_TABLE_ERROR, _describe(p, err, i)
+    assert np.all(np.isfinite(err)) and err[i] < rungs.hg_table_error(g), _describe(p, err, i)
     assert err_q.max() < rungs.HG_QUADRATURE_ERROR, _describe(p, err_q, int(np.argmax(err_q)))
 
 
@@ -380,3 +380,76 @@ def test_anisotropic_extremes_no_nan(g):
             with np.errstate(over="ignore"):
                 v = al.airlight(beta, d_sv, d_vp, gamma, quadrature=quad, g=g)
             assert np.all(np.isfinite(v)) and np.all(v >= 0.0), (g, d_vp, quad)
+
+
+# --- anisotropic fog, strict protocol: 40 000 cached samples with g (tests/data/airlight_reference_hg.npz) ------
+
+@pytest.fixture(scope="module")
+def hg_cache(regen):
+    return ref.load_hg_cache(regen=regen)
+
+
+def _hg_per_g(c, gs, evaluate, bound, label):
+    """Relative error of ``evaluate(params, g)`` against the cache, sample by sample, for each g in ``gs``.
+
+    Prints max and p99 per g; returns the assertion message (None if every g is below ``bound(g)``).
+    """
+    p = _params(c)
+    failures, lines = [], []
+    for g in gs:
+        m = c["g"] == g
+        sub = [np.asarray(x)[m] for x in p]
+        with np.errstate(over="ignore"):
+            err = _rel(evaluate(sub, g), c["reference"][m])
+        assert np.all(np.isfinite(err)), (label, g)
+        i = int(np.argmax(err))
+        lines.append(f"{label} g={g:+.2f} n={int(m.sum())}: max {err[i]:.3g}, p99 {np.percentile(err, 99):.3g}")
+        if err[i] >= bound(g):
+            bad = np.argsort(err)[::-1][:int(np.sum(err >= bound(g)))]
+            failures += [f"g={g:+.2f} {_describe(sub, err, int(j))}" for j in bad]
+    print("\n" + "\n".join(lines))
+    return f"{len(failures)} samples over the bound:\n" + "\n".join(failures) if failures else None
+
+
+def test_hg_reference_cache_is_sound(hg_cache):
+    c = hg_cache
+    b, s, v, gam = _params(c)
+    g = c["g"]
+    gs, extra = tuple(c["table_gs"]), tuple(c["extra_gs"])
+    n_table, per_g = int(c["n_table"]), int(c["per_g"])
+    assert gs == ref.HG_TABLE_GS and extra == ref.HG_QUADRATURE_ONLY_GS
+    assert len(gs) == 16 and {-0.8, 0.0, 0.7, 0.85, 0.95} <= set(gs)
+    assert min(gs) == rungs.MIN_TABLE_ANISOTROPY and max(gs) == tables.MAX_ANISOTROPY
+    assert n_table == 40000 == len(gs) * per_g and len(b) == n_table + len(extra) * int(c["extra_per_g"]) == 42000
+    assert np.all(g[:n_table] >= rungs.MIN_TABLE_ANISOTROPY) and np.all(g[n_table:] < rungs.MIN_TABLE_ANISOTROPY)
+    for gv in gs + extra:
+        m = g == gv
+        n = per_g if gv in gs else int(c["extra_per_g"])
+        n_bg = int(c["background_per_g"]) if gv in gs else int(c["extra_background_per_g"])
+        assert m.sum() == n and np.isinf(v[m]).sum() == n_bg          # ~10 % background rays per g
+    fin = np.isfinite(v)
+    t_sv, t_vp = b * s, b[fin] * v[fin]
+    assert t_sv.min() >= 0.0099 and t_sv.max() <= 20.01
+    assert t_vp.min() >= 0.0099 and t_vp.max() <= 50.01
+    assert gam.min() > 0.0 and gam.max() < math.pi
+    assert np.all(np.isfinite(c["reference"])) and np.all(c["reference"] > 0.0)
+    assert c["est_rel_err"].max() < 1e-9
+    assert c["eq9_rel_diff"].max() < REF_AGREEMENT   # Eq. 5 (in x) vs Eq. 9 (in xi) quadrature, with the phase
+
+
+def test_anisotropic_40000_cache(hg_cache):
+    """The node tables against the 40 000 cached samples: 16 values of g in [-0.8, 0.95] x 2 500 rays (250 to the
+    sky), one table baked per g, relative error sample by sample below rungs.hg_table_error(g)."""
+    def tables_for(sub, g):
+        return al.airlight(*sub, table=al.bake_airlight_table(tables.anisotropic(tables.AIRLIGHT, g)), g=g)
+    msg = _hg_per_g(hg_cache, tuple(hg_cache["table_gs"]), tables_for, rungs.hg_table_error, "tables")
+    assert msg is None, msg
+
+
+def test_anisotropic_cache_quadrature(hg_cache):
+    """The OSL method's quadrature against all 42 000 cached samples (the 40 000 of the tables and 2 000 at
+    g = -0.95, -0.9, below the tables' range): relative error below rungs.HG_QUADRATURE_ERROR (~0.5 s)."""
+    gs = tuple(hg_cache["table_gs"]) + tuple(hg_cache["extra_gs"])
+    msg = _hg_per_g(hg_cache, gs, lambda sub, g: al.airlight(*sub, quadrature=True, g=g),
+                    lambda g: rungs.HG_QUADRATURE_ERROR, "quadrature")
+    assert msg is None, msg

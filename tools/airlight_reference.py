@@ -18,6 +18,12 @@ Also here: ``sample_parameters`` (the test sample design), ``hemisphere_mean``
 tests/data/airlight_reference.npz using all CPU cores:
 
     .venv/bin/python tools/airlight_reference.py [--n 40000] [--out PATH]
+
+and, with ``--hg``, the Henyey-Greenstein cache tests/data/airlight_reference_hg.npz
+(``build_hg_cache``: 16 values of g x 2 500 samples for the tables and the
+quadrature, plus 2 000 samples at g = -0.95, -0.9 for the quadrature only):
+
+    .venv/bin/python tools/airlight_reference.py --hg [--processes 2] [--out PATH]
 """
 import argparse
 import math
@@ -240,6 +246,76 @@ def build_cache(path=CACHE, n=N_CACHE, n_bg=N_BACKGROUND, seed=CACHE_SEED, proce
     return _as_float64(np.load(path))
 
 
+# --- Henyey-Greenstein cache (issue 9): 40 000 samples over g in [-0.8, 0.95] + 2 000 strong back-scatter ---------
+
+HG_CACHE = ROOT / "tests" / "data" / "airlight_reference_hg.npz"
+HG_CACHE_SEED = 20050809       # seed of the Henyey-Greenstein cache; group k uses HG_CACHE_SEED + 2k (+1 background)
+# 16 values over [-0.8, 0.95] (-0.8 = rungs.MIN_TABLE_ANISOTROPY, 0.95 = tables.MAX_ANISOTROPY), denser where the
+# forward peak sharpens; the node tables serve all of them.
+HG_TABLE_GS = (-0.8, -0.65, -0.5, -0.35, -0.2, -0.1, 0.0, 0.15, 0.3, 0.45, 0.6, 0.7, 0.8, 0.85, 0.9, 0.95)
+HG_QUADRATURE_ONLY_GS = (-0.95, -0.9)   # below MIN_TABLE_ANISOTROPY: the OSL method's quadrature only
+HG_PER_G = 2500                 # samples per g of HG_TABLE_GS, HG_BACKGROUND_PER_G of them background (d_vp = inf)
+HG_BACKGROUND_PER_G = 250
+HG_EXTRA_PER_G = 1000           # samples per g of HG_QUADRATURE_ONLY_GS, HG_EXTRA_BACKGROUND_PER_G background
+HG_EXTRA_BACKGROUND_PER_G = 100
+
+
+def hg_cache_parameters(seed=HG_CACHE_SEED, table_gs=HG_TABLE_GS, per_g=HG_PER_G, bg_per_g=HG_BACKGROUND_PER_G,
+                        extra_gs=HG_QUADRATURE_ONLY_GS, extra_per_g=HG_EXTRA_PER_G,
+                        extra_bg_per_g=HG_EXTRA_BACKGROUND_PER_G):
+    """(beta, d_sv, d_vp, gamma, g) of the Henyey-Greenstein cache, grouped by g in the order table_gs + extra_gs.
+
+    Each group: per_g - bg_per_g surface rays, then bg_per_g background rays (d_vp = inf), from
+    ``sample_parameters`` (same ranges as the isotropic cache) with its own seeds, so no two groups share
+    a geometry.  The first len(table_gs) * per_g samples are those the node tables serve.
+    """
+    groups = [(g, per_g, bg_per_g) for g in table_gs] + [(g, extra_per_g, extra_bg_per_g) for g in extra_gs]
+    cols = [[] for _ in range(5)]
+    for k, (g, n, n_bg) in enumerate(groups):
+        fin = sample_parameters(n - n_bg, seed + 2 * k)
+        bg = sample_parameters(n_bg, seed + 2 * k + 1, background=True)
+        for c, a, b in zip(cols, fin, bg):
+            c.append(np.concatenate([a, b]))
+        cols[4].append(np.full(n, float(g)))
+    return tuple(np.concatenate(c) for c in cols)
+
+
+def build_hg_cache(path=HG_CACHE, seed=HG_CACHE_SEED, table_gs=HG_TABLE_GS, per_g=HG_PER_G,
+                   bg_per_g=HG_BACKGROUND_PER_G, extra_gs=HG_QUADRATURE_ONLY_GS, extra_per_g=HG_EXTRA_PER_G,
+                   extra_bg_per_g=HG_EXTRA_BACKGROUND_PER_G, processes=None, log=print):
+    """Reference airlight with the Henyey-Greenstein phase function (Eq. 5 in x, checked by Eq. 9 in xi).
+
+    Stores float32 inputs (beta, d_sv, d_vp, gamma; exactly what was integrated), g per sample in float64
+    (the exact value of its group), the float64 reference, the Eq. 5 vs Eq. 9 relative disagreement and
+    the quadrature's estimated relative error (float32), and ``n_table``: the first n_table samples have
+    g in table_gs (tables and quadrature), the rest g in extra_gs (quadrature only).
+    """
+    t0 = time.time()
+    beta, d_sv, d_vp, gamma, g = hg_cache_parameters(seed, table_gs, per_g, bg_per_g, extra_gs, extra_per_g,
+                                                     extra_bg_per_g)
+    ref, est, ref9 = reference_values(beta, d_sv, d_vp, gamma, processes=processes, check=True, g=g)
+    disagreement = np.abs(ref9 - ref) / ref
+    log(f"{len(ref)} Henyey-Greenstein references ({len(table_gs)} + {len(extra_gs)} values of g) in "
+        f"{time.time() - t0:.1f} s; Eq.5 vs Eq.9 quadrature: max rel diff {disagreement.max():.2e}, "
+        f"max est. rel err {np.max(est / ref):.2e}")
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    f32 = lambda v: np.asarray(v, np.float32)
+    np.savez_compressed(path, beta=f32(beta), d_sv=f32(d_sv), d_vp=f32(d_vp), gamma=f32(gamma), g=g,
+                        reference=ref, eq9_rel_diff=f32(disagreement), est_rel_err=f32(est / ref),
+                        table_gs=np.array(table_gs, float), extra_gs=np.array(extra_gs, float),
+                        per_g=per_g, background_per_g=bg_per_g, extra_per_g=extra_per_g,
+                        extra_background_per_g=extra_bg_per_g, n_table=len(table_gs) * per_g, seed=seed)
+    return _as_float64(np.load(path))
+
+
+def load_hg_cache(path=HG_CACHE, regen=False, processes=None, log=print):
+    path = pathlib.Path(path)
+    if regen or not path.exists():
+        return build_hg_cache(path, processes=processes, log=log)
+    return _as_float64(np.load(path))
+
+
 def _as_float64(npz):
     return {k: (np.asarray(v, float) if np.asarray(v).dtype == np.float32 else np.asarray(v)) for k, v in npz.items()}
 
@@ -255,8 +331,16 @@ if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=N_CACHE)
     ap.add_argument("--n-background", type=int, default=N_BACKGROUND)
-    ap.add_argument("--out", default=str(CACHE))
+    ap.add_argument("--out", default=None, help=f"default {CACHE}, with --hg {HG_CACHE}")
+    ap.add_argument("--hg", action="store_true",
+                    help="build the Henyey-Greenstein cache (build_hg_cache) instead of the isotropic one")
+    ap.add_argument("--processes", type=int, default=None, help="worker processes (default: all CPU cores)")
     a = ap.parse_args()
-    build_cache(a.out, a.n, a.n_background)
+    if a.hg:
+        a.out = a.out or str(HG_CACHE)
+        build_hg_cache(a.out, processes=a.processes)
+    else:
+        a.out = a.out or str(CACHE)
+        build_cache(a.out, a.n, a.n_background, processes=a.processes)
     print("wrote", a.out, f"{pathlib.Path(a.out).stat().st_size / 1e6:.2f} MB")
     sys.exit(0)
