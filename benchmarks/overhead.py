@@ -1,7 +1,7 @@
 """What the fog costs as lights multiply: render time with fog over render time without, same scene, same process.
 
     .venv/bin/python benchmarks/overhead.py [--budget S] [--lights 1,4,16,64,256] [--methods ...]
-                                            [--no-boulevard] [--repeats N] [--error E|exact]
+                                            [--no-boulevard] [--repeats N] [--error E|exact] [--anisotropy G]
                                             [--samples N] [--resolution WxH] [--out CSV] [--chart PNG]
     .venv/bin/python benchmarks/overhead.py --chart-only [--out CSV] [--chart PNG]
 
@@ -74,7 +74,9 @@ fog's glow brightens every scene here: measured 1.5-2.4x).
 CSV records it (``error``: what was asked, ``error_passed``: whether
 ``apply_fog`` took it).  Without ``--error`` the add-on's default is used.
 With ``--error`` the outputs default to ``overhead_error-<E>.csv/png``, so a
-run per Quality keeps the others.
+run per Quality keeps the others.  ``--anisotropy G`` (Henyey-Greenstein g, default 0)
+is passed to ``apply_fog(anisotropy=G)``; with G != 0 the outputs get ``_g<G>``
+(``overhead_g0.85.csv``), and the CSV records it (``anisotropy``).
 
 Each worker has a wall-clock budget (``--budget``): when it runs out the
 worker is killed and the case recorded with whatever it measured (on a busy
@@ -126,7 +128,7 @@ DARK_FRAC = 0.2                # ... or more than this share of lit pixels gone 
 DARK_VS_BRIGHTEST = 0.8        # fogged mean luminance below this share of another method's: "darker"
 DARK_GAIN = 0.5                # alone: fogged mean below this share of the no-fog mean: "suspect"
 GOALS = ((1, 1.5), (16, 2.0), (64, 3.0))   # the issue's: (lights, max fog / no fog)
-FIELDS = ["case", "lights", "method", "engine", "error", "error_passed", "status", "picture_ok",
+FIELDS = ["case", "lights", "method", "engine", "error", "error_passed", "anisotropy", "status", "picture_ok",
           "picture_check", "log_errors",
           "ratio_warm_cpu", "ratio_first_cpu", "ratio_warm", "ratio_first", "ratio_first_est_cpu",
           "nofog_first_s", "nofog_first_cpu_s", "nofog_warm_s", "nofog_warm_cpu_s",
@@ -323,7 +325,7 @@ def worker(spec):
     nofog = _save_render(scene, tmp / f"{tag}_nofog.exr")
     _emit(dict(res, apply_started=time.time()))
     c, t = time.process_time(), time.perf_counter()
-    apply.apply_fog(scene, density, method=method, **kwargs)
+    apply.apply_fog(scene, density, anisotropy=spec.get("anisotropy", 0.0), method=method, **kwargs)
     res["fog_apply_s"], res["fog_apply_cpu_s"] = time.perf_counter() - t, time.process_time() - c
     scene.cycles.use_denoising = False
     _emit(res)
@@ -384,12 +386,13 @@ def run_worker(spec, budget):
 def measure_case(case, n, method, args, apply_only=False):
     engine, _ = METHODS[method]
     spec = {"case": case, "lights": n, "method": method, "repeats": args.repeats, "error": args.error,
+            "anisotropy": args.anisotropy,
             "resolution": args.resolution, "samples": args.samples, "apply_only": apply_only}
     load0 = load_avg()
     res, beat, log, timed_out, wall, cpu = run_worker(spec, args.budget)
     errors = log_errors(log)
     row = {"case": case, "lights": res.get("lights", n), "method": method, "engine": engine,
-           "error": error_tag(args.error), "error_passed": res.get("error_passed", ""),
+           "error": error_tag(args.error), "error_passed": res.get("error_passed", ""), "anisotropy": args.anisotropy,
            "budget_s": args.budget, "process_s": wall, "process_cpu_s": cpu, "load_avg_start": load0,
            "load_avg_end": load_avg(), "resolution": "{}x{}".format(*args.resolution), "samples": args.samples,
            "source": args.source, "log_errors": len(errors)}
@@ -578,6 +581,8 @@ def chart(rows, path):
     spp = rows[0].get("samples", "") if rows else ""
     err = rows[0].get("error", "") if rows else ""
     src = rows[0].get("source", "") if rows else ""
+    g = rows[0].get("anisotropy", "") if rows else ""
+    err = f"{err}, g {g:g}" if isinstance(g, float) and g else err
     ax.set_title(f"Cost of the fog, {res}, {spp:g} spp, Cycles CPU (2 cores) / EEVEE (llvmpipe); Quality: {err}; "
                  f"code {src}\n(benchmarks/overhead.py)" if isinstance(spp, (int, float)) else "Cost of the fog", fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
@@ -628,10 +633,12 @@ def main(argv=None):
                     help="keep the CSV's other rows: replace only the (case, lights, method) rows run now")
     ap.add_argument("--error", help="Quality: target error passed to apply_fog(error=...) if it has that "
                                     "keyword: a number (0.05, 0.01), draft, final or exact; default: the add-on's")
+    ap.add_argument("--anisotropy", type=float, default=0.0,
+                    help="Henyey-Greenstein g passed to apply_fog(anisotropy=...); default 0 (isotropic)")
     ap.add_argument("--samples", type=int, default=SAMPLES, help="(the issue's protocol: 16)")
     ap.add_argument("--resolution", default="{}x{}".format(*RESOLUTION), help="(the issue's protocol: 320x180)")
-    ap.add_argument("--out", help="CSV (default benchmarks/out/overhead[_error-E].csv)")
-    ap.add_argument("--chart", help="PNG (default docs/figures/overhead[_error-E].png)")
+    ap.add_argument("--out", help="CSV (default benchmarks/out/overhead[_error-E][_gG].csv)")
+    ap.add_argument("--chart", help="PNG (default docs/figures/overhead[_error-E][_gG].png)")
     ap.add_argument("--chart-only", action="store_true", help="redraw the chart from the CSV")
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
@@ -639,7 +646,8 @@ def main(argv=None):
         spec = json.loads(args.worker)
         return worker(spec)
     args.error = parse_error(args.error)
-    suffix = "" if args.error is None else f"_error-{error_tag(args.error)}"
+    suffix = ("" if args.error is None else f"_error-{error_tag(args.error)}") + (
+        f"_g{args.anisotropy:g}" if args.anisotropy else "")
     csv_path = pathlib.Path(args.out) if args.out else OUT / f"overhead{suffix}.csv"
     png_path = pathlib.Path(args.chart) if args.chart else PNG.with_name(f"overhead{suffix}.png")
     if args.chart_only:
@@ -651,7 +659,7 @@ def main(argv=None):
     args.source = source_id()
     os.environ.setdefault("TMPDIR", tempfile.mkdtemp(prefix="overhead_"))
     t0 = time.perf_counter()
-    print(f"code {args.source}, Quality {error_tag(args.error)}, {args.resolution[0]}x{args.resolution[1]}, "
+    print(f"code {args.source}, Quality {error_tag(args.error)}, g {args.anisotropy:g}, {args.resolution[0]}x{args.resolution[1]}, "
           f"{args.samples} spp, budget {args.budget:g} s per worker, load {load_avg()}, {os.cpu_count()} CPUs",
           flush=True)
     lights = sorted(int(x) for x in args.lights.split(",") if x.strip() and x.strip().lower() != "none")
@@ -667,7 +675,8 @@ def main(argv=None):
         for case, n in cases:
             if apply_stopped_at is not None:
                 rows.append({"case": case, "lights": n, "method": method, "engine": METHODS[method][0],
-                             "error": error_tag(args.error), "status": "not run", "budget_s": args.budget,
+                             "error": error_tag(args.error), "anisotropy": args.anisotropy, "status": "not run",
+                             "budget_s": args.budget,
                              "resolution": "{}x{}".format(*args.resolution), "samples": args.samples,
                              "source": args.source,
                              "note": f"adding the fog timed out with {apply_stopped_at} lights already"})
