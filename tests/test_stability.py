@@ -124,11 +124,13 @@ def test_reference_cache_is_current(cache):
 
 # --- NaN / Inf anywhere in the domain ---------------------------------------------------
 
-def _dense():
-    t = np.geomspace(*sm.T_RANGE, 48)
-    gamma = np.concatenate([[0.0], np.geomspace(1e-7, 1.0, 14), [0.5 * math.pi],
-                            math.pi - np.geomspace(1e-7, 1.0, 14)[::-1], [math.pi]])
-    beta = np.geomspace(1e-4, 1e2, 7)
+def _dense(n_t=48, n_gamma=14, n_beta=7):
+    """(beta, d_sv, d_vp, gamma) on a grid over the map's domain: T_sv, T_vp log-spaced (and T_vp = inf),
+    gamma at 0, pi/2, pi and log-spaced towards 0 and pi, beta from 1e-4 to 1e2 /m."""
+    t = np.geomspace(*sm.T_RANGE, n_t)
+    gamma = np.concatenate([[0.0], np.geomspace(1e-7, 1.0, n_gamma), [0.5 * math.pi],
+                            math.pi - np.geomspace(1e-7, 1.0, n_gamma)[::-1], [math.pi]])
+    beta = np.geomspace(1e-4, 1e2, n_beta)
     b, ts, tv, g = np.meshgrid(beta, t, np.concatenate([t, [np.inf]]), gamma, indexing="ij")
     return b, ts / b, tv / b, g
 
@@ -379,12 +381,7 @@ def test_appendix_d_fails_at_g085_where_ours_does_not():
 
 
 def _modest():
-    t = np.geomspace(*sm.T_RANGE, 16)
-    gamma = np.concatenate([[0.0], np.geomspace(1e-7, 1.0, 8), [0.5 * math.pi],
-                            math.pi - np.geomspace(1e-7, 1.0, 8)[::-1], [math.pi]])
-    beta = np.geomspace(1e-4, 1e2, 4)
-    b, ts, tv, gm = np.meshgrid(beta, t, np.concatenate([t, [np.inf]]), gamma, indexing="ij")
-    return b, ts / b, tv / b, gm
+    return _dense(16, 8, 4)
 
 
 HG_SHIPPED = [(-0.8, False), (0.85, False), (0.95, False), (-0.95, True), (-0.8, True), (0.85, True), (0.95, True)]
