@@ -121,10 +121,17 @@ def airlight_segment(m, beta, d_sv, along, h, d_vp, g=0.0):
         long_ = m.maximum(long_, 0.0)
     short = 0.0
     h2 = h * h
+    a2 = h2 * ((1.0 - g) ** 2) if g else None   # hg_weight's (1 - g)^2 h^2, once per segment
     for x, w in zip(_GL_X, _GL_W):
         p = seg * x
         q = q0 + p
-        short = short + w * hg_weight(m, g, q, h) * m.exp(neg_beta * p) / m.maximum(q * q + h2, 1e-30)
+        q2 = q * q
+        r2 = m.maximum(q2 + h2, 1e-30)
+        if g:   # hg_weight / r2 = (1 - g^2) sqrt(r2 / den) / den, den = (1 - g)^2 h^2 + (1 + g)^2 q^2
+            den = m.maximum(a2 + ((1.0 + g) ** 2) * q2, 1e-300)
+            short = short + (w * (1.0 - g * g)) * m.exp(neg_beta * p) * m.sqrt(r2 / den) / den
+        else:
+            short = short + w * m.exp(neg_beta * p) / r2
     short = short * seg
     is_short = m.less(beta * seg, SHORT_SEGMENT * m.minimum(1.0, beta * phase_scale(m, g, q0, h)))
     return (beta * INV_2PI) * m.exp(neg_beta * d_sv) * m.select(is_short, short, long_)
