@@ -192,10 +192,12 @@ def _resolve_density(args, required):
 
 def _validate_common(args, density_required):
     _resolve_density(args, density_required)
-    from .precompute import tables
-    if args.anisotropy is not None and abs(args.anisotropy) > tables.MAX_ANISOTROPY:
-        raise UsageError(f"anisotropy {args.anisotropy} is outside [-{tables.MAX_ANISOTROPY}, "
-                         f"{tables.MAX_ANISOTROPY}] (Henyey-Greenstein g)")
+    if args.anisotropy is not None:
+        from .precompute.medium import validate_anisotropy
+        try:
+            args.anisotropy = validate_anisotropy(args.anisotropy)
+        except ValueError as exc:
+            raise UsageError(str(exc))
     if not os.path.isfile(args.scene):
         raise UsageError(f"scene file not found: {args.scene}")
     if not args.scene.lower().endswith(".blend"):

@@ -25,13 +25,10 @@ looked up by name), from a ``load_post`` handler, and after appends (a
 ``depsgraph_update_post`` handler; do the merge from a ``bpy.app.timers``
 callback it registers rather than inside the depsgraph callback itself).
 """
-import re
-
 import bpy
 
 from . import groups, images, osl, owned
 
-_SUFFIX = re.compile(r"^(?P<base>.+)\.(?P<num>\d{3,})$")
 
 
 def _shared():
@@ -58,7 +55,7 @@ def _only_in_collections(obj):
 
 def pending():
     """True if some fog node group, table image or OSL text has a suffixed copy (cheap: names only)."""
-    return any(_SUFFIX.match(idb.name) and idb.name.startswith(owned.PREFIX)
+    return any(owned.SUFFIX.match(idb.name) and idb.name.startswith(owned.PREFIX)
                for coll_name, _, _ in _shared() for idb in getattr(bpy.data, coll_name))
 
 
@@ -84,7 +81,7 @@ def merge_duplicates(remove_pulled=False):
         coll = getattr(bpy.data, coll_name)
         found = {}
         for idb in coll:
-            m = _SUFFIX.match(idb.name)
+            m = owned.SUFFIX.match(idb.name)
             if m and m["base"] in bases and idb.library is None and ours(idb):
                 found.setdefault(m["base"], []).append((int(m["num"]), idb))
         for base in bases:

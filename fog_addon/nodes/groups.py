@@ -30,7 +30,7 @@ import bpy
 
 from ..precompute import fingerprint, model, ops, predict, rungs, shading, surface, tables
 from ..precompute.medium import Medium
-from . import osl, passes, sockets
+from . import osl, owned, passes, sockets
 from .sockets import NodeOps
 
 PARAMS = "AnalyticFog Params"
@@ -68,13 +68,13 @@ def all_group_names():
     this file has (their names without a ``.NNN`` suffix) first, as they use the per-light groups (so
     deleting unused groups in this order leaves none behind), then the fixed ones."""
     names = sorted(base for ng in bpy.data.node_groups
-                   if _BUNDLE_NAME.match(base := re.sub(r"\.\d{3,}$", "", ng.name)))
+                   if _BUNDLE_NAME.match(base := owned.base_name(ng.name)))
     names += [PARAMS, SURFACE, WORLD]
     for pref in rungs.PREFERENCES:
         models = rungs.choose(pref)
         names += [light_group_name(models), background_group_name(models)]
     names += sorted(base for ng in bpy.data.node_groups if ng.get(FOG_PROP)   # another anisotropy's
-                    and (base := re.sub(r"\.\d{3,}$", "", ng.name)).startswith((f"{LIGHT} [", f"{BACKGROUND_LIGHT} [")))
+                    and (base := owned.base_name(ng.name)).startswith((f"{LIGHT} [", f"{BACKGROUND_LIGHT} [")))
     return list(dict.fromkeys(names))
 
 
@@ -217,7 +217,7 @@ def set_params(beta, albedo, g=None):
     if ng is None:
         ng = build_params(beta, albedo)
     if g is not None and ng.get(ANISOTROPY_KEY, 0.0) != float(g):
-        ng[ANISOTROPY_KEY] = float(g)
+        set_anisotropy(g)
     ng.nodes["Beta"].outputs[0].default_value = beta
     ng.nodes["Albedo"].outputs[0].default_value = (*albedo, 1.0)
     return ng

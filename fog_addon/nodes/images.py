@@ -1,10 +1,9 @@
 """Tables as packed 32-bit float images (one shared copy per table)."""
-import re
-
 import bpy
 import numpy as np
 
 from ..precompute import fingerprint, tables
+from . import owned
 
 VERSION_KEY = "analytic_fog_table_version"   # on each image: the fingerprint of the code that baked it
 
@@ -61,5 +60,5 @@ def all_table_images(g=0.0):
 def table_names():
     """The tables' image names: the isotropic ones and every other table image in the file (another g's)."""
     names = list(_bakers())
-    return names + sorted({re.sub(r"\.\d{3,}$", "", img.name) for img in bpy.data.images
+    return names + sorted({owned.base_name(img.name) for img in bpy.data.images
                            if VERSION_KEY in img} - set(names))

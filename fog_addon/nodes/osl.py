@@ -20,6 +20,7 @@ import sys
 import bpy
 
 from ..precompute import fingerprint, rungs
+from . import owned
 
 PREFIX = "AnalyticFog"
 SHADER_PREFIX = "analytic_fog_"
@@ -212,7 +213,7 @@ def text_names():
     """Names of the texts of every rung that runs in OSL (what ``remove`` and ``dedupe`` look for): the
     isotropic rungs' and those of anisotropic rungs (``rungs.anisotropic_rungs``) in the file."""
     names = [text_name(r) for r in rungs.RUNGS if "osl" in r.backends]
-    return names + sorted({re.sub(r"\.\d{3,}$", "", t.name) for t in bpy.data.texts
+    return names + sorted({owned.base_name(t.name) for t in bpy.data.texts
                            if t.name.startswith(PREFIX) and t.as_string().startswith(HEADER)} - set(names))
 
 

@@ -9,8 +9,17 @@ rename them (a user node already held the name).  The tag is saved with the
 file and copied with the node.  The nodes keep readable names and labels
 (``AnalyticFog <role>``) for the artist.
 """
+import re
+
 PREFIX = "AnalyticFog"   # of the names the fog gives: its nodes and its node groups, images and texts
 TAG = "analytic_fog"     # custom property on each node the fog adds: the node's role
+SUFFIX = re.compile(r"^(?P<base>.+)\.(?P<num>\d{3,})$")   # Blender's ".001" of a clashing name
+
+
+def base_name(name):
+    """``name`` without Blender's ``.NNN`` suffix (an appended or clashing copy's)."""
+    m = SUFFIX.match(name)
+    return m.group("base") if m else name
 
 
 def mark(node, role):

@@ -19,6 +19,18 @@ class Medium(NamedTuple):
     g: float = 0.0                  # Henyey-Greenstein anisotropy (a Python float: folded into the kernels)
 
 
+def validate_anisotropy(g):
+    """g as a float in [-MAX_ANISOTROPY, MAX_ANISOTROPY], or ValueError with a message a user understands."""
+    try:
+        g = float(g)
+    except (TypeError, ValueError):
+        raise ValueError(f"anisotropy must be a number, got {g!r}") from None
+    if not (math.isfinite(g) and abs(g) <= tables.MAX_ANISOTROPY):
+        raise ValueError(f"anisotropy (Henyey-Greenstein g) must be between {-tables.MAX_ANISOTROPY} and "
+                         f"{tables.MAX_ANISOTROPY}, got {g}")
+    return g
+
+
 def medium(beta, albedo=(1.0, 1.0, 1.0), g=0.0, scene_scale=1.0):
     """A validated Medium from user settings; raises ValueError with a message a user understands.
 
@@ -28,15 +40,11 @@ def medium(beta, albedo=(1.0, 1.0, 1.0), g=0.0, scene_scale=1.0):
     beta = presets.validate_density(beta)
     try:
         scene_scale = float(scene_scale)
-        g = float(g)
         albedo = tuple(float(a) for a in albedo)
     except (TypeError, ValueError):
-        raise ValueError("scene scale, anisotropy and colour must be numbers") from None
+        raise ValueError("scene scale and colour must be numbers") from None
     if not (math.isfinite(scene_scale) and scene_scale > 0.0):
         raise ValueError(f"scene scale must be a positive number of metres per unit, got {scene_scale}")
     if len(albedo) != 3 or not all(math.isfinite(a) and 0.0 <= a <= 1.0 for a in albedo):
         raise ValueError(f"the fog colour (albedo) needs three values in [0, 1], got {albedo}")
-    if not (math.isfinite(g) and abs(g) <= tables.MAX_ANISOTROPY):
-        raise ValueError(f"anisotropy (Henyey-Greenstein g) must be between {-tables.MAX_ANISOTROPY} and "
-                         f"{tables.MAX_ANISOTROPY}, got {g}")
-    return Medium(beta * scene_scale, albedo, g)
+    return Medium(beta * scene_scale, albedo, validate_anisotropy(g))
