@@ -98,6 +98,23 @@ def add_point_light(scene, name, location, power):
     return ob
 
 
+def add_spot_light(scene, name, location, target, power, size_deg, blend, color=(1.0, 1.0, 1.0)):
+    """Spot light of radius 0 aimed at ``target`` (its axis is local -Z): Blender's cone of ``size_deg``
+    degrees and ``blend``; within the cone it shines as a point light of the same power."""
+    light = bpy.data.lights.new(name, 'SPOT')
+    light.energy = power
+    light.shadow_soft_size = 0.0
+    light.use_shadow = True
+    light.color = color
+    light.spot_size = math.radians(size_deg)
+    light.spot_blend = blend
+    ob = bpy.data.objects.new(name, light)
+    ob.location = location
+    ob.rotation_euler = (Vector(target) - Vector(location)).to_track_quat('-Z', 'Y').to_euler()
+    scene.collection.objects.link(ob)
+    return ob
+
+
 def add_camera(scene, location, target, lens=35.0):
     cam = bpy.data.cameras.new("Camera")
     cam.lens = lens

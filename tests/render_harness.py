@@ -42,7 +42,8 @@ TEST_RESOLUTION = (64, 36)
 REFERENCE_SAMPLES = {"street_lamps": 4096, "spheres": 8192, "boulevard": 16384}
 # Forward-scattering fog (g = 0.85): Cycles does not sample the phase function's peak towards its lights,
 # so its noise at the counts above was 14x (street lamps: 3.7 %) and 3.5x (spheres: 0.87 %) the isotropic.
-REFERENCE_SAMPLES_ANISOTROPIC = {"street_lamps": 131072, "spheres": 65536}
+REFERENCE_SAMPLES_ANISOTROPIC = {"street_lamps": 131072, "spheres": 65536, "concert_stage": 65536,
+                                 "headlights": 65536}
 # Measured noise of ONE cached reference (from a second seed; difference / sqrt 2), as
 # (relative RMSE, p95 per-pixel relative error, max per-pixel relative error).
 # Airlight-only pixels are nearly exact (QMC); the noise sits on fog-lit surfaces

@@ -71,8 +71,9 @@ def all_group_names():
                    if _BUNDLE_NAME.match(base := owned.base_name(ng.name)))
     names += [PARAMS, SURFACE, WORLD]
     for pref in rungs.PREFERENCES:
-        models = rungs.choose(pref)
-        names += [light_group_name(models), background_group_name(models)]
+        for spot in (False, True):
+            models = rungs.choose(pref, spot=spot)
+            names += [light_group_name(models), background_group_name(models)]
     names += sorted(base for ng in bpy.data.node_groups if ng.get(FOG_PROP)   # another anisotropy's
                     and (base := owned.base_name(ng.name)).startswith((f"{LIGHT} [", f"{BACKGROUND_LIGHT} [")))
     return list(dict.fromkeys(names))
@@ -236,6 +237,21 @@ def _medium(m, beta, albedo=None):
     return Medium(m.wrap(beta)) if albedo is None else Medium(m.wrap(beta), m.wrap(albedo, vector=True))
 
 
+SPOT_ROWS = ("Spot X", "Spot Y", "Spot Z")   # a spot light's group inputs: its inverse matrix's rows (shading.Spot)
+SPOT_COS, SPOT_BLEND = "Spot Cos Half", "Spot Blend"
+
+
+def _spot_inputs(models):
+    """The extra inputs of a spot light's group (``rungs.is_spot``), none for a point light's."""
+    return [(n, V) for n in SPOT_ROWS] + [(SPOT_COS, F), (SPOT_BLEND, F)] if rungs.is_spot(models) else []
+
+
+def _light(g, models):
+    """shading.Light from a per-light group's inputs ``g`` (name: value)."""
+    cone = shading.Spot(tuple(g[n] for n in SPOT_ROWS), g[SPOT_COS], g[SPOT_BLEND]) if rungs.is_spot(models) else None
+    return shading.Light(g["Light"], g["Intensity"], cone)
+
+
 def build_light(models, images):
     """Per-light surface group: ``shading.shade_point`` (Sun et al. 2005 Eq. 11, 14, 17-18) with ``models``."""
     name = light_group_name(models)
@@ -244,13 +260,13 @@ def build_light(models, images):
     ng, gin, gout = _new_group(name, [
         ("Beta", F), ("Light", V), ("Intensity", C), ("Position", V), ("Incoming", V),
         ("View Distance", F), ("Normal", V), ("Diffuse", C), ("Specular", C), ("Glossy Level", F),
-    ], [("Airlight", C), ("Scattered", C), ("Attenuation", F), ("Weight", F)])
+        *_spot_inputs(models)], [("Airlight", C), ("Scattered", C), ("Attenuation", F), ("Weight", F)])
     m = NodeOps(ng, images)
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
     pos, incoming, d_vp = g["Position"], g["Incoming"], g["View Distance"]
     geo = shading.Geometry(pos + incoming * d_vp, pos, incoming, d_vp, g["Normal"])
     material = shading.Material(g["Diffuse"], g["Specular"], g["Glossy Level"])
-    light = shading.Light(g["Light"], g["Intensity"])
+    light = _light(g, models)
     terms = shading.shade_point(m, geo, material, light, _medium(m, g["Beta"]), models)
     for key, v in terms._asdict().items():
         m.feed(gout.inputs[key.title()], v)
@@ -264,12 +280,11 @@ def build_background_light(models, images):
     if (ng := _up_to_date(name)) is not None:
         return ng
     ng, gin, gout = _new_group(name, [
-        ("Beta", F), ("Light", V), ("Intensity", C), ("Camera", V), ("Direction", V),
+        ("Beta", F), ("Light", V), ("Intensity", C), ("Camera", V), ("Direction", V), *_spot_inputs(models),
     ], [("Airlight", C)])
     m = NodeOps(ng, images)
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
-    air = shading.background_point(m, g["Camera"], g["Direction"], shading.Light(g["Light"], g["Intensity"]),
-                                   _medium(m, g["Beta"]), models)
+    air = shading.background_point(m, g["Camera"], g["Direction"], _light(g, models), _medium(m, g["Beta"]), models)
     m.feed(gout.inputs["Airlight"], air)
     ng[BUILT] = code_fingerprint()
     return _install(ng, name)
@@ -332,7 +347,54 @@ def _light_instance(ng, k, light, group_name, inputs):
     node.location = (-300, -300 * k)
     for a, b in ((loc.outputs[0], "Light"), (inten.outputs[0], "Intensity"), *inputs):
         ng.links.new(a, node.inputs[b])
+    if SPOT_COS in node.inputs:
+        _drive_spot(ng, k, light, node)
     return node
+
+
+def _matrix_var(driver, name, obj, column, row):
+    """A driver variable ``name`` = obj.matrix_world[row][column] (the RNA path is column-major)."""
+    var = driver.variables.new()
+    var.name = name
+    var.type = "SINGLE_PROP"
+    var.targets[0].id_type = "OBJECT"
+    var.targets[0].id = obj
+    var.targets[0].data_path = f"matrix_world[{column}][{row}]"
+
+
+def _drive_spot(ng, k, light, node):
+    """Feed a spot group ``node``'s cone inputs from ``light``: the rows of its world matrix's cofactor
+    matrix (det(M) M^-1: row i is the cross product of the other two columns, j x k in cyclic order), and
+    cos(spot_size / 2) and spot_blend, all by simple-expression drivers (they evaluate without the add-on)."""
+    for i, row_name in enumerate(SPOT_ROWS):
+        vec = _driven_vector(ng, f"Light {k} {row_name}", -900, -300 * k - 60 * i)
+        cj, ck = (i + 1) % 3, (i + 2) % 3
+        for axis in range(3):
+            a1, a2 = (axis + 1) % 3, (axis + 2) % 3
+            sock = vec.inputs[axis]
+            sock.driver_remove("default_value")
+            d = sock.driver_add("default_value").driver
+            d.type = "SCRIPTED"
+            for name, col, row in (("a", cj, a1), ("b", ck, a2), ("c", cj, a2), ("e", ck, a1)):
+                _matrix_var(d, name, light, col, row)
+            d.expression = "a * b - c * e"   # (col_j x col_k)[axis]
+        ng.links.new(vec.outputs[0], node.inputs[row_name])
+    for sock_name, path, expression in ((SPOT_COS, "spot_size", "cos(v * 0.5)"), (SPOT_BLEND, "spot_blend", "v")):
+        value = ng.nodes.new("ShaderNodeValue")
+        value.name = value.label = f"Light {k} {sock_name}"
+        value.location = (-900, -300 * k - 200)
+        out = value.outputs[0]
+        out.driver_remove("default_value")
+        d = out.driver_add("default_value").driver
+        d.type = "SCRIPTED"
+        var = d.variables.new()
+        var.name = "v"
+        var.type = "SINGLE_PROP"
+        var.targets[0].id_type = "LIGHT"
+        var.targets[0].id = light.data
+        var.targets[0].data_path = path
+        d.expression = expression
+        ng.links.new(out, node.inputs[sock_name])
 
 
 def _bundles(lights, models):

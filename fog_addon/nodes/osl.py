@@ -94,6 +94,12 @@ class OslOps:
     def cos(self, x):
         return self.call("cos", x)
 
+    def tan(self, x):
+        return self.call("tan", x)
+
+    def mul_add(self, a, b, c):
+        return self.wrap(a) * b + c
+
     def floor(self, x):
         return self.call("floor", x)
 
@@ -160,6 +166,10 @@ class OslOps:
         """Not available: OSL's texture() cannot read images packed into the .blend (and a farm file
         must not depend on files beside it), so OSL runs only table-free rungs."""
         raise NotImplementedError("OSL cannot read packed images: only table-free models run in OSL")
+
+    def group(self, name, fn, *args):
+        """``fn(self, *args)`` printed inline (the node backend shares it as a node group)."""
+        return fn(self, *args)
 
     def run(self, rung, *args):
         """``rung.kernel`` printed into this shader (it must run in OSL)."""

@@ -12,7 +12,7 @@ from ..precompute import medium, predict, presets, rungs
 from . import progress as progress_
 from . import view
 
-SUPPORTED_LIGHTS = ("POINT",)
+SUPPORTED_LIGHTS = ("POINT", "SPOT")
 OSL_WAS = "analytic_fog_osl_was"   # scene custom property: Cycles' OSL switch before the OSL method set it
 LIGHTS_KEY = "analytic_fog_lights"  # on the Surface group: the lights, their models and the camera it was built for
 PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method preference it was built with
@@ -39,9 +39,16 @@ def fog_lights(scene):
         else:
             lights.append(obj)
             s = obj.matrix_world.to_scale()
-            if max(s) - min(s) > 1e-6 * max(abs(max(s)), 1e-30):
+            if data.type == "SPOT" and obj.matrix_world.to_3x3().determinant() < 0.0:
+                notes.append((obj.name, "is mirrored (negative scale): its cone in the fog points the other way"))
+            elif data.type == "POINT" and max(s) - min(s) > 1e-6 * max(abs(max(s)), 1e-30):
                 notes.append((obj.name, "is scaled non-uniformly: a point light's fog ignores scale"))
     return lights, notes
+
+
+def is_spot(light):
+    """True for a spot light object (its fog follows the cone: ``rungs.choose(..., spot=True)``)."""
+    return light.data.type == "SPOT"
 
 
 def check_camera(camera):
@@ -134,7 +141,7 @@ def choose_models(scene, lights, preference, quality):
             choice["limited"] = budget.name + ("" if pred.fits else ": too many lights even with every light off")
     else:
         choice["lights"] = {o.name: [0, 0.0] for o in lights}
-    return [rungs.choose(preference, k, groups.get_anisotropy()) for k in steps], choice
+    return [rungs.choose(preference, k, groups.get_anisotropy(), is_spot(o)) for o, k in zip(lights, steps)], choice
 
 
 def stored_choice():
@@ -195,7 +202,7 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
     if kept is None:
         models, choice = choose_models(scene, lights, preference, quality)
     else:
-        models = [rungs.choose(preference, step, groups.get_anisotropy()) for step in kept]
+        models = [rungs.choose(preference, step, groups.get_anisotropy(), is_spot(o)) for o, step in zip(lights, kept)]
         choice = dict(old, lights={o.name: old["lights"].get(o.name, [0, 0.0]) for o in lights})
     choice["quality"] = quality_value(quality)
     # lights stepped out of the groups to fit a budget (rungs.LEFT_OUT) keep their own dimming (wrap_light)

@@ -33,6 +33,8 @@ class ShaderOps(Protocol):
     def sqrt(self, x) -> Any: ...            # 0 below 0
     def sin(self, x) -> Any: ...
     def cos(self, x) -> Any: ...
+    def tan(self, x) -> Any: ...
+    def mul_add(self, a, b, c) -> Any: ...     # a * b + c (scalars: one Multiply Add node)
     def floor(self, x) -> Any: ...
     def abs(self, x) -> Any: ...
     def minimum(self, a, b) -> Any: ...
@@ -49,6 +51,7 @@ class ShaderOps(Protocol):
     def combine(self, x, y, z) -> Any: ...
     def fori(self, count: int, body: Callable, state: tuple, done: Callable = None) -> tuple: ...
     def table(self, spec, x, y, row0: int = 0, rows: int = None) -> Any: ...
+    def group(self, name, fn, *args) -> Any: ...   # fn(self, *args), shared as one sub-program (node group)
     def run(self, rung, *args) -> Any: ...    # a model's kernel on this backend (or one it delegates to)
 
 
@@ -68,6 +71,11 @@ class NumpyOps:
     sqrt = staticmethod(lambda x: np.sqrt(np.maximum(x, 0.0)))   # Math SQRT returns 0 below 0
     sin = staticmethod(np.sin)
     cos = staticmethod(np.cos)
+    tan = staticmethod(np.tan)
+
+    @staticmethod
+    def mul_add(a, b, c):
+        return a * b + c
     floor = staticmethod(np.floor)
     abs = staticmethod(np.abs)
     minimum = staticmethod(np.minimum)
@@ -122,6 +130,10 @@ class NumpyOps:
         return np.stack(np.broadcast_arrays(*(np.asarray(v, float) for v in (x, y, z))), axis=-1)
 
     # -- models ------------------------------------------------------------------
+    def group(self, name, fn, *args):
+        """``fn(self, *args)``: the node backend makes it one shared node group (``NodeOps.group``)."""
+        return fn(self, *args)
+
     def run(self, rung, *args):
         """``rung.kernel`` on numpy (every kernel runs here: it is each model's reference twin)."""
         return rung.kernel(self, *args)

@@ -23,12 +23,18 @@ intensity of the light):
 * background(m, beta, d_sv, along, h) -> 1/m^2
 * scatter(m, beta, d_sp, cos_theta, level) -> 1/m^2 per unit albedo
 * direct(m, beta, d_sp) -> transmittance (dimensionless)
+
+A spot light (``spot.py``) has rungs of its own for the glow (``spot_rungs``: the point light's rung
+on the part of the ray inside the inner cone, quadrature on the blend rim), whose kernels take the
+ray in the light's space too: airlight(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz,
+cos_half, blend) and background(... without d_vp); and ``DIRECT_SPOT``, whose ``spot`` flag tells the
+shading (``shading.shade_point``) to follow the cone in the direct light and the scattered fog light.
 """
 from dataclasses import dataclass, replace
 import functools
 from typing import Callable, NamedTuple
 
-from . import model, surface, tables
+from . import model, spot, surface, tables
 
 TERMS = ("airlight", "background", "scatter", "direct")
 BACKENDS = ("numpy", "nodes", "osl")
@@ -45,6 +51,7 @@ class Rung:
     domain: str = "all inputs"   # where the error bound holds
     max_error: float = 0.0    # max relative error over the domain against adaptive quadrature (measured; see tests)
     evidence: str = ""        # the test that measures max_error
+    spot: bool = False        # a spot light's rung (``spot_rungs``, DIRECT_SPOT): the spot kernels' signature
 
     def predicted_error(self, *situation):
         """Bound on the relative error this rung makes in any pixel of a situation (camera, light, medium).
@@ -75,6 +82,10 @@ SCATTER_TABLE = Rung(
 DIRECT_EXACT = Rung(
     "direct exact", "direct", model.transmittance, frozenset({"numpy", "nodes", "osl"}), (),
     "all inputs", 0.0, "closed form (Eq. 14)")
+# A spot's direct light is the point light's times Blender's cone factor at the surface (``spot.falloff_at``);
+# the fog light it scatters onto a surface is taken as the point light's times the same factor: the fog
+# around the point lit as the point is (``shading.shade_point``; measured in tests/test_spot.py).
+DIRECT_SPOT = replace(DIRECT_EXACT, name="direct exact, spot cone", spot=True)
 
 
 
@@ -100,7 +111,7 @@ BACKGROUND_OFF = Rung("background off", "background", no_background, frozenset(B
 SCATTER_OFF = Rung("scatter off", "scatter", no_scatter, frozenset(BACKENDS), (), _OFF, 1.0, AIRLIGHT_OFF.evidence)
 
 RUNGS = (AIRLIGHT_TABLE, BACKGROUND_TABLE, AIRLIGHT_QUADRATURE, BACKGROUND_QUADRATURE, SCATTER_TABLE, DIRECT_EXACT,
-         AIRLIGHT_OFF, BACKGROUND_OFF, SCATTER_OFF)
+         DIRECT_SPOT, AIRLIGHT_OFF, BACKGROUND_OFF, SCATTER_OFF)
 
 # A light's steps down the ladder, cheapest last: 0 every term modelled; 1 the fog light it scatters onto
 # surfaces left out (the glow stays); 2 its glow left out too (its direct light still dims through the fog);
@@ -165,9 +176,27 @@ def anisotropic_rungs(g):
                                      hg_scatter_error(g))))
 
 
-def choose(preference="nodes", step=0, g=0.0):
+SPOT_RIM_ERROR = 3e-3   # the rim's quadrature (spot.RIM_NODES points): max 2.3e-3 of the whole glow, tests/test_spot.py
+
+
+@functools.lru_cache(maxsize=None)
+def spot_rungs(air, background, g):
+    """(airlight, background) rungs of a spot light for the point light's rungs ``air`` and ``background``
+    (anisotropy g): ``air``'s kernel on the inner cone's piece of the ray (on the sky's rays too: the piece
+    stops at optical depth spot.INNER_DEPTH), the rim by quadrature (``spot.airlight``)."""
+    kernels = (functools.partial(spot.airlight, inner=air.kernel, g=float(g)),
+               functools.partial(spot.airlight_background, inner=air.kernel, g=float(g)))
+    domain = air.domain + "; spot size 1-180 degrees, blend 0-1, any orientation and scale"
+    evidence = "tests/test_spot.py: Eq. 5 with Blender's spot factor, scipy quadrature"
+    return tuple(replace(r, name="spot " + r.name, kernel=k, domain=domain, spot=True, evidence=evidence,
+                         max_error=air.max_error + SPOT_RIM_ERROR)
+                 for r, k in ((air, kernels[0]), (background, kernels[1])))
+
+
+def choose(preference="nodes", step=0, g=0.0, spot=False):
     """The models for one light's terms, honouring the user's ``preference`` (PREFERENCES), ``step``
-    (index into STEPS) rungs down the ladder, for Henyey-Greenstein anisotropy ``g``.
+    (index into STEPS) rungs down the ladder, for Henyey-Greenstein anisotropy ``g``; ``spot``: for a
+    spot light (``spot_rungs``, DIRECT_SPOT).
 
     "nodes": every term from the node groups' tables; "osl": the glow by
     quadrature in OSL (Cycles only), the other terms as "nodes" (they have no
@@ -187,11 +216,19 @@ def choose(preference="nodes", step=0, g=0.0):
                          "with so much back-scattering; use the OSL method (Cycles)")
     else:
         models = LightModels(air_table, bg_table, scatter, DIRECT_EXACT)
+    if spot:
+        models = models._replace(direct=DIRECT_SPOT)._replace(
+            **dict(zip(("airlight", "background"), spot_rungs(models.airlight, models.background, g))))
     if step >= 1:
         models = models._replace(scatter=SCATTER_OFF)
     if step >= 2:
         models = models._replace(airlight=AIRLIGHT_OFF, background=BACKGROUND_OFF)
     return models   # LEFT_OUT: the models of "off"; the builders leave the light out
+
+
+def is_spot(models):
+    """True if ``models`` are a spot light's (``choose(..., spot=True)``)."""
+    return models.direct.spot
 
 
 def needs_osl(models):

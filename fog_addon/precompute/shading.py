@@ -14,7 +14,7 @@ Units: positions and distances in m, beta in 1/m, light intensity I0 in W/sr
 import math
 from typing import Any, NamedTuple
 
-from . import model, tables
+from . import model, spot, tables
 
 
 class Geometry(NamedTuple):
@@ -33,9 +33,18 @@ class Material(NamedTuple):
     level: Any           # table level 4 log2 n of the Phong exponent n
 
 
+class Spot(NamedTuple):
+    """A spot light's cone (``spot.py``): Blender's spot_size and spot_blend in the light's space."""
+    rows: Any            # the rows of the inverse of the light's 3x3 world matrix (three vectors; any
+                         # positive multiple: only directions matter)
+    cos_half: Any        # cos(spot_size / 2)
+    blend: Any           # spot_blend in [0, 1]
+
+
 class Light(NamedTuple):
     position: Any        # m
     intensity: Any       # RGB radiant intensity I0, W/sr
+    spot: Any = None     # Spot for a spot light (its models: rungs.choose(..., spot=True)), None for a point light
 
 
 class LightTerms(NamedTuple):
@@ -92,13 +101,18 @@ def shade_point(m, geo, material, light, medium, models):
     d_sp = m.length(to_light)
     inv_d = 1.0 / m.maximum(d_sp, model.MIN_DISTANCE)
     d_sv, along, h = model.ray_light_geometry(m, geo.camera, -1.0 * geo.incoming, light.position)
-    air = m.run(models.airlight, beta, d_sv, along, h, geo.view_distance)
+    air = m.run(models.airlight, beta, d_sv, along, h, geo.view_distance,
+                *_spot_ray(m, light, models.airlight, geo.camera, -1.0 * geo.incoming))
     cos_n = m.dot(to_light, geo.normal) * inv_d
     cos_r = m.dot(to_light, mirror(m, geo.incoming, geo.normal)) * inv_d
     diffuse = m.run(models.scatter, beta, d_sp, cos_n, 0.0)
     glossy = m.run(models.scatter, beta, d_sp, cos_r, material.level)
     reflected = m.scale(material.diffuse, diffuse) + m.scale(material.specular, glossy)
     weight = _grey(m, light.intensity) * reflected_lobe(m, material, cos_n, cos_r) * inv_d * inv_d
+    if models.direct.spot:   # the cone's factor at p on its direct light, and on its scattered fog light
+        cone = spot.falloff_at(m, light.spot.rows, geo.position, light.position, light.spot.cos_half,
+                               light.spot.blend)
+        reflected, weight = m.scale(reflected, cone), weight * cone
     return LightTerms(airlight=m.scale(light.intensity, air),
                       scattered=light.intensity * reflected,
                       attenuation=m.run(models.direct, beta, d_sp),
@@ -169,10 +183,20 @@ def shade_surface(m, terms, medium, view_distance, is_camera):
     return surface_fog(m, sum_lights(m, terms, medium, t_vp, is_camera) if terms else None, transmit)
 
 
+def _spot_ray(m, light, rung, origin, direction):
+    """The spot kernels' extra arguments (``rungs.spot_rungs``) for ``rung``: the ray in the light's space,
+    the cone's cos_half and blend; none for a point light's rung."""
+    if not rung.spot:
+        return ()
+    s = light.spot
+    return (*spot.light_space_ray(m, s.rows, origin, direction, light.position), s.cos_half, s.blend)
+
+
 def background_point(m, camera, direction, light, medium, models):
     """One light's RGB glow along a camera ray to infinity (Sun et al. 2005 Eq. 12 times I0), W/(m^2 sr)."""
     d_sv, along, h = model.ray_light_geometry(m, camera, direction, light.position)
-    return m.scale(light.intensity, m.run(models.background, medium.beta, d_sv, along, h))
+    return m.scale(light.intensity, m.run(models.background, medium.beta, d_sv, along, h,
+                                          *_spot_ray(m, light, models.background, camera, direction)))
 
 
 def shade_background(m, airlights, medium, is_camera):

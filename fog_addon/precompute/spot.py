@@ -1,7 +1,5 @@
 """Spot lights in fog: Blender's cone and blend, the ray clipped to the cone, the rim integrated (issue 9).
 
-Not yet wired into the node groups or OSL: the numpy physics and its measured accuracy.
-
 Blender's spot (Cycles and EEVEE, measured per pixel: ../shared/notes/blender-facts.md section 1):
 the intensity towards a point is the point light's times
 
@@ -9,40 +7,70 @@ the intensity towards a point is the point light's times
 
 c the cosine between the light-to-point direction in the light's own space (non-uniform scale
 deforms the cone) and its local -Z axis; a hard cut (f = 1 inside) when b = 0; no other cos factor.
+The spot's radius (soft shadows) and "show cone" (a viewport drawing) change nothing in the fog.
 
 Along a camera ray the airlight (Sun et al. 2005 Eq. 5, per unit intensity) becomes
-int f(c(x)) w(x) beta e^{-beta (d + x)} / (4 pi d^2) dx.  The cone of half-angle <= 90 degrees is
+int f(c(t)) w(t) beta e^{-beta (d + t)} / (4 pi d^2) dt.  The cone of half-angle <= 90 degrees is
 convex, so a ray meets the set where c >= k in one interval (``cone_interval``):
 
 * inside the inner cone (c >= c_in = c_h + (1 - c_h) b) f = 1 and the point light's integral applies
   unchanged on that sub-segment (Pegoraro et al.: the segment's bounds are free; here the viewer moved
-  to the segment's start, ``model.airlight_segment``, times the extinction to it);
+  to the segment's start, any point-light airlight rung of ``rungs.py``, times the extinction to it);
 * on the blend rim (c_h < c < c_in, at most two intervals) f varies smoothly and the integral is taken
   by Gauss-Legendre quadrature (``RIM_NODES`` points per interval).
+
+The kernels take scalars only (so OSL runs them as they are): the point light's ray geometry
+(d_sv, along, h) and the ray in the light's space, p = M^-1 (origin - light) and d = M^-1 direction
+(``light_space_ray``), M the light's 3x3 world matrix.
 """
+import functools
+
 import numpy as np
 
 from . import model
 
-RIM_NODES = 12    # Gauss-Legendre points per rim interval (tests/test_spot.py measures the error)
+RIM_NODES = 10    # Gauss-Legendre points per rim interval (tests/test_spot.py, 200 random spots per case: max
+                  # 2.3e-3 of the whole glow with non-uniform scale and g = -0.5; 8 points 6.4e-3, 12 points 1.1e-3)
+RIM_DEPTH = 12.0   # the rim's quadrature stops this optical depth past its start (e^-12 = 6e-6)
+INNER_DEPTH = 60.0   # the inner segment stops this optical depth past its start (e^-60 = 1e-26)
 _GL = tuple((float(x), float(w)) for x, w in zip(*np.polynomial.legendre.leggauss(RIM_NODES)))
 
 
+def inverse_width(m, cos_half, blend):
+    """1 / the blend ramp's width in cosine, (1 - c_h) b; at most 1e7: blend = 0 is Blender's hard cut as
+    a ramp 1e-7 wide in cosine (under 2e-4 degrees for any cone: no pixel shows it)."""
+    return 1.0 / m.maximum((1.0 - cos_half) * blend, 1e-7)
+
+
+def ramp(m, neg_c, cos_half, inv_width):
+    """Blender's spot factor f in [0, 1] at the cosine c = -``neg_c`` to the axis: smoothstep((c - c_h) /
+    ((1 - c_h) b)) (module docstring), given ``inverse_width``."""
+    x = m.clamp01(m.mul_add(neg_c, -inv_width, -cos_half * inv_width))
+    return x * x * m.mul_add(x, -2.0, 3.0)
+
+
 def spot_falloff(m, c, cos_half, blend):
-    """Blender's spot factor f in [0, 1] for the cosine c to the axis (module docstring).
-
-    ``cos_half`` = cos(size / 2), ``blend`` in [0, 1]; blend = 0 is a hard cut at c = cos_half.
-    """
-    width = (1.0 - cos_half) * blend
-    x = m.clamp01((c - cos_half) / m.maximum(width, 1e-30))
-    soft = x * x * (3.0 - 2.0 * x)
-    hard = 1.0 - m.less(c, cos_half)
-    return m.select(m.less(width, 1e-12), hard, soft)
+    """Blender's spot factor f in [0, 1] for the cosine c to the axis, ``cos_half`` = cos(size / 2),
+    ``blend`` in [0, 1] (blend = 0: a hard cut at c = cos_half, ``inverse_width``)."""
+    return ramp(m, -c, cos_half, inverse_width(m, cos_half, blend))
 
 
-def _local(m, rows, v):
-    """The light-space vector of ``v``: rows = the three rows of the light's inverse 3x3 matrix."""
+def light_space(m, rows, v):
+    """(x, y, z) of the world vector ``v`` in the light's space: rows = the three rows of the inverse of
+    the light's 3x3 world matrix (any positive multiple of them: only directions matter)."""
     return m.dot(rows[0], v), m.dot(rows[1], v), m.dot(rows[2], v)
+
+
+def light_space_ray(m, rows, origin, direction, light):
+    """(px, py, pz, dx, dy, dz): a camera ray's origin relative to the light and its direction, in the
+    light's space (the spot kernels' arguments)."""
+    return (*light_space(m, rows, origin - light), *light_space(m, rows, direction))
+
+
+def falloff_at(m, rows, point, light, cos_half, blend):
+    """Blender's spot factor f at a world ``point`` (its direct light there is f times the point light's)."""
+    x, y, z = light_space(m, rows, point - light)
+    return spot_falloff(m, -z / m.maximum(m.sqrt(x * x + y * y + z * z), 1e-30), cos_half, blend)
 
 
 def cone_interval(m, p0, d, kappa, t_end):
@@ -88,23 +116,33 @@ def cone_interval(m, p0, d, kappa, t_end):
     return lo, m.maximum(hi, lo)
 
 
-def _segment(m, beta, origin, direction, light, t0, t1, g):
-    """Airlight per unit intensity (1/m^2) of the ray's piece [t0, t1] (t0 < t1; t1 may be FAR):
-    the viewer moved to t0, times e^{-beta t0}."""
-    start = origin + m.scale(direction, t0)
-    d_sv, along, h = model.ray_light_geometry(m, start, direction, light)
-    seg = model.airlight_segment(m, beta, d_sv, along, h, t1 - t0, g)
-    return m.select(m.less(t0, t1), m.exp(-beta * t0) * seg, 0.0)
+def _cone(m, px, py, pz, dx, dy, dz, kappa, t_end):
+    return cone_interval(m, (px, py, pz), (dx, dy, dz), kappa, t_end)
 
 
-RIM_DEPTH = 12.0   # the rim's quadrature stops this optical depth past its start (e^-12 = 6e-6)
+def _kernel_name(fn):
+    """A name for the kernel ``fn`` (a function or a functools.partial of one), its bound values included."""
+    base = getattr(fn, "func", fn)
+    bound = ", ".join(f"{k} {_kernel_name(v) if callable(v) else f'{v:+.3f}'}"
+                      for k, v in sorted(getattr(fn, "keywords", {}).items()))
+    return base.__name__ + (f" ({bound})" if bound else "")
 
 
-def _rim(m, beta, origin, direction, light, rows, t0, t1, cos_half, blend, g):
+def _inner(m, beta, along, h, t0, t1, *, inner):
+    """The point light's airlight (1/m^2) over the ray's piece [t0, t1] (empty if t0 >= t1; t1 may be
+    FAR): ``inner`` (a point-light airlight kernel) with the viewer moved to t0, times e^{-beta t0}."""
+    a0 = along - t0
+    d0 = m.maximum(m.sqrt(a0 * a0 + h * h), model.MIN_DISTANCE)
+    seg = m.maximum(m.minimum(t1 - t0, INNER_DEPTH / beta), 0.0)
+    return m.select(m.less(t0, t1), m.exp(-beta * t0) * inner(m, beta, d0, a0, h, seg), 0.0)
+
+
+def _rim(m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, t0, t1, cos_half, inv_width, g=0.0):
     """f(c) times the point light's airlight over [t0, t1] (1/m^2), by Gauss-Legendre quadrature in
     Sun's angle xi = atan(Q / h) (Eq. 9: the integrand beta/(2 pi h) e^{-beta (D_sv + Q - Q_0)} w is
-    smooth and bounded there however close the ray passes the light), up to optical depth RIM_DEPTH."""
-    d_sv, along, h = model.ray_light_geometry(m, origin, direction, light)
+    smooth and bounded there however close the ray passes the light), up to optical depth RIM_DEPTH.
+    In xi the Henyey-Greenstein weight is (1 - g^2) / (1 + g^2 - 2 g cos 2 xi)^{3/2} (scattering angle
+    2 xi, Pegoraro et al. Eq. 8-9; ``model.hg_weight`` in Q)."""
     h = m.maximum(h, model.MIN_ANGLE * d_sv)
     q0 = model.closest_point_q(m, d_sv, -along, h)
 
@@ -116,35 +154,68 @@ def _rim(m, beta, origin, direction, light, rows, t0, t1, cos_half, blend, g):
     qb = m.minimum(q_at(t1), qa + RIM_DEPTH / beta)
     xa, xb = m.atan2(qa, h), m.atan2(qb, h)
     half, centre = 0.5 * (xb - xa), 0.5 * (xb + xa)
+    h2, beta_q0 = h * h, beta * q0
+    start, step = m.combine(px, py, pz), m.combine(dx, dy, dz)
     total = 0.0
     for x, w in _GL:
-        xi = centre + half * x
-        q = h * m.sin(xi) / m.maximum(m.cos(xi), 1e-30)
-        t = along + (q * q - h * h) / m.maximum(2.0 * q, 1e-300)   # z = (Q^2 - h^2) / 2Q
-        lx, ly, lz = _local(m, rows, origin + m.scale(direction, t) - light)
-        c = -lz / m.maximum(m.sqrt(lx * lx + ly * ly + lz * lz), 1e-300)
-        total = total + w * spot_falloff(m, c, cos_half, blend) * model.hg_weight(m, g, q, h) * m.exp(
-            -beta * (q - q0))
-    value = (beta * model.INV_2PI) * m.exp(-beta * d_sv) / h * half * total
+        xi = m.mul_add(half, x, centre)
+        # Q = h tan(xi), within [qa, qb]: in float32 (shader nodes) atan2 of a huge Q / h rounds above pi/2,
+        # where tan turns huge and negative (an empty rim far beyond the light: its NaN survives the select)
+        q = m.minimum(m.maximum(h * m.tan(xi), qa), qb)
+        t = m.mul_add(q - h2 / q, 0.5, along)   # the ray's t there: z = (Q^2 - h^2) / 2Q
+        dist = m.maximum(m.length(start + m.scale(step, t)), 1e-30)   # 0 where a ray meets the apex
+        f = ramp(m, m.mul_add(t, dz, pz) / dist, cos_half, inv_width)
+        if g:
+            f = f * m.power(m.mul_add(m.cos(2.0 * xi), -2.0 * g, 1.0 + g * g), -1.5)
+        total = m.mul_add(f * m.exp(m.mul_add(q, -beta, beta_q0)), w, total)
+    value = (beta * model.INV_2PI * (1.0 - g * g)) * m.exp(-beta * d_sv) / h * half * total
     return m.select(m.less(t0, t1), value, 0.0)
 
 
-def airlight_spot(m, beta, origin, direction, light, rows, cos_half, blend, d_vp, g=0.0):
+def airlight(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend, *,
+             inner=model.airlight_segment, g=0.0):
     """Airlight of a spot light per unit intensity, 1/m^2, along a camera ray (module docstring).
 
-    origin, direction (unit), light: world vectors (m); rows: the light's inverse 3x3 matrix as three
-    row vectors (its axis is local -Z); cos_half = cos(spot size / 2) >= 0; blend in [0, 1]; d_vp: the
-    distance to the surface (model.FAR for the sky); g: Henyey-Greenstein anisotropy (Python float).
+    (d_sv, along, h): the ray's geometry about the light (``model.ray_light_geometry``); d_vp: the
+    distance to the surface, m (model.FAR for the sky); (px, py, pz, dx, dy, dz): the ray in the light's
+    space (``light_space_ray``); cos_half = cos(spot size / 2) >= 0; blend in [0, 1].  ``inner``: the
+    point-light airlight kernel of the inner cone (a table or quadrature rung, its g bound); g:
+    Henyey-Greenstein anisotropy of the rim's integrand (Python float).  Shader nodes share it, and its
+    parts, as node groups (``m.group``).
     """
-    p0 = _local(m, rows, origin - light)
-    d = _local(m, rows, direction)
+    fn = functools.partial(_airlight, inner=inner, g=float(g))
+    return m.group(f"Spot Airlight [{_kernel_name(fn)}]", fn, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz,
+                   cos_half, blend)
+
+
+def _airlight(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend, *, inner, g):
+    ray = (px, py, pz, dx, dy, dz)
+    inv_width = inverse_width(m, cos_half, blend)
     cos_in = cos_half + (1.0 - cos_half) * blend
-    lo_out, hi_out = cone_interval(m, p0, d, cos_half, d_vp)
-    lo_in, hi_in = cone_interval(m, p0, d, m.minimum(cos_in, 1.0 - 1e-7), d_vp)
+    lo_out, hi_out = m.group("Spot Cone Interval", _cone, *ray, cos_half, d_vp)
+    lo_in, hi_in = m.group("Spot Cone Interval", _cone, *ray, m.minimum(cos_in, 1.0 - 1e-7), d_vp)
     empty_in = 1.0 - m.less(lo_in, hi_in)
-    inner = _segment(m, beta, origin, direction, light, lo_in, hi_in, g)
+    inner_fn = functools.partial(_inner, inner=inner)
+    value = m.group(f"Spot Inner [{_kernel_name(inner)}]", inner_fn, beta, along, h, lo_in, hi_in)
     # the rim: [lo_out, lo_in] and [hi_in, hi_out], or the whole outer interval when the inner is empty
     first_end = m.select(empty_in, hi_out, lo_in)
-    rim = (_rim(m, beta, origin, direction, light, rows, lo_out, first_end, cos_half, blend, g)
-           + (1.0 - empty_in) * _rim(m, beta, origin, direction, light, rows, hi_in, hi_out, cos_half, blend, g))
-    return inner + rim
+    rim = functools.partial(_rim, g=float(g))
+    rim_name = f"Spot Rim [{_kernel_name(rim)}]"
+    value = value + m.group(rim_name, rim, beta, d_sv, along, h, *ray, lo_out, first_end, cos_half, inv_width)
+    return value + (1.0 - empty_in) * m.group(rim_name, rim, beta, d_sv, along, h, *ray, hi_in, hi_out, cos_half,
+                                              inv_width)
+
+
+def airlight_background(m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, cos_half, blend, *,
+                        inner=model.airlight_segment, g=0.0):
+    """:func:`airlight` of a ray that meets no surface (Sun et al. 2005 Eq. 12), 1/m^2."""
+    return airlight(m, beta, d_sv, along, h, model.FAR, px, py, pz, dx, dy, dz, cos_half, blend,
+                    inner=inner, g=g)
+
+
+def airlight_spot(m, beta, origin, direction, light, rows, cos_half, blend, d_vp, g=0.0):
+    """:func:`airlight` from world vectors (origin, unit direction, light position: m; rows: the light's
+    inverse 3x3 matrix as three row vectors), with the table's point-light segment for anisotropy g."""
+    d_sv, along, h = model.ray_light_geometry(m, origin, direction, light)
+    return airlight(m, beta, d_sv, along, h, d_vp, *light_space_ray(m, rows, origin, direction, light),
+                    cos_half, blend, inner=lambda *a: model.airlight_segment(*a, g=g), g=g)

@@ -1,6 +1,6 @@
 """Tiny render of the whole fog on a lit plane and the background, against its numpy twin, per pixel.
 
-    python tests/scenes/shading_probe.py OUT_DIR ENGINE METHOD CASE [G]
+    python tests/scenes/shading_probe.py OUT_DIR ENGINE METHOD CASE [G] [KIND]
 
 The lights are kept out of the surfaces' direct lighting (Cycles: light ray
 visibility; EEVEE: diffuse and specular factors 0) and the world is black, so
@@ -9,7 +9,9 @@ colours plus the fog light the plane reflects (Sun et al. 2005 Eq. 19).  The
 twin is ``precompute.shading`` run by numpy at each pixel centre's camera
 ray, with the models METHOD chooses.  CASE "principled" is a diffuse-and-glossy dielectric; "mirror" is a
 smooth metal (roughness 0: only the glossy fog light, Phong n = 1024).  G: the fog's
-Henyey-Greenstein anisotropy (default 0), the twin's models and tables baked for it.
+Henyey-Greenstein anisotropy (default 0), the twin's models and tables baked for it.  KIND "spot": the
+lights are spots (``SPOTS``: cones of 40 and 70 degrees aimed across the plane, one scaled non-uniformly),
+their cones' rows from the inverse of the light's world matrix in numpy.
 
 Prints JSON: ratio statistics over all pixels, and for the glossy term alone
 (render minus the twin's other terms, against the twin's glossy term) where
@@ -25,6 +27,7 @@ sys.path.insert(0, str(ROOT))
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
+from mathutils import Vector  # noqa: E402
 
 from fog_addon import imageio, measure  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
@@ -36,11 +39,13 @@ import probe_common  # noqa: E402
 BETA, W, H = 0.2, 64, 48
 ALBEDO = (0.9, 0.8, 0.7)
 LIGHTS = (((0.5, 1.5, 0.6), 600.0, (1.0, 0.8, 0.6)), ((-2.0, 4.0, 1.0), 1500.0, (0.5, 0.7, 1.0)))
+SPOTS = ((40.0, 0.3, (0.3, 2.0, 0.0), (1.0, 1.0, 1.0)), (70.0, 0.8, (-0.5, 1.0, 0.0), (1.0, 0.6, 1.4)))
+#        (size in degrees, blend, target, object scale) for LIGHTS' two lights with KIND "spot"
 CASES = {"principled": dict(base=(0.6, 0.5, 0.4), metallic=0.3, roughness=0.35, ior_level=0.5),
          "mirror": dict(base=(0.9, 0.85, 0.8), metallic=1.0, roughness=0.0, ior_level=0.5)}
 
 
-def build(engine, method, case, g=0.0):
+def build(engine, method, case, g=0.0, kind="point"):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     s = bpy.context.scene
     cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
@@ -51,11 +56,16 @@ def build(engine, method, case, g=0.0):
     cam.data.clip_start = 0.001
     cam.data.lens = 30.0
     for k, (loc, power, colour) in enumerate(LIGHTS):
-        ob = bpy.data.objects.new(f"L{k}", bpy.data.lights.new(f"L{k}", "POINT"))
+        ob = bpy.data.objects.new(f"L{k}", bpy.data.lights.new(f"L{k}", kind.upper()))
         ob.data.energy, ob.data.color, ob.data.shadow_soft_size = power, colour, 0.0
         ob.data.diffuse_factor = ob.data.specular_factor = 0.0   # EEVEE: no direct light on surfaces
         ob.visible_diffuse = ob.visible_glossy = False           # Cycles: the same
         ob.location = loc
+        if kind == "spot":
+            size, blend, target, scale = SPOTS[k]
+            ob.data.spot_size, ob.data.spot_blend = math.radians(size), blend
+            ob.rotation_euler = (Vector(target) - Vector(loc)).to_track_quat("-Z", "Y").to_euler()
+            ob.scale = scale
         s.collection.objects.link(ob)
     bpy.ops.mesh.primitive_plane_add(size=40, location=(0, 0, 0))
     mat = bpy.data.materials.new("probe")
@@ -73,8 +83,9 @@ def build(engine, method, case, g=0.0):
     return s, cam
 
 
-def twin(c, d, case, method, without=None, g=0.0):
-    """The numpy twin of the fog's emission per pixel; ``without`` "glossy": that term zeroed."""
+def twin(c, d, case, method, without=None, g=0.0, spots=None):
+    """The numpy twin of the fog's emission per pixel; ``without`` "glossy": that term zeroed; ``spots``:
+    a shading.Spot per light (None: point lights)."""
     spec = tables.anisotropic(tables.AIRLIGHT, g)
     m = NumpyOps({spec.name: airlight.bake_airlight_table(spec),
                   tables.anisotropic(tables.SURFACE, g).name: surface.surface_table(g)})
@@ -90,10 +101,10 @@ def twin(c, d, case, method, without=None, g=0.0):
     geo = shading.Geometry(c, c + d * t[..., None], -d, t, np.array([0.0, 0.0, 1.0]))
     material = shading.Material(rho_d, rho_s, level)
     med = Medium(BETA, np.asarray(ALBEDO))
-    models = rungs.choose(method, 0, g)
-    lights = [shading.Light(np.asarray(loc, float), power / (4 * math.pi) * np.asarray(col)) for loc, power, col
-              in LIGHTS]
-    with np.errstate(over="ignore", invalid="ignore"):
+    models = rungs.choose(method, 0, g, spots is not None)
+    lights = [shading.Light(np.asarray(loc, float), power / (4 * math.pi) * np.asarray(col),
+                            None if spots is None else spots[k]) for k, (loc, power, col) in enumerate(LIGHTS)]
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         terms = [shading.shade_point(m, geo, material, li, med, models) for li in lights]
         surf = shading.shade_surface(m, terms, med, t, 1.0).emission
         bg = shading.shade_background(m, [shading.background_point(m, c, d, li, med, models) for li in lights],
@@ -101,17 +112,22 @@ def twin(c, d, case, method, without=None, g=0.0):
     return np.where(hit[..., None], surf, bg), hit
 
 
-def main(out_dir, engine="CYCLES", method="nodes", case="principled", g="0"):
+def main(out_dir, engine="CYCLES", method="nodes", case="principled", g="0", kind="point"):
     g = float(g)
-    s, cam = build(engine, method, case, g)
+    s, cam = build(engine, method, case, g, kind)
     got = imageio.read_rgb(measure.render_to_file(s, str(pathlib.Path(out_dir) / "probe.exr")))
     c, d = probe_common.camera_rays(cam, W, H)
-    want, hit = twin(c, d, case, method, g=g)
+    spots = None
+    if kind == "spot":
+        spots = [shading.Spot(tuple(np.linalg.inv(np.array(ob.matrix_world.to_3x3()))), math.cos(ob.data.spot_size / 2),
+                              ob.data.spot_blend) for ob in (s.objects["L0"], s.objects["L1"])]
+    want, hit = twin(c, d, case, method, g=g, spots=spots)
     r = got / want
     res = {"median": float(np.median(r)), "max_dev": float(np.max(np.abs(r - 1))),
            "p99_dev": float(np.percentile(np.abs(r - 1), 99)),
            "surface_pixels": int(hit.sum()), "background_pixels": int((~hit).sum())}
-    rest, _ = twin(c, d, case, method, without="glossy", g=g)
+    rest, _ = twin(c, d, case, method, without="glossy", g=g, spots=spots)
+    np.save(pathlib.Path(out_dir) / "twin.npy", want)
     glossy = want - rest
     big = hit[..., None] & (glossy > 0.05 * want)
     g_err = np.abs((got - rest)[big] / glossy[big] - 1)
