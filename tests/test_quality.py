@@ -25,7 +25,7 @@ from fog_addon.precompute import predict
 
 SCRIPT = ROOT / "tests" / "scenes" / "quality_probe.py"
 CASES = [("street_lamps", "draft"), ("boulevard", "final"), ("random:0", "draft"), ("random:1", "draft"),
-         ("random:2", "draft"), ("random:4", "final")]
+         ("random:2", "draft"), ("random:4", "final"), ("randomspot:3", "draft"), ("randomspot:5", "final")]
 
 
 def _run(tmp_path, scene, quality):

@@ -76,7 +76,17 @@ def all_group_names():
             names += [light_group_name(models), background_group_name(models)]
     names += sorted(base for ng in bpy.data.node_groups if ng.get(FOG_PROP)   # another anisotropy's
                     and (base := owned.base_name(ng.name)).startswith((f"{LIGHT} [", f"{BACKGROUND_LIGHT} [")))
+    # the kernels' shared groups (sockets.NodeOps.group), last: the light groups use them, and the larger
+    # kernels the smaller ones (deleted in the order of their size)
+    kernels = [ng for ng in bpy.data.node_groups if ng.get(FOG_PROP) and ng.name.startswith(sockets.KERNEL_GROUP)]
+    names += [owned.base_name(ng.name) for ng in sorted(kernels, key=lambda ng: -_kernel_depth(ng))]
     return list(dict.fromkeys(names))
+
+
+def _kernel_depth(ng):
+    """How deep ``ng``'s group nodes nest (0: none): a group is deleted before those it uses."""
+    return max((1 + _kernel_depth(n.node_tree) for n in ng.nodes
+                if n.bl_idname == "ShaderNodeGroup" and n.node_tree is not None), default=0)
 
 
 def _new_group(name, inputs, outputs):
@@ -160,21 +170,43 @@ OSL_MATERIAL_LAYERS = (248, 63, 59, 0)
 OSL_WORLD_LAYERS = (15, 15, 0, 0)
 
 
-def osl_budget():
-    """What a fogged material and the World can hold as one OSL shader group (predict.Budget)."""
+# A spot light (rungs.spot_rungs) costs more: its glow kernel (spot.py: two cone intervals, the inner segment
+# and two rims of quadrature) in the material and the World.  Measured at bpy 5.0.1, this stop: OSL, nodes a
+# light adds (8 vs 4 lights, g = 0.85): 289 full and 27 in the World (point 249, 15); EEVEE, saved and
+# reopened, fully modelled: 12 and 16 spots 85 168 and 113 520 bytes at g = 0 (7 088 a spot; the World 106 384
+# and 141 744, 8 840 a spot), 99 568 at g = 0.85 (the World 120 784): 8 288 and 10 040 a spot, taken as the
+# extra over a point light at g = 0.85 for every g (at g = 0 it overstates by about 500 and 1 000 bytes).
+# Glow only keeps the same glow; off keeps the cone's factor (a few constants, estimated).
+OSL_SPOT_EXTRA = ((40, 40, 12, 0), (12, 12, 0, 0))
+EEVEE_SPOT_EXTRA = ((4730, 4730, 100, 0), (8960, 8960, 0, 0))
+
+
+def _per_light(costs, extra, spots):
+    """(K, N, STEPS) costs of lights ``spots`` (True for a spot) from the point light's ``costs`` (K, STEPS)
+    and a spot's ``extra``; the (K, STEPS) costs themselves when no light is a spot."""
+    if not any(spots):
+        return costs
+    return tuple(tuple(tuple(c + (e if spot else 0) for c, e in zip(cost, more)) for spot in spots)
+                 for cost, more in zip(costs, extra))
+
+
+def osl_budget(spots=()):
+    """What a fogged material and the World can hold as one OSL shader group (predict.Budget); ``spots``:
+    one bool per light, True for a spot."""
     room = OSL_LAYER_LIMIT - OSL_LAYER_RESERVE
-    return predict.Budget((OSL_MATERIAL_LAYERS, OSL_WORLD_LAYERS), (room, room),
+    return predict.Budget(_per_light((OSL_MATERIAL_LAYERS, OSL_WORLD_LAYERS), OSL_SPOT_EXTRA, spots), (room, room),
                           "OSL's shader group size (32 767 nodes per material)")
 
 
-def eevee_budget(g=0.0):
+def eevee_budget(g=0.0, spots=()):
     """What a fogged material and the World can hold in EEVEE (predict.Budget over the lights' steps) for
-    fog of anisotropy g."""
+    fog of anisotropy g; ``spots``: one bool per light, True for a spot."""
     room = EEVEE_UNIFORM_LIMIT - EEVEE_UNIFORM_RESERVE
     costs = (EEVEE_MATERIAL_BYTES, EEVEE_WORLD_BYTES)
     if g:
         costs = tuple(tuple(a + b for a, b in zip(c, extra)) for c, extra in zip(costs, EEVEE_ANISOTROPIC_EXTRA))
-    return predict.Budget(costs, (room, room), "EEVEE's uniform block (64 KiB of node constants per material)")
+    return predict.Budget(_per_light(costs, EEVEE_SPOT_EXTRA, spots), (room, room),
+                          "EEVEE's uniform block (64 KiB of node constants per material)")
 
 
 def build_params(beta, albedo):

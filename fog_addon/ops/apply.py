@@ -103,13 +103,14 @@ def quality_value(quality):
     return "exact" if quality is None else quality
 
 
-def _budget(scene, preference):
-    """What the renderer can hold (predict.Budget), or None: EEVEE's uniform block, Cycles OSL's shader
-    group layers."""
+def _budget(scene, preference, lights):
+    """What the renderer can hold (predict.Budget) with ``lights``, or None: EEVEE's uniform block, Cycles
+    OSL's shader group layers."""
+    spots = [is_spot(o) for o in lights]
     if scene.render.engine == groups.EEVEE_ENGINE:
-        return groups.eevee_budget(groups.get_anisotropy())
+        return groups.eevee_budget(groups.get_anisotropy(), spots)
     if preference == "osl":
-        return groups.osl_budget()
+        return groups.osl_budget(spots)
     return None
 
 
@@ -127,7 +128,7 @@ def choose_models(scene, lights, preference, quality):
     """
     target = predict.target_error(quality)
     engine = scene.render.engine
-    budget = _budget(scene, preference)
+    budget = _budget(scene, preference, lights)
     steps = [0] * len(lights)
     choice = {"target": target, "error": 0.0, "lights": {}, "engine": engine, "limited": None}
     if lights and (target is not None or (budget is not None and not budget.fits(steps))):
@@ -196,7 +197,7 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
     if not (rechoose or old is None or old.get("quality") != quality_value(quality)
             or (old.get("engine") == groups.EEVEE_ENGINE) != (scene.render.engine == groups.EEVEE_ENGINE)):
         kept = [old["lights"].get(o.name, [0, 0.0])[0] for o in lights]
-        budget = _budget(scene, preference)
+        budget = _budget(scene, preference, lights)
         if budget is not None and not budget.fits(kept):   # e.g. the method switched to OSL: choose again
             kept = None
     if kept is None:

@@ -181,7 +181,9 @@ def _sample_frame(scene, depsgraph, lights, grid):
         for brdf in ([known] if known is not None else [LAMBERT, MIRROR]):
             rows.append((d, dist, n, brdf))
     light_pos = np.array([np.array(o.matrix_world.translation) for o in lights]).reshape(-1, 3)
-    return origin, rows, light_pos
+    inverse = np.array([np.linalg.inv(np.array(o.matrix_world.to_3x3())) if o.data.type == "SPOT" else np.eye(3)
+                        for o in lights]).reshape(-1, 3, 3)
+    return origin, rows, light_pos, inverse
 
 
 def sample_grid(scene, max_samples=MAX_SAMPLES):
@@ -202,13 +204,13 @@ def view_samples(scene, lights, frames=None, grid=None):
     frames = sample_frames(scene) if frames is None else frames
     grid = sample_grid(scene) if grid is None else grid
     current = scene.frame_current, scene.frame_subframe
-    cams, dirs, dists, normals, rds, rss, levels, lps, fr = [], [], [], [], [], [], [], [], []
+    cams, dirs, dists, normals, rds, rss, levels, lps, invs, fr = [], [], [], [], [], [], [], [], [], []
     try:
         for f in frames:
             if f != scene.frame_current:
                 scene.frame_set(f)
             depsgraph = bpy.context.evaluated_depsgraph_get()
-            origin, rows, light_pos = _sample_frame(scene, depsgraph, lights, grid)
+            origin, rows, light_pos, inverse = _sample_frame(scene, depsgraph, lights, grid)
             for d, dist, n, (rd, rs, lev) in rows:
                 cams.append(origin)
                 dirs.append(d)
@@ -218,17 +220,23 @@ def view_samples(scene, lights, frames=None, grid=None):
                 rss.append(rs)
                 levels.append(lev)
                 lps.append(light_pos)
+                invs.append(inverse)
                 fr.append(f)
     finally:
         if (scene.frame_current, scene.frame_subframe) != current:
             scene.frame_set(current[0], subframe=current[1])
     n_lights = len(lights)
+    is_spot = np.array([o.data.type == "SPOT" for o in lights], bool)
+    spots = predict.SpotSamples(is_spot, np.array(invs).reshape(-1, n_lights, 3, 3),
+                                np.array([math.cos(o.data.spot_size / 2) if s else 1.0 for o, s in zip(lights, is_spot)]),
+                                np.array([o.data.spot_blend if s else 0.0 for o, s in zip(lights, is_spot)]))
     return predict.ViewSamples(np.array(cams).reshape(-1, 3), np.array(dirs).reshape(-1, 3), np.array(dists, float),
                                np.array(normals).reshape(-1, 3), np.array(rds).reshape(-1, 3),
                                np.array(rss).reshape(-1, 3), np.array(levels, float),
-                               np.array(lps).reshape(-1, n_lights, 3), np.array(fr))
+                               np.array(lps).reshape(-1, n_lights, 3), np.array(fr), spots if is_spot.any() else None)
 
 
 def light_intensities(lights):
-    """(N, 3) RGB radiant intensity I0 = power * colour / (4 pi) of point lights, W/sr."""
+    """(N, 3) RGB radiant intensity I0 = power * colour / (4 pi) of point and spot lights (a spot's inside
+    its cone), W/sr."""
     return np.array([[o.data.energy * c / (4.0 * math.pi) for c in o.data.color] for o in lights]).reshape(-1, 3)

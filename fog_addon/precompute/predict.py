@@ -28,6 +28,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from . import airlight, model, rungs, shading, surface, tables
+from . import spot as spot_mod
 from .ops import NumpyOps
 
 FLOOR = 1e-3          # samples below this fraction of the peak fog are not judged (issue 8 §2)
@@ -46,6 +47,15 @@ class ViewSamples(NamedTuple):
     level: Any        # (P,) table level of the glossy exponent
     lights: Any       # (P, N, 3) each light's position when the sample was taken
     frame: Any = None  # (P,) the frame of each sample (for reports)
+    spots: Any = None  # SpotSamples, or None: every light a point light
+
+
+class SpotSamples(NamedTuple):
+    """The cones of the lights that are spots (``shading.Spot``), as the view samples saw them."""
+    is_spot: Any      # (N,) bool
+    rows: Any         # (P, N, 3, 3) the inverse of each light's 3x3 world matrix (identity for a point light)
+    cos_half: Any     # (N,) cos(spot_size / 2)
+    blend: Any        # (N,) spot_blend
 
 
 class Prediction(NamedTuple):
@@ -58,14 +68,17 @@ class Prediction(NamedTuple):
 
 
 class Budget(NamedTuple):
-    """What a renderer can hold, per resource k: sum over the lights of ``cost[k][step]`` <= ``limit[k]``."""
-    cost: Any          # (K, len(rungs.STEPS)): each resource's cost of one light at each step
+    """What a renderer can hold, per resource k: sum over the lights i of ``cost[k][i][step_i]`` (or, the
+    same for every light, ``cost[k][step_i]``) <= ``limit[k]``."""
+    cost: Any          # (K, len(rungs.STEPS)) or (K, N, len(rungs.STEPS)): each resource's cost of a light by step
     limit: Any         # (K,)
     name: str          # what runs out (for reports)
 
     def fits(self, steps):
         cost = np.asarray(self.cost, float)
-        return bool((cost[:, np.asarray(steps, int)].sum(axis=1) <= np.asarray(self.limit, float)).all())
+        steps = np.asarray(steps, int)
+        used = cost[:, np.arange(len(steps)), steps] if cost.ndim == 3 else cost[:, steps]
+        return bool((used.sum(axis=1) <= np.asarray(self.limit, float)).all())
 
 
 def target_error(quality):
@@ -103,7 +116,8 @@ def light_fog(samples, intensity, beta, g=0.0):
     tables' range), the shaders' twin.
     """
     m = _numpy_ops(g)
-    full = rungs.choose("nodes" if g >= rungs.MIN_TABLE_ANISOTROPY else "osl", 0, g)
+    preference = "nodes" if g >= rungs.MIN_TABLE_ANISOTROPY else "osl"
+    full = rungs.choose(preference, 0, g)
     cam = np.asarray(samples.camera, float)[:, None, :]
     d = np.asarray(samples.direction, float)[:, None, :]
     lights = np.asarray(samples.lights, float)
@@ -122,6 +136,20 @@ def light_fog(samples, intensity, beta, g=0.0):
         level = np.broadcast_to(np.asarray(samples.level, float)[:, None], cos_r.shape)
         diffuse = m.run(full.scatter, beta, d_sp, cos_n, np.zeros_like(level))
         glossy = m.run(full.scatter, beta, d_sp, cos_r, level)
+        spots = samples.spots
+        if spots is not None and np.any(spots.is_spot):   # the spots' glow and cone (shading.shade_point)
+            k = np.flatnonzero(spots.is_spot)
+            rows = np.asarray(spots.rows, float)[:, k]
+            light = shading.Light(lights[:, k], None, shading.Spot(tuple(rows[..., i, :] for i in range(3)),
+                                                                    np.asarray(spots.cos_half, float)[k],
+                                                                    np.asarray(spots.blend, float)[k]))
+            spot = rungs.choose(preference, 0, g, spot=True)
+            args = (beta, d_sv[:, k], along[:, k], h[:, k])
+            ray = shading.spot_ray(m, light, spot.airlight, cam, d)
+            air[:, k] = np.where(sky, m.run(spot.background, *args, *ray), m.run(spot.airlight, *args, d_vp, *ray))
+            cone = spot_mod.falloff_at(m, light.spot.rows, cam + m.scale(d, d_vp), light.position,
+                                       light.spot.cos_half, light.spot.blend)
+            diffuse[:, k], glossy[:, k] = diffuse[:, k] * cone, glossy[:, k] * cone
     t_vp = np.exp(-beta * d_vp)[..., None]
     reflected = (np.asarray(samples.rho_d, float)[:, None, :] * diffuse[..., None]
                  + np.asarray(samples.rho_s, float)[:, None, :] * glossy[..., None])

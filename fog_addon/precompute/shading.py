@@ -102,7 +102,7 @@ def shade_point(m, geo, material, light, medium, models):
     inv_d = 1.0 / m.maximum(d_sp, model.MIN_DISTANCE)
     d_sv, along, h = model.ray_light_geometry(m, geo.camera, -1.0 * geo.incoming, light.position)
     air = m.run(models.airlight, beta, d_sv, along, h, geo.view_distance,
-                *_spot_ray(m, light, models.airlight, geo.camera, -1.0 * geo.incoming))
+                *spot_ray(m, light, models.airlight, geo.camera, -1.0 * geo.incoming))
     cos_n = m.dot(to_light, geo.normal) * inv_d
     cos_r = m.dot(to_light, mirror(m, geo.incoming, geo.normal)) * inv_d
     diffuse = m.run(models.scatter, beta, d_sp, cos_n, 0.0)
@@ -183,7 +183,7 @@ def shade_surface(m, terms, medium, view_distance, is_camera):
     return surface_fog(m, sum_lights(m, terms, medium, t_vp, is_camera) if terms else None, transmit)
 
 
-def _spot_ray(m, light, rung, origin, direction):
+def spot_ray(m, light, rung, origin, direction):
     """The spot kernels' extra arguments (``rungs.spot_rungs``) for ``rung``: the ray in the light's space,
     the cone's cos_half and blend; none for a point light's rung."""
     if not rung.spot:
@@ -196,7 +196,7 @@ def background_point(m, camera, direction, light, medium, models):
     """One light's RGB glow along a camera ray to infinity (Sun et al. 2005 Eq. 12 times I0), W/(m^2 sr)."""
     d_sv, along, h = model.ray_light_geometry(m, camera, direction, light.position)
     return m.scale(light.intensity, m.run(models.background, medium.beta, d_sv, along, h,
-                                          *_spot_ray(m, light, models.background, camera, direction)))
+                                          *spot_ray(m, light, models.background, camera, direction)))
 
 
 def shade_background(m, airlights, medium, is_camera):

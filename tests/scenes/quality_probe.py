@@ -3,9 +3,10 @@
     python tests/scenes/quality_probe.py OUT_DIR SCENE QUALITY [WIDTH HEIGHT]
 
 SCENE: a demo scene module name (street_lamps, boulevard, ...) at its default
-density, or ``random:SEED`` (a ground, boxes and spheres with random
+density (and anisotropy, if it has one), or ``random:SEED`` (a ground, boxes and spheres with random
 Principled materials, 2-40 point lights of random power and colour, a random
-camera, beta log-uniform in [0.005, 0.3] 1/m).  Cycles, 1 sample at each
+camera, beta log-uniform in [0.005, 0.3] 1/m), or ``randomspot:SEED``: the same with every other
+light a spot (10-120 degrees, blend 0-1) aimed at a random point of the ground.  Cycles, 1 sample at each
 pixel centre.  The lights light only the fog (hidden from diffuse and
 glossy rays: in Cycles their diffuse and specular factors alone still let
 them light surfaces) and the World is black, so the picture is the fog's
@@ -27,14 +28,15 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "scenes"))
 
 import bpy  # noqa: E402
+from mathutils import Vector  # noqa: E402
 
 import demo_scenes  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 from probe_common import light_fog_only, tiny_render  # noqa: E402
 
 
-def random_scene(scene, seed):
-    """A random fogged street-like scene; returns its beta (1/m)."""
+def random_scene(scene, seed, spots=False):
+    """A random fogged street-like scene; returns its beta (1/m).  ``spots``: every other light a spot."""
     rng = random.Random(seed)
     demo_scenes.clear_scene(scene)
     demo_scenes.set_world(scene)
@@ -53,18 +55,25 @@ def random_scene(scene, seed):
         ob = demo_scenes.add_point_light(scene, f"L{k:02d}", (rng.uniform(-15, 15), rng.uniform(-3, 50),
                                                              rng.uniform(0.5, 8)), math.exp(rng.uniform(2.3, 8.5)))
         ob.data.color = tuple(rng.uniform(0.3, 1.0) for _ in range(3))
+        if spots and k % 2:
+            ob.data.type = "SPOT"
+            ob.data.spot_size, ob.data.spot_blend = math.radians(rng.uniform(10, 120)), rng.uniform(0, 1)
+            aim = Vector((rng.uniform(-15, 15), rng.uniform(0, 50), 0.0)) - ob.location
+            ob.rotation_euler = aim.to_track_quat("-Z", "Y").to_euler()
     demo_scenes.add_camera(scene, (rng.uniform(-3, 3), rng.uniform(-4, 0), rng.uniform(1, 3)),
                            (rng.uniform(-6, 6), rng.uniform(15, 40), rng.uniform(0, 4)), lens=rng.uniform(20, 50))
     return math.exp(rng.uniform(math.log(0.005), math.log(0.3)))
 
 
 def build(scene, name):
-    if name.startswith("random:"):
-        return random_scene(scene, int(name.split(":", 1)[1]))
+    """Build scene ``name``; returns its (beta in 1/m, anisotropy g)."""
+    kind, _, seed = name.partition(":")
+    if kind in ("random", "randomspot"):
+        return random_scene(scene, int(seed), spots=kind == "randomspot"), 0.0
     mod = importlib.import_module(f"demo_scenes.{name}")
     demo_scenes.clear_scene(scene)
     mod.build(scene)
-    return mod.DEFAULT_DENSITY
+    return mod.DEFAULT_DENSITY, getattr(mod, "ANISOTROPY", 0.0)
 
 
 def fog_only(scene):
@@ -89,14 +98,14 @@ def main(out, name, quality, width=128, height=72):
     out = pathlib.Path(out)
     out.mkdir(parents=True, exist_ok=True)
     scene = bpy.context.scene
-    beta = build(scene, name)
+    beta, g = build(scene, name)
     fog_only(scene)
     tiny_render(scene, "CYCLES", width, height)
     quality = None if quality == "exact" else (float(quality) if quality[0].isdigit() else quality)
-    apply.apply_fog(scene, beta, error=quality)
+    apply.apply_fog(scene, beta, anisotropy=g, error=quality)
     choice = apply.stored_choice()
     render(scene, out / "auto.exr")
-    apply.apply_fog(scene, beta, error=None)
+    apply.apply_fog(scene, beta, anisotropy=g, error=None)
     render(scene, out / "exact.exr")
     print(json.dumps({"scene": name, "beta": beta, "quality": quality, "predicted": choice["error"],
                       "steps": {k: v[0] for k, v in choice["lights"].items()},
