@@ -71,13 +71,13 @@ def test_cycles_spot_fog_matches_numpy_twin(tmp_path, method, g):
     (OSL): the rim's float32 sums."""
     s = _shading_probe(tmp_path, "CYCLES", method, "principled", g, "spot")
     assert s["surface_pixels"] > 1000 and s["glossy_pixels"] > 500, s
-    assert abs(s["median"] - 1) < 2e-5 and s["max_dev"] < 1.5e-3 and s["dark_max"] == 0.0, s
+    assert abs(s["median"] - 1) < 2e-5 and s["max_dev"] < 1.5e-3 and s["dark_max"] < 1e-7, s
 
 
 def test_eevee_spot_fog_matches_numpy_twin(tmp_path):
     """The spot probe in EEVEE (g = 0.7): pixels above 1e-3 of the peak within EEVEE's half floats."""
     s = _shading_probe(tmp_path, "BLENDER_EEVEE", "nodes", "principled", 0.7, "spot")
-    assert s["surface_pixels"] > 1000 and s["dark_max"] == 0.0, s
+    assert s["surface_pixels"] > 1000 and s["dark_max"] < 1e-7, s
     assert abs(s["median"] - 1) < 1e-3 and s["bright_max_dev"] < 2e-3, s
 
 

@@ -126,3 +126,29 @@ def test_anisotropic(tmp_path, regen, scene, density, engine, method, rel_rmse, 
                        mean_ratio_tol=mean_ratio_tol)
     print(f"{scene} g={ANISOTROPY} {engine} {method}: relative RMSE {m['rel_rmse']:.4g}, "
           f"mean ratio {m['mean_ratio']:.5f}")
+
+
+# Spot lights (issue 9 §1, §3): the demo scenes "concert stage" (three coloured spots raking through haze,
+# g = 0.7) and "headlights" (two narrow spots towards the camera and a street lamp, g = 0.85), against the
+# Cycles path-traced World volume of the same anisotropy (65 536 spp).  The issue's goal is 3 % (Cycles) and
+# 5 % (EEVEE); measured (this stop): concert stage 8.3 % (nodes and OSL), 10.7 % (EEVEE); headlights 5.8 %,
+# 5.8 %, 19.1 %.  The glows match to about 1 % where they dominate (the headlights' rows above the road);
+# what is left is the fog light the spots scatter onto surfaces (spot.scatter_fraction: it does not track
+# the direction the light comes from, tests/test_spot_scatter.py) and, in EEVEE, its spots' direct light on
+# the glossy road.  The bounds guard what is measured, not the goal.
+SPOT_SCENES = {"concert_stage": (0.04, 0.7, {"cycles": 0.10, "eevee": 0.13}),
+               "headlights": (0.05, 0.85, {"cycles": 0.07, "eevee": 0.22})}
+
+
+@pytest.mark.parametrize("scene", sorted(SPOT_SCENES))
+@pytest.mark.parametrize("engine,method", [("cycles", "nodes"), ("cycles", "osl"), ("eevee", "nodes")])
+def test_spot_scenes(tmp_path, regen, scene, engine, method):
+    density, g, bound = SPOT_SCENES[scene]
+    ref = h.ensure_reference(scene, density, regen, anisotropy=g)
+    log = []
+    out = h.render_test(scene, density, str(tmp_path / f"{scene}_{engine}_{method}.exr"), engine=engine,
+                        method=method, extra=["--anisotropy", repr(g)], log=log)
+    assert not h.log_errors(log[0])
+    m = h.assert_close(out, ref, f"{scene}_{density}_g{g}_{engine}_{method}", rel_rmse=bound[engine],
+                       mean_ratio_tol=0.15)   # measured 1.116 (concert stage: the surfaces' fog light)
+    print(f"{scene} g={g} {engine} {method}: relative RMSE {m['rel_rmse']:.4g}, mean ratio {m['mean_ratio']:.5f}")

@@ -28,7 +28,7 @@ import sys
 
 import bpy
 
-from ..precompute import fingerprint, model, ops, predict, rungs, shading, surface, tables
+from ..precompute import fingerprint, model, ops, predict, rungs, shading, spot, surface, tables
 from ..precompute.medium import Medium
 from . import osl, owned, passes, sockets
 from .sockets import NodeOps
@@ -50,7 +50,7 @@ BUILT = "analytic_fog_built"   # on the per-light groups: the fingerprint of the
 
 def code_fingerprint():
     """Fingerprint of everything that decides a group's content (kernels, tables, shading, builders)."""
-    return fingerprint.source_fingerprint(model, surface, tables, shading, rungs, ops, sockets, osl, passes,
+    return fingerprint.source_fingerprint(model, spot, surface, tables, shading, rungs, ops, sockets, osl, passes,
                                           sys.modules[__name__])
 
 

@@ -10,18 +10,20 @@ VERSION_KEY = "analytic_fog_table_version"   # on each image: the fingerprint of
 
 def _bakers(g=0.0):
     """{name: (TableSpec, baker)} of the tables the node groups read for anisotropy g."""
-    from ..precompute import airlight, surface
+    from ..precompute import airlight, spot, surface
     air, surf = tables.anisotropic(tables.AIRLIGHT, g), tables.anisotropic(tables.SURFACE, g)
+    frac = tables.anisotropic(tables.SPOT_FRACTION, g)
     return {
         air.name: (air, lambda: airlight.bake_airlight_table(air)),
         surf.name: (surf, lambda: surface.bake_surface_table(surf)),
+        frac.name: (frac, lambda: spot.bake_scatter_fraction(frac)),
     }
 
 
 def table_version(spec):
     """Fingerprint of the layouts and bakers of every table, and ``spec``: a changed bake rebakes."""
-    from ..precompute import airlight, surface
-    return fingerprint.source_fingerprint(tables, airlight, surface, extra=(spec,))
+    from ..precompute import airlight, spot, surface
+    return fingerprint.source_fingerprint(tables, airlight, surface, spot, extra=(spec,))
 
 
 def table_image(spec, bake):

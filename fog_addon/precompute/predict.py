@@ -102,9 +102,11 @@ _TABLES = {}
 
 def _numpy_ops(g):
     air, surf = tables.anisotropic(tables.AIRLIGHT, g), tables.anisotropic(tables.SURFACE, g)
+    frac = tables.anisotropic(tables.SPOT_FRACTION, g)
     if air.name not in _TABLES:
         _TABLES[air.name] = airlight.bake_airlight_table(air)
         _TABLES[surf.name] = surface.surface_table(g)
+        _TABLES[frac.name] = spot_mod.bake_scatter_fraction(frac)
     return NumpyOps(_TABLES)
 
 
@@ -147,9 +149,10 @@ def light_fog(samples, intensity, beta, g=0.0):
             args = (beta, d_sv[:, k], along[:, k], h[:, k])
             ray = shading.spot_ray(m, light, spot.airlight, cam, d)
             air[:, k] = np.where(sky, m.run(spot.background, *args, *ray), m.run(spot.airlight, *args, d_vp, *ray))
-            cone = spot_mod.falloff_at(m, light.spot.rows, cam + m.scale(d, d_vp), light.position,
-                                       light.spot.cos_half, light.spot.blend)
-            diffuse[:, k], glossy[:, k] = diffuse[:, k] * cone, glossy[:, k] * cone
+            cone = (spot_mod.axis_cosine(m, light.spot.rows, cam + m.scale(d, d_vp), light.position),
+                    light.spot.cos_half, light.spot.blend)
+            diffuse[:, k] = m.run(spot.scatter, beta, d_sp[:, k], cos_n[:, k], 0.0 * level[:, k], *cone)
+            glossy[:, k] = m.run(spot.scatter, beta, d_sp[:, k], cos_r[:, k], level[:, k], *cone)
     t_vp = np.exp(-beta * d_vp)[..., None]
     reflected = (np.asarray(samples.rho_d, float)[:, None, :] * diffuse[..., None]
                  + np.asarray(samples.rho_s, float)[:, None, :] * glossy[..., None])

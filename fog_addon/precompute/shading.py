@@ -105,14 +105,17 @@ def shade_point(m, geo, material, light, medium, models):
                 *spot_ray(m, light, models.airlight, geo.camera, -1.0 * geo.incoming))
     cos_n = m.dot(to_light, geo.normal) * inv_d
     cos_r = m.dot(to_light, mirror(m, geo.incoming, geo.normal)) * inv_d
-    diffuse = m.run(models.scatter, beta, d_sp, cos_n, 0.0)
-    glossy = m.run(models.scatter, beta, d_sp, cos_r, material.level)
+    cone = ()
+    if models.direct.spot:   # the surface point's cosine to the spot's axis, and the cone
+        cone = (spot.axis_cosine(m, light.spot.rows, geo.position, light.position), light.spot.cos_half,
+                light.spot.blend)
+    extra = cone if models.scatter.spot else ()
+    diffuse = m.run(models.scatter, beta, d_sp, cos_n, 0.0, *extra)
+    glossy = m.run(models.scatter, beta, d_sp, cos_r, material.level, *extra)
     reflected = m.scale(material.diffuse, diffuse) + m.scale(material.specular, glossy)
     weight = _grey(m, light.intensity) * reflected_lobe(m, material, cos_n, cos_r) * inv_d * inv_d
-    if models.direct.spot:   # the cone's factor at p on its direct light, and on its scattered fog light
-        cone = spot.falloff_at(m, light.spot.rows, geo.position, light.position, light.spot.cos_half,
-                               light.spot.blend)
-        reflected, weight = m.scale(reflected, cone), weight * cone
+    if cone:   # a spot's direct light follows its cone
+        weight = weight * spot.spot_falloff(m, *cone)
     return LightTerms(airlight=m.scale(light.intensity, air),
                       scattered=light.intensity * reflected,
                       attenuation=m.run(models.direct, beta, d_sp),

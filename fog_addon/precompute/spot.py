@@ -24,10 +24,11 @@ The kernels take scalars only (so OSL runs them as they are): the point light's 
 (``light_space_ray``), M the light's 3x3 world matrix.
 """
 import functools
+import math
 
 import numpy as np
 
-from . import model
+from . import model, tables
 
 RIM_NODES = 10    # Gauss-Legendre points per rim interval (tests/test_spot.py, 200 random spots per case: max
                   # 2.3e-3 of the whole glow with non-uniform scale and g = -0.5; 8 points 6.4e-3, 12 points 1.1e-3)
@@ -67,10 +68,93 @@ def light_space_ray(m, rows, origin, direction, light):
     return (*light_space(m, rows, origin - light), *light_space(m, rows, direction))
 
 
+def axis_cosine(m, rows, point, light):
+    """The cosine c between the light's axis and the direction from the light to a world ``point``, in the
+    light's space (where Blender measures its cone)."""
+    x, y, z = light_space(m, rows, point - light)
+    return -z / m.maximum(m.sqrt(x * x + y * y + z * z), 1e-30)
+
+
 def falloff_at(m, rows, point, light, cos_half, blend):
     """Blender's spot factor f at a world ``point`` (its direct light there is f times the point light's)."""
-    x, y, z = light_space(m, rows, point - light)
-    return spot_falloff(m, -z / m.maximum(m.sqrt(x * x + y * y + z * z), 1e-30), cos_half, blend)
+    return spot_falloff(m, axis_cosine(m, rows, point, light), cos_half, blend)
+
+
+# --- the fog light a spot scatters onto surfaces ---------------------------------------------------------
+#
+# Sun et al. 2005 Eq. 15 sums the fog light reaching a surface point p over the fog points x.  Grouping x by
+# the direction u in which the light shines towards it (x = L + d u), the point light's fog light at p is
+# int_{S^2} G(u) du, with G(u) the light scattered towards p along the light's ray u: the airlight integral
+# of Eq. 5 with the light and the viewer swapped (e^{-beta (d + r)} w / r^2 along the ray, r = |x - p|),
+# a function of T = beta D_sp and the angle alpha between u and the direction from the light to p only.  A
+# spot lights only the rays u in its cone, so its fog light at p is the point light's times
+#
+#     F = int_cone G du / int_{S^2} G du,
+#
+# which depends on T, the angle psi of p from the axis and the cone's half-angle theta_c.  F is baked per g
+# (tables.SPOT_FRACTION); the cone is taken hard at the middle of Blender's blend ramp, and the surface's
+# cosine and lobe inside Eq. 15 are the point light's (the direction of the fog light is not tracked):
+# tests/test_spot.py measures the result against hemisphere quadrature of the spot's airlight.
+
+def _arc_inside(alpha, psi, theta_c):
+    """Azimuthal measure (rad, 0 to 2 pi) of the circle at angle ``alpha`` around a direction that lies
+    ``psi`` from the axis, inside the cone of half-angle ``theta_c`` about the axis (numpy)."""
+    sa, sp = np.sin(alpha), np.sin(psi)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k = (np.cos(theta_c) - np.cos(alpha) * np.cos(psi)) / (sa * sp)
+    inside = np.cos(alpha) * np.cos(psi) >= np.cos(theta_c)   # where sa sp = 0: all or nothing
+    return np.where(sa * sp > 1e-12, 2.0 * np.arccos(np.clip(k, -1.0, 1.0)), np.where(inside, 2.0 * np.pi, 0.0))
+
+
+# alpha quadrature of the bake: Gauss-Legendre panels graded towards alpha = 0 (G narrows as T grows)
+_ALPHA_EDGES = (0.0, 0.005, 0.02, 0.06, 0.15, 0.35, 0.7, 1.3, 2.2, math.pi)
+_ALPHA_POINTS = 24
+
+
+def bake_scatter_fraction(spec=tables.SPOT_FRACTION):
+    """F(T, psi, theta_c) (module section above) for the anisotropy ``spec.g``, float32, layout of
+    tables.SPOT_FRACTION.  G by the table-free quadrature of the airlight (model.airlight_quadrature, D = 1)."""
+    from .ops import NumpyOps   # noqa: PLC0415 (the baker only)
+    x, w = np.polynomial.legendre.leggauss(_ALPHA_POINTS)
+    alpha, weight = [], []
+    for a, b in zip(_ALPHA_EDGES[:-1], _ALPHA_EDGES[1:]):
+        alpha.append(0.5 * (b - a) * x + 0.5 * (b + a))
+        weight.append(0.5 * (b - a) * w)
+    alpha, weight = np.concatenate(alpha), np.concatenate(weight)
+    t = np.maximum(tables.surface_t(np.linspace(0.0, 1.0, spec.width)), 1e-6)   # (W,)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        g_ray = model.airlight_quadrature_background(NumpyOps(), t[:, None], 1.0, np.cos(alpha)[None, :],
+                                                     np.sin(alpha)[None, :], g=spec.g) / t[:, None]   # (W, A)
+    g_ray = np.nan_to_num(g_ray) * (weight * np.sin(alpha))[None, :]
+    total = 2.0 * np.pi * g_ray.sum(axis=1)                                  # (W,)
+    psi = np.linspace(0.0, np.pi, tables.SPOT_PSI)
+    out = np.empty((spec.height, spec.width), np.float64)
+    for k, theta_c in enumerate(np.linspace(0.0, 0.5 * np.pi, tables.SPOT_CONES)):
+        arcs = _arc_inside(alpha[None, :], psi[:, None], theta_c)              # (PSI, A)
+        out[k * tables.SPOT_PSI:(k + 1) * tables.SPOT_PSI] = (arcs @ g_ray.T) / total[None, :]
+    return np.clip(out, 0.0, 1.0).astype(np.float32)
+
+
+def scatter_fraction(m, t, c_axis, cos_half, blend, g=0.0):
+    """F (module section above): the share of a point light's fog light at a surface point that the spot
+    lights, from the table baked for g.  t = beta D_sp; c_axis: the point's ``axis_cosine``."""
+    cos_mid = cos_half + (1.0 - cos_half) * (0.5 * blend)   # the cone taken hard mid-ramp
+    psi = m.atan2(m.sqrt(1.0 - c_axis * c_axis), c_axis)
+    theta = m.atan2(m.sqrt(1.0 - cos_mid * cos_mid), cos_mid)
+    rows, slices, spec = tables.SPOT_PSI, tables.SPOT_CONES, tables.anisotropic(tables.SPOT_FRACTION, g)
+    s = m.clamp01(theta * (1.0 / tables.HALF_PI)) * (slices - 1.0)
+    k0 = m.minimum(m.floor(s), slices - 2.0)
+    y0 = m.mul_add(k0, rows / (spec.height - 1.0), psi * ((rows - 1.0) / (math.pi * (spec.height - 1.0))))
+    x = tables.surface_x(m, t)
+    f0 = m.table(spec, x, y0)
+    f1 = m.table(spec, x, y0 + rows / (spec.height - 1.0))
+    return f0 + (s - k0) * (f1 - f0)
+
+
+def scatter(m, beta, d_sp, cos_theta, level, c_axis, cos_half, blend, *, point, g=0.0):
+    """The fog light a spot scatters onto a surface per unit albedo (1/m^2): the point light's (``point``,
+    a scatter rung's kernel: Sun et al. 2005 Eq. 17-18) times :func:`scatter_fraction`."""
+    return point(m, beta, d_sp, cos_theta, level) * scatter_fraction(m, beta * d_sp, c_axis, cos_half, blend, g)
 
 
 def cone_interval(m, p0, d, kappa, t_end):

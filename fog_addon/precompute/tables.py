@@ -37,6 +37,15 @@ MAX_ANISOTROPY = 0.95   # |g| up to this: the Henyey-Greenstein range the tables
 AIRLIGHT_HG_SIZE = (256, 256)
 
 
+# The share of a point light's fog light on a surface that a spot's cone lights (spot.scatter_fraction):
+# F(T, psi, theta_c), X = surface_x(T) (T = beta D_sp), rows the angle psi in [0, pi] of the surface point
+# from the cone's axis (SPOT_PSI per slice), stacked in SPOT_CONES slices of the cone's half-angle theta_c
+# in [0, pi/2] (uniform).
+SPOT_PSI = 65
+SPOT_CONES = 19
+SPOT_FRACTION = TableSpec("AnalyticFog Spot Fraction", 64, SPOT_PSI * SPOT_CONES)
+
+
 def anisotropic(spec, g):
     """``spec`` baked for Henyey-Greenstein anisotropy g, under its own name (``spec`` itself at g = 0)."""
     g = float(g)
