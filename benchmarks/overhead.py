@@ -2,13 +2,14 @@
 
     .venv/bin/python benchmarks/overhead.py [--budget S] [--lights 1,4,16,64,256] [--methods ...]
                                             [--no-boulevard] [--repeats N] [--error E|exact] [--anisotropy G]
-                                            [--samples N] [--resolution WxH] [--out CSV] [--chart PNG]
+                                            [--samples N] [--resolution WxH] [--spots] [--out CSV] [--chart PNG]
     .venv/bin/python benchmarks/overhead.py --chart-only [--out CSV] [--chart PNG]
 
 Scenes: tests/scenes/many_lights.py (a ground plane, matte, glossy and metallic
 spheres, N point lights on a grid; here with the lights lighting the surfaces
 as in any scene, fog beta = 0.1 1/m) for N in 1, 4, 16, 64, 256, and
-demo_scenes/boulevard.py (45 lights, its default density).  Cycles CPU at
+demo_scenes/boulevard.py (45 lights, its default density).  ``--spots``: every light of the
+many-lights scene a spot (60 degrees, blend 0.3) aimed straight down (issue 9's overhead with spots).  Cycles CPU at
 320x180, 16 spp (Blender's default filter and no denoiser; cast shadows on),
 EEVEE 16 samples at the same size.
 
@@ -93,6 +94,7 @@ import argparse
 import csv
 import inspect
 import json
+import math
 import os
 import pathlib
 import re
@@ -128,7 +130,7 @@ DARK_FRAC = 0.2                # ... or more than this share of lit pixels gone 
 DARK_VS_BRIGHTEST = 0.8        # fogged mean luminance below this share of another method's: "darker"
 DARK_GAIN = 0.5                # alone: fogged mean below this share of the no-fog mean: "suspect"
 GOALS = ((1, 1.5), (16, 2.0), (64, 3.0))   # the issue's: (lights, max fog / no fog)
-FIELDS = ["case", "lights", "method", "engine", "error", "error_passed", "anisotropy", "status", "picture_ok",
+FIELDS = ["case", "lights", "method", "engine", "error", "error_passed", "anisotropy", "spots", "status", "picture_ok",
           "picture_check", "log_errors",
           "ratio_warm_cpu", "ratio_first_cpu", "ratio_warm", "ratio_first", "ratio_first_est_cpu",
           "nofog_first_s", "nofog_first_cpu_s", "nofog_warm_s", "nofog_warm_cpu_s",
@@ -297,6 +299,11 @@ def worker(spec):
         import many_lights
         scene, _ = many_lights.build_scene(spec["lights"], direct_light=True)
         density = DENSITY
+        for ob in scene.objects if spec.get("spots") else ():
+            if ob.type == "LIGHT":
+                ob.data.type = "SPOT"
+                ob.data.spot_size, ob.data.spot_blend = math.radians(60.0), 0.3
+                ob.rotation_euler = (0.0, 0.0, 0.0)   # local -Z: straight down
     scene.render.engine = engine
     measure.set_resolution(scene, *spec["resolution"])
     measure.set_samples(scene, spec["samples"])
@@ -386,14 +393,14 @@ def run_worker(spec, budget):
 def measure_case(case, n, method, args, apply_only=False):
     engine, _ = METHODS[method]
     spec = {"case": case, "lights": n, "method": method, "repeats": args.repeats, "error": args.error,
-            "anisotropy": args.anisotropy,
+            "anisotropy": args.anisotropy, "spots": args.spots,
             "resolution": args.resolution, "samples": args.samples, "apply_only": apply_only}
     load0 = load_avg()
     res, beat, log, timed_out, wall, cpu = run_worker(spec, args.budget)
     errors = log_errors(log)
     row = {"case": case, "lights": res.get("lights", n), "method": method, "engine": engine,
            "error": error_tag(args.error), "error_passed": res.get("error_passed", ""), "anisotropy": args.anisotropy,
-           "budget_s": args.budget, "process_s": wall, "process_cpu_s": cpu, "load_avg_start": load0,
+           "spots": args.spots, "budget_s": args.budget, "process_s": wall, "process_cpu_s": cpu, "load_avg_start": load0,
            "load_avg_end": load_avg(), "resolution": "{}x{}".format(*args.resolution), "samples": args.samples,
            "source": args.source, "log_errors": len(errors)}
     for k in ("threads", "nofog_first_s", "nofog_first_cpu_s", "nofog_warm_s", "nofog_warm_cpu_s", "fog_apply_s",
@@ -635,6 +642,7 @@ def main(argv=None):
                                     "keyword: a number (0.05, 0.01), draft, final or exact; default: the add-on's")
     ap.add_argument("--anisotropy", type=float, default=0.0,
                     help="Henyey-Greenstein g passed to apply_fog(anisotropy=...); default 0 (isotropic)")
+    ap.add_argument("--spots", action="store_true", help="the many-lights scene's lights as spots")
     ap.add_argument("--samples", type=int, default=SAMPLES, help="(the issue's protocol: 16)")
     ap.add_argument("--resolution", default="{}x{}".format(*RESOLUTION), help="(the issue's protocol: 320x180)")
     ap.add_argument("--out", help="CSV (default benchmarks/out/overhead[_error-E][_gG].csv)")
@@ -647,7 +655,7 @@ def main(argv=None):
         return worker(spec)
     args.error = parse_error(args.error)
     suffix = ("" if args.error is None else f"_error-{error_tag(args.error)}") + (
-        f"_g{args.anisotropy:g}" if args.anisotropy else "")
+        f"_g{args.anisotropy:g}" if args.anisotropy else "") + ("_spots" if args.spots else "")
     csv_path = pathlib.Path(args.out) if args.out else OUT / f"overhead{suffix}.csv"
     png_path = pathlib.Path(args.chart) if args.chart else PNG.with_name(f"overhead{suffix}.png")
     if args.chart_only:

@@ -278,6 +278,11 @@ def _spot_inputs(models):
     return [(n, V) for n in SPOT_ROWS] + [(SPOT_COS, F), (SPOT_BLEND, F)] if rungs.is_spot(models) else []
 
 
+def _seen_output(rung):
+    """A spot glow's gate output ("Seen": 1 if the ray meets the cone, ``shading.LightTerms.seen``)."""
+    return [("Seen", F)] if rung.spot else []
+
+
 def _light(g, models):
     """shading.Light from a per-light group's inputs ``g`` (name: value)."""
     cone = shading.Spot(tuple(g[n] for n in SPOT_ROWS), g[SPOT_COS], g[SPOT_BLEND]) if rungs.is_spot(models) else None
@@ -292,7 +297,8 @@ def build_light(models, images):
     ng, gin, gout = _new_group(name, [
         ("Beta", F), ("Light", V), ("Intensity", C), ("Position", V), ("Incoming", V),
         ("View Distance", F), ("Normal", V), ("Diffuse", C), ("Specular", C), ("Glossy Level", F),
-        *_spot_inputs(models)], [("Airlight", C), ("Scattered", C), ("Attenuation", F), ("Weight", F)])
+        *_spot_inputs(models)], [("Airlight", C), ("Scattered", C), ("Attenuation", F), ("Weight", F),
+                                 *_seen_output(models.airlight)])
     m = NodeOps(ng, images)
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
     pos, incoming, d_vp = g["Position"], g["Incoming"], g["View Distance"]
@@ -301,7 +307,8 @@ def build_light(models, images):
     light = _light(g, models)
     terms = shading.shade_point(m, geo, material, light, _medium(m, g["Beta"]), models)
     for key, v in terms._asdict().items():
-        m.feed(gout.inputs[key.title()], v)
+        if v is not None:
+            m.feed(gout.inputs[key.title()], m.wrap(v))
     ng[BUILT] = code_fingerprint()
     return _install(ng, name)
 
@@ -313,11 +320,14 @@ def build_background_light(models, images):
         return ng
     ng, gin, gout = _new_group(name, [
         ("Beta", F), ("Light", V), ("Intensity", C), ("Camera", V), ("Direction", V), *_spot_inputs(models),
-    ], [("Airlight", C)])
+    ], [("Airlight", C), *_seen_output(models.background)])
     m = NodeOps(ng, images)
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
-    air = shading.background_point(m, g["Camera"], g["Direction"], _light(g, models), _medium(m, g["Beta"]), models)
+    light = _light(g, models)
+    air = shading.background_point(m, g["Camera"], g["Direction"], light, _medium(m, g["Beta"]), models)
     m.feed(gout.inputs["Airlight"], air)
+    if models.background.spot:
+        m.feed(gout.inputs["Seen"], m.wrap(shading.background_seen(m, g["Camera"], g["Direction"], light, models)))
     ng[BUILT] = code_fingerprint()
     return _install(ng, name)
 
@@ -516,11 +526,12 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained):
         node = _light_instance(ng, first + k, light, build_light(mod, images).name,
                                [(g[n], n) for n, _ in _SURFACE_SHARED])
         terms.append(shading.LightTerms(*(m.wrap(node.outputs[f], vector=node.outputs[f].type != "VALUE")
-                                          for f in ("Airlight", "Scattered", "Attenuation", "Weight"))))
+                                          for f in ("Airlight", "Scattered", "Attenuation", "Weight")),
+                                        seen=m.wrap(node.outputs["Seen"]) if "Seen" in node.outputs else None))
     sums = shading.sum_lights(m, terms, _medium(m, g["Beta"], g["Albedo"]), m.wrap(g["View Transmittance"]),
                               m.wrap(g["Is Camera"]))
     opacity = m.wrap(g[passes.OPACITY], vector=True)
-    _closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", [m.wrap(e, vector=True) * opacity
+    _closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", [_times(m, e, opacity, with_passes)
                                                                 for e, mod in zip(sums.emissions, models) if _lit(mod)])
     for sock, v in (("Emission", sums.emission), ("Weighted", sums.weighted), ("Weight", sums.weight)):
         m.feed(gout.inputs[sock], m.wrap(v))
@@ -669,17 +680,42 @@ def _lit(models):
     return models.airlight is not rungs.AIRLIGHT_OFF or models.scatter is not rungs.SCATTER_OFF
 
 
+def _times(m, emission, factor, flat):
+    """A light's fog light (a colour or ``shading.Gated``) times the colour ``factor``; ``flat``: a Gated
+    as one colour (the fog passes read every closure's colour, ``_chained_closure_sum``)."""
+    if not isinstance(emission, shading.Gated):
+        return m.wrap(emission, vector=True) * factor
+    glow, rest = m.wrap(emission.glow, vector=True) * factor, m.wrap(emission.rest, vector=True) * factor
+    return glow + rest if flat else emission._replace(glow=glow, rest=rest)
+
+
 def _closure_sum(m, sock, bl_idname, colours):
     """Link into ``sock`` the sum of one ``bl_idname`` closure (Emission, Background) per colour
-    (``_shader_tree``)."""
+    (``_shader_tree``).  A ``shading.Gated`` colour gets two: its rest (if any), and its glow behind a Mix
+    Shader of factor gate, whose nodes Cycles' SVM jumps over where the gate is 0 (a spot's glow where the
+    ray misses its cone: most of the view for a narrow beam)."""
     ng = m.tree
     leaves = []
-    for k, colour in enumerate(colours):
+
+    def closure(k, colour, part=""):
         node = ng.nodes.new(bl_idname)
-        node.name = node.label = f"Light {k} Fog"
+        node.name = node.label = f"Light {k} Fog{part}"
         node.location = (3600, -300 * k)
-        m.feed(node.inputs["Color"], colour)
-        leaves.append(node.outputs[0])
+        m.feed(node.inputs["Color"], m.wrap(colour, vector=True))
+        return node
+
+    for k, colour in enumerate(colours):
+        if not isinstance(colour, shading.Gated):
+            leaves.append(closure(k, colour).outputs[0])
+            continue
+        mix = ng.nodes.new("ShaderNodeMixShader")
+        mix.name = mix.label = f"Light {k} Glow Gate"
+        mix.location = (3800, -300 * k)
+        m.feed(mix.inputs[0], m.wrap(colour.gate))
+        ng.links.new(closure(k, colour.glow, " Glow").outputs[0], mix.inputs[2])   # input 1 empty: no closure
+        leaves.append(mix.outputs[0])
+        if colour.rest is not None:
+            leaves.append(closure(k, colour.rest).outputs[0])
     _shader_tree(ng, sock, leaves)
 
 
@@ -730,14 +766,16 @@ def build_world_bundle(images, first, lights, models, with_passes, chained):
     m = NodeOps(ng, {})
     g = {s.name: s for s in gin.outputs if s.name}
     medium, is_camera = _medium(m, g["Beta"], g["Albedo"]), m.wrap(g["Is Camera"])
-    nodes, airlights = [], []
+    nodes, airlights, colours = [], [], []
     for k, (light, mod) in enumerate(zip(lights, models)):
         node = _light_instance(ng, first + k, light, build_background_light(mod, images).name,
                                [(g[n], n) for n in ("Beta", "Camera", "Direction")])
         nodes.append(node)
         airlights.append(m.wrap(node.outputs["Airlight"], vector=True))
-    _closure_sum(m, gout.inputs["Fog"], "ShaderNodeBackground",   # see build_surface for why closures
-                 [m.wrap(shading.shade_background(m, [a], medium, is_camera)[0], vector=True) for a in airlights])
+        colour = m.wrap(shading.shade_background(m, [airlights[-1]], medium, is_camera)[0], vector=True)
+        gated = "Seen" in node.outputs and not with_passes
+        colours.append(shading.Gated(m.wrap(node.outputs["Seen"]), colour, None) if gated else colour)
+    _closure_sum(m, gout.inputs["Fog"], "ShaderNodeBackground", colours)   # see build_surface for why closures
     m.feed(gout.inputs["Airlight"], shading.total(airlights))
     if with_passes:
         start = m.wrap(g[RUNNING], vector=True) if chained else None

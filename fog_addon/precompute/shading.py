@@ -53,6 +53,7 @@ class LightTerms(NamedTuple):
     scattered: Any       # RGB fog light the surface reflects (Eq. 17-18 times I0), leaving p
     attenuation: Any     # e^{-beta D_sp}: the light's direct light at p is dimmed by this (Eq. 14)
     weight: Any          # the light's unshadowed reflected radiance at p (grey), for EEVEE's shared attenuation
+    seen: Any = None     # a spot's: 1 if the camera ray meets its cone (else its glow is 0), None for a point light
 
 
 class SurfaceFog(NamedTuple):
@@ -101,14 +102,17 @@ def shade_point(m, geo, material, light, medium, models):
     d_sp = m.length(to_light)
     inv_d = 1.0 / m.maximum(d_sp, model.MIN_DISTANCE)
     d_sv, along, h = model.ray_light_geometry(m, geo.camera, -1.0 * geo.incoming, light.position)
-    air = m.run(models.airlight, beta, d_sv, along, h, geo.view_distance,
-                *spot_ray(m, light, models.airlight, geo.camera, -1.0 * geo.incoming))
+    air_ray = spot_ray(m, light, models.airlight, geo.camera, -1.0 * geo.incoming)
+    air = m.run(models.airlight, beta, d_sv, along, h, geo.view_distance, *air_ray)
     cos_n = m.dot(to_light, geo.normal) * inv_d
     cos_r = m.dot(to_light, mirror(m, geo.incoming, geo.normal)) * inv_d
     cone = ()
     if models.direct.spot:   # the surface point's cosine to the spot's axis, and the cone
         cone = (spot.axis_cosine(m, light.spot.rows, geo.position, light.position), light.spot.cos_half,
                 light.spot.blend)
+    seen = None
+    if models.airlight.spot:
+        seen = spot.cone_hit(m, *air_ray[:6], light.spot.cos_half, geo.view_distance)
     extra = cone if models.scatter.spot else ()
     diffuse = m.run(models.scatter, beta, d_sp, cos_n, 0.0, *extra)
     glossy = m.run(models.scatter, beta, d_sp, cos_r, material.level, *extra)
@@ -119,12 +123,22 @@ def shade_point(m, geo, material, light, medium, models):
     return LightTerms(airlight=m.scale(light.intensity, air),
                       scattered=light.intensity * reflected,
                       attenuation=m.run(models.direct, beta, d_sp),
-                      weight=weight)
+                      weight=weight, seen=seen)
+
+
+class Gated(NamedTuple):
+    """A light's fog light in two parts: ``glow``, worth computing only where ``gate`` is 1 (a spot's
+    glow: the shader builders put it behind a Mix Shader of that factor, which Cycles' SVM skips at 0),
+    and ``rest``."""
+    gate: Any
+    glow: Any
+    rest: Any
 
 
 class LightSums(NamedTuple):
     """Some lights' share of Eq. 19 at a surface point (``sum_lights``); ``merge_sums`` adds two."""
     emissions: list           # each light's albedo * (airlight + e^{-beta D_vp} scattered), camera rays only
+                              # (a Gated for a light whose glow has a gate, LightTerms.seen)
     emission: Any             # their sum (RGB)
     weighted: Any             # sum of weight * attenuation (LightTerms), for EEVEE's shared attenuation
     weight: Any               # sum of weight
@@ -149,8 +163,11 @@ def sum_lights(m, terms, medium, t_vp, is_camera):
     """LightSums of the lights' ``terms`` (LightTerms, at least one): each light's fog light on camera rays
     (Eq. 19's L_a: albedo * (airlight + e^{-beta D_vp} * reflected fog light)) and EEVEE's weights."""
     albedo = medium.albedo
-    emissions = [m.scale(albedo * (t.airlight + m.scale(t.scattered, t_vp)), is_camera) for t in terms]
-    return LightSums(emissions, total(emissions), total([t.weight * t.attenuation for t in terms]),
+    emissions = [m.scale(albedo * (t.airlight + m.scale(t.scattered, t_vp)), is_camera) if t.seen is None else
+                 Gated(t.seen, m.scale(albedo * t.airlight, is_camera), m.scale(albedo * m.scale(t.scattered, t_vp),
+                                                                              is_camera)) for t in terms]
+    colours = [e.glow + e.rest if isinstance(e, Gated) else e for e in emissions]
+    return LightSums(emissions, total(colours), total([t.weight * t.attenuation for t in terms]),
                      total([t.weight for t in terms]))
 
 
@@ -193,6 +210,14 @@ def spot_ray(m, light, rung, origin, direction):
         return ()
     s = light.spot
     return (*spot.light_space_ray(m, s.rows, origin, direction, light.position), s.cos_half, s.blend)
+
+
+def background_seen(m, camera, direction, light, models):
+    """1 if a ray to infinity meets a spot's cone (else its glow is 0: ``Gated``), None for a point light."""
+    if not models.background.spot:
+        return None
+    return spot.cone_hit(m, *spot_ray(m, light, models.background, camera, direction)[:6], light.spot.cos_half,
+                         model.FAR)
 
 
 def background_point(m, camera, direction, light, medium, models):

@@ -204,6 +204,13 @@ def _cone(m, px, py, pz, dx, dy, dz, kappa, t_end):
     return cone_interval(m, (px, py, pz), (dx, dy, dz), kappa, t_end)
 
 
+def cone_hit(m, px, py, pz, dx, dy, dz, cos_half, t_end):
+    """1 if the ray (in the light's space, ``light_space_ray``) meets the spot's cone before ``t_end``, else 0:
+    outside it the spot's glow is 0 (the shader builders skip computing it there, ``shading.Gated``)."""
+    lo, hi = m.group("Spot Cone Interval", _cone, px, py, pz, dx, dy, dz, cos_half, t_end)
+    return m.less(lo, hi)
+
+
 def _kernel_name(fn):
     """A name for the kernel ``fn`` (a function or a functools.partial of one), its bound values included."""
     base = getattr(fn, "func", fn)
