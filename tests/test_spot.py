@@ -157,3 +157,13 @@ def test_beams_end_on_and_side_on_no_nan(size_deg, blend):
     want = reference(beta, origin, direction, light, inv, cos_half, blend, 4.999)
     got = _model(beta, origin, direction, light, inv, cos_half, blend, 4.999)
     assert abs(got / want - 1) < 5e-3, (got, want)
+
+
+def test_no_fog_gives_no_glow():
+    """beta = 0 (a fog of density 0, which the command line allows): no glow, no error (the ray's pieces
+    stop at optical depths divided by beta)."""
+    light, inv = np.zeros(3), np.eye(3)
+    for origin, direction, d_vp in ((np.array([0.0, 0.0, -5.0]), np.array([0.0, 0.0, 1.0]), 4.0),
+                                    (np.array([1.0, 0.0, -5.0]), np.array([0.0, 0.0, 1.0]), math.inf)):
+        got = _model(0.0, origin, direction, light, inv, math.cos(0.5), 0.3, d_vp)
+        assert got == 0.0

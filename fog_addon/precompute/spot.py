@@ -224,7 +224,7 @@ def _inner(m, beta, along, h, t0, t1, *, inner):
     FAR): ``inner`` (a point-light airlight kernel) with the viewer moved to t0, times e^{-beta t0}."""
     a0 = along - t0
     d0 = m.maximum(m.sqrt(a0 * a0 + h * h), model.MIN_DISTANCE)
-    seg = m.maximum(m.minimum(t1 - t0, INNER_DEPTH / beta), 0.0)
+    seg = m.maximum(m.minimum(t1 - t0, INNER_DEPTH / m.maximum(beta, 1e-30)), 0.0)   # beta = 0: no fog
     return m.select(m.less(t0, t1), m.exp(-beta * t0) * inner(m, beta, d0, a0, h, seg), 0.0)
 
 
@@ -242,7 +242,7 @@ def _rim(m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, t0, t1, cos_half, inv_
         return model.closest_point_q(m, m.sqrt(z * z + h * h), z, h)
 
     qa = q_at(t0)
-    qb = m.minimum(q_at(t1), qa + RIM_DEPTH / beta)
+    qb = m.minimum(q_at(t1), qa + RIM_DEPTH / m.maximum(beta, 1e-30))
     xa, xb = m.atan2(qa, h), m.atan2(qb, h)
     half, centre = 0.5 * (xb - xa), 0.5 * (xb + xa)
     h2, beta_q0 = h * h, beta * q0
