@@ -1,21 +1,19 @@
 """Spot lights in fog (issue 9): the cone clipping and the rim against adaptive quadrature of Eq. 5.
 
-The reference is independent of ``spot.py``: scipy's adaptive quadrature of Sun et al. 2005 Eq. 5 with
-the integrand times Blender's spot factor (blender-facts section 1: smoothstep in the light-space
-cosine, a hard cut at blend 0) and the Henyey-Greenstein weight, split where the cosine crosses the
-cone's two edges (found by bisection on a fine grid, not by the code under test).
+The reference is independent of ``spot.py``: ``tools/spot_reference.py``, scipy's adaptive quadrature of
+Sun et al. 2005 Eq. 5 with the integrand times Blender's spot factor (blender-facts section 1: smoothstep
+in the light-space cosine, a hard cut at blend 0) and the Henyey-Greenstein weight, split where the
+cosine crosses the cone's two edges (found on a fine grid and by bisection, not by the code under test).
 """
+import functools
 import math
-import warnings
 
 import numpy as np
 import pytest
-from scipy.integrate import quad
-
-import functools
 
 from fog_addon.precompute import airlight, model, spot, tables
 from fog_addon.precompute.ops import NumpyOps
+from tools import spot_reference as ref
 
 M = NumpyOps()
 
@@ -26,52 +24,9 @@ def _ops(g):
     return NumpyOps({spec.name: airlight.bake_airlight_table(spec)})
 
 
-def _falloff(c, cos_half, blend):
-    if blend <= 0.0:
-        return 1.0 if c >= cos_half else 0.0
-    x = min(max((c - cos_half) / ((1.0 - cos_half) * blend), 0.0), 1.0)
-    return x * x * (3.0 - 2.0 * x)
-
-
-def reference(beta, origin, direction, light, inv, cos_half, blend, d_vp, g=0.0):
-    """int_0^{d_vp} f(c) w beta e^{-beta (d + x)} / (4 pi d^2) dx by scipy quad (1/m^2)."""
-    def cosine(x):
-        p = inv @ (origin + x * direction - light)
-        return -p[2] / np.linalg.norm(p)
-
-    def f(x):
-        p = origin + x * direction - light
-        d = float(np.linalg.norm(p))
-        w = (1.0 - g * g) / (1.0 + g * g + 2.0 * g * float(p @ direction) / d) ** 1.5 if g else 1.0
-        return _falloff(cosine(x), cos_half, blend) * w * beta * math.exp(-beta * (d + x)) / (4 * math.pi * d * d)
-
-    end = d_vp if math.isfinite(d_vp) else 60.0 / beta + float(np.linalg.norm(light - origin))
-    # breakpoints: the edges of the cone and of its inner cone, the point closest to the light
-    xs = np.linspace(0.0, end, 4001)
-    cs = np.array([cosine(x) for x in xs])
-    cos_in = cos_half + (1.0 - cos_half) * blend
-    pts = {float((light - origin) @ direction)}
-    for k in (cos_half, cos_in):
-        for i in np.nonzero(np.diff(np.sign(cs - k)))[0]:
-            a, b = xs[i], xs[i + 1]
-            for _ in range(60):
-                mid = 0.5 * (a + b)
-                a, b = (mid, b) if (cosine(mid) - k) * (cs[i] - k) > 0 else (a, mid)
-            pts.add(0.5 * (a + b))
-    pts = sorted(p for p in pts if 0.0 < p < end)
-    edges = [0.0, *pts, end]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return sum(quad(f, a, b, epsabs=0, epsrel=1e-10, limit=400)[0] for a, b in zip(edges[:-1], edges[1:]))
-
-
-def _rotation(rng):
-    q = rng.normal(size=4)
-    q /= np.linalg.norm(q)
-    w, x, y, z = q
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+def reference(*args, **kw):
+    """The airlight by scipy quadrature (``tools/spot_reference.py``), 1/m^2."""
+    return ref.reference(*args, **kw)[0]
 
 
 def _case(rng, scale=False):
@@ -87,7 +42,7 @@ def _case(rng, scale=False):
     d_vp = t_vp / beta if rng.uniform() < 0.8 else math.inf
     size = math.radians(rng.uniform(1.0, 180.0))
     blend = 0.0 if rng.uniform() < 0.2 else rng.uniform(0.0, 1.0)
-    matrix = _rotation(rng) @ (np.diag(rng.uniform(0.5, 2.0, 3)) if scale else np.eye(3))
+    matrix = ref.random_rotation(rng) @ (np.diag(rng.uniform(0.5, 2.0, 3)) if scale else np.eye(3))
     return beta, origin, direction, light, np.linalg.inv(matrix), math.cos(size / 2), blend, d_vp
 
 

@@ -62,7 +62,8 @@ BETA = (1e-3, 1.0)
 
 # --- sampling --------------------------------------------------------------------------------------------
 
-def _rotation(rng):
+def random_rotation(rng):
+    """A uniformly random rotation matrix (from a random unit quaternion)."""
     q = rng.normal(size=4)
     q /= np.linalg.norm(q)
     w, x, y, z = q
@@ -130,7 +131,7 @@ def sample_parameters(n, seed=SEED, n_g=N_G):
             target = origin + rng.uniform(0.0, reach) * direction - light
             rot = _aimed_rotation(rng, target / np.linalg.norm(target))
         else:
-            rot = _rotation(rng)
+            rot = random_rotation(rng)
         scaled = rng.uniform() < 0.5
         matrix = rot @ (np.diag(rng.uniform(0.5, 2.0, 3)) if scaled else np.eye(3))
         for k, v in (("beta", beta), ("origin", origin), ("direction", direction), ("light", light),
