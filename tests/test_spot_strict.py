@@ -2,8 +2,8 @@
 
 The cache tests/data/spot_reference.npz (tools/spot_reference.py, independent of fog_addon: scipy quad of
 Sun et al. 2005 Eq. 5 times Blender's spot factor and the Henyey-Greenstein weight, split at the cone's
-edges) holds random (g, cone size, blend, orientation with or without non-uniform scale, T_sv, T_vp,
-gamma) and the reference airlight.  The model (``spot.airlight_spot`` at the Exact setting: the clipped
+edges) holds the reference airlight of random (g, cone size, blend, orientation with or without
+non-uniform scale, T_sv, T_vp, gamma), drawn again from its seed (``load_cache``).  The model (``spot.airlight_spot`` at the Exact setting: the clipped
 exact segment plus the rim quadrature) must match every sample within 0.5 %.  Regenerate the cache with
 
     .venv/bin/python tools/spot_reference.py --n 40000 --processes 2 --out tests/data/spot_reference.npz
@@ -16,6 +16,7 @@ import pytest
 
 from fog_addon.precompute import airlight, model, spot, tables
 from fog_addon.precompute.ops import NumpyOps
+from tools import spot_reference
 
 CACHE = pathlib.Path(__file__).resolve().parent / "data" / "spot_reference.npz"
 MAX_REL = 5e-3
@@ -25,9 +26,9 @@ N_EXPECTED = 40000
 
 @pytest.fixture(scope="module")
 def cache():
-    if not CACHE.exists():
-        pytest.skip(f"{CACHE} missing: run tools/spot_reference.py --n 40000 --processes 2 --out {CACHE}")
-    return dict(np.load(CACHE))
+    """The cache with its inputs drawn again from its seed (a missing or stale cache fails: rebuild it)."""
+    assert CACHE.exists(), f"{CACHE} missing: run tools/spot_reference.py --n 40000 --processes 2 --out {CACHE}"
+    return spot_reference.load_cache(CACHE)
 
 
 def _model_values(d):
