@@ -3,8 +3,9 @@
 The cache tests/data/spot_reference.npz (tools/spot_reference.py, independent of fog_addon: scipy quad of
 Sun et al. 2005 Eq. 5 times Blender's spot factor and the Henyey-Greenstein weight, split at the cone's
 edges) holds the reference airlight of random (g, cone size, blend, orientation with or without
-non-uniform scale, T_sv, T_vp, gamma), drawn again from its seed (``load_cache``).  The model (``spot.airlight_spot`` at the Exact setting: the clipped
-exact segment plus the rim quadrature) must match every sample within 0.5 %.  Regenerate the cache with
+non-uniform scale, T_sv, T_vp, gamma), drawn again from its seed (``load_cache``).  The model
+(``spot.airlight_spot`` at the Exact setting: the clipped exact segment plus the rim quadrature) must match
+every sample within 0.5 %.  Regenerate the cache with
 
     .venv/bin/python tools/spot_reference.py --n 40000 --processes 2 --out tests/data/spot_reference.npz
 """

@@ -18,7 +18,7 @@ One shared copy of each group per .blend:
   their models change leaves every material untouched.
 
 Each group records the fingerprint of the code that built it
-(``BUILT``, from the source of the kernels, the shading and the builders): a
+(``owned.BUILT``, from the source of the kernels, the shading and the builders): a
 saved file made by other code rebuilds it.
 """
 import functools
@@ -45,7 +45,6 @@ _BUNDLE_NAME = re.compile(rf"^({re.escape(SURFACE_LIGHTS)}|{re.escape(WORLD_LIGH
 
 FOG_PROP = "analytic_fog"   # custom-property key marking data the fog made or changed
 BUILDING = " (building)"     # name suffix of a group being built beside the one in use
-BUILT = "analytic_fog_built"   # on the per-light groups: the fingerprint of the code they were built by
 
 
 def code_fingerprint():
@@ -110,7 +109,7 @@ def _new_group(name, inputs, outputs):
         for n, t, io in want:
             ng.interface.new_socket(n, in_out=io, socket_type=t)
     ng[FOG_PROP] = True
-    ng.pop(BUILT, None)
+    ng.pop(owned.BUILT, None)
     gin = ng.nodes.new("NodeGroupInput")
     gout = ng.nodes.new("NodeGroupOutput")
     gin.location = (-300, 0)
@@ -259,7 +258,7 @@ def set_params(beta, albedo, g=None):
 def _up_to_date(name):
     """The group ``name`` if this code built it and its tables are all there (rebuilding costs seconds)."""
     ng = bpy.data.node_groups.get(name)
-    if ng is None or ng.get(BUILT) != code_fingerprint():
+    if ng is None or ng.get(owned.BUILT) != code_fingerprint():
         return None
     return ng if all(n.image is not None for n in ng.nodes if n.bl_idname == "ShaderNodeTexImage") else None
 
@@ -309,7 +308,7 @@ def build_light(models, images):
     for key, v in terms._asdict().items():
         if v is not None:
             m.feed(gout.inputs[key.title()], m.wrap(v))
-    ng[BUILT] = code_fingerprint()
+    ng[owned.BUILT] = code_fingerprint()
     return _install(ng, name)
 
 
@@ -328,7 +327,7 @@ def build_background_light(models, images):
     m.feed(gout.inputs["Airlight"], air)
     if models.background.spot:
         m.feed(gout.inputs["Seen"], m.wrap(shading.background_seen(m, g["Camera"], g["Direction"], light, models)))
-    ng[BUILT] = code_fingerprint()
+    ng[owned.BUILT] = code_fingerprint()
     return _install(ng, name)
 
 
@@ -349,21 +348,28 @@ def _drive_location(node, obj):
         t.transform_space = "WORLD_SPACE"
 
 
+def _drive_expression(sock, expression, variables):
+    """Drive ``sock``'s value by the simple expression ``expression`` of ``variables``: (name, ID, data path)
+    of single properties (the ID's type taken from it).  Simple expressions evaluate without Python, so
+    with auto-run off and without the add-on."""
+    sock.driver_remove("default_value")
+    d = sock.driver_add("default_value").driver
+    d.type = "SCRIPTED"
+    for name, owner, path in variables:
+        var = d.variables.new()
+        var.name = name
+        var.type = "SINGLE_PROP"
+        var.targets[0].id_type = "LIGHT" if isinstance(owner, bpy.types.Light) else "OBJECT"
+        var.targets[0].id = owner
+        var.targets[0].data_path = path
+    d.expression = expression
+
+
 def _drive_intensity(node, light_data):
     """Inputs 0-2 of ``node`` = radiant intensity P * colour / (4 pi) in W/sr (simple-expression drivers)."""
     for i in range(3):
-        sock = node.inputs[i]
-        sock.driver_remove("default_value")
-        d = sock.driver_add("default_value").driver
-        d.type = "SCRIPTED"
-        for name, path in (("p", "energy"), ("c", f"color[{i}]")):
-            var = d.variables.new()
-            var.name = name
-            var.type = "SINGLE_PROP"
-            var.targets[0].id_type = "LIGHT"
-            var.targets[0].id = light_data
-            var.targets[0].data_path = path
-        d.expression = f"p * c * {1.0 / (4.0 * math.pi)!r}"
+        _drive_expression(node.inputs[i], f"p * c * {1.0 / (4.0 * math.pi)!r}",
+                          (("p", light_data, "energy"), ("c", light_data, f"color[{i}]")))
 
 
 def _driven_vector(ng, name, x, y):
@@ -394,49 +400,26 @@ def _light_instance(ng, k, light, group_name, inputs):
     return node
 
 
-def _matrix_var(driver, name, obj, column, row):
-    """A driver variable ``name`` = obj.matrix_world[row][column] (the RNA path is column-major)."""
-    var = driver.variables.new()
-    var.name = name
-    var.type = "SINGLE_PROP"
-    var.targets[0].id_type = "OBJECT"
-    var.targets[0].id = obj
-    var.targets[0].data_path = f"matrix_world[{column}][{row}]"
-
-
 def _drive_spot(ng, k, light, node):
     """Feed a spot group ``node``'s cone inputs from ``light``: the rows of its world matrix's cofactor
     matrix (det(M) M^-1: row i is the cross product of the other two columns, j x k in cyclic order), and
-    cos(spot_size / 2) and spot_blend, all by simple-expression drivers (they evaluate without the add-on)."""
+    cos(spot_size / 2) and spot_blend, all by simple-expression drivers (``_drive_expression``).  The RNA
+    path matrix_world[c][r] is the element of row r, column c."""
     for i, row_name in enumerate(SPOT_ROWS):
         vec = _driven_vector(ng, f"Light {k} {row_name}", -900, -300 * k - 60 * i)
         cj, ck = (i + 1) % 3, (i + 2) % 3
         for axis in range(3):
             a1, a2 = (axis + 1) % 3, (axis + 2) % 3
-            sock = vec.inputs[axis]
-            sock.driver_remove("default_value")
-            d = sock.driver_add("default_value").driver
-            d.type = "SCRIPTED"
-            for name, col, row in (("a", cj, a1), ("b", ck, a2), ("c", cj, a2), ("e", ck, a1)):
-                _matrix_var(d, name, light, col, row)
-            d.expression = "a * b - c * e"   # (col_j x col_k)[axis]
+            _drive_expression(vec.inputs[axis], "a * b - c * e",   # (col_j x col_k)[axis]
+                              [(name, light, f"matrix_world[{col}][{row}]")
+                               for name, col, row in (("a", cj, a1), ("b", ck, a2), ("c", cj, a2), ("e", ck, a1))])
         ng.links.new(vec.outputs[0], node.inputs[row_name])
     for sock_name, path, expression in ((SPOT_COS, "spot_size", "cos(v * 0.5)"), (SPOT_BLEND, "spot_blend", "v")):
         value = ng.nodes.new("ShaderNodeValue")
         value.name = value.label = f"Light {k} {sock_name}"
         value.location = (-900, -300 * k - 200)
-        out = value.outputs[0]
-        out.driver_remove("default_value")
-        d = out.driver_add("default_value").driver
-        d.type = "SCRIPTED"
-        var = d.variables.new()
-        var.name = "v"
-        var.type = "SINGLE_PROP"
-        var.targets[0].id_type = "LIGHT"
-        var.targets[0].id = light.data
-        var.targets[0].data_path = path
-        d.expression = expression
-        ng.links.new(out, node.inputs[sock_name])
+        _drive_expression(value.outputs[0], expression, (("v", light.data, path),))
+        ng.links.new(value.outputs[0], node.inputs[sock_name])
 
 
 def _bundles(lights, models):

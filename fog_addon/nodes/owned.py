@@ -13,6 +13,7 @@ import re
 
 PREFIX = "AnalyticFog"   # of the names the fog gives: its nodes and its node groups, images and texts
 TAG = "analytic_fog"     # custom property on each node the fog adds: the node's role
+BUILT = "analytic_fog_built"   # on the node groups the fog builds: the fingerprint of the code that built them
 SUFFIX = re.compile(r"^(?P<base>.+)\.(?P<num>\d{3,})$")   # Blender's ".001" of a clashing name
 
 

@@ -14,7 +14,6 @@ from . import owned
 
 COLUMN = 170.0
 KERNEL_GROUP = f"{owned.PREFIX} Kernel"   # name prefix of the shared sub-program groups (``NodeOps.group``)
-KERNEL_BUILT = "analytic_fog_built"        # on them: the fingerprint of the code that built them
 ROW = 140.0
 
 
@@ -296,7 +295,7 @@ class NodeOps:
     def _kernel_group(self, name, fn, count):
         built = fingerprint.source_fingerprint(*_modules(fn), sys.modules[__name__], extra=(name,))
         ng = bpy.data.node_groups.get(name)
-        if ng is not None and ng.get(KERNEL_BUILT) == built:
+        if ng is not None and ng.get(owned.BUILT) == built:
             return ng
         if ng is None:
             ng = bpy.data.node_groups.new(name, "ShaderNodeTree")
@@ -314,7 +313,7 @@ class NodeOps:
             sub.feed(gout.inputs[k], sub.wrap(v))
         gout.location = (COLUMN * (1 + max(sub.wrap(v).col for v in result)), 0)
         ng[owned.TAG] = True
-        ng[KERNEL_BUILT] = built
+        ng[owned.BUILT] = built
         return ng
 
     def run(self, rung, *args):

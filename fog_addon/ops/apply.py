@@ -39,16 +39,11 @@ def fog_lights(scene):
         else:
             lights.append(obj)
             s = obj.matrix_world.to_scale()
-            if data.type == "SPOT" and obj.matrix_world.to_3x3().determinant() < 0.0:
+            if view.is_spot(obj) and obj.matrix_world.to_3x3().determinant() < 0.0:
                 notes.append((obj.name, "is mirrored (negative scale): its cone in the fog points the other way"))
             elif data.type == "POINT" and max(s) - min(s) > 1e-6 * max(abs(max(s)), 1e-30):
                 notes.append((obj.name, "is scaled non-uniformly: a point light's fog ignores scale"))
     return lights, notes
-
-
-def is_spot(light):
-    """True for a spot light object (its fog follows the cone: ``rungs.choose(..., spot=True)``)."""
-    return light.data.type == "SPOT"
 
 
 def check_camera(camera):
@@ -106,7 +101,7 @@ def quality_value(quality):
 def _budget(scene, preference, lights):
     """What the renderer can hold (predict.Budget) with ``lights``, or None: EEVEE's uniform block, Cycles
     OSL's shader group layers."""
-    spots = [is_spot(o) for o in lights]
+    spots = [view.is_spot(o) for o in lights]
     if scene.render.engine == groups.EEVEE_ENGINE:
         return groups.eevee_budget(groups.get_anisotropy(), spots)
     if preference == "osl":
@@ -142,7 +137,8 @@ def choose_models(scene, lights, preference, quality):
             choice["limited"] = budget.name + ("" if pred.fits else ": too many lights even with every light off")
     else:
         choice["lights"] = {o.name: [0, 0.0] for o in lights}
-    return [rungs.choose(preference, k, groups.get_anisotropy(), is_spot(o)) for o, k in zip(lights, steps)], choice
+    g = groups.get_anisotropy()
+    return [rungs.choose(preference, k, g, view.is_spot(o)) for o, k in zip(lights, steps)], choice
 
 
 def stored_choice():
@@ -203,7 +199,8 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
     if kept is None:
         models, choice = choose_models(scene, lights, preference, quality)
     else:
-        models = [rungs.choose(preference, step, groups.get_anisotropy(), is_spot(o)) for o, step in zip(lights, kept)]
+        g = groups.get_anisotropy()
+        models = [rungs.choose(preference, step, g, view.is_spot(o)) for o, step in zip(lights, kept)]
         choice = dict(old, lights={o.name: old["lights"].get(o.name, [0, 0.0]) for o in lights})
     choice["quality"] = quality_value(quality)
     # lights stepped out of the groups to fit a budget (rungs.LEFT_OUT) keep their own dimming (wrap_light)

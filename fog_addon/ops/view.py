@@ -181,7 +181,7 @@ def _sample_frame(scene, depsgraph, lights, grid):
         for brdf in ([known] if known is not None else [LAMBERT, MIRROR]):
             rows.append((d, dist, n, brdf))
     light_pos = np.array([np.array(o.matrix_world.translation) for o in lights]).reshape(-1, 3)
-    inverse = np.array([np.linalg.inv(np.array(o.matrix_world.to_3x3())) if o.data.type == "SPOT" else np.eye(3)
+    inverse = np.array([np.linalg.inv(np.array(o.matrix_world.to_3x3())) if is_spot(o) else np.eye(3)
                         for o in lights]).reshape(-1, 3, 3)
     return origin, rows, light_pos, inverse
 
@@ -226,14 +226,19 @@ def view_samples(scene, lights, frames=None, grid=None):
         if (scene.frame_current, scene.frame_subframe) != current:
             scene.frame_set(current[0], subframe=current[1])
     n_lights = len(lights)
-    is_spot = np.array([o.data.type == "SPOT" for o in lights], bool)
-    spots = predict.SpotSamples(is_spot, np.array(invs).reshape(-1, n_lights, 3, 3),
-                                np.array([math.cos(o.data.spot_size / 2) if s else 1.0 for o, s in zip(lights, is_spot)]),
-                                np.array([o.data.spot_blend if s else 0.0 for o, s in zip(lights, is_spot)]))
+    spot = np.array([is_spot(o) for o in lights], bool)
+    spots = predict.SpotSamples(spot, np.array(invs).reshape(-1, n_lights, 3, 3),
+                                np.array([math.cos(o.data.spot_size / 2) if s else 1.0 for o, s in zip(lights, spot)]),
+                                np.array([o.data.spot_blend if s else 0.0 for o, s in zip(lights, spot)]))
     return predict.ViewSamples(np.array(cams).reshape(-1, 3), np.array(dirs).reshape(-1, 3), np.array(dists, float),
                                np.array(normals).reshape(-1, 3), np.array(rds).reshape(-1, 3),
                                np.array(rss).reshape(-1, 3), np.array(levels, float),
-                               np.array(lps).reshape(-1, n_lights, 3), np.array(fr), spots if is_spot.any() else None)
+                               np.array(lps).reshape(-1, n_lights, 3), np.array(fr), spots if spot.any() else None)
+
+
+def is_spot(light):
+    """True for a spot light object (its fog follows the cone: ``rungs.choose(..., spot=True)``)."""
+    return light.data.type == "SPOT"
 
 
 def light_intensities(lights):

@@ -149,8 +149,7 @@ def light_fog(samples, intensity, beta, g=0.0):
             args = (beta, d_sv[:, k], along[:, k], h[:, k])
             ray = shading.spot_ray(m, light, spot.airlight, cam, d)
             air[:, k] = np.where(sky, m.run(spot.background, *args, *ray), m.run(spot.airlight, *args, d_vp, *ray))
-            cone = (spot_mod.axis_cosine(m, light.spot.rows, cam + m.scale(d, d_vp), light.position),
-                    light.spot.cos_half, light.spot.blend)
+            cone = shading.surface_cone(m, light, cam + m.scale(d, d_vp))
             diffuse[:, k] = m.run(spot.scatter, beta, d_sp[:, k], cos_n[:, k], 0.0 * level[:, k], *cone)
             glossy[:, k] = m.run(spot.scatter, beta, d_sp[:, k], cos_r[:, k], level[:, k], *cone)
     t_vp = np.exp(-beta * d_vp)[..., None]

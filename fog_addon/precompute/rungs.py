@@ -186,7 +186,7 @@ def spot_rungs(air, background, g):
     kernels = (functools.partial(spot.airlight, inner=air.kernel, g=float(g)),
                functools.partial(spot.airlight_background, inner=air.kernel, g=float(g)))
     domain = air.domain + "; spot size 1-180 degrees, blend 0-1, any orientation and scale"
-    evidence = "tests/test_spot.py: Eq. 5 with Blender's spot factor, scipy quadrature"
+    evidence = "tests/test_spot.py, tests/test_spot_strict.py: Eq. 5 with Blender's spot factor, scipy quadrature"
     return tuple(replace(r, name="spot " + r.name, kernel=k, domain=domain, spot=True, evidence=evidence,
                          max_error=air.max_error + SPOT_RIM_ERROR)
                  for r, k in ((air, kernels[0]), (background, kernels[1])))
@@ -206,7 +206,7 @@ def spot_scatter_rung(scatter, g):
                    kernel=functools.partial(spot.scatter, point=scatter.kernel, g=float(g)),
                    tables=scatter.tables + (tables.anisotropic(tables.SPOT_FRACTION, g),),
                    domain=scatter.domain + "; relative to the point light's fog light", max_error=SPOT_SCATTER_ERROR,
-                   evidence="tests/test_spot.py: Eq. 15 by hemisphere quadrature of the spot's airlight")
+                   evidence="tests/test_spot_scatter.py: Eq. 15 by hemisphere quadrature of the spot's airlight")
 
 
 def choose(preference="nodes", step=0, g=0.0, spot=False):

@@ -106,10 +106,7 @@ def shade_point(m, geo, material, light, medium, models):
     air = m.run(models.airlight, beta, d_sv, along, h, geo.view_distance, *air_ray)
     cos_n = m.dot(to_light, geo.normal) * inv_d
     cos_r = m.dot(to_light, mirror(m, geo.incoming, geo.normal)) * inv_d
-    cone = ()
-    if models.direct.spot:   # the surface point's cosine to the spot's axis, and the cone
-        cone = (spot.axis_cosine(m, light.spot.rows, geo.position, light.position), light.spot.cos_half,
-                light.spot.blend)
+    cone = surface_cone(m, light, geo.position) if models.direct.spot else ()
     seen = None
     if models.airlight.spot:
         seen = spot.cone_hit(m, *air_ray[:6], light.spot.cos_half, geo.view_distance)
@@ -201,6 +198,12 @@ def shade_surface(m, terms, medium, view_distance, is_camera):
     """
     t_vp, transmit = view_transmittance(m, medium.beta, view_distance, is_camera)
     return surface_fog(m, sum_lights(m, terms, medium, t_vp, is_camera) if terms else None, transmit)
+
+
+def surface_cone(m, light, point):
+    """A spot's cone as its scatter rung and ``spot.spot_falloff`` take it at a surface ``point``: (the
+    point's cosine to the axis, cos_half, blend)."""
+    return (spot.axis_cosine(m, light.spot.rows, point, light.position), light.spot.cos_half, light.spot.blend)
 
 
 def spot_ray(m, light, rung, origin, direction):

@@ -94,7 +94,7 @@ def falloff_at(m, rows, point, light, cos_half, blend):
 # which depends on T, the angle psi of p from the axis and the cone's half-angle theta_c.  F is baked per g
 # (tables.SPOT_FRACTION); the cone is taken hard at the middle of Blender's blend ramp, and the surface's
 # cosine and lobe inside Eq. 15 are the point light's (the direction of the fog light is not tracked):
-# tests/test_spot.py measures the result against hemisphere quadrature of the spot's airlight.
+# tests/test_spot_scatter.py measures the result against hemisphere quadrature of the spot's airlight.
 
 def _arc_inside(alpha, psi, theta_c):
     """Azimuthal measure (rad, 0 to 2 pi) of the circle at angle ``alpha`` around a direction that lies
@@ -309,4 +309,4 @@ def airlight_spot(m, beta, origin, direction, light, rows, cos_half, blend, d_vp
     inverse 3x3 matrix as three row vectors), with the table's point-light segment for anisotropy g."""
     d_sv, along, h = model.ray_light_geometry(m, origin, direction, light)
     return airlight(m, beta, d_sv, along, h, d_vp, *light_space_ray(m, rows, origin, direction, light),
-                    cos_half, blend, inner=lambda *a: model.airlight_segment(*a, g=g), g=g)
+                    cos_half, blend, inner=functools.partial(model.airlight_segment, g=g), g=g)
