@@ -143,6 +143,9 @@ def build_parser():
     r.add_argument("--error", type=_quality, metavar="E",
                    help="Quality: the largest relative error of any pixel's fog light, a fraction such as 0.01, "
                         "or draft (5 %%), final (1 %%), exact (every light fully modelled)" + from_file)
+    r.add_argument("--world-light", choices=["on", "off"], default=None,
+                   help="on: the World keeps lighting surfaces through the fog (an artistic ambient); off: the fog "
+                        "extinguishes it, as Cycles' World volume does" + from_file)
     r.add_argument("--explain", action="store_true",
                    help="print the models each light got and the error predicted for them")
     r.add_argument("--pixel-centre", action="store_true",

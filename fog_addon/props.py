@@ -111,6 +111,12 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
         name="Target Error", default=0.01, min=1e-4, max=0.5, subtype="FACTOR", precision=4,
         update=_quality_changed,
         description="Largest relative change of any pixel's fog light the Custom quality allows")
+    world_light: bpy.props.BoolProperty(
+        name="World Light", default=False, update=_push,
+        description="Let the World light surfaces through the fog. Off (physical, as Cycles' World volume): "
+                    "the fog fills all space, so no light from the infinitely far World gets through it and "
+                    "the lamps light the scene alone. On: surfaces keep the World's light, an artistic "
+                    "ambient (the camera still sees the fog, not the World)")
     use_passes: bpy.props.BoolProperty(
         name="Fog Passes", default=False, update=_passes_changed,
         description="Write the render passes Fog Light (the light the fog adds) and Fog Transmittance "

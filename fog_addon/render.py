@@ -56,6 +56,7 @@ def fog_settings(scene, args):
     method = pick("method", "method", lambda: s.method.lower())
     with_passes = bool(pick("fog passes", "passes", lambda: s.use_passes))
     quality = pick("quality", "error", lambda: props.quality_setting(s))
+    world_light = pick("world light", "world_light", lambda: "on" if s.world_light else "off")
     if method == "osl" and args.engine_id != "CYCLES":
         if source["method"] == "flag":
             raise SystemExit("error: --method osl needs --engine cycles (EEVEE cannot run OSL); use --method nodes")
@@ -68,9 +69,9 @@ def fog_settings(scene, args):
         notes.append(("materials", f"the file's fog is Selected Only: fogging the materials of "
                                    f"{len(objects)} selected object(s) (and those fogged already)"))
     kwargs = dict(density=density, albedo=albedo, anisotropy=anisotropy, method=method, objects=objects,
-                  scene_scale=scene_scale, with_passes=with_passes, error=quality)
+                  scene_scale=scene_scale, with_passes=with_passes, error=quality, world_light=world_light == "on")
     shown = {"density": density, "colour": albedo, "scene scale": scene_scale, "anisotropy": anisotropy,
-             "method": method, "fog passes": with_passes, "quality": quality}
+             "method": method, "fog passes": with_passes, "quality": quality, "world light": world_light}
     return kwargs, {k: (v, source[k]) for k, v in shown.items()}, notes
 
 

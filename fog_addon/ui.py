@@ -63,6 +63,7 @@ def draw_fog(layout, context):
     if s.method == "OSL" and scene.render.engine != "CYCLES":
         col.label(text="Switch the render engine to Cycles to see OSL fog", icon="ERROR")
     col.prop(s, "selected_only")
+    col.prop(s, "world_light")
     col.prop(s, "use_passes")
     _draw_models(layout, s)
     note = presets.invisible_fog_note(s.density * s.scene_scale, apply.scene_size(scene))

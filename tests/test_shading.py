@@ -134,6 +134,10 @@ def test_background_against_quadrature(m):
                                                        Medium(0.1, np.array([0.5, 1, 1])), np.asarray(1.0))
     np.testing.assert_allclose(emission, [1.5, 3.0, 3.0])
     assert transmittance == 0.0   # the background is seen through infinite fog
+    # other rays: the World's light is extinguished too, unless the artist keeps it
+    for world_light, want in ((0.0, 0.0), (1.0, 1.0)):
+        emission, transmittance = shading.shade_background(m, [np.ones(3)], Medium(0.1), np.asarray(0.0), world_light)
+        assert transmittance == want and not emission.any()
 
 
 # --- models as data ----------------------------------------------------------------

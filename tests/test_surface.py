@@ -30,7 +30,7 @@ def table():
 
 @pytest.fixture(scope="module")
 def ops(table):
-    return NumpyOps({tables.SURFACE.name: table})
+    return NumpyOps({tables.SURFACE.name: table, tables.SPECULAR_ALBEDO.name: surface.specular_table()})
 
 
 def table_m(ops, t, theta, n):
@@ -199,7 +199,8 @@ def test_t0_limit_closed_form(table):
     for (n, theta), value in closed.items():
         assert surface.surface_m_t0([theta], n)[0] == pytest.approx(value, rel=QUAD_TOL)
         assert surface.surface_m([1e-7], [theta], n)[0, 0] == pytest.approx(value, rel=1e-5)   # continuity
-        # T = 0, theta in {0, pi}: table nodes, up to the quadrature (5e-6) and the 0.01-row clamp of surface_log_m (<= 1e-4)
+        # T = 0, theta in {0, pi}: table nodes, up to the quadrature (5e-6) and the 0.01-row clamp of surface_log_m
+        # (<= 1e-4)
         assert table_m(m, 0.0, theta, n) == pytest.approx(value, rel=2e-4)
     # all levels at theta = 0 and pi vs the 1-D closed-form integrals
     for k, n in enumerate(tables.PHONG_EXPONENTS[::8]):
@@ -287,17 +288,48 @@ def test_material_mapping(ops):
     assert surface.phong_exponent_from_roughness(0.5) == pytest.approx(7.5)   # alpha = 0.25
     levels = surface.phong_level(ops, r)
     assert np.allclose(levels, [surface.exponent_level(v) for v in n], atol=1e-3)
-    rho_d, rho_s, n = surface.principled_albedos([0.8, 0.5, 0.2], metallic=0.0, roughness=0.4)
-    assert np.allclose(rho_s, 0.04 + 0.96 / 21)
-    assert np.allclose(rho_d, np.array([0.8, 0.5, 0.2]) * (1 - (0.04 + 0.96 / 21)))
+    rho_d, rho_s, n = surface.principled_albedos([0.8, 0.5, 0.2], metallic=0.0, roughness=0.4, cos_view=0.7)
+    e = surface.principled_albedos([0.0, 0.0, 0.0], roughness=0.4, cos_view=0.7)[1]
+    assert np.allclose(rho_s, e) and np.allclose(rho_d, np.array([0.8, 0.5, 0.2]) * (1 - e))
     assert n == pytest.approx(0.5 * (0.4 ** -4 - 1))
-    rho_d, rho_s, _ = surface.principled_albedos([0.9, 0.6, 0.3], metallic=1.0)
-    assert np.all(rho_d == 0.0) and np.allclose(rho_s, np.array([0.9, 0.6, 0.3]) * 20 / 21 + 1 / 21)
+    rho_d, rho_s, _ = surface.principled_albedos([0.9, 0.6, 0.3], metallic=1.0, cos_view=0.7)
+    assert np.all(rho_d == 0.0) and np.all(np.diff(rho_s) < 0)
+    assert surface.principled_albedos([0.5] * 3, specular_ior_level=0.0, cos_view=0.3)[1] == pytest.approx(0.0)
     # per-pixel inputs (vectors (..., 3), scalars (...))
     base = np.array([[0.8, 0.5, 0.2], [0.9, 0.6, 0.3]])
-    rd, rs, lv = surface.principled_to_phong(ops, base, np.array([0.0, 1.0]), np.array([0.4, 0.2]), np.array([0.5, 0.5]))
+    rd, rs, lv = surface.principled_to_phong(ops, base, np.array([0.0, 1.0]), np.array([0.4, 0.2]),
+                                             np.array([0.5, 0.5]), np.array([0.7, 0.7]))
     assert rd.shape == rs.shape == (2, 3) and lv.shape == (2,)
-    assert np.allclose(rs[1], base[1] * 20 / 21 + 1 / 21) and np.allclose(rd[1], 0.0)
+    assert np.allclose(rd[1], 0.0)
+
+
+def _fresnel(cos_i, ior):
+    """Unpolarised Fresnel reflectance of a dielectric (s and p written out: Born & Wolf)."""
+    sin_t = np.sqrt(1.0 - cos_i * cos_i) / ior
+    cos_t = np.sqrt(1.0 - sin_t * sin_t)
+    r_s = (cos_i - ior * cos_t) / (cos_i + ior * cos_t)
+    r_p = (ior * cos_i - cos_t) / (ior * cos_i + cos_t)
+    return 0.5 * (r_s * r_s + r_p * r_p)
+
+
+def test_specular_albedo_limits():
+    """The specular layer's directional albedo (``surface.bake_specular_albedo``, the glossy lobe's rho_s):
+    a smooth surface (roughness 0) reflects the Fresnel equations' reflectance (dielectric, IOR 1.5) and
+    Schlick's (metal), within the bilinear lookup; rougher lobes lose energy to masking (below 1 for
+    F = 1) and never exceed it; a dielectric's albedo rises towards grazing angles.  (Against Cycles'
+    own Principled BSDF: tests/test_material_kinds.py.)"""
+    m = NumpyOps({tables.SPECULAR_ALBEDO.name: surface.specular_table()})
+    mu = np.linspace(0.05, 1.0, 20)
+    smooth = surface.dielectric_albedo(m, 0.04, np.zeros_like(mu), mu)
+    np.testing.assert_allclose(smooth, _fresnel(mu, 1.5), rtol=0.03, atol=2e-3)
+    metal = surface.metal_albedo(m, np.array([0.9, 0.6, 0.3]), np.zeros_like(mu), mu)
+    want = np.array([0.9, 0.6, 0.3]) + (1 - np.array([0.9, 0.6, 0.3])) * ((1 - mu) ** 5)[:, None]
+    np.testing.assert_allclose(metal, want, rtol=0.03, atol=2e-3)
+    for r, least in ((0.2, 0.85), (0.5, 0.7), (0.9, 0.35)):   # GGX single scattering loses up to ~60 %
+        white = surface.metal_albedo(m, np.ones(3), np.full_like(mu, r), mu)[:, 0]
+        assert np.all(white <= 1.0 + 1e-6) and white.min() > least, (r, white.min())
+        rising = surface.dielectric_albedo(m, 0.04, np.full_like(mu, r), mu)
+        assert np.all(np.diff(rising) < 0), r   # mu grows: the albedo falls from grazing to normal
 
 
 # --- anisotropic fog (issue 9): the table baked for Henyey-Greenstein g --------------------------------

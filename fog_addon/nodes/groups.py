@@ -170,14 +170,17 @@ OSL_WORLD_LAYERS = (15, 15, 0, 0)
 
 
 # A spot light (rungs.spot_rungs) costs more: its glow kernel (spot.py: two cone intervals, the inner segment
-# and two rims of quadrature) in the material and the World.  Measured at bpy 5.0.1, this stop: OSL, nodes a
-# light adds (8 vs 4 lights, g = 0.85): 289 full and 27 in the World (point 249, 15); EEVEE, saved and
-# reopened, fully modelled: 12 and 16 spots 85 168 and 113 520 bytes at g = 0 (7 088 a spot; the World 106 384
-# and 141 744, 8 840 a spot), 99 568 at g = 0.85 (the World 120 784): 8 288 and 10 040 a spot, taken as the
-# extra over a point light at g = 0.85 for every g (at g = 0 it overstates by about 500 and 1 000 bytes).
-# Glow only keeps the same glow; off keeps the cone's factor (a few constants, estimated).
-OSL_SPOT_EXTRA = ((40, 40, 12, 0), (12, 12, 0, 0))
-EEVEE_SPOT_EXTRA = ((4730, 4730, 100, 0), (8960, 8960, 0, 0))
+# and two rims of quadrature) in the material and the World, and its scatter's tables (spot.scatter: F, the
+# moments, the lobe response, read once for both lobes).  Measured at bpy 5.0.1 (helper, at 99dbfcf), g = 0.85,
+# files saved and reopened.  OSL, nodes a light adds with the OSL method (8 vs 4 lights): full 924 a spot
+# against 249 a point, glow only 222 against 64, off 92 against 60; the World 149 against 16.  EEVEE (overflow
+# messages): a fully modelled spot 13 276 bytes in a material (8 and 12 spots: 107 008, 160 112), a spot with
+# its glow only 9 836 (12 and 16: 118 832, 158 176), a point 3 348 (24 and 32 points: 80 656, 107 440); the
+# World 8 940 a spot (8, 12, 16: 71 632, 107 392, 143 152), 652 a point.  The extras over the budgeted point
+# (EEVEE_MATERIAL_BYTES plus EEVEE_ANISOTROPIC_EXTRA) with a 3 % margin; off keeps the cone's factor (a few
+# constants, estimated).
+OSL_SPOT_EXTRA = ((700, 170, 40, 0), (140, 140, 0, 0))
+EEVEE_SPOT_EXTRA = ((10010, 7540, 100, 0), (8960, 8960, 0, 0))
 
 
 def _per_light(costs, extra, spots):
@@ -208,19 +211,18 @@ def eevee_budget(g=0.0, spots=()):
                           "EEVEE's uniform block (64 KiB of node constants per material)")
 
 
-def build_params(beta, albedo):
-    ng, gin, gout = _new_group(PARAMS, [], [("Beta", F), ("Albedo", C)])
-    b = ng.nodes.new("ShaderNodeValue")
-    b.name = b.label = "Beta"
-    b.outputs[0].default_value = beta
-    a = ng.nodes.new("ShaderNodeRGB")
-    a.name = a.label = "Albedo"
-    a.outputs[0].default_value = (*albedo, 1.0)
-    ng.links.new(b.outputs[0], gout.inputs["Beta"])
-    ng.links.new(a.outputs[0], gout.inputs["Albedo"])
+def build_params(beta, albedo, world_light=False):
+    ng, gin, gout = _new_group(PARAMS, [], [("Beta", F), ("Albedo", C), (WORLD_LIGHT, F)])
+    for name, kind, value in (("Beta", "ShaderNodeValue", beta), ("Albedo", "ShaderNodeRGB", (*albedo, 1.0)),
+                              (WORLD_LIGHT, "ShaderNodeValue", float(world_light))):
+        node = ng.nodes.new(kind)
+        node.name = node.label = name
+        node.outputs[0].default_value = value
+        ng.links.new(node.outputs[0], gout.inputs[name])
     return _install(ng, PARAMS)
 
 
+WORLD_LIGHT = "World Light"   # the params group's 0/1: the World lights surfaces through the fog
 ANISOTROPY_KEY = "analytic_fog_anisotropy"   # on the params group: the g the lights' models are built for
 
 
@@ -242,16 +244,22 @@ def set_anisotropy(g):
     bpy.data.node_groups[PARAMS][ANISOTROPY_KEY] = float(g)
 
 
-def set_params(beta, albedo, g=None):
-    """Write the fog's settings into the shared params group (creating it if needed); ``g``: the
-    anisotropy to store (None: keep it)."""
+def set_params(beta, albedo, g=None, world_light=None):
+    """Write the fog's settings into the shared params group (creating it if needed, or if an older
+    version made it); ``g``: the anisotropy to store, ``world_light``: whether the World lights surfaces
+    through the fog (``shading.shade_background``) (None: keep them)."""
     ng = bpy.data.node_groups.get(PARAMS)
-    if ng is None:
-        ng = build_params(beta, albedo)
+    if ng is None or ng.nodes.get(WORLD_LIGHT) is None:
+        kept = ng.get(ANISOTROPY_KEY) if ng is not None else None
+        ng = build_params(beta, albedo, bool(world_light))
+        if kept is not None:
+            ng[ANISOTROPY_KEY] = kept
     if g is not None and ng.get(ANISOTROPY_KEY, 0.0) != float(g):
         set_anisotropy(g)
     ng.nodes["Beta"].outputs[0].default_value = beta
     ng.nodes["Albedo"].outputs[0].default_value = (*albedo, 1.0)
+    if world_light is not None:
+        ng.nodes[WORLD_LIGHT].outputs[0].default_value = float(world_light)
     return ng
 
 
@@ -548,7 +556,7 @@ def build_surface(lights, models, images, with_passes=False):
     ], [("Fog", "NodeSocketShader"), ("Emission", C), ("Transmittance", F), ("Direct Attenuation", F),
         ("Cycles Mix Factor", F), ("EEVEE Mix Factor", F)])
     next(i for i in ng.interface.items_tree if i.name == passes.OPACITY).default_value = (1.0, 1.0, 1.0, 1.0)
-    m = NodeOps(ng, {})
+    m = NodeOps(ng, images)
     params = ng.nodes.new("ShaderNodeGroup")
     params.node_tree = bpy.data.node_groups[PARAMS]
     geo = ng.nodes.new("ShaderNodeNewGeometry")
@@ -557,7 +565,8 @@ def build_surface(lights, models, images, with_passes=False):
     g = {s.name: s for s in gin.outputs if s.name}
     diffuse, specular, level = surface.principled_to_phong(
         m, m.wrap(g["Base Color"], vector=True), m.wrap(g["Metallic"]), m.wrap(g["Roughness"]),
-        m.wrap(g["Specular IOR Level"]))
+        m.wrap(g["Specular IOR Level"]), m.dot(m.wrap(geo.outputs["Incoming"], vector=True),
+                                               m.wrap(geo.outputs["Normal"], vector=True)))
     is_camera = m.wrap(path.outputs["Is Camera Ray"])
     t_vp, transmit = shading.view_transmittance(m, m.wrap(params.outputs["Beta"]),
                                                 m.wrap(cam.outputs["View Distance"]), is_camera)
@@ -771,8 +780,8 @@ def build_world(lights, models, camera, images, with_passes=False):
 
     Camera position by TRANSFORMS drivers on ``camera`` (no node gives it in a
     world shader).  The background itself is seen through infinite fog:
-    Transmittance is 0 on camera rays (1 on other rays, which keep the
-    world's lighting).  The lights whose glow is on sit in bundle groups
+    Transmittance is 0 (1 on rays other than the camera's if the params
+    group's World Light is 1: they keep the world's lighting).  The lights whose glow is on sit in bundle groups
     (``_bundles``, ``build_world_bundle``).
     """
     ng, gin, gout = _new_group(WORLD, [], [("Fog", "NodeSocketShader"), ("Emission", C), ("Transmittance", F)])
@@ -797,7 +806,8 @@ def build_world(lights, models, camera, images, with_passes=False):
     medium = _medium(m, params.outputs["Beta"], params.outputs["Albedo"])
     is_camera = m.wrap(path.outputs["Is Camera Ray"])
     emission, transmittance = shading.shade_background(
-        m, [m.wrap(node.outputs["Airlight"], vector=True) for node, _ in placed], medium, is_camera)
+        m, [m.wrap(node.outputs["Airlight"], vector=True) for node, _ in placed], medium, is_camera,
+        m.wrap(params.outputs[WORLD_LIGHT]))
     m.feed(gout.inputs["Emission"], m.wrap(emission))
     _shader_tree(ng, gout.inputs["Fog"], fogs)
     m.feed(gout.inputs["Transmittance"], m.wrap(transmittance))

@@ -2,28 +2,16 @@
 import bpy
 import numpy as np
 
-from ..precompute import fingerprint, tables
+from ..precompute import bakers, fingerprint, tables
 from . import owned
 
 VERSION_KEY = "analytic_fog_table_version"   # on each image: the fingerprint of the code that baked it
 
 
-def _bakers(g=0.0):
-    """{name: (TableSpec, baker)} of the tables the node groups read for anisotropy g."""
-    from ..precompute import airlight, spot, surface
-    air, surf = tables.anisotropic(tables.AIRLIGHT, g), tables.anisotropic(tables.SURFACE, g)
-    frac = tables.anisotropic(tables.SPOT_FRACTION, g)
-    return {
-        air.name: (air, lambda: airlight.bake_airlight_table(air)),
-        surf.name: (surf, lambda: surface.bake_surface_table(surf)),
-        frac.name: (frac, lambda: spot.bake_scatter_fraction(frac)),
-    }
-
-
 def table_version(spec):
     """Fingerprint of the layouts and bakers of every table, and ``spec``: a changed bake rebakes."""
     from ..precompute import airlight, spot, surface
-    return fingerprint.source_fingerprint(tables, airlight, surface, spot, extra=(spec,))
+    return fingerprint.source_fingerprint(tables, bakers, airlight, surface, spot, extra=(spec,))
 
 
 def table_image(spec, bake):
@@ -56,11 +44,11 @@ def table_image(spec, bake):
 
 def all_table_images(g=0.0):
     """{TableSpec.name: image} for every table the node groups use with Henyey-Greenstein anisotropy g."""
-    return {name: table_image(spec, bake) for name, (spec, bake) in _bakers(g).items()}
+    return {name: table_image(spec, bake) for name, (spec, bake) in bakers.bakers(g).items()}
 
 
 def table_names():
     """The tables' image names: the isotropic ones and every other table image in the file (another g's)."""
-    names = list(_bakers())
+    names = list(bakers.bakers())
     return names + sorted({owned.base_name(img.name) for img in bpy.data.images
                            if VERSION_KEY in img} - set(names))

@@ -58,7 +58,8 @@ class FOG_OT_add(bpy.types.Operator):
                 skipped = apply.apply_fog(scene, density, tuple(settings.color), settings.anisotropy,
                                           settings.method.lower(), objects, settings.scene_scale,
                                           with_passes=settings.use_passes,
-                                          error=props.quality_setting(settings), progress=report)
+                                          error=props.quality_setting(settings),
+                                          world_light=settings.world_light, progress=report)
         except ValueError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}

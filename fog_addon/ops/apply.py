@@ -252,7 +252,8 @@ def merge_appended():
 
 
 def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="nodes", objects=None,
-              scene_scale=1.0, with_passes=False, error=predict.DEFAULT_QUALITY, progress=progress_.silent):
+              scene_scale=1.0, with_passes=False, error=predict.DEFAULT_QUALITY, world_light=False,
+              progress=progress_.silent):
     """Add (or update) the fog on ``scene``; adding twice is the same as once.
 
     ``method``: the user's preference for the models (``rungs.PREFERENCES``):
@@ -266,7 +267,9 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     passes (``passes.py``; they cost render time).  ``error``: the Quality, a
     target relative error or a preset name of ``predict.QUALITY`` ("exact" or
     None: every light fully modelled); each light gets the cheapest models whose
-    predicted error stays within it (``choose_models``).  ``progress(stage, done, total)``
+    predicted error stays within it (``choose_models``).  ``world_light``: the World keeps lighting
+    surfaces through the fog (default off: the fog fills all space and extinguishes it, as Cycles'
+    World volume does; ``shading.shade_background``).  ``progress(stage, done, total)``
     is called as the work advances (``progress.py``).
     """
     fog = medium.medium(density, albedo, anisotropy, scene_scale)
@@ -278,7 +281,7 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     lights, notes = fog_lights(scene)
     skipped += notes
     progress("lights and tables", 0, 1)
-    groups.set_params(fog.beta, fog.albedo, fog.g)
+    groups.set_params(fog.beta, fog.albedo, fog.g, world_light=bool(world_light))
     if bpy.data.node_groups.get(groups.SURFACE) is None:
         # The materials are wrapped around a Surface group without lights, which the lights' group then
         # replaces (``groups._install``): every node Blender's API adds to a material costs more the
@@ -312,7 +315,7 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
 def update_params(scene):
     """Push the scene's density, colour and scale into the shared params group."""
     s = scene.analytic_fog
-    groups.set_params(s.density * s.scene_scale, tuple(s.color))
+    groups.set_params(s.density * s.scene_scale, tuple(s.color), world_light=s.world_light)
 
 
 _KEEP = object()   # _rebuild: keep the setting the scene groups were built with

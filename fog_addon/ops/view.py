@@ -47,7 +47,8 @@ def sample_frames(scene):
 
 
 def _principled(material):
-    """(rho_d, rho_s, level) of a material's Principled BSDF from its own values, or None."""
+    """(base colour, metallic, roughness, specular IOR level, IOR) of a material's Principled BSDF from its
+    own values, or None."""
     if material is None or not material.use_nodes or material.node_tree is None:
         return None
     for node in material.node_tree.nodes:
@@ -55,12 +56,35 @@ def _principled(material):
             names = ("Base Color", "Metallic", "Roughness", "Specular IOR Level")
             if any(node.inputs[n].is_linked for n in names):
                 return None
-            rho_d, rho_s, n = surface.principled_albedos(
-                tuple(node.inputs["Base Color"].default_value)[:3], node.inputs["Metallic"].default_value,
-                node.inputs["Roughness"].default_value, node.inputs["Specular IOR Level"].default_value,
-                node.inputs["IOR"].default_value)
-            return tuple(rho_d), tuple(rho_s), tables.PHONG_LEVELS_PER_OCTAVE * math.log2(n)
+            return (tuple(node.inputs["Base Color"].default_value)[:3], node.inputs["Metallic"].default_value,
+                    node.inputs["Roughness"].default_value, node.inputs["Specular IOR Level"].default_value,
+                    node.inputs["IOR"].default_value)
     return None
+
+
+def _albedos(rows):
+    """[(rho_d, rho_s, level)] of the hits ``rows`` (direction, distance, normal, Principled values or a
+    stand-in), the Principled ones by ``surface.principled_albedos`` at each hit's view cosine, at once."""
+    out = [brdf for _, _, _, brdf in rows]
+    live = [k for k, (_, _, _, brdf) in enumerate(rows) if len(brdf) == 5]
+    if not live:
+        return out
+    cols = list(zip(*(rows[k][3] for k in live)))
+    cos_view = [-float(np.dot(rows[k][0], rows[k][2])) for k in live]
+    levels = {}
+    for ior in sorted(set(cols[4])):   # the IOR is a constant of the formula: one call per IOR in the view
+        sel = [i for i, v in enumerate(cols[4]) if v == ior]
+        rho_d, rho_s, _ = surface.principled_albedos(np.array([cols[0][i] for i in sel]),
+                                                     np.array([cols[1][i] for i in sel]),
+                                                     np.array([cols[2][i] for i in sel]),
+                                                     np.array([cols[3][i] for i in sel]), float(ior),
+                                                     np.array([cos_view[i] for i in sel]))
+        for j, i in enumerate(sel):
+            r = cols[2][i]
+            if r not in levels:
+                levels[r] = tables.PHONG_LEVELS_PER_OCTAVE * math.log2(surface.phong_exponent_from_roughness(r))
+            out[live[i]] = (tuple(rho_d[j]), tuple(rho_s[j]), levels[r])
+    return out
 
 
 class _MeshInfo:
@@ -98,7 +122,8 @@ class _MeshInfo:
 
 def _frame_rays(scene, camera, grid):
     """(origin, unit directions (P, 3)) through the pixel centres of a grid over the camera's frame."""
-    frame = [np.array(v) for v in camera.data.view_frame(scene=scene)]   # top-right, bottom-right, bottom-left, top-left
+    # top-right, bottom-right, bottom-left, top-left
+    frame = [np.array(v) for v in camera.data.view_frame(scene=scene)]
     nx, ny = grid
     u = (np.arange(nx) + 0.5) / nx
     v = (np.arange(ny) + 0.5) / ny
@@ -180,6 +205,7 @@ def _sample_frame(scene, depsgraph, lights, grid):
         dist = float(np.linalg.norm(loc - origin))
         for brdf in ([known] if known is not None else [LAMBERT, MIRROR]):
             rows.append((d, dist, n, brdf))
+    rows = [(d, dist, n, brdf) for (d, dist, n, _), brdf in zip(rows, _albedos(rows))]
     light_pos = np.array([np.array(o.matrix_world.translation) for o in lights]).reshape(-1, 3)
     inverse = np.array([np.linalg.inv(np.array(o.matrix_world.to_3x3())) if is_spot(o) else np.eye(3)
                         for o in lights]).reshape(-1, 3, 3)

@@ -27,7 +27,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from . import airlight, model, rungs, shading, surface, tables
+from . import bakers, model, rungs, shading
 from . import spot as spot_mod
 from .ops import NumpyOps
 
@@ -97,17 +97,8 @@ def target_error(quality):
     return value
 
 
-_TABLES = {}
-
-
 def _numpy_ops(g):
-    air, surf = tables.anisotropic(tables.AIRLIGHT, g), tables.anisotropic(tables.SURFACE, g)
-    frac = tables.anisotropic(tables.SPOT_FRACTION, g)
-    if air.name not in _TABLES:
-        _TABLES[air.name] = airlight.bake_airlight_table(air)
-        _TABLES[surf.name] = surface.surface_table(g)
-        _TABLES[frac.name] = spot_mod.bake_scatter_fraction(frac)
-    return NumpyOps(_TABLES)
+    return NumpyOps(bakers.numpy_tables(float(g)))
 
 
 def light_fog(samples, intensity, beta, g=0.0):
@@ -150,8 +141,9 @@ def light_fog(samples, intensity, beta, g=0.0):
             ray = shading.spot_ray(m, light, spot.airlight, cam, d)
             air[:, k] = np.where(sky, m.run(spot.background, *args, *ray), m.run(spot.airlight, *args, d_vp, *ray))
             cone = shading.surface_cone(m, light, cam + m.scale(d, d_vp))
-            diffuse[:, k] = m.run(spot.scatter, beta, d_sp[:, k], cos_n[:, k], 0.0 * level[:, k], *cone)
-            glossy[:, k] = m.run(spot.scatter, beta, d_sp[:, k], cos_r[:, k], level[:, k], *cone)
+            axis = spot_mod.world_axis(m, light.spot.rows)
+            diffuse[:, k], glossy[:, k] = m.run(spot.scatter, beta, d_sp[:, k], cos_n[:, k], cos_r[:, k], level[:, k],
+                                                *cone, m.dot(n, axis), m.dot(shading.mirror(m, -d, n), axis))
     t_vp = np.exp(-beta * d_vp)[..., None]
     reflected = (np.asarray(samples.rho_d, float)[:, None, :] * diffuse[..., None]
                  + np.asarray(samples.rho_s, float)[:, None, :] * glossy[..., None])

@@ -27,8 +27,9 @@ intensity of the light):
 A spot light (``spot.py``) has rungs of its own for the glow (``spot_rungs``: the point light's rung
 on the part of the ray inside the inner cone, quadrature on the blend rim), whose kernels take the
 ray in the light's space too: airlight(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz,
-cos_half, blend) and background(... without d_vp); its scatter rung (``spot_scatter_rung``) takes the
-surface point's cosine to the axis, cos_half and blend after the point's arguments; and ``DIRECT_SPOT``,
+cos_half, blend) and background(... without d_vp); its scatter rung (``spot_scatter_rung``) gives both
+lobes at once, scatter(m, beta, d_sp, cos_n, cos_r, level, c_axis, cos_half, blend, cos_n_axis, cos_r_axis)
+-> (diffuse, glossy) (``spot.scatter``: they share the spot's table lookups); and ``DIRECT_SPOT``,
 whose ``spot`` flag tells the shading (``shading.shade_point``) to follow the cone in the direct light.
 """
 from dataclasses import dataclass, replace
@@ -131,8 +132,9 @@ class LightModels(NamedTuple):
 
 # Henyey-Greenstein anisotropy g: the glow's rungs integrate 4 pi p_HG along the ray (model.hg_weight), from
 # a table baked for g (tables.anisotropic) or by quadrature; the scatter table is baked for g the same way
-# (surface.radiance_profile), its bound hg_scatter_error(g) (measured: tests/test_surface.py).  Measured against scipy quadrature of Eq. 5 with
-# the phase function (tests/test_airlight.py); the table's cancellation between the two tails grows as
+# (surface.radiance_profile), its bound hg_scatter_error(g) (measured: tests/test_surface.py).  Measured
+# against scipy quadrature of Eq. 5 with the phase function (tests/test_airlight.py); the table's
+# cancellation between the two tails grows as
 # g -> -1 (the back-scatter peak far beyond the light), so tables serve g >= MIN_TABLE_ANISOTROPY.
 MIN_TABLE_ANISOTROPY = -0.8
 HG_TABLE_ERROR = 1.6e-3      # max relative error of the g != 0 airlight tables over g in [-0.7, 0.95]
@@ -192,11 +194,13 @@ def spot_rungs(air, background, g):
                  for r, k in ((air, kernels[0]), (background, kernels[1])))
 
 
-# The fog light a spot scatters onto a surface: the point light's times the share of it the cone lights
-# (spot.scatter_fraction, a table per g).  Against hemisphere quadrature of the spot's airlight (150 random
-# points inside, at the edge of and outside cones of 10-120 degrees, g = 0 and 0.85): at most 0.40 of the
-# point light's fog light off (95 % within 0.25); the direction the fog light comes from is not tracked.
-SPOT_SCATTER_ERROR = 0.41
+# The fog light a spot scatters onto a surface: the point light's at the mean direction of the spot's fog
+# light, times the share the cone lights and a correction for its concentration (spot.scatter, tables per
+# g), never above the point light's.  Against hemisphere quadrature of the spot's airlight (150 random points
+# inside, at the edge of and outside cones of 10-120 degrees, g = 0, 0.7, 0.85, tests/test_spot_scatter.py):
+# the diffuse lobe at most 0.11 of the point light's fog light off, Phong lobes (n = 2-128) 0.71 of the larger
+# of the point light's and the spot's: narrow lobes see the beam's shape, which a mean direction does not hold.
+SPOT_SCATTER_ERROR = 0.75
 
 
 @functools.lru_cache(maxsize=None)
@@ -204,7 +208,8 @@ def spot_scatter_rung(scatter, g):
     """The scatter rung of a spot light for the point light's ``scatter`` rung (anisotropy g)."""
     return replace(scatter, name="spot " + scatter.name, spot=True,
                    kernel=functools.partial(spot.scatter, point=scatter.kernel, g=float(g)),
-                   tables=scatter.tables + (tables.anisotropic(tables.SPOT_FRACTION, g),),
+                   tables=scatter.tables + tuple(tables.anisotropic(t, g) for t in tables.SPOT_TABLES)
+                   + (tables.LOBE_RESPONSE,),
                    domain=scatter.domain + "; relative to the point light's fog light", max_error=SPOT_SCATTER_ERROR,
                    evidence="tests/test_spot_scatter.py: Eq. 15 by hemisphere quadrature of the spot's airlight")
 

@@ -104,15 +104,20 @@ def shade_point(m, geo, material, light, medium, models):
     d_sv, along, h = model.ray_light_geometry(m, geo.camera, -1.0 * geo.incoming, light.position)
     air_ray = spot_ray(m, light, models.airlight, geo.camera, -1.0 * geo.incoming)
     air = m.run(models.airlight, beta, d_sv, along, h, geo.view_distance, *air_ray)
+    mirrored = mirror(m, geo.incoming, geo.normal)
     cos_n = m.dot(to_light, geo.normal) * inv_d
-    cos_r = m.dot(to_light, mirror(m, geo.incoming, geo.normal)) * inv_d
+    cos_r = m.dot(to_light, mirrored) * inv_d
     cone = surface_cone(m, light, geo.position) if models.direct.spot else ()
     seen = None
     if models.airlight.spot:
         seen = spot.cone_hit(m, *air_ray[:6], light.spot.cos_half, geo.view_distance)
-    extra = cone if models.scatter.spot else ()
-    diffuse = m.run(models.scatter, beta, d_sp, cos_n, 0.0, *extra)
-    glossy = m.run(models.scatter, beta, d_sp, cos_r, material.level, *extra)
+    if models.scatter.spot:   # both lobes at once: they share the spot's table lookups
+        axis = spot.world_axis(m, light.spot.rows)
+        diffuse, glossy = m.run(models.scatter, beta, d_sp, cos_n, cos_r, material.level, *cone,
+                                m.dot(geo.normal, axis), m.dot(mirrored, axis))
+    else:
+        diffuse = m.run(models.scatter, beta, d_sp, cos_n, 0.0)
+        glossy = m.run(models.scatter, beta, d_sp, cos_r, material.level)
     reflected = m.scale(material.diffuse, diffuse) + m.scale(material.specular, glossy)
     weight = _grey(m, light.intensity) * reflected_lobe(m, material, cos_n, cos_r) * inv_d * inv_d
     if cone:   # a spot's direct light follows its cone
@@ -230,9 +235,13 @@ def background_point(m, camera, direction, light, medium, models):
                                           *spot_ray(m, light, models.background, camera, direction)))
 
 
-def shade_background(m, airlights, medium, is_camera):
+def shade_background(m, airlights, medium, is_camera, world_light=0.0):
     """(emission, transmittance) of the World: the sum of the lights' glows times the albedo on camera
-    rays, the background itself seen through infinite fog (transmittance 0 on camera rays, 1 on others)."""
+    rays, and the factor on the user's World.  The fog fills all space, so nothing from infinitely far
+    away comes through it: the transmittance is 0 on every ray (the World neither seen nor lighting
+    surfaces, as with Cycles' World volume), unless ``world_light`` is 1 (the artist keeps the World's
+    light on surfaces: then 1 on rays other than the camera's)."""
+    transmittance = world_light * (1.0 - is_camera)
     if not airlights:
-        return m.combine(0.0, 0.0, 0.0), 1.0 - is_camera
-    return m.scale(medium.albedo * total(airlights), is_camera), 1.0 - is_camera
+        return m.combine(0.0, 0.0, 0.0), transmittance
+    return m.scale(medium.albedo * total(airlights), is_camera), transmittance

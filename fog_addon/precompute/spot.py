@@ -83,78 +83,220 @@ def falloff_at(m, rows, point, light, cos_half, blend):
 # --- the fog light a spot scatters onto surfaces ---------------------------------------------------------
 #
 # Sun et al. 2005 Eq. 15 sums the fog light reaching a surface point p over the fog points x.  Grouping x by
-# the direction u in which the light shines towards it (x = L + d u), the point light's fog light at p is
+# the direction u in which the light shines towards it (x = L + r u), the point light's fog light at p is
 # int_{S^2} G(u) du, with G(u) the light scattered towards p along the light's ray u: the airlight integral
-# of Eq. 5 with the light and the viewer swapped (e^{-beta (d + r)} w / r^2 along the ray, r = |x - p|),
+# of Eq. 5 with the light and the viewer swapped (e^{-beta (r + d)} w / d^2 along the ray, d = |x - p|),
 # a function of T = beta D_sp and the angle alpha between u and the direction from the light to p only.  A
-# spot lights only the rays u in its cone, so its fog light at p is the point light's times
+# spot lights only the rays u in its cone, so the total fog light it sends to p (before the surface's
+# cosine) is the point light's times
 #
 #     F = int_cone G du / int_{S^2} G du,
 #
-# which depends on T, the angle psi of p from the axis and the cone's half-angle theta_c.  F is baked per g
-# (tables.SPOT_FRACTION); the cone is taken hard at the middle of Blender's blend ramp, and the surface's
-# cosine and lobe inside Eq. 15 are the point light's (the direction of the fog light is not tracked):
-# tests/test_spot_scatter.py measures the result against hemisphere quadrature of the spot's airlight.
+# a function of T, the angle psi of p from the axis and the cone's half-angle theta_c.  The surface's
+# cosine (or Phong lobe) inside Eq. 15 depends on the direction the fog light arrives from, which for a
+# spot is not the point light's: seen from beside a beam the light comes from the beam.  The bake also
+# stores the first moment of the arrival directions, E1 = int_cone int (x - p) / d ... , in the frame of the
+# direction e_l from p to the light and e_a, the unit vector normal to e_l towards the axis (by symmetry E1
+# lies in their plane).  The shader turns it into the mean direction mu and the mean resultant length R of
+# the spot's fog light and of the point light's, and
+#
+#     spot = F * point(mu) * resp(n . mu, R_spot) / resp(n . mu, R_point)
+#
+# for the diffuse lobe: the point light's exact response (its table) evaluated at the direction the spot's
+# light comes from, corrected by the ratio of the Lambertian responses of two von Mises-Fisher
+# distributions of those concentrations (``lobe_response``).  The glossy lobe takes the point light's at mu
+# (the correction, a diffuse one, does not carry over to narrow lobes).  The cone is taken hard at the
+# middle of Blender's blend ramp.  Measured against hemisphere quadrature of the spot's airlight in
+# tests/test_spot_scatter.py.
 
 def _arc_inside(alpha, psi, theta_c):
-    """Azimuthal measure (rad, 0 to 2 pi) of the circle at angle ``alpha`` around a direction that lies
-    ``psi`` from the axis, inside the cone of half-angle ``theta_c`` about the axis (numpy)."""
+    """(measure, first moment) of the circle at angle ``alpha`` around a direction that lies ``psi`` from the
+    axis, inside the cone of half-angle ``theta_c`` about the axis (numpy): the azimuthal measure (rad, 0 to
+    2 pi) and int cos(phi) dphi over it, phi from the azimuth towards the axis."""
     sa, sp = np.sin(alpha), np.sin(psi)
     with np.errstate(divide="ignore", invalid="ignore"):
-        k = (np.cos(theta_c) - np.cos(alpha) * np.cos(psi)) / (sa * sp)
+        k = np.clip((np.cos(theta_c) - np.cos(alpha) * np.cos(psi)) / (sa * sp), -1.0, 1.0)
     inside = np.cos(alpha) * np.cos(psi) >= np.cos(theta_c)   # where sa sp = 0: all or nothing
-    return np.where(sa * sp > 1e-12, 2.0 * np.arccos(np.clip(k, -1.0, 1.0)), np.where(inside, 2.0 * np.pi, 0.0))
+    partial = sa * sp > 1e-12
+    return (np.where(partial, 2.0 * np.arccos(k), np.where(inside, 2.0 * np.pi, 0.0)),
+            np.where(partial, 2.0 * np.sqrt(1.0 - k * k), 0.0))
 
 
 # alpha quadrature of the bake: Gauss-Legendre panels graded towards alpha = 0 (G narrows as T grows)
 _ALPHA_EDGES = (0.0, 0.005, 0.02, 0.06, 0.15, 0.35, 0.7, 1.3, 2.2, math.pi)
 _ALPHA_POINTS = 24
+_XI_PANELS = 32   # per light ray, in Sun's angle xi seen from p, graded towards p (tests: F within 1e-4)
+_XI_ORDER = 8
+_PSI_EDGE = 1e-4  # rad: the rows psi = 0 and pi are baked this close to them (the axis moment's limit there)
 
 
-def bake_scatter_fraction(spec=tables.SPOT_FRACTION):
-    """F(T, psi, theta_c) (module section above) for the anisotropy ``spec.g``, float32, layout of
-    tables.SPOT_FRACTION.  G by the table-free quadrature of the airlight (model.airlight_quadrature, D = 1)."""
-    from .ops import NumpyOps   # noqa: PLC0415 (the baker only)
+def _ray_terms(t, alpha, g):
+    """(G, G_l, G_a) along the light's rays at angles ``alpha`` (A,) from the direction to p, for optical
+    distances ``t`` (W,), D_sp = 1: G the fog light they send to p (the airlight of Eq. 5 with light and
+    viewer swapped, up to a factor per T) and its first moment's components along e_l and towards the ray.
+
+    In Sun's angle xi of the ray point seen from p (z = h tan xi about the ray's closest point, h = sin
+    alpha, d = h / cos xi) the integrand t e^{-t (r + d)} w / d^2 dr is t e^{-t (r + d)} w dxi / h, smooth
+    and bounded; the scattering angle is pi/2 + xi (cos = -sin xi), so the Henyey-Greenstein weight is
+    (1 - g^2) / (1 + g^2 + 2 g sin xi)^{3/2}.  Composite Gauss-Legendre on xi in [alpha - pi/2, pi/2]
+    graded towards max(0, alpha - pi/2), the point nearest p."""
+    x, w = np.polynomial.legendre.leggauss(_XI_ORDER)
+    edges = np.linspace(-1.0, 1.0, _XI_PANELS + 1)
+    edges = np.sign(edges) * edges * edges
+    lo, hi = edges[:-1, None], edges[1:, None]
+    s = (0.5 * (hi - lo) * x + 0.5 * (hi + lo)).ravel()
+    ws = (0.5 * (hi - lo) * w).ravel()
+    a = np.asarray(alpha, float)[None, :, None]
+    xi0 = a - 0.5 * math.pi
+    c = np.maximum(xi0, 0.0)
+    before = s < 0.0
+    xi = np.where(before, c + s * (c - xi0), c + s * (0.5 * math.pi - c))
+    jac = np.where(before, c - xi0, 0.5 * math.pi - c) * ws
+    h, r0 = np.sin(a), np.cos(a)
+    d = h / np.cos(xi)
+    r = r0 + h * np.tan(xi)
+    tt = np.asarray(t, float)[:, None, None]
+    phase = (1.0 - g * g) / (1.0 + g * g + 2.0 * g * np.sin(xi)) ** 1.5 if g else 1.0
+    f = tt * np.exp(-tt * (r + d)) * phase * jac / h
+    return f.sum(-1), (f * (1.0 - r * r0) / d).sum(-1), (f * r * h / d).sum(-1)
+
+
+def bake_scatter_tables(g=0.0):
+    """{name: float32 table} of the spot scatter tables (``tables.SPOT_TABLES``) for anisotropy g: F, the
+    first moment along e_l and the one towards the axis divided by sin psi, both over the point light's
+    total (module section above).  The last slice is the whole sphere (the point light: F = 1)."""
     x, w = np.polynomial.legendre.leggauss(_ALPHA_POINTS)
     alpha, weight = [], []
     for a, b in zip(_ALPHA_EDGES[:-1], _ALPHA_EDGES[1:]):
         alpha.append(0.5 * (b - a) * x + 0.5 * (b + a))
         weight.append(0.5 * (b - a) * w)
     alpha, weight = np.concatenate(alpha), np.concatenate(weight)
+    spec = tables.SPOT_FRACTION
     t = np.maximum(tables.surface_t(np.linspace(0.0, 1.0, spec.width)), 1e-6)   # (W,)
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        g_ray = model.airlight_quadrature_background(NumpyOps(), t[:, None], 1.0, np.cos(alpha)[None, :],
-                                                     np.sin(alpha)[None, :], g=spec.g) / t[:, None]   # (W, A)
-    g_ray = np.nan_to_num(g_ray) * (weight * np.sin(alpha))[None, :]
-    total = 2.0 * np.pi * g_ray.sum(axis=1)                                  # (W,)
-    psi = np.linspace(0.0, np.pi, tables.SPOT_PSI)
-    out = np.empty((spec.height, spec.width), np.float64)
-    for k, theta_c in enumerate(np.linspace(0.0, 0.5 * np.pi, tables.SPOT_CONES)):
-        arcs = _arc_inside(alpha[None, :], psi[:, None], theta_c)              # (PSI, A)
-        out[k * tables.SPOT_PSI:(k + 1) * tables.SPOT_PSI] = (arcs @ g_ray.T) / total[None, :]
-    return np.clip(out, 0.0, 1.0).astype(np.float32)
+    g_all, g_l, g_a = (v * (weight * np.sin(alpha))[None, :] for v in _ray_terms(t, alpha, g))   # (W, A)
+    total = 2.0 * np.pi * g_all.sum(axis=1)[None, :]
+    psi = np.clip(np.linspace(0.0, np.pi, tables.SPOT_PSI), _PSI_EDGE, np.pi - _PSI_EDGE)
+    out = [np.empty((spec.height, spec.width)) for _ in tables.SPOT_TABLES]
+    for k in range(tables.SPOT_SLICES):
+        rows = slice(k * tables.SPOT_PSI, (k + 1) * tables.SPOT_PSI)
+        if k < tables.SPOT_CONES:
+            arcs, moments = _arc_inside(alpha[None, :], psi[:, None], k * tables.HALF_PI / (tables.SPOT_CONES - 1))
+        else:
+            arcs, moments = np.full((tables.SPOT_PSI, alpha.size), 2.0 * np.pi), np.zeros((tables.SPOT_PSI, alpha.size))
+        out[0][rows] = (arcs @ g_all.T) / total
+        out[1][rows] = (arcs @ g_l.T) / total
+        out[2][rows] = (moments @ g_a.T) / (total * np.sin(psi)[:, None])
+    out[0] = np.clip(out[0], 0.0, 1.0)
+    return {tables.anisotropic(spec, g).name: v.astype(np.float32) for spec, v in zip(tables.SPOT_TABLES, out)}
 
 
-def scatter_fraction(m, t, c_axis, cos_half, blend, g=0.0):
-    """F (module section above): the share of a point light's fog light at a surface point that the spot
-    lights, from the table baked for g.  t = beta D_sp; c_axis: the point's ``axis_cosine``."""
+def _vmf_kappa(r):
+    """The concentration kappa of the von Mises-Fisher distribution of mean resultant length r in (0, 1):
+    coth kappa - 1/kappa = r, by bisection in log kappa (numpy)."""
+    lo, hi = np.full(np.shape(r), -12.0), np.full(np.shape(r), 16.0)
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        k = np.exp(mid)
+        mean = np.where(k < 1e-3, k / 3.0, 1.0 / np.tanh(np.minimum(k, 700.0)) - 1.0 / k)
+        low = mean < r
+        lo, hi = np.where(low, mid, lo), np.where(low, hi, mid)
+    return np.exp(0.5 * (lo + hi))
+
+
+def bake_lobe_response(spec=tables.LOBE_RESPONSE):
+    """resp(c, R) = int f(w) max(0, n . w) dw / pi, f the von Mises-Fisher density of mean resultant length
+    R about mu, c = n . mu (layout of tables.LOBE_RESPONSE; float32): 1 / (4 pi) for R = 0, max(0, c) / pi
+    for R = 1.  In t = mu . w the azimuthal integral of the clamped cosine is closed form (2 pi c t, 0, or
+    2 (A phi_m + B sin phi_m) where the ring crosses the horizon); t by Gauss-Legendre panels graded
+    towards t = 1, where the density e^{kappa (t - 1)} concentrates."""
+    c = np.linspace(-1.0, 1.0, spec.width)[None, :, None]
+    r = np.linspace(0.0, 1.0, spec.height)
+    x, w = np.polynomial.legendre.leggauss(16)
+    edges = np.concatenate([[0.0], 2.0 * 1e-7 ** np.linspace(1.0, 0.0, 48)])   # u = 1 - t in [0, 2]
+    lo, hi = edges[:-1, None], edges[1:, None]
+    u = (0.5 * (hi - lo) * x + 0.5 * (hi + lo)).ravel()
+    wu = (0.5 * (hi - lo) * w).ravel()
+    tt = 1.0 - u
+    a = c * tt
+    b = np.sqrt(np.maximum(1.0 - c * c, 0.0)) * np.sqrt(np.maximum(1.0 - tt * tt, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        phim = np.arccos(np.clip(-a / b, -1.0, 1.0))
+    ring = np.where(a >= b, 2.0 * np.pi * a, np.where(a <= -b, 0.0, 2.0 * (a * phim + b * np.sin(phim))))
+    kappa = _vmf_kappa(np.clip(r, 1e-9, 1.0 - 1e-9))[:, None, None]
+    density = kappa / (2.0 * np.pi * -np.expm1(-2.0 * kappa)) * np.exp(-kappa * u)   # per steradian, (R, 1, U)
+    out = np.sum(density * ring * wu, axis=-1) / np.pi
+    out[0] = 0.25 / np.pi
+    out[-1] = np.maximum(c[0, :, 0], 0.0) / np.pi
+    return out.astype(np.float32)
+
+
+def _lookup(m, spec, x, y0, step, frac):
+    """Bilinear in (X, psi) of ``spec`` at two slices ``step`` apart in Y, linear between them by ``frac``."""
+    f0 = m.table(spec, x, y0)
+    return f0 + frac * (m.table(spec, x, y0 + step) - f0)
+
+
+def world_axis(m, rows):
+    """Unit world direction of the cone's axis (the light's local -Z) from the rows of its inverse matrix:
+    -(row_x x row_y), normalised (the matrix's third column, up to a positive factor)."""
+    axis = m.cross(rows[1], rows[0])
+    return m.scale(axis, 1.0 / m.maximum(m.length(axis), 1e-30))
+
+
+def lobe_response(m, c, r):
+    """resp(c, R) of ``bake_lobe_response`` from its table."""
+    return m.table(tables.LOBE_RESPONSE, m.mul_add(c, 0.5, 0.5), r)
+
+
+def _moments(m, beta, d_sp, c_axis, cos_half, blend, g):
+    """(F, E1 . e_l, E1 . e_a / sin psi, the point light's R) from the tables of g (module section above):
+    the cone's share and first moment over the point light's total, once per light and surface point."""
+    spec, slice_rows = tables.anisotropic(tables.SPOT_FRACTION, g), tables.SPOT_PSI
+    ml_spec, ma_spec = (tables.anisotropic(s, g) for s in tables.SPOT_TABLES[1:])
     cos_mid = cos_half + (1.0 - cos_half) * (0.5 * blend)   # the cone taken hard mid-ramp
     psi = m.atan2(m.sqrt(1.0 - c_axis * c_axis), c_axis)
     theta = m.atan2(m.sqrt(1.0 - cos_mid * cos_mid), cos_mid)
-    rows, slices, spec = tables.SPOT_PSI, tables.SPOT_CONES, tables.anisotropic(tables.SPOT_FRACTION, g)
-    s = m.clamp01(theta * (1.0 / tables.HALF_PI)) * (slices - 1.0)
-    k0 = m.minimum(m.floor(s), slices - 2.0)
-    y0 = m.mul_add(k0, rows / (spec.height - 1.0), psi * ((rows - 1.0) / (math.pi * (spec.height - 1.0))))
-    x = tables.surface_x(m, t)
-    f0 = m.table(spec, x, y0)
-    f1 = m.table(spec, x, y0 + rows / (spec.height - 1.0))
-    return f0 + (s - k0) * (f1 - f0)
+    s = m.clamp01(theta * (1.0 / tables.HALF_PI)) * (tables.SPOT_CONES - 1.0)
+    k0 = m.minimum(m.floor(s), tables.SPOT_CONES - 2.0)
+    step = slice_rows / (spec.height - 1.0)
+    y0 = m.mul_add(k0, step, psi * ((slice_rows - 1.0) / (math.pi * (spec.height - 1.0))))
+    x = tables.surface_x(m, beta * d_sp)
+    frac = s - k0
+    return (_lookup(m, spec, x, y0, step, frac), _lookup(m, ml_spec, x, y0, step, frac),
+            _lookup(m, ma_spec, x, y0, step, frac),
+            m.table(ml_spec, x, (tables.SPOT_CONES * slice_rows) / (spec.height - 1.0)))
 
 
-def scatter(m, beta, d_sp, cos_theta, level, c_axis, cos_half, blend, *, point, g=0.0):
-    """The fog light a spot scatters onto a surface per unit albedo (1/m^2): the point light's (``point``,
-    a scatter rung's kernel: Sun et al. 2005 Eq. 17-18) times :func:`scatter_fraction`."""
-    return point(m, beta, d_sp, cos_theta, level) * scatter_fraction(m, beta * d_sp, c_axis, cos_half, blend, g)
+def _lobe(m, beta, d_sp, cos_theta, level, cos_lobe_axis, c_axis, moments, point, diffuse):
+    """One lobe of ``scatter``: the point light's at the mean direction, times F (and, ``diffuse``, the
+    concentration's correction), at most the point light's."""
+    share, e_l, e_a, r_point = moments
+    sin_psi = m.sqrt(1.0 - c_axis * c_axis)
+    # E1 . lobe = e_l cos_theta + e_a sin_psi (lobe . e_a), lobe . e_a = (lobe . axis + c_axis cos_theta) / sin_psi
+    along = m.mul_add(e_l, cos_theta, e_a * m.mul_add(c_axis, cos_theta, cos_lobe_axis))
+    size = m.maximum(m.sqrt(m.mul_add(e_l, e_l, (e_a * sin_psi) * (e_a * sin_psi))), 1e-30)
+    cos_mu = m.minimum(m.maximum(along / size, -1.0), 1.0)
+    spot = point(m, beta, d_sp, cos_mu, level) * share
+    if diffuse:
+        r_spot = m.minimum(size / m.maximum(share, 1e-30), 1.0)
+        spot = spot * lobe_response(m, cos_mu, r_spot) / m.maximum(lobe_response(m, cos_mu, r_point), 1e-6)
+    # the spot lights a part of the point light's fog: never more than the point light's fog light
+    return m.minimum(spot, point(m, beta, d_sp, cos_theta, level))
+
+
+def scatter(m, beta, d_sp, cos_n, cos_r, level, c_axis, cos_half, blend, cos_n_axis, cos_r_axis, *, point, g=0.0):
+    """(diffuse, glossy): the fog light a spot scatters onto a surface per unit albedo (1/m^2) through its
+    Lambertian lobe and its Phong lobe of table level ``level``: the point light's (``point``, a scatter
+    rung's kernel: Sun et al. 2005 Eq. 17-18) at the mean direction of the spot's fog light, times the
+    cone's share F, and for the diffuse lobe the correction for its concentration (module section above).
+    The tables are read once for both lobes.
+
+    cos_n, cos_r: the normal and the mirrored view vector against the direction to the light; c_axis: the
+    point's ``axis_cosine``; cos_n_axis, cos_r_axis: the normal and the mirrored view vector against the
+    cone's ``world_axis``."""
+    moments = _moments(m, beta, d_sp, c_axis, cos_half, blend, float(g))
+    return (_lobe(m, beta, d_sp, cos_n, 0.0, cos_n_axis, c_axis, moments, point, diffuse=True),
+            _lobe(m, beta, d_sp, cos_r, level, cos_r_axis, c_axis, moments, point, diffuse=False))
 
 
 def cone_interval(m, p0, d, kappa, t_end):

@@ -287,40 +287,100 @@ def phong_level(m, roughness):
     return tables.PHONG_LEVELS_PER_OCTAVE * log2_approx(m, n)
 
 
-def principled_to_phong(m, base_color, metallic, roughness, specular_ior_level, ior=1.5):
+def bake_specular_albedo(spec=tables.SPECULAR_ALBEDO):
+    """A(mu, r) and B(mu, r) of the split sum E = F0 A + F90 B (Karis 2013): the directional albedo of a
+    GGX lobe (alpha = r^2, Walter et al. 2007) with Smith's height-correlated masking-shadowing (Heitz 2014)
+    and Schlick's Fresnel F0 + (F90 - F0) (1 - v.h)^5, seen at mu = cos(view angle); and E with the
+    Fresnel equations of a dielectric of IOR tables.SPECULAR_IOR.  Layout of tables.SPECULAR_ALBEDO (A, B
+    and E in three slices of rows), float32.
+
+    Quadrature over the half vector h drawn from D cos(theta_h): u -> cos^2 theta_h = (1 - u) / (1 + (a^2 - 1) u)
+    by 96-point Gauss-Legendre in u, 64 points in azimuth; the integrand f cos(theta_l) / pdf is then
+    G (v.h) / (mu cos theta_h), smooth however narrow the lobe."""
+    mu = np.maximum(np.linspace(0.0, 1.0, spec.width), 1e-3)[None, :, None, None]
+    r = np.linspace(0.0, 1.0, tables.SPECULAR_ROUGHNESS)[:, None, None, None]
+    a2 = np.maximum(r * r, 1e-3) ** 2
+    x, w = np.polynomial.legendre.leggauss(96)
+    u, wu = (0.5 * (x + 1.0))[None, None, :, None], (0.5 * w)[None, None, :, None]
+    phi = ((np.arange(64) + 0.5) * (2.0 * math.pi / 64))[None, None, None, :]
+    cos_h = np.sqrt((1.0 - u) / (1.0 + (a2 - 1.0) * u))
+    sin_h = np.sqrt(np.maximum(1.0 - cos_h * cos_h, 0.0))
+    sin_v = np.sqrt(1.0 - mu * mu)
+    v_h = sin_v * sin_h * np.cos(phi) + mu * cos_h
+    cos_l = 2.0 * v_h * cos_h - mu
+
+    def smith_lambda(c):
+        c2 = np.maximum(c * c, 1e-12)
+        return 0.5 * (np.sqrt(1.0 + a2 * (1.0 - c2) / c2) - 1.0)
+
+    ok = (cos_l > 0.0) & (v_h > 0.0)
+    weight = np.where(ok, v_h / (mu * cos_h * (1.0 + smith_lambda(mu) + smith_lambda(np.maximum(cos_l, 1e-6)))), 0.0)
+    fresnel = (1.0 - np.clip(v_h, 0.0, 1.0)) ** 5
+    mean = lambda f: np.sum(np.mean(f, axis=-1) * wu[..., 0], axis=-1)   # noqa: E731  (u by GL, phi uniform)
+    return np.concatenate([mean(weight * (1.0 - fresnel)), mean(weight * fresnel),
+                           mean(weight * dielectric_fresnel(v_h, tables.SPECULAR_IOR))]).astype(np.float32)
+
+
+def dielectric_fresnel(c, ior):
+    """Unpolarised reflectance of a dielectric of relative index ``ior`` at the cosine c of incidence (the
+    Fresnel equations, numpy)."""
+    c = np.clip(c, 0.0, 1.0)
+    g = np.sqrt(np.maximum(ior * ior - 1.0 + c * c, 0.0))
+    a, b = (g - c) / (g + c), (c * (g + c) - 1.0) / (c * (g - c) + 1.0)
+    return 0.5 * a * a * (1.0 + b * b)
+
+
+def _specular_coords(m, roughness, cos_view):
+    spec, rows = tables.SPECULAR_ALBEDO, tables.SPECULAR_ROUGHNESS
+    return m.clamp01(cos_view), m.clamp01(roughness) * ((rows - 1.0) / (spec.height - 1.0)), rows / (spec.height - 1.0)
+
+
+def metal_albedo(m, f0, roughness, cos_view):
+    """Directional albedo of a metal's specular layer: F0 A + B from ``bake_specular_albedo`` (f0: RGB)."""
+    x, y, step = _specular_coords(m, roughness, cos_view)
+    bias = m.table(tables.SPECULAR_ALBEDO, x, y + step)
+    return m.scale(f0, m.table(tables.SPECULAR_ALBEDO, x, y)) + m.combine(bias, bias, bias)
+
+
+def dielectric_albedo(m, f0, roughness, cos_view):
+    """Directional albedo of a dielectric specular layer of normal reflectance f0 (scalar): the table's
+    Fresnel-equation albedo of IOR tables.SPECULAR_IOR scaled by f0 over its F0 (Blender's IOR Level
+    scales F0 the same way), 0 for f0 = 0."""
+    x, y, step = _specular_coords(m, roughness, cos_view)
+    f0_table = ((tables.SPECULAR_IOR - 1.0) / (tables.SPECULAR_IOR + 1.0)) ** 2
+    return m.minimum(m.table(tables.SPECULAR_ALBEDO, x, y + 2.0 * step) * (f0 * (1.0 / f0_table)), 1.0)
+
+
+def principled_to_phong(m, base_color, metallic, roughness, specular_ior_level, cos_view, ior=1.5):
     """(rho_d, rho_s, level) of a Principled BSDF for the reflected airlight, against ``m``.
 
-    base_color: vector (RGB); metallic, roughness, specular_ior_level: scalars;
-    ior: Python float (Blender's default 1.5).  rho_d, rho_s: RGB albedos of the
-    diffuse (n = 1 about the normal) and glossy (about the mirrored view vector)
-    lobes; level: table level of the glossy exponent (``phong_level``).
+    base_color: vector (RGB); metallic, roughness, specular_ior_level: scalars; cos_view: the cosine
+    between the shading normal and the direction to the viewer; ior: Python float (Blender's default
+    1.5).  rho_d, rho_s: RGB albedos of the diffuse (n = 1 about the normal) and glossy (about the
+    mirrored view vector) lobes; level: table level of the glossy exponent (``phong_level``).
 
-    The fog light reaching a surface comes from all directions, so the albedos
-    are hemispherical averages rather than normal-incidence values:
+    The glossy lobe of Eq. 17-18 is normalised to 1, so its albedo is the specular layer's directional
+    albedo seen from the viewer (``dielectric_albedo``, ``metal_albedo``: the Phong lobe carries the
+    prefiltered fog light, E(mu) the reflectance: Karis 2013).  It rises from F0 at normal incidence
+    to several times that at grazing angles (roughness 0.45: 0.04 to 0.2 at mu = 0.1), where wet roads
+    and floors are seen.
 
     * dielectric F0 = ((ior - 1) / (ior + 1))^2 * 2 * specular_ior_level
       (Blender 4+: IOR Level 0.5 keeps the IOR's F0, 0.04 at IOR 1.5);
       metal F0 = base colour; F0 = mix(F0_dielectric, base_color, metallic).
-    * Schlick's Fresnel averaged over the cosine-weighted hemisphere:
-      F_avg = F0 + (1 - F0) / 21  ->  rho_s = F_avg (the Phong lobe is normalised to 1).
-      Blender lowers the IOR itself to scale F0 (IOR Level), so a dielectric's
-      F_avg must vanish with F0: below F0 = 0.04 it is F0 (1 + (1 - F0) / 0.84),
-      which equals Schlick's average at 0.04 and is 0 at F0 = 0.
-    * rho_d = base_color (1 - metallic) (1 - F_avg_dielectric): the diffuse base
-      receives what the dielectric specular layer does not reflect.
-    * level from roughness r: GGX alpha = r^2 ~ Blinn-Phong exponent 2/alpha^2 - 2
-      about the half vector (Walter et al. 2007); the reflected-direction lobe is
-      twice as wide in angle, so n = (1/alpha^2 - 1) / 2 (see ``phong_exponent_from_roughness``).
+    * rho_d = base_color (1 - metallic) (1 - E_dielectric(mu)): the diffuse base receives what the
+      dielectric specular layer does not reflect.
+    * level from roughness r: GGX alpha = r^2 ~ Blinn-Phong exponent 2/alpha^2 - 2 about the half vector
+      (Walter et al. 2007); the reflected-direction lobe is twice as wide in angle, so
+      n = (1/alpha^2 - 1) / 2 (see ``phong_exponent_from_roughness``).
 
     Ignored: transmission, coat, sheen, subsurface, diffuse roughness, anisotropy.
     """
     f0_d = m.minimum(specular_ior_level * (2.0 * ((ior - 1.0) / (ior + 1.0)) ** 2), 1.0)
-    # Schlick's average, but going to 0 with F0 below 0.04: IOR Level 0 means no specular layer at all.
-    avg_d = m.minimum(f0_d * (20.0 / 21.0) + 1.0 / 21.0, f0_d * (1.0 + (1.0 - f0_d) * (1.0 / 0.84)))
-    rho_d = m.scale(base_color, (1.0 - metallic) * (1.0 - avg_d))
-    # rho_s = F_avg(mix(F0_d, base, metallic)) = (1 - metallic) avg_d + metallic (base 20/21 + 1/21)
-    grey = (1.0 - metallic) * avg_d + metallic * (1.0 / 21.0)
-    rho_s = m.scale(base_color, metallic * (20.0 / 21.0)) + m.combine(grey, grey, grey)
+    e_d = dielectric_albedo(m, f0_d, roughness, cos_view)
+    rho_d = m.scale(base_color, (1.0 - metallic) * (1.0 - e_d))
+    grey = (1.0 - metallic) * e_d
+    rho_s = m.scale(metal_albedo(m, base_color, roughness, cos_view), metallic) + m.combine(grey, grey, grey)
     return rho_d, rho_s, phong_level(m, roughness)
 
 
@@ -373,9 +433,19 @@ def phong_exponent_from_roughness(roughness):
     return min(max(n, lo), hi)
 
 
-def principled_albedos(base_color, metallic=0.0, roughness=0.5, specular_ior_level=0.5, ior=1.5):
-    """numpy version of :func:`principled_to_phong`: (rho_d RGB, rho_s RGB, n)."""
-    m = NumpyOps()
-    rho_d, rho_s, _ = principled_to_phong(m, np.asarray(base_color, float), np.asarray(float(metallic)),
-                                          np.asarray(float(roughness)), np.asarray(float(specular_ior_level)), ior)
-    return rho_d, rho_s, phong_exponent_from_roughness(roughness)
+def principled_albedos(base_color, metallic=0.0, roughness=0.5, specular_ior_level=0.5, ior=1.5, cos_view=1.0):
+    """numpy version of :func:`principled_to_phong`: (rho_d RGB, rho_s RGB, n); arrays broadcast (cos_view
+    one per view)."""
+    m = NumpyOps({tables.SPECULAR_ALBEDO.name: specular_table()})
+    rho_d, rho_s, _ = principled_to_phong(m, np.asarray(base_color, float), np.asarray(metallic, float),
+                                          np.asarray(roughness, float), np.asarray(specular_ior_level, float),
+                                          np.asarray(cos_view, float), ior)
+    n = np.vectorize(phong_exponent_from_roughness, otypes=[float])(roughness)
+    return rho_d, rho_s, float(n) if np.ndim(n) == 0 else n
+
+
+def specular_table():
+    """The specular albedo table (cached per process)."""
+    if tables.SPECULAR_ALBEDO.name not in _TABLE_CACHE:
+        _TABLE_CACHE[tables.SPECULAR_ALBEDO.name] = bake_specular_albedo()
+    return _TABLE_CACHE[tables.SPECULAR_ALBEDO.name]

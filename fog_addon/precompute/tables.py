@@ -37,13 +37,33 @@ MAX_ANISOTROPY = 0.95   # |g| up to this: the Henyey-Greenstein range the tables
 AIRLIGHT_HG_SIZE = (256, 256)
 
 
-# The share of a point light's fog light on a surface that a spot's cone lights (spot.scatter_fraction):
-# F(T, psi, theta_c), X = surface_x(T) (T = beta D_sp), rows the angle psi in [0, pi] of the surface point
-# from the cone's axis (SPOT_PSI per slice), stacked in SPOT_CONES slices of the cone's half-angle theta_c
-# in [0, pi/2] (uniform).
+# A spot's fog light on a surface (spot.scatter): tables of X = surface_x(T) (T = beta D_sp) and rows of the
+# angle psi in [0, pi] of the surface point from the cone's axis (SPOT_PSI per slice), stacked in slices of
+# the cone's half-angle theta_c in [0, pi/2] (SPOT_CONES, uniform) and one last slice for the whole sphere
+# (the point light).  Per g: the share F of the point light's fog light that the cone lights, and the two
+# components of the first moment of the directions it arrives from (``spot.bake_scatter_tables``).
 SPOT_PSI = 65
 SPOT_CONES = 19
-SPOT_FRACTION = TableSpec("AnalyticFog Spot Fraction", 64, SPOT_PSI * SPOT_CONES)
+SPOT_SLICES = SPOT_CONES + 1
+SPOT_FRACTION = TableSpec("AnalyticFog Spot Fraction", 64, SPOT_PSI * SPOT_SLICES)
+SPOT_MOMENT_LIGHT = TableSpec("AnalyticFog Spot Moment Light", 64, SPOT_PSI * SPOT_SLICES)
+SPOT_MOMENT_AXIS = TableSpec("AnalyticFog Spot Moment Axis", 64, SPOT_PSI * SPOT_SLICES)
+SPOT_TABLES = (SPOT_FRACTION, SPOT_MOMENT_LIGHT, SPOT_MOMENT_AXIS)
+
+# The Lambertian response of light arriving from a von Mises-Fisher distribution of directions
+# (``spot.lobe_response``): X = (c + 1) / 2, c the cosine between the normal and the mean direction;
+# Y = the mean resultant length R in [0, 1].  No g: the distribution's shape only.
+LOBE_RESPONSE = TableSpec("AnalyticFog Lobe Response", 129, 65)
+
+
+# The directional albedo of the Principled BSDF's specular layer (``surface.bake_specular_albedo``):
+# Karis' split sum, E(mu, r) = F0 A(mu, r) + F90 B(mu, r), GGX with Smith masking and Schlick's Fresnel
+# (metals), and E with the dielectric Fresnel equations of IOR SPECULAR_IOR (dielectrics);
+# X = mu = cos(view angle) in [0, 1], Y = roughness r in [0, 1] within each of three slices: A, B, E.
+SPECULAR_MU = 33
+SPECULAR_ROUGHNESS = 33
+SPECULAR_IOR = 1.5
+SPECULAR_ALBEDO = TableSpec("AnalyticFog Specular Albedo", SPECULAR_MU, 3 * SPECULAR_ROUGHNESS)
 
 
 def anisotropic(spec, g):

@@ -42,7 +42,7 @@ import numpy as np  # noqa: E402
 
 from fog_addon import imageio, measure  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
-from fog_addon.precompute import airlight, rungs, shading, surface, tables  # noqa: E402
+from fog_addon.precompute import bakers, rungs, shading, surface  # noqa: E402
 from fog_addon.precompute.medium import Medium  # noqa: E402
 from fog_addon.precompute.ops import NumpyOps  # noqa: E402
 from probe_common import add_point_lights, camera_rays, look_at, tiny_render  # noqa: E402
@@ -180,7 +180,7 @@ def twin(c, d, method, n, steps=None):
     """The numpy twin of the fog's emission per pixel, and (object index, valid mask, names).
 
     ``steps``: each light's step down the ladder (rungs.STEPS) as the add-on chose it; default all full."""
-    m = NumpyOps({tables.AIRLIGHT.name: airlight.bake_airlight_table(), tables.SURFACE.name: surface.surface_table()})
+    m = NumpyOps(bakers.numpy_tables(0.0))
     med = Medium(BETA, np.asarray(ALBEDO))
     models = [rungs.choose(method, k) for k in ([0] * n if steps is None else steps)]
     ls = [shading.Light(np.asarray(loc, float), power / (4 * math.pi) * np.asarray(col)) for loc, power, col
@@ -207,7 +207,8 @@ def twin(c, d, method, n, steps=None):
                 normal = (p - np.asarray(centre)) / radius
             base, rough, metal, level = MATERIALS[name]
             rho_d, rho_s, lev = surface.principled_to_phong(m, np.asarray(base, float), np.asarray(metal),
-                                                             np.asarray(rough), np.asarray(level))
+                                                             np.asarray(rough), np.asarray(level),
+                                                             np.sum(-dd * np.broadcast_to(normal, dd.shape), -1))
             geo = shading.Geometry(c, p, -dd, tt, normal)
             terms = [shading.shade_point(m, geo, shading.Material(rho_d, rho_s, lev), li, med, mod)
                      for li, mod in zip(ls, models)]

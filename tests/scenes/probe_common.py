@@ -58,3 +58,23 @@ def add_point_lights(scene, specs, fog_only=True):
             light_fog_only(ob)
         ob.location = where
         scene.collection.objects.link(ob)
+
+
+def white_furnace(base_color, roughness, specular_ior_level=0.5, size=1e4):
+    """A new empty scene with one plane of ``size`` m (at z = 0, selected) of a Principled BSDF under a
+    uniform white World of radiance 1: the light a point of it reflects is its directional albedo."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    bpy.ops.mesh.primitive_plane_add(size=size)
+    mat = bpy.data.materials.new("Furnace")
+    mat.use_nodes = True
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (*base_color, 1.0)
+    bsdf.inputs["Roughness"].default_value = roughness
+    bsdf.inputs["Specular IOR Level"].default_value = specular_ior_level
+    bpy.context.object.data.materials.append(mat)
+    world = bpy.data.worlds.new("White")
+    world.use_nodes = True
+    world.node_tree.nodes["Background"].inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    scene.world = world
+    return scene

@@ -31,7 +31,7 @@ from mathutils import Vector  # noqa: E402
 
 from fog_addon import imageio, measure  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
-from fog_addon.precompute import airlight, rungs, shading, spot, surface, tables  # noqa: E402
+from fog_addon.precompute import bakers, rungs, shading, surface  # noqa: E402
 from fog_addon.precompute.medium import Medium  # noqa: E402
 from fog_addon.precompute.ops import NumpyOps  # noqa: E402
 import probe_common  # noqa: E402
@@ -86,15 +86,11 @@ def build(engine, method, case, g=0.0, kind="point"):
 def twin(c, d, case, method, without=None, g=0.0, spots=None):
     """The numpy twin of the fog's emission per pixel; ``without`` "glossy": that term zeroed; ``spots``:
     a shading.Spot per light (None: point lights)."""
-    spec = tables.anisotropic(tables.AIRLIGHT, g)
-    frac = tables.anisotropic(tables.SPOT_FRACTION, g)
-    m = NumpyOps({spec.name: airlight.bake_airlight_table(spec),
-                  tables.anisotropic(tables.SURFACE, g).name: surface.surface_table(g),
-                  frac.name: spot.bake_scatter_fraction(frac)})
+    m = NumpyOps(bakers.numpy_tables(g))
     p = CASES[case]
     rho_d, rho_s, level = surface.principled_to_phong(
         m, np.asarray(p["base"], float), np.asarray(p["metallic"]), np.asarray(p["roughness"]),
-        np.asarray(p["ior_level"]))
+        np.asarray(p["ior_level"]), -d[..., 2])   # the plane's normal is +Z
     if without == "glossy":
         rho_s = 0.0 * rho_s
     t = np.where(d[..., 2] < 0, -c[2] / np.minimum(d[..., 2], -1e-12), np.inf)

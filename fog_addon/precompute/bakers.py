@@ -1,0 +1,29 @@
+"""The one map from every table the shaders read to its baker (numpy only)."""
+import functools
+
+from . import airlight, spot, surface, tables
+
+
+@functools.lru_cache(maxsize=None)
+def _spot_tables(g):
+    return spot.bake_scatter_tables(g)
+
+
+def bakers(g=0.0):
+    """{TableSpec.name: (TableSpec, baker)} of the tables for Henyey-Greenstein anisotropy g (the lobe
+    response and the specular albedo are the same for every g)."""
+    air, surf = tables.anisotropic(tables.AIRLIGHT, g), tables.anisotropic(tables.SURFACE, g)
+    out = {air.name: (air, lambda: airlight.bake_airlight_table(air)),
+           surf.name: (surf, lambda: surface.surface_table(g)),   # cached per process
+           tables.LOBE_RESPONSE.name: (tables.LOBE_RESPONSE, spot.bake_lobe_response),
+           tables.SPECULAR_ALBEDO.name: (tables.SPECULAR_ALBEDO, surface.bake_specular_albedo)}
+    for spec in tables.SPOT_TABLES:
+        spec = tables.anisotropic(spec, g)
+        out[spec.name] = (spec, functools.partial(lambda name: _spot_tables(float(g))[name], spec.name))
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def numpy_tables(g=0.0):
+    """{name: float32 array} of every table for anisotropy g, baked once per process (read-only use)."""
+    return {name: bake() for name, (_, bake) in bakers(g).items()}
