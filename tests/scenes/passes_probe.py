@@ -19,9 +19,9 @@ MODE
 The one-lamp scene: camera at (0, -6, 1) looking along +y, a black plane 20 m wide (no reflection:
 base colour 0, specular 0), so every pixel off the sphere is pure airlight; the lamp
 (1000 W, beta = 0.2 /m) is 0.09 px from a pixel centre, a sharp glow; a grey sphere lit by the lamp and
-by a grey World (which camera rays do not see once fogged: they see the fog) is the noisy part the
-denoiser has to clean.  Multilayer EXRs are read by
-the test (OpenImageIO crashed reading multi-part files in a process that had rendered).
+by a grey World (which camera rays do not see once fogged: they see the fog; the fog's World Light is on,
+so the World keeps lighting the sphere through the fog) is the noisy part the denoiser has to clean.
+Multilayer EXRs are read by the test (OpenImageIO crashed reading multi-part files in a process that had rendered).
 The last line of stdout is one JSON object describing the scene.
 """
 import json
@@ -43,7 +43,7 @@ LAMP_PIXEL = (37.57, 21.56)   # where the lamp is seen, in pixels (x right, y do
 LAMP_DEPTH = 6.0              # m in front of the camera
 PLANE = 20.0
 SPHERE = ((-1.0, -2.0, 0.7), 0.6)
-SKY = (0.8, 0.8, 0.8)   # the user's World: camera rays see only the fog, other rays this
+SKY = (0.8, 0.8, 0.8)   # the user's World: camera rays see only the fog, other rays this (World Light on)
 
 
 def lamp_location():
@@ -128,7 +128,7 @@ def denoise(out, keep_setup=True):
     scene = bpy.context.scene
     info = one_lamp(scene)
     info["denoiser_before"] = scene.cycles.use_denoising
-    info["notes"] = apply.apply_fog(scene, BETA, with_passes=True)
+    info["notes"] = apply.apply_fog(scene, BETA, with_passes=True, world_light=True)
     info["set_up"] = compositor.is_set_up(scene)
     if not keep_setup:
         compositor.teardown(scene)
