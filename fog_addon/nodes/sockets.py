@@ -64,7 +64,14 @@ def _modules(fn):
 
 
 class NodeOps:
-    """Builds ``model.py`` formulas into ``tree``; ``images`` maps TableSpec.name -> bpy image."""
+    """Builds ``model.py`` formulas into ``tree``; ``images`` maps TableSpec.name -> bpy image.
+
+    The node types of a group and its tree are class attributes, so a subclass can build the same
+    formulas into another kind of node tree (the compositor's: ``benchmarks/compositor_fog``)."""
+
+    GROUP_NODE = "ShaderNodeGroup"
+    GROUP_TREE = "ShaderNodeTree"
+    KERNEL_PREFIX = KERNEL_GROUP
 
     def __init__(self, tree, images=None, x0=0.0, y0=0.0):
         self.tree = tree
@@ -282,10 +289,10 @@ class NodeOps:
         say everything that changes what ``fn`` builds), a group node here.  Why: Blender's
         ``nodes.new`` costs time growing with the nodes already in the tree (500 nodes 0.9 s, 2 000 16 s),
         and Cycles and EEVEE inline groups, so what they compile is the same."""
-        tree = self._kernel_group(f"{KERNEL_GROUP} {name}", fn, len(args))
+        tree = self._kernel_group(f"{self.KERNEL_PREFIX} {name}", fn, len(args))
         vals = [self.wrap(a) for a in args]
         col = 1 + max(v.col for v in vals)
-        n = self.node("ShaderNodeGroup", col)
+        n = self.node(self.GROUP_NODE, col)
         n.node_tree = tree
         for sock, v in zip(n.inputs, vals):
             self.feed(sock, v)
@@ -298,14 +305,14 @@ class NodeOps:
         if ng is not None and ng.get(owned.BUILT) == built:
             return ng
         if ng is None:
-            ng = bpy.data.node_groups.new(name, "ShaderNodeTree")
+            ng = bpy.data.node_groups.new(name, self.GROUP_TREE)
         ng.nodes.clear()
         ng.interface.clear()
         for k in range(count):
             ng.interface.new_socket(f"In {k}", in_out="INPUT", socket_type="NodeSocketFloat")
         gin = ng.nodes.new("NodeGroupInput")
         gout = ng.nodes.new("NodeGroupOutput")
-        sub = NodeOps(ng, self.images)
+        sub = type(self)(ng, self.images)
         result = fn(sub, *(sub.wrap(o) for o in gin.outputs[:count]))
         result = result if isinstance(result, tuple) else (result,)
         for k, v in enumerate(result):

@@ -1,0 +1,81 @@
+"""The glow's peaks: the compositor's fog light and the materials' (16 samples a pixel) against converged means.
+
+    .venv/bin/python benchmarks/compositor_fog/peaks.py N EXACT.exr
+Around each of the N lights' images (7 x 7 pixels, all seeing the sky), the pixel's mean glow under
+Cycles' pixel filter (Blackman-Harris, support +-1.5 px, x and y drawn independently) is integrated on a
+241 x 241 grid with the numpy twin of the background glow (Sun Eq. 12): independent of both renders.
+Elsewhere the reference is the materials' Fog Light AOV (exact per sample; its 16 samples a pixel are
+what the compositor's AOVs average too).  Prints one JSON line: the relative RMSE of each against that
+reference, and the largest relative error in the peak windows.
+"""
+import json
+import pathlib
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path[:0] = [str(ROOT), str(ROOT / "tests" / "scenes"), str(pathlib.Path(__file__).resolve().parent)]
+
+import numpy as np  # noqa: E402
+
+from fog_addon import imageio  # noqa: E402
+
+
+def main(n, path):
+    layers = imageio.read_layers(path)   # before bpy renders anything (imageio.read_layers)
+    shader = layers["ViewLayer.Fog Light"][::-1, :, :3].astype(float)   # row 0 at the bottom, as Blender's
+    comp = layers["Composite.Combined"][::-1, :, :3].astype(float)
+    cover = layers["ViewLayer.CF Cover"][::-1, :, 0]
+    import bpy
+    import build
+    import many_lights
+    from fog_addon import measure
+    from fog_addon.ops import apply, view
+    from fog_addon.precompute import model, predict, rungs
+    scene, _ = many_lights.build_scene(n, direct_light=True)
+    measure.set_resolution(scene, build.W, build.H)
+    bpy.context.view_layer.update()
+    lights, _ = apply.fog_lights(scene)
+    intensity = view.light_intensities(lights)
+    positions = np.array([list(o.matrix_world.translation) for o in lights])
+    cam = np.array(scene.camera.matrix_world.translation)
+    _, rays = view._frame_rays(scene, scene.camera, (build.W, build.H))
+    rays = rays.reshape(build.H, build.W, 3)
+    forward = -np.array(scene.camera.matrix_world.to_3x3().col[2])
+    plane = rays / (rays @ forward)[..., None]          # on the plane at unit depth: linear in pixel coords
+    ex, ey = plane[0, 1] - plane[0, 0], plane[1, 0] - plane[0, 0]
+    m = predict._numpy_ops(0.0)
+    full = rungs.choose("nodes", 0, 0.0)
+    steps = 241
+    s = (np.arange(steps) + 0.5) / steps * build.FILTER_WIDTH - build.FILTER_WIDTH / 2
+    w = build.blackman_harris(s)
+    weights = np.outer(w, w) / np.outer(w, w).sum()
+    sx, sy = np.meshgrid(s, s)
+    ref = shader.copy()
+    window = np.zeros(cover.shape, bool)
+    for light in lights:
+        lx, ly, _ = build.light_pixel(scene, light)
+        for j in range(int(ly) - 3, int(ly) + 4):
+            for i in range(int(lx) - 3, int(lx) + 4):
+                if not (0 <= i < build.W and 0 <= j < build.H) or cover[j, i] > 0:
+                    continue
+                v = plane[0, 0] + (i + sx)[..., None] * ex + (j + sy)[..., None] * ey
+                d = v / np.linalg.norm(v, axis=-1, keepdims=True)
+                d_sv, along, h = model.ray_light_geometry(m, cam, d[..., None, :], positions)
+                glow = (m.run(full.background, many_lights.BETA, d_sv, along, h)[..., None] * intensity).sum(-2)
+                ref[j, i] = (glow * weights[..., None]).sum((0, 1)) * np.array(many_lights.ALBEDO)
+                window[j, i] = True
+    den = (ref ** 2).sum()
+
+    def rel(img):
+        return float(np.sqrt(((img - ref) ** 2).sum() / den))
+
+    def worst(img):
+        return float((np.abs(img - ref).max(-1) / ref.max(-1))[window].max())
+
+    print(json.dumps({"n": n, "peak_pixels": int(window.sum()), "comp_rel_rmse": rel(comp),
+                      "shader16_rel_rmse": rel(shader), "comp_peak_max_rel": worst(comp),
+                      "shader16_peak_max_rel": worst(shader)}))
+
+
+if __name__ == "__main__":
+    main(int(sys.argv[-2]), sys.argv[-1])
