@@ -130,12 +130,12 @@ def light_group(models, imgs, peak, cache={}):
     ng, gin, gout = _group("CF " + key, [
         ("Beta", F), ("Light", V), ("Intensity", V), ("Camera", V), ("Position", V), ("Incoming", V),
         ("View Distance", F), ("Normal", V), ("Diffuse", V), ("Specular", V), ("Level", F), ("Direction", V),
-        ("Pixel", V), ("Light Pixel", V), ("D1", F), ("D2", F), ("W1", F)],
+        ("Pixel", V), ("Light Pixel", V), ("D1", F), ("D2", F), ("W1", F), *groups._spot_inputs(models)],
         [("Airlight", V), ("Scattered", V), ("Background", V)])
     m = CompOps(ng, imgs)
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
     geo = shading.Geometry(g["Camera"], g["Position"], g["Incoming"], g["View Distance"], g["Normal"])
-    light = shading.Light(g["Light"], g["Intensity"])
+    light = groups._light(g, models)
     medium = groups._medium(m, g["Beta"])
     terms = shading.shade_point(m, geo, shading.Material(g["Diffuse"], g["Specular"], g["Level"]), light,
                                 medium, models)
@@ -144,7 +144,8 @@ def light_group(models, imgs, peak, cache={}):
         material = shading.Material(g["Diffuse"], g["Specular"], g["Level"])
         glow, lit = [], []
         for d, w in ((g["D1"], g["W1"]), (g["D2"], 1.0 - g["W1"])):
-            a = m.run(models.airlight, medium.beta, d_sv, along, h, d)
+            a = m.run(models.airlight, medium.beta, d_sv, along, h, d,
+                      *shading.spot_ray(m, light, models.airlight, g["Camera"], g["Direction"]))
             glow.append(w * (a * peak_factor(m, along, d, g["Pixel"], g["Light Pixel"], imgs) if peak else a))
             at = shading.Geometry(g["Camera"], g["Camera"] + m.scale(g["Direction"], d), -1.0 * g["Direction"], d,
                                   g["Normal"])
@@ -244,6 +245,13 @@ def build_compositor(scene, lights, models, imgs, beta, albedo):
         node.inputs["Light"].default_value = tuple(light.matrix_world.translation)
         node.inputs["Light Pixel"].default_value = [c * scale for c in light_pixel(scene, light)]
         node.inputs["Intensity"].default_value = tuple(view.light_intensities([light])[0])
+        if view.is_spot(light):   # the cone as groups._drive_spot feeds it (constants here)
+            m3 = light.matrix_world.to_3x3()
+            cofactor = m3.inverted() * m3.determinant()
+            for i, name in enumerate(groups.SPOT_ROWS):
+                node.inputs[name].default_value = tuple(cofactor[i])
+            node.inputs[groups.SPOT_COS].default_value = math.cos(light.data.spot_size * 0.5)
+            node.inputs[groups.SPOT_BLEND].default_value = light.data.spot_blend
         a, s, b = (m.wrap(node.outputs[n], vector=True) for n in ("Airlight", "Scattered", "Background"))
         air, scat, back = (a, s, b) if air is None else (air + a, scat + s, back + b)
     t_vp = m.exp(d_vp * -beta)
@@ -303,10 +311,11 @@ def to_compositor(scene, comp=True, lights=None):
     keep only e^{-beta D_vp} (no light's nodes) and the Composite is the render plus the compositor's fog
     light; without, the materials keep their fog and the Composite is the compositor's fog light alone
     (to compare with the Fog Light pass).  Each light gets the models its Quality chose (the stored
-    choice: ``apply.choose_models``); point lights only, g = 0."""
+    choice: ``apply.choose_models``), spot lights and Henyey-Greenstein g included."""
     scene.render.use_compositing = True
     lights = lights or apply.fog_lights(scene)[0]
-    imgs = images.all_table_images(0.0)
+    g = groups.get_anisotropy()
+    imgs = images.all_table_images(g)
     imgs[FILTER.name] = images.table_image(FILTER, bake_filter)
     if comp:
         groups.build_surface([], [], imgs)
@@ -315,7 +324,7 @@ def to_compositor(scene, comp=True, lights=None):
     albedo = tuple(bpy.data.node_groups[groups.PARAMS].nodes["Albedo"].outputs[0].default_value)[:3]
     choice = apply.stored_choice()
     steps = [choice["lights"].get(o.name, [0])[0] if choice else 0 for o in lights]
-    lights, models = zip(*[(o, rungs.choose("nodes", k, 0.0, False)) for o, k in zip(lights, steps)
+    lights, models = zip(*[(o, rungs.choose("nodes", k, g, view.is_spot(o))) for o, k in zip(lights, steps)
                            if k != rungs.LEFT_OUT])
     tree, rl, out, fog = build_compositor(scene, lights, models, imgs, groups.get_beta(), albedo)
     m = CompOps(tree, imgs)
