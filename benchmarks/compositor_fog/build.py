@@ -14,7 +14,7 @@ The compositor's graph is ``shading.shade_point`` / ``background_point`` built b
 backend with compositor groups and Map UV taps: the same formulas as the materials' groups.
 Inputs per pixel (AOVs averaged over the pixel's samples): coverage by surfaces, position, normal, the
 material's Principled inputs (``surface.principled_to_phong`` runs in the compositor); the camera rays'
-directions for the sky come from an image of the frame's rays.
+directions and the lights' positions in the picture come from the camera's image plane (``camera_frame``).
 """
 import json
 import math
@@ -190,17 +190,28 @@ def filter_scale(scene):
     return 1.5 / c.filter_width if c.pixel_filter_type == "BLACKMAN_HARRIS" else None
 
 
-def rays_image(scene):
-    """The frame's camera ray directions as a float image (row 0 at the bottom, as Blender's)."""
-    w, h = size(scene)
-    _, d = view._frame_rays(scene, scene.camera, (w, h))
-    img = bpy.data.images.new("CF Rays", w, h, alpha=True, float_buffer=True, is_data=True)
-    img.colorspace_settings.name = "Non-Color"
-    img.alpha_mode = "CHANNEL_PACKED"
-    img.pixels.foreach_set(np.concatenate([d, np.ones((len(d), 1))], axis=1).astype(np.float32).ravel())
-    img.update()
-    img.pack()
-    return img
+def camera_frame(scene):
+    """(corner, across, up): the perspective camera's image plane in world space, at the distance where
+    Blender's view frame lies: the bottom-left corner's direction and the vectors to the bottom-right and
+    top-left corners.  A pixel at normalised (u, v) looks along corner + u across + v up."""
+    cam = scene.camera
+    if cam.data.type != "PERSP":
+        raise ValueError("the compositor's fog light needs a perspective camera")
+    top_right, bottom_right, bottom_left, top_left = [cam.matrix_world.to_3x3() @ v
+                                                      for v in cam.data.view_frame(scene=scene)]
+    return bottom_left, bottom_right - bottom_left, top_left - bottom_left
+
+
+def picture_position(m, to_light, corner, across, up, size):
+    """Where the point ``to_light`` (from the camera, m) appears in the picture, in the units of
+    ``size`` (its width and height), from the bottom-left corner; far outside when behind the camera."""
+    normal = m.cross(across, up)
+    t = m.dot(corner, normal) / m.dot(to_light, normal)
+    q = m.scale(to_light, t) - corner
+    u = m.dot(q, across) * (size[0] / m.dot(across, across))
+    v = m.dot(q, up) * (size[1] / m.dot(up, up))
+    behind = m.less(t, 0.0) * 1e6
+    return m.combine(u + behind, v + behind, 0.0)
 
 
 def build_compositor(scene, lights, models, imgs, beta, albedo):
@@ -219,16 +230,17 @@ def build_compositor(scene, lights, models, imgs, beta, albedo):
     d_vp = m.length(to_cam)
     incoming = m.scale(to_cam, 1.0 / m.maximum(d_vp, 1e-9))
     normal = m.scale(p["CF Normal"], 1.0 / m.maximum(m.length(p["CF Normal"]), 1e-9))
-    rays = tree.nodes.new("CompositorNodeImage")
-    rays.image = rays_image(scene)
-    direction = m.wrap(rays.outputs["Image"], vector=True)
     coords = tree.nodes.new("CompositorNodeImageCoordinates")
     tree.links.new(rl.outputs["Image"], coords.inputs[0])
+    uv = m.wrap(coords.outputs["Normalized"], vector=True)
+    corner, across, up = (m.wrap(tuple(v)) for v in camera_frame(scene))
+    ray = corner + m.scale(across, m.dot(uv, (1.0, 0.0, 0.0))) + m.scale(up, m.dot(uv, (0.0, 1.0, 0.0)))
+    direction = m.scale(ray, 1.0 / m.length(ray))
     w, h = size(scene)
     scale = filter_scale(scene)
     peak = scale is not None and os.environ.get("CF_PEAK", "1") == "1"
     scale = scale or 0.0
-    pixel = m.wrap(coords.outputs["Normalized"], vector=True) * m.wrap((w * scale, h * scale, 0.0))
+    pixel = uv * m.wrap((w * scale, h * scale, 0.0))
     mats = surface.principled_to_phong(m, m.scale(p["CF Base Color"], inv), p["CF Metallic"] * inv,
                                        p["CF Roughness"] * inv, p["CF Specular IOR Level"] * inv,
                                        m.dot(incoming, normal))
@@ -243,7 +255,8 @@ def build_compositor(scene, lights, models, imgs, beta, albedo):
                         ("D1", d1), ("D2", d2), ("W1", w1)):
             m.feed(node.inputs[name], v)
         node.inputs["Light"].default_value = tuple(light.matrix_world.translation)
-        node.inputs["Light Pixel"].default_value = [c * scale for c in light_pixel(scene, light)]
+        to_light = m.wrap(tuple(light.matrix_world.translation)) - cam
+        m.feed(node.inputs["Light Pixel"], picture_position(m, to_light, corner, across, up, (w * scale, h * scale)))
         node.inputs["Intensity"].default_value = tuple(view.light_intensities([light])[0])
         if view.is_spot(light):   # the cone as groups._drive_spot feeds it (constants here)
             m3 = light.matrix_world.to_3x3()
