@@ -202,6 +202,41 @@ def camera_frame(scene):
     return bottom_left, bottom_right - bottom_left, top_left - bottom_left
 
 
+def _drive(sock, expression, variables):
+    """Drive ``sock`` by a simple expression (no Python at render time) of (name, ID, ID type, data path)."""
+    d = sock.driver_add("default_value").driver
+    d.type = "SCRIPTED"
+    for name, owner, id_type, path in variables:
+        var = d.variables.new()
+        var.name, var.type = name, "SINGLE_PROP"
+        var.targets[0].id_type = id_type
+        var.targets[0].id = owner
+        var.targets[0].data_path = path
+    d.expression = expression
+
+
+def driven_camera_frame(m, scene):
+    """``camera_frame`` as three vectors driven by the camera's matrix, lens, sensor and shift and the
+    render's size (sensor fit Auto or Horizontal, a picture at least as wide as it is tall)."""
+    cam = scene.camera
+    r = scene.render
+    if cam.data.sensor_fit == "VERTICAL" or r.resolution_x < r.resolution_y:
+        raise ValueError("the prototype drives a horizontal sensor fit only")
+    common = [("l", cam.data, "CAMERA", "lens"), ("s", cam.data, "CAMERA", "sensor_width"),
+              ("x", cam.data, "CAMERA", "shift_x"), ("y", cam.data, "CAMERA", "shift_y"),
+              ("rx", scene, "SCENE", "render.resolution_x"), ("ry", scene, "SCENE", "render.resolution_y")]
+    out = []
+    for label, expression in (("corner", "(x*s/l - s/(2*l))*a + (y*s/l - s*ry/(2*l*rx))*b - c"),
+                              ("across", "s/l*a"), ("up", "s*ry/(l*rx)*b")):
+        vec = m.node("ShaderNodeCombineXYZ", 0)
+        vec.label = f"Camera {label}"
+        for i in range(3):
+            _drive(vec.inputs[i], expression, common + [(n, cam, "OBJECT", f"matrix_world[{col}][{i}]")
+                                                         for n, col in (("a", 0), ("b", 1), ("c", 2))])
+        out.append(m.wrap(vec.outputs[0], vector=True))
+    return out
+
+
 def picture_position(m, to_light, corner, across, up, size):
     """Where the point ``to_light`` (from the camera, m) appears in the picture, in the units of
     ``size`` (its width and height), from the bottom-left corner; far outside when behind the camera."""
@@ -214,8 +249,10 @@ def picture_position(m, to_light, corner, across, up, size):
     return m.combine(u + behind, v + behind, 0.0)
 
 
-def build_compositor(scene, lights, models, imgs, beta, albedo):
-    """The compositor graph: Image + the fog's light (``comp``) or the fog's light alone (``exact``)."""
+def build_compositor(scene, lights, models, imgs, beta, albedo, drive=False):
+    """The compositor graph: Image + the fog's light (``comp``) or the fog's light alone (``exact``).
+    ``drive``: the camera's and the lights' values by drivers (a saved file renders any frame without the
+    add-on), else constants of the current frame."""
     tree = bpy.data.node_groups.new("CF Compositor", "CompositorNodeTree")
     tree.interface.new_socket("Image", in_out="OUTPUT", socket_type=C)
     m = CompOps(tree, imgs)
@@ -224,7 +261,12 @@ def build_compositor(scene, lights, models, imgs, beta, albedo):
     p = {n: m.wrap(rl.outputs[n], vector=t == "COLOR") for n, t in AOVS}
     cover = p["CF Cover"]
     inv = 1.0 / m.maximum(cover, 1e-6)
-    cam = m.wrap(tuple(scene.camera.matrix_world.translation))
+    if drive:
+        cam_node = m.node("ShaderNodeCombineXYZ", 0)
+        groups._drive_location(cam_node, scene.camera)
+        cam = m.wrap(cam_node.outputs[0], vector=True)
+    else:
+        cam = m.wrap(tuple(scene.camera.matrix_world.translation))
     pos = m.scale(p["CF Position"], inv)
     to_cam = cam - pos
     d_vp = m.length(to_cam)
@@ -233,7 +275,8 @@ def build_compositor(scene, lights, models, imgs, beta, albedo):
     coords = tree.nodes.new("CompositorNodeImageCoordinates")
     tree.links.new(rl.outputs["Image"], coords.inputs[0])
     uv = m.wrap(coords.outputs["Normalized"], vector=True)
-    corner, across, up = (m.wrap(tuple(v)) for v in camera_frame(scene))
+    corner, across, up = (driven_camera_frame(m, scene) if drive else
+                          [m.wrap(tuple(v)) for v in camera_frame(scene)])
     ray = corner + m.scale(across, m.dot(uv, (1.0, 0.0, 0.0))) + m.scale(up, m.dot(uv, (0.0, 1.0, 0.0)))
     direction = m.scale(ray, 1.0 / m.length(ray))
     w, h = size(scene)
@@ -254,17 +297,29 @@ def build_compositor(scene, lights, models, imgs, beta, albedo):
                         ("Specular", mats[1]), ("Level", mats[2]), ("Direction", direction), ("Pixel", pixel),
                         ("D1", d1), ("D2", d2), ("W1", w1)):
             m.feed(node.inputs[name], v)
-        node.inputs["Light"].default_value = tuple(light.matrix_world.translation)
-        to_light = m.wrap(tuple(light.matrix_world.translation)) - cam
-        m.feed(node.inputs["Light Pixel"], picture_position(m, to_light, corner, across, up, (w * scale, h * scale)))
-        node.inputs["Intensity"].default_value = tuple(view.light_intensities([light])[0])
-        if view.is_spot(light):   # the cone as groups._drive_spot feeds it (constants here)
-            m3 = light.matrix_world.to_3x3()
-            cofactor = m3.inverted() * m3.determinant()
-            for i, name in enumerate(groups.SPOT_ROWS):
-                node.inputs[name].default_value = tuple(cofactor[i])
-            node.inputs[groups.SPOT_COS].default_value = math.cos(light.data.spot_size * 0.5)
-            node.inputs[groups.SPOT_BLEND].default_value = light.data.spot_blend
+        if drive:   # the shipped groups' drivers (groups._light_instance), here in the compositor
+            loc = m.node("ShaderNodeCombineXYZ", 4)
+            groups._drive_location(loc, light)
+            intensity = m.node("ShaderNodeCombineXYZ", 4)
+            groups._drive_intensity(intensity, light.data)
+            tree.links.new(loc.outputs[0], node.inputs["Light"])
+            tree.links.new(intensity.outputs[0], node.inputs["Intensity"])
+            if view.is_spot(light):
+                groups._drive_spot(tree, k, light, node)
+            position = m.wrap(loc.outputs[0], vector=True)
+        else:
+            node.inputs["Light"].default_value = tuple(light.matrix_world.translation)
+            node.inputs["Intensity"].default_value = tuple(view.light_intensities([light])[0])
+            if view.is_spot(light):   # the cone as groups._drive_spot feeds it (constants here)
+                m3 = light.matrix_world.to_3x3()
+                cofactor = m3.inverted() * m3.determinant()
+                for i, name in enumerate(groups.SPOT_ROWS):
+                    node.inputs[name].default_value = tuple(cofactor[i])
+                node.inputs[groups.SPOT_COS].default_value = math.cos(light.data.spot_size * 0.5)
+                node.inputs[groups.SPOT_BLEND].default_value = light.data.spot_blend
+            position = m.wrap(tuple(light.matrix_world.translation))
+        m.feed(node.inputs["Light Pixel"], picture_position(m, position - cam, corner, across, up,
+                                                            (w * scale, h * scale)))
         a, s, b = (m.wrap(node.outputs[n], vector=True) for n in ("Airlight", "Scattered", "Background"))
         air, scat, back = (a, s, b) if air is None else (air + a, scat + s, back + b)
     t_vp = m.exp(d_vp * -beta)
@@ -319,7 +374,7 @@ def add_aovs(scene, imgs):
         aov.name, aov.type = name, kind
 
 
-def to_compositor(scene, comp=True, lights=None):
+def to_compositor(scene, comp=True, lights=None, drive=False):
     """Move the fogged ``scene``'s fog light into the compositor: with ``comp`` the materials and the World
     keep only e^{-beta D_vp} (no light's nodes) and the Composite is the render plus the compositor's fog
     light; without, the materials keep their fog and the Composite is the compositor's fog light alone
@@ -339,7 +394,7 @@ def to_compositor(scene, comp=True, lights=None):
     steps = [choice["lights"].get(o.name, [0])[0] if choice else 0 for o in lights]
     lights, models = zip(*[(o, rungs.choose("nodes", k, g, view.is_spot(o))) for o, k in zip(lights, steps)
                            if k != rungs.LEFT_OUT])
-    tree, rl, out, fog = build_compositor(scene, lights, models, imgs, groups.get_beta(), albedo)
+    tree, rl, out, fog = build_compositor(scene, lights, models, imgs, groups.get_beta(), albedo, drive)
     m = CompOps(tree, imgs)
     if comp:
         fog = fog + m.wrap(rl.outputs["Image"], vector=True)
