@@ -3,6 +3,7 @@
     .venv/bin/python benchmarks/compositor_fog/build.py N MODE OUT.exr
 MODE: nofog   the many-lights scene without fog;
       ratio   nofog, then comp in the same process (the issue's protocol: fog over no fog, one run);
+      (CF_SPOTS=1: every light a spot as in benchmarks/overhead.py --spots; CF_ANISOTROPY=g: the fog's g)
       exact   the fog in the materials (Quality Exact, Fog Passes: the Fog Light AOV is the reference)
               plus the compositor's fog light as the Composite;
       comp    what would ship: the lights dim their own direct light (their node trees), the materials
@@ -415,6 +416,11 @@ def _render_best(reps):
 def main(n, mode, out_path):
     """``mode`` "ratio": the render without fog, then with the compositor's fog (``comp``), in one process."""
     scene, _ = many_lights.build_scene(n, direct_light=True)
+    for ob in scene.objects if os.environ.get("CF_SPOTS") == "1" else ():   # as benchmarks/overhead.py --spots
+        if ob.type == "LIGHT":
+            ob.data.type = "SPOT"
+            ob.data.spot_size, ob.data.spot_blend = math.radians(60.0), 0.3
+            ob.rotation_euler = (0.0, 0.0, 0.0)   # local -Z: straight down
     scene.render.engine = "CYCLES"
     measure.set_resolution(scene, W, H)
     measure.set_samples(scene, SPP)
@@ -433,7 +439,8 @@ def main(n, mode, out_path):
     if mode != "nofog":
         t0 = time.perf_counter()
         apply.apply_fog(scene, many_lights.BETA, albedo=many_lights.ALBEDO, with_passes=mode == "exact",
-                        error="exact" if mode == "exact" else "final")
+                        error="exact" if mode == "exact" else "final",
+                        anisotropy=float(os.environ.get("CF_ANISOTROPY", 0.0)))
         to_compositor(scene, comp=mode != "exact")
         if mode == "exact":   # the lights' pixels, for compare.py
             pixels = [light_pixel(scene, o) for o in apply.fog_lights(scene)[0]]

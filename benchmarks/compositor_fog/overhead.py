@@ -5,7 +5,8 @@
 Each N runs ``build.py N ratio`` in a process of its own (the many-lights scene, Cycles on the CPU,
 320x180, 16 spp, best of REPS=3 renders without fog, then with it, in that process).  Writes
 benchmarks/out/compositor_fog_overhead.csv (with CF_MOMENTS=1: ..._moments.csv, the fog light at two
-depths per pixel) and docs/figures/compositor_fog_overhead.png from whichever of the two exist.
+depths per pixel; CF_SPOTS=1 and CF_ANISOTROPY=g add _spots and _g<g>) and
+docs/figures/compositor_fog_overhead.png from the variants in VARIANTS that exist.
 """
 import json
 import os
@@ -21,7 +22,8 @@ import csv_rows  # noqa: E402
 
 GOALS = {1: 1.5, 16: 2.0, 64: 3.0}   # issue 8 section 3
 OUT = ROOT / "benchmarks" / "out"
-VARIANTS = {"": "one depth per pixel (the samples' mean position)", "_moments": "two depths per pixel (moments)"}
+VARIANTS = {"": "one depth per pixel (the samples' mean position)", "_moments": "two depths per pixel (moments)",
+            "_spots_g0.7": "spot lights, g = 0.7 (one depth per pixel)"}
 
 
 def measure(n):
@@ -64,7 +66,9 @@ def main(counts):
     for n in counts:
         rows.append(measure(n))
         print(json.dumps(rows[-1]), flush=True)
-    suffix = "_moments" if os.environ.get("CF_MOMENTS") == "1" else ""
+    suffix = ("_moments" if os.environ.get("CF_MOMENTS") == "1" else "") + (
+        "_spots" if os.environ.get("CF_SPOTS") == "1" else "") + (
+        f"_g{float(os.environ['CF_ANISOTROPY']):g}" if os.environ.get("CF_ANISOTROPY") else "")
     csv_rows.write(OUT / f"compositor_fog_overhead{suffix}.csv", rows,
                    ["n", "cpu_nofog", "cpu", "ratio_cpu", "wall_nofog", "wall", "ratio_wall", "setup"], digits=4)
     chart(ROOT / "docs" / "figures" / "compositor_fog_overhead.png")
