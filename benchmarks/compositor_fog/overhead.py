@@ -51,7 +51,7 @@ def chart(path):
             ax.plot([int(r["n"]) for r in rows], [float(r["ratio_cpu"]) for r in rows], "o-", label=label)
     ax.plot(list(GOALS), list(GOALS.values()), "k_", markersize=18, mew=2, label="issue 8's goals")
     ax.set_xscale("log", base=2)
-    ax.set_xlabel("point lights")
+    ax.set_xlabel("lights")
     ax.set_ylabel("render CPU time, fog / no fog")
     ax.set_title("Cycles CPU, 320x180, 16 spp (many-lights scene)")
     ax.grid(alpha=0.3)
