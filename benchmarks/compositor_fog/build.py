@@ -71,16 +71,21 @@ def bake_filter():
     return wy @ wx.T * ((reach / nr) * (2 * np.pi / nphi) / norm)
 
 
-def peak_factor(m, along, d_vp, pixel, light_pixel, imgs):
-    """The pixel's mean glow over its centre's glow near a light seen in the picture: r A(delta), where the
-    glow is c / r (r px from the light; Sun Eq. 12 as gamma -> 0, any phase function), tapered to 1
-    over the table's last pixel.  0 effect where a surface hides the light (``along`` beyond ``d_vp``)."""
+def peak_excess(m, pixel, light_pixel):
+    """r A(delta) - 1, tapered to 0 over the table's last pixel: how much a pixel's mean glow exceeds its
+    centre's near a light seen in the picture, where the glow is c / r (r px from the light; Sun Eq. 12 as
+    gamma -> 0, any phase function).  One per light and pixel: ``peak_factor`` applies it."""
     delta = pixel - light_pixel
     dx, dy = m.abs(m.dot(delta, (1.0, 0.0, 0.0))), m.abs(m.dot(delta, (0.0, 1.0, 0.0)))
     r = m.sqrt(dx * dx + dy * dy)
     a = m.table(FILTER, dx * (1.0 / FILTER_REACH), dy * (1.0 / FILTER_REACH))
-    weight = m.clamp01(FILTER_REACH - r) * m.less(along, d_vp)
-    return 1.0 + weight * (r * a - 1.0)
+    return m.clamp01(FILTER_REACH - r) * (r * a - 1.0)
+
+
+def peak_factor(m, excess, along, d_vp):
+    """The factor on a light's glow along a ray that ends at ``d_vp``: 1 + ``peak_excess`` where the ray
+    passes the light (``along`` before ``d_vp``), 1 where a surface hides it."""
+    return 1.0 + m.less(along, d_vp) * excess
 
 
 class CompOps(sockets.NodeOps):
@@ -138,49 +143,51 @@ def light_group(models, imgs, peak, cache={}):
     geo = shading.Geometry(g["Camera"], g["Position"], g["Incoming"], g["View Distance"], g["Normal"])
     light = groups._light(g, models)
     medium = groups._medium(m, g["Beta"])
-    terms = shading.shade_point(m, geo, shading.Material(g["Diffuse"], g["Specular"], g["Level"]), light,
-                                medium, models)
+    material = shading.Material(g["Diffuse"], g["Specular"], g["Level"])
+    excess = peak_excess(m, g["Pixel"], g["Light Pixel"]) if peak else None
     if MOMENTS:   # the glow and the fog light the surfaces reflect at each of the two depths (the sky: FAR)
         d_sv, along, h = model.ray_light_geometry(m, g["Camera"], g["Direction"], g["Light"])
-        material = shading.Material(g["Diffuse"], g["Specular"], g["Level"])
         glow, lit = [], []
         for d, w in ((g["D1"], g["W1"]), (g["D2"], 1.0 - g["W1"])):
             a = m.run(models.airlight, medium.beta, d_sv, along, h, d,
                       *shading.spot_ray(m, light, models.airlight, g["Camera"], g["Direction"]))
-            glow.append(w * (a * peak_factor(m, along, d, g["Pixel"], g["Light Pixel"], imgs) if peak else a))
+            glow.append(w * (a * peak_factor(m, excess, along, d) if peak else a))
             at = shading.Geometry(g["Camera"], g["Camera"] + m.scale(g["Direction"], d), -1.0 * g["Direction"], d,
                                   g["Normal"])
             surface_weight = w * m.less(d, 0.5 * model.FAR) * model.transmittance(m, medium.beta, d)
             lit.append(m.scale(shading.shade_point(m, at, material, light, medium, models).scattered,
                                surface_weight))
         air = m.scale(g["Intensity"], glow[0] + glow[1])
-        terms = terms._replace(scattered=lit[0] + lit[1])
+        scattered = lit[0] + lit[1]
         back = m.wrap((0.0, 0.0, 0.0))
     else:
-        air, back = terms.airlight, shading.background_point(m, g["Camera"], g["Direction"], light, medium, models)
-    if peak and not MOMENTS:
-        _, along, _ = model.ray_light_geometry(m, g["Camera"], -1.0 * g["Incoming"], g["Light"])
-        _, along_sky, _ = model.ray_light_geometry(m, g["Camera"], g["Direction"], g["Light"])
-        air = m.scale(air, peak_factor(m, along, g["View Distance"], g["Pixel"], g["Light Pixel"], imgs))
-        back = m.scale(back, peak_factor(m, along_sky, model.FAR, g["Pixel"], g["Light Pixel"], imgs))
+        geo = shading.Geometry(g["Camera"], g["Position"], g["Incoming"], g["View Distance"], g["Normal"])
+        terms = shading.shade_point(m, geo, material, light, medium, models)
+        air, scattered = terms.airlight, terms.scattered
+        back = shading.background_point(m, g["Camera"], g["Direction"], light, medium, models)
+        if peak:   # the sky's rays pass every light before FAR: its factor is 1 + excess
+            along = m.dot(g["Light"] - g["Camera"], -1.0 * g["Incoming"])
+            air = m.scale(air, peak_factor(m, excess, along, g["View Distance"]))
+            back = m.scale(back, 1.0 + excess)
     m.feed(gout.inputs["Airlight"], air)
-    m.feed(gout.inputs["Scattered"], m.wrap(terms.scattered))
+    m.feed(gout.inputs["Scattered"], m.wrap(scattered))
     m.feed(gout.inputs["Background"], back)
     cache[key] = ng
     return ng
-
-
-def size(scene):
-    r = scene.render
-    return r.resolution_x * r.resolution_percentage // 100, r.resolution_y * r.resolution_percentage // 100
 
 
 def light_pixel(scene, light):
     """The light's position in the picture, px from the bottom-left corner (far away behind the camera)."""
     from bpy_extras.object_utils import world_to_camera_view
     p = world_to_camera_view(scene, scene.camera, light.matrix_world.translation)
-    w, h = size(scene)
+    w, h = view.render_size(scene)
     return (p.x * w, p.y * h, 0.0) if p.z > 0 else (1e6, 1e6, 0.0)
+
+
+def write_light_pixels(scene, path):
+    """``path``.json: the fog lights' positions in the picture (``light_pixel``), for ``compare.py``."""
+    pixels = [light_pixel(scene, o) for o in apply.fog_lights(scene)[0]]
+    pathlib.Path(str(path) + ".json").write_text(json.dumps({"light_pixels": pixels}))
 
 
 def filter_scale(scene):
@@ -280,7 +287,7 @@ def build_compositor(scene, lights, models, imgs, beta, albedo, drive=False):
                           [m.wrap(tuple(v)) for v in camera_frame(scene)])
     ray = corner + m.scale(across, m.dot(uv, (1.0, 0.0, 0.0))) + m.scale(up, m.dot(uv, (0.0, 1.0, 0.0)))
     direction = m.scale(ray, 1.0 / m.length(ray))
-    w, h = size(scene)
+    w, h = view.render_size(scene)
     scale = filter_scale(scene)
     peak = scale is not None and os.environ.get("CF_PEAK", "1") == "1"
     scale = scale or 0.0
@@ -442,9 +449,8 @@ def main(n, mode, out_path):
                         error="exact" if mode == "exact" else "final",
                         anisotropy=float(os.environ.get("CF_ANISOTROPY", 0.0)))
         to_compositor(scene, comp=mode != "exact")
-        if mode == "exact":   # the lights' pixels, for compare.py
-            pixels = [light_pixel(scene, o) for o in apply.fog_lights(scene)[0]]
-            pathlib.Path(out_path + ".json").write_text(json.dumps({"light_pixels": pixels}))
+        if mode == "exact":
+            write_light_pixels(scene, out_path)
         row["setup"] = time.perf_counter() - t0
         row["cpu"], row["wall"] = _render_best(reps)
     if mode == "ratio":

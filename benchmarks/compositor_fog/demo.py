@@ -25,7 +25,6 @@ def render(scene_name, density, out, extra, exact=False):
     import build
     import render_harness
     from fog_addon import cli, measure
-    from fog_addon.ops import apply
     original = measure.render_to_file
 
     def render_to_file(scene, path):
@@ -33,8 +32,7 @@ def render(scene_name, density, out, extra, exact=False):
         if not exact:
             return original(scene, path)
         bpy.context.view_layer.update()
-        pixels = [build.light_pixel(scene, o) for o in apply.fog_lights(scene)[0]]
-        pathlib.Path(path + ".json").write_text(json.dumps({"light_pixels": pixels}))
+        build.write_light_pixels(scene, path)
         measure.configure_output(scene, path)
         scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
         scene.render.image_settings.file_format = "OPEN_EXR_MULTILAYER"

@@ -212,12 +212,17 @@ def _sample_frame(scene, depsgraph, lights, grid):
     return origin, rows, light_pos, inverse
 
 
+def render_size(scene):
+    """(width, height) of the render in pixels (its resolution times its percentage)."""
+    r = scene.render
+    return (max(1, round(r.resolution_x * r.resolution_percentage / 100)),
+            max(1, round(r.resolution_y * r.resolution_percentage / 100)))
+
+
 def sample_grid(scene, max_samples=MAX_SAMPLES):
     """(nx, ny): the render's pixels if they are at most ``max_samples``, else the largest grid of the
     same aspect within it (then pixels between the rays are not judged: see the README's Quality)."""
-    r = scene.render
-    w = max(1, round(r.resolution_x * r.resolution_percentage / 100))
-    h = max(1, round(r.resolution_y * r.resolution_percentage / 100))
+    w, h = render_size(scene)
     if w * h <= max_samples:
         return w, h
     k = math.sqrt(max_samples / (w * h))
