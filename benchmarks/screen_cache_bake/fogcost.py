@@ -8,11 +8,7 @@ import os
 import sys
 import time
 
-import pathlib  # noqa: E402
-ROOT = str(pathlib.Path(__file__).resolve().parents[2])
-HERE = str(pathlib.Path(__file__).resolve().parent)
-sys.path.insert(0, ROOT)
-sys.path.insert(0, ROOT + "/tests/scenes")
+import hits  # noqa: E402  (first: it puts the repository and tests/scenes on sys.path)
 
 import bpy  # noqa: E402,F401
 import numpy as np  # noqa: E402

@@ -9,11 +9,7 @@ import os
 import sys
 import time
 
-import pathlib  # noqa: E402
-ROOT = str(pathlib.Path(__file__).resolve().parents[2])
-HERE = str(pathlib.Path(__file__).resolve().parent)
-sys.path.insert(0, ROOT)
-sys.path.insert(0, ROOT + "/tests/scenes")
+import hits  # noqa: E402  (first: it puts the repository and tests/scenes on sys.path)
 
 import bpy  # noqa: E402,F401
 import numpy as np  # noqa: E402
@@ -27,7 +23,6 @@ from fog_addon.precompute.model import (  # noqa: E402
     airlight_segment, airlight_tail, closest_point_q, phase_scale)
 from fog_addon.precompute.ops import NumpyOps  # noqa: E402
 
-sys.path.insert(0, HERE)
 from hits import m_bvh  # noqa: E402
 
 from hits import H, REPS, W, fog_scene, timed  # noqa: E402,F401

@@ -11,12 +11,7 @@ import os
 import sys
 import time
 
-import pathlib  # noqa: E402
-ROOT = str(pathlib.Path(__file__).resolve().parents[2])
-HERE = str(pathlib.Path(__file__).resolve().parent)
-sys.path.insert(0, ROOT)
-sys.path.insert(0, ROOT + "/tests/scenes")
-sys.path.insert(0, HERE)
+import hits  # noqa: E402  (first: it puts the repository and tests/scenes on sys.path)
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
@@ -26,7 +21,6 @@ from fog_addon.ops import apply, view  # noqa: E402
 from fog_addon.precompute import bakers, predict, surface, tables  # noqa: E402
 from fulllean import scatter  # noqa: E402
 from glowfast import glow  # noqa: E402
-import hits  # noqa: E402
 
 from hits import H, REPS, W, timed  # noqa: E402,F401
 CHUNK = 4096
