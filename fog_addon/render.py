@@ -13,6 +13,7 @@ from . import measure, props
 from .ops import apply, progress
 
 DEFAULT_SAMPLES = {"CYCLES": 16, "BLENDER_EEVEE": 16}
+CYCLES_ONLY = {"osl": "EEVEE cannot run OSL", "compositor": "EEVEE's AOVs are half floats"}
 EEVEE_LIGHT_THRESHOLD = 1e-4   # EEVEE's default 0.01 windows point lights (ratio 0.92 at 4.5 m for 100 W)
 
 
@@ -36,9 +37,8 @@ def fog_settings(scene, args):
 
     Returns (keyword arguments for ``apply.apply_fog``, {setting: (value, "flag" | "file")},
     [notes]).  Without a flag the method is the file's; a file whose method
-    is OSL rendered with EEVEE (which cannot run OSL) gets the node groups,
-    with a note.  Selected Only in the file fogs only the materials of the
-    objects selected in the file (as *Update Fog* would with it open).
+    is OSL or Compositor rendered with EEVEE gets the node groups, with a note.  Selected Only in the
+    file fogs only the materials of the objects selected in the file (as *Update Fog* would with it open).
     """
     ensure_properties()
     s = scene.analytic_fog
@@ -57,10 +57,12 @@ def fog_settings(scene, args):
     with_passes = bool(pick("fog passes", "passes", lambda: s.use_passes))
     quality = pick("quality", "error", lambda: props.quality_setting(s))
     world_light = pick("world light", "world_light", lambda: "on" if s.world_light else "off")
-    if method == "osl" and args.engine_id != "CYCLES":
+    if method in ("osl", "compositor") and args.engine_id != "CYCLES":
         if source["method"] == "flag":
-            raise SystemExit("error: --method osl needs --engine cycles (EEVEE cannot run OSL); use --method nodes")
-        notes.append(("method", "the file's method is OSL, which EEVEE cannot run: rendering with the node groups"))
+            raise SystemExit(f"error: --method {method} needs --engine cycles ({CYCLES_ONLY[method]}); "
+                             "use --method nodes")
+        notes.append(("method", f"the file's method is {method}, which needs Cycles ({CYCLES_ONLY[method]}): "
+                                "rendering with the node groups"))
         method = "nodes"
     objects = None
     if s.selected_only:

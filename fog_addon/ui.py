@@ -7,6 +7,7 @@ from .precompute import presets, rungs
 ENGINE_NOTES = {
     "NODES": "Node groups: Cycles and EEVEE",
     "OSL": "OSL: Cycles only (EEVEE shows no glow)",
+    "COMPOSITOR": "Compositor: Cycles only, Compositing on",
 }
 
 
@@ -60,8 +61,8 @@ def draw_fog(layout, context):
     col.prop(s, "scene_scale")
     col.prop(s, "method")
     col.label(text=ENGINE_NOTES[s.method], icon="INFO")
-    if s.method == "OSL" and scene.render.engine != "CYCLES":
-        col.label(text="Switch the render engine to Cycles to see OSL fog", icon="ERROR")
+    if s.method in ("OSL", "COMPOSITOR") and scene.render.engine != "CYCLES":
+        col.label(text=f"Switch the render engine to Cycles to see {s.method.title()} fog", icon="ERROR")
     col.prop(s, "selected_only")
     col.prop(s, "world_light")
     col.prop(s, "use_passes")

@@ -45,6 +45,18 @@ def test_cycles_osl(tmp_path, regen, scene, density):
     h.assert_close(out, ref, f"{scene}_{density}_cycles_osl", rel_rmse=0.03, mean_ratio_tol=0.01)
 
 
+# The Compositor method (nodes/comp_fog.py): the fog's light once per pixel in the compositor from the
+# AOVs; pixel-centre sampling, so every pixel sees one surface and no peak factor applies.
+@pytest.mark.parametrize("scene,density", THICK + THIN)
+def test_cycles_compositor(tmp_path, regen, scene, density):
+    ref = h.ensure_reference(scene, density, regen)
+    log = []
+    out = h.render_test(scene, density, str(tmp_path / f"{scene}_compositor.exr"), method="compositor", log=log)
+    assert not h.log_errors(log[0])
+    m = h.assert_close(out, ref, f"{scene}_{density}_cycles_compositor", rel_rmse=0.03, mean_ratio_tol=0.01)
+    print(f"{scene} {density} cycles compositor: relative RMSE {m['rel_rmse']:.4g}, mean ratio {m['mean_ratio']:.5f}")
+
+
 @pytest.mark.parametrize("scene,density", THICK + THIN)
 def test_eevee_nodes(tmp_path, regen, scene, density):
     out, ref = _case(tmp_path, regen, scene, density, "eevee")
@@ -95,6 +107,10 @@ def test_boulevard_cycles_nodes(tmp_path, regen):
     _boulevard(tmp_path, regen, "cycles", "nodes", BOULEVARD_CYCLES_SAMPLES, 0.03, 0.01)
 
 
+def test_boulevard_cycles_compositor(tmp_path, regen):
+    _boulevard(tmp_path, regen, "cycles", "compositor", BOULEVARD_CYCLES_SAMPLES, 0.03, 0.01)
+
+
 @_slow(BOULEVARD_TODAY["cycles_osl"])
 def test_boulevard_cycles_osl(tmp_path, regen):
     _boulevard(tmp_path, regen, "cycles", "osl", BOULEVARD_CYCLES_SAMPLES, 0.03, 0.01)
@@ -115,7 +131,8 @@ ANISOTROPY = 0.85
 
 @pytest.mark.parametrize("scene,density", THICK)
 @pytest.mark.parametrize("engine,method,rel_rmse,mean_ratio_tol", [
-    ("cycles", "nodes", 0.03, 0.01), ("cycles", "osl", 0.03, 0.01), ("eevee", "nodes", 0.05, 0.02)])
+    ("cycles", "nodes", 0.03, 0.01), ("cycles", "osl", 0.03, 0.01), ("cycles", "compositor", 0.03, 0.01),
+    ("eevee", "nodes", 0.05, 0.02)])
 def test_anisotropic(tmp_path, regen, scene, density, engine, method, rel_rmse, mean_ratio_tol):
     ref = h.ensure_reference(scene, density, regen, anisotropy=ANISOTROPY)
     log = []
@@ -146,7 +163,8 @@ SPOT_SAMPLES = {"cycles": 256, "eevee": None}
 
 
 @pytest.mark.parametrize("scene", sorted(SPOT_SCENES))
-@pytest.mark.parametrize("engine,method", [("cycles", "nodes"), ("cycles", "osl"), ("eevee", "nodes")])
+@pytest.mark.parametrize("engine,method", [("cycles", "nodes"), ("cycles", "osl"), ("cycles", "compositor"),
+                                           ("eevee", "nodes")])
 def test_spot_scenes(tmp_path, regen, scene, engine, method):
     density, g, bound = SPOT_SCENES[scene]
     ref = h.ensure_reference(scene, density, regen, anisotropy=g)

@@ -37,8 +37,8 @@ def main(path):
     layers = imageio.read_layers(path)
     want = layer(layers, "Fog Light")[..., :3]
     got = layer(layers, "Composite.Combined")[..., :3]
-    cover = layer(layers, "CF Cover")[..., 0]
-    normal = layer(layers, "CF Normal")[..., :3]
+    cover = layer(layers, "Fog Coverage")[..., 0]
+    normal = layer(layers, "Fog Normal")[..., :3]
     nlen = np.linalg.norm(normal, axis=-1) / np.maximum(cover, 1e-6)
     mixed = ((cover > 1e-4) & (cover < 1 - 1e-4)) | ((cover > 0.5) & (nlen < 0.999))
     peaks = np.zeros(cover.shape, bool)

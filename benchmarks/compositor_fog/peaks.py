@@ -24,13 +24,13 @@ def main(n, path):
     layers = imageio.read_layers(path)   # before bpy renders anything (imageio.read_layers)
     shader = layers["ViewLayer.Fog Light"][::-1, :, :3].astype(float)   # row 0 at the bottom, as Blender's
     comp = layers["Composite.Combined"][::-1, :, :3].astype(float)
-    cover = layers["ViewLayer.CF Cover"][::-1, :, 0]
+    cover = layers["ViewLayer.Fog Coverage"][::-1, :, 0]
     import bpy
     import build
     import many_lights
     from fog_addon import measure
     from fog_addon.ops import apply, view
-    from fog_addon.precompute import model, predict, rungs
+    from fog_addon.precompute import model, pixel, predict, rungs
     scene, _ = many_lights.build_scene(n, direct_light=True)
     measure.set_resolution(scene, build.W, build.H)
     bpy.context.view_layer.update()
@@ -46,8 +46,8 @@ def main(n, path):
     m = predict._numpy_ops(0.0)
     full = rungs.choose("nodes", 0, 0.0)
     steps = 241
-    s = (np.arange(steps) + 0.5) / steps * build.FILTER_WIDTH - build.FILTER_WIDTH / 2
-    w = build.blackman_harris(s)
+    s = (np.arange(steps) + 0.5) / steps * pixel.FILTER_WIDTH - pixel.FILTER_WIDTH / 2
+    w = pixel.blackman_harris(s)
     weights = np.outer(w, w) / np.outer(w, w).sum()
     sx, sy = np.meshgrid(s, s)
     ref = shader.copy()

@@ -37,6 +37,11 @@ writes it).
 * Not for EEVEE (Cycles' denoiser flag does not apply).  ``follow`` sets the
   set-up up or takes it down as the engine and the denoiser flag change.
 
+With the Compositor method (``comp_fog.py``) the render holds no fog light: Cycles' denoiser stays on,
+and the chain after each Render Layers node is instead one group node, the fog's ``AnalyticFog
+Compositor Fog``, fed with the Image and the method's AOVs, which adds the fog's light.  It is spliced
+into a user's compositor the same way, for every view layer that renders, denoised or not.
+
 The settings changed (the scene's denoiser and Compositing flags, each view
 layer's Emission, Environment and Denoising Data passes) are recorded by ``overrides.py`` and restored
 exactly by ``teardown``; the scene's ``STATE`` names the tree the fog edited.
@@ -46,7 +51,8 @@ import bpy
 from . import overrides, owned
 
 EMISSION, ENVIRONMENT = "Emission", "Environment"   # the Render Layers outputs of Cycles' Emit and Env passes
-STATE = "analytic_fog_compositor"   # on the scene: {"tree": name of the compositor tree the fog edited or made}
+STATE = "analytic_fog_compositor"   # on the scene: {"tree": the compositor tree the fog edited or made,
+#                                      "fog": True for the Compositor method's chain, else the denoiser's}
 GROUP = "AnalyticFog Compositor"
 _PREFILTER = {"NONE": "None", "FAST": "Fast", "ACCURATE": "Accurate"}
 _QUALITY = {"HIGH": "High", "BALANCED": "Balanced", "FAST": "Fast"}
@@ -61,27 +67,31 @@ def is_set_up(scene):
     return scene.get(STATE) is not None
 
 
-def wanted(scene):
-    """True if ``scene`` should have the set-up: Cycles with its denoiser on (or set up already)."""
-    return scene.render.engine == "CYCLES" and (scene.cycles.use_denoising or is_set_up(scene))
+def wanted(scene, fog=None):
+    """True if ``scene`` should have the set-up: Cycles with its denoiser on (or set up already), or with
+    the Compositor method's ``fog`` group."""
+    if scene.render.engine != "CYCLES":
+        return False
+    return fog is not None or scene.cycles.use_denoising or (is_set_up(scene) and not scene[STATE].get("fog"))
 
 
-def follow(scene, rebuild=False):
+def follow(scene, rebuild=False, fog=None):
     """Set the set-up up or take it down as ``scene`` needs; returns [(name, note)].
 
     Cheap when nothing changed (the depsgraph handler calls it).  ``rebuild``:
-    rebuild a set-up in place (it takes the scene's current denoiser settings).
+    rebuild a set-up in place (it takes the scene's current denoiser settings).  ``fog``: the
+    Compositor method's group (``comp_fog.FOG_GROUP``), None for the other methods.
     """
-    if not wanted(scene):
+    if not wanted(scene, fog):
         teardown(scene)
         return []
     if is_set_up(scene):
-        if not rebuild:
-            if scene.cycles.use_denoising:   # switched back on by hand: the fog's Denoise node does it
+        if not rebuild and bool(scene[STATE].get("fog")) == (fog is not None):
+            if fog is None and scene.cycles.use_denoising:   # switched back on by hand: the fog's Denoise does it
                 scene.cycles.use_denoising = False
             return []
         teardown(scene)
-    return setup(scene)
+    return setup(scene, fog)
 
 
 # --- which Render Layers nodes -------------------------------------------------------------
@@ -111,7 +121,7 @@ def _nested(tree, scene, seen=()):
     return found
 
 
-def _why_not(scene, tree, nodes):
+def _why_not(scene, tree, nodes, fog):
     """Why the user's compositor ``tree`` (with Render Layers ``nodes`` to splice) is left alone, or None."""
     why = owned.read_only(tree)
     if why:
@@ -123,8 +133,8 @@ def _why_not(scene, tree, nodes):
     nested = _nested(tree, scene)
     if nested:
         return f"Render Layers inside node group {', '.join(map(repr, nested))} of {tree.name!r} cannot be spliced"
-    if any(n.outputs.get("Noisy Image") is not None and n.outputs["Noisy Image"].is_linked
-           for n in tree.nodes if _renders(scene, n)):
+    if fog is None and any(n.outputs.get("Noisy Image") is not None and n.outputs["Noisy Image"].is_linked
+                           for n in tree.nodes if _renders(scene, n)):
         return f"{tree.name!r} reads Noisy Image, which Cycles writes only with its denoiser on"
     return None
 
@@ -169,6 +179,18 @@ def _chain(scene, tree, rl, k):
     return _sock(add.outputs, _MIX_OUT)
 
 
+def _fog_chain(tree, rl, k, fog):
+    """The Compositor method's chain after Render Layers ``rl``: the ``fog`` group node, fed with the Image
+    and the AOVs of the same names; returns its Image output."""
+    rl.update()   # the view layer's AOVs become outputs
+    node = owned.add(tree, "CompositorNodeGroup", f"Compositor {k} Fog", (rl.location.x + 300, rl.location.y - 360 * k))
+    node.node_tree = fog
+    for sock in node.inputs:
+        if rl.outputs.get(sock.name) is not None:
+            tree.links.new(rl.outputs[sock.name], sock)
+    return node.outputs["Image"]
+
+
 def _store_passes(scene, layers):
     """The Emission and Environment passes on for ``layers``, and Cycles' Denoising Data passes if the
     Denoise node reads them."""
@@ -179,40 +201,50 @@ def _store_passes(scene, layers):
             overrides.override(vl, "cycles.denoising_store_passes", True)
 
 
-def setup(scene):
-    """Build the set-up on ``scene`` (see the module); returns [(name, note)] if it was left out."""
+def setup(scene, fog=None):
+    """Build the set-up on ``scene`` (see the module), the Compositor method's with its ``fog`` group;
+    returns [(name, note)] if it was left out."""
     tree = scene.compositing_node_group
+    chain = (lambda tree, rl, k: _fog_chain(tree, rl, k, fog)) if fog is not None else (
+        lambda tree, rl, k: _chain(scene, tree, rl, k))
+    needs = (lambda vl: vl is not None and vl.use) if fog is not None else (lambda vl: _denoised(scene, vl))
     if tree is None:
         vl = next((v for v in scene.view_layers if v.use), None)
-        if not _denoised(scene, vl):
+        if not needs(vl):
             return []
-        _store_passes(scene, [vl])
+        if fog is None:
+            _store_passes(scene, [vl])
         tree = bpy.data.node_groups.new(GROUP, "CompositorNodeTree")
         tree[owned.TAG] = "Compositor"   # the fog's own group
         tree.interface.new_socket("Image", in_out="OUTPUT", socket_type="NodeSocketColor")
         rl = owned.add(tree, "CompositorNodeRLayers", "Render Layers", (0, 0))
         rl.scene, rl.layer = scene, vl.name
         out = owned.add(tree, "NodeGroupOutput", "Group Output", (1000, 0))
-        tree.links.new(_chain(scene, tree, rl, 0), out.inputs["Image"])
+        tree.links.new(chain(tree, rl, 0), out.inputs["Image"])
         scene.compositing_node_group = tree
         overrides.override(scene, "render.use_compositing", True)
     else:
         nodes = [n for n in tree.nodes if _renders(scene, n) and n.outputs["Image"].is_linked
-                 and _denoised(scene, _layer(scene, n))]
+                 and needs(_layer(scene, n))]
         if not nodes:
-            return []   # the compositor does not read the denoised picture
-        why = _why_not(scene, tree, nodes)
+            return []   # the compositor does not read the (denoised) picture
+        why = _why_not(scene, tree, nodes, fog)
+        if why and fog is not None:
+            return [(scene.name, f"{why}: the compositor is left as it is, so the fog's light, which the "
+                                 "Compositor method adds there, is missing (use the Node Groups method)")]
         if why:
             return [(scene.name, f"{why}: the compositor is left as it is and Cycles' denoiser on, which "
                                  "smears the fog's glows (turn it off, or see README 'Fog passes')")]
-        _store_passes(scene, {_layer(scene, n) for n in nodes})
+        if fog is None:
+            _store_passes(scene, {_layer(scene, n) for n in nodes})
         for k, rl in enumerate(nodes):
             users = [link.to_socket for link in rl.outputs["Image"].links]
-            last = _chain(scene, tree, rl, k)
+            last = chain(tree, rl, k)
             for sock in users:
                 tree.links.new(last, sock)
-    overrides.override(scene, "cycles.use_denoising", False)
-    scene[STATE] = {"tree": tree.name}
+    if fog is None:
+        overrides.override(scene, "cycles.use_denoising", False)
+    scene[STATE] = {"tree": tree.name, "fog": fog is not None}
     return []
 
 
@@ -244,9 +276,9 @@ def _unsplice(tree):
     for link in tree.links:
         if owned.is_ours(link.from_node) and not owned.is_ours(link.to_node):
             role = owned.role_of(link.from_node).rsplit(" ", 1)[0]   # "Compositor k"
-            sub = owned.find(tree, f"{role} Subtract")
-            src = next((l.from_socket for l in tree.links if sub is not None and l.to_node == sub
-                        and l.to_socket.identifier == _MIX_A and not owned.is_ours(l.from_node)), None)
+            src = next((l.from_socket for l in tree.links if owned.is_ours(l.to_node)
+                        and owned.role_of(l.to_node).rsplit(" ", 1)[0] == role
+                        and not owned.is_ours(l.from_node) and l.from_socket.identifier == "Image"), None)
             if src is not None:
                 back.append((src.node.name, src.identifier, link.to_node.name, link.to_socket.identifier))
     owned.remove_ours(tree)

@@ -85,11 +85,11 @@ def all_group_names():
 def _kernel_depth(ng):
     """How deep ``ng``'s group nodes nest (0: none): a group is deleted before those it uses."""
     return max((1 + _kernel_depth(n.node_tree) for n in ng.nodes
-                if n.bl_idname == "ShaderNodeGroup" and n.node_tree is not None), default=0)
+                if n.bl_idname in ("ShaderNodeGroup", "CompositorNodeGroup") and n.node_tree is not None), default=0)
 
 
-def _new_group(name, inputs, outputs):
-    """An empty shader group for ``name`` with the given (name, socket type) interface.
+def _new_group(name, inputs, outputs, tree_type="ShaderNodeTree"):
+    """An empty shader group (or ``tree_type``'s) for ``name`` with the given (name, socket type) interface.
 
     An unused group of that name is emptied and reused; one in use is left
     alone and a new group is built beside it, for ``_install`` to swap in:
@@ -98,7 +98,7 @@ def _new_group(name, inputs, outputs):
     """
     ng = bpy.data.node_groups.get(name)
     if ng is None or ng.users:
-        ng = bpy.data.node_groups.new(name + BUILDING, "ShaderNodeTree")
+        ng = bpy.data.node_groups.new(name + BUILDING, tree_type)
     ng.animation_data_clear()
     ng.nodes.clear()
     want = [(n, t, "INPUT") for n, t in inputs] + [(n, t, "OUTPUT") for n, t in outputs]
@@ -358,8 +358,8 @@ def _drive_location(node, obj):
 
 def _drive_expression(sock, expression, variables):
     """Drive ``sock``'s value by the simple expression ``expression`` of ``variables``: (name, ID, data path)
-    of single properties (the ID's type taken from it).  Simple expressions evaluate without Python, so
-    with auto-run off and without the add-on."""
+    of single properties (the ID's type taken from it: an object, light, camera, scene or node group).
+    Simple expressions evaluate without Python, so with auto-run off and without the add-on."""
     sock.driver_remove("default_value")
     d = sock.driver_add("default_value").driver
     d.type = "SCRIPTED"
@@ -367,7 +367,7 @@ def _drive_expression(sock, expression, variables):
         var = d.variables.new()
         var.name = name
         var.type = "SINGLE_PROP"
-        var.targets[0].id_type = "LIGHT" if isinstance(owner, bpy.types.Light) else "OBJECT"
+        var.targets[0].id_type = owner.id_type
         var.targets[0].id = owner
         var.targets[0].data_path = path
     d.expression = expression

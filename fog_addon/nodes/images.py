@@ -10,8 +10,8 @@ VERSION_KEY = "analytic_fog_table_version"   # on each image: the fingerprint of
 
 def table_version(spec):
     """Fingerprint of the layouts and bakers of every table, and ``spec``: a changed bake rebakes."""
-    from ..precompute import airlight, spot, surface
-    return fingerprint.source_fingerprint(tables, bakers, airlight, surface, spot, extra=(spec,))
+    from ..precompute import airlight, pixel, spot, surface
+    return fingerprint.source_fingerprint(tables, bakers, airlight, surface, spot, pixel, extra=(spec,))
 
 
 def table_image(spec, bake):

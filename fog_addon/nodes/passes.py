@@ -39,8 +39,9 @@ VERSION = 2           # in each material's stamp: bumped when the material's fog
 
 # --- the view layers' AOVs --------------------------------------------------------------------
 
-def add_view_layer_aovs(scene):
-    """Give each of ``scene``'s view layers the fog's AOVs; returns [(view layer, reason)] for clashes.
+def add_view_layer_aovs(scene, aovs=AOVS):
+    """Give each of ``scene``'s view layers the AOVs ``aovs`` ((name, type) pairs: the fog passes', or the
+    Compositor method's inputs); returns [(view layer, reason)] for clashes.
 
     A user's AOV of the same name and type is used as it is (and kept on
     Remove); one of the same name and another type is left alone and reported.
@@ -50,7 +51,7 @@ def add_view_layer_aovs(scene):
         record = vl.get(ADDED)
         added = list(record["names"]) if record is not None else []
         active = record["active"] if record is not None else vl.active_aov_index
-        for name, kind in AOVS:
+        for name, kind in aovs:
             aov = vl.aovs.get(name)
             if aov is None:
                 aov = vl.aovs.add()
@@ -66,20 +67,24 @@ def add_view_layer_aovs(scene):
     return notes
 
 
-def remove_view_layer_aovs(scene):
-    """Delete the AOVs the fog added to ``scene``'s view layers (the user's own stay)."""
+def remove_view_layer_aovs(scene, kinds, keep=()):
+    """Delete the AOVs the fog added to ``scene``'s view layers (the user's own stay), but those named in
+    ``keep``; ``kinds``: {name: type} of every AOV the fog adds (one of another type is the user's)."""
     for vl in scene.view_layers:
         record = vl.get(ADDED)
         if record is None:
             continue
-        kinds = dict(AOVS)
         for name in record["names"]:
             aov = vl.aovs.get(name)
-            if aov is not None and aov.type == kinds.get(name):
+            if name not in keep and aov is not None and aov.type == kinds.get(name):
                 vl.aovs.remove(aov)
         if 0 <= record["active"] < len(vl.aovs):
             vl.active_aov_index = record["active"]
-        del vl[ADDED]
+        names = [n for n in record["names"] if n in keep]
+        if names:
+            vl[ADDED] = {"names": names, "active": record["active"]}
+        else:
+            del vl[ADDED]
 
 
 def has_view_layer_aovs(view_layer):

@@ -3,7 +3,7 @@ import json
 
 import bpy
 
-from ..nodes import compositor, dedupe, groups, images, osl, passes
+from ..nodes import comp_fog, compositor, dedupe, groups, images, osl, passes
 from ..nodes.light import unwrap_light, wrap_light
 from ..nodes.material import unwrap_material, wrap_material
 from ..nodes.owned import is_fogged
@@ -18,6 +18,8 @@ LIGHTS_KEY = "analytic_fog_lights"  # on the Surface group: the lights, their mo
 PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method preference it was built with
 PASSES_KEY = "analytic_fog_passes"   # on the Surface group: built with the fog passes (AOV outputs)
 CHOICE_KEY = "analytic_fog_choice"   # on the Surface group: the Quality, {light: [step, predicted error]}, the total
+AOV_KINDS = dict(passes.AOVS + comp_fog.AOVS)   # every AOV the fog adds to view layers, by name
+COMPOSITOR = "compositor"   # the method that adds the fog's light in the compositor (``nodes/comp_fog.py``)
 
 
 def fog_lights(scene):
@@ -86,10 +88,16 @@ def use_osl(scene, on):
         del scene[OSL_WAS]
 
 
-def _signature(lights, models, camera, with_passes):
+def _signature(scene, lights, models, preference, with_passes):
+    camera = scene.camera
+    extra = []
+    if preference == COMPOSITOR:   # what the compositor's graph is built for (the rest it reads by drivers)
+        c = scene.cycles
+        extra = [f"compositor:{scene.render.engine}:{c.pixel_filter_type}:{comp_fog.horizontal_fit(scene)}:"
+                 f"{camera.data.sensor_fit}"]
     return "|".join([groups.code_fingerprint()] + [f"{o.name_full}:{'/'.join(r.name for r in mod)}"
                                                     for o, mod in zip(lights, models)]
-                     + ["camera:" + (camera.name_full if camera else ""), f"passes:{with_passes}"])
+                     + ["camera:" + (camera.name_full if camera else ""), f"passes:{with_passes}"] + extra)
 
 
 def quality_value(quality):
@@ -206,17 +214,24 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
     # lights stepped out of the groups to fit a budget (rungs.LEFT_OUT) keep their own dimming (wrap_light)
     grouped = [(o, mod) for o, mod in zip(lights, models) if choice["lights"][o.name][0] != rungs.LEFT_OUT]
     in_groups, grouped_models = [o for o, _ in grouped], [mod for _, mod in grouped]
-    signature = _signature(in_groups, grouped_models, scene.camera, with_passes)
+    signature = _signature(scene, in_groups, grouped_models, preference, with_passes)
     surface = bpy.data.node_groups.get(groups.SURFACE)
+    in_compositor = preference == COMPOSITOR
     if (surface is None or bpy.data.node_groups.get(groups.WORLD) is None
-            or surface.get(LIGHTS_KEY) != signature):
+            or surface.get(LIGHTS_KEY) != signature
+            or (in_compositor and bpy.data.node_groups.get(comp_fog.FOG_GROUP) is None)):
         imgs = images.all_table_images(groups.get_anisotropy())
-        surface = groups.build_surface(in_groups, grouped_models, imgs, with_passes)
+        # the Compositor method: materials and World without lights, the lights in the compositor
+        in_shaders = ([], []) if in_compositor else (in_groups, grouped_models)
+        surface = groups.build_surface(*in_shaders, imgs, with_passes)
+        if in_compositor:
+            comp_fog.add_surface_aovs(surface)
+            imgs = comp_fog.build_fog_group(scene, in_groups, grouped_models, imgs)
         surface[LIGHTS_KEY] = signature
         surface[PREFERENCE_KEY] = preference
         surface[PASSES_KEY] = with_passes
-        groups.build_world(in_groups, grouped_models, scene.camera, imgs, with_passes)
-        for name in groups.all_group_names():
+        groups.build_world(*in_shaders, scene.camera, imgs, with_passes)
+        for name in comp_fog.all_group_names()[1:] + groups.all_group_names():
             ng = bpy.data.node_groups.get(name)
             if ng is not None and ng.users == 0 and name not in (groups.PARAMS, groups.SURFACE, groups.WORLD):
                 bpy.data.node_groups.remove(ng)
@@ -235,10 +250,9 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
     if (limit := limit_text(choice)) is not None:
         notes.append((scene.render.engine, f"{limit}, predicted error {choice['error']:.2%} "
                                            "(render --explain lists each light's models)"))
-    if with_passes:
-        return notes + passes.add_view_layer_aovs(scene)
-    passes.remove_view_layer_aovs(scene)
-    return notes
+    aovs = (passes.AOVS if with_passes else ()) + (comp_fog.AOVS if in_compositor else ())
+    passes.remove_view_layer_aovs(scene, AOV_KINDS, keep=[name for name, _ in aovs])
+    return notes + passes.add_view_layer_aovs(scene, aovs)
 
 
 def merge_appended():
@@ -257,8 +271,9 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     """Add (or update) the fog on ``scene``; adding twice is the same as once.
 
     ``method``: the user's preference for the models (``rungs.PREFERENCES``):
-    "nodes" (node-group tables, Cycles and EEVEE) or "osl" (the glow by
-    quadrature in an OSL script, Cycles only; switches Cycles' OSL on).
+    "nodes" (node-group tables, Cycles and EEVEE), "osl" (the glow by
+    quadrature in an OSL script, Cycles only; switches Cycles' OSL on) or "compositor" (the node
+    groups' models once per pixel in the compositor, Cycles only: ``nodes/comp_fog.py``).
     ``objects``: fog only their materials (default: all in the scene).
     ``scene_scale``: real metres per Blender unit (the groups get density *
     scene_scale per unit).  Returns a list of (data-block name, reason) for
@@ -276,6 +291,8 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     rungs.choose(method, 0, fog.g)   # an unknown preference or unserved g raises here, before anything changes
     predict.target_error(error)
     check_camera(scene.camera)
+    if method == COMPOSITOR:
+        check_compositor_method(scene, with_passes)
     progress("appended fog", 0, 1)
     skipped = merge_appended()   # first: the tables and groups are looked up by name below
     lights, notes = fog_lights(scene)
@@ -303,13 +320,39 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
         why = wrap_world(scene.world)
         if why:
             skipped.append((scene.world.name, why))
-    skipped += compositor.follow(scene, rebuild=True)   # Cycles' denoiser kept off the fog's light
+    skipped += follow_compositor(scene, rebuild=True)   # Cycles' denoiser kept off the fog's light
     if not lights:
         skipped.append((scene.name, "has no point light taking part: the fog only dims"))
     note = presets.invisible_fog_note(fog.beta, scene_size(scene))
     if note:
         skipped.append((scene.name, note))
     return skipped
+
+
+def follow_compositor(scene, rebuild=False):
+    """The scene's compositor set-up as the fog's method needs it (``compositor.follow``): the Compositor
+    method's chain, else the denoiser's where Cycles denoises; returns [(name, note)]."""
+    surface = bpy.data.node_groups.get(groups.SURFACE)
+    in_compositor = surface is not None and surface.get(PREFERENCE_KEY) == COMPOSITOR
+    fog = bpy.data.node_groups.get(comp_fog.FOG_GROUP) if in_compositor else None
+    notes = compositor.follow(scene, rebuild, fog)
+    old = bpy.data.node_groups.get(comp_fog.FOG_GROUP)
+    if not in_compositor and old is not None and old.users == 0:   # the method changed from Compositor
+        bpy.data.node_groups.remove(old)
+    return notes
+
+
+def check_compositor_method(scene, with_passes):
+    """Raise ValueError unless ``scene`` can take the Compositor method (``comp_fog.py``'s limits)."""
+    if scene.render.engine != "CYCLES":
+        raise ValueError("the Compositor method needs Cycles (EEVEE writes its inputs as half floats): switch the "
+                         "render engine to Cycles or use the Node Groups method")
+    if scene.camera.data.type != "PERSP":
+        raise ValueError(f"the Compositor method needs a perspective camera ({scene.camera.name!r} is "
+                         f"{scene.camera.data.type.lower()}): use the Node Groups method")
+    if with_passes:
+        raise ValueError("the Compositor method adds the fog's light in the compositor, so there are no fog "
+                         "passes: switch Fog Passes off or use the Node Groups method")
 
 
 def update_params(scene):
@@ -350,13 +393,18 @@ def set_method(scene, method):
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is not None:
         rungs.choose(method, 0, groups.get_anisotropy())   # raises (nothing changed) for a g it can't serve
+        if method == COMPOSITOR:
+            check_compositor_method(scene, bool(surface.get(PASSES_KEY, False)))
         _rebuild(scene, surface, preference=method)
+        follow_compositor(scene, rebuild=True)
 
 
 def set_passes(scene, with_passes):
     """The user switched the fog passes on or off: rebuild the scene groups (materials are not touched)."""
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is not None:
+        if with_passes and surface.get(PREFERENCE_KEY) == COMPOSITOR:
+            check_compositor_method(scene, with_passes)
         _rebuild(scene, surface, with_passes=with_passes)
 
 
@@ -376,7 +424,7 @@ def refresh_lights(scene, rechoose=False):
     if surface is None or surface.library is not None:
         return
     _rebuild(scene, surface, rechoose=rechoose)
-    compositor.follow(scene)   # the engine or the denoiser flag may have changed
+    follow_compositor(scene)   # the engine or the denoiser flag may have changed
 
 
 def remove_fog(scene, progress=progress_.silent):
@@ -392,7 +440,9 @@ def remove_fog(scene, progress=progress_.silent):
     progress("lights", 0, 1)
     for light in bpy.data.lights:
         unwrap_light(light)
-    for name in groups.all_group_names():
+    for s in bpy.data.scenes:   # first: the compositor's chains use the fog's compositor groups
+        compositor.teardown(s)
+    for name in comp_fog.all_group_names() + groups.all_group_names():
         ng = bpy.data.node_groups.get(name)
         if ng is not None:
             bpy.data.node_groups.remove(ng)
@@ -406,5 +456,4 @@ def remove_fog(scene, progress=progress_.silent):
             bpy.data.texts.remove(text)
     use_osl(scene, False)
     for s in bpy.data.scenes:
-        compositor.teardown(s)
-        passes.remove_view_layer_aovs(s)
+        passes.remove_view_layer_aovs(s, AOV_KINDS)

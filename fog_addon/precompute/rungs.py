@@ -40,7 +40,8 @@ from . import model, spot, surface, tables
 
 TERMS = ("airlight", "background", "scatter", "direct")
 BACKENDS = ("numpy", "nodes", "osl")
-PREFERENCES = ("nodes", "osl")   # the user's Method: node-group tables, or OSL quadrature where a rung has one
+PREFERENCES = ("nodes", "osl", "compositor")   # the user's Method: node-group tables, OSL quadrature where a
+#                                                rung has one, or the node groups' models in the compositor
 
 
 @dataclass(frozen=True)
@@ -221,7 +222,8 @@ def choose(preference="nodes", step=0, g=0.0, spot=False):
 
     "nodes": every term from the node groups' tables; "osl": the glow by
     quadrature in OSL (Cycles only), the other terms as "nodes" (they have no
-    OSL rung).  ``predict.choose_steps`` picks each light's step from the
+    OSL rung); "compositor": the models of "nodes", evaluated once per pixel in the compositor
+    (``nodes/comp_fog.py``).  ``predict.choose_steps`` picks each light's step from the
     error it would make in the camera's view.  Raises ValueError for what no rung
     serves (tables below MIN_TABLE_ANISOTROPY).
     """

@@ -1,0 +1,89 @@
+"""One pixel of the fog's light computed in the compositor, from what the pixel's samples average to.
+
+The Compositor method (``nodes/comp_fog.py``) evaluates the fog's light once per pixel from render
+passes instead of in every material on every sample.  The formulas here are written against an ``m``
+ops namespace (numpy or nodes, ``ops.py``), like ``shading.py``, plus the one table they read.
+
+* **The picture's geometry**: a pixel's camera ray and a light's position in the picture, from the
+  camera's image plane (``picture_position``).
+* **Peaks**: a pixel's mean of a glow c / r about a light r px away (Sun et al. 2005 Eq. 12 as the
+  angle to the light gamma -> 0: every phase function gives 1 / r there) is not its centre's value.  Cycles
+  averages a pixel's samples with its Blackman-Harris filter (x and y drawn independently, support
+  +-1.5 px at the default width 1.5).  ``bake_filter`` tabulates E[1 / |delta + s|] over those offsets s;
+  ``peak_excess`` turns it into the factor the pixel's glow is multiplied by.  Measured against
+  converged pixel means (``benchmarks/compositor_fog/peaks.py``): 1.18 % relative RMSE over the pixels
+  near lights, where the centre value alone is 8.5 % off.
+"""
+import numpy as np
+
+from . import tables
+
+FILTER_WIDTH = 3.0    # px: Cycles' default Blackman-Harris filter, width 1.5, which its filter table doubles
+FILTER_REACH = 6.0    # px: the filter table covers offsets |dx|, |dy| up to this
+FILTER = tables.TableSpec("AnalyticFog Pixel Filter", 97, 97)
+DEFAULT_FILTER_WIDTH = 1.5   # px: Cycles' default width, the one FILTER is baked for (``filter_scale``)
+
+
+def blackman_harris(x, width=FILTER_WIDTH):
+    """Cycles' Blackman-Harris pixel filter (unnormalised) at offset x px from the pixel centre."""
+    t = 2.0 * np.pi * (x / width + 0.5)
+    value = 0.35875 - 0.48829 * np.cos(t) + 0.14128 * np.cos(2 * t) - 0.01168 * np.cos(3 * t)
+    return np.where(np.abs(x) <= width / 2, value, 0.0)
+
+
+def bake_filter():
+    """E[1 / |delta + s|] (1/px) over the offsets s of a pixel's samples (x and y drawn independently from
+    the filter, as Cycles does), for delta = (dx, dy) on FILTER's grid (0 .. FILTER_REACH px): the pixel's
+    mean of a glow c / r about a light r px away, per unit c.  In polar coordinates about the light the
+    1/r cancels the area element, so the integrand is smooth: midpoint rule in (rho, phi)."""
+    g = np.linspace(0.0, FILTER_REACH, FILTER.width)
+    nr, nphi, reach = 240, 256, FILTER_REACH * 1.5 + FILTER_WIDTH
+    rho = (np.arange(nr) + 0.5) / nr * reach
+    phi = (np.arange(nphi) + 0.5) / nphi * 2 * np.pi
+    x1 = np.linspace(-FILTER_WIDTH / 2, FILTER_WIDTH / 2, 20001)
+    w1 = blackman_harris(x1)
+    norm = (np.sum(w1[1:] + w1[:-1]) * 0.5 * (x1[1] - x1[0])) ** 2
+    cr, sr = rho[None, :] * np.cos(phi)[:, None], rho[None, :] * np.sin(phi)[:, None]
+    wx = blackman_harris(cr[None] - g[:, None, None]).reshape(len(g), -1)
+    wy = blackman_harris(sr[None] - g[:, None, None]).reshape(len(g), -1)
+    return wy @ wx.T * ((reach / nr) * (2 * np.pi / nphi) / norm)
+
+
+def filter_scale(filter_type, filter_width):
+    """What pixel offsets are multiplied by to use FILTER (baked for Blackman-Harris of width 1.5: the
+    mean of c / r scales as 1 / width, so r A(delta) depends on delta / width only), or None where the
+    peak factor does not apply: another filter (Gaussian pixel-centre sampling needs none)."""
+    return DEFAULT_FILTER_WIDTH / filter_width if filter_type == "BLACKMAN_HARRIS" else None
+
+
+def peak_excess(m, pixel, light_pixel):
+    """r A(delta) - 1, tapered to 0 over the table's last pixel: how much a pixel's mean glow exceeds its
+    centre's near a light seen in the picture, where the glow is c / r (r px from the light; Sun et al. 2005
+    Eq. 12 as gamma -> 0, any phase function).  ``pixel``, ``light_pixel``: positions in filter-scaled px
+    (``filter_scale``).  One per light and pixel: ``peak_factor`` applies it."""
+    delta = pixel - light_pixel
+    dx, dy = m.abs(m.dot(delta, (1.0, 0.0, 0.0))), m.abs(m.dot(delta, (0.0, 1.0, 0.0)))
+    r = m.sqrt(dx * dx + dy * dy)
+    a = m.table(FILTER, dx * (1.0 / FILTER_REACH), dy * (1.0 / FILTER_REACH))
+    return m.clamp01(FILTER_REACH - r) * (r * a - 1.0)
+
+
+def peak_factor(m, excess, along, d_vp):
+    """The factor on a light's glow along a ray that ends at ``d_vp`` (m): 1 + ``peak_excess`` where the
+    ray passes the light (``along``, the light's distance along the ray, before ``d_vp``), 1 where a surface
+    hides it."""
+    return 1.0 + m.less(along, d_vp) * excess
+
+
+def picture_position(m, to_light, corner, across, up, size):
+    """Where the point ``to_light`` (m, from the camera) appears in the picture, in the units of ``size``
+    (a vector: its width and height, then 0), from the bottom-left corner; far outside (1e6) when behind the camera.
+    ``corner``, ``across``, ``up``: the image plane (the bottom-left corner's direction and the vectors to
+    the bottom-right and top-left corners), which is what the camera rays are built from too."""
+    normal = m.cross(across, up)
+    t = m.dot(corner, normal) / m.dot(to_light, normal)
+    q = m.scale(to_light, t) - corner
+    u = m.dot(q, across) * m.dot(size, (1.0, 0.0, 0.0)) / m.dot(across, across)
+    v = m.dot(q, up) * m.dot(size, (0.0, 1.0, 0.0)) / m.dot(up, up)
+    behind = m.less(t, 0.0) * 1e6
+    return m.combine(u + behind, v + behind, 0.0)
