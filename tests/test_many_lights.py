@@ -45,7 +45,8 @@ import render_harness as h
 
 SCRIPT = h.ROOT / "tests" / "scenes" / "many_lights.py"
 LIGHTS = (1, 4, 16, 64, 256)
-METHODS = {"cycles_nodes": ("CYCLES", "nodes"), "cycles_osl": ("CYCLES", "osl"), "eevee": ("BLENDER_EEVEE", "nodes")}
+METHODS = {"cycles_nodes": ("CYCLES", "nodes"), "cycles_osl": ("CYCLES", "osl"), "eevee": ("BLENDER_EEVEE", "nodes"),
+           "cycles_compositor": ("CYCLES", "compositor")}
 SAMPLES = 1
 TIMEOUT_S = 300              # hard limit of one case's process
 SLOW_TIMEOUT_S = 1800        # with FOG_SLOW_TESTS=1

@@ -1,0 +1,170 @@
+"""The Compositor method's set-up on the spheres demo scene, without rendering; prints one JSON line.
+
+* ``frames``: for camera set-ups (sensor fits, landscape and portrait pictures, lens shifts), the largest
+  difference between the driven image plane (``comp_fog.camera_frame``, read after the drivers ran) and
+  the one Blender's ``Camera.view_frame`` gives (scaled to unit distance).
+* ``splice``: on a user's compositor (Render Layers -> Glare -> Group Output, and its Image also to a
+  Viewer) the fog's group node sits between Render Layers and both, Cycles' denoiser stays on, and
+  Remove gives back the same links, the same nodes, no fog data-blocks and no fog AOVs.
+* ``switch``: Node Groups -> Compositor -> Node Groups: the compositor's set-up and AOVs go, the
+  materials' light groups come back.
+* ``refused``: the method refused, with nothing changed, for EEVEE, the fog passes and a panoramic camera.
+* ``driven``: a density, colour, light power and lamp move reach the compositor's graph without a rebuild.
+"""
+import json
+import math
+import pathlib
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+import bpy  # noqa: E402
+
+from demo_scenes import spheres  # noqa: E402
+from fog_addon.nodes import comp_fog, compositor, groups, owned  # noqa: E402
+from fog_addon.nodes.sockets import NodeOps  # noqa: E402
+from fog_addon.ops import apply  # noqa: E402
+
+BETA = 0.15
+
+
+def fresh():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    spheres.build(scene)
+    scene.render.engine = "CYCLES"
+    scene.cycles.use_denoising = True
+    bpy.context.view_layer.update()
+    return scene
+
+
+def frame_error(scene, fit, size, shift):
+    """Largest |driven - view_frame| over the image plane's three vectors for one camera set-up."""
+    cam = scene.camera
+    cam.data.sensor_fit = fit
+    cam.data.sensor_height = 18.0
+    cam.data.shift_x, cam.data.shift_y = shift
+    scene.render.resolution_x, scene.render.resolution_y = size
+    tree = bpy.data.node_groups.new("frame probe", "CompositorNodeTree")
+    scene.compositing_node_group = tree
+    vectors = comp_fog.camera_frame(NodeOps(tree), scene)
+    scene.frame_set(scene.frame_current)
+    got = [[s.default_value for s in v.sock.node.inputs[:3]] for v in vectors]
+    local = [v / -v.z for v in cam.data.view_frame(scene=scene)]   # corners at unit distance
+    top_right, bottom_right, bottom_left, top_left = [cam.matrix_world.to_3x3() @ v for v in local]
+    want = [bottom_left, bottom_right - bottom_left, top_left - bottom_left]
+    scene.compositing_node_group = None
+    bpy.data.node_groups.remove(tree)
+    return max(abs(g - w) for gv, wv in zip(got, want) for g, w in zip(gv, wv))
+
+
+def links(tree):
+    return sorted((l.from_node.name, l.from_socket.identifier, l.to_node.name, l.to_socket.identifier)
+                  for l in tree.links)
+
+
+def fog_data():
+    """Names of the fog's node groups and table images left in the file."""
+    return sorted([ng.name for ng in bpy.data.node_groups if ng.name.startswith(owned.PREFIX)]
+                  + [im.name for im in bpy.data.images if im.name.startswith(owned.PREFIX)])
+
+
+def main():
+    res = {}
+    scene = fresh()
+    res["frames"] = {f"{fit} {w}x{h} shift {sx},{sy}": frame_error(scene, fit, (w, h), (sx, sy))
+                     for fit, (w, h), (sx, sy) in [("AUTO", (320, 180), (0.0, 0.0)), ("AUTO", (180, 320), (0.1, -0.2)),
+                                                   ("HORIZONTAL", (200, 300), (0.0, 0.15)),
+                                                   ("VERTICAL", (320, 180), (-0.1, 0.05)),
+                                                   ("AUTO", (320, 180), (0.25, 0.1))]}
+
+    scene = fresh()
+    tree = bpy.data.node_groups.new("My Compositor", "CompositorNodeTree")
+    tree.interface.new_socket("Image", in_out="OUTPUT", socket_type="NodeSocketColor")
+    rl = tree.nodes.new("CompositorNodeRLayers")
+    glare = tree.nodes.new("CompositorNodeGlare")
+    viewer = tree.nodes.new("CompositorNodeViewer")
+    out = tree.nodes.new("NodeGroupOutput")
+    tree.links.new(rl.outputs["Image"], glare.inputs["Image"])
+    tree.links.new(rl.outputs["Image"], viewer.inputs["Image"])
+    tree.links.new(glare.outputs["Image"], out.inputs["Image"])
+    scene.compositing_node_group = tree
+    scene.render.use_compositing = True
+    before = {"links": links(tree), "nodes": sorted(n.name for n in tree.nodes), "fog": fog_data(),
+              "aovs": [a.name for a in scene.view_layers[0].aovs]}
+    notes = apply.apply_fog(scene, BETA, method="compositor")
+    fog_nodes = [n for n in tree.nodes if owned.is_ours(n)]
+    fed = {l.to_node.name for l in tree.links if l.from_node in fog_nodes}
+    res["splice"] = {
+        "notes": notes, "fog_nodes": [n.bl_idname for n in fog_nodes],
+        "group": fog_nodes[0].node_tree.name if fog_nodes else None,
+        "feeds": sorted(fed), "rl_feeds": sorted({l.to_node.name for l in tree.links if l.from_node == rl}),
+        "aovs_fed": sorted(l.to_socket.name for l in tree.links if l.from_node == rl and l.to_node in fog_nodes),
+        "denoising": scene.cycles.use_denoising, "state": dict(scene.get(compositor.STATE, {}))}
+    apply.remove_fog(scene)
+    after = {"links": links(tree), "nodes": sorted(n.name for n in tree.nodes), "fog": fog_data(),
+             "aovs": [a.name for a in scene.view_layers[0].aovs]}
+    res["splice"]["restored"] = {k: after[k] == before[k] for k in before}
+    res["splice"]["after"] = after
+
+    scene = fresh()
+    scene.cycles.use_denoising = False
+    apply.apply_fog(scene, BETA, method="nodes")
+    lights_in_materials = len([ng for ng in bpy.data.node_groups if ng.name.startswith("AnalyticFog Light [")])
+    apply.set_method(scene, "compositor")
+    in_compositor = {"own_tree": getattr(scene.compositing_node_group, "name", None),
+                     "aovs": [a.name for a in scene.view_layers[0].aovs],
+                     "material_light_groups": len([ng for ng in bpy.data.node_groups
+                                                   if ng.name.startswith("AnalyticFog Light [")])}
+    apply.set_method(scene, "nodes")
+    res["switch"] = {"nodes_light_groups": lights_in_materials, "compositor": in_compositor,
+                     "back": {"tree": getattr(scene.compositing_node_group, "name", None),
+                              "compositing": scene.render.use_compositing,
+                              "aovs": [a.name for a in scene.view_layers[0].aovs],
+                              "fog_group": bpy.data.node_groups.get(comp_fog.FOG_GROUP) is not None,
+                              "material_light_groups": len([ng for ng in bpy.data.node_groups
+                                                            if ng.name.startswith("AnalyticFog Light [")])}}
+
+    refused = {}
+    for case in ("eevee", "passes", "panoramic"):
+        scene = fresh()
+        kwargs = {}
+        if case == "eevee":
+            scene.render.engine = "BLENDER_EEVEE"
+        elif case == "passes":
+            kwargs["with_passes"] = True
+        else:
+            scene.camera.data.type = "PANO"
+        try:
+            apply.apply_fog(scene, BETA, method="compositor", **kwargs)
+            refused[case] = None
+        except ValueError as e:
+            refused[case] = str(e)
+        tagged = [m.name for m in bpy.data.materials if m.node_tree and any(owned.is_ours(n) for n in m.node_tree.nodes)]
+        refused[case + " changed"] = tagged + fog_data()
+    res["refused"] = refused
+
+    scene = fresh()
+    scene.cycles.use_denoising = False
+    apply.apply_fog(scene, BETA, albedo=(0.9, 0.8, 0.7), method="compositor")
+    fog = bpy.data.node_groups[comp_fog.FOG_GROUP]
+    lamp = next(o for o in scene.objects if o.type == "LIGHT")
+    groups.set_params(0.05, (0.5, 0.6, 0.7))   # what the panel's density and colour do (apply.update_params)
+    lamp.data.energy *= 2.0
+    lamp.location.x += 1.25
+    scene.frame_set(scene.frame_current)
+
+    def value(label, i=None):
+        node = next(n for n in fog.nodes if n.label == label)
+        return node.outputs[0].default_value if i is None else node.inputs[i].default_value
+    light_node = next(n for n in fog.nodes if n.label.startswith("Light 0:"))
+    intensity = light_node.inputs["Intensity"].links[0].from_node.inputs[0].default_value
+    res["driven"] = {"beta": value("Beta"), "albedo": [value("Albedo", i) for i in range(3)],
+                     "light_x": value("Light 0 Location", 0), "lamp_x": lamp.matrix_world.translation.x,
+                     "intensity": intensity, "want_intensity": lamp.data.energy * lamp.data.color[0] / (4 * math.pi)}
+    print("COMPOSITOR_JSON " + json.dumps(res), flush=True)
+
+
+if __name__ == "__main__":
+    main()

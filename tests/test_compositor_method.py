@@ -1,0 +1,67 @@
+"""The Compositor method's set-up (tests/scenes/compositor_method.py, one process, no render): the driven
+image plane against Blender's own ``Camera.view_frame``, splicing into a user's compositor and taking it
+out again, switching methods, refusals that change nothing, and drivers that carry the panel's density and
+colour and an animated lamp into the compositor.  Its pictures are proved in test_render.py (against
+Cycles' path-traced volume) and test_many_lights.py (1 to 256 lights against the numpy twin)."""
+import json
+
+import pytest
+
+import render_harness as h
+
+FOG_AOVS = ["Fog Coverage", "Fog Position", "Fog Normal", "Fog Base Color", "Fog Metallic", "Fog Roughness",
+            "Fog Specular IOR Level"]
+
+
+@pytest.fixture(scope="module")
+def res():
+    proc = h.run([h.ROOT / "tests" / "scenes" / "compositor_method.py"], timeout=600)
+    assert not h.log_errors(proc.stdout + proc.stderr)
+    line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("COMPOSITOR_JSON "))
+    return json.loads(line.split(" ", 1)[1])
+
+
+def test_driven_image_plane_matches_view_frame(res):
+    """Auto, Horizontal and Vertical sensor fits, landscape and portrait, shifted: the driven corner and
+    edge vectors (unit distance, so about 0.5-1 long) within float32 rounding of Blender's."""
+    assert len(res["frames"]) == 5
+    for case, err in res["frames"].items():
+        assert err < 1e-6, (case, err)
+
+
+def test_spliced_into_a_users_compositor_and_taken_out(res):
+    s = res["splice"]
+    assert s["notes"] == []
+    assert s["fog_nodes"] == ["CompositorNodeGroup"] and s["group"] == "AnalyticFog Compositor Fog"
+    assert s["feeds"] == ["Glare", "Viewer"], "both of the Image's users read the fogged picture"
+    assert s["rl_feeds"] == ["AnalyticFog Compositor 0 Fog"]
+    assert s["aovs_fed"] == sorted(FOG_AOVS + ["Image"])
+    assert s["denoising"] is True, "the render holds no fog light: Cycles' denoiser stays on"
+    assert s["state"] == {"tree": "My Compositor", "fog": True}
+    assert s["restored"] == {"links": True, "nodes": True, "fog": True, "aovs": True}, s["after"]
+
+
+def test_switching_methods(res):
+    s = res["switch"]
+    assert s["nodes_light_groups"] >= 1
+    c = s["compositor"]
+    assert c["own_tree"] == "AnalyticFog Compositor" and c["aovs"] == FOG_AOVS
+    assert c["material_light_groups"] == 0, "with the Compositor method the materials hold no light's fog"
+    b = s["back"]
+    assert b["tree"] is None and b["aovs"] == [] and not b["fog_group"]
+    assert b["material_light_groups"] == s["nodes_light_groups"]
+
+
+@pytest.mark.parametrize("case,words", [("eevee", "needs Cycles"), ("passes", "no fog passes"),
+                                        ("panoramic", "perspective camera")])
+def test_refused_changing_nothing(res, case, words):
+    assert res["refused"][case] is not None and words in res["refused"][case]
+    assert res["refused"][case + " changed"] == []
+
+
+def test_density_colour_and_lamp_reach_the_compositor_by_drivers(res):
+    d = res["driven"]
+    assert d["beta"] == pytest.approx(0.05, rel=1e-6)
+    assert d["albedo"] == pytest.approx([0.5, 0.6, 0.7], rel=1e-6)
+    assert d["light_x"] == pytest.approx(d["lamp_x"], abs=1e-6) and abs(d["lamp_x"]) > 1.0
+    assert d["intensity"] == pytest.approx(d["want_intensity"], rel=1e-6)
