@@ -9,7 +9,9 @@ Process B (tests/scenes/farm_render.py) starts with a clean environment in a dir
 * nodes: Cycles (48x27, 4 spp, pixel centres, no denoiser, seed 0) and EEVEE (32x18, 1 sample);
 * osl: Cycles with the airlight from the OSL Script node (bytecode saved in the .blend);
 * anim: the same scene with one light's position and power and the camera keyframed; B renders
-  frames 1, 5, 10 after ``frame_set``.  A's expectation for frame f is the scene made static at
+  frames 1, 5, 10 after ``frame_set``;
+* compositor, anim_compositor: the static and animated scenes with the Compositor method (the fog's light
+  added by the compositor's graph, every input driven).  A's expectation for frame f is the scene made static at
   frame f (animation cleared, objects posed, fog re-added).
 
 B also checks: the tables are packed, every driver is valid and none is a Python expression, the
@@ -59,6 +61,10 @@ LANES = {
     "osl": ("osl.blend", [{"out": "farm_osl_cycles.exr", "expect": "osl_cycles.exr"}]),
     "anim": ("anim.blend", [{"out": f"farm_anim_{f}.exr", "expect": f"expect_{f}.exr", "frame": f}
                             for f in FRAMES]),
+    # the Compositor method: the fog's light added by the compositor's driven graph
+    "compositor": ("compositor.blend", [{"out": "farm_compositor_cycles.exr", "expect": "compositor_cycles.exr"}]),
+    "anim_compositor": ("anim.blend", [{"out": f"farm_anim_compositor_{f}.exr", "expect": f"expect_{f}.exr",
+                                        "frame": f} for f in FRAMES]),
 }
 
 
@@ -196,7 +202,7 @@ def test_farm_render_matches(farm, lane, job):
     r = farm[lane]
     spec = next(j for j in LANES[lane][1] if j["out"] == job)
     img = _assert_same(r["dir"] / job, r["dir"] / spec["expect"], job[:-4])
-    if lane != "anim" and "engine" not in spec:   # the fog is there: not the fog-free picture
+    if not lane.startswith("anim") and "engine" not in spec:   # the fog is there: not the fog-free picture
         nofog = _read(r["dir"] / "nofog_cycles.exr")
         effect = compare.metrics(img, nofog)["rel_rmse"]
         assert effect > MIN_FOG_EFFECT, f"{job}: differs from the fog-free render by only {effect:.3g}"
@@ -218,7 +224,17 @@ def test_animation_follows_light_and_camera(farm):
         assert np.allclose(lamp, poses[f]["lamp"], atol=1e-5), (f, lamp, poses[f])
         assert np.allclose(cam, poses[f]["camera"], atol=1e-5), (f, cam, poses[f])
         assert np.allclose(power, poses[f]["power"] / (4 * np.pi), rtol=1e-6), (f, power, poses[f])
-    imgs = {f: _read(r["dir"] / f"farm_anim_{f}.exr") for f in FRAMES}
+    _frames_change(r["dir"], "farm_anim")
+
+
+def test_compositor_animation_changes(farm):
+    """The Compositor method's farm frames (each matching its static expectation: test_farm_render_matches)
+    differ from frame to frame."""
+    _frames_change(farm["anim_compositor"]["dir"], "farm_anim_compositor")
+
+
+def _frames_change(folder, prefix):
+    imgs = {f: _read(folder / f"{prefix}_{f}.exr") for f in FRAMES}
     for f, g in zip(FRAMES, FRAMES[1:]):
         change = compare.metrics(imgs[g], imgs[f])["rel_rmse"]
         assert change > MIN_FRAME_CHANGE, f"frames {f} and {g} differ by only {change:.3g}: the fog did not move"

@@ -30,6 +30,9 @@ from .sockets import KERNEL_GROUP, NodeOps, Val
 
 FOG_GROUP = f"{owned.PREFIX} Compositor Fog"     # the compositor group that adds the fog's light
 LIGHT_GROUP = f"{owned.PREFIX} Compositor Light"  # per-light compositor groups: "<LIGHT_GROUP> [models]"
+BUNDLE = f"{owned.PREFIX} Compositor Bundle"     # the scene's lights by BUNDLE_SIZE: "<BUNDLE> 1-8", ...
+BUNDLE_SIZE = 8   # lights a bundle: Blender's node and link editing grows with a tree's size (one tree of 256
+#                   lights with their drivers took over 15 min to build; ``build_fog_group``)
 KERNEL_PREFIX = f"{KERNEL_GROUP} Compositor"   # the kernels' compositor groups (``sockets.NodeOps.group``)
 AOVS = (("Fog Coverage", "VALUE"), ("Fog Position", "COLOR"), ("Fog Normal", "COLOR"),
         ("Fog Base Color", "COLOR"), ("Fog Metallic", "VALUE"), ("Fog Roughness", "VALUE"),
@@ -37,6 +40,11 @@ AOVS = (("Fog Coverage", "VALUE"), ("Fog Position", "COLOR"), ("Fog Normal", "CO
 AOV_ROLE = "Compositor AOV"   # the Surface group's AOV Output nodes: "<AOV_ROLE> <AOV name>"
 PRINCIPLED = ("Base Color", "Metallic", "Roughness", "Specular IOR Level")
 V, C, F = "NodeSocketVector", "NodeSocketColor", "NodeSocketFloat"
+# what every light's group reads of the pixel (the same for all lights), and the terms it returns
+SHARED = (("Beta", F), ("Camera", V), ("Position", V), ("Incoming", V), ("View Distance", F), ("Normal", V),
+          ("Diffuse", V), ("Specular", V), ("Level", F), ("Direction", V), ("Pixel", V), ("Corner", V),
+          ("Across", V), ("Up", V), ("Size", V))
+TERMS = (("Airlight", V), ("Scattered", V), ("Background", V))
 
 
 class CompOps(NodeOps):
@@ -71,10 +79,11 @@ def light_group_name(models, peak):
 
 
 def all_group_names():
-    """The compositor groups the fog can make in this file, users first: the fog group and the per-light
-    groups (their kernels are among ``groups.all_group_names``, which must come after these)."""
-    return [FOG_GROUP] + sorted({owned.base_name(ng.name) for ng in bpy.data.node_groups
-                                 if ng.get(groups.FOG_PROP) and ng.name.startswith(LIGHT_GROUP)})
+    """The compositor groups the fog can make in this file, users first: the fog group, the bundles, the
+    per-light groups (their kernels are among ``groups.all_group_names``, which must come after these)."""
+    names = {owned.base_name(ng.name) for ng in bpy.data.node_groups
+             if ng.get(groups.FOG_PROP) and ng.name.startswith((LIGHT_GROUP, BUNDLE))}
+    return [FOG_GROUP] + sorted(names, key=lambda name: (not name.startswith(BUNDLE), name))
 
 
 def build_light_group(models, images, peak):
@@ -82,15 +91,13 @@ def build_light_group(models, images, peak):
     Airlight (the glow up to the surface, Sun et al. 2005 Eq. 12 through ``shading.shade_point``),
     Scattered (the fog light the surface reflects, Eq. 17-18) and Background (the glow of a ray that
     meets no surface).  ``peak``: times the peak factor (``pixel.peak_factor``) where the ray passes
-    the light."""
+    the light, seen in the picture at ``pixel.picture_position`` (Corner, Across, Up: the image plane,
+    Size: the picture's, ``camera_frame`` and ``_picture_scale``)."""
     name = light_group_name(models, peak)
     if (ng := groups._up_to_date(name)) is not None:
         return ng
-    ng, gin, gout = groups._new_group(name, [
-        ("Beta", F), ("Light", V), ("Intensity", V), ("Camera", V), ("Position", V), ("Incoming", V),
-        ("View Distance", F), ("Normal", V), ("Diffuse", V), ("Specular", V), ("Level", F), ("Direction", V),
-        ("Pixel", V), ("Light Pixel", V), *groups._spot_inputs(models)],
-        [("Airlight", V), ("Scattered", V), ("Background", V)], tree_type="CompositorNodeTree")
+    ng, gin, gout = groups._new_group(name, [*SHARED, ("Light", V), ("Intensity", V), *groups._spot_inputs(models)],
+                                      TERMS, tree_type="CompositorNodeTree")
     m = CompOps(ng, images)
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
     geo = shading.Geometry(g["Camera"], g["Position"], g["Incoming"], g["View Distance"], g["Normal"])
@@ -101,7 +108,8 @@ def build_light_group(models, images, peak):
     air = terms.airlight
     back = shading.background_point(m, g["Camera"], g["Direction"], light, medium, models)
     if peak:   # the sky's rays pass every light before the end of the world: its factor is 1 + excess
-        excess = pixel.peak_excess(m, g["Pixel"], g["Light Pixel"])
+        seen_at = pixel.picture_position(m, g["Light"] - g["Camera"], g["Corner"], g["Across"], g["Up"], g["Size"])
+        excess = pixel.peak_excess(m, g["Pixel"], seen_at)
         along = m.dot(g["Light"] - g["Camera"], -1.0 * g["Incoming"])
         air = m.scale(air, pixel.peak_factor(m, excess, along, g["View Distance"]))
         back = m.scale(back, 1.0 + excess)
@@ -181,6 +189,40 @@ def _picture_scale(m, scene, peak):
     return _vector(m, "Picture Size", [f"rx*{k}", f"ry*{k}", "0"], r)
 
 
+def _sum_terms(m, node, *sums):
+    """``sums`` (Airlight, Scattered, Background so far, or None) plus ``node``'s outputs of those names."""
+    terms = [m.wrap(node.outputs[name], vector=True) for name, _ in TERMS]
+    return terms if sums[0] is None else [a + b for a, b in zip(sums, terms)]
+
+
+def build_bundle(first, lights, models, images, peak):
+    """The compositor group of the scene's lights ``first`` + 1 .. ``first`` + len(lights) (at most
+    BUNDLE_SIZE): SHARED in, each light's group (``build_light_group``) with its position, intensity and
+    cone driven by the light (``groups._drive_intensity``, ``_drive_spot``), TERMS summed out."""
+    name = f"{BUNDLE} {first + 1}-{first + len(lights)}"
+    ng, gin, gout = groups._new_group(name, SHARED, TERMS, tree_type="CompositorNodeTree")
+    m = CompOps(ng, images)
+    sums = [None] * 3
+    for k, (light, mod) in enumerate(zip(lights, models), start=first):
+        node = m.node("CompositorNodeGroup", 5)
+        node.node_tree = build_light_group(mod, images, peak)
+        node.label = f"Light {k}: {light.name}"
+        for socket, _ in SHARED:
+            ng.links.new(gin.outputs[socket], node.inputs[socket])
+        position = _vector(m, f"Light {k} Location", ["v"] * 3,
+                           lambda i: [("v", light, f"matrix_world[3][{i}]")], col=4)
+        intensity = m.node("ShaderNodeCombineXYZ", 4)
+        groups._drive_intensity(intensity, light.data)
+        m.feed(node.inputs["Light"], position)
+        ng.links.new(intensity.outputs[0], node.inputs["Intensity"])
+        if groups.SPOT_COS in node.inputs:
+            groups._drive_spot(ng, k, light, node)
+        sums = _sum_terms(m, node, *sums)
+    for (term, _), v in zip(TERMS, sums):
+        m.feed(gout.inputs[term], v)
+    return groups._install(ng, name)
+
+
 def _params(m):
     """(beta 1/m, albedo) of the params group, driven (a density or colour change needs no rebuild)."""
     params = bpy.data.node_groups[groups.PARAMS]
@@ -235,26 +277,15 @@ def build_fog_group(scene, lights, models, images):
         p["Fog Specular IOR Level"] * inv, m.dot(incoming, normal))
     shared = {"Beta": beta, "Camera": cam, "Position": pos, "Incoming": incoming, "View Distance": d_vp,
               "Normal": normal, "Diffuse": diffuse, "Specular": specular, "Level": level,
-              "Direction": direction, "Pixel": pix}
+              "Direction": direction, "Pixel": pix, "Corner": corner, "Across": across, "Up": up, "Size": size}
     air = scat = back = None
-    for k, (light, mod) in enumerate(zip(lights, models)):
+    for first in range(0, len(lights), BUNDLE_SIZE):
         node = m.node("CompositorNodeGroup", 5)
-        node.node_tree = build_light_group(mod, images, peak)
-        node.label = f"Light {k}: {light.name}"
+        node.node_tree = build_bundle(first, lights[first:first + BUNDLE_SIZE], models[first:first + BUNDLE_SIZE],
+                                      images, peak)
         for name, v in shared.items():
             m.feed(node.inputs[name], v)
-        position = _vector(m, f"Light {k} Location", ["v"] * 3,
-                           lambda i: [("v", light, f"matrix_world[3][{i}]")], col=4)
-        intensity = m.node("ShaderNodeCombineXYZ", 4)
-        groups._drive_intensity(intensity, light.data)
-        m.feed(node.inputs["Light"], position)
-        ng.links.new(intensity.outputs[0], node.inputs["Intensity"])
-        if groups.SPOT_COS in node.inputs:
-            groups._drive_spot(ng, k, light, node)
-        if peak:
-            m.feed(node.inputs["Light Pixel"], pixel.picture_position(m, position - cam, corner, across, up, size))
-        a, s, b = (m.wrap(node.outputs[n], vector=True) for n in ("Airlight", "Scattered", "Background"))
-        air, scat, back = (a, s, b) if air is None else (air + a, scat + s, back + b)
+        air, scat, back = _sum_terms(m, node, air, scat, back)
     if air is None:
         fog = m.wrap((0.0, 0.0, 0.0))
     else:

@@ -148,17 +148,19 @@ def main():
     scene = fresh()
     scene.cycles.use_denoising = False
     apply.apply_fog(scene, BETA, albedo=(0.9, 0.8, 0.7), method="compositor")
-    fog = bpy.data.node_groups[comp_fog.FOG_GROUP]
     lamp = next(o for o in scene.objects if o.type == "LIGHT")
     groups.set_params(0.05, (0.5, 0.6, 0.7))   # what the panel's density and colour do (apply.update_params)
     lamp.data.energy *= 2.0
     lamp.location.x += 1.25
     scene.frame_set(scene.frame_current)
 
+    nodes = [n for ng in bpy.data.node_groups if ng.name.startswith((comp_fog.FOG_GROUP, comp_fog.BUNDLE))
+             for n in ng.nodes]
+
     def value(label, i=None):
-        node = next(n for n in fog.nodes if n.label == label)
+        node = next(n for n in nodes if n.label == label)
         return node.outputs[0].default_value if i is None else node.inputs[i].default_value
-    light_node = next(n for n in fog.nodes if n.label.startswith("Light 0:"))
+    light_node = next(n for n in nodes if n.label.startswith("Light 0:"))
     intensity = light_node.inputs["Intensity"].links[0].from_node.inputs[0].default_value
     res["driven"] = {"beta": value("Beta"), "albedo": [value("Albedo", i) for i in range(3)],
                      "light_x": value("Light 0 Location", 0), "lamp_x": lamp.matrix_world.translation.x,

@@ -81,18 +81,19 @@ def nodes(outdir):
     emit({"packed": packed, "render_s": log})
 
 
-def osl(outdir):
-    """The fog by apply_fog(method="osl") (Cycles only): expectation, then osl.blend."""
+def osl(outdir, method="osl"):
+    """The fog by apply_fog(method=``method``: "osl" or "compositor", Cycles only): expectation, then
+    <method>.blend."""
     from fog_addon.ops import apply
     log = {}
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = build(bpy.context.scene)
     timed(log, "nofog_cycles", render_exr, scene, os.path.join(outdir, "nofog_cycles.exr"))
     fog_addon.register()
-    skipped = apply.apply_fog(scene, DENSITY, method="osl")
-    timed(log, "osl_cycles", render_exr, scene, os.path.join(outdir, "osl_cycles.exr"))
+    skipped = apply.apply_fog(scene, DENSITY, method=method)
+    timed(log, f"{method}_cycles", render_exr, scene, os.path.join(outdir, f"{method}_cycles.exr"))
     packed = packed_report()
-    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(outdir, "osl.blend"))
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(outdir, f"{method}.blend"))
     emit({"packed": packed, "skipped": skipped, "shading_system_osl": bool(scene.cycles.shading_system),
           "render_s": log})
 
@@ -108,8 +109,9 @@ def _key(idb, path, frames_values, index=-1):
         idb.keyframe_insert(path, index=index, frame=f)
 
 
-def anim(outdir):
-    """anim.blend: one light moving (and its power animated), the camera moving; then the expectations."""
+def anim(outdir, method="NODES"):
+    """anim.blend: one light moving (and its power animated), the camera moving; then the expectations.
+    ``method``: the panel's Method the fog is added with."""
     log = {}
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = build(bpy.context.scene)
@@ -119,6 +121,7 @@ def anim(outdir):
     _key(lamp.data, "energy", LIGHT_A_POWER)
     _key(cam, "location", CAMERA_LOC)
     fog_addon.register()
+    scene.analytic_fog.method = method
     assert bpy.ops.fog.add(density=DENSITY) == {"FINISHED"}
     scene.frame_set(1)
     bpy.ops.wm.save_as_mainfile(filepath=os.path.join(outdir, "anim.blend"))
@@ -147,4 +150,5 @@ def anim(outdir):
 
 if __name__ == "__main__":
     mode, outdir = sys.argv[1], sys.argv[2]
-    {"nodes": nodes, "osl": osl, "anim": anim}[mode](outdir)
+    {"nodes": nodes, "osl": osl, "anim": anim, "compositor": lambda out: osl(out, "compositor"),
+     "anim_compositor": lambda out: anim(out, "COMPOSITOR")}[mode](outdir)
