@@ -589,7 +589,7 @@ def chart(rows, path):
     res = rows[0].get("resolution", "") if rows else ""
     spp = rows[0].get("samples", "") if rows else ""
     err = rows[0].get("error", "") if rows else ""
-    src = rows[0].get("source", "") if rows else ""
+    src = ", ".join(dict.fromkeys(str(r.get("source", "")) for r in rows))   # every commit the rows were measured at
     g = rows[0].get("anisotropy", "") if rows else ""
     err = f"{err}, g {g:g}" if isinstance(g, float) and g else err
     ax.set_title(f"Cost of the fog, {res}, {spp:g} spp, Cycles CPU (2 cores) / EEVEE (llvmpipe); Quality: {err}; "

@@ -55,7 +55,7 @@ def set_pixel_centre_filter(scene):
     """Make each pixel a point sample at its centre (both engines)."""
     scene.cycles.pixel_filter_type = 'GAUSSIAN'
     scene.cycles.filter_width = PIXEL_CENTRE_FILTER_WIDTH
-    compositor.teardown(scene)   # no denoiser at all, not even the fog's compositor set-up
+    compositor.teardown_denoiser(scene)   # no denoiser at all, not even the fog's compositor set-up
     scene.cycles.use_denoising = False   # on by default; it smears glow peaks at low sample counts
     # EEVEE reconstructs with render.filter_size (px); 0 = no spatial filter.
     scene.render.filter_size = 0.0

@@ -1,4 +1,5 @@
-"""Many lights: 1, 4, 16, 64 and 256 point lights, Cycles (node groups, OSL) and EEVEE, against the numpy twin.
+"""Many lights: 1, 4, 16, 64 and 256 point lights, Cycles (node groups, OSL, compositor) and EEVEE, against the
+numpy twin.
 
 Each case runs tests/scenes/many_lights.py in a fresh process (48x27, 1 spp,
 pixel centres; a ground plane and matte, glossy and metallic spheres; the
@@ -27,6 +28,8 @@ constants a material, ``groups.eevee_budget``): 16 lights fit fully modelled sin
 picture renders exactly that choice.  Before the budget, EEVEE at 16 lights
 overflowed the block ("Uniform block node_tree too big (78800/65536)") and every
 material rendered EEVEE's fallback (median render / twin 3.0-4.5).
+The Compositor method (nodes/comp_fog.py) passes at every count, 256 lights included, in 7-15 s a
+case (relative RMSE 0.014-0.17 %, median render / twin within 0.07 % of 1; at ff98a1e).
 ``MEASURED`` holds what each case did on 2 CPU cores (bpy 5.0.1, other jobs
 running); failing cases that finish in about 2 minutes are
 ``xfail(strict=True)``, so they turn into failures the day they pass (then

@@ -248,6 +248,12 @@ def setup(scene, fog=None):
     return []
 
 
+def teardown_denoiser(scene):
+    """Take the denoiser's set-up off ``scene`` (the Compositor method's chain stays: it adds the fog)."""
+    if is_set_up(scene) and not scene[STATE].get("fog"):
+        teardown(scene)
+
+
 def teardown(scene):
     """Take the set-up off ``scene``: the fog's compositor nodes (or group) go, the settings come back."""
     state = scene.get(STATE)
