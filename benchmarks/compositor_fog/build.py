@@ -1,18 +1,14 @@
-"""The fog's light computed in Blender's compositor (the Compositor method, ``fog_addon/nodes/comp_fog.py``)
-on the many-lights scene: timing and pass renders.
+"""The Compositor method's fog light beside the node groups' per-sample Fog Light pass, for ``compare.py``
+and ``peaks.py``.
 
-    .venv/bin/python benchmarks/compositor_fog/build.py N MODE OUT.exr
-MODE: nofog   the many-lights scene without fog;
-      ratio   nofog, then comp in the same process (the issue's protocol: fog over no fog, one run);
-      (CF_SPOTS=1: every light a spot as in benchmarks/overhead.py --spots; CF_ANISOTROPY=g: the fog's g)
-      exact   the fog in the materials (Quality Exact, Fog Passes: the Fog Light AOV is the reference)
-              plus the compositor's fog light alone as the Composite (for ``compare.py``);
-      comp    the Compositor method as it ships (``apply_fog(method="compositor")``).
-Prints one JSON line: render CPU and wall seconds (best of REPS), set-up seconds.
+    .venv/bin/python benchmarks/compositor_fog/build.py N OUT.exr
+The many-lights scene with N lights (320x180, 16 spp, Blender's default pixel filter): the fog in the
+materials (Quality Exact, Fog Passes: the Fog Light AOV is the reference) plus the Compositor method's
+AOVs and fog group, whose Fog Light is the Composite; a multilayer EXR and OUT.exr.json (the lights'
+pixels).  Prints one JSON line: set-up and render seconds.  (Its cost: ``benchmarks/overhead.py
+--methods cycles_compositor``.)
 """
 import json
-import math
-import os
 import pathlib
 import sys
 import time
@@ -70,54 +66,25 @@ def compositor_fog_alone(scene):
 
 
 
-def _render_best(reps):
-    """(min CPU s, min wall s) of ``reps`` renders of the scene to its output file."""
-    best = [1e9, 1e9]
-    for _ in range(reps):
-        c0, w0 = time.process_time(), time.perf_counter()
-        bpy.ops.render.render(write_still=True)
-        best = [min(best[0], time.process_time() - c0), min(best[1], time.perf_counter() - w0)]
-    return best
-
-
-def main(n, mode, out_path):
-    """``mode`` "ratio": the render without fog, then with the compositor's fog (``comp``), in one process."""
+def main(n, out_path):
     scene, _ = many_lights.build_scene(n, direct_light=True)
-    for ob in scene.objects if os.environ.get("CF_SPOTS") == "1" else ():   # as benchmarks/overhead.py --spots
-        if ob.type == "LIGHT":
-            ob.data.type = "SPOT"
-            ob.data.spot_size, ob.data.spot_blend = math.radians(60.0), 0.3
-            ob.rotation_euler = (0.0, 0.0, 0.0)   # local -Z: straight down
     scene.render.engine = "CYCLES"
     measure.set_resolution(scene, W, H)
     measure.set_samples(scene, SPP)
     measure.set_cycles_cpu(scene)
     scene.cycles.use_denoising = False
-    scene.render.use_persistent_data = False
     bpy.context.view_layer.update()   # matrix_world of the new objects, read below
     measure.configure_output(scene, out_path)
-    if mode != "ratio":   # the passes, for compare.py (timing writes only the picture, as a render would)
-        scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
-        scene.render.image_settings.file_format = "OPEN_EXR_MULTILAYER"
-    reps = int(os.environ.get("REPS", 2))
-    row = {"n": n, "mode": mode}
-    if mode in ("nofog", "ratio"):
-        row["cpu_nofog"], row["wall_nofog"] = _render_best(reps)
-    if mode != "nofog":
-        t0 = time.perf_counter()
-        apply.apply_fog(scene, many_lights.BETA, albedo=many_lights.ALBEDO, with_passes=mode == "exact",
-                        error="exact" if mode == "exact" else "final",
-                        method="nodes" if mode == "exact" else "compositor",
-                        anisotropy=float(os.environ.get("CF_ANISOTROPY", 0.0)))
-        if mode == "exact":
-            compositor_fog_alone(scene)
-            write_light_pixels(scene, out_path)
-        row["setup"] = time.perf_counter() - t0
-        row["cpu"], row["wall"] = _render_best(reps)
-    if mode == "ratio":
-        row["ratio_cpu"], row["ratio_wall"] = row["cpu"] / row["cpu_nofog"], row["wall"] / row["wall_nofog"]
-    print(json.dumps(row), flush=True)
+    scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
+    scene.render.image_settings.file_format = "OPEN_EXR_MULTILAYER"
+    t0 = time.perf_counter()
+    apply.apply_fog(scene, many_lights.BETA, albedo=many_lights.ALBEDO, with_passes=True, error="exact")
+    compositor_fog_alone(scene)
+    write_light_pixels(scene, out_path)
+    t1 = time.perf_counter()
+    bpy.ops.render.render(write_still=True)
+    print(json.dumps({"n": n, "setup": t1 - t0, "render": time.perf_counter() - t1}), flush=True)
 
 
 if __name__ == "__main__":
-    main(int(sys.argv[-3]), sys.argv[-2], sys.argv[-1])
+    main(int(sys.argv[-2]), sys.argv[-1])

@@ -67,7 +67,7 @@ class NodeOps:
     """Builds ``model.py`` formulas into ``tree``; ``images`` maps TableSpec.name -> bpy image.
 
     The node types of a group and its tree are class attributes, so a subclass can build the same
-    formulas into another kind of node tree (the compositor's: ``benchmarks/compositor_fog``)."""
+    formulas into another kind of node tree (the compositor's: ``comp_fog.CompOps``)."""
 
     GROUP_NODE = "ShaderNodeGroup"
     GROUP_TREE = "ShaderNodeTree"
