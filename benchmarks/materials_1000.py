@@ -1,7 +1,7 @@
 """Scale: adding the fog to 1 000 materials with 64 lights (issue 8's goal: <= 20 s), removing it, adding it again.
 
     .venv/bin/python benchmarks/materials_1000.py [--materials N] [--lights N] [--error E|exact]
-                                                  [--no-profile] [--top K]
+                                                  [--method nodes|osl|compositor] [--no-profile] [--top K]
 
 Builds a scene of N (1 000) small cube objects, each with its own Principled
 BSDF material (distinct colours / roughness), plus ``--lights`` (64) point
@@ -25,6 +25,8 @@ Timings are wall-clock (``seconds``) and this process's CPU time
 (``cpu_seconds``: closer to the wall time of an otherwise idle machine, the
 work being single-threaded) on a shared machine: approximate.
 
+``--method`` (default nodes; compositor renders with Cycles) is the Method for ``apply_fog`` and the
+panel; another method than nodes writes materials_1000_<method>.csv and _profile.txt.
 ``--error`` (Quality: target error, a number, ``draft``, ``final`` or ``exact``) is passed to
 ``apply_fog(error=...)`` and ``bpy.ops.fog.add(error=...)`` when they have
 that keyword (checked), and recorded.
@@ -53,7 +55,7 @@ import bmesh  # noqa: E402
 
 import fog_addon  # noqa: E402
 from demo_scenes import add_camera, add_point_light, render_settings, set_world  # noqa: E402
-from fog_addon.nodes import compositor, groups, images, owned  # noqa: E402
+from fog_addon.nodes import comp_fog, compositor, groups, images, owned  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 from fog_addon.precompute import rungs  # noqa: E402
 
@@ -118,6 +120,12 @@ def shared_ok(on):
                   ) if on else []
     if on and compositor.is_set_up(bpy.context.scene):   # the scene's own denoising set-up (Cycles, denoiser on)
         want = sorted(want + [compositor.GROUP])
+    if on and KW.get("method") == "compositor":   # the lights are the compositor's: its groups, once each
+        bundles = {f"{comp_fog.BUNDLE} {k + 1}-{min(k + comp_fog.BUNDLE_SIZE, len(lights))}"
+                   for k in range(0, len(lights), comp_fog.BUNDLE_SIZE)}
+        need = {groups.PARAMS, groups.SURFACE, groups.WORLD, comp_fog.FOG_GROUP, compositor.GROUP} | bundles
+        return need <= set(ours) and not any(owned.SUFFIX.match(n) for n in ours) and not any(
+            n.startswith((groups.SURFACE_LIGHTS, groups.WORLD_LIGHTS)) for n in ours)
     return ours == want
 
 
@@ -203,9 +211,12 @@ def main(argv=None):
     ap.add_argument("--lights", type=int, default=LIGHTS, help="point lights (default 64, the issue's)")
     ap.add_argument("--error", help="Quality: target error for apply_fog(error=...) if it has that keyword: "
                                     "a number (0.05, 0.01), draft, final or exact; default: the add-on's")
+    ap.add_argument("--method", choices=rungs.PREFERENCES, default="nodes")
     ap.add_argument("--no-profile", action="store_true")
     ap.add_argument("--top", type=int, default=25)
     args = ap.parse_args(argv)
+    KW["method"] = args.method
+    tag = "" if args.method == "nodes" else f"_{args.method}"
     n = args.materials
     global ERROR_TAG
     op_kw = {}
@@ -223,6 +234,7 @@ def main(argv=None):
     scene = bpy.context.scene
     t0 = time.perf_counter()
     build(scene, n, args.lights)
+    scene.render.engine = "CYCLES" if args.method == "compositor" else scene.render.engine
     print(f"built {n} objects/materials, {args.lights} lights in {time.perf_counter() - t0:.2f} s (load avg {load_avg()})", flush=True)
 
     rows = []
@@ -230,12 +242,14 @@ def main(argv=None):
     timed(rows, "remove_fog", lambda: apply.remove_fog(scene), n, False)
     timed(rows, "apply_fog (again, bakes tables)", lambda: apply.apply_fog(scene, DENSITY, **KW), n, True)
     timed(rows, "apply_fog (fog already on)", lambda: apply.apply_fog(scene, DENSITY, **KW), n, True)
-    lights, _ = apply.fog_lights(scene)
-    surface_args = (lights, [rungs.choose("nodes")] * len(lights), images.all_table_images())
-    timed(rows, "what-if: build_surface in place", lambda: groups.build_surface(*surface_args), n, True)
-    timed(rows, "what-if: build_surface side-built",
-          lambda: side_built(groups.SURFACE, groups.build_surface, *surface_args), n, True)
+    if args.method != "compositor":   # (the Compositor method's Surface group has no lights)
+        lights, _ = apply.fog_lights(scene)
+        surface_args = (lights, [rungs.choose("nodes")] * len(lights), images.all_table_images())
+        timed(rows, "what-if: build_surface in place", lambda: groups.build_surface(*surface_args), n, True)
+        timed(rows, "what-if: build_surface side-built",
+              lambda: side_built(groups.SURFACE, groups.build_surface, *surface_args), n, True)
     fog_addon.register()
+    scene.analytic_fog.method = args.method.upper()
     if isinstance(KW.get("error"), float) and "error" in bpy.ops.fog.add.get_rna_type().properties.keys():
         op_kw["error"] = KW["error"]   # a number; names and "exact" are not passed to the operator (its own form)
     print(f"bpy.ops.fog.add keywords: {op_kw or 'none (its defaults)'}", flush=True)
@@ -247,21 +261,22 @@ def main(argv=None):
     finally:
         fog_addon.unregister()
 
-    csv_rows.write(OUT / "materials_1000.csv", rows)
-    print(f"wrote {OUT / 'materials_1000.csv'}")
+    csv_rows.write(OUT / f"materials_1000{tag}.csv", rows)
+    print(f"wrote {OUT / f'materials_1000{tag}.csv'}")
     adds = [r for r in rows if "apply_fog" in r["step"] or r["step"].startswith("bpy.ops.fog.add")]
     for key in ("seconds", "cpu_seconds"):
         worst = max(r[key] for r in adds)
         print(f"slowest add ({key}): {worst:.2f} s (target <= {TARGET_S:g} s): {'met' if worst <= TARGET_S else 'NOT met'}")
 
     if not args.no_profile:
-        report = [f"{n} materials, {args.lights} lights, Quality {ERROR_TAG}, load average {load_avg()} at start\n"]
+        report = [f"{n} materials, {args.lights} lights, Quality {ERROR_TAG}, method {args.method}, "
+                  f"load average {load_avg()} at start\n"]
         for fresh in (True, False):
             head, text = profile(scene, args.top, fresh)
             print("\n" + head + text, flush=True)
             report += [head, "\n", text, "\n"]
-        (OUT / "materials_1000_profile.txt").write_text("".join(report))
-        print(f"wrote {OUT / 'materials_1000_profile.txt'}")
+        (OUT / f"materials_1000{tag}_profile.txt").write_text("".join(report))
+        print(f"wrote {OUT / f'materials_1000{tag}_profile.txt'}")
     return 0 if all(r["ok"] for r in rows) else 1
 
 

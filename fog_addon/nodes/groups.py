@@ -532,7 +532,7 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained):
     return ng
 
 
-def build_surface(lights, models, images, with_passes=False):
+def build_surface(lights, models, images, with_passes=False, extra=None):
     """Scene group for materials: ``shading.shade_surface`` (Sun et al. 2005 Eq. 19) over ``lights``.
 
     ``models``: one rungs.LightModels per light.  Inputs mirror the Principled
@@ -542,7 +542,8 @@ def build_surface(lights, models, images, with_passes=False):
     Transmittance e^{-beta D_vp} to scale the material, Direct Attenuation
     (EEVEE's stand-in for the per-light e^{-beta D_sp}) and per engine the
     Mix Factor 1 - scale of the user's shader.  ``with_passes``: it writes the
-    fog passes (``passes.py``), weighted by the Opacity input (white: opaque).
+    fog passes (``passes.py``), weighted by the Opacity input (white: opaque).  ``extra(group)``: adds
+    nodes of its own (the Compositor method's AOVs, ``comp_fog.add_surface_aovs``).
     The lights sit in bundle groups (``_bundles``, ``build_surface_bundle``).
 
     Why closures: Cycles' SVM emits a shader's value nodes in the order of
@@ -594,6 +595,8 @@ def build_surface(lights, models, images, with_passes=False):
                            light_weighted=True)
     else:
         _camera_rays_only(ng, gout.inputs["Fog"], path.outputs["Is Camera Ray"])
+    if extra is not None:   # before it replaces the group the materials use: adding a node there costs more
+        extra(ng)
     ng = _install(ng, SURFACE)
     _name_bundles(bundles)
     return ng

@@ -223,9 +223,9 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
         imgs = images.all_table_images(groups.get_anisotropy())
         # the Compositor method: materials and World without lights, the lights in the compositor
         in_shaders = ([], []) if in_compositor else (in_groups, grouped_models)
-        surface = groups.build_surface(*in_shaders, imgs, with_passes)
+        surface = groups.build_surface(*in_shaders, imgs, with_passes,
+                                       extra=comp_fog.add_surface_aovs if in_compositor else None)
         if in_compositor:
-            comp_fog.add_surface_aovs(surface)
             imgs = comp_fog.build_fog_group(scene, in_groups, grouped_models, imgs)
         surface[LIGHTS_KEY] = signature
         surface[PREFERENCE_KEY] = preference
