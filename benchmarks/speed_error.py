@@ -3,6 +3,7 @@ volumetrics at equal error.
 
     .venv/bin/python benchmarks/speed_error.py [--resolution 160x90] [--quick] [--regen] [--repeats N]
         [--threads N] [--scenes a,b] [--ladder 1,4,...] [--qualities draft,final,exact] [--time cpu|wall]
+        [--methods path_traced,compositor/cycles,...] [--update]
     .venv/bin/python benchmarks/speed_error.py --replot [--time cpu|wall]   # summary + chart from the CSV
 
 For each demo scene case in ``SCENES`` (pixel-centre filter, cast shadows and
@@ -115,6 +116,7 @@ METHODS = [
     ("nodes", "cycles", (1, 4, 16)),
     ("nodes", "eevee", (1, 4)),
     ("osl", "cycles", (1, 4, 16)),
+    ("compositor", "cycles", (1, 4, 16)),
 ]
 # EEVEE's volumetrics on the reference's World volume.  "default" is EEVEE 5.0's default volume
 # settings (resolution 1:8, 64 steps, 16 shadow samples) at the add-on's 16 render samples (EEVEE's
@@ -334,8 +336,17 @@ def measure_case(case, scene, beta, blend, gt, cfg, scratch):
     return rows
 
 
+def family(method, engine):
+    """The ``--methods`` name of a case: path_traced, eevee_volumetrics or <method of METHODS>/<engine>."""
+    return method if method in (PATH_TRACED, EEVEE_VOLUMETRICS) else f"{method.split('/')[0]}/{engine}"
+
+
+FAMILIES = [PATH_TRACED, EEVEE_VOLUMETRICS] + [f"{m}/{e}" for m, e, _ in METHODS]
+
+
 def cases(cfg, beta):
-    """The worker cases of one scene: path tracing, EEVEE volumetrics, every METHODS line x Quality."""
+    """The worker cases of one scene: path tracing, EEVEE volumetrics, every METHODS line x Quality (those of
+    ``cfg["families"]``)."""
     out = [(PATH_TRACED, "cycles", "", [{"spp": s} for s in cfg["ladder"]]),
            (EEVEE_VOLUMETRICS, "eevee", "", [{"spp": props["taa_render_samples"], "setting": name,
                                               "eevee": props} for name, props in EEVEE_VOLUMETRICS_SETTINGS])]
@@ -344,7 +355,7 @@ def cases(cfg, beta):
             samples = samples[-1:]
         for quality in cfg["qualities"]:
             out.append((f"{method}/{quality}", engine, quality, [{"spp": s} for s in samples]))
-    return out
+    return [c for c in out if family(c[0], c[1]) in cfg["families"]]
 
 
 def time_at_error(pt_rows, err, key="render_cpu_s"):
@@ -384,7 +395,8 @@ def equal_error(rows, gt_spp, key="render_cpu_s"):
 
 
 QUALITY_MARKERS = {"draft": "v", "final": "o", "exact": "D"}
-ANALYTIC_COLOURS = {("nodes", "cycles"): "C0", ("osl", "cycles"): "C1", ("nodes", "eevee"): "C2"}
+ANALYTIC_COLOURS = {("nodes", "cycles"): "C0", ("osl", "cycles"): "C1", ("nodes", "eevee"): "C2",
+                    ("compositor", "cycles"): "C3"}
 
 
 def chart(rows, summary, cfg, key="render_cpu_s"):
@@ -534,6 +546,10 @@ def main(argv=None):
     ap.add_argument("--time", choices=sorted(TIME_KEYS), default="cpu",
                     help="render time of the speed-ups and the chart: the process CPU time (default; with "
                          "--threads 1 the time on an idle core, robust to other load) or the wall time")
+    ap.add_argument("--methods", default=",".join(FAMILIES),
+                    help="comma-separated subset of " + ",".join(FAMILIES) + " (default all)")
+    ap.add_argument("--update", action="store_true",
+                    help="keep the CSV's rows of the methods not run now (same resolution and ground truth)")
     ap.add_argument("--replot", action="store_true",
                     help="no renders: the summary CSV and the chart from the existing " + CSV.name)
     ap.add_argument("--worker", help=argparse.SUPPRESS)
@@ -551,6 +567,9 @@ def main(argv=None):
     cfg["qualities"] = tuple(q.strip() for q in args.qualities.split(","))
     if not set(cfg["qualities"]) <= set(QUALITIES):
         ap.error(f"--qualities: each of {', '.join(QUALITIES)}")
+    cfg["families"] = [f.strip() for f in args.methods.split(",")]
+    if not set(cfg["families"]) <= set(FAMILIES):
+        ap.error(f"--methods: each of {', '.join(FAMILIES)}")
     if args.scenes:
         names = args.scenes.split(",")
         if not set(names) <= {s for s, _ in SCENES}:
@@ -564,6 +583,9 @@ def main(argv=None):
             gt = ground_truth(scene, beta, blend, cfg, args.regen, scratch)
             for case in cases(cfg, beta):
                 rows += measure_case(case, scene, beta, blend, gt, cfg, scratch)
+    if args.update and CSV.is_file():   # the rows of the cases not run now stay
+        run = {(r["scene"], family(r["method"], r["engine"])) for r in rows}
+        rows = [r for r in read_rows(CSV) if (r["scene"], family(r["method"], r["engine"])) not in run] + rows
     csv_rows.write(CSV, rows, FIELDS, digits=6)
     summary = equal_error(rows, cfg["gt_samples"], key)
     csv_rows.write(SUMMARY_CSV, summary, SUMMARY_FIELDS, digits=6)
