@@ -20,7 +20,7 @@ from fog_addon.ops import apply, view  # noqa: E402
 from fog_addon.precompute import bakers, model  # noqa: E402
 from fog_addon.precompute.model import (  # noqa: E402
     INV_2PI, MIN_ANGLE, SHORT_SEGMENT, _GL_W, _GL_X, airlight_background,
-    airlight_segment, airlight_tail, closest_point_q, phase_scale)
+    airlight_segment, airlight_tail, phase_scale, segment_ends)
 from fog_addon.precompute.ops import NumpyOps  # noqa: E402
 
 from hits import m_bvh  # noqa: E402
@@ -30,12 +30,7 @@ from hits import H, REPS, W, fog_scene, timed  # noqa: E402,F401
 
 def segment_masked(m, beta, d_sv, along, h, d_vp):
     """airlight_segment (g = 0), each element through its own branch only (1-D arrays)."""
-    z1 = d_vp - along
-    d_sp = m.sqrt(z1 * z1 + h * h)
-    h = m.maximum(h, MIN_ANGLE * d_sv)
-    q0 = closest_point_q(m, d_sv, -along, h)
-    q1 = closest_point_q(m, d_sp, z1, h)
-    seg = d_vp * (q0 + q1) / m.maximum(d_sp + d_sv, 1e-30)
+    h, d_sp, q0, q1, seg = segment_ends(m, d_sv, along, h, d_vp, MIN_ANGLE * d_sv)
     is_short = beta * seg < SHORT_SEGMENT * np.minimum(1.0, beta * phase_scale(m, 0.0, q0, h))
     out = np.empty_like(seg)
     s = is_short

@@ -98,6 +98,21 @@ def closest_point_q(m, d, along, h):
     return m.select(m.less(0.0, along), along + d, h * h / m.maximum(d + m.abs(along), 1e-30))
 
 
+def segment_ends(m, d_sv, along, h, d_vp, h_min):
+    """(h, d_sp, q0, q1, seg) of the camera ray's segment from the viewer to a surface at d_vp (m), in Sun
+    et al. 2005's closest-point coordinate Q (Eq. 5): h raised to ``h_min`` (a ray through the light keeps
+    a finite integrand), the light-surface distance D_sp = sqrt((d_vp - along)^2 + h^2), the segment's ends
+    Q0 and Q1 (``closest_point_q``) and its length Q1 - Q0 = d_vp + d_sp - d_sv, taken as
+    d_vp (q0 + q1) / (d_sv + d_sp) without cancellation.  Shared by ``airlight_segment`` and
+    ``airlight_quadrature``."""
+    h = m.maximum(h, h_min)
+    z1 = d_vp - along
+    d_sp = m.sqrt(z1 * z1 + h * h)
+    q0 = closest_point_q(m, d_sv, -along, h)
+    q1 = closest_point_q(m, d_sp, z1, h)
+    return h, d_sp, q0, q1, d_vp * ((q0 + q1) / m.maximum(d_sp + d_sv, 1e-30))
+
+
 def airlight_segment(m, beta, d_sv, along, h, d_vp, g=0.0):
     """Airlight per unit intensity, 1/m^2: Sun et al. 2005 Eq. 5 / Eq. 11, ray from the viewer to a surface.
 
@@ -107,13 +122,7 @@ def airlight_segment(m, beta, d_sv, along, h, d_vp, g=0.0):
     float: the integrand times ``hg_weight``, Pegoraro et al. Eq. 8; tables per g, Biri 2006).
     """
     neg_beta = -beta   # once, not per use: every material inlines this per light
-    z1 = d_vp - along
-    d_sp = m.sqrt(z1 * z1 + h * h)
-    h = m.maximum(h, MIN_ANGLE * d_sv)
-    q0 = closest_point_q(m, d_sv, -along, h)
-    q1 = closest_point_q(m, d_sp, z1, h)
-    # P = Q1 - Q0 = d_vp + d_sp - d_sv = d_vp (q0 + q1) / (d_sv + d_sp), without cancellation.
-    seg = d_vp * (q0 + q1) / m.maximum(d_sp + d_sv, 1e-30)
+    h, d_sp, q0, q1, seg = segment_ends(m, d_sv, along, h, d_vp, MIN_ANGLE * d_sv)
     long_ = airlight_tail(m, beta, q0, h, d_sv, g) - m.exp(neg_beta * seg) * airlight_tail(m, beta, q1, h, d_sp, g)
     if g < 0.0:
         # back-scatter: both tails are dominated by the peak far beyond the light, and on rays within a few
@@ -161,13 +170,8 @@ def airlight_quadrature(m, beta, d_sv, along, h, d_vp, g=0.0):
     anisotropy, the integrand times ``hg_weight`` (Pegoraro et al. Eq. 8); panels are then
     at most QUAD_GROWTH ``phase_scale`` long (the weight's poles at Q = +-ih/s).
     """
-    h = m.maximum(h, MIN_ANGLE * m.maximum(d_sv, MIN_DISTANCE))
-    z1 = d_vp - along
-    d_sp = m.sqrt(z1 * z1 + h * h)
-    q0 = closest_point_q(m, d_sv, -along, h)
-    q1 = closest_point_q(m, d_sp, z1, h)
-    # Q1 - Q0 = d_vp + d_sp - d_sv without cancellation, as in airlight_segment
-    end = m.minimum(d_vp * ((q0 + q1) / m.maximum(d_sp + d_sv, 1e-30)), QUAD_END / beta)
+    h, _, q0, _, seg = segment_ends(m, d_sv, along, h, d_vp, MIN_ANGLE * m.maximum(d_sv, MIN_DISTANCE))
+    end = m.minimum(seg, QUAD_END / beta)
 
     def panel(pa, total):
         qa = q0 + pa
