@@ -24,7 +24,7 @@ clamps negatives); perspective cameras; no fog passes (the fog's light is the co
 """
 import bpy
 
-from ..precompute import pixel, shading, surface
+from ..precompute import model, pixel, shading, surface
 from . import groups, images as images_, owned
 from .sockets import KERNEL_GROUP, NodeOps, Val
 
@@ -108,9 +108,10 @@ def build_light_group(models, images, peak):
     air = terms.airlight
     back = shading.background_point(m, g["Camera"], g["Direction"], light, medium, models)
     if peak:   # the sky's rays pass every light before the end of the world: its factor is 1 + excess
-        seen_at = pixel.picture_position(m, g["Light"] - g["Camera"], g["Corner"], g["Across"], g["Up"], g["Size"])
+        to_light = g["Light"] - g["Camera"]
+        seen_at = pixel.picture_position(m, to_light, g["Corner"], g["Across"], g["Up"], g["Size"])
         excess = pixel.peak_excess(m, g["Pixel"], seen_at)
-        along = m.dot(g["Light"] - g["Camera"], -1.0 * g["Incoming"])
+        along = m.dot(to_light, -1.0 * g["Incoming"])
         air = m.scale(air, pixel.peak_factor(m, excess, along, g["View Distance"]))
         back = m.scale(back, 1.0 + excess)
     m.feed(gout.inputs["Airlight"], air)
@@ -135,9 +136,9 @@ def add_surface_aovs(surface_group):
         m.feed(node.inputs["Color" if kind == "COLOR" else "Value"], values[name])
 
 
-def _value(m, label, expression, variables, col=0):
+def _value(m, label, expression, variables):
     """A Value node driven by ``expression`` (``groups._drive_expression``)."""
-    node = m.node("ShaderNodeValue", col)
+    node = m.node("ShaderNodeValue", 0)
     node.label = label
     groups._drive_expression(node.outputs[0], expression, variables)
     return m.wrap(node.outputs[0])
@@ -173,11 +174,18 @@ def camera_frame(m, scene):
               ("rx", scene, "render.resolution_x"), ("ry", scene, "render.resolution_y")]
     # w, h: the frame's width and height at unit distance; the shifts are in units of the fitted side
     w, h = ("s/l", "s*ry/(l*rx)") if horizontal_fit(scene) else ("s*rx/(l*ry)", "s/l")
-    side = "s/l"
     axes = lambda i: common + [(n, cam, f"matrix_world[{col}][{i}]") for n, col in (("a", 0), ("b", 1), ("c", 2))]
-    corner = f"(x*{side} - {w}/2)*a + (y*{side} - {h}/2)*b - c"
+    corner = f"(x*s/l - {w}/2)*a + (y*s/l - {h}/2)*b - c"
     return [_vector(m, f"Camera {label}", [e] * 3, axes)
             for label, e in (("corner", corner), ("across", f"{w}*a"), ("up", f"{h}*b"))]
+
+
+def _location(m, label, obj, col=0):
+    """``obj``'s world location, driven as the shader groups drive theirs (``groups._drive_location``)."""
+    node = m.node("ShaderNodeCombineXYZ", col)
+    node.label = label
+    groups._drive_location(node, obj)
+    return m.wrap(node.outputs[0], vector=True)
 
 
 def _picture_scale(m, scene, peak):
@@ -209,8 +217,7 @@ def build_bundle(first, lights, models, images, peak):
         node.label = f"Light {k}: {light.name}"
         for socket, _ in SHARED:
             ng.links.new(gin.outputs[socket], node.inputs[socket])
-        position = _vector(m, f"Light {k} Location", ["v"] * 3,
-                           lambda i: [("v", light, f"matrix_world[3][{i}]")], col=4)
+        position = _location(m, f"Light {k} Location", light, col=4)
         intensity = m.node("ShaderNodeCombineXYZ", 4)
         groups._drive_intensity(intensity, light.data)
         m.feed(node.inputs["Light"], position)
@@ -257,7 +264,7 @@ def build_fog_group(scene, lights, models, images):
     p = {s.name: m.wrap(s, vector=s.type == "RGBA") for s in gin.outputs if s.name}
     cover = p["Fog Coverage"]
     inv = 1.0 / m.maximum(cover, 1e-6)
-    cam = _vector(m, "Camera", ["v"] * 3, lambda i: [("v", scene.camera, f"matrix_world[3][{i}]")])
+    cam = _location(m, "Camera", scene.camera)
     beta, albedo = _params(m)
     pos = m.scale(p["Fog Position"], inv)
     to_cam = cam - pos
@@ -289,7 +296,7 @@ def build_fog_group(scene, lights, models, images):
     if air is None:
         fog = m.wrap((0.0, 0.0, 0.0))
     else:
-        t_vp = m.exp(d_vp * -1.0 * beta)
+        t_vp = model.transmittance(m, beta, d_vp)
         fog = albedo * (m.scale(air + m.scale(scat, t_vp), cover) + m.scale(back, 1.0 - cover))
     m.feed(gout.inputs["Fog Light"], fog)
     m.feed(gout.inputs["Image"], fog + p["Image"])
