@@ -118,7 +118,7 @@ LIGHTS = (1, 4, 16, 64, 256)
 BOULEVARD_LIGHTS = 45
 # name: (engine, method preference); the order of the table and the chart
 METHODS = {"cycles_nodes": ("CYCLES", "nodes"), "cycles_osl": ("CYCLES", "osl"), "eevee": ("BLENDER_EEVEE", "nodes"),
-           "cycles_compositor": ("CYCLES", "compositor")}
+           "cycles_compositor": ("CYCLES", "compositor"), "eevee_compositor": ("BLENDER_EEVEE", "compositor")}
 RESOLUTION = (320, 180)
 SAMPLES = 16
 DENSITY = 0.1                  # 1/m for the many-lights scenes (the boulevard uses its own default)
@@ -538,7 +538,7 @@ def chart(rows, path):
 
     fig, ax = plt.subplots(figsize=(12, 6.5))
     labels = {"cycles_nodes": "Cycles, node groups", "cycles_osl": "Cycles, OSL", "eevee": "EEVEE, node groups",
-              "cycles_compositor": "Cycles, compositor"}
+              "cycles_compositor": "Cycles, compositor", "eevee_compositor": "EEVEE, compositor"}
 
     def point(x, y, r, colour, big, est=None):
         ms = 12 if big else 7

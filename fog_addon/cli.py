@@ -135,7 +135,7 @@ def build_parser():
                    help="write the Fog Light and Fog Transmittance passes (default: the file's setting)")
     r.add_argument("--method", choices=["nodes", "osl", "compositor"], default=None,
                    help="node groups (Cycles, EEVEE), OSL (Cycles) or compositor (the fog's light once per pixel "
-                        "in the compositor, Cycles) (default: the file's Method)")
+                        "in the compositor, Cycles and EEVEE) (default: the file's Method)")
     _add_fog_flags(r, from_file)
     r.add_argument("--color", type=_color, metavar="R,G,B",
                    help="the fog's colour (single-scattering albedo), each in [0, 1]" + from_file)

@@ -96,8 +96,8 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
                ("OSL", "OSL", "Prefer OSL models where one exists (the glow by quadrature in an OSL script): "
                               "Cycles only (switches Cycles' OSL on)"),
                ("COMPOSITOR", "Compositor", "The node groups' models evaluated once per pixel in the compositor "
-                                            "from render passes: far cheaper with many lights; Cycles only, "
-                                            "a pixel that sees two surfaces gets their mean's fog light")],
+                                            "from render passes: far cheaper with many lights; Cycles and "
+                                            "EEVEE; a pixel that sees two surfaces gets one point's fog light")],
         description="Preference for the fog's models: each light gets, per term, the model this preference "
                     "chooses (shown below)")
     quality: bpy.props.EnumProperty(

@@ -13,7 +13,7 @@ from . import measure, props
 from .ops import apply, progress
 
 DEFAULT_SAMPLES = {"CYCLES": 16, "BLENDER_EEVEE": 16}
-CYCLES_ONLY = {"osl": "EEVEE cannot run OSL", "compositor": "EEVEE's AOVs are half floats"}
+CYCLES_ONLY = {"osl": "EEVEE cannot run OSL"}
 EEVEE_LIGHT_THRESHOLD = 1e-4   # EEVEE's default 0.01 windows point lights (ratio 0.92 at 4.5 m for 100 W)
 
 
@@ -37,7 +37,7 @@ def fog_settings(scene, args):
 
     Returns (keyword arguments for ``apply.apply_fog``, {setting: (value, "flag" | "file")},
     [notes]).  Without a flag the method is the file's; a file whose method
-    is OSL or Compositor rendered with EEVEE gets the node groups, with a note.  Selected Only in the
+    is OSL rendered with EEVEE gets the node groups, with a note.  Selected Only in the
     file fogs only the materials of the objects selected in the file (as *Update Fog* would with it open).
     """
     ensure_properties()
@@ -57,7 +57,7 @@ def fog_settings(scene, args):
     with_passes = bool(pick("fog passes", "passes", lambda: s.use_passes))
     quality = pick("quality", "error", lambda: props.quality_setting(s))
     world_light = pick("world light", "world_light", lambda: "on" if s.world_light else "off")
-    if method in ("osl", "compositor") and args.engine_id != "CYCLES":
+    if method in CYCLES_ONLY and args.engine_id != "CYCLES":
         if source["method"] == "flag":
             raise SystemExit(f"error: --method {method} needs --engine cycles ({CYCLES_ONLY[method]}); "
                              "use --method nodes")

@@ -7,13 +7,13 @@ from .precompute import presets, rungs
 ENGINE_NOTES = {
     "NODES": "Node groups: Cycles and EEVEE",
     "OSL": "OSL: Cycles only (EEVEE shows no glow)",
-    "COMPOSITOR": "Compositor: Cycles only, Compositing on",
+    "COMPOSITOR": "Compositor: Cycles and EEVEE, Compositing on",
 }
 
 
 MAX_LISTED = 12   # lights listed by name in the panel; the rest are counted
-MANY_LIGHTS = 8   # from this many fog lights on, Cycles' panel suggests the Compositor method (16 lights: 29x
-#                   the fog-free render with node groups, 1.4x with the compositor; README "The Compositor method")
+MANY_LIGHTS = 8   # from this many fog lights on, the panel suggests the Compositor method (16 lights in Cycles:
+#                   29x the fog-free render with node groups, 1.6x with the compositor; README "The Compositor method")
 
 
 def _draw_models(layout, settings):
@@ -63,7 +63,7 @@ def draw_fog(layout, context):
     col.prop(s, "scene_scale")
     col.prop(s, "method")
     col.label(text=ENGINE_NOTES[s.method], icon="INFO")
-    if s.method in ("OSL", "COMPOSITOR") and scene.render.engine != "CYCLES":
+    if s.method == "OSL" and scene.render.engine != "CYCLES":
         col.label(text=f"Switch the render engine to Cycles to see {s.method.title()} fog", icon="ERROR")
     col.prop(s, "selected_only")
     col.prop(s, "world_light")
@@ -76,7 +76,7 @@ def draw_fog(layout, context):
             box.label(text=line, icon="ERROR" if i == 0 else "BLANK1")
     lights, notes = apply.fog_lights(scene)
     layout.label(text=f"{len(lights)} light(s) light the fog", icon="LIGHT_POINT")
-    if len(lights) >= MANY_LIGHTS and s.method != "COMPOSITOR" and scene.render.engine == "CYCLES":
+    if len(lights) >= MANY_LIGHTS and s.method != "COMPOSITOR":
         layout.label(text="With this many lights the Compositor method renders far faster", icon="INFO")
     for name, why in notes:
         layout.label(text=f"{name}: {why}", icon="ERROR")

@@ -37,7 +37,7 @@ def test_spliced_into_a_users_compositor_and_taken_out(res):
     assert s["rl_feeds"] == ["AnalyticFog Compositor 0 Fog"]
     assert s["aovs_fed"] == sorted(FOG_AOVS + ["Image"])
     assert s["denoising"] is True, "the render holds no fog light: Cycles' denoiser stays on"
-    assert s["state"] == {"tree": "My Compositor", "fog": True}
+    assert s["state"] == {"tree": "My Compositor", "fog": True, "engine": "CYCLES"}
     assert s["restored"] == {"links": True, "nodes": True, "fog": True, "aovs": True}, s["after"]
 
 
@@ -52,7 +52,21 @@ def test_switching_methods(res):
     assert b["material_light_groups"] == s["nodes_light_groups"]
 
 
-@pytest.mark.parametrize("case,words", [("eevee", "needs Cycles"), ("passes", "no fog passes"),
+def test_switching_engines(res):
+    """EEVEE reads the Depth pass instead of the position AOV (comp_fog.EEVEE_AOVS), and its materials keep the
+    lights' shared dimming of direct light (EEVEE has no light node trees); switching back undoes both."""
+    cycles, eevee, back = res["engines"]["states"]
+    assert cycles["inputs_fed"] == sorted(FOG_AOVS + ["Image"]) and not cycles["depth_pass"]
+    assert cycles["aovs"] == sorted(FOG_AOVS) and cycles["material_light_groups"] == 0
+    eevee_aovs = [name if name != "Fog Position" else "Fog Depth" for name in FOG_AOVS]
+    assert eevee["engine"] == "BLENDER_EEVEE" and eevee["depth_pass"]
+    assert eevee["inputs_fed"] == sorted(eevee_aovs + ["Image", "Depth"]) and eevee["aovs"] == sorted(eevee_aovs)
+    assert eevee["material_light_groups"] >= 1, "EEVEE's materials dim the lights' direct light"
+    assert back == cycles
+    assert res["engines"]["removed"] == {"depth_pass": False, "fog": []}
+
+
+@pytest.mark.parametrize("case,words", [("workbench", "needs Cycles or EEVEE"), ("passes", "no fog passes"),
                                         ("panoramic", "perspective camera")])
 def test_refused_changing_nothing(res, case, words):
     assert res["refused"][case] is not None and words in res["refused"][case]

@@ -25,7 +25,7 @@ clamps negatives); perspective cameras; no fog passes (the fog's light is the co
 import bpy
 
 from ..precompute import model, pixel, shading, surface
-from . import groups, images as images_, owned
+from . import compositor, groups, images as images_, owned
 from .sockets import KERNEL_GROUP, NodeOps, Val
 
 FOG_GROUP = f"{owned.PREFIX} Compositor Fog"     # the compositor group that adds the fog's light
@@ -37,6 +37,11 @@ KERNEL_PREFIX = f"{KERNEL_GROUP} Compositor"   # the kernels' compositor groups 
 AOVS = (("Fog Coverage", "VALUE"), ("Fog Position", "COLOR"), ("Fog Normal", "COLOR"),
         ("Fog Base Color", "COLOR"), ("Fog Metallic", "VALUE"), ("Fog Roughness", "VALUE"),
         ("Fog Specular IOR Level", "VALUE"))
+# EEVEE writes AOVs as half floats accumulated with a loss (a constant 37.123 read back 37.03-37.09 at 16
+# samples, README "The Compositor method") and clamps negatives: its surface point is the Depth pass's (float32,
+# the sample nearest the pixel's centre) along the pixel's ray, with the mean View Z Depth where they disagree
+EEVEE_AOVS = tuple(("Fog Depth", "VALUE") if name == "Fog Position" else (name, kind) for name, kind in AOVS)
+DEPTH_AGREE = 0.02     # the Depth pass is the pixel's surface where within 2 % of the mean View Z Depth
 AOV_ROLE = "Compositor AOV"   # the Surface group's AOV Output nodes: "<AOV_ROLE> <AOV name>"
 PRINCIPLED = ("Base Color", "Metallic", "Roughness", "Specular IOR Level")
 V, C, F = "NodeSocketVector", "NodeSocketColor", "NodeSocketFloat"
@@ -121,16 +126,24 @@ def build_light_group(models, images, peak):
     return groups._install(ng, name)
 
 
-def add_surface_aovs(surface_group):
-    """AOV Output nodes in the Surface group (built without lights): the compositor's inputs per sample,
-    the Principled inputs as the fog reads them (``surface.principled_to_phong`` runs in the compositor)."""
+def aovs(engine):
+    """The AOVs (name, kind) the Compositor method reads in ``engine`` (a ``render.engine``)."""
+    return EEVEE_AOVS if engine == groups.EEVEE_ENGINE else AOVS
+
+
+def add_surface_aovs(surface_group, engine="CYCLES"):
+    """AOV Output nodes in the Surface group: the compositor's inputs per sample (``aovs(engine)``), the
+    normal as (1 + n) / 2 (EEVEE clamps negatives), the Principled inputs as the fog reads them
+    (``surface.principled_to_phong`` runs in the compositor)."""
     m = NodeOps(surface_group)
     gin = next(n for n in surface_group.nodes if n.bl_idname == "NodeGroupInput")
     geo = surface_group.nodes.new("ShaderNodeNewGeometry")
+    cam = surface_group.nodes.new("ShaderNodeCameraData")
+    normal = m.wrap(geo.outputs["Normal"], vector=True)
     values = {"Fog Coverage": m.wrap(1.0), "Fog Position": m.wrap(geo.outputs["Position"], vector=True),
-              "Fog Normal": m.wrap(geo.outputs["Normal"], vector=True),
+              "Fog Depth": m.wrap(cam.outputs["View Z Depth"]), "Fog Normal": m.scale(normal, 0.5) + (0.5, 0.5, 0.5),
               **{f"Fog {k}": m.wrap(gin.outputs[k], vector=k == "Base Color") for k in PRINCIPLED}}
-    for k, (name, kind) in enumerate(AOVS):
+    for k, (name, kind) in enumerate(aovs(engine)):
         node = owned.add(surface_group, "ShaderNodeOutputAOV", f"{AOV_ROLE} {name}", (4000, -300 - 150 * k))
         node.aov_name = name
         m.feed(node.inputs["Color" if kind == "COLOR" else "Value"], values[name])
@@ -248,14 +261,19 @@ def build_fog_group(scene, lights, models, images):
         scene.cycles.pixel_filter_type, scene.cycles.filter_width) is not None
     if peak:
         images = dict(images, **{pixel.FILTER.name: images_.table_image(pixel.FILTER, pixel.bake_filter)})
+    eevee = scene.render.engine == groups.EEVEE_ENGINE
+    inputs = (("Image", "COLOR"),) + aovs(scene.render.engine) + (((compositor.DEPTH, "VALUE"),) if eevee else ())
     ng = bpy.data.node_groups.get(FOG_GROUP)
     if ng is None:
         ng = bpy.data.node_groups.new(FOG_GROUP, "CompositorNodeTree")
-        for name, kind in (("Image", "COLOR"),) + AOVS:
+        ng[groups.FOG_PROP] = True
+    if [(i.name, i.in_out) for i in ng.interface.items_tree] != [(n, "INPUT") for n, _ in inputs] + [
+            ("Image", "OUTPUT"), ("Fog Light", "OUTPUT")]:   # new, or another engine's: the chain links it anew
+        ng.interface.clear()
+        for name, kind in inputs:
             ng.interface.new_socket(name, in_out="INPUT", socket_type=C if kind == "COLOR" else F)
         for name in ("Image", "Fog Light"):
             ng.interface.new_socket(name, in_out="OUTPUT", socket_type=C)
-        ng[groups.FOG_PROP] = True
     ng.animation_data_clear()
     ng.nodes.clear()
     gin, gout = ng.nodes.new("NodeGroupInput"), ng.nodes.new("NodeGroupOutput")
@@ -266,17 +284,23 @@ def build_fog_group(scene, lights, models, images):
     inv = 1.0 / m.maximum(cover, 1e-6)
     cam = _location(m, "Camera", scene.camera)
     beta, albedo = _params(m)
-    pos = m.scale(p["Fog Position"], inv)
-    to_cam = cam - pos
-    d_vp = m.length(to_cam)
-    incoming = m.scale(to_cam, 1.0 / m.maximum(d_vp, 1e-9))
-    normal = m.scale(p["Fog Normal"], 1.0 / m.maximum(m.length(p["Fog Normal"]), 1e-9))
     coords = m.node("CompositorNodeImageCoordinates", 0)
     ng.links.new(gin.outputs["Image"], coords.inputs[0])
     uv = m.wrap(coords.outputs["Normalized"], vector=True)
     corner, across, up = camera_frame(m, scene)
     ray = corner + m.scale(across, m.dot(uv, (1.0, 0.0, 0.0))) + m.scale(up, m.dot(uv, (0.0, 1.0, 0.0)))
     direction = m.scale(ray, 1.0 / m.length(ray))
+    if eevee:   # ray is the pixel's ray at unit view depth
+        mean_depth, depth = p["Fog Depth"] * inv, p[compositor.DEPTH]
+        agree = m.less(m.abs(depth - mean_depth), DEPTH_AGREE * mean_depth)
+        pos = cam + m.scale(ray, m.select(agree, depth, mean_depth))
+    else:
+        pos = m.scale(p["Fog Position"], inv)
+    to_cam = cam - pos
+    d_vp = m.length(to_cam)
+    incoming = m.scale(to_cam, 1.0 / m.maximum(d_vp, 1e-9))
+    summed = m.scale(p["Fog Normal"], 2.0) - m.scale(m.wrap((1.0, 1.0, 1.0)), cover)   # written as (1 + n) / 2
+    normal = m.scale(summed, 1.0 / m.maximum(m.length(summed), 1e-9))
     size = _picture_scale(m, scene, peak)
     pix = uv * size if peak else m.wrap((0.0, 0.0, 0.0))
     diffuse, specular, level = surface.principled_to_phong(

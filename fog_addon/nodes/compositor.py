@@ -34,16 +34,17 @@ writes it).
   note saying why) when it is linked from a library, Compositing is off,
   Render Layers of the scene sit inside a nested group, a link reads Noisy
   Image (gone with the render denoiser off).
-* Not for EEVEE (Cycles' denoiser flag does not apply).  ``follow`` sets the
+* The denoiser's chain is not for EEVEE (Cycles' denoiser flag does not apply).  ``follow`` sets the
   set-up up or takes it down as the engine and the denoiser flag change.
 
 With the Compositor method (``comp_fog.py``) the render holds no fog light: Cycles' denoiser stays on,
 and the chain after each Render Layers node is instead one group node, the fog's ``AnalyticFog
 Compositor Fog``, fed with the Image and the method's AOVs, which adds the fog's light.  It is spliced
-into a user's compositor the same way, for every view layer that renders, denoised or not.
+into a user's compositor the same way, for every view layer that renders, denoised or not, in Cycles and
+EEVEE (where the group also reads the Depth pass, switched on and restored like the passes below).
 
 The settings changed (the scene's denoiser and Compositing flags, each view
-layer's Emission, Environment and Denoising Data passes) are recorded by ``overrides.py`` and restored
+layer's Emission, Environment, Denoising Data and Depth passes) are recorded by ``overrides.py`` and restored
 exactly by ``teardown``; the scene's ``STATE`` names the tree the fog edited.
 """
 import bpy
@@ -51,6 +52,7 @@ import bpy
 from . import overrides, owned
 
 EMISSION, ENVIRONMENT = "Emission", "Environment"   # the Render Layers outputs of Cycles' Emit and Env passes
+DEPTH = "Depth"   # the Render Layers output of the Z pass (``use_pass_z``), which the fog group reads in EEVEE
 STATE = "analytic_fog_compositor"   # on the scene: {"tree": the compositor tree the fog edited or made,
 #                                      "fog": True for the Compositor method's chain, else the denoiser's}
 GROUP = "AnalyticFog Compositor"
@@ -70,9 +72,11 @@ def is_set_up(scene):
 def wanted(scene, fog=None):
     """True if ``scene`` should have the set-up: Cycles with its denoiser on (or set up already), or with
     the Compositor method's ``fog`` group."""
+    if fog is not None:
+        return True
     if scene.render.engine != "CYCLES":
         return False
-    return fog is not None or scene.cycles.use_denoising or (is_set_up(scene) and not scene[STATE].get("fog"))
+    return scene.cycles.use_denoising or (is_set_up(scene) and not scene[STATE].get("fog"))
 
 
 def follow(scene, rebuild=False, fog=None):
@@ -86,7 +90,8 @@ def follow(scene, rebuild=False, fog=None):
         teardown(scene)
         return []
     if is_set_up(scene):
-        if not rebuild and bool(scene[STATE].get("fog")) == (fog is not None):
+        if not rebuild and bool(scene[STATE].get("fog")) == (fog is not None) and (
+                fog is None or scene[STATE].get("engine") == scene.render.engine):   # the fog group's inputs
             if fog is None and scene.cycles.use_denoising:   # switched back on by hand: the fog's Denoise does it
                 scene.cycles.use_denoising = False
             return []
@@ -191,10 +196,15 @@ def _fog_chain(tree, rl, k, fog):
     return node.outputs["Image"]
 
 
-def _store_passes(scene, layers):
-    """The Emission and Environment passes on for ``layers``, and Cycles' Denoising Data passes if the
-    Denoise node reads them."""
+def _store_passes(scene, layers, fog=None):
+    """The passes the chain reads on for ``layers``: with the Compositor method's ``fog`` group the Depth
+    pass if it reads it (EEVEE), else the Emission and Environment passes, and Cycles' Denoising Data passes
+    if the Denoise node reads them."""
     for vl in layers:
+        if fog is not None:
+            if any(i.name == DEPTH for i in fog.interface.items_tree if i.in_out == "INPUT"):
+                overrides.override(vl, "use_pass_z", True)
+            continue
         overrides.override(vl, "use_pass_emit", True)
         overrides.override(vl, "use_pass_environment", True)
         if scene.cycles.denoising_input_passes != "RGB":
@@ -212,8 +222,7 @@ def setup(scene, fog=None):
         vl = next((v for v in scene.view_layers if v.use), None)
         if not needs(vl):
             return []
-        if fog is None:
-            _store_passes(scene, [vl])
+        _store_passes(scene, [vl], fog)
         tree = bpy.data.node_groups.new(GROUP, "CompositorNodeTree")
         tree[owned.TAG] = "Compositor"   # the fog's own group
         tree.interface.new_socket("Image", in_out="OUTPUT", socket_type="NodeSocketColor")
@@ -235,8 +244,7 @@ def setup(scene, fog=None):
         if why:
             return [(scene.name, f"{why}: the compositor is left as it is and Cycles' denoiser on, which "
                                  "smears the fog's glows (turn it off, or see README 'Fog passes')")]
-        if fog is None:
-            _store_passes(scene, {_layer(scene, n) for n in nodes})
+        _store_passes(scene, {_layer(scene, n) for n in nodes}, fog)
         for k, rl in enumerate(nodes):
             users = [link.to_socket for link in rl.outputs["Image"].links]
             last = chain(tree, rl, k)
@@ -244,7 +252,7 @@ def setup(scene, fog=None):
                 tree.links.new(last, sock)
     if fog is None:
         overrides.override(scene, "cycles.use_denoising", False)
-    scene[STATE] = {"tree": tree.name, "fog": fog is not None}
+    scene[STATE] = {"tree": tree.name, "fog": fog is not None, "engine": scene.render.engine}
     return []
 
 

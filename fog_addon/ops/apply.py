@@ -1,4 +1,5 @@
 """Adding, updating and removing the fog on a scene (what the operators, handlers and command line call)."""
+import functools
 import json
 
 import bpy
@@ -18,7 +19,7 @@ LIGHTS_KEY = "analytic_fog_lights"  # on the Surface group: the lights, their mo
 PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method preference it was built with
 PASSES_KEY = "analytic_fog_passes"   # on the Surface group: built with the fog passes (AOV outputs)
 CHOICE_KEY = "analytic_fog_choice"   # on the Surface group: the Quality, {light: [step, predicted error]}, the total
-AOV_KINDS = dict(passes.AOVS + comp_fog.AOVS)   # every AOV the fog adds to view layers, by name
+AOV_KINDS = dict(passes.AOVS + comp_fog.AOVS + comp_fog.EEVEE_AOVS)   # every AOV the fog adds to view layers
 COMPOSITOR = "compositor"   # the method that adds the fog's light in the compositor (``nodes/comp_fog.py``)
 
 
@@ -110,6 +111,8 @@ def _budget(scene, preference, lights):
     """What the renderer can hold (predict.Budget) with ``lights``, or None: EEVEE's uniform block, Cycles
     OSL's shader group layers."""
     spots = [view.is_spot(o) for o in lights]
+    if preference == COMPOSITOR:   # the compositor's groups hold any number; EEVEE's materials: dimming_lights
+        return None
     if scene.render.engine == groups.EEVEE_ENGINE:
         return groups.eevee_budget(groups.get_anisotropy(), spots)
     if preference == "osl":
@@ -214,23 +217,25 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
     # lights stepped out of the groups to fit a budget (rungs.LEFT_OUT) keep their own dimming (wrap_light)
     grouped = [(o, mod) for o, mod in zip(lights, models) if choice["lights"][o.name][0] != rungs.LEFT_OUT]
     in_groups, grouped_models = [o for o, _ in grouped], [mod for _, mod in grouped]
-    signature = _signature(scene, in_groups, grouped_models, preference, with_passes)
-    surface = bpy.data.node_groups.get(groups.SURFACE)
     in_compositor = preference == COMPOSITOR
+    # the materials' lights: none in the Compositor method (Cycles' lights dim their own direct light), in
+    # EEVEE's only the shared dimming of those that fit its uniform block
+    in_shaders = dimming_lights(scene, in_groups, preference) if in_compositor else (in_groups, grouped_models)
+    signature = _signature(scene, in_groups, grouped_models, preference, with_passes) + (
+        "|dimming:" + ",".join(o.name_full for o in in_shaders[0]) if in_compositor else "")
+    surface = bpy.data.node_groups.get(groups.SURFACE)
     if (surface is None or bpy.data.node_groups.get(groups.WORLD) is None
             or surface.get(LIGHTS_KEY) != signature
             or (in_compositor and bpy.data.node_groups.get(comp_fog.FOG_GROUP) is None)):
         imgs = images.all_table_images(groups.get_anisotropy())
-        # the Compositor method: materials and World without lights, the lights in the compositor
-        in_shaders = ([], []) if in_compositor else (in_groups, grouped_models)
-        surface = groups.build_surface(*in_shaders, imgs, with_passes,
-                                       extra=comp_fog.add_surface_aovs if in_compositor else None)
+        aovs = functools.partial(comp_fog.add_surface_aovs, engine=scene.render.engine) if in_compositor else None
+        surface = groups.build_surface(*in_shaders, imgs, with_passes, extra=aovs)
         if in_compositor:
             imgs = comp_fog.build_fog_group(scene, in_groups, grouped_models, imgs)
         surface[LIGHTS_KEY] = signature
         surface[PREFERENCE_KEY] = preference
         surface[PASSES_KEY] = with_passes
-        groups.build_world(*in_shaders, scene.camera, imgs, with_passes)
+        groups.build_world(*(([], []) if in_compositor else in_shaders), scene.camera, imgs, with_passes)
         for name in comp_fog.all_group_names()[1:] + groups.all_group_names():
             ng = bpy.data.node_groups.get(name)
             if ng is not None and ng.users == 0 and name not in (groups.PARAMS, groups.SURFACE, groups.WORLD):
@@ -250,9 +255,37 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
     if (limit := limit_text(choice)) is not None:
         notes.append((scene.render.engine, f"{limit}, predicted error {choice['error']:.2%} "
                                            "(render --explain lists each light's models)"))
-    aovs = (passes.AOVS if with_passes else ()) + (comp_fog.AOVS if in_compositor else ())
+    if in_compositor and scene.render.engine == groups.EEVEE_ENGINE and len(in_shaders[0]) < len(in_groups):
+        notes.append((scene.render.engine, f"{len(in_groups) - len(in_shaders[0])} of {len(in_groups)} lights are "
+                      "not in the materials' shared dimming of direct light (EEVEE's uniform block): their direct "
+                      "light is dimmed as the nearer lights' is"))
+    aovs = (passes.AOVS if with_passes else ()) + (comp_fog.aovs(scene.render.engine) if in_compositor else ())
     passes.remove_view_layer_aovs(scene, AOV_KINDS, keep=[name for name, _ in aovs])
     return notes + passes.add_view_layer_aovs(scene, aovs)
+
+
+def dimming_lights(scene, lights, preference):
+    """The Compositor method's materials' lights: ([], []) in Cycles, whose lights dim their own direct light
+    (``light.py``); in EEVEE, which has no light node trees, (lights, models) of the lights whose direct
+    light the materials dim by the shared weights of ``shading.surface_fog`` (rungs step "off": no fog light,
+    which the compositor adds), as many as EEVEE's uniform block holds (``groups.eevee_budget``), the
+    brightest at the camera first (radiant intensity over squared distance)."""
+    if scene.render.engine != groups.EEVEE_ENGINE or not lights:
+        return [], []
+    spots = [view.is_spot(o) for o in lights]
+    budget = groups.eevee_budget(0.0, spots)   # step "off" has no phase weight: its cost does not depend on g
+    eye = scene.camera.matrix_world.translation
+    order = sorted(range(len(lights)), key=lambda i: -sum(lights[i].data.color) * lights[i].data.energy / max(
+        (lights[i].matrix_world.translation - eye).length_squared, 1e-12))
+    steps = [rungs.LEFT_OUT] * len(lights)
+    for i in order:
+        steps[i] = rungs.OFF
+        if not budget.fits(steps):
+            steps[i] = rungs.LEFT_OUT
+            break
+    kept = [i for i in range(len(lights)) if steps[i] == rungs.OFF]
+    g = groups.get_anisotropy()
+    return [lights[i] for i in kept], [rungs.choose(preference, rungs.OFF, g, spots[i]) for i in kept]
 
 
 def merge_appended():
@@ -344,9 +377,8 @@ def follow_compositor(scene, rebuild=False):
 
 def check_compositor_method(scene, with_passes):
     """Raise ValueError unless ``scene`` can take the Compositor method (``comp_fog.py``'s limits)."""
-    if scene.render.engine != "CYCLES":
-        raise ValueError("the Compositor method needs Cycles (EEVEE writes its inputs as half floats): switch the "
-                         "render engine to Cycles or use the Node Groups method")
+    if scene.render.engine not in ("CYCLES", groups.EEVEE_ENGINE):
+        raise ValueError(f"the Compositor method needs Cycles or EEVEE, not {scene.render.engine}")
     if scene.camera.data.type != "PERSP":
         raise ValueError(f"the Compositor method needs a perspective camera ({scene.camera.name!r} is "
                          f"{scene.camera.data.type.lower()}): use the Node Groups method")

@@ -120,6 +120,7 @@ RUNGS = (AIRLIGHT_TABLE, BACKGROUND_TABLE, AIRLIGHT_QUADRATURE, BACKGROUND_QUADR
 # uniform block, ``predict.choose_steps``): Cycles dims its direct light in its own node tree as at 2,
 # EEVEE by the other lights' shared attenuation instead of its own.
 STEPS = ("full", "glow only", "off", "off, not in EEVEE's shared dimming")
+OFF = 2
 LEFT_OUT = 3
 
 

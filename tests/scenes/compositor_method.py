@@ -8,7 +8,10 @@
   Remove gives back the same links, the same nodes, no fog data-blocks and no fog AOVs.
 * ``switch``: Node Groups -> Compositor -> Node Groups: the compositor's set-up and AOVs go, the
   materials' light groups come back.
-* ``refused``: the method refused, with nothing changed, for EEVEE, the fog passes and a panoramic camera.
+* ``engines``: Cycles -> EEVEE -> Cycles -> EEVEE with the fog on: the fog group's inputs (EEVEE's read the
+  Depth pass, switched on), the AOVs and the materials' lights (EEVEE's shared dimming) follow; Remove restores
+  the Depth pass.
+* ``refused``: the method refused, with nothing changed, for Workbench, the fog passes and a panoramic camera.
 * ``driven``: a density, colour, light power and lamp move reach the compositor's graph without a rebuild.
 """
 import json
@@ -126,12 +129,35 @@ def main():
                               "material_light_groups": len([ng for ng in bpy.data.node_groups
                                                             if ng.name.startswith("AnalyticFog Light [")])}}
 
+    scene = fresh()
+    scene.cycles.use_denoising = False
+    apply.apply_fog(scene, BETA, method="compositor")
+
+    def engine_state():
+        tree = scene.compositing_node_group
+        fog = next(n for n in tree.nodes if owned.is_ours(n) and n.bl_idname == "CompositorNodeGroup")
+        return {"engine": scene.render.engine, "inputs_fed": sorted(l.to_socket.name for l in tree.links
+                                                                    if l.to_node == fog),
+                "depth_pass": scene.view_layers[0].use_pass_z, "aovs": sorted(a.name for a in scene.view_layers[0].aovs),
+                "material_light_groups": len([ng for ng in bpy.data.node_groups
+                                              if ng.name.startswith("AnalyticFog Light [")])}
+    engines = [engine_state()]
+    for engine in ("BLENDER_EEVEE", "CYCLES"):
+        scene.render.engine = engine
+        apply.refresh_lights(scene)   # what the depsgraph handler does when the engine changes
+        engines.append(engine_state())
+    scene.render.engine = "BLENDER_EEVEE"
+    apply.refresh_lights(scene)
+    apply.remove_fog(scene)
+    res["engines"] = {"states": engines, "removed": {"depth_pass": scene.view_layers[0].use_pass_z,
+                                                     "fog": fog_data()}}
+
     refused = {}
-    for case in ("eevee", "passes", "panoramic"):
+    for case in ("workbench", "passes", "panoramic"):
         scene = fresh()
         kwargs = {}
-        if case == "eevee":
-            scene.render.engine = "BLENDER_EEVEE"
+        if case == "workbench":
+            scene.render.engine = "BLENDER_WORKBENCH"
         elif case == "passes":
             kwargs["with_passes"] = True
         else:
