@@ -117,6 +117,7 @@ METHODS = [
     ("nodes", "eevee", (1, 4)),
     ("osl", "cycles", (1, 4, 16)),
     ("compositor", "cycles", (1, 4, 16)),
+    ("compositor", "eevee", (1, 4)),
 ]
 # EEVEE's volumetrics on the reference's World volume.  "default" is EEVEE 5.0's default volume
 # settings (resolution 1:8, 64 steps, 16 shadow samples) at the add-on's 16 render samples (EEVEE's
@@ -396,7 +397,7 @@ def equal_error(rows, gt_spp, key="render_cpu_s"):
 
 QUALITY_MARKERS = {"draft": "v", "final": "o", "exact": "D"}
 ANALYTIC_COLOURS = {("nodes", "cycles"): "C0", ("osl", "cycles"): "C1", ("nodes", "eevee"): "C2",
-                    ("compositor", "cycles"): "C3"}
+                    ("compositor", "cycles"): "C3", ("compositor", "eevee"): "C4"}
 
 
 def chart(rows, summary, cfg, key="render_cpu_s"):
