@@ -108,8 +108,8 @@ def quality_value(quality):
 
 
 def _budget(scene, preference, lights):
-    """What the renderer can hold (predict.Budget) with ``lights``, or None: EEVEE's uniform block, Cycles
-    OSL's shader group layers."""
+    """What the renderer can hold (predict.Budget) with ``lights``, or None (Cycles' SVM, the Compositor
+    method): EEVEE's uniform block, Cycles OSL's shader group layers."""
     spots = [view.is_spot(o) for o in lights]
     if preference == COMPOSITOR:   # the compositor's groups hold any number; EEVEE's materials: dimming_lights
         return None
