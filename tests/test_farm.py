@@ -12,7 +12,9 @@ Process B (tests/scenes/farm_render.py) starts with a clean environment in a dir
   frames 1, 5, 10 after ``frame_set``;
 * compositor, anim_compositor: the static and animated scenes with the Compositor method (the fog's light
   added by the compositor's graph, every input driven).  A's expectation for frame f is the scene made static at
-  frame f (animation cleared, objects posed, fog re-added).
+  frame f (animation cleared, objects posed, fog re-added);
+* compositor_eevee: the compositor lane's scene with the Compositor method in EEVEE (32x18, 1 sample), the
+  file saved with EEVEE as its engine.
 
 B also checks: the tables are packed, every driver is valid and none is a Python expression, the
 OSL text is internal with bytecode in the Script nodes, the driven light/camera positions and light
@@ -20,7 +22,7 @@ intensities equal the objects' own at each frame, and (a canary driver that need
 that Python drivers really cannot run in B.
 
 The World uses a 64 MANUAL importance map (see farm_build.build: with Cycles' AUTOMATIC map the
-fog's World shader costs about 37 s per render here).  The three lanes (A then B) run side by side.
+fog's World shader costs about 37 s per render here).  The lanes (A then B) run side by side.
 """
 import concurrent.futures
 import json
@@ -63,6 +65,9 @@ LANES = {
                             for f in FRAMES]),
     # the Compositor method: the fog's light added by the compositor's driven graph
     "compositor": ("compositor.blend", [{"out": "farm_compositor_cycles.exr", "expect": "compositor_cycles.exr"}]),
+    # the same in EEVEE: the file saved with EEVEE as its engine (its Depth pass on, the fog group reading it)
+    "compositor_eevee": ("compositor_eevee.blend", [{"out": "farm_compositor_eevee.exr",
+                                                     "expect": "compositor_eevee.exr"}]),
     "anim_compositor": ("anim.blend", [{"out": f"farm_anim_compositor_{f}.exr", "expect": f"expect_{f}.exr",
                                         "frame": f} for f in FRAMES]),
 }
@@ -183,8 +188,9 @@ def test_saved_file_is_self_contained(farm, lane):
         py = [d for d in drivers if d["type"] == "SCRIPTED" and not d["simple"]]
         assert not py, f"Python-expression drivers (need auto-run): {py[:5]}"
     s = b["settings"]
+    engine = "BLENDER_EEVEE" if lane.endswith("_eevee") else "CYCLES"
     assert (s["engine"], s["samples"], s["seed"], s["animated_seed"], s["denoise"], s["filter"]) \
-        == ("CYCLES", 4, 0, False, False, "GAUSSIAN"), s
+        == (engine, 4, 0, False, False, "GAUSSIAN"), s
 
 
 def test_osl_script_is_internal_and_compiled(farm):
@@ -203,7 +209,7 @@ def test_farm_render_matches(farm, lane, job):
     spec = next(j for j in LANES[lane][1] if j["out"] == job)
     img = _assert_same(r["dir"] / job, r["dir"] / spec["expect"], job[:-4])
     if not lane.startswith("anim") and "engine" not in spec:   # the fog is there: not the fog-free picture
-        nofog = _read(r["dir"] / "nofog_cycles.exr")
+        nofog = _read(r["dir"] / ("nofog_eevee.exr" if lane.endswith("_eevee") else "nofog_cycles.exr"))
         effect = compare.metrics(img, nofog)["rel_rmse"]
         assert effect > MIN_FOG_EFFECT, f"{job}: differs from the fog-free render by only {effect:.3g}"
 

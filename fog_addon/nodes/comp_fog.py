@@ -18,9 +18,13 @@ Everything the graph reads from the scene reaches it by simple-expression driver
 lens, sensor and shift, the render's size, each light's position, power, colour and cone, the fog's
 density and colour in the params group): a saved file renders any frame on a farm without the add-on.
 
-Limits (README "The fog's light in the compositor"): one depth per pixel, so a pixel that sees two
-surfaces gets the fog light of their mean position; Cycles only (EEVEE writes AOVs as half floats and
-clamps negatives); perspective cameras; no fog passes (the fog's light is the compositor's).
+In EEVEE, which writes AOVs as half floats accumulated with a loss and clamps negatives, the surface point
+is the Depth pass's (float32) on the pixel's ray (``EEVEE_AOVS``), and the materials keep the lights' shared
+dimming of direct light (EEVEE has no light node trees: ``apply.dimming_lights``).
+
+Limits (README "The Compositor method"): one surface point per pixel, so a pixel that sees two surfaces
+gets the fog light of one point (Cycles: their mean position; EEVEE: the one its centre sees); perspective
+cameras; no fog passes (the fog's light is the compositor's).
 """
 import bpy
 

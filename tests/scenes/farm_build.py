@@ -81,19 +81,22 @@ def nodes(outdir):
     emit({"packed": packed, "render_s": log})
 
 
-def osl(outdir, method="osl"):
-    """The fog by apply_fog(method=``method``: "osl" or "compositor", Cycles only): expectation, then
-    <method>.blend."""
+def osl(outdir, method="osl", engine="CYCLES"):
+    """The fog by apply_fog(method=``method``: "osl" or "compositor") in ``engine`` (EEVEE: the compositor
+    only): expectation, then <method>.blend (EEVEE: <method>_eevee.blend)."""
     from fog_addon.ops import apply
     log = {}
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = build(bpy.context.scene)
-    timed(log, "nofog_cycles", render_exr, scene, os.path.join(outdir, "nofog_cycles.exr"))
+    tag = "cycles" if engine == "CYCLES" else "eevee"
+    render_settings(scene, engine)
+    timed(log, f"nofog_{tag}", render_exr, scene, os.path.join(outdir, f"nofog_{tag}.exr"))
     fog_addon.register()
     skipped = apply.apply_fog(scene, DENSITY, method=method)
-    timed(log, f"{method}_cycles", render_exr, scene, os.path.join(outdir, f"{method}_cycles.exr"))
+    timed(log, f"{method}_{tag}", render_exr, scene, os.path.join(outdir, f"{method}_{tag}.exr"))
     packed = packed_report()
-    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(outdir, f"{method}.blend"))
+    name = f"{method}.blend" if engine == "CYCLES" else f"{method}_{tag}.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(outdir, name))
     emit({"packed": packed, "skipped": skipped, "shading_system_osl": bool(scene.cycles.shading_system),
           "render_s": log})
 
@@ -151,4 +154,5 @@ def anim(outdir, method="NODES"):
 if __name__ == "__main__":
     mode, outdir = sys.argv[1], sys.argv[2]
     {"nodes": nodes, "osl": osl, "anim": anim, "compositor": lambda out: osl(out, "compositor"),
+     "compositor_eevee": lambda out: osl(out, "compositor", "BLENDER_EEVEE"),
      "anim_compositor": lambda out: anim(out, "COMPOSITOR")}[mode](outdir)
