@@ -66,6 +66,15 @@ def test_switching_engines(res):
     assert res["engines"]["removed"] == {"depth_pass": False, "fog": []}
 
 
+def test_eevee_dimming_holds_what_fits_brightest_first(res):
+    """apply.dimming_lights on 200 lamps in EEVEE: as many as the budget holds at step off (no fog light in
+    the materials), the brightest at the camera (power over squared distance); none in Cycles."""
+    d = res["dimming"]
+    assert 100 < d["kept"] < 200 and d["fits"] and not d["one_more_fits"], d
+    assert d["models"] == ["airlight off"] and d["brightest"], d
+    assert d["cycles"] == 0
+
+
 @pytest.mark.parametrize("case,words", [("workbench", "needs Cycles or EEVEE"), ("passes", "no fog passes"),
                                         ("panoramic", "perspective camera")])
 def test_refused_changing_nothing(res, case, words):

@@ -306,7 +306,7 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     ``method``: the user's preference for the models (``rungs.PREFERENCES``):
     "nodes" (node-group tables, Cycles and EEVEE), "osl" (the glow by
     quadrature in an OSL script, Cycles only; switches Cycles' OSL on) or "compositor" (the node
-    groups' models once per pixel in the compositor, Cycles only: ``nodes/comp_fog.py``).
+    groups' models once per pixel in the compositor, Cycles and EEVEE: ``nodes/comp_fog.py``).
     ``objects``: fog only their materials (default: all in the scene).
     ``scene_scale``: real metres per Blender unit (the groups get density *
     scene_scale per unit).  Returns a list of (data-block name, reason) for

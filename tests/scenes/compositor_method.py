@@ -11,6 +11,8 @@
 * ``engines``: Cycles -> EEVEE -> Cycles -> EEVEE with the fog on: the fog group's inputs (EEVEE's read the
   Depth pass, switched on), the AOVs and the materials' lights (EEVEE's shared dimming) follow; Remove restores
   the Depth pass.
+* ``dimming``: in EEVEE the materials' shared dimming holds as many of 200 lamps as EEVEE's uniform block
+  does, the brightest at the camera, at step off; none in Cycles.
 * ``refused``: the method refused, with nothing changed, for Workbench, the fog passes and a panoramic camera.
 * ``driven``: a density, colour, light power and lamp move reach the compositor's graph without a rebuild.
 """
@@ -30,6 +32,7 @@ from fog_addon.nodes.sockets import NodeOps  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 
 BETA = 0.15
+DIMMING_LIGHTS = 200   # more than EEVEE's uniform block holds in the materials' shared dimming (about 170)
 
 
 def fresh():
@@ -191,6 +194,30 @@ def main():
     res["driven"] = {"beta": value("Beta"), "albedo": [value("Albedo", i) for i in range(3)],
                      "light_x": value("Light 0 Location", 0), "lamp_x": lamp.matrix_world.translation.x,
                      "intensity": intensity, "want_intensity": lamp.data.energy * lamp.data.color[0] / (4 * math.pi)}
+
+    scene = fresh()
+    scene.render.engine = "BLENDER_EEVEE"
+    for o in [o for o in scene.objects if o.type == "LIGHT"]:
+        bpy.data.objects.remove(o)
+    eye = scene.camera.matrix_world.translation
+    lamps = []
+    for k in range(DIMMING_LIGHTS):   # a row of equal lamps going away from the camera, every 7th twice as bright
+        data = bpy.data.lights.new(f"D{k:03d}", "POINT")
+        data.energy = 200.0 if k % 7 == 0 else 100.0
+        lamp = bpy.data.objects.new(f"D{k:03d}", data)
+        lamp.location = (eye.x + 0.5, eye.y + 2.0 + k, eye.z)
+        scene.collection.objects.link(lamp)
+        lamps.append(lamp)
+    bpy.context.view_layer.update()
+    kept, models = apply.dimming_lights(scene, lamps, "compositor")
+    score = {o.name: o.data.energy / (o.matrix_world.translation - eye).length_squared for o in lamps}
+    res["dimming"] = {"kept": len(kept), "models": sorted({m.airlight.name for m in models}),
+                      "fits": groups.eevee_budget(0.0).fits([2] * len(kept)),
+                      "one_more_fits": groups.eevee_budget(0.0).fits([2] * (len(kept) + 1)),
+                      "brightest": min(score[o.name] for o in kept) >= max(
+                          [score[o.name] for o in lamps if o not in kept], default=0.0)}
+    scene.render.engine = "CYCLES"   # Cycles' lights dim their own direct light: none in the materials
+    res["dimming"]["cycles"] = len(apply.dimming_lights(scene, lamps, "compositor")[0])
     print("COMPOSITOR_JSON " + json.dumps(res), flush=True)
 
 
