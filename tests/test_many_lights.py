@@ -76,6 +76,8 @@ BLACK = 0.1                  # median render / twin below this: the material ren
 # at 256 lights, but Cycles' first render (node groups) was still not done after 2 177 s of CPU
 # (benchmarks/overhead.py at 709fad8).
 MEASURED = {
+    (16, "cycles_osl"): ("skip", "passes (relative RMSE 0.023 %) but slow for CI: 49 s in the full run at 225f330; "
+                                 "test_closure_sum_renders_every_closure checks OSL's closure sum up to 256"),
     (256, "cycles_nodes"): ("skip", "too slow: fog added in 221 s, first render not finished at 300 s (killed); "
                                     "with the lights stepped down to 64 full lights' nodes a material (29 full, "
                                     "137 glow only, 90 left out, predicted error 57 %) it passed (relative RMSE "

@@ -117,6 +117,8 @@ def _boulevard(tmp_path, regen, engine, method, samples, rel_rmse, mean_ratio_to
     print(f"{scene} {engine} {method}: relative RMSE {m['rel_rmse']:.4g}, mean ratio {m['mean_ratio']:.5f}")
 
 
+@_slow("passes (relative RMSE 0.86 %, mean ratio 0.995) but slow for CI: 170 s in the full run at 225f330 "
+       "(146-514 s before); test_boulevard_cycles_compositor renders the boulevard in Cycles in 10 s")
 def test_boulevard_cycles_nodes(tmp_path, regen):
     _boulevard(tmp_path, regen, "cycles", "nodes", BOULEVARD_CYCLES_SAMPLES, 0.03, 0.01)
 
@@ -186,8 +188,11 @@ SPOT_SAMPLES = {"cycles": 256, "eevee": None}
 
 
 @pytest.mark.parametrize("scene", sorted(SPOT_SCENES))
-@pytest.mark.parametrize("engine,method", [("cycles", "nodes"), ("cycles", "osl"), ("cycles", "compositor"),
-                                           ("eevee", "nodes"), ("eevee", "compositor")])
+@pytest.mark.parametrize("engine,method", [
+    ("cycles", "nodes"), pytest.param("cycles", "osl", marks=_slow(
+        "passes (concert stage 1.17 %, headlights 2.55 %) but slow for CI: 38-39 s a case at 256 spp; the OSL spot "
+        "glow matches the numpy twin in test_nodes.py")), ("cycles", "compositor"),
+    ("eevee", "nodes"), ("eevee", "compositor")])
 def test_spot_scenes(tmp_path, regen, scene, engine, method):
     density, g, bound = SPOT_SCENES[scene]
     ref = h.ensure_reference(scene, density, regen, anisotropy=g)

@@ -1,6 +1,6 @@
 """The Quality's proof scene: one scene fogged at a Quality and at Exact, the Fog Light pass of each written.
 
-    python tests/scenes/quality_probe.py OUT_DIR SCENE QUALITY [WIDTH HEIGHT]
+    python tests/scenes/quality_probe.py OUT_DIR SCENE QUALITY [METHOD [WIDTH HEIGHT]]
 
 SCENE: a demo scene module name (street_lamps, boulevard, ...) at its default
 density (and anisotropy, if it has one), or ``random:SEED`` (a ground, boxes and spheres with random
@@ -10,7 +10,8 @@ light a spot (10-120 degrees, blend 0-1) aimed at a random point of the ground. 
 pixel centre.  The lights light only the fog (hidden from diffuse and
 glossy rays: in Cycles their diffuse and specular factors alone still let
 them light surfaces) and the World is black, so the picture is the fog's
-light alone, without noise and without the Fog Passes' cost.
+light alone, without noise and without the Fog Passes' cost.  METHOD: the fog's method (default nodes; with
+"compositor" the same models are evaluated once per pixel, at the pixel centre's surface point here).
 
 Writes OUT_DIR/auto.exr and OUT_DIR/exact.exr and prints one JSON line: the
 predicted error of the choice, the steps, and the scene's lights and beta.
@@ -94,7 +95,7 @@ def render(scene, path):
     bpy.ops.render.render(write_still=True, scene=scene.name)
 
 
-def main(out, name, quality, width=128, height=72):
+def main(out, name, quality, method="nodes", width=128, height=72):
     out = pathlib.Path(out)
     out.mkdir(parents=True, exist_ok=True)
     scene = bpy.context.scene
@@ -102,10 +103,10 @@ def main(out, name, quality, width=128, height=72):
     fog_only(scene)
     tiny_render(scene, "CYCLES", width, height)
     quality = None if quality == "exact" else (float(quality) if quality[0].isdigit() else quality)
-    apply.apply_fog(scene, beta, anisotropy=g, error=quality)
+    apply.apply_fog(scene, beta, anisotropy=g, error=quality, method=method)
     choice = apply.stored_choice()
     render(scene, out / "auto.exr")
-    apply.apply_fog(scene, beta, anisotropy=g, error=None)
+    apply.apply_fog(scene, beta, anisotropy=g, error=None, method=method)
     render(scene, out / "exact.exr")
     print(json.dumps({"scene": name, "beta": beta, "quality": quality, "predicted": choice["error"],
                       "steps": {k: v[0] for k, v in choice["lights"].items()},
@@ -115,4 +116,4 @@ def main(out, name, quality, width=128, height=72):
 
 if __name__ == "__main__":
     os.environ.setdefault("TMPDIR", "/tmp")
-    main(sys.argv[1], sys.argv[2], sys.argv[3], *(int(a) for a in sys.argv[4:6]))
+    main(sys.argv[1], sys.argv[2], sys.argv[3], *sys.argv[4:5], *(int(a) for a in sys.argv[5:7]))
