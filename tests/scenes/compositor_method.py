@@ -139,9 +139,10 @@ def main():
     def engine_state():
         tree = scene.compositing_node_group
         fog = next(n for n in tree.nodes if owned.is_ours(n) and n.bl_idname == "CompositorNodeGroup")
+        vl = scene.view_layers[0]
         return {"engine": scene.render.engine, "inputs_fed": sorted(l.to_socket.name for l in tree.links
                                                                     if l.to_node == fog),
-                "depth_pass": scene.view_layers[0].use_pass_z, "aovs": sorted(a.name for a in scene.view_layers[0].aovs),
+                "depth_pass": vl.use_pass_z, "aovs": sorted(a.name for a in vl.aovs),
                 "material_light_groups": len([ng for ng in bpy.data.node_groups
                                               if ng.name.startswith("AnalyticFog Light [")])}
     engines = [engine_state()]
