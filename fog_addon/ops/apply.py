@@ -275,7 +275,8 @@ def dimming_lights(scene, lights, preference):
     spots = [view.is_spot(o) for o in lights]
     budget = groups.eevee_budget(0.0, spots)   # step "off" has no phase weight: its cost does not depend on g
     eye = scene.camera.matrix_world.translation
-    order = sorted(range(len(lights)), key=lambda i: -sum(lights[i].data.color) * lights[i].data.energy / max(
+    intensity = view.light_intensities(lights).sum(axis=1)
+    order = sorted(range(len(lights)), key=lambda i: -intensity[i] / max(
         (lights[i].matrix_world.translation - eye).length_squared, 1e-12))
     steps = [rungs.LEFT_OUT] * len(lights)
     for i in order:
