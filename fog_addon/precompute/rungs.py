@@ -55,6 +55,8 @@ class Rung:
     max_error: float = 0.0    # max relative error over the domain against adaptive quadrature (measured; see tests)
     evidence: str = ""        # the test that measures max_error
     spot: bool = False        # a spot light's rung (``spot_rungs``, DIRECT_SPOT): the spot kernels' signature
+    pair: Callable = None     # an airlight rung's (airlight, background) of one ray at once, sharing their work
+    #                           (``spot.airlight_pair``), for a backend that needs both per pixel (the compositor)
 
     def predicted_error(self, *situation):
         """Bound on the relative error this rung makes in any pixel of a situation (camera, light, medium).
@@ -191,9 +193,10 @@ def spot_rungs(air, background, g):
                functools.partial(spot.airlight_background, inner=air.kernel, g=float(g)))
     domain = air.domain + "; spot size 1-180 degrees, blend 0-1, any orientation and scale"
     evidence = "tests/test_spot.py, tests/test_spot_strict.py: Eq. 5 with Blender's spot factor, scipy quadrature"
+    pair = functools.partial(spot.airlight_pair, inner=air.kernel, g=float(g))
     return tuple(replace(r, name="spot " + r.name, kernel=k, domain=domain, spot=True, evidence=evidence,
-                         max_error=air.max_error + SPOT_RIM_ERROR)
-                 for r, k in ((air, kernels[0]), (background, kernels[1])))
+                         max_error=air.max_error + SPOT_RIM_ERROR, pair=p)
+                 for r, k, p in ((air, kernels[0], pair), (background, kernels[1], None)))
 
 
 # The fog light a spot scatters onto a surface: the point light's at the mean direction of the spot's fog

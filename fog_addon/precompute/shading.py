@@ -90,20 +90,21 @@ def reflected_lobe(m, material, cos_n, cos_r):
     return _grey(m, material.diffuse) * m.maximum(cos_n, 0.0) * (1.0 / math.pi) + _grey(m, material.specular) * glossy
 
 
-def shade_point(m, geo, material, light, medium, models):
+def shade_point(m, geo, material, light, medium, models, air=None):
     """One light's terms at a surface point: Sun et al. 2005 Eq. 11 (glow), 14 (direct), 17-18 (fog light).
 
     geo: Geometry; material: Material; light: Light; medium: ``medium.Medium``
-    (beta and albedo as backend values); models: ``rungs.LightModels``.
-    Returns LightTerms.
+    (beta and albedo as backend values); models: ``rungs.LightModels``; air: the glow per unit intensity
+    (1/m^2) if it is already computed (``glow_pair``).  Returns LightTerms.
     """
     beta = medium.beta
     to_light = light.position - geo.position
     d_sp = m.length(to_light)
     inv_d = 1.0 / m.maximum(d_sp, model.MIN_DISTANCE)
-    d_sv, along, h = model.ray_light_geometry(m, geo.camera, -1.0 * geo.incoming, light.position)
     air_ray = spot_ray(m, light, models.airlight, geo.camera, -1.0 * geo.incoming)
-    air = m.run(models.airlight, beta, d_sv, along, h, geo.view_distance, *air_ray)
+    if air is None:
+        d_sv, along, h = model.ray_light_geometry(m, geo.camera, -1.0 * geo.incoming, light.position)
+        air = m.run(models.airlight, beta, d_sv, along, h, geo.view_distance, *air_ray)
     mirrored = mirror(m, geo.incoming, geo.normal)
     cos_n = m.dot(to_light, geo.normal) * inv_d
     cos_r = m.dot(to_light, mirrored) * inv_d
@@ -233,6 +234,19 @@ def background_point(m, camera, direction, light, medium, models):
     d_sv, along, h = model.ray_light_geometry(m, camera, direction, light.position)
     return m.scale(light.intensity, m.run(models.background, medium.beta, d_sv, along, h,
                                           *spot_ray(m, light, models.background, camera, direction)))
+
+
+def glow_pair(m, camera, direction, view_distance, light, medium, models):
+    """(glow to the surface at ``view_distance``, glow to infinity) per unit intensity, 1/m^2, of one light
+    along one ray (unit ``direction``): Sun et al. 2005 Eq. 11 and 12 at once, for a backend that needs both
+    per pixel (the compositor).  From the airlight rung's ``pair`` kernel, which shares their work (a spot's
+    cone intervals and rims: ``spot.airlight_pair``); None if it has none (``shade_point`` and
+    ``background_point`` then compute them apart)."""
+    if models.airlight.pair is None or not models.background.spot:
+        return None
+    d_sv, along, h = model.ray_light_geometry(m, camera, direction, light.position)
+    return models.airlight.pair(m, medium.beta, d_sv, along, h, view_distance,
+                                *spot_ray(m, light, models.airlight, camera, direction))
 
 
 def shade_background(m, airlights, medium, is_camera, world_light=0.0):

@@ -25,6 +25,7 @@ The kernels take scalars only (so OSL runs them as they are): the point light's 
 """
 import functools
 import math
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -421,22 +422,74 @@ def airlight(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, bl
                    cos_half, blend)
 
 
+class _Clip(NamedTuple):
+    """A ray's pieces in a spot's cone (``_clip``): ``lo_in``-``hi_in`` in the inner cone, the rims
+    ``lo_out``-``first_end`` and (unless ``empty_in``) ``hi_in``-``hi_out``."""
+    lo_out: Any
+    hi_out: Any
+    lo_in: Any
+    hi_in: Any
+    empty_in: Any      # 1 if the ray misses the inner cone: then its one rim is the whole outer interval
+    first_end: Any
+    inv_width: Any
+
+
+def _clip(m, ray, cos_half, blend, t_end):
+    """The pieces of the ray (light space) up to ``t_end`` in the spot's outer and inner cones."""
+    cos_in = cos_half + (1.0 - cos_half) * blend
+    lo_out, hi_out = m.group("Spot Cone Interval", _cone, *ray, cos_half, t_end)
+    lo_in, hi_in = m.group("Spot Cone Interval", _cone, *ray, m.minimum(cos_in, 1.0 - 1e-7), t_end)
+    empty_in = 1.0 - m.less(lo_in, hi_in)
+    return _Clip(lo_out, hi_out, lo_in, hi_in, empty_in, m.select(empty_in, hi_out, lo_in),
+                 inverse_width(m, cos_half, blend))
+
+
+def _parts(inner, g):
+    """(the inner piece's kernel group, the rim's kernel group) as ``m.group`` names and functions."""
+    rim = functools.partial(_rim, g=float(g))
+    return ((f"Spot Inner [{_kernel_name(inner)}]", functools.partial(_inner, inner=inner)),
+            (f"Spot Rim [{_kernel_name(rim)}]", rim))
+
+
 def _airlight(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend, *, inner, g):
     ray = (px, py, pz, dx, dy, dz)
-    inv_width = inverse_width(m, cos_half, blend)
-    cos_in = cos_half + (1.0 - cos_half) * blend
-    lo_out, hi_out = m.group("Spot Cone Interval", _cone, *ray, cos_half, d_vp)
-    lo_in, hi_in = m.group("Spot Cone Interval", _cone, *ray, m.minimum(cos_in, 1.0 - 1e-7), d_vp)
-    empty_in = 1.0 - m.less(lo_in, hi_in)
-    inner_fn = functools.partial(_inner, inner=inner)
-    value = m.group(f"Spot Inner [{_kernel_name(inner)}]", inner_fn, beta, along, h, lo_in, hi_in)
+    c = _clip(m, ray, cos_half, blend, d_vp)
+    (inner_name, inner_fn), (rim_name, rim) = _parts(inner, g)
+    value = m.group(inner_name, inner_fn, beta, along, h, c.lo_in, c.hi_in)
     # the rim: [lo_out, lo_in] and [hi_in, hi_out], or the whole outer interval when the inner is empty
-    first_end = m.select(empty_in, hi_out, lo_in)
-    rim = functools.partial(_rim, g=float(g))
-    rim_name = f"Spot Rim [{_kernel_name(rim)}]"
-    value = value + m.group(rim_name, rim, beta, d_sv, along, h, *ray, lo_out, first_end, cos_half, inv_width)
-    return value + (1.0 - empty_in) * m.group(rim_name, rim, beta, d_sv, along, h, *ray, hi_in, hi_out, cos_half,
-                                              inv_width)
+    rim_args = (beta, d_sv, along, h, *ray)
+    value = value + m.group(rim_name, rim, *rim_args, c.lo_out, c.first_end, cos_half, c.inv_width)
+    return value + (1.0 - c.empty_in) * m.group(rim_name, rim, *rim_args, c.hi_in, c.hi_out, cos_half, c.inv_width)
+
+
+def airlight_pair(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend, *,
+                  inner=model.airlight_segment, g=0.0):
+    """(:func:`airlight` to the surface at ``d_vp``, :func:`airlight_background`) of one ray, 1/m^2, for a
+    backend that needs both per pixel (the compositor: a pixel partly covered mixes the two).  The same
+    formulas, sharing what they have in common: the cone intervals (the ray's to infinity, clipped at
+    d_vp) and every rim d_vp does not cut, so three rims are integrated instead of four."""
+    fn = functools.partial(_airlight_pair, inner=inner, g=float(g))
+    return m.group(f"Spot Airlight Pair [{_kernel_name(fn)}]", fn, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy,
+                   dz, cos_half, blend)
+
+
+def _airlight_pair(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend, *, inner, g):
+    ray = (px, py, pz, dx, dy, dz)
+    c = _clip(m, ray, cos_half, blend, model.FAR)
+    (inner_name, inner_fn), (rim_name, rim) = _parts(inner, g)
+    rim_args = (beta, d_sv, along, h, *ray)
+    first = m.group(rim_name, rim, *rim_args, c.lo_out, c.first_end, cos_half, c.inv_width)
+    second = (1.0 - c.empty_in) * m.group(rim_name, rim, *rim_args, c.hi_in, c.hi_out, cos_half, c.inv_width)
+    background = m.group(inner_name, inner_fn, beta, along, h, c.lo_in, c.hi_in) + first + second
+    # to the surface: d_vp cuts at most one rim, the first (before first_end) or else the second, whose
+    # piece [hi_in, d_vp] is empty unless d_vp lies in it
+    before_first_end = m.less(d_vp, c.first_end)
+    cut = m.group(rim_name, rim, *rim_args, m.select(before_first_end, c.lo_out, c.hi_in), d_vp, cos_half,
+                  c.inv_width)
+    second_cut = (1.0 - c.empty_in) * m.select(m.less(d_vp, c.hi_out), cut, second)
+    rims = m.select(before_first_end, cut, first + second_cut)
+    surface = m.group(inner_name, inner_fn, beta, along, h, c.lo_in, m.maximum(m.minimum(c.hi_in, d_vp), c.lo_in))
+    return surface + rims, background
 
 
 def airlight_background(m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, cos_half, blend, *,
