@@ -158,12 +158,12 @@ def build_light_group(models, images, peak):
     light = groups._light(g, models)
     medium = groups._medium(m, g["Beta"])
     material = shading.Material(g["Diffuse"], g["Specular"], g["Level"])
-    # a spot's two glows at once, both along the pixel's ray (``shading.glow_pair``)
-    pair = shading.glow_pair(m, g["Camera"], g["Direction"], g["View Distance"], light, medium, models)
-    terms = shading.shade_point(m, geo, material, light, medium, models, air=None if pair is None else pair[0])
+    # the glows to the surface and to the sky at once, both along the pixel's ray (``shading.glow_pair``)
+    air_unit, back_unit = shading.glow_pair(m, g["Camera"], g["Direction"], g["View Distance"], light, medium,
+                                            models)
+    terms = shading.shade_point(m, geo, material, light, medium, models, air=air_unit)
     air = terms.airlight
-    back = (shading.background_point(m, g["Camera"], g["Direction"], light, medium, models) if pair is None else
-            m.scale(light.intensity, pair[1]))
+    back = m.scale(light.intensity, back_unit)
     if peak:   # the sky's rays pass every light before the end of the world: its factor is 1 + excess
         to_light = g["Light"] - g["Camera"]
         seen_at = pixel.picture_position(m, to_light, g["Corner"], g["Across"], g["Up"], g["Size"])

@@ -239,14 +239,16 @@ def background_point(m, camera, direction, light, medium, models):
 def glow_pair(m, camera, direction, view_distance, light, medium, models):
     """(glow to the surface at ``view_distance``, glow to infinity) per unit intensity, 1/m^2, of one light
     along one ray (unit ``direction``): Sun et al. 2005 Eq. 11 and 12 at once, for a backend that needs both
-    per pixel (the compositor).  From the airlight rung's ``pair`` kernel, which shares their work (a spot's
-    cone intervals and rims: ``spot.airlight_pair``); None if it has none (``shade_point`` and
-    ``background_point`` then compute them apart)."""
-    if models.airlight.pair is None or not models.background.spot:
-        return None
+    per pixel (the compositor, whose ``CompOps`` builds a node once for the same inputs: the two share the
+    ray's geometry and a point light's tail at the viewer).  A spot's come from its airlight rung's ``pair``
+    kernel, which shares their cone intervals and rims (``spot.airlight_pair``)."""
     d_sv, along, h = model.ray_light_geometry(m, camera, direction, light.position)
-    return models.airlight.pair(m, medium.beta, d_sv, along, h, view_distance,
-                                *spot_ray(m, light, models.airlight, camera, direction))
+    air_ray = spot_ray(m, light, models.airlight, camera, direction)
+    if models.airlight.pair is not None and models.background.spot:
+        return models.airlight.pair(m, medium.beta, d_sv, along, h, view_distance, *air_ray)
+    return (m.run(models.airlight, medium.beta, d_sv, along, h, view_distance, *air_ray),
+            m.run(models.background, medium.beta, d_sv, along, h,
+                  *spot_ray(m, light, models.background, camera, direction)))
 
 
 def shade_background(m, airlights, medium, is_camera, world_light=0.0):
