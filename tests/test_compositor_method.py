@@ -88,3 +88,13 @@ def test_density_colour_and_lamp_reach_the_compositor_by_drivers(res):
     assert d["albedo"] == pytest.approx([0.5, 0.6, 0.7], rel=1e-6)
     assert d["light_x"] == pytest.approx(d["lamp_x"], abs=1e-6) and abs(d["lamp_x"]) > 1.0
     assert d["intensity"] == pytest.approx(d["want_intensity"], rel=1e-6)
+
+
+def test_each_node_built_once(res):
+    """CompOps (the compositor's node builder) builds an operation on the same inputs once: Blender's
+    compositor evaluates every node it is given over every pixel (Cycles and EEVEE merge duplicates
+    themselves).  A spot's two glows share all but one rim (spot.airlight_pair: three, not four)."""
+    s = res["shared"]
+    assert s["same"] and s["different"]
+    assert s["math"] == ["ADD", "EXPONENT", "EXPONENT", "MULTIPLY", "MULTIPLY", "SQRT"], s["math"]
+    assert s["pair_rims"] == 3

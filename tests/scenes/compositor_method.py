@@ -15,6 +15,8 @@
   does, the brightest at the camera, at step off; none in Cycles.
 * ``refused``: the method refused, with nothing changed, for Workbench, the fog passes and a panoramic camera.
 * ``driven``: a density, colour, light power and lamp move reach the compositor's graph without a rebuild.
+* ``shared``: ``CompOps`` builds an operation on the same inputs once (a commuted product too), a different one
+  anew; a spot's glow pair integrates three rims.
 """
 import json
 import math
@@ -27,7 +29,8 @@ sys.path.insert(0, str(ROOT))
 import bpy  # noqa: E402
 
 from demo_scenes import spheres  # noqa: E402
-from fog_addon.nodes import comp_fog, compositor, groups, owned  # noqa: E402
+from fog_addon.nodes import comp_fog, compositor, groups, images, owned  # noqa: E402
+from fog_addon.precompute import spot  # noqa: E402
 from fog_addon.nodes.sockets import NodeOps  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 
@@ -74,6 +77,27 @@ def fog_data():
     """Names of the fog's node groups and table images left in the file."""
     return sorted([ng.name for ng in bpy.data.node_groups if ng.name.startswith(owned.PREFIX)]
                   + [im.name for im in bpy.data.images if im.name.startswith(owned.PREFIX)])
+
+
+def shared():
+    """What ``CompOps``' hash-consing keeps: nodes of a tree computing exp(2x) + sqrt(x) twice (once as
+    exp(x * 2)), and exp(3x) once; the rim groups in a spot's glow pair."""
+    tree = bpy.data.node_groups.new("Shared test", "CompositorNodeTree")
+    tree.interface.new_socket("x", in_out="INPUT", socket_type="NodeSocketFloat")
+    x = comp_fog.CompOps(tree).wrap(tree.nodes.new("NodeGroupInput").outputs[0])
+    m = x.ops
+    a = m.exp(2.0 * x) + m.sqrt(x)
+    b = m.exp(x * 2.0) + m.sqrt(x)
+    c = m.exp(3.0 * x)
+    kinds = sorted(n.operation for n in tree.nodes if n.bl_idname == "ShaderNodeMath")
+    spot_tree = bpy.data.node_groups.new("Spot test", "CompositorNodeTree")
+    for k in range(13):
+        spot_tree.interface.new_socket(f"In {k}", in_out="INPUT", socket_type="NodeSocketFloat")
+    m = comp_fog.CompOps(spot_tree, images.all_table_images())
+    spot.airlight_pair(m, *(m.wrap(o) for o in spot_tree.nodes.new("NodeGroupInput").outputs[:13]))
+    pair = next(n.node_tree for n in spot_tree.nodes if n.bl_idname == "CompositorNodeGroup")
+    rims = [n for n in pair.nodes if n.bl_idname == "CompositorNodeGroup" and "Spot Rim" in n.node_tree.name]
+    return {"same": a.sock == b.sock, "different": c.sock != a.sock, "math": kinds, "pair_rims": len(rims)}
 
 
 def main():
@@ -219,6 +243,7 @@ def main():
                           [score[o.name] for o in lamps if o not in kept], default=0.0)}
     scene.render.engine = "CYCLES"   # Cycles' lights dim their own direct light: none in the materials
     res["dimming"]["cycles"] = len(apply.dimming_lights(scene, lamps, "compositor")[0])
+    res["shared"] = shared()
     print("COMPOSITOR_JSON " + json.dumps(res), flush=True)
 
 
