@@ -86,7 +86,9 @@ MEASURED = {
                                     "121 lights (112 full, 9 glow only) pass, relative RMSE 1.5e-4, first render "
                                     "97 s; 256 lights (238 full, 18 glow only) pass too, relative RMSE 1.4e-4, median "
                                     "render / twin within 0.03 % of 1, but the first render takes 1 139 s (fog added "
-                                    "in 17 s; 1 796 s of CPU)"),
+                                    "in 17 s; 1 796 s of CPU); profiled at 121 lights (bf2080c): 96 % of the first "
+                                    "render is Cycles' ShaderGraph::deduplicate_nodes, quadratic in a material's Math "
+                                    "nodes (README, Many lights)"),
     (64, "cycles_osl"): ("skip", "passes (relative RMSE 0.019 %, median render / twin 1.0000-1.0002) but too "
                                  "slow for CI: 140-299 s (fog added in 9-19 s, first render 129-277 s; "
                                  "163 s CPU); test_closure_sum_renders_every_closure checks OSL's closure "
