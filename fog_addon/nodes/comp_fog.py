@@ -9,10 +9,11 @@ cost grows with lights x samples x materials (issue 8's overhead: 4x the fog-fre
   Surface group writes the pixel's inputs as shader AOVs (``AOVS``): coverage, position, normal and the
   Principled inputs, each averaged over the pixel's samples;
 * the World is black (the fog hides it);
-* the compositor's ``AnalyticFog Compositor Fog`` group adds, per pixel, ``shading.shade_point`` and
-  ``shading.background_point`` over the lights, built by ``CompOps`` (the same formulas and tables as
-  the materials' groups) at the pixel's mean surface point, plus the peak factor of ``pixel.py`` where
-  a light is seen in the picture.
+* the compositor's ``AnalyticFog Compositor Fog`` group adds, per pixel, ``shading.shade_point`` at the
+  pixel's mean surface point and the glows along the pixel's ray to it and to the sky
+  (``shading.glow_pair``) over the lights, built by ``CompOps`` (the same formulas and tables as the
+  materials' groups, each node once), plus the peak factor of ``pixel.py`` where a light is seen in the
+  picture.
 
 Everything the graph reads from the scene reaches it by simple-expression drivers (the camera's matrix,
 lens, sensor and shift, the render's size, each light's position, power, colour and cone, the fog's
@@ -93,7 +94,8 @@ class CompOps(NodeOps):
         return self._once(("math", op, self._ids(vals, op)), lambda: super(CompOps, self).math(op, *vals))
 
     def vmath(self, op, *args, out=0):
-        return self._once(("vmath", op, out, self._ids(args, op)), lambda: super(CompOps, self).vmath(op, *args, out=out))
+        return self._once(("vmath", op, out, self._ids(args, op)),
+                          lambda: super(CompOps, self).vmath(op, *args, out=out))
 
     def combine(self, x, y, z):
         return self._once(("combine", self._ids((x, y, z))), lambda: super(CompOps, self).combine(x, y, z))
@@ -107,7 +109,8 @@ class CompOps(NodeOps):
         return self._once(("group", name, self._ids(args)), lambda: super(CompOps, self).group(name, fn, *args))
 
     def table(self, spec, x, y, row0=0, rows=None):
-        return self._once(("table", spec.name, row0, rows, self._ids((x, y))), lambda: self._map_uv(spec, x, y, row0, rows))
+        return self._once(("table", spec.name, row0, rows, self._ids((x, y))),
+                          lambda: self._map_uv(spec, x, y, row0, rows))
 
     def _map_uv(self, spec, x, y, row0=0, rows=None):
         """One bilinear Map UV (the compositor's interpolation is exact bilinear between texel centres):
