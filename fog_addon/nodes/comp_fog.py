@@ -60,59 +60,15 @@ TERMS = (("Airlight", V), ("Scattered", V), ("Background", V))
 class CompOps(NodeOps):
     """NodeOps building into a compositor tree: compositor groups, tables read by Map UV, no EEVEE flags.
 
-    Each node is built once per tree: an operation on the same inputs returns the node already built
-    (hash-consing).  Cycles merges such duplicates when it compiles a material (and EEVEE's GLSL compiler
-    its expressions); Blender's compositor evaluates every node it is given, over every pixel.  The
-    formulas repeat work across terms: the scatter of a light's two lobes at one distance, a spot's four
-    (``spot.scatter``), the rims of ``spot.airlight_pair``."""
+    Each node is built once per tree (``NodeOps``): Blender's compositor evaluates every node it is given,
+    over every pixel."""
 
     GROUP_NODE = "CompositorNodeGroup"
     GROUP_TREE = "CompositorNodeTree"
     KERNEL_PREFIX = KERNEL_PREFIX
-    COMMUTATIVE = {"ADD", "MULTIPLY", "MINIMUM", "MAXIMUM", "DOT_PRODUCT"}
     inline = staticmethod(lambda node: None)
 
-    def __init__(self, tree, images=None, x0=0.0, y0=0.0):
-        super().__init__(tree, images, x0, y0)
-        self._built = {}
-
-    def _once(self, key, build):
-        """The value built for ``key`` (an operation and its inputs' identities), building it the first time."""
-        if key not in self._built:
-            self._built[key] = build()
-        return self._built[key]
-
-    def _ids(self, args, op=None):
-        ids = tuple(("s", v.sock.as_pointer()) if v.sock is not None else ("c", v.const)
-                    for v in (self.wrap(a) for a in args))
-        return tuple(sorted(ids, key=repr)) if op in self.COMMUTATIVE else ids
-
-    def math(self, op, *args):
-        vals = [self.wrap(a) for a in args]
-        if all(v.const is not None for v in vals):
-            return super().math(op, *vals)
-        return self._once(("math", op, self._ids(vals, op)), lambda: super(CompOps, self).math(op, *vals))
-
-    def vmath(self, op, *args, out=0):
-        return self._once(("vmath", op, out, self._ids(args, op)),
-                          lambda: super(CompOps, self).vmath(op, *args, out=out))
-
-    def combine(self, x, y, z):
-        return self._once(("combine", self._ids((x, y, z))), lambda: super(CompOps, self).combine(x, y, z))
-
-    def clamp(self, x, lo=0.0, hi=1.0):
-        if self.wrap(x).const is not None:
-            return super().clamp(x, lo, hi)
-        return self._once(("clamp", lo, hi, self._ids((x,))), lambda: super(CompOps, self).clamp(x, lo, hi))
-
-    def group(self, name, fn, *args):
-        return self._once(("group", name, self._ids(args)), lambda: super(CompOps, self).group(name, fn, *args))
-
-    def table(self, spec, x, y, row0=0, rows=None):
-        return self._once(("table", spec.name, row0, rows, self._ids((x, y))),
-                          lambda: self._map_uv(spec, x, y, row0, rows))
-
-    def _map_uv(self, spec, x, y, row0=0, rows=None):
+    def _table(self, spec, x, y, row0=0, rows=None):
         """One bilinear Map UV (the compositor's interpolation is exact bilinear between texel centres):
         x, y in [0, 1] span the texel centres of rows row0 .. row0 + rows - 1."""
         rows = spec.height if rows is None else rows

@@ -78,6 +78,49 @@ class NodeOps:
         self.images = images or {}
         self.x0, self.y0 = x0, y0
         self._rows = {}
+        self._built = {}
+
+    # -- each node once ----------------------------------------------------------
+    # An operation on the same inputs returns the node already built (hash-consing): the formulas repeat
+    # work across terms (a light's two scatter lobes at one distance, a spot's four, a pixel's two glows).
+    # Cycles merges such duplicates itself, by comparing every node of a material with every earlier one of
+    # its type (quadratic: README, Many lights); Blender's compositor evaluates every node over every pixel.
+    COMMUTATIVE = {"ADD", "MULTIPLY", "MINIMUM", "MAXIMUM", "DOT_PRODUCT"}
+
+    def _once(self, key, build):
+        """The value built for ``key`` (an operation and its inputs' identities), building it the first time."""
+        if key not in self._built:
+            self._built[key] = build()
+        return self._built[key]
+
+    def _ids(self, args, op=None):
+        ids = tuple(("s", v.sock.as_pointer()) if v.sock is not None else ("c", v.const)
+                    for v in (self.wrap(a) for a in args))
+        return tuple(sorted(ids, key=repr)) if op in self.COMMUTATIVE else ids
+
+    def math(self, op, *args):
+        vals = [self.wrap(a) for a in args]
+        if all(v.const is not None for v in vals):
+            return self._new_math(op, *vals)
+        return self._once(("math", op, self._ids(vals, op)), lambda: self._new_math(op, *vals))
+
+    def vmath(self, op, *args, out=0):
+        return self._once(("vmath", op, out, self._ids(args, op)), lambda: self._new_vmath(op, *args, out=out))
+
+    def combine(self, x, y, z):
+        return self._once(("combine", self._ids((x, y, z))), lambda: self._new_combine(x, y, z))
+
+    def clamp(self, x, lo=0.0, hi=1.0):
+        if self.wrap(x).const is not None:
+            return self._new_clamp(x, lo, hi)
+        return self._once(("clamp", lo, hi, self._ids((x,))), lambda: self._new_clamp(x, lo, hi))
+
+    def group(self, name, fn, *args):
+        return self._once(("group", name, self._ids(args)), lambda: self._new_group(name, fn, *args))
+
+    def table(self, spec, x, y, row0=0, rows=None):
+        return self._once(("table", spec.name, row0, rows, self._ids((x, y))),
+                          lambda: self._table(spec, x, y, row0, rows))
 
     # -- plumbing -----------------------------------------------------------
     def wrap(self, x, vector=False):
@@ -127,7 +170,7 @@ class NodeOps:
             if not sock.is_linked and sock.type in ("VALUE", "VECTOR", "RGBA"):
                 sock.hide_value = True
 
-    def math(self, op, *args):
+    def _new_math(self, op, *args):
         vals = [self.wrap(a) for a in args]
         if all(v.const is not None for v in vals):
             f = {1: _FOLD1, 2: _FOLD, 3: _FOLD3}[len(vals)].get(op)
@@ -139,7 +182,7 @@ class NodeOps:
         self.inline(n)
         return Val(self, sock=n.outputs[0], col=col)
 
-    def vmath(self, op, *args, out=0):
+    def _new_vmath(self, op, *args, out=0):
         vals = [self.wrap(a) for a in args]
         col = 1 + max(v.col for v in vals)
         n = self.node("ShaderNodeVectorMath", col, operation=op)
@@ -246,7 +289,7 @@ class NodeOps:
     def clamp01(self, x):
         return self.clamp(x)
 
-    def clamp(self, x, lo=0.0, hi=1.0):
+    def _new_clamp(self, x, lo=0.0, hi=1.0):
         """``x`` clamped to [lo, hi] by one Clamp node (folded for a constant)."""
         x = self.wrap(x)
         if x.const is not None:
@@ -269,7 +312,7 @@ class NodeOps:
     def scale(self, v, s):
         return self.vmath("SCALE", v, s)
 
-    def combine(self, x, y, z):
+    def _new_combine(self, x, y, z):
         vals = [self.wrap(v) for v in (x, y, z)]
         col = 1 + max(v.col for v in vals)
         n = self.node("ShaderNodeCombineXYZ", col)
@@ -283,7 +326,7 @@ class NodeOps:
         Cycles' SVM stack).  Kernels with loops run in OSL: ``run`` puts them in a Script node."""
         raise NotImplementedError("shader nodes have no loops: run this kernel through NodeOps.run (OSL)")
 
-    def group(self, name, fn, *args):
+    def _new_group(self, name, fn, *args):
         """``fn(m, *args)`` (scalar arguments; a scalar or a tuple of scalars) as one node group
         "AnalyticFog Kernel <name>" shared by every tree that calls it: built once per .blend (``name`` must
         say everything that changes what ``fn`` builds), a group node here.  Why: Blender's
@@ -335,7 +378,7 @@ class NodeOps:
             self.feed(node.inputs[name], self.wrap(v))
         return Val(self, sock=node.outputs[osl.OUTPUT], col=1 + max(self.wrap(v).col for v in args))
 
-    def table(self, spec, x, y, row0=0, rows=None):
+    def _table(self, spec, x, y, row0=0, rows=None):
         """Bilinear lookup from four Closest taps (EEVEE's Linear filter is not exact bilinear here).
 
         Few nodes, since every fogged material inlines it several times per light (Cycles' set-up grows
