@@ -15,8 +15,8 @@
   does, the brightest at the camera, at step off; none in Cycles.
 * ``refused``: the method refused, with nothing changed, for Workbench, the fog passes and a panoramic camera.
 * ``driven``: a density, colour, light power and lamp move reach the compositor's graph without a rebuild.
-* ``shared``: ``CompOps`` builds an operation on the same inputs once (a commuted product too), a different one
-  anew; a spot's glow pair integrates three rims.
+* ``shared``: ``CompOps`` (and ``NodeOps`` in a shader tree) builds an operation on the same inputs once (a
+  commuted product too), a different one anew; a spot's glow pair integrates three rims.
 """
 import json
 import math
@@ -90,6 +90,10 @@ def shared():
     b = m.exp(x * 2.0) + m.sqrt(x)
     c = m.exp(3.0 * x)
     kinds = sorted(n.operation for n in tree.nodes if n.bl_idname == "ShaderNodeMath")
+    shader = bpy.data.node_groups.new("Shared shader test", "ShaderNodeTree")   # the materials' builder too
+    shader.interface.new_socket("x", in_out="INPUT", socket_type="NodeSocketFloat")
+    y = NodeOps(shader).wrap(shader.nodes.new("NodeGroupInput").outputs[0])
+    same_in_shader = y.ops.exp(2.0 * y).sock == y.ops.exp(y * 2.0).sock
     spot_tree = bpy.data.node_groups.new("Spot test", "CompositorNodeTree")
     for k in range(13):
         spot_tree.interface.new_socket(f"In {k}", in_out="INPUT", socket_type="NodeSocketFloat")
@@ -97,7 +101,8 @@ def shared():
     spot.airlight_pair(m, *(m.wrap(o) for o in spot_tree.nodes.new("NodeGroupInput").outputs[:13]))
     pair = next(n.node_tree for n in spot_tree.nodes if n.bl_idname == "CompositorNodeGroup")
     rims = [n for n in pair.nodes if n.bl_idname == "CompositorNodeGroup" and "Spot Rim" in n.node_tree.name]
-    return {"same": a.sock == b.sock, "different": c.sock != a.sock, "math": kinds, "pair_rims": len(rims)}
+    return {"same": a.sock == b.sock, "different": c.sock != a.sock, "math": kinds, "pair_rims": len(rims),
+            "same_in_shader": same_in_shader}
 
 
 def main():
