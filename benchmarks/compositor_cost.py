@@ -13,13 +13,15 @@ warm renders (``time.process_time``, all threads).
 """
 import argparse
 import json
-import math
 import os
 import pathlib
 import subprocess
 import sys
 import tempfile
 import time
+
+import csv_rows
+import overhead
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "out" / "compositor_cost.csv"
@@ -36,11 +38,8 @@ def worker(spec):
     from fog_addon.ops import apply
 
     scene, _ = many_lights.build_scene(spec["lights"], direct_light=True)
-    for ob in scene.objects if spec["kind"] == "spot" else ():
-        if ob.type == "LIGHT":
-            ob.data.type = "SPOT"
-            ob.data.spot_size, ob.data.spot_blend = math.radians(60.0), 0.3
-            ob.rotation_euler = (0.0, 0.0, 0.0)
+    if spec["kind"] == "spot":
+        overhead.as_spots(scene)
     scene.render.engine = "CYCLES"
     measure.set_resolution(scene, 320, 180)
     measure.set_samples(scene, 1)
@@ -70,14 +69,6 @@ def worker(spec):
     print("COST_JSON " + json.dumps({"nofog_cpu_s": nofog, "fog_cpu_s": fog}), flush=True)
 
 
-def source_id():
-    try:
-        return subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
-                              text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--lights", type=int, default=16)
@@ -87,8 +78,6 @@ def main(argv=None):
     args = ap.parse_args(argv)
     if args.worker:
         return worker(json.loads(args.worker))
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    import csv_rows
     env = dict(os.environ, TMPDIR=os.environ.get("TMPDIR") or tempfile.mkdtemp(prefix="compositor_cost_"))
     rows = []
     for kind in ("point", "spot"):
@@ -102,7 +91,7 @@ def main(argv=None):
             r = json.loads(line.split(" ", 1)[1])
             rows.append({"kind": kind, "lights": args.lights, "cut": cut or "none", **r,
                          "ms_per_light": 1000.0 * (r["fog_cpu_s"] - r["nofog_cpu_s"]) / args.lights,
-                         "resolution": "320x180", "samples": 1, "source": source_id()})
+                         "resolution": "320x180", "samples": 1, "source": overhead.source_id()})
             print(f"{kind:5} cut {cut or 'none':30} {rows[-1]['ms_per_light']:7.1f} ms a light", flush=True)
     csv_rows.write(args.out, rows, FIELDS, digits=4)
     print(f"wrote {args.out}")

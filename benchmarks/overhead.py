@@ -182,6 +182,15 @@ def source_id():
 
 # ---------------------------------------------------------------- workers (inside bpy)
 
+def as_spots(scene):
+    """Every light of ``scene`` a spot (60 degrees, blend 0.3) aimed straight down: ``--spots``."""
+    for ob in scene.objects:
+        if ob.type == "LIGHT":
+            ob.data.type = "SPOT"
+            ob.data.spot_size, ob.data.spot_blend = math.radians(60.0), 0.3
+            ob.rotation_euler = (0.0, 0.0, 0.0)   # local -Z: straight down
+
+
 def _emit(result):
     print("OVERHEAD_JSON " + json.dumps(result), flush=True)
 
@@ -300,11 +309,8 @@ def worker(spec):
         import many_lights
         scene, _ = many_lights.build_scene(spec["lights"], direct_light=True)
         density = DENSITY
-        for ob in scene.objects if spec.get("spots") else ():
-            if ob.type == "LIGHT":
-                ob.data.type = "SPOT"
-                ob.data.spot_size, ob.data.spot_blend = math.radians(60.0), 0.3
-                ob.rotation_euler = (0.0, 0.0, 0.0)   # local -Z: straight down
+        if spec.get("spots"):
+            as_spots(scene)
     scene.render.engine = engine
     measure.set_resolution(scene, *spec["resolution"])
     measure.set_samples(scene, spec["samples"])

@@ -93,7 +93,8 @@ def test_density_colour_and_lamp_reach_the_compositor_by_drivers(res):
 def test_each_node_built_once(res):
     """CompOps (the compositor's node builder) and NodeOps (the materials') build an operation on the same
     inputs once: Blender's compositor evaluates every node it is given over every pixel, and Cycles' own
-    merging of duplicates is quadratic in a material's nodes.  A spot's two glows share all but one rim (spot.airlight_pair: three, not four)."""
+    merging of duplicates is quadratic in a material's nodes.  A spot's two glows share all but one rim
+    (spot.airlight_pair: three, not four)."""
     s = res["shared"]
     assert s["same"] and s["different"] and s["same_in_shader"]
     assert s["math"] == ["ADD", "EXPONENT", "EXPONENT", "MULTIPLY", "MULTIPLY", "SQRT"], s["math"]
