@@ -95,23 +95,24 @@ def shade_point(m, geo, material, light, medium, models, air=None):
 
     geo: Geometry; material: Material; light: Light; medium: ``medium.Medium``
     (beta and albedo as backend values); models: ``rungs.LightModels``; air: the glow per unit intensity
-    (1/m^2) if it is already computed (``glow_pair``).  Returns LightTerms.
+    (1/m^2) if it is already computed (``glow_pair``; then no gate, ``LightTerms.seen``, is built for it).
+    Returns LightTerms.
     """
     beta = medium.beta
     to_light = light.position - geo.position
     d_sp = m.length(to_light)
     inv_d = 1.0 / m.maximum(d_sp, model.MIN_DISTANCE)
-    air_ray = spot_ray(m, light, models.airlight, geo.camera, -1.0 * geo.incoming)
+    seen = None
     if air is None:
         d_sv, along, h = model.ray_light_geometry(m, geo.camera, -1.0 * geo.incoming, light.position)
+        air_ray = spot_ray(m, light, models.airlight, geo.camera, -1.0 * geo.incoming)
         air = m.run(models.airlight, beta, d_sv, along, h, geo.view_distance, *air_ray)
+        if models.airlight.spot:
+            seen = spot.cone_hit(m, *air_ray[:6], light.spot.cos_half, geo.view_distance)
     mirrored = mirror(m, geo.incoming, geo.normal)
     cos_n = m.dot(to_light, geo.normal) * inv_d
     cos_r = m.dot(to_light, mirrored) * inv_d
     cone = surface_cone(m, light, geo.position) if models.direct.spot else ()
-    seen = None
-    if models.airlight.spot:
-        seen = spot.cone_hit(m, *air_ray[:6], light.spot.cos_half, geo.view_distance)
     if models.scatter.spot:   # both lobes at once: they share the spot's table lookups
         axis = spot.world_axis(m, light.spot.rows)
         diffuse, glossy = m.run(models.scatter, beta, d_sp, cos_n, cos_r, material.level, *cone,
