@@ -61,7 +61,7 @@ def worker(spec):
     for ng in bpy.data.node_groups:
         if ng.name.startswith(comp_fog.LIGHT_GROUP):
             out = next(n for n in ng.nodes if n.bl_idname == "NodeGroupOutput")
-            for name in cut:
+            for name in (c for c in cut if c in out.inputs):   # a light's glow group or its scatter group
                 for link in list(out.inputs[name].links):
                     ng.links.remove(link)
     bpy.ops.render.render()

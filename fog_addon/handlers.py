@@ -6,7 +6,8 @@ materials.  Positions, power and colour are followed by drivers without it.
 When the camera, lights or objects moved, the lights' models are chosen again
 for the Quality (``apply.choose_models``), RECHOOSE_DELAY_S after the scene
 stopped changing (not while rendering: a render keeps the stored choice, as a
-farm without the add-on does).
+farm without the add-on does).  The Compositor method's windows (``view.windows``) follow at once for the
+current frame; an animation's other frames at the re-choice, and before the file is saved.
 """
 import bpy
 from bpy.app.handlers import persistent
@@ -59,19 +60,31 @@ def on_depsgraph_update(scene, depsgraph):
             bpy.app.timers.register(_merge_appended, first_interval=0.0)
         return
     if any(depsgraph.id_type_updated(t) for t in ("OBJECT", "LIGHT", "SCENE", "COLLECTION")):
-        apply.refresh_lights(scene)
+        apply.refresh_lights(scene, this_frame=True)
         if not bpy.app.is_job_running("RENDER"):
             _schedule_rechoose()
+
+
+@persistent
+def on_save_pre(*_):
+    """A saved file renders on a farm without the add-on: its windows hold every frame of the range."""
+    scene = bpy.context.scene
+    if scene is not None and getattr(scene, "analytic_fog", None) is not None and scene.analytic_fog.enabled:
+        apply.refresh_lights(scene)
 
 
 def register():
     if on_depsgraph_update not in bpy.app.handlers.depsgraph_update_post:
         bpy.app.handlers.depsgraph_update_post.append(on_depsgraph_update)
+    if on_save_pre not in bpy.app.handlers.save_pre:
+        bpy.app.handlers.save_pre.append(on_save_pre)
 
 
 def unregister():
     while on_depsgraph_update in bpy.app.handlers.depsgraph_update_post:
         bpy.app.handlers.depsgraph_update_post.remove(on_depsgraph_update)
+    while on_save_pre in bpy.app.handlers.save_pre:
+        bpy.app.handlers.save_pre.remove(on_save_pre)
     for timer in (_merge_appended, _rechoose):
         if bpy.app.timers.is_registered(timer):
             bpy.app.timers.unregister(timer)

@@ -29,7 +29,7 @@ cameras; no fog passes (the fog's light is the compositor's).
 """
 import bpy
 
-from ..precompute import model, pixel, shading, surface
+from ..precompute import footprint, model, pixel, shading, surface
 from . import compositor, groups, images as images_, owned
 from .sockets import KERNEL_GROUP, NodeOps, Val
 
@@ -50,11 +50,18 @@ DEPTH_AGREE = 0.02     # the Depth pass is the pixel's surface where within 2 % 
 AOV_ROLE = "Compositor AOV"   # the Surface group's AOV Output nodes: "<AOV_ROLE> <AOV name>"
 PRINCIPLED = ("Base Color", "Metallic", "Roughness", "Specular IOR Level")
 V, C, F = "NodeSocketVector", "NodeSocketColor", "NodeSocketFloat"
-# what every light's group reads of the pixel (the same for all lights), and the terms it returns
-SHARED = (("Beta", F), ("Camera", V), ("Position", V), ("Incoming", V), ("View Distance", F), ("Normal", V),
-          ("Diffuse", V), ("Specular", V), ("Level", F), ("Direction", V), ("Pixel", V), ("Corner", V),
-          ("Across", V), ("Up", V), ("Size", V))
+# what a light's glow group reads of the pixel (the same for all lights), and what its scatter group reads
+GLOW_SHARED = (("Beta", F), ("Camera", V), ("Incoming", V), ("View Distance", F), ("Direction", V), ("Pixel", V),
+               ("Corner", V), ("Across", V), ("Up", V), ("Size", V))
+SURFACE_SHARED = (("Beta", F), ("Camera", V), ("Position", V), ("Incoming", V), ("Normal", V), ("Diffuse", V),
+                  ("Specular", V), ("Level", F))
+SURFACE_IMAGES = tuple(name for name, _ in SURFACE_SHARED[2:])   # per pixel: cropped to the surfaces' window
+SURFACE = "Surface "   # a bundle's inputs of SURFACE_IMAGES: "Surface Position", ...
+SHARED = GLOW_SHARED + tuple((SURFACE + name, kind) for name, kind in SURFACE_SHARED[2:])   # a bundle's inputs
+GLOW_TERMS = (("Airlight", V), ("Background", V))
 TERMS = (("Airlight", V), ("Scattered", V), ("Background", V))
+WINDOW = "Fog Window"   # the Value nodes holding the windows (``footprint.py``): a bundle's "<WINDOW> <k> u0", ...
+#                         for its k-th light's glow, the fog group's "<WINDOW> Surface u0", ... for surfaces
 
 
 class CompOps(NodeOps):
@@ -86,9 +93,12 @@ class CompOps(NodeOps):
         return Val(self, sock=sep.outputs["Alpha"], col=uv.col + 2)
 
 
-def light_group_name(models, peak):
-    return f"{LIGHT_GROUP} [{models.airlight.name}, {models.scatter.name}, {models.background.name}]" + (
-        " Peak" if peak else "")
+def glow_group_name(models, peak):
+    return f"{LIGHT_GROUP} Glow [{models.airlight.name}, {models.background.name}]" + (" Peak" if peak else "")
+
+
+def scatter_group_name(models):
+    return f"{LIGHT_GROUP} Scatter [{models.scatter.name}]"
 
 
 def all_group_names():
@@ -99,30 +109,29 @@ def all_group_names():
     return [FOG_GROUP] + sorted(names, key=lambda name: (not name.startswith(BUNDLE), name))
 
 
-def build_light_group(models, images, peak):
-    """One light's fog light at a pixel (compositor group), shared by every light with these models:
-    Airlight (the glow up to the surface, Sun et al. 2005 Eq. 12 through ``shading.shade_point``),
-    Scattered (the fog light the surface reflects, Eq. 17-18) and Background (the glow of a ray that
-    meets no surface).  ``peak``: times the peak factor (``pixel.peak_factor``) where the ray passes
-    the light, seen in the picture at ``pixel.picture_position`` (Corner, Across, Up: the image plane,
-    Size: the picture's, ``camera_frame`` and ``_picture_scale``)."""
-    name = light_group_name(models, peak)
-    if (ng := groups._up_to_date(name)) is not None:
-        return ng
-    ng, gin, gout = groups._new_group(name, [*SHARED, ("Light", V), ("Intensity", V), *groups._spot_inputs(models)],
-                                      TERMS, tree_type="CompositorNodeTree")
+def _light_group(name, shared, terms, models, images):
+    """(group, CompOps, its inputs by name, its output node, its light) of a new per-light group ``name``."""
+    ng, gin, gout = groups._new_group(name, [*shared, ("Light", V), ("Intensity", V), *groups._spot_inputs(models)],
+                                      terms, tree_type="CompositorNodeTree")
     m = CompOps(ng, images)
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
-    geo = shading.Geometry(g["Camera"], g["Position"], g["Incoming"], g["View Distance"], g["Normal"])
-    light = groups._light(g, models)
-    medium = groups._medium(m, g["Beta"])
-    material = shading.Material(g["Diffuse"], g["Specular"], g["Level"])
-    # the glows to the surface and to the sky at once, both along the pixel's ray (``shading.glow_pair``)
-    air_unit, back_unit = shading.glow_pair(m, g["Camera"], g["Direction"], g["View Distance"], light, medium,
-                                            models)
-    terms = shading.shade_point(m, geo, material, light, medium, models, air=air_unit)
-    air = terms.airlight
-    back = m.scale(light.intensity, back_unit)
+    return ng, m, g, gout, groups._light(g, models)
+
+
+def build_glow_group(models, images, peak):
+    """One light's glows at a pixel (compositor group), shared by every light with these models: Airlight
+    (the glow along the pixel's ray up to the surface, Sun et al. 2005 Eq. 11) and Background (the glow of
+    the ray to the sky, Eq. 12), from ``shading.glow_pair``.  ``peak``: times the peak factor
+    (``pixel.peak_factor``) where the ray passes the light, seen in the picture at
+    ``pixel.picture_position`` (Corner, Across, Up: the image plane, Size: the picture's, ``camera_frame``
+    and ``_picture_scale``).  Reads GLOW_SHARED (Incoming and Pixel only with ``peak``)."""
+    name = glow_group_name(models, peak)
+    if (ng := groups._up_to_date(name)) is not None:
+        return ng
+    ng, m, g, gout, light = _light_group(name, GLOW_SHARED, GLOW_TERMS, models, images)
+    air_unit, back_unit = shading.glow_pair(m, g["Camera"], g["Direction"], g["View Distance"], light,
+                                            groups._medium(m, g["Beta"]), models)
+    air, back = m.scale(light.intensity, air_unit), m.scale(light.intensity, back_unit)
     if peak:   # the sky's rays pass every light before the end of the world: its factor is 1 + excess
         to_light = g["Light"] - g["Camera"]
         seen_at = pixel.picture_position(m, to_light, g["Corner"], g["Across"], g["Up"], g["Size"])
@@ -131,10 +140,73 @@ def build_light_group(models, images, peak):
         air = m.scale(air, pixel.peak_factor(m, excess, along, g["View Distance"]))
         back = m.scale(back, 1.0 + excess)
     m.feed(gout.inputs["Airlight"], air)
-    m.feed(gout.inputs["Scattered"], m.wrap(terms.scattered))
     m.feed(gout.inputs["Background"], back)
     ng[owned.BUILT] = groups.code_fingerprint()
     return groups._install(ng, name)
+
+
+def build_scatter_group(models, images):
+    """One light's fog light reflected by the pixel's surface (compositor group: Scattered, Sun et al. 2005
+    Eq. 17-18 through ``shading.shade_point``), shared by every light with these models.  Reads
+    SURFACE_SHARED."""
+    name = scatter_group_name(models)
+    if (ng := groups._up_to_date(name)) is not None:
+        return ng
+    ng, m, g, gout, light = _light_group(name, SURFACE_SHARED, (("Scattered", V),), models, images)
+    geo = shading.Geometry(g["Camera"], g["Position"], g["Incoming"], m.wrap(0.0), g["Normal"])
+    material = shading.Material(g["Diffuse"], g["Specular"], g["Level"])
+    terms = shading.shade_point(m, geo, material, light, groups._medium(m, g["Beta"]), models, air=m.wrap(0.0))
+    m.feed(gout.inputs["Scattered"], m.wrap(terms.scattered))
+    ng[owned.BUILT] = groups.code_fingerprint()
+    return groups._install(ng, name)
+
+
+WINDOW_SIDES = ("u0", "u1", "v0", "v1")
+
+
+def _window(m, scene, label, win):
+    """The crop of the window ``win`` (u0, u1, v0, v1: ``footprint.py``) as nodes, ((start, extent, shift) in x,
+    the same in y) px: ``footprint.crop`` of Value nodes "<WINDOW> <label> u0" .. "v1" holding the window
+    (``set_windows`` sets them) and of the render's size (driven)."""
+    sides = []
+    for name, value in zip(WINDOW_SIDES, win):
+        node = m.node("ShaderNodeValue", 0)
+        node.name = node.label = f"{WINDOW} {label} {name}"
+        node.outputs[0].default_value = value
+        sides.append(m.wrap(node.outputs[0]))
+    crops = []
+    for axis in "xy":
+        size = _value(m, f"Picture {axis}", "int(r*p/100)", [("r", scene, f"render.resolution_{axis}"),
+                                                             ("p", scene, "render.resolution_percentage")])
+        crops.append(footprint.crop(m, *sides[:2], size) if axis == "x" else footprint.crop(m, *sides[2:], size))
+    return crops
+
+
+def _crop(m, value, window):
+    """``value`` (an image) cropped to ``window`` (``_window``): the compositor evaluates what reads it over
+    those pixels only."""
+    node = m.node("CompositorNodeCrop", value.col + 1)
+    m.feed(node.inputs["Image"], value)
+    (x, w, _), (y, h, _) = window
+    for sock, v in (("X", x), ("Width", w), ("Y", y), ("Height", h)):
+        m.feed(node.inputs[sock], v)
+    return m.wrap(node.outputs[0], vector=True)
+
+
+def _uncrop(m, value, window):
+    """An image cropped by ``_crop`` moved back to its place in the picture (the compositor centres it)."""
+    node = m.node("CompositorNodeTranslate", value.col + 1)
+    node.inputs["Interpolation"].default_value = "Nearest"   # whole pixels
+    m.feed(node.inputs["Image"], value)
+    m.feed(node.inputs["X"], window[0][2])
+    m.feed(node.inputs["Y"], window[1][2])
+    return m.wrap(node.outputs[0], vector=True)
+
+
+def _accumulate(m, total, term):
+    """total + term, the result on ``total``'s domain (the compositor takes a node's domain from its first
+    image input and places the others on it; the hash-consing's sorted operands could swap them)."""
+    return m._new_vmath("ADD", total, term)
 
 
 def aovs(engine):
@@ -221,37 +293,78 @@ def _picture_scale(m, scene, peak):
     return _vector(m, "Picture Size", [f"rx*{k}", f"ry*{k}", "0"], r)
 
 
-def _sum_terms(m, node, *sums):
-    """``sums`` (Airlight, Scattered, Background so far, or None) plus ``node``'s outputs of those names."""
-    terms = [m.wrap(node.outputs[name], vector=True) for name, _ in TERMS]
-    return terms if sums[0] is None else [a + b for a, b in zip(sums, terms)]
+def _zero(m, image):
+    """Black on ``image``'s domain (a sum's first operand: ``_accumulate``)."""
+    return m._new_vmath("MULTIPLY", image, (0.0, 0.0, 0.0))
 
 
-def build_bundle(first, lights, models, images, peak):
+def build_bundle(scene, first, lights, models, images, peak, windows):
     """The compositor group of the scene's lights ``first`` + 1 .. ``first`` + len(lights) (at most
-    BUNDLE_SIZE): SHARED in, each light's group (``build_light_group``) with its position, intensity and
-    cone driven by the light (``groups._drive_intensity``, ``_drive_spot``), TERMS summed out."""
+    BUNDLE_SIZE): SHARED in, each light's glow and scatter groups (``build_glow_group``,
+    ``build_scatter_group``) with its position, intensity and cone driven by the light
+    (``groups._drive_intensity``, ``_drive_spot``), TERMS summed out: Airlight and Background over the
+    picture, Scattered over the Surface inputs' window.  ``windows``: each light's glow window
+    (``footprint.py``), or None for none (the whole picture): a light with one gets its glow group's
+    inputs cropped to it (``_window``)."""
     name = f"{BUNDLE} {first + 1}-{first + len(lights)}"
     ng, gin, gout = groups._new_group(name, SHARED, TERMS, tree_type="CompositorNodeTree")
     m = CompOps(ng, images)
-    sums = [None] * 3
+    g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
+    # what a glow group reads per pixel: cropped to its light's window
+    per_pixel = ("Direction", "View Distance") + (("Incoming", "Pixel") if peak else ())
+    air, back, scat = _zero(m, g["Direction"]), _zero(m, g["Direction"]), _zero(m, g[SURFACE + "Position"])
     for k, (light, mod) in enumerate(zip(lights, models), start=first):
-        node = m.node("CompositorNodeGroup", 5)
-        node.node_tree = build_light_group(mod, images, peak)
-        node.label = f"Light {k}: {light.name}"
-        for socket, _ in SHARED:
-            ng.links.new(gin.outputs[socket], node.inputs[socket])
         position = _location(m, f"Light {k} Location", light, col=4)
         intensity = m.node("ShaderNodeCombineXYZ", 4)
         groups._drive_intensity(intensity, light.data)
-        m.feed(node.inputs["Light"], position)
-        ng.links.new(intensity.outputs[0], node.inputs["Intensity"])
-        if groups.SPOT_COS in node.inputs:
-            groups._drive_spot(ng, k, light, node)
-        sums = _sum_terms(m, node, *sums)
-    for (term, _), v in zip(TERMS, sums):
+        glow, scatter = m.node("CompositorNodeGroup", 6), m.node("CompositorNodeGroup", 6)
+        glow.node_tree, scatter.node_tree = build_glow_group(mod, images, peak), build_scatter_group(mod, images)
+        glow.label, scatter.label = f"Light {k}: {light.name}", f"Light {k} Scatter: {light.name}"
+        win = None if windows is None or windows[k - first] is None else _window(m, scene, k, windows[k - first])
+        for socket, _ in GLOW_SHARED:
+            m.feed(glow.inputs[socket], _crop(m, g[socket], win) if win and socket in per_pixel else g[socket])
+        for socket, _ in SURFACE_SHARED:
+            m.feed(scatter.inputs[socket], g[socket if socket not in SURFACE_IMAGES else SURFACE + socket])
+        for node in (glow, scatter):
+            m.feed(node.inputs["Light"], position)
+            ng.links.new(intensity.outputs[0], node.inputs["Intensity"])
+        if groups.SPOT_COS in glow.inputs:
+            groups._drive_spot(ng, k, light, glow)
+            for socket, _ in groups._spot_inputs(mod):
+                ng.links.new(glow.inputs[socket].links[0].from_socket, scatter.inputs[socket])
+        terms = [m.wrap(glow.outputs[term], vector=True) for term, _ in GLOW_TERMS]
+        if win is not None:
+            terms = [_uncrop(m, v, win) for v in terms]
+        air, back = _accumulate(m, air, terms[0]), _accumulate(m, back, terms[1])
+        scat = _accumulate(m, scat, m.wrap(scatter.outputs["Scattered"], vector=True))
+    for term, v in (("Airlight", air), ("Scattered", scat), ("Background", back)):
         m.feed(gout.inputs[term], v)
     return groups._install(ng, name)
+
+
+def set_windows(lights, windows, grow=False):
+    """Set the windows (``footprint.py``) the fog's compositor groups crop to: ``windows`` = (the surfaces'
+    window, [each light's glow window or None]), ``lights`` in the order of ``build_fog_group``'s; ``grow``:
+    each the union of the one it had and the new one.  Only values change: a light built without a window
+    keeps none (the whole picture)."""
+    surface_window, glows = windows
+    _set(bpy.data.node_groups.get(FOG_GROUP), "Surface", surface_window, grow)
+    for first in range(0, len(lights), BUNDLE_SIZE):
+        bundle = bpy.data.node_groups.get(f"{BUNDLE} {first + 1}-{min(first + BUNDLE_SIZE, len(lights))}")
+        for k, win in enumerate(glows[first:first + BUNDLE_SIZE], start=first):
+            if win is not None:
+                _set(bundle, k, win, grow)
+
+
+def _set(ng, label, win, grow):
+    nodes = [None if ng is None else ng.nodes.get(f"{WINDOW} {label} {name}") for name in WINDOW_SIDES]
+    if None in nodes:
+        return
+    if grow:
+        win = footprint.union(tuple(n.outputs[0].default_value for n in nodes), win)
+    for node, value in zip(nodes, win):
+        if node.outputs[0].default_value != value:   # no needless update of the tree
+            node.outputs[0].default_value = value
 
 
 def _params(m):
@@ -263,11 +376,13 @@ def _params(m):
     return beta, albedo
 
 
-def build_fog_group(scene, lights, models, images):
+def build_fog_group(scene, lights, models, images, windows=None):
     """(Re)build the compositor group ``FOG_GROUP``: Image (the render) and the AOVs in; Image (the render
     plus the fog's light) and Fog Light out.  ``lights``: the fog's lights, ``models``: each light's
-    rungs.LightModels.  Rebuilt in place, so the scene's compositor keeps its group node.  Returns the table
-    images it reads (``images`` and the pixel filter's)."""
+    rungs.LightModels; ``windows``: (the surfaces' window, [each light's glow window or None]) of
+    ``footprint.py`` (``view.windows``), or None to evaluate every term over the whole picture.  Rebuilt in
+    place, so the scene's compositor keeps its group node.  Returns the table images it reads (``images``
+    and the pixel filter's)."""
     peak = scene.render.engine == "CYCLES" and pixel.filter_scale(
         scene.cycles.pixel_filter_type, scene.cycles.filter_width) is not None
     if peak:
@@ -317,17 +432,26 @@ def build_fog_group(scene, lights, models, images):
     diffuse, specular, level = surface.principled_to_phong(
         m, m.scale(p["Fog Base Color"], inv), p["Fog Metallic"] * inv, p["Fog Roughness"] * inv,
         p["Fog Specular IOR Level"] * inv, m.dot(incoming, normal))
-    shared = {"Beta": beta, "Camera": cam, "Position": pos, "Incoming": incoming, "View Distance": d_vp,
-              "Normal": normal, "Diffuse": diffuse, "Specular": specular, "Level": level,
-              "Direction": direction, "Pixel": pix, "Corner": corner, "Across": across, "Up": up, "Size": size}
+    shared = {"Beta": beta, "Camera": cam, "Incoming": incoming, "View Distance": d_vp, "Direction": direction,
+              "Pixel": pix, "Corner": corner, "Across": across, "Up": up, "Size": size}
+    surface_in = {"Position": pos, "Incoming": incoming, "Normal": normal, "Diffuse": diffuse, "Specular": specular,
+                  "Level": level}
+    win = None if windows is None else _window(m, scene, "Surface", windows[0])
+    if win is not None:   # the fog light on surfaces: only where the picture has surfaces
+        surface_in = {k: _crop(m, v, win) for k, v in surface_in.items()}
+    shared.update({SURFACE + k: v for k, v in surface_in.items()})
     air = scat = back = None
     for first in range(0, len(lights), BUNDLE_SIZE):
         node = m.node("CompositorNodeGroup", 5)
-        node.node_tree = build_bundle(first, lights[first:first + BUNDLE_SIZE], models[first:first + BUNDLE_SIZE],
-                                      images, peak)
+        node.node_tree = build_bundle(scene, first, lights[first:first + BUNDLE_SIZE],
+                                      models[first:first + BUNDLE_SIZE], images, peak,
+                                      None if windows is None else windows[1][first:first + BUNDLE_SIZE])
         for name, v in shared.items():
             m.feed(node.inputs[name], v)
-        air, scat, back = _sum_terms(m, node, air, scat, back)
+        terms = [m.wrap(node.outputs[name], vector=True) for name, _ in TERMS]
+        air, scat, back = terms if air is None else (_accumulate(m, t, u) for t, u in zip((air, scat, back), terms))
+    if scat is not None and win is not None:
+        scat = _accumulate(m, _zero(m, direction), _uncrop(m, scat, win))
     if air is None:
         fog = m.wrap((0.0, 0.0, 0.0))
     else:

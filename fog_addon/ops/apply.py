@@ -188,7 +188,8 @@ def explain(choice=None):
     return lines
 
 
-def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.DEFAULT_QUALITY, rechoose=True):
+def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.DEFAULT_QUALITY, rechoose=True,
+                        this_frame=False):
     """(Re)build the Surface and World groups for ``lights``, their models and the fog passes (on or off)
     unless built for them already; per-light groups no longer used are deleted, lights that no longer
     take part lose the fog's attenuation, Cycles' OSL is switched on while some model needs it, and the
@@ -223,6 +224,10 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
     in_shaders = dimming_lights(scene, in_groups, preference) if in_compositor else (in_groups, grouped_models)
     signature = _signature(scene, in_groups, grouped_models, preference, with_passes) + (
         "|dimming:" + ",".join(o.name_full for o in in_shaders[0]) if in_compositor else "")
+    # where the compositor evaluates each term (``view.windows``); over an animation's frames, or (the handler's
+    # ``this_frame``, which can't change frames) this frame's, added to the windows the groups have
+    partial = this_frame and view.animated(scene)
+    windows = view.windows(scene, in_groups, [scene.frame_current] if partial else None) if in_compositor else None
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if (surface is None or bpy.data.node_groups.get(groups.WORLD) is None
             or surface.get(LIGHTS_KEY) != signature
@@ -231,7 +236,8 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
         aovs = functools.partial(comp_fog.add_surface_aovs, engine=scene.render.engine) if in_compositor else None
         surface = groups.build_surface(*in_shaders, imgs, with_passes, extra=aovs)
         if in_compositor:
-            imgs = comp_fog.build_fog_group(scene, in_groups, grouped_models, imgs)
+            imgs = comp_fog.build_fog_group(scene, in_groups, grouped_models, imgs,
+                                            view.full_windows(in_groups) if partial else windows)
         surface[LIGHTS_KEY] = signature
         surface[PREFERENCE_KEY] = preference
         surface[PASSES_KEY] = with_passes
@@ -248,6 +254,8 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
         for light in bpy.data.lights:
             if light.users and light not in taking_part and is_fogged(light):
                 unwrap_light(light)
+    elif windows is not None:
+        comp_fog.set_windows(in_groups, windows, grow=partial)
     if surface.get(CHOICE_KEY) != json.dumps(choice):
         surface[CHOICE_KEY] = json.dumps(choice)
     use_osl(scene, any(rungs.needs_osl(mod) for mod in models))
@@ -397,7 +405,8 @@ def update_params(scene):
 _KEEP = object()   # _rebuild: keep the setting the scene groups were built with
 
 
-def _rebuild(scene, surface, preference=_KEEP, with_passes=_KEEP, quality=_KEEP, rechoose=False):
+def _rebuild(scene, surface, preference=_KEEP, with_passes=_KEEP, quality=_KEEP, rechoose=False,
+             this_frame=False):
     """Rebuild the scene groups (materials are not touched) for the settings given, keeping the rest as
     ``surface`` (the Surface group) was built."""
     choice = stored_choice() or {}
@@ -405,7 +414,7 @@ def _rebuild(scene, surface, preference=_KEEP, with_passes=_KEEP, quality=_KEEP,
                         surface.get(PREFERENCE_KEY, "nodes") if preference is _KEEP else preference,
                         bool(surface.get(PASSES_KEY, False)) if with_passes is _KEEP else with_passes,
                         choice.get("quality", predict.DEFAULT_QUALITY) if quality is _KEEP else quality,
-                        rechoose=rechoose)
+                        rechoose=rechoose, this_frame=this_frame)
 
 
 def set_anisotropy(scene, g):
@@ -448,15 +457,17 @@ def set_quality(scene, quality):
         _rebuild(scene, surface, quality=quality, rechoose=True)
 
 
-def refresh_lights(scene, rechoose=False):
+def refresh_lights(scene, rechoose=False, this_frame=False):
     """Rebuild the scene groups if the fog lights, their models or the camera changed; materials are not
-    touched.  Called from the depsgraph handler: when nothing changed it only compares names.
-    ``rechoose``: also choose the lights' models again from the view (camera, lights or objects moved);
-    the handler does that after the scene has stopped changing (``handlers.py``)."""
+    touched.  Called from the depsgraph handler: when nothing changed it only compares names (and sets the
+    Compositor method's windows).  ``rechoose``: also choose the lights' models again from the view
+    (camera, lights or objects moved); the handler does that after the scene has stopped changing
+    (``handlers.py``).  ``this_frame``: the handler's call, which must not change frames (the windows of
+    an animation grow by this frame's; the rest follows at the re-choice)."""
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is None or surface.library is not None:
         return
-    _rebuild(scene, surface, rechoose=rechoose)
+    _rebuild(scene, surface, rechoose=rechoose, this_frame=this_frame)
     follow_compositor(scene)   # the engine or the denoiser flag may have changed
 
 

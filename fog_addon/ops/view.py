@@ -17,7 +17,7 @@ import bpy
 import numpy as np
 from mathutils.bvhtree import BVHTree
 
-from ..precompute import predict, surface, tables
+from ..precompute import footprint, predict, surface, tables
 
 MAX_SAMPLES = 160 * 90          # rays per frame at most: one per pixel centre up to this, else a coarser grid
 MAX_FRAMES = 8                  # an animation: at most this many frames, evenly spread over the range
@@ -276,3 +276,68 @@ def light_intensities(lights):
     """(N, 3) RGB radiant intensity I0 = power * colour / (4 pi) of point and spot lights (a spot's inside
     its cone), W/sr."""
     return np.array([[o.data.energy * c / (4.0 * math.pi) for c in o.data.color] for o in lights]).reshape(-1, 3)
+
+
+MAX_WINDOW_FRAMES = 250   # an animation longer than this gets no windows (every frame is bounded)
+GEOMETRY = {"MESH", "CURVE", "SURFACE", "FONT", "META", "CURVES", "POINTCLOUD", "VOLUME"}
+
+
+def _camera_frame(scene, camera):
+    """(left, right, bottom, top) of ``camera``'s frame at unit distance (shifts included)."""
+    corners = np.array([tuple(v) for v in camera.data.view_frame(scene=scene)])
+    x, y = corners[:, 0] / -corners[:, 2], corners[:, 1] / -corners[:, 2]
+    return x.min(), x.max(), y.min(), y.max()
+
+
+def _frame_windows(scene, depsgraph, lights):
+    """(surfaces' window, [each spot's glow window, None for a point light]) at the current frame."""
+    camera = scene.camera.evaluated_get(depsgraph)
+    mw = np.array(camera.matrix_world)
+    mw[:3, :3] /= np.linalg.norm(mw[:3, :3], axis=0)   # the view's axes (a camera's scale does not scale its rays)
+    frame = _camera_frame(scene, camera)
+    surfaces = footprint.EMPTY
+    for inst in depsgraph.object_instances:
+        if inst.object.type in GEOMETRY:
+            box = footprint.box_points(inst.object.bound_box, inst.matrix_world)
+            surfaces = footprint.union(surfaces, footprint.window(box, mw, frame))
+    glows = [footprint.window(footprint.spot_points(o.evaluated_get(depsgraph).matrix_world,
+                                                    math.cos(o.data.spot_size / 2)), mw, frame)
+             if is_spot(o) else None for o in lights]
+    return surfaces, glows
+
+
+def full_windows(lights):
+    """:func:`windows` that crop nothing."""
+    return footprint.FULL, [footprint.FULL if is_spot(o) else None for o in lights]
+
+
+def animated(scene):
+    """True if the view may change with the frame (an object or its data animated)."""
+    return _animated(scene)
+
+
+def windows(scene, lights, frames=None):
+    """The windows of the Compositor method (``precompute/footprint.py``): (the surfaces' window, [each
+    light's glow window: a spot's, None for a point light]) holding ``frames`` (default: every frame of an
+    animated scene's range, else the current one).  Full windows where they can't be bounded: border
+    renders, animations over MAX_WINDOW_FRAMES frames."""
+    if scene.render.use_border or scene.camera is None or scene.camera.data.type != "PERSP":
+        return full_windows(lights)
+    if frames is None and _animated(scene):
+        if scene.frame_end - scene.frame_start + 1 > MAX_WINDOW_FRAMES:
+            return full_windows(lights)
+        frames = range(scene.frame_start, scene.frame_end + 1)
+    frames = [scene.frame_current] if frames is None else frames
+    current = scene.frame_current, scene.frame_subframe
+    surfaces, glows = footprint.EMPTY, [footprint.EMPTY if is_spot(o) else None for o in lights]
+    try:
+        for f in frames:
+            if f != scene.frame_current:
+                scene.frame_set(f)
+            s, g = _frame_windows(scene, bpy.context.evaluated_depsgraph_get(), lights)
+            surfaces = footprint.union(surfaces, s)
+            glows = [None if a is None else footprint.union(a, b) for a, b in zip(glows, g)]
+    finally:
+        if (scene.frame_current, scene.frame_subframe) != current:
+            scene.frame_set(current[0], subframe=current[1])
+    return surfaces, glows

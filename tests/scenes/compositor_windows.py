@@ -1,0 +1,107 @@
+"""The Compositor method's windows (``precompute/footprint.py``) change no pixel: renders with them against
+renders without them (every term over the whole picture), the same scene, frame and settings.
+
+    python tests/scenes/compositor_windows.py OUT_DIR
+
+The many-lights scene with four spots set to hard cases: one whose cone holds the camera, one aimed sideways
+with a non-uniform scale, a 10-degree cone with no blend, a 170-degree cone animated across the picture over
+frames 1-5 (the windows hold the whole range).  Renders (Cycles, 1 spp, Gaussian filter at pixel centres):
+frame 1 and frame 5, then frame 1 again after a spot moved and ``apply.refresh_lights`` ran as the
+depsgraph handler runs it (this frame only), each with and without windows.  Writes the pictures as EXR and prints one line
+``WINDOWS_JSON {...}``: the pictures' paths by case and each window's share of the picture.
+"""
+import json
+import math
+import pathlib
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests" / "scenes"))
+
+import bpy  # noqa: E402
+
+import many_lights  # noqa: E402
+from fog_addon import measure  # noqa: E402
+from fog_addon.ops import apply, view  # noqa: E402
+from fog_addon.precompute import footprint  # noqa: E402
+
+W, H = 96, 54
+BETA = 0.1
+
+
+def build():
+    scene, _ = many_lights.build_scene(4, direct_light=True)
+    spots = sorted((o for o in scene.objects if o.type == "LIGHT"), key=lambda o: o.name)
+    for o in spots:
+        o.data.type = "SPOT"
+        o.data.spot_size, o.data.spot_blend = math.radians(60.0), 0.3
+    cam = scene.camera.matrix_world.translation
+    spots[0].location = (cam.x + 0.5, cam.y + 6.0, cam.z + 0.5)   # aimed back at the camera: it is in the cone
+    spots[0].rotation_euler = (math.radians(-90.0), 0.0, 0.0)
+    spots[1].rotation_euler = (0.0, math.radians(80.0), 0.3)      # sideways, squashed
+    spots[1].scale = (1.0, 0.3, 1.0)
+    spots[2].data.spot_size, spots[2].data.spot_blend = math.radians(10.0), 0.0
+    spots[3].data.spot_size = math.radians(170.0)
+    for frame, x in ((1, -6.0), (5, 6.0)):
+        spots[3].location.x = x
+        spots[3].keyframe_insert("location", index=0, frame=frame)
+    scene.frame_start, scene.frame_end = 1, 5
+    scene.frame_set(1)
+    scene.render.engine = "CYCLES"
+    measure.set_resolution(scene, W, H)
+    measure.set_samples(scene, 1)
+    measure.set_cycles_cpu(scene)
+    scene.cycles.use_denoising = False
+    scene.cycles.pixel_filter_type = "GAUSSIAN"
+    scene.cycles.filter_width = 0.01
+    im = scene.render.image_settings
+    im.file_format, im.color_depth, im.color_mode = "OPEN_EXR", "32", "RGB"
+    return scene, spots
+
+
+def render(scene, path):
+    scene.render.filepath = str(path)
+    bpy.ops.render.render(write_still=True)
+    return str(path)
+
+
+def run(out, windowed):
+    scene, spots = build()
+    tag = "windows" if windowed else "whole"
+    if not windowed:   # every term over the whole picture: the groups built without windows
+        view.windows = lambda *args, **kwargs: None
+        view.full_windows = lambda lights: None
+    apply.apply_fog(scene, BETA, method="compositor")
+    paths = {"frame 1": render(scene, out / f"{tag}_f1.exr")}
+    scene.frame_set(5)
+    paths["frame 5"] = render(scene, out / f"{tag}_f5.exr")
+    scene.frame_set(1)
+    spots[2].location.x -= 4.0   # the narrow spot moves and turns: the handler's refresh (this frame) grows its window
+    spots[2].rotation_euler = (0.0, 0.3, 0.0)
+    bpy.context.view_layer.update()
+    apply.refresh_lights(scene, this_frame=True)
+    paths["moved"] = render(scene, out / f"{tag}_moved.exr")
+    lights = sorted((o for o in scene.objects if o.type == "LIGHT"), key=lambda o: o.name)
+    shares = None
+    if windowed:
+        surfaces, glows = view.windows(scene, lights)
+        shares = {"surfaces": _share(surfaces), **{o.name: _share(g) for o, g in zip(lights, glows)}}
+    return paths, shares
+
+
+def _share(win):
+    x, y, w, h = footprint.pixels(win, W, H)
+    return w * h / (W * H)
+
+
+def main():
+    out = pathlib.Path(sys.argv[sys.argv.index("--") + 1] if "--" in sys.argv else sys.argv[1])
+    out.mkdir(parents=True, exist_ok=True)
+    windowed, shares = run(out, True)
+    whole, _ = run(out, False)
+    print("WINDOWS_JSON " + json.dumps({"windows": windowed, "whole": whole, "shares": shares}), flush=True)
+
+
+if __name__ == "__main__":
+    main()
