@@ -134,3 +134,21 @@ def test_pixels_hold_the_window_with_the_pictures_parity(size):
         assert x >= 0 and x + w <= max(size, 2) and (size - w) % 2 == 0
         if len(want):
             assert x <= want.min() and want.max() < x + w
+
+
+def test_boxes_window_holds_each_boxs_window():
+    """The union over boxes at once (in front: their corners' bounding box) holds each box's own window,
+    and ignores boxes outside the frame."""
+    rng = np.random.default_rng(7)
+    cam = _look((0.0, -10.0, 2.0), (0.0, 5.0, 1.0))
+    unit = np.array([[(0.0, 1.0)[(i >> k) & 1] for k in range(3)] for i in range(8)])
+    boxes = []
+    for _ in range(30):
+        matrix = _random_spot(rng)
+        boxes.append(footprint.box_points(unit * rng.uniform(0.1, 4.0, 3), matrix))
+    boxes = np.array(boxes)
+    whole = footprint.boxes_window(boxes, cam, FRAME)
+    for box in boxes:
+        assert footprint.union(whole, footprint.window(box, cam, FRAME)) == whole
+    off = footprint.box_points(unit, np.eye(4)) + (-40.0, 10.0, 0.0)   # far to the left, in front
+    assert footprint.boxes_window(off[None], cam, FRAME) == footprint.EMPTY

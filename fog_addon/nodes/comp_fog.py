@@ -60,8 +60,8 @@ SURFACE = "Surface "   # a bundle's inputs of SURFACE_IMAGES: "Surface Position"
 SHARED = GLOW_SHARED + tuple((SURFACE + name, kind) for name, kind in SURFACE_SHARED[2:])   # a bundle's inputs
 GLOW_TERMS = (("Airlight", V), ("Background", V))
 TERMS = (("Airlight", V), ("Scattered", V), ("Background", V))
-WINDOW = "Fog Window"   # the Value nodes holding the windows (``footprint.py``): a bundle's "<WINDOW> <k> u0", ...
-#                         for its k-th light's glow, the fog group's "<WINDOW> Surface u0", ... for surfaces
+WINDOW = "Fog Window"   # ID properties (u0, u1, v0, v1) of the windows (``footprint.py``): a bundle's "<WINDOW> <k>"
+#                         for its k-th light's glow, the fog group's "<WINDOW> Surface" for the fog light on surfaces
 
 
 class CompOps(NodeOps):
@@ -161,24 +161,19 @@ def build_scatter_group(models, images):
     return groups._install(ng, name)
 
 
-WINDOW_SIDES = ("u0", "u1", "v0", "v1")
-
-
 def _window(m, scene, label, win):
     """The crop of the window ``win`` (u0, u1, v0, v1: ``footprint.py``) as nodes, ((start, extent, shift) in x,
-    the same in y) px: ``footprint.crop`` of Value nodes "<WINDOW> <label> u0" .. "v1" holding the window
-    (``set_windows`` sets them) and of the render's size (driven)."""
-    sides = []
-    for name, value in zip(WINDOW_SIDES, win):
-        node = m.node("ShaderNodeValue", 0)
-        node.name = node.label = f"{WINDOW} {label} {name}"
-        node.outputs[0].default_value = value
-        sides.append(m.wrap(node.outputs[0]))
+    the same in y) px: Value nodes driven by ``footprint.START``, ``EXTENT`` and ``SIZE`` of the tree's ID
+    property "<WINDOW> <label>" (the window: ``set_windows`` sets it) and of the render's size."""
+    key = f"{WINDOW} {label}"
+    m.tree[key] = list(win)
     crops = []
-    for axis in "xy":
-        size = _value(m, f"Picture {axis}", "int(r*p/100)", [("r", scene, f"render.resolution_{axis}"),
-                                                             ("p", scene, "render.resolution_percentage")])
-        crops.append(footprint.crop(m, *sides[:2], size) if axis == "x" else footprint.crop(m, *sides[2:], size))
+    for axis, name in enumerate("xy"):
+        variables = [("l", m.tree, f'["{key}"][{2 * axis}]'), ("h", m.tree, f'["{key}"][{2 * axis + 1}]'),
+                     ("r", scene, f"render.resolution_{name}"), ("p", scene, "render.resolution_percentage")]
+        start, extent, size = (_value(m, f"{key} {part} {name}", expression, variables) for part, expression in
+                               (("start", footprint.START), ("extent", footprint.EXTENT), ("size", footprint.SIZE)))
+        crops.append((start, extent, start + 0.5 * (extent - size)))
     return crops
 
 
@@ -357,14 +352,13 @@ def set_windows(lights, windows, grow=False):
 
 
 def _set(ng, label, win, grow):
-    nodes = [None if ng is None else ng.nodes.get(f"{WINDOW} {label} {name}") for name in WINDOW_SIDES]
-    if None in nodes:
+    key = f"{WINDOW} {label}"
+    if ng is None or key not in ng:
         return
     if grow:
-        win = footprint.union(tuple(n.outputs[0].default_value for n in nodes), win)
-    for node, value in zip(nodes, win):
-        if node.outputs[0].default_value != value:   # no needless update of the tree
-            node.outputs[0].default_value = value
+        win = footprint.union(tuple(ng[key]), win)
+    if tuple(ng[key]) != tuple(win):   # no needless update of the tree
+        ng[key] = list(win)
 
 
 def _params(m):

@@ -295,11 +295,9 @@ def _frame_windows(scene, depsgraph, lights):
     mw = np.array(camera.matrix_world)
     mw[:3, :3] /= np.linalg.norm(mw[:3, :3], axis=0)   # the view's axes (a camera's scale does not scale its rays)
     frame = _camera_frame(scene, camera)
-    surfaces = footprint.EMPTY
-    for inst in depsgraph.object_instances:
-        if inst.object.type in GEOMETRY:
-            box = footprint.box_points(inst.object.bound_box, inst.matrix_world)
-            surfaces = footprint.union(surfaces, footprint.window(box, mw, frame))
+    boxes = [footprint.box_points(inst.object.bound_box, inst.matrix_world)
+             for inst in depsgraph.object_instances if inst.object.type in GEOMETRY]
+    surfaces = footprint.boxes_window(np.array(boxes), mw, frame) if boxes else footprint.EMPTY
     glows = [footprint.window(footprint.spot_points(o.evaluated_get(depsgraph).matrix_world,
                                                     math.cos(o.data.spot_size / 2)), mw, frame)
              if is_spot(o) else None for o in lights]
@@ -320,12 +318,12 @@ def windows(scene, lights, frames=None):
     """The windows of the Compositor method (``precompute/footprint.py``): (the surfaces' window, [each
     light's glow window: a spot's, None for a point light]) holding ``frames`` (default: every frame of an
     animated scene's range, else the current one).  Full windows where they can't be bounded: border
-    renders, animations over MAX_WINDOW_FRAMES frames."""
+    renders, animations over MAX_WINDOW_FRAMES frames or with motion blur."""
     if scene.render.use_border or scene.camera is None or scene.camera.data.type != "PERSP":
         return full_windows(lights)
     if frames is None and _animated(scene):
-        if scene.frame_end - scene.frame_start + 1 > MAX_WINDOW_FRAMES:
-            return full_windows(lights)
+        if scene.frame_end - scene.frame_start + 1 > MAX_WINDOW_FRAMES or scene.render.use_motion_blur:
+            return full_windows(lights)   # (motion blur: the frames' windows don't bound the times between)
         frames = range(scene.frame_start, scene.frame_end + 1)
     frames = [scene.frame_current] if frames is None else frames
     current = scene.frame_current, scene.frame_subframe

@@ -16,9 +16,9 @@ edges of the camera's frame, 1 at the right and top) of the projection of a conv
 convex hull of the points it is given.  Points behind the camera's near plane are clipped away; what
 crosses it projects to the picture's border.  Pure numpy: matrices in, windows out.
 """
-import numpy as np
+import math
 
-from .ops import NumpyOps
+import numpy as np
 
 GLOW_RADIUS = 1e6     # m: where a spot's cone is cut (module docstring)
 HULL_SIDES = 16       # sides of the polygon about the cone's axis (circumscribed: it contains the circle)
@@ -56,6 +56,29 @@ def box_points(bound_box, matrix):
     """(8, 3) world corners of an object's local bounding box (Blender's ``Object.bound_box``)."""
     m = np.asarray(matrix, float)
     return np.asarray(bound_box, float) @ m[:3, :3].T + m[:3, 3]
+
+
+def boxes_window(corners, camera_matrix, frame):
+    """The union of the windows of boxes (M, 8, 3 world corners, ``box_points``): at once for the boxes wholly
+    in front of the camera (the bounding box of their projected corners, within the window of each hull,
+    skipped if outside the frame), by :func:`window` for those crossing the camera's plane."""
+    cam = np.asarray(camera_matrix, float)
+    local = (np.asarray(corners, float).reshape(-1, 8, 3) - cam[:3, 3]) @ cam[:3, :3]
+    depth = -local[..., 2]
+    front = (depth >= NEAR).all(axis=1)
+    crossing = (depth >= NEAR).any(axis=1) & ~front
+    left, right, bottom, top = frame
+    u = (local[front, :, 0] / depth[front] - left) / (right - left)
+    v = (local[front, :, 1] / depth[front] - bottom) / (top - bottom)
+    lo_u, hi_u, lo_v, hi_v = u.min(axis=1), u.max(axis=1), v.min(axis=1), v.max(axis=1)
+    seen = (hi_u >= 0.0) & (lo_u <= 1.0) & (hi_v >= 0.0) & (lo_v <= 1.0)
+    out = EMPTY
+    if seen.any():
+        out = tuple(float(np.clip(x, 0.0, 1.0)) for x in (lo_u[seen].min(), hi_u[seen].max(),
+                                                            lo_v[seen].min(), hi_v[seen].max()))
+    for box in np.asarray(corners, float).reshape(-1, 8, 3)[crossing]:
+        out = union(out, window(box, cam, frame))
+    return out
 
 
 def window(points, camera_matrix, frame):
@@ -135,22 +158,26 @@ def union(a, b):
     return (min(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), max(a[3], b[3]))
 
 
-def crop(m, lo, hi, size):
-    """(start, extent, shift) in px of the crop of a window's side [lo, hi] (normalised) in a picture ``size`` px
-    across: every pixel whose centre is in [lo, hi], at least 2 px (or the picture), and of the picture's parity (the compositor
-    centres a smaller image on the picture: with the same parity, ``shift``, where the crop's centre is from the
-    picture's, is a whole number of pixels).  Written against ``m`` (the compositor's nodes compute it from
-    the render's size at render time, ``nodes/comp_fog.py``)."""
-    first = m.floor(lo * size)
-    span = m.minimum(m.maximum(-1.0 * m.floor(-1.0 * hi * size) - first, 2.0), size)
-    extent = span + (size - span) - 2.0 * m.floor((size - span) * 0.5)
-    start = m.maximum(m.minimum(first, size - extent), 0.0)
-    return start, extent, start + 0.5 * extent - 0.5 * size
+# The crop of a window's side [l, h] (normalised) in a picture of r px at p percent, as Blender simple
+# expressions (the compositor's drivers evaluate them at render time, without the add-on): every pixel whose
+# centre is in [l, h], at least 2 px (or the picture), of the picture's parity (the compositor centres a
+# smaller image on the picture: with the same parity the way back is a whole number of pixels, (START +
+# EXTENT / 2 - SIZE / 2)).  Each under Blender's 256 characters.
+SIZE = "int(r*p/100)"
+_SPAN = f"min(max(ceil(h*{SIZE})-floor(l*{SIZE}),2),{SIZE})"
+EXTENT = f"{_SPAN}+fmod({SIZE}-{_SPAN},2)"
+START = f"max(min(floor(l*{SIZE}),{SIZE}-({EXTENT})),0)"
+_SIMPLE = {"floor": math.floor, "ceil": math.ceil, "fmod": math.fmod, "max": max, "min": min, "int": int}
+
+
+def evaluate(expression, lo, hi, size):
+    """``expression`` (SIZE, START or EXTENT) for a window's side [lo, hi] in a picture ``size`` px across, as
+    a driver evaluates it."""
+    return eval(expression, dict(_SIMPLE), {"l": lo, "h": hi, "r": size, "p": 100})
 
 
 def pixels(win, width, height):
-    """(x, y, w, h): the pixels the compositor crops ``win`` to in a width x height picture (:func:`crop`)."""
-    m = NumpyOps()
-    (x, w, _), (y, h, _) = (crop(m, np.float64(lo), np.float64(hi), np.float64(n))
-                            for lo, hi, n in ((*win[:2], width), (*win[2:], height)))
-    return int(x), int(y), int(w), int(h)
+    """(x, y, w, h): the pixels the compositor crops ``win`` to in a width x height picture."""
+    (x, w), (y, h) = ((int(evaluate(START, lo, hi, n)), int(evaluate(EXTENT, lo, hi, n)))
+                      for lo, hi, n in ((*win[:2], width), (*win[2:], height)))
+    return x, y, w, h
