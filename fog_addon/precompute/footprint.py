@@ -115,16 +115,17 @@ def window(points, camera_matrix, frame):
 
 def convex_hull_2d(points):
     """(K, 2) corners of the convex hull of (N, 2) points, counter-clockwise (Andrew's monotone chain)."""
-    pts = np.unique(np.asarray(points, float), axis=0)
+    pts = [tuple(p) for p in np.unique(np.asarray(points, float), axis=0).tolist()]
     if len(pts) < 3:
-        return pts
+        return np.array(pts).reshape(-1, 2)
 
     def chain(seq):
         out = []
-        for p in seq:
-            while len(out) >= 2 and np.cross(out[-1] - out[-2], p - out[-2]) <= 0.0:
+        for x, y in seq:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (y - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (x - out[-2][0])) <= 0.0:
                 out.pop()
-            out.append(p)
+            out.append((x, y))
         return out[:-1]
 
     return np.array(chain(pts) + chain(pts[::-1]))
