@@ -7,8 +7,9 @@ The many-lights scene with four spots set to hard cases: one whose cone holds th
 with a non-uniform scale, a 10-degree cone with no blend, a 170-degree cone animated across the picture over
 frames 1-5 (the windows hold the whole range).  Renders (Cycles, 1 spp, Gaussian filter at pixel centres):
 frame 1 and frame 5, then frame 1 again after a spot moved and ``apply.refresh_lights`` ran as the
-depsgraph handler runs it (this frame only), each with and without windows.  Writes the pictures as EXR and prints one line
-``WINDOWS_JSON {...}``: the pictures' paths by case and each window's share of the picture.
+depsgraph handler runs it (this frame only), each with and without windows.  Writes the pictures as EXR
+and prints one line ``WINDOWS_JSON {...}``: the pictures' paths by case and each window's share of the
+picture.
 """
 import json
 import math
