@@ -7,13 +7,14 @@ When the camera, lights or objects moved, the lights' models are chosen again
 for the Quality (``apply.choose_models``), RECHOOSE_DELAY_S after the scene
 stopped changing (not while rendering: a render keeps the stored choice, as a
 farm without the add-on does).  The Compositor method's windows (``view.windows``) follow at once for the
-current frame; an animation's other frames at the re-choice, and before the file is saved.
+current frame (and grow by each frame an animation plays or renders); an animation's other frames at the
+re-choice, and before the file is saved.
 """
 import bpy
 from bpy.app.handlers import persistent
 
 from .nodes import dedupe
-from .ops import apply
+from .ops import apply, view
 
 
 def _merge_appended():
@@ -66,6 +67,14 @@ def on_depsgraph_update(scene, depsgraph):
 
 
 @persistent
+def on_frame_change(scene, *_):
+    """Each frame of an animation that plays or renders: the windows grow by the frame's (``apply.grow_windows``)."""
+    settings = getattr(scene, "analytic_fog", None)
+    if settings is not None and settings.enabled and not view.sampling_frames():
+        apply.grow_windows(scene)
+
+
+@persistent
 def on_save_pre(*_):
     """A saved file renders on a farm without the add-on: its windows hold every frame of the range."""
     scene = bpy.context.scene
@@ -78,6 +87,8 @@ def register():
         bpy.app.handlers.depsgraph_update_post.append(on_depsgraph_update)
     if on_save_pre not in bpy.app.handlers.save_pre:
         bpy.app.handlers.save_pre.append(on_save_pre)
+    if on_frame_change not in bpy.app.handlers.frame_change_post:
+        bpy.app.handlers.frame_change_post.append(on_frame_change)
 
 
 def unregister():
@@ -85,6 +96,8 @@ def unregister():
         bpy.app.handlers.depsgraph_update_post.remove(on_depsgraph_update)
     while on_save_pre in bpy.app.handlers.save_pre:
         bpy.app.handlers.save_pre.remove(on_save_pre)
+    while on_frame_change in bpy.app.handlers.frame_change_post:
+        bpy.app.handlers.frame_change_post.remove(on_frame_change)
     for timer in (_merge_appended, _rechoose):
         if bpy.app.timers.is_registered(timer):
             bpy.app.timers.unregister(timer)

@@ -29,7 +29,7 @@ cameras; no fog passes (the fog's light is the compositor's).
 """
 import bpy
 
-from ..precompute import footprint, model, pixel, shading, surface
+from ..precompute import footprint, model, pixel, rungs, shading, surface
 from . import compositor, groups, images as images_, owned
 from .sockets import KERNEL_GROUP, NodeOps, Val
 
@@ -312,26 +312,34 @@ def build_bundle(scene, first, lights, models, images, peak, windows):
         position = _location(m, f"Light {k} Location", light, col=4)
         intensity = m.node("ShaderNodeCombineXYZ", 4)
         groups._drive_intensity(intensity, light.data)
-        glow, scatter = m.node("CompositorNodeGroup", 6), m.node("CompositorNodeGroup", 6)
-        glow.node_tree, scatter.node_tree = build_glow_group(mod, images, peak), build_scatter_group(mod, images)
-        glow.label, scatter.label = f"Light {k}: {light.name}", f"Light {k} Scatter: {light.name}"
-        win = None if windows is None or windows[k - first] is None else _window(m, scene, k, windows[k - first])
-        for socket, _ in GLOW_SHARED:
-            m.feed(glow.inputs[socket], _crop(m, g[socket], win) if win and socket in per_pixel else g[socket])
-        for socket, _ in SURFACE_SHARED:
-            m.feed(scatter.inputs[socket], g[socket if socket not in SURFACE_IMAGES else SURFACE + socket])
-        for node in (glow, scatter):
+        built = []   # a term the light's step leaves out (rungs.STEPS) gets no group at all
+        if mod.airlight is not rungs.AIRLIGHT_OFF:
+            glow = m.node("CompositorNodeGroup", 6)
+            glow.node_tree, glow.label = build_glow_group(mod, images, peak), f"Light {k}: {light.name}"
+            win = None if windows is None or windows[k - first] is None else _window(m, scene, k, windows[k - first])
+            for socket, _ in GLOW_SHARED:
+                m.feed(glow.inputs[socket], _crop(m, g[socket], win) if win and socket in per_pixel else g[socket])
+            terms = [m.wrap(glow.outputs[term], vector=True) for term, _ in GLOW_TERMS]
+            if win is not None:
+                terms = [_uncrop(m, v, win) for v in terms]
+            air, back = _accumulate(m, air, terms[0]), _accumulate(m, back, terms[1])
+            built.append(glow)
+        if mod.scatter is not rungs.SCATTER_OFF:
+            scatter = m.node("CompositorNodeGroup", 6)
+            scatter.node_tree = build_scatter_group(mod, images)
+            scatter.label = f"Light {k} Scatter: {light.name}"
+            for socket, _ in SURFACE_SHARED:
+                m.feed(scatter.inputs[socket], g[socket if socket not in SURFACE_IMAGES else SURFACE + socket])
+            scat = _accumulate(m, scat, m.wrap(scatter.outputs["Scattered"], vector=True))
+            built.append(scatter)
+        for node in built:
             m.feed(node.inputs["Light"], position)
             ng.links.new(intensity.outputs[0], node.inputs["Intensity"])
-        if groups.SPOT_COS in glow.inputs:
-            groups._drive_spot(ng, k, light, glow)
-            for socket, _ in groups._spot_inputs(mod):
-                ng.links.new(glow.inputs[socket].links[0].from_socket, scatter.inputs[socket])
-        terms = [m.wrap(glow.outputs[term], vector=True) for term, _ in GLOW_TERMS]
-        if win is not None:
-            terms = [_uncrop(m, v, win) for v in terms]
-        air, back = _accumulate(m, air, terms[0]), _accumulate(m, back, terms[1])
-        scat = _accumulate(m, scat, m.wrap(scatter.outputs["Scattered"], vector=True))
+        if built and groups.SPOT_COS in built[0].inputs:   # the cone's drivers once, for both groups
+            groups._drive_spot(ng, k, light, built[0])
+            for node in built[1:]:
+                for socket, _ in groups._spot_inputs(mod):
+                    ng.links.new(built[0].inputs[socket].links[0].from_socket, node.inputs[socket])
     for term, v in (("Airlight", air), ("Scattered", scat), ("Background", back)):
         m.feed(gout.inputs[term], v)
     return groups._install(ng, name)

@@ -471,6 +471,17 @@ def refresh_lights(scene, rechoose=False, this_frame=False):
     follow_compositor(scene)   # the engine or the denoiser flag may have changed
 
 
+def grow_windows(scene):
+    """The frame changed (an animation plays or renders): the Compositor method's windows grow by this frame's
+    (``view.windows``), so a light moved since they were computed over the range is not cut on this frame."""
+    surface = bpy.data.node_groups.get(groups.SURFACE)
+    if surface is None or surface.get(PREFERENCE_KEY) != COMPOSITOR or comp_fog.FOG_GROUP not in bpy.data.node_groups:
+        return
+    steps = (stored_choice() or {}).get("lights", {})
+    lights = [o for o in fog_lights(scene)[0] if steps.get(o.name, [0])[0] != rungs.LEFT_OUT]
+    comp_fog.set_windows(lights, view.windows(scene, lights, [scene.frame_current]), grow=True)
+
+
 def remove_fog(scene, progress=progress_.silent):
     """Take the fog out of every material, light and world, and delete its node groups and tables."""
     mats = list(bpy.data.materials)

@@ -27,6 +27,22 @@ LAMBERT = ((1.0, 1.0, 1.0), (0.0, 0.0, 0.0), 0.0)
 MIRROR = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), len(tables.PHONG_EXPONENTS) - 1.0)
 
 
+_sampling = []   # non-empty while the view's frames are being sampled (``sampling_frames``)
+
+
+def sampling_frames():
+    """True while this module steps through frames (the frame-change handler leaves those alone)."""
+    return bool(_sampling)
+
+
+def _frame_set(scene, frame, subframe=0.0):
+    _sampling.append(True)
+    try:
+        scene.frame_set(frame, subframe=subframe)
+    finally:
+        _sampling.pop()
+
+
 def _animated(scene):
     """True if an object or its data is animated (an action or drivers): the view may change with the frame."""
     for obj in scene.objects:
@@ -239,7 +255,7 @@ def view_samples(scene, lights, frames=None, grid=None):
     try:
         for f in frames:
             if f != scene.frame_current:
-                scene.frame_set(f)
+                _frame_set(scene, f)
             depsgraph = bpy.context.evaluated_depsgraph_get()
             origin, rows, light_pos, inverse = _sample_frame(scene, depsgraph, lights, grid)
             for d, dist, n, (rd, rs, lev) in rows:
@@ -255,7 +271,7 @@ def view_samples(scene, lights, frames=None, grid=None):
                 fr.append(f)
     finally:
         if (scene.frame_current, scene.frame_subframe) != current:
-            scene.frame_set(current[0], subframe=current[1])
+            _frame_set(scene, current[0], current[1])
     n_lights = len(lights)
     spot = np.array([is_spot(o) for o in lights], bool)
     spots = predict.SpotSamples(spot, np.array(invs).reshape(-1, n_lights, 3, 3),
@@ -331,11 +347,11 @@ def windows(scene, lights, frames=None):
     try:
         for f in frames:
             if f != scene.frame_current:
-                scene.frame_set(f)
+                _frame_set(scene, f)
             s, g = _frame_windows(scene, bpy.context.evaluated_depsgraph_get(), lights)
             surfaces = footprint.union(surfaces, s)
             glows = [None if a is None else footprint.union(a, b) for a, b in zip(glows, g)]
     finally:
         if (scene.frame_current, scene.frame_subframe) != current:
-            scene.frame_set(current[0], subframe=current[1])
+            _frame_set(scene, current[0], current[1])
     return surfaces, glows

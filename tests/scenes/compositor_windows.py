@@ -7,7 +7,8 @@ The many-lights scene with four spots set to hard cases: one whose cone holds th
 with a non-uniform scale, a 10-degree cone with no blend, a 170-degree cone animated across the picture over
 frames 1-5 (the windows hold the whole range).  Renders (Cycles, 1 spp, Gaussian filter at pixel centres):
 frame 1 and frame 5, then frame 1 again after a spot moved and ``apply.refresh_lights`` ran as the
-depsgraph handler runs it (this frame only), each with and without windows.  Writes the pictures as EXR
+depsgraph handler runs it (this frame only), and at frame 5 after it moved again and the frame-change
+handler ran (``apply.grow_windows``), each with and without windows.  Writes the pictures as EXR
 and prints one line ``WINDOWS_JSON {...}``: the pictures' paths by case and each window's share of the
 picture.
 """
@@ -83,6 +84,11 @@ def run(out, windowed):
     bpy.context.view_layer.update()
     apply.refresh_lights(scene, this_frame=True)
     paths["moved"] = render(scene, out / f"{tag}_moved.exr")
+    spots[2].location.x += 8.0   # moved again, then the frame changes: the frame-change handler grows the windows
+    scene.frame_set(5)
+    if windowed:   # (without windows there are none to grow)
+        apply.grow_windows(scene)
+    paths["moved, frame 5"] = render(scene, out / f"{tag}_moved_f5.exr")
     lights = sorted((o for o in scene.objects if o.type == "LIGHT"), key=lambda o: o.name)
     shares = None
     if windowed:
