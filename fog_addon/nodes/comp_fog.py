@@ -13,11 +13,14 @@ cost grows with lights x samples x materials (issue 8's overhead: 4x the fog-fre
   pixel's mean surface point and the glows along the pixel's ray to it and to the sky
   (``shading.glow_pair``) over the lights, built by ``CompOps`` (the same formulas and tables as the
   materials' groups, each node once), plus the peak factor of ``pixel.py`` where a light is seen in the
-  picture.
+  picture; each light in two groups, its glows (``build_glow_group``) and the fog light its surface
+  reflects (``build_scatter_group``), each evaluated only in its window (``precompute/footprint.py``: a
+  spot's cone, the picture's surfaces) through Crop nodes, and put back in place by Translate nodes.
 
 Everything the graph reads from the scene reaches it by simple-expression drivers (the camera's matrix,
 lens, sensor and shift, the render's size, each light's position, power, colour and cone, the fog's
-density and colour in the params group): a saved file renders any frame on a farm without the add-on.
+density and colour in the params group; the windows' crops from ID properties that hold every frame of an
+animation): a saved file renders any frame on a farm without the add-on.
 
 In EEVEE, which writes AOVs as half floats accumulated with a loss and clamps negatives, the surface point
 is the Depth pass's (float32) on the pixel's ray (``EEVEE_AOVS``), and the materials keep the lights' shared
