@@ -18,10 +18,12 @@ from fog_addon import imageio
 TOLERANCE = 1e-5   # of the picture's peak: float rounding (the cropped floats pass through colour sockets)
 
 
-@pytest.fixture(scope="module")
-def res(tmp_path_factory):
+@pytest.fixture(scope="module", params=["landscape", "portrait"])
+def res(request, tmp_path_factory):
+    """The scene's renders; "portrait": odd sizes at 150 %, the sensor fitted vertically, the lens shifted."""
     out = tmp_path_factory.mktemp("windows")
-    proc = h.run([h.ROOT / "tests" / "scenes" / "compositor_windows.py", out], timeout=600)
+    extra = ["portrait"] if request.param == "portrait" else []
+    proc = h.run([h.ROOT / "tests" / "scenes" / "compositor_windows.py", out, *extra], timeout=600)
     assert not h.log_errors(proc.stdout + proc.stderr)
     line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("WINDOWS_JSON "))
     return json.loads(line.split(" ", 1)[1])
@@ -40,4 +42,4 @@ def test_windows_crop(res):
     sky above the ground), but not the spot holding the camera."""
     shares = res["shares"]
     assert shares["L000"] == 1.0
-    assert shares["L002"] < 0.2 and shares["surfaces"] < 0.8
+    assert shares["L002"] < 0.25 and shares["surfaces"] < 0.8

@@ -1,7 +1,7 @@
 """The Compositor method's windows (``precompute/footprint.py``) change no pixel: renders with them against
 renders without them (every term over the whole picture), the same scene, frame and settings.
 
-    python tests/scenes/compositor_windows.py OUT_DIR
+    python tests/scenes/compositor_windows.py OUT_DIR [portrait]
 
 The many-lights scene with four spots set to hard cases: one whose cone holds the camera, one aimed sideways
 with a non-uniform scale, a 10-degree cone with no blend, a 170-degree cone animated across the picture over
@@ -10,7 +10,8 @@ frame 1 and frame 5, then frame 1 again after a spot moved and ``apply.refresh_l
 depsgraph handler runs it (this frame only), and at frame 5 after it moved again and the frame-change
 handler ran (``apply.grow_windows``), each with and without windows.  Writes the pictures as EXR
 and prints one line ``WINDOWS_JSON {...}``: the pictures' paths by case and each window's share of the
-picture.
+picture.  ``portrait``: the same at 41 x 73 px at 150 % (odd sizes), the sensor fitted vertically, the lens
+shifted.
 """
 import json
 import math
@@ -28,8 +29,9 @@ from fog_addon import measure  # noqa: E402
 from fog_addon.ops import apply, view  # noqa: E402
 from fog_addon.precompute import footprint  # noqa: E402
 
-W, H = 96, 54
 BETA = 0.1
+PORTRAIT = "portrait" in sys.argv
+W, H = (61, 109) if PORTRAIT else (96, 54)   # the render's pixels
 
 
 def build():
@@ -52,6 +54,11 @@ def build():
     scene.frame_set(1)
     scene.render.engine = "CYCLES"
     measure.set_resolution(scene, W, H)
+    if PORTRAIT:
+        measure.set_resolution(scene, 41, 73)
+        scene.render.resolution_percentage = 150
+        scene.camera.data.sensor_fit = "VERTICAL"
+        scene.camera.data.shift_x, scene.camera.data.shift_y = 0.13, -0.07
     measure.set_samples(scene, 1)
     measure.set_cycles_cpu(scene)
     scene.cycles.use_denoising = False
@@ -103,7 +110,7 @@ def _share(win):
 
 
 def main():
-    out = pathlib.Path(sys.argv[sys.argv.index("--") + 1] if "--" in sys.argv else sys.argv[1])
+    out = pathlib.Path(sys.argv[1])
     out.mkdir(parents=True, exist_ok=True)
     windowed, shares = run(out, True)
     whole, _ = run(out, False)
