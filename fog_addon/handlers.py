@@ -6,14 +6,14 @@ materials.  Positions, power and colour are followed by drivers without it.
 When the camera, lights or objects moved, the lights' models are chosen again
 for the Quality (``apply.choose_models``), RECHOOSE_DELAY_S after the scene
 stopped changing (not while rendering: a render keeps the stored choice, as a
-farm without the add-on does).  The Compositor method's windows (``view.windows``) follow at once for the
-current frame (and grow by each frame an animation plays or renders); an animation's other frames at the
-re-choice, and before the file is saved.
+farm without the add-on does).  The Compositor method's windows (``view.windows``) grow at once by the
+current frame's (and by each frame an animation plays or renders); they are computed over an animation's
+range again before the file is saved.
 """
 import bpy
 from bpy.app.handlers import persistent
 
-from .nodes import dedupe
+from .nodes import comp_fog, dedupe
 from .ops import apply, view
 
 
@@ -39,7 +39,7 @@ def _rechoose():
         return RECHOOSE_DELAY_S
     _choosing.append(True)
     try:
-        apply.refresh_lights(scene, rechoose=True)
+        apply.refresh_lights(scene, rechoose=True, this_frame=True)   # (the windows: at saving, over the range)
     finally:
         _choosing.clear()
     return None
@@ -76,9 +76,11 @@ def on_frame_change(scene, *_):
 
 @persistent
 def on_save_pre(*_):
-    """A saved file renders on a farm without the add-on: its windows hold every frame of the range."""
+    """A saved file renders on a farm without the add-on: its windows hold every frame of the range (computed
+    again if they were grown by single frames since: stepping through the frames costs seconds in a big scene)."""
     scene = bpy.context.scene
-    if scene is not None and getattr(scene, "analytic_fog", None) is not None and scene.analytic_fog.enabled:
+    settings = getattr(scene, "analytic_fog", None)
+    if settings is not None and settings.enabled and comp_fog.windows_partial():
         apply.refresh_lights(scene)
 
 

@@ -44,3 +44,12 @@ def test_windows_crop(res):
     shares = res["shares"]
     assert shares["L000"] == 1.0
     assert shares["L002"] < 0.25 and shares["surfaces"] < 0.8
+
+
+def test_grown_windows_are_computed_again_before_saving(res):
+    """Windows grown by single frames are marked (saving the file computes them over the range again,
+    ``handlers.on_save_pre``); the refresh it runs clears the mark.  (In the portrait picture the moved
+    spot stays within its window: nothing grows, nothing is marked.)"""
+    shares = res["shares"]
+    assert shares["grown"] == shares["grown, frame 5"] == (not res["portrait"])
+    assert not shares["saved"]

@@ -348,28 +348,44 @@ def build_bundle(scene, first, lights, models, images, peak, windows):
     return groups._install(ng, name)
 
 
+PARTIAL = "Fog Windows Partial"   # on the fog group: its windows were grown by single frames (or built full)
+#                                    since they were last computed over an animation's range
+
+
+def windows_partial():
+    """True if the windows should be computed over the range again before the file is saved (``PARTIAL``)."""
+    ng = bpy.data.node_groups.get(FOG_GROUP)
+    return bool(ng is not None and ng.get(PARTIAL))
+
+
 def set_windows(lights, windows, grow=False):
     """Set the windows (``footprint.py``) the fog's compositor groups crop to: ``windows`` = (the surfaces'
     window, [each light's glow window or None]), ``lights`` in the order of ``build_fog_group``'s; ``grow``:
     each the union of the one it had and the new one.  Only values change: a light built without a window
     keeps none (the whole picture)."""
     surface_window, glows = windows
-    _set(bpy.data.node_groups.get(FOG_GROUP), "Surface", surface_window, grow)
+    fog = bpy.data.node_groups.get(FOG_GROUP)
+    changed = _set(fog, "Surface", surface_window, grow)
     for first in range(0, len(lights), BUNDLE_SIZE):
         bundle = bpy.data.node_groups.get(f"{BUNDLE} {first + 1}-{min(first + BUNDLE_SIZE, len(lights))}")
         for k, win in enumerate(glows[first:first + BUNDLE_SIZE], start=first):
             if win is not None:
-                _set(bundle, k, win, grow)
+                changed = _set(bundle, k, win, grow) or changed
+    if fog is not None and (not grow or changed) and bool(fog.get(PARTIAL)) != grow:
+        fog[PARTIAL] = grow
 
 
 def _set(ng, label, win, grow):
+    """Set the window "<WINDOW> <label>" of ``ng`` (the union with the one it has if ``grow``); True if it changed."""
     key = f"{WINDOW} {label}"
     if ng is None or key not in ng:
-        return
+        return False
     if grow:
         win = footprint.union(tuple(ng[key]), win)
-    if tuple(ng[key]) != tuple(win):   # no needless update of the tree
-        ng[key] = list(win)
+    if tuple(ng[key]) == tuple(win):   # no needless update of the tree
+        return False
+    ng[key] = list(win)
+    return True
 
 
 def _params(m):
@@ -381,12 +397,13 @@ def _params(m):
     return beta, albedo
 
 
-def build_fog_group(scene, lights, models, images, windows=None):
+def build_fog_group(scene, lights, models, images, windows=None, partial=False):
     """(Re)build the compositor group ``FOG_GROUP``: Image (the render) and the AOVs in; Image (the render
     plus the fog's light) and Fog Light out.  ``lights``: the fog's lights, ``models``: each light's
     rungs.LightModels; ``windows``: (the surfaces' window, [each light's glow window or None]) of
-    ``footprint.py`` (``view.windows``), or None to evaluate every term over the whole picture.  Rebuilt in
-    place, so the scene's compositor keeps its group node.  Returns the table images it reads (``images``
+    ``footprint.py`` (``view.windows``), or None to evaluate every term over the whole picture; ``partial``:
+    they do not hold the animation's range (``PARTIAL``).  Rebuilt in place, so the scene's compositor keeps
+    its group node.  Returns the table images it reads (``images``
     and the pixel filter's)."""
     peak = scene.render.engine == "CYCLES" and pixel.filter_scale(
         scene.cycles.pixel_filter_type, scene.cycles.filter_width) is not None
@@ -464,5 +481,6 @@ def build_fog_group(scene, lights, models, images, windows=None):
         fog = albedo * (m.scale(air + m.scale(scat, t_vp), cover) + m.scale(back, 1.0 - cover))
     m.feed(gout.inputs["Fog Light"], fog)
     m.feed(gout.inputs["Image"], fog + p["Image"])
+    ng[PARTIAL] = partial
     ng[owned.BUILT] = groups.code_fingerprint()
     return images

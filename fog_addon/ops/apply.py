@@ -224,8 +224,8 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
     in_shaders = dimming_lights(scene, in_groups, preference) if in_compositor else (in_groups, grouped_models)
     signature = _signature(scene, in_groups, grouped_models, preference, with_passes) + (
         "|dimming:" + ",".join(o.name_full for o in in_shaders[0]) if in_compositor else "")
-    # where the compositor evaluates each term (``view.windows``); over an animation's frames, or (the handler's
-    # ``this_frame``, which can't change frames) this frame's, added to the windows the groups have
+    # where the compositor evaluates each term (``view.windows``); over an animation's frames, or (the handlers'
+    # ``this_frame``: no stepping through frames) this frame's, added to the windows the groups have
     partial = this_frame and view.animated(scene)
     windows = view.windows(scene, in_groups, [scene.frame_current] if partial else None) if in_compositor else None
     surface = bpy.data.node_groups.get(groups.SURFACE)
@@ -237,7 +237,7 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
         surface = groups.build_surface(*in_shaders, imgs, with_passes, extra=aovs)
         if in_compositor:
             imgs = comp_fog.build_fog_group(scene, in_groups, grouped_models, imgs,
-                                            view.full_windows(in_groups) if partial else windows)
+                                            view.full_windows(in_groups) if partial else windows, partial)
         surface[LIGHTS_KEY] = signature
         surface[PREFERENCE_KEY] = preference
         surface[PASSES_KEY] = with_passes
@@ -462,8 +462,8 @@ def refresh_lights(scene, rechoose=False, this_frame=False):
     touched.  Called from the depsgraph handler: when nothing changed it only compares names (and sets the
     Compositor method's windows).  ``rechoose``: also choose the lights' models again from the view
     (camera, lights or objects moved); the handler does that after the scene has stopped changing
-    (``handlers.py``).  ``this_frame``: the handler's call, which must not change frames (the windows of
-    an animation grow by this frame's; the rest follows at the re-choice)."""
+    (``handlers.py``).  ``this_frame``: the handlers' calls, which do not step through frames (the windows
+    of an animation grow by this frame's; saving the file computes them over the range again)."""
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is None or surface.library is not None:
         return

@@ -8,7 +8,8 @@ with a non-uniform scale, a 10-degree cone with no blend, a 170-degree cone anim
 frames 1-5 (the windows hold the whole range).  Renders (Cycles, 1 spp, Gaussian filter at pixel centres):
 frame 1 and frame 5, then frame 1 again after a spot moved and ``apply.refresh_lights`` ran as the
 depsgraph handler runs it (this frame only), and at frame 5 after it moved again and the frame-change
-handler ran (``apply.grow_windows``), each with and without windows.  Writes the pictures as EXR
+handler ran (``apply.grow_windows``), each with and without windows; then whether the windows were marked
+grown (``comp_fog.windows_partial``) and are no longer after the refresh that saving a file runs.  Writes the pictures as EXR
 and prints one line ``WINDOWS_JSON {...}``: the pictures' paths by case and each window's share of the
 picture.  ``portrait``: the same at 41 x 73 px at 150 % (odd sizes), the sensor fitted vertically, the lens
 shifted.
@@ -26,6 +27,7 @@ import bpy  # noqa: E402
 
 import many_lights  # noqa: E402
 from fog_addon import measure  # noqa: E402
+from fog_addon.nodes import comp_fog  # noqa: E402
 from fog_addon.ops import apply, view  # noqa: E402
 from fog_addon.precompute import footprint  # noqa: E402
 
@@ -91,6 +93,7 @@ def run(out, windowed):
     bpy.context.view_layer.update()
     apply.refresh_lights(scene, this_frame=True)
     paths["moved"] = render(scene, out / f"{tag}_moved.exr")
+    flags = {"grown": comp_fog.windows_partial()}
     spots[2].location.x += 8.0   # moved again, then the frame changes: the frame-change handler grows the windows
     scene.frame_set(5)
     if windowed:   # (without windows there are none to grow)
@@ -98,9 +101,13 @@ def run(out, windowed):
     paths["moved, frame 5"] = render(scene, out / f"{tag}_moved_f5.exr")
     lights = sorted((o for o in scene.objects if o.type == "LIGHT"), key=lambda o: o.name)
     shares = None
-    if windowed:
+    if windowed:   # what saving the file does with grown windows (handlers.on_save_pre): over the range again
+        flags["grown, frame 5"] = comp_fog.windows_partial()
+        apply.refresh_lights(scene)
+        flags["saved"] = comp_fog.windows_partial()
+        shares = flags
         surfaces, glows = view.windows(scene, lights)
-        shares = {"surfaces": _share(surfaces), **{o.name: _share(g) for o, g in zip(lights, glows)}}
+        shares.update({"surfaces": _share(surfaces), **{o.name: _share(g) for o, g in zip(lights, glows)}})
     return paths, shares
 
 
@@ -114,7 +121,8 @@ def main():
     out.mkdir(parents=True, exist_ok=True)
     windowed, shares = run(out, True)
     whole, _ = run(out, False)
-    print("WINDOWS_JSON " + json.dumps({"windows": windowed, "whole": whole, "shares": shares}), flush=True)
+    print("WINDOWS_JSON " + json.dumps({"windows": windowed, "whole": whole, "shares": shares, "portrait": PORTRAIT}),
+          flush=True)
 
 
 if __name__ == "__main__":
