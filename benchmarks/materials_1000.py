@@ -121,7 +121,7 @@ def shared_ok(on):
     if on and compositor.is_set_up(bpy.context.scene):   # the scene's own denoising set-up (Cycles, denoiser on)
         want = sorted(want + [compositor.GROUP])
     if on and KW.get("method") == "compositor":   # the lights are the compositor's: its groups, once each
-        bundles = {f"{comp_fog.BUNDLE} {k + 1}-{min(k + comp_fog.BUNDLE_SIZE, len(lights))}"
+        bundles = {comp_fog.bundle_name(k, min(comp_fog.BUNDLE_SIZE, len(lights) - k))
                    for k in range(0, len(lights), comp_fog.BUNDLE_SIZE)}
         need = {groups.PARAMS, groups.SURFACE, groups.WORLD, comp_fog.FOG_GROUP, compositor.GROUP} | bundles
         return need <= set(ours) and not any(owned.SUFFIX.match(n) for n in ours) and not any(

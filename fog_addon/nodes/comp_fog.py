@@ -296,6 +296,11 @@ def _zero(m, image):
     return m._new_vmath("MULTIPLY", image, (0.0, 0.0, 0.0))
 
 
+def bundle_name(first, count):
+    """The bundle group of the scene's lights ``first`` + 1 .. ``first`` + ``count``."""
+    return f"{BUNDLE} {first + 1}-{first + count}"
+
+
 def build_bundle(scene, first, lights, models, images, peak, windows):
     """The compositor group of the scene's lights ``first`` + 1 .. ``first`` + len(lights) (at most
     BUNDLE_SIZE): SHARED in, each light's glow and scatter groups (``build_glow_group``,
@@ -304,7 +309,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows):
     picture, Scattered over the Surface inputs' window.  ``windows``: each light's glow window
     (``footprint.py``), or None for none (the whole picture): a light with one gets its glow group's
     inputs cropped to it (``_window``)."""
-    name = f"{BUNDLE} {first + 1}-{first + len(lights)}"
+    name = bundle_name(first, len(lights))
     ng, gin, gout = groups._new_group(name, SHARED, TERMS, tree_type="CompositorNodeTree")
     m = CompOps(ng, images)
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
@@ -367,7 +372,7 @@ def set_windows(lights, windows, grow=False):
     fog = bpy.data.node_groups.get(FOG_GROUP)
     changed = _set(fog, "Surface", surface_window, grow)
     for first in range(0, len(lights), BUNDLE_SIZE):
-        bundle = bpy.data.node_groups.get(f"{BUNDLE} {first + 1}-{min(first + BUNDLE_SIZE, len(lights))}")
+        bundle = bpy.data.node_groups.get(bundle_name(first, min(BUNDLE_SIZE, len(lights) - first)))
         for k, win in enumerate(glows[first:first + BUNDLE_SIZE], start=first):
             if win is not None:
                 changed = _set(bundle, k, win, grow) or changed
@@ -403,8 +408,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False):
     rungs.LightModels; ``windows``: (the surfaces' window, [each light's glow window or None]) of
     ``footprint.py`` (``view.windows``), or None to evaluate every term over the whole picture; ``partial``:
     they do not hold the animation's range (``PARTIAL``).  Rebuilt in place, so the scene's compositor keeps
-    its group node.  Returns the table images it reads (``images``
-    and the pixel filter's)."""
+    its group node.  Returns the table images it reads (``images`` and the pixel filter's)."""
     peak = scene.render.engine == "CYCLES" and pixel.filter_scale(
         scene.cycles.pixel_filter_type, scene.cycles.filter_width) is not None
     if peak:

@@ -188,6 +188,12 @@ def explain(choice=None):
     return lines
 
 
+def _in_groups(lights, choice):
+    """The ``lights`` the fog's groups hold: all but those ``choice`` stepped out to fit a budget (rungs.LEFT_OUT;
+    a light the choice does not know is in)."""
+    return [o for o in lights if choice["lights"].get(o.name, [0])[0] != rungs.LEFT_OUT]
+
+
 def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.DEFAULT_QUALITY, rechoose=True,
                         this_frame=False):
     """(Re)build the Surface and World groups for ``lights``, their models and the fog passes (on or off)
@@ -216,8 +222,8 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
         choice = dict(old, lights={o.name: old["lights"].get(o.name, [0, 0.0]) for o in lights})
     choice["quality"] = quality_value(quality)
     # lights stepped out of the groups to fit a budget (rungs.LEFT_OUT) keep their own dimming (wrap_light)
-    grouped = [(o, mod) for o, mod in zip(lights, models) if choice["lights"][o.name][0] != rungs.LEFT_OUT]
-    in_groups, grouped_models = [o for o, _ in grouped], [mod for _, mod in grouped]
+    in_groups = _in_groups(lights, choice)
+    grouped_models = [mod for o, mod in zip(lights, models) if o in in_groups]
     in_compositor = preference == COMPOSITOR
     # the materials' lights: none in the Compositor method (Cycles' lights dim their own direct light), in
     # EEVEE's only the shared dimming of those that fit its uniform block
@@ -477,8 +483,7 @@ def grow_windows(scene):
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is None or surface.get(PREFERENCE_KEY) != COMPOSITOR or comp_fog.FOG_GROUP not in bpy.data.node_groups:
         return
-    steps = (stored_choice() or {}).get("lights", {})
-    lights = [o for o in fog_lights(scene)[0] if steps.get(o.name, [0])[0] != rungs.LEFT_OUT]
+    lights = _in_groups(fog_lights(scene)[0], stored_choice() or {"lights": {}})
     comp_fog.set_windows(lights, view.windows(scene, lights, [scene.frame_current]), grow=True)
 
 

@@ -43,7 +43,20 @@ def _frame_set(scene, frame, subframe=0.0):
         _sampling.pop()
 
 
-def _animated(scene):
+def _at_frames(scene, frames):
+    """Yield (frame, evaluated depsgraph) at each of ``frames``, the scene's frame restored afterwards."""
+    current = scene.frame_current, scene.frame_subframe
+    try:
+        for f in frames:
+            if f != scene.frame_current:
+                _frame_set(scene, f)
+            yield f, bpy.context.evaluated_depsgraph_get()
+    finally:
+        if (scene.frame_current, scene.frame_subframe) != current:
+            _frame_set(scene, current[0], current[1])
+
+
+def animated(scene):
     """True if an object or its data is animated (an action or drivers): the view may change with the frame."""
     for obj in scene.objects:
         for idb in (obj, obj.data):
@@ -56,7 +69,7 @@ def _animated(scene):
 def sample_frames(scene):
     """The frames to sample: the current one for a still, up to MAX_FRAMES spread over an animation."""
     first, last = scene.frame_start, scene.frame_end
-    if last <= first or not _animated(scene):
+    if last <= first or not animated(scene):
         return [scene.frame_current]
     count = min(MAX_FRAMES, last - first + 1)
     return sorted({int(round(first + k * (last - first) / max(count - 1, 1))) for k in range(count)})
@@ -250,28 +263,20 @@ def view_samples(scene, lights, frames=None, grid=None):
     :func:`sample_frames`).  Changes the current frame while sampling and restores it."""
     frames = sample_frames(scene) if frames is None else frames
     grid = sample_grid(scene) if grid is None else grid
-    current = scene.frame_current, scene.frame_subframe
     cams, dirs, dists, normals, rds, rss, levels, lps, invs, fr = [], [], [], [], [], [], [], [], [], []
-    try:
-        for f in frames:
-            if f != scene.frame_current:
-                _frame_set(scene, f)
-            depsgraph = bpy.context.evaluated_depsgraph_get()
-            origin, rows, light_pos, inverse = _sample_frame(scene, depsgraph, lights, grid)
-            for d, dist, n, (rd, rs, lev) in rows:
-                cams.append(origin)
-                dirs.append(d)
-                dists.append(dist)
-                normals.append(n)
-                rds.append(rd)
-                rss.append(rs)
-                levels.append(lev)
-                lps.append(light_pos)
-                invs.append(inverse)
-                fr.append(f)
-    finally:
-        if (scene.frame_current, scene.frame_subframe) != current:
-            _frame_set(scene, current[0], current[1])
+    for f, depsgraph in _at_frames(scene, frames):
+        origin, rows, light_pos, inverse = _sample_frame(scene, depsgraph, lights, grid)
+        for d, dist, n, (rd, rs, lev) in rows:
+            cams.append(origin)
+            dirs.append(d)
+            dists.append(dist)
+            normals.append(n)
+            rds.append(rd)
+            rss.append(rs)
+            levels.append(lev)
+            lps.append(light_pos)
+            invs.append(inverse)
+            fr.append(f)
     n_lights = len(lights)
     spot = np.array([is_spot(o) for o in lights], bool)
     spots = predict.SpotSamples(spot, np.array(invs).reshape(-1, n_lights, 3, 3),
@@ -325,11 +330,6 @@ def full_windows(lights):
     return footprint.FULL, [footprint.FULL if is_spot(o) else None for o in lights]
 
 
-def animated(scene):
-    """True if the view may change with the frame (an object or its data animated)."""
-    return _animated(scene)
-
-
 def windows(scene, lights, frames=None):
     """The windows of the Compositor method (``precompute/footprint.py``): (the surfaces' window, [each
     light's glow window: a spot's, None for a point light]) holding ``frames`` (default: every frame of an
@@ -337,21 +337,14 @@ def windows(scene, lights, frames=None):
     renders, animations over MAX_WINDOW_FRAMES frames or with motion blur."""
     if scene.render.use_border or scene.camera is None or scene.camera.data.type != "PERSP":
         return full_windows(lights)
-    if frames is None and _animated(scene):
+    if frames is None and animated(scene):
         if scene.frame_end - scene.frame_start + 1 > MAX_WINDOW_FRAMES or scene.render.use_motion_blur:
             return full_windows(lights)   # (motion blur: the frames' windows don't bound the times between)
         frames = range(scene.frame_start, scene.frame_end + 1)
     frames = [scene.frame_current] if frames is None else frames
-    current = scene.frame_current, scene.frame_subframe
     surfaces, glows = footprint.EMPTY, [footprint.EMPTY if is_spot(o) else None for o in lights]
-    try:
-        for f in frames:
-            if f != scene.frame_current:
-                _frame_set(scene, f)
-            s, g = _frame_windows(scene, bpy.context.evaluated_depsgraph_get(), lights)
-            surfaces = footprint.union(surfaces, s)
-            glows = [None if a is None else footprint.union(a, b) for a, b in zip(glows, g)]
-    finally:
-        if (scene.frame_current, scene.frame_subframe) != current:
-            _frame_set(scene, current[0], current[1])
+    for _, depsgraph in _at_frames(scene, frames):
+        s, g = _frame_windows(scene, depsgraph, lights)
+        surfaces = footprint.union(surfaces, s)
+        glows = [None if a is None else footprint.union(a, b) for a, b in zip(glows, g)]
     return surfaces, glows
