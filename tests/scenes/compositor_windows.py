@@ -66,6 +66,7 @@ def build():
     scene.cycles.use_denoising = False
     scene.cycles.pixel_filter_type = "GAUSSIAN"
     scene.cycles.filter_width = 0.01
+    scene.render.threads_mode, scene.render.threads = "FIXED", 1   # the same float sums in both renders
     im = scene.render.image_settings
     im.file_format, im.color_depth, im.color_mode = "OPEN_EXR", "32", "RGB"
     return scene, spots
