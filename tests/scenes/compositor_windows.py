@@ -9,9 +9,9 @@ frames 1-5 (the windows hold the whole range).  Renders (Cycles, 1 spp, Gaussian
 frame 1 and frame 5, then frame 1 again after a spot moved and ``apply.refresh_lights`` ran as the
 depsgraph handler runs it (this frame only), and at frame 5 after it moved again and the frame-change
 handler ran (``apply.grow_windows``), each with and without windows; then whether the windows were marked
-grown (``comp_fog.windows_partial``) and are no longer after the refresh that saving a file runs.  Writes the pictures as EXR
-and prints one line ``WINDOWS_JSON {...}``: the pictures' paths by case and each window's share of the
-picture.  ``portrait``: the same at 41 x 73 px at 150 % (odd sizes), the sensor fitted vertically, the lens
+grown (``comp_fog.windows_partial``) and are no longer after the refresh that saving a file runs.  Writes
+the pictures as EXR and prints one line ``WINDOWS_JSON {...}``: the pictures' paths by case and each window's
+share of the picture.  ``portrait``: the same at 41 x 73 px at 150 % (odd sizes), the sensor fitted vertically, the lens
 shifted.
 """
 import json
