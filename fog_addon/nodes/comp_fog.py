@@ -75,12 +75,34 @@ class CompOps(NodeOps):
 
     GROUP_NODE = "CompositorNodeGroup"
     GROUP_TREE = "CompositorNodeTree"
+    SEPARATE_COLOR = "CompositorNodeSeparateColor"
     KERNEL_PREFIX = KERNEL_PREFIX
     inline = staticmethod(lambda node: None)
 
-    def _table(self, spec, x, y, row0=0, rows=None):
-        """One bilinear Map UV (the compositor's interpolation is exact bilinear between texel centres):
-        x, y in [0, 1] span the texel centres of rows row0 .. row0 + rows - 1."""
+    def select(self, cond, if_true, if_false):
+        """One Mix node (Float) for the four Math nodes of ``NodeOps.select``: (1 - cond) if_false + cond if_true,
+        exact for cond in {0, 1} as theirs (a Mix node's unused inputs cost EEVEE uniforms, not the compositor)."""
+        vals = [self.wrap(v) for v in (cond, if_false, if_true)]
+        if any(v.vector for v in vals) or vals[0].const is not None:
+            return super().select(cond, if_true, if_false)
+        return self._once(("select", self._ids(vals)), lambda: self._new_select(*vals))
+
+    def _new_select(self, cond, if_false, if_true):
+        col = 1 + max(v.col for v in (cond, if_false, if_true))
+        n = self.node("ShaderNodeMix", col, data_type="FLOAT", clamp_factor=False)
+        for name, v in (("Factor_Float", cond), ("A_Float", if_false), ("B_Float", if_true)):
+            self.feed(next(s for s in n.inputs if s.identifier == name), v)
+        return Val(self, sock=next(s for s in n.outputs if s.identifier == "Result_Float"), col=col)
+
+    def _table(self, spec, x, y, row0=0, rows=None, channel=0):
+        """``channel`` of one bilinear Map UV (the compositor's interpolation is exact bilinear between texel
+        centres; the channels of a texel share it): x, y in [0, 1] span the texel centres of rows row0 ..
+        row0 + rows - 1."""
+        mu, col = self._once(("map uv", spec.name, row0, rows, self._ids((x, y))),
+                             lambda: self._map_uv(spec, x, y, row0, rows))
+        return self.texel(spec, mu, col, channel)
+
+    def _map_uv(self, spec, x, y, row0, rows):
         rows = spec.height if rows is None else rows
         u = self.clamp(x) * ((spec.width - 1.0) / spec.width) + 0.5 / spec.width
         v = self.clamp(y) * ((rows - 1.0) / spec.height) + (row0 + 0.5) / spec.height
@@ -91,9 +113,7 @@ class CompOps(NodeOps):
         mu.inputs["Interpolation"].default_value = "Bilinear"
         self.tree.links.new(im.outputs["Image"], mu.inputs["Image"])
         self.tree.links.new(uv.sock, mu.inputs["UV"])
-        sep = self.node("CompositorNodeSeparateColor", uv.col + 2)
-        self.tree.links.new(mu.outputs[0], sep.inputs[0])
-        return Val(self, sock=sep.outputs["Alpha"], col=uv.col + 2)
+        return mu, uv.col + 1
 
 
 def glow_group_name(models, peak):

@@ -17,9 +17,9 @@ def table_version(spec):
 def table_image(spec, bake):
     """The image holding ``spec``'s table, baked and packed if missing or stale.
 
-    Values go to all four channels; the node tree reads Alpha, an exact float
-    output (CHANNEL_PACKED keeps it independent of RGB).  ``use_half_precision``
-    is off or EEVEE would upload half floats.
+    A one-channel table's values go to all four channels; the node tree reads Alpha, an exact float
+    output (CHANNEL_PACKED keeps it independent of RGB).  A table of ``spec.channels`` = 4 fills RGBA.
+    ``use_half_precision`` is off or EEVEE would upload half floats.
     """
     version = table_version(spec)
     img = bpy.data.images.get(spec.name)
@@ -29,12 +29,13 @@ def table_image(spec, bake):
     if img is not None:
         bpy.data.images.remove(img)
     arr = np.asarray(bake(), np.float32)
-    assert arr.shape == (spec.height, spec.width), (arr.shape, spec)
+    shape = (spec.height, spec.width) + ((spec.channels,) if spec.channels > 1 else ())
+    assert arr.shape == shape and spec.channels in (1, 4), (arr.shape, spec)
     img = bpy.data.images.new(spec.name, spec.width, spec.height, alpha=True, float_buffer=True, is_data=True)
     img.colorspace_settings.name = "Non-Color"
     img.alpha_mode = "CHANNEL_PACKED"
     img.use_half_precision = False
-    img.pixels.foreach_set(np.repeat(arr[..., None], 4, axis=-1).ravel())
+    img.pixels.foreach_set((arr if spec.channels == 4 else np.repeat(arr[..., None], 4, axis=-1)).ravel())
     img.update()
     img.pack()
     img.use_fake_user = True

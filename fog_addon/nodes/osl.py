@@ -128,6 +128,9 @@ class OslOps:
     def clamp01(self, x):
         return self.call("clamp", x, 0.0, 1.0)
 
+    def smoothstep(self, edge0, edge1, x):
+        return self.call("smoothstep", edge0, edge1, x)
+
     def dot(self, a, b):
         return self.call("dot", a, b)
 

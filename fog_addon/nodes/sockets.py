@@ -71,6 +71,7 @@ class NodeOps:
 
     GROUP_NODE = "ShaderNodeGroup"
     GROUP_TREE = "ShaderNodeTree"
+    SEPARATE_COLOR = "ShaderNodeSeparateColor"
     KERNEL_PREFIX = KERNEL_GROUP
 
     def __init__(self, tree, images=None, x0=0.0, y0=0.0):
@@ -115,12 +116,29 @@ class NodeOps:
             return self._new_clamp(x, lo, hi)
         return self._once(("clamp", lo, hi, self._ids((x,))), lambda: self._new_clamp(x, lo, hi))
 
+    def smoothstep(self, edge0, edge1, x):
+        return self._once(("smoothstep", self._ids((edge0, edge1, x))), lambda: self._new_smoothstep(edge0, edge1, x))
+
     def group(self, name, fn, *args):
         return self._once(("group", name, self._ids(args)), lambda: self._new_group(name, fn, *args))
 
-    def table(self, spec, x, y, row0=0, rows=None):
-        return self._once(("table", spec.name, row0, rows, self._ids((x, y))),
-                          lambda: self._table(spec, x, y, row0, rows))
+    def table(self, spec, x, y, row0=0, rows=None, channel=0):
+        return self._once(("table", spec.name, row0, rows, channel, self._ids((x, y))),
+                          lambda: self._table(spec, x, y, row0, rows, channel))
+
+    def texel(self, spec, node, col, channel):
+        """``spec``'s ``channel`` as read by ``node`` (an image-reading node in column ``col``): its Alpha output
+        (an exact float output) for A and for a one-channel table's value, else by one Separate Color node."""
+        channel = 3 if spec.channels == 1 else channel
+        if channel == 3 and "Alpha" in node.outputs:
+            return Val(self, sock=node.outputs["Alpha"], col=col)
+
+        def separate():
+            sep = self.node(self.SEPARATE_COLOR, col + 1)
+            self.tree.links.new(node.outputs[0], sep.inputs[0])
+            self.inline(sep)
+            return sep
+        return Val(self, sock=self._once(("separate", node.as_pointer()), separate).outputs[channel], col=col + 1)
 
     # -- plumbing -----------------------------------------------------------
     def wrap(self, x, vector=False):
@@ -181,6 +199,19 @@ class NodeOps:
             self.feed(s, v)
         self.inline(n)
         return Val(self, sock=n.outputs[0], col=col)
+
+    def _new_smoothstep(self, edge0, edge1, x):
+        """One Map Range node (Float, Smooth Step) from [edge0, edge1] to [0, 1] (folded for constants)."""
+        vals = [self.wrap(v) for v in (x, edge0, edge1)]
+        if all(v.const is not None for v in vals):
+            t = min(max((vals[0].const - vals[1].const) / (vals[2].const - vals[1].const), 0.0), 1.0)
+            return Val(self, const=t * t * (3.0 - 2.0 * t))
+        col = 1 + max(v.col for v in vals)
+        n = self.node("ShaderNodeMapRange", col, data_type="FLOAT", interpolation_type="SMOOTHSTEP")
+        for s, v in zip(n.inputs, vals):   # Value, From Min, From Max (To Min 0, To Max 1)
+            self.feed(s, v)
+        self.inline(n)
+        return Val(self, sock=n.outputs["Result"], col=col)
 
     def _new_vmath(self, op, *args, out=0):
         vals = [self.wrap(a) for a in args]
@@ -378,8 +409,8 @@ class NodeOps:
             self.feed(node.inputs[name], self.wrap(v))
         return Val(self, sock=node.outputs[osl.OUTPUT], col=1 + max(self.wrap(v).col for v in args))
 
-    def _table(self, spec, x, y, row0=0, rows=None):
-        """Bilinear lookup from four Closest taps (EEVEE's Linear filter is not exact bilinear here).
+    def _table(self, spec, x, y, row0=0, rows=None, channel=0):
+        """Bilinear lookup of ``channel`` from four Closest taps (EEVEE's Linear filter is not exact bilinear here).
 
         Few nodes, since every fogged material inlines it several times per light (Cycles' set-up grows
         with the square of a material's nodes, EEVEE's uniform block with their number): one Clamp node
@@ -395,7 +426,7 @@ class NodeOps:
         u1 = u0 + 1.0 / spec.width
         v0 = self.math("MULTIPLY_ADD", j, 1.0 / spec.height, (row0 + 0.5) / spec.height)
         v1 = v0 + 1.0 / spec.height
-        taps = [self._tap(spec, u, v) for v in (v0, v1) for u in (u0, u1)]
+        taps = [self._tap(spec, u, v, channel) for v in (v0, v1) for u in (u0, u1)]
         return self.lerp(self.lerp(taps[0], taps[1], tx), self.lerp(taps[2], taps[3], tx), ty)
 
     def lerp(self, a, b, t):
@@ -404,8 +435,12 @@ class NodeOps:
         material with Mix nodes, against the 65 536 EEVEE allows and 78 832 before)."""
         return self.math("MULTIPLY_ADD", t, self.wrap(b) - a, a)
 
-    def _tap(self, spec, u, v):
+    def _tap(self, spec, u, v, channel):
         uv = self.combine(u, v, 0.0)
+        n = self._once(("tap", spec.name, self._ids((uv,))), lambda: self._new_tap(spec, uv))
+        return self.texel(spec, n, uv.col + 1, channel)
+
+    def _new_tap(self, spec, uv):
         n = self.node("ShaderNodeTexImage", uv.col + 1, interpolation="Closest", extension="EXTEND")
         n.image = self.images[spec.name]
         # A new node's texture mapping is not flagged as the identity until one of its values is set
@@ -414,4 +449,4 @@ class NodeOps:
         n.texture_mapping.translation = (0.0, 0.0, 0.0)
         self.tree.links.new(uv.sock, n.inputs["Vector"])
         self.inline(n)
-        return Val(self, sock=n.outputs["Alpha"], col=uv.col + 1)
+        return n

@@ -17,9 +17,8 @@ def bakers(g=0.0):
            surf.name: (surf, lambda: surface.surface_table(g)),   # cached per process
            tables.LOBE_RESPONSE.name: (tables.LOBE_RESPONSE, spot.bake_lobe_response),
            tables.SPECULAR_ALBEDO.name: (tables.SPECULAR_ALBEDO, surface.bake_specular_albedo)}
-    for spec in tables.SPOT_TABLES:
-        spec = tables.anisotropic(spec, g)
-        out[spec.name] = (spec, functools.partial(lambda name: _spot_tables(float(g))[name], spec.name))
+    spot_spec = tables.anisotropic(tables.SPOT_MOMENTS, g)
+    out[spot_spec.name] = (spot_spec, lambda: _spot_tables(float(g)))
     return out
 
 

@@ -44,13 +44,14 @@ class ShaderOps(Protocol):
     def less(self, a, b) -> Any: ...          # 1.0 where a < b else 0.0
     def select(self, cond, if_true, if_false) -> Any: ...
     def clamp01(self, x) -> Any: ...
+    def smoothstep(self, edge0, edge1, x) -> Any: ...   # edge0 < edge1: one Map Range node (Smooth Step)
     def dot(self, a, b) -> Any: ...
     def cross(self, a, b) -> Any: ...
     def length(self, a) -> Any: ...
     def scale(self, v, s) -> Any: ...
     def combine(self, x, y, z) -> Any: ...
     def fori(self, count: int, body: Callable, state: tuple, done: Callable = None) -> tuple: ...
-    def table(self, spec, x, y, row0: int = 0, rows: int = None) -> Any: ...
+    def table(self, spec, x, y, row0: int = 0, rows: int = None, channel: int = 0) -> Any: ...
     def group(self, name, fn, *args) -> Any: ...   # fn(self, *args), shared as one sub-program (node group)
     def run(self, rung, *args) -> Any: ...    # a model's kernel on this backend (or one it delegates to)
 
@@ -108,6 +109,13 @@ class NumpyOps:
     def clamp01(x):
         return np.clip(x, 0.0, 1.0)
 
+    @staticmethod
+    def smoothstep(edge0, edge1, x):
+        """t^2 (3 - 2 t), t = (x - edge0) / (edge1 - edge0) clamped to [0, 1] (Map Range, Smooth Step; GLSL's
+        and OSL's smoothstep), for edge0 < edge1."""
+        t = np.clip((np.asarray(x) - edge0) / (np.asarray(edge1) - edge0), 0.0, 1.0)
+        return t * t * (3.0 - 2.0 * t)
+
     # -- vectors (Vector Math node operations) ------------------------------
     @staticmethod
     def dot(a, b):
@@ -155,14 +163,15 @@ class NumpyOps:
         return state
 
     # -- tables ---------------------------------------------------------------
-    def table(self, spec, x, y, row0=0, rows=None):
-        """Bilinear lookup of table ``spec`` at grid coordinates x, y in [0, 1].
+    def table(self, spec, x, y, row0=0, rows=None, channel=0):
+        """Bilinear lookup of table ``spec`` (its ``channel``) at grid coordinates x, y in [0, 1].
 
         ``row0``/``rows`` select a horizontal band of the image (stacked tables).
         The same interpolation as the four Closest taps of the node version (a + t (b - a) here, a Multiply
         Add node there: equal but for rounding).
         """
         arr = self.tables[spec.name]
+        arr = arr[..., channel] if arr.ndim == 3 else arr
         rows = arr.shape[0] if rows is None else rows
         w = arr.shape[1]
         fx = np.clip(x, 0.0, 1.0) * (w - 1)

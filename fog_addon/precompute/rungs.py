@@ -213,7 +213,7 @@ def spot_scatter_rung(scatter, g):
     """The scatter rung of a spot light for the point light's ``scatter`` rung (anisotropy g)."""
     return replace(scatter, name="spot " + scatter.name, spot=True,
                    kernel=functools.partial(spot.scatter, point=scatter.kernel, g=float(g)),
-                   tables=scatter.tables + tuple(tables.anisotropic(t, g) for t in tables.SPOT_TABLES)
+                   tables=scatter.tables + (tables.anisotropic(tables.SPOT_MOMENTS, g),)
                    + (tables.LOBE_RESPONSE,),
                    domain=scatter.domain + "; relative to the point light's fog light", max_error=SPOT_SCATTER_ERROR,
                    evidence="tests/test_spot_scatter.py: Eq. 15 by hemisphere quadrature of the spot's airlight")

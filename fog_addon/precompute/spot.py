@@ -38,23 +38,22 @@ INNER_DEPTH = 60.0   # the inner segment stops this optical depth past its start
 _GL = tuple((float(x), float(w)) for x, w in zip(*np.polynomial.legendre.leggauss(RIM_NODES)))
 
 
-def inverse_width(m, cos_half, blend):
-    """1 / the blend ramp's width in cosine, (1 - c_h) b; at most 1e7: blend = 0 is Blender's hard cut as
-    a ramp 1e-7 wide in cosine (under 2e-4 degrees for any cone: no pixel shows it)."""
-    return 1.0 / m.maximum((1.0 - cos_half) * blend, 1e-7)
+def ramp_end(m, cos_half, blend):
+    """The cosine where Blender's blend ramp reaches 1: c_h + (1 - c_h) b, at least 1e-7 above c_h (blend = 0:
+    Blender's hard cut as a ramp 1e-7 wide in cosine, under 2e-4 degrees for any cone: no pixel shows it)."""
+    return cos_half + m.maximum((1.0 - cos_half) * blend, 1e-7)
 
 
-def ramp(m, neg_c, cos_half, inv_width):
-    """Blender's spot factor f in [0, 1] at the cosine c = -``neg_c`` to the axis: smoothstep((c - c_h) /
-    ((1 - c_h) b)) (module docstring), given ``inverse_width``."""
-    x = m.clamp01(m.mul_add(neg_c, -inv_width, -cos_half * inv_width))
-    return x * x * m.mul_add(x, -2.0, 3.0)
+def ramp(m, c, cos_half, cos_end):
+    """Blender's spot factor f in [0, 1] at the cosine c to the axis: smoothstep((c - c_h) / ((1 - c_h) b))
+    (module docstring), given ``ramp_end``: one Map Range node in shader nodes."""
+    return m.smoothstep(cos_half, cos_end, c)
 
 
 def spot_falloff(m, c, cos_half, blend):
     """Blender's spot factor f in [0, 1] for the cosine c to the axis, ``cos_half`` = cos(size / 2),
-    ``blend`` in [0, 1] (blend = 0: a hard cut at c = cos_half, ``inverse_width``)."""
-    return ramp(m, -c, cos_half, inverse_width(m, cos_half, blend))
+    ``blend`` in [0, 1] (blend = 0: a hard cut at c = cos_half, ``ramp_end``)."""
+    return ramp(m, c, cos_half, ramp_end(m, cos_half, blend))
 
 
 def light_space(m, rows, v):
@@ -163,32 +162,34 @@ def _ray_terms(t, alpha, g):
 
 
 def bake_scatter_tables(g=0.0):
-    """{name: float32 table} of the spot scatter tables (``tables.SPOT_TABLES``) for anisotropy g: F, the
-    first moment along e_l and the one towards the axis divided by sin psi, both over the point light's
-    total (module section above).  The last slice is the whole sphere (the point light: F = 1)."""
+    """{name: float32 (height, width, 4) table} of ``tables.SPOT_MOMENTS`` for anisotropy g: F, the first
+    moment along e_l and the one towards the axis divided by sin psi, both over the point light's total
+    (module section above), and the point light's first moment.  The last slice is the whole sphere (the
+    point light: F = 1)."""
     x, w = np.polynomial.legendre.leggauss(_ALPHA_POINTS)
     alpha, weight = [], []
     for a, b in zip(_ALPHA_EDGES[:-1], _ALPHA_EDGES[1:]):
         alpha.append(0.5 * (b - a) * x + 0.5 * (b + a))
         weight.append(0.5 * (b - a) * w)
     alpha, weight = np.concatenate(alpha), np.concatenate(weight)
-    spec = tables.SPOT_FRACTION
+    spec = tables.SPOT_MOMENTS
     t = np.maximum(tables.surface_t(np.linspace(0.0, 1.0, spec.width)), 1e-6)   # (W,)
     g_all, g_l, g_a = (v * (weight * np.sin(alpha))[None, :] for v in _ray_terms(t, alpha, g))   # (W, A)
     total = 2.0 * np.pi * g_all.sum(axis=1)[None, :]
     psi = np.clip(np.linspace(0.0, np.pi, tables.SPOT_PSI), _PSI_EDGE, np.pi - _PSI_EDGE)
-    out = [np.empty((spec.height, spec.width)) for _ in tables.SPOT_TABLES]
+    out = np.empty((spec.height, spec.width, spec.channels))
     for k in range(tables.SPOT_SLICES):
         rows = slice(k * tables.SPOT_PSI, (k + 1) * tables.SPOT_PSI)
         if k < tables.SPOT_CONES:
             arcs, moments = _arc_inside(alpha[None, :], psi[:, None], k * tables.HALF_PI / (tables.SPOT_CONES - 1))
         else:
             arcs, moments = np.full((tables.SPOT_PSI, alpha.size), 2.0 * np.pi), np.zeros((tables.SPOT_PSI, alpha.size))
-        out[0][rows] = (arcs @ g_all.T) / total
-        out[1][rows] = (arcs @ g_l.T) / total
-        out[2][rows] = (moments @ g_a.T) / (total * np.sin(psi)[:, None])
-    out[0] = np.clip(out[0], 0.0, 1.0)
-    return {tables.anisotropic(spec, g).name: v.astype(np.float32) for spec, v in zip(tables.SPOT_TABLES, out)}
+        out[rows, :, tables.SPOT_SHARE] = (arcs @ g_all.T) / total
+        out[rows, :, tables.SPOT_MOMENT_LIGHT] = (arcs @ g_l.T) / total
+        out[rows, :, tables.SPOT_MOMENT_AXIS] = (moments @ g_a.T) / (total * np.sin(psi)[:, None])
+    out[..., tables.SPOT_SHARE] = np.clip(out[..., tables.SPOT_SHARE], 0.0, 1.0)
+    out[..., tables.SPOT_MOMENT_POINT] = out[tables.SPOT_CONES * tables.SPOT_PSI, :, tables.SPOT_MOMENT_LIGHT]
+    return out.astype(np.float32)
 
 
 def _vmf_kappa(r):
@@ -231,10 +232,11 @@ def bake_lobe_response(spec=tables.LOBE_RESPONSE):
     return out.astype(np.float32)
 
 
-def _lookup(m, spec, x, y0, step, frac):
-    """Bilinear in (X, psi) of ``spec`` at two slices ``step`` apart in Y, linear between them by ``frac``."""
-    f0 = m.table(spec, x, y0)
-    return f0 + frac * (m.table(spec, x, y0 + step) - f0)
+def _lookup(m, spec, x, y0, step, frac, channel):
+    """Bilinear in (X, psi) of ``spec``'s ``channel`` at two slices ``step`` apart in Y, linear between them by
+    ``frac`` (the four channels of a texel come with one lookup)."""
+    f0 = m.table(spec, x, y0, channel=channel)
+    return f0 + frac * (m.table(spec, x, y0 + step, channel=channel) - f0)
 
 
 def world_axis(m, rows):
@@ -252,8 +254,7 @@ def lobe_response(m, c, r):
 def _moments(m, beta, d_sp, c_axis, cos_half, blend, g):
     """(F, E1 . e_l, E1 . e_a / sin psi, the point light's R) from the tables of g (module section above):
     the cone's share and first moment over the point light's total, once per light and surface point."""
-    spec, slice_rows = tables.anisotropic(tables.SPOT_FRACTION, g), tables.SPOT_PSI
-    ml_spec, ma_spec = (tables.anisotropic(s, g) for s in tables.SPOT_TABLES[1:])
+    spec, slice_rows = tables.anisotropic(tables.SPOT_MOMENTS, g), tables.SPOT_PSI
     cos_mid = cos_half + (1.0 - cos_half) * (0.5 * blend)   # the cone taken hard mid-ramp
     psi = m.atan2(m.sqrt(1.0 - c_axis * c_axis), c_axis)
     theta = m.atan2(m.sqrt(1.0 - cos_mid * cos_mid), cos_mid)
@@ -263,9 +264,9 @@ def _moments(m, beta, d_sp, c_axis, cos_half, blend, g):
     y0 = m.mul_add(k0, step, psi * ((slice_rows - 1.0) / (math.pi * (spec.height - 1.0))))
     x = tables.surface_x(m, beta * d_sp)
     frac = s - k0
-    return (_lookup(m, spec, x, y0, step, frac), _lookup(m, ml_spec, x, y0, step, frac),
-            _lookup(m, ma_spec, x, y0, step, frac),
-            m.table(ml_spec, x, (tables.SPOT_CONES * slice_rows) / (spec.height - 1.0)))
+    return (*(_lookup(m, spec, x, y0, step, frac, k)
+              for k in (tables.SPOT_SHARE, tables.SPOT_MOMENT_LIGHT, tables.SPOT_MOMENT_AXIS)),
+            m.table(spec, x, y0, channel=tables.SPOT_MOMENT_POINT))
 
 
 def _lobe(m, beta, d_sp, cos_theta, level, cos_lobe_axis, c_axis, moments, point, diffuse):
@@ -371,12 +372,13 @@ def _inner(m, beta, along, h, t0, t1, *, inner):
     return m.select(m.less(t0, t1), m.exp(-beta * t0) * inner(m, beta, d0, a0, h, seg), 0.0)
 
 
-def _rim(m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, t0, t1, cos_half, inv_width, g=0.0):
+def _rim(m, beta, d_sv, along, h, neg_pz, neg_dz, a, t_l, h_l2, t0, t1, cos_half, cos_end, g=0.0):
     """f(c) times the point light's airlight over [t0, t1] (1/m^2), by Gauss-Legendre quadrature in
-    Sun's angle xi = atan(Q / h) (Eq. 9: the integrand beta/(2 pi h) e^{-beta (D_sv + Q - Q_0)} w is
-    smooth and bounded there however close the ray passes the light), up to optical depth RIM_DEPTH.
-    In xi the Henyey-Greenstein weight is (1 - g^2) / (1 + g^2 - 2 g cos 2 xi)^{3/2} (scattering angle
-    2 xi, Pegoraro et al. Eq. 8-9; ``model.hg_weight`` in Q)."""
+    u = tan(xi / 2), xi = atan(Q / h) Sun's angle (Eq. 9: in xi the integrand beta/(2 pi h) e^{-beta (D_sv +
+    Q - Q_0)} w is smooth and bounded however close the ray passes the light; dxi = 2 du / (1 + u^2), and
+    Q = 2 h u / (1 - u^2) needs no tangent), up to optical depth RIM_DEPTH.  In xi the Henyey-Greenstein
+    weight is (1 - g^2) / (1 + g^2 - 2 g cos 2 xi)^{3/2} (scattering angle 2 xi, Pegoraro et al. Eq. 8-9;
+    ``model.hg_weight`` in Q), cos xi = (1 - u^2) / (1 + u^2).  (neg_pz, ..., h_l2): ``_ray_quadratic``."""
     h = m.maximum(h, model.MIN_ANGLE * d_sv)
     q0 = model.closest_point_q(m, d_sv, -along, h)
 
@@ -384,26 +386,41 @@ def _rim(m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, t0, t1, cos_half, inv_
         z = t - along
         return model.closest_point_q(m, m.sqrt(z * z + h * h), z, h)
 
+    h2 = h * h
+
+    def u_at(q):   # tan(xi / 2) = Q / (h + sqrt(h^2 + Q^2)), in [0, 1)
+        return q / (h + m.sqrt(m.mul_add(q, q, h2)))
+
     qa = q_at(t0)
     qb = m.minimum(q_at(t1), qa + RIM_DEPTH / m.maximum(beta, 1e-30))
-    xa, xb = m.atan2(qa, h), m.atan2(qb, h)
-    half, centre = 0.5 * (xb - xa), 0.5 * (xb + xa)
-    h2, beta_q0 = h * h, beta * q0
-    start, step = m.combine(px, py, pz), m.combine(dx, dy, dz)
+    ua, ub = u_at(qa), u_at(qb)
+    half, centre = 0.5 * (ub - ua), 0.5 * (ub + ua)
+    two_h, beta_q0 = 2.0 * h, beta * q0
     total = 0.0
     for x, w in _GL:
-        xi = m.mul_add(half, x, centre)
-        # Q = h tan(xi), within [qa, qb]: in float32 (shader nodes) atan2 of a huge Q / h rounds above pi/2,
-        # where tan turns huge and negative (an empty rim far beyond the light: its NaN survives the select)
-        q = m.minimum(m.maximum(h * m.tan(xi), qa), qb)
+        u = m.mul_add(half, x, centre)
+        cos_part = m.mul_add(u, -u, 1.0)   # 1 - u^2 (0 where a float32 u rounds to 1: Q clamps to qb)
+        q = m.minimum(m.maximum(two_h * u / cos_part, qa), qb)
         t = m.mul_add(q - h2 / q, 0.5, along)   # the ray's t there: z = (Q^2 - h^2) / 2Q
-        dist = m.maximum(m.length(start + m.scale(step, t)), 1e-30)   # 0 where a ray meets the apex
-        f = ramp(m, m.mul_add(t, dz, pz) / dist, cos_half, inv_width)
+        s = t - t_l
+        dist = m.maximum(m.sqrt(m.mul_add(a, s * s, h_l2)), 1e-30)   # |p + t d|; 0 where a ray meets the apex
+        f = ramp(m, m.mul_add(t, neg_dz, neg_pz) / dist, cos_half, cos_end)
+        jacobian = 1.0 / (2.0 - cos_part)   # dxi / du / 2 = 1 / (1 + u^2)
         if g:
-            f = f * m.power(m.mul_add(m.cos(2.0 * xi), -2.0 * g, 1.0 + g * g), -1.5)
-        total = m.mul_add(f * m.exp(m.mul_add(q, -beta, beta_q0)), w, total)
-    value = (beta * model.INV_2PI * (1.0 - g * g)) * m.exp(-beta * d_sv) / h * half * total
+            cos_xi = cos_part * jacobian
+            f = f * m.power(m.mul_add(cos_xi * cos_xi, -4.0 * g, (1.0 + g) * (1.0 + g)), -1.5)
+        total = m.mul_add(f * m.exp(m.mul_add(q, -beta, beta_q0)) * jacobian, w, total)
+    value = (beta * (2.0 * model.INV_2PI) * (1.0 - g * g)) * m.exp(-beta * d_sv) / h * half * total
     return m.select(m.less(t0, t1), value, 0.0)
+
+
+def _ray_quadratic(m, px, py, pz, dx, dy, dz):
+    """(-p_z, -d_z, a, t_l, h_l2) of the ray p + t d in the light's space for ``_rim``: |p + t d|^2 = a (t -
+    t_l)^2 + h_l2 with a = |d|^2, t_l = -p.d / a and h_l2 = |p x d|^2 / a (no cancellation near the apex)."""
+    p, d = m.combine(px, py, pz), m.combine(dx, dy, dz)
+    a = m.maximum(m.dot(d, d), 1e-30)
+    cross = m.cross(p, d)
+    return -pz, -dz, a, -m.dot(p, d) / a, m.dot(cross, cross) / a
 
 
 def airlight(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend, *,
@@ -431,7 +448,7 @@ class _Clip(NamedTuple):
     hi_in: Any
     empty_in: Any      # 1 if the ray misses the inner cone: then its one rim is the whole outer interval
     first_end: Any
-    inv_width: Any
+    cos_end: Any       # ``ramp_end``
 
 
 def _clip(m, ray, cos_half, blend, t_end):
@@ -441,7 +458,7 @@ def _clip(m, ray, cos_half, blend, t_end):
     lo_in, hi_in = m.group("Spot Cone Interval", _cone, *ray, m.minimum(cos_in, 1.0 - 1e-7), t_end)
     empty_in = 1.0 - m.less(lo_in, hi_in)
     return _Clip(lo_out, hi_out, lo_in, hi_in, empty_in, m.select(empty_in, hi_out, lo_in),
-                 inverse_width(m, cos_half, blend))
+                 ramp_end(m, cos_half, blend))
 
 
 def _parts(inner, g):
@@ -457,9 +474,9 @@ def _airlight(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, b
     (inner_name, inner_fn), (rim_name, rim) = _parts(inner, g)
     value = m.group(inner_name, inner_fn, beta, along, h, c.lo_in, c.hi_in)
     # the rim: [lo_out, lo_in] and [hi_in, hi_out], or the whole outer interval when the inner is empty
-    rim_args = (beta, d_sv, along, h, *ray)
-    value = value + m.group(rim_name, rim, *rim_args, c.lo_out, c.first_end, cos_half, c.inv_width)
-    return value + (1.0 - c.empty_in) * m.group(rim_name, rim, *rim_args, c.hi_in, c.hi_out, cos_half, c.inv_width)
+    rim_args = (beta, d_sv, along, h, *_ray_quadratic(m, *ray))
+    value = value + m.group(rim_name, rim, *rim_args, c.lo_out, c.first_end, cos_half, c.cos_end)
+    return value + (1.0 - c.empty_in) * m.group(rim_name, rim, *rim_args, c.hi_in, c.hi_out, cos_half, c.cos_end)
 
 
 def airlight_pair(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend, *,
@@ -477,15 +494,15 @@ def _airlight_pair(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_ha
     ray = (px, py, pz, dx, dy, dz)
     c = _clip(m, ray, cos_half, blend, model.FAR)
     (inner_name, inner_fn), (rim_name, rim) = _parts(inner, g)
-    rim_args = (beta, d_sv, along, h, *ray)
-    first = m.group(rim_name, rim, *rim_args, c.lo_out, c.first_end, cos_half, c.inv_width)
-    second = (1.0 - c.empty_in) * m.group(rim_name, rim, *rim_args, c.hi_in, c.hi_out, cos_half, c.inv_width)
+    rim_args = (beta, d_sv, along, h, *_ray_quadratic(m, *ray))
+    first = m.group(rim_name, rim, *rim_args, c.lo_out, c.first_end, cos_half, c.cos_end)
+    second = (1.0 - c.empty_in) * m.group(rim_name, rim, *rim_args, c.hi_in, c.hi_out, cos_half, c.cos_end)
     background = m.group(inner_name, inner_fn, beta, along, h, c.lo_in, c.hi_in) + first + second
     # to the surface: d_vp cuts at most one rim, the first (before first_end) or else the second, whose
     # piece [hi_in, d_vp] is empty unless d_vp lies in it
     before_first_end = m.less(d_vp, c.first_end)
     cut = m.group(rim_name, rim, *rim_args, m.select(before_first_end, c.lo_out, c.hi_in), d_vp, cos_half,
-                  c.inv_width)
+                  c.cos_end)
     second_cut = (1.0 - c.empty_in) * m.select(m.less(d_vp, c.hi_out), cut, second)
     rims = m.select(before_first_end, cut, first + second_cut)
     surface = m.group(inner_name, inner_fn, beta, along, h, c.lo_in, m.maximum(m.minimum(c.hi_in, d_vp), c.lo_in))

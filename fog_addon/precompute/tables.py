@@ -25,6 +25,7 @@ class TableSpec:
     width: int         # samples along X
     height: int        # samples along Y
     g: float = 0.0     # the Henyey-Greenstein anisotropy the table is baked for (a table per g, Biri 2006)
+    channels: int = 1  # values per texel, as RGBA; a one-channel table holds its value in all four
 
 
 # Normalised airlight kernel N(rho, xi); see airlight.py.
@@ -40,15 +41,15 @@ AIRLIGHT_HG_SIZE = (256, 256)
 # A spot's fog light on a surface (spot.scatter): tables of X = surface_x(T) (T = beta D_sp) and rows of the
 # angle psi in [0, pi] of the surface point from the cone's axis (SPOT_PSI per slice), stacked in slices of
 # the cone's half-angle theta_c in [0, pi/2] (SPOT_CONES, uniform) and one last slice for the whole sphere
-# (the point light).  Per g: the share F of the point light's fog light that the cone lights, and the two
-# components of the first moment of the directions it arrives from (``spot.bake_scatter_tables``).
+# (the point light).  Per g, one texel holds four values read by one lookup (``spot.bake_scatter_tables``): the
+# share F of the point light's fog light that the cone lights (R), the two components of the first moment of
+# the directions it arrives from (G, B), and the point light's first moment (A: the last slice's G at that X,
+# in every row).
 SPOT_PSI = 65
 SPOT_CONES = 19
 SPOT_SLICES = SPOT_CONES + 1
-SPOT_FRACTION = TableSpec("AnalyticFog Spot Fraction", 64, SPOT_PSI * SPOT_SLICES)
-SPOT_MOMENT_LIGHT = TableSpec("AnalyticFog Spot Moment Light", 64, SPOT_PSI * SPOT_SLICES)
-SPOT_MOMENT_AXIS = TableSpec("AnalyticFog Spot Moment Axis", 64, SPOT_PSI * SPOT_SLICES)
-SPOT_TABLES = (SPOT_FRACTION, SPOT_MOMENT_LIGHT, SPOT_MOMENT_AXIS)
+SPOT_MOMENTS = TableSpec("AnalyticFog Spot Moments", 64, SPOT_PSI * SPOT_SLICES, channels=4)
+SPOT_SHARE, SPOT_MOMENT_LIGHT, SPOT_MOMENT_AXIS, SPOT_MOMENT_POINT = range(4)   # its channels
 
 # The Lambertian response of light arriving from a von Mises-Fisher distribution of directions
 # (``spot.lobe_response``): X = (c + 1) / 2, c the cosine between the normal and the mean direction;
@@ -72,7 +73,7 @@ def anisotropic(spec, g):
     if g == 0.0:
         return spec
     width, height = AIRLIGHT_HG_SIZE if spec == AIRLIGHT else (spec.width, spec.height)
-    return TableSpec(f"{spec.name} (g {g:+.3f})", width, height, g)
+    return TableSpec(f"{spec.name} (g {g:+.3f})", width, height, g, spec.channels)
 
 
 def hg_stretch(g):
