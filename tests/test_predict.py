@@ -8,7 +8,7 @@ sample, and bad Quality values are refused with a clear message.
 import numpy as np
 import pytest
 
-from fog_addon.precompute import airlight, predict, rungs, shading, surface, tables
+from fog_addon.precompute import airlight, predict, rungs, shading, spot, surface, tables
 from fog_addon.precompute.medium import Medium
 from fog_addon.precompute.ops import NumpyOps
 
@@ -76,6 +76,29 @@ def test_a_negligible_light_goes_off_and_exact_keeps_everything():
     assert list(pred.steps) == [0, 0, 2]
     assert pred.error == pytest.approx(2e-6 / 3.000002, rel=1e-6)
     assert list(predict.choose_steps(glow, scatter, None).steps) == [0, 0, 0]
+
+
+def test_rims_take_the_fewest_points_their_deviation_allows():
+    """Each spot's rim (spot.RIM_LADDER): the fewest points whose deviation, counted predict.RIM_SAFETY times
+    with what the steps dropped, keeps every judged sample within the target; the error predicted is that sum.
+    Light 0's rim moves nothing (4 points), light 1's a little at 4 points (6), light 2's much at both (10);
+    light 3 is off (its glow dropped, its rim moot); with no target every rim keeps its exact count."""
+    p, n = 50, 4
+    glow, scatter = np.ones((p, n, 3)), np.zeros((p, n, 3))
+    glow[:, 3] = 1e-6
+    dev = np.zeros((2, p, n, 3))            # (6 points, 4 points)
+    dev[1, :, 1] = 0.03
+    dev[0, :, 1] = 1e-4
+    dev[:, :, 2] = 0.05
+    dev[:, :, 3] = 1.0
+    pred = predict.choose_steps(glow, scatter, 0.01, rim_dev=dev)
+    assert list(pred.steps) == [1, 1, 1, 2]   # no scatter to leave out: "glow only" costs nothing
+    assert list(pred.rims[:3]) == [4, 6, 10]
+    fog = (glow + scatter).sum(axis=1)
+    moved = predict.RIM_SAFETY * 1e-4 + 1e-6
+    assert pred.error == pytest.approx(moved / fog[0, 0], rel=1e-9) and pred.error <= 0.01
+    assert pred.light_error[1] == pytest.approx(predict.RIM_SAFETY * 1e-4 / fog[0, 0], rel=1e-9)
+    assert list(predict.choose_steps(glow, scatter, None, rim_dev=dev).rims) == [spot.RIM_NODES] * n
 
 
 @pytest.mark.parametrize("bad", [0.0, -0.1, 1.0, float("nan"), float("inf"), "best", "1 %"])

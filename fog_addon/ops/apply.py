@@ -9,7 +9,7 @@ from ..nodes.light import unwrap_light, wrap_light
 from ..nodes.material import unwrap_material, wrap_material
 from ..nodes.owned import is_fogged
 from ..nodes.world import unwrap_world, wrap_world
-from ..precompute import medium, predict, presets, rungs
+from ..precompute import medium, predict, presets, rungs, spot
 from . import progress as progress_
 from . import view
 
@@ -128,15 +128,15 @@ def choose_models(scene, lights, preference, quality):
     steps must also fit its uniform block (``groups.eevee_budget``), with Cycles' OSL its shader group's
     layers (``groups.osl_budget``): lights
     step down beyond the target, least error first, until they do.  Returns
-    (models, choice) with choice = {"lights": {name: [step, error]}, "error":
-    total, "target": t, "engine": the render engine chosen for, "limited":
-    what forced steps beyond the target, or None}.
+    (models, choice) with choice = {"lights": {name: [step, error]}, "rims": {name: point count} of the spots
+    whose glow's rim takes fewer than spot.RIM_NODES points, "error": total, "target": t, "engine": the render
+    engine chosen for, "limited": what forced steps beyond the target, or None}.
     """
     target = predict.target_error(quality)
     engine = scene.render.engine
     budget = _budget(scene, preference, lights)
     steps = [0] * len(lights)
-    choice = {"target": target, "error": 0.0, "lights": {}, "engine": engine, "limited": None}
+    choice = {"target": target, "error": 0.0, "lights": {}, "rims": {}, "engine": engine, "limited": None}
     if lights and (target is not None or (budget is not None and not budget.fits(steps))):
         samples = view.view_samples(scene, lights)
         pred = predict.predict(samples, view.light_intensities(lights), groups.get_beta(), target, budget,
@@ -144,12 +144,20 @@ def choose_models(scene, lights, preference, quality):
         steps = [int(k) for k in pred.steps]
         choice["error"] = pred.error
         choice["lights"] = {o.name: [int(k), float(e)] for o, k, e in zip(lights, pred.steps, pred.light_error)}
+        choice["rims"] = {o.name: int(n) for o, k, n in zip(lights, pred.steps, pred.rims)
+                          if view.is_spot(o) and k < rungs.OFF and n != spot.RIM_NODES}
         if pred.limited or not pred.fits:
             choice["limited"] = budget.name + ("" if pred.fits else ": too many lights even with every light off")
     else:
         choice["lights"] = {o.name: [0, 0.0] for o in lights}
+    return _models(preference, lights, steps, choice["rims"]), choice
+
+
+def _models(preference, lights, steps, rims):
+    """Each light's models at its step, a spot's glow with its rim's point count (``rims``: by name)."""
     g = groups.get_anisotropy()
-    return [rungs.choose(preference, k, g, view.is_spot(o)) for o, k in zip(lights, steps)], choice
+    return [rungs.choose(preference, k, g, view.is_spot(o), rims.get(o.name, spot.RIM_NODES))
+            for o, k in zip(lights, steps)]
 
 
 def stored_choice():
@@ -183,8 +191,11 @@ def explain(choice=None):
         return ["the fog is not on"]
     limit = limit_text(choice)
     lines = [quality_head(choice) + (f"; {limit}" if limit else "")]
+    rims = choice.get("rims", {})
     for name, (step, err) in sorted(choice["lights"].items()):
-        lines.append(f"  {name}: {rungs.STEPS[step]}" + (f" (leaves out up to {err:.2%})" if step else ""))
+        rim = f", {rims[name]}-point rim" if name in rims else ""
+        lines.append(f"  {name}: {rungs.STEPS[step]}{rim}" + (f" (leaves out up to {err:.2%})" if step else
+                                                               f" (moves up to {err:.2%})" if rim else ""))
     return lines
 
 
@@ -217,9 +228,9 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
     if kept is None:
         models, choice = choose_models(scene, lights, preference, quality)
     else:
-        g = groups.get_anisotropy()
-        models = [rungs.choose(preference, step, g, view.is_spot(o)) for o, step in zip(lights, kept)]
-        choice = dict(old, lights={o.name: old["lights"].get(o.name, [0, 0.0]) for o in lights})
+        rims = {o.name: old["rims"][o.name] for o in lights if o.name in old.get("rims", {})}
+        models = _models(preference, lights, kept, rims)
+        choice = dict(old, lights={o.name: old["lights"].get(o.name, [0, 0.0]) for o in lights}, rims=rims)
     choice["quality"] = quality_value(quality)
     # lights stepped out of the groups to fit a budget (rungs.LEFT_OUT) keep their own dimming (wrap_light)
     in_groups = _in_groups(lights, choice)

@@ -32,6 +32,7 @@ from . import spot as spot_mod
 from .ops import NumpyOps
 
 FLOOR = 1e-3          # samples below this fraction of the peak fog are not judged (issue 8 §2)
+RIM_SAFETY = 2.0      # a cheaper rim's deviation at the samples counts twice: between them it can peak higher
 QUALITY = {"draft": 0.05, "final": 0.01, "exact": None}   # Quality presets: target relative error (None: no step)
 DEFAULT_QUALITY = "final"
 
@@ -65,6 +66,7 @@ class Prediction(NamedTuple):
     judged: int        # samples judged (fog >= FLOOR * peak)
     limited: bool = False   # the budget took steps beyond the target (error may exceed it)
     fits: bool = True       # the steps fit the budget (False: even every light off does not)
+    rims: Any = None        # (N,) int: the point count of each spot's rim (spot.RIM_LADDER; meaningless for points)
 
 
 class Budget(NamedTuple):
@@ -109,15 +111,9 @@ def light_fog(samples, intensity, beta, g=0.0):
     tables' range), the shaders' twin.
     """
     m = _numpy_ops(g)
-    preference = "nodes" if g >= rungs.MIN_TABLE_ANISOTROPY else "osl"
+    preference = _preference(g)
     full = rungs.choose(preference, 0, g)
-    cam = np.asarray(samples.camera, float)[:, None, :]
-    d = np.asarray(samples.direction, float)[:, None, :]
-    lights = np.asarray(samples.lights, float)
-    dist = np.asarray(samples.distance, float)[:, None]
-    sky = ~np.isfinite(dist)
-    d_vp = np.where(sky, 0.0, dist)
-    d_sv, along, h = model.ray_light_geometry(m, cam, d, lights)
+    cam, d, lights, sky, d_vp, d_sv, along, h = rays = _rays(m, samples)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         air = np.where(sky, m.run(full.background, beta, d_sv, along, h),
                        m.run(full.airlight, beta, d_sv, along, h, d_vp))
@@ -129,17 +125,10 @@ def light_fog(samples, intensity, beta, g=0.0):
         level = np.broadcast_to(np.asarray(samples.level, float)[:, None], cos_r.shape)
         diffuse = m.run(full.scatter, beta, d_sp, cos_n, np.zeros_like(level))
         glossy = m.run(full.scatter, beta, d_sp, cos_r, level)
-        spots = samples.spots
-        if spots is not None and np.any(spots.is_spot):   # the spots' glow and cone (shading.shade_point)
-            k = np.flatnonzero(spots.is_spot)
-            rows = np.asarray(spots.rows, float)[:, k]
-            light = shading.Light(lights[:, k], None, shading.Spot(tuple(rows[..., i, :] for i in range(3)),
-                                                                    np.asarray(spots.cos_half, float)[k],
-                                                                    np.asarray(spots.blend, float)[k]))
+        k, light = _spot_lights(samples, lights)
+        if k.size:   # the spots' glow and cone (shading.shade_point)
             spot = rungs.choose(preference, 0, g, spot=True)
-            args = (beta, d_sv[:, k], along[:, k], h[:, k])
-            ray = shading.spot_ray(m, light, spot.airlight, cam, d)
-            air[:, k] = np.where(sky, m.run(spot.background, *args, *ray), m.run(spot.airlight, *args, d_vp, *ray))
+            air[:, k] = _spot_glow(m, spot, beta, k, light, rays)
             cone = shading.surface_cone(m, light, cam + m.scale(d, d_vp))
             axis = spot_mod.world_axis(m, light.spot.rows)
             diffuse[:, k], glossy[:, k] = m.run(spot.scatter, beta, d_sp[:, k], cos_n[:, k], cos_r[:, k], level[:, k],
@@ -153,8 +142,62 @@ def light_fog(samples, intensity, beta, g=0.0):
     return glow, scatter
 
 
-def choose_steps(glow, scatter, target, budget=None):
-    """Each light's step down the ladder so that the predicted error stays within ``target``.
+def _preference(g):
+    """The models the predictor takes as exact: the node groups' tables, OSL's quadrature where g is below them."""
+    return "nodes" if g >= rungs.MIN_TABLE_ANISOTROPY else "osl"
+
+
+def _rays(m, samples):
+    """(camera (P, 1, 3), direction (P, 1, 3), lights (P, N, 3), sky (P, 1), d_vp (P, 1), d_sv, along, h (P, N))."""
+    cam = np.asarray(samples.camera, float)[:, None, :]
+    d = np.asarray(samples.direction, float)[:, None, :]
+    lights = np.asarray(samples.lights, float)
+    dist = np.asarray(samples.distance, float)[:, None]
+    sky = ~np.isfinite(dist)
+    return (cam, d, lights, sky, np.where(sky, 0.0, dist), *model.ray_light_geometry(m, cam, d, lights))
+
+
+def _spot_lights(samples, lights):
+    """(indices k of the spots, shading.Light of them (no intensity)); k is empty for point lights only."""
+    spots = samples.spots
+    if spots is None or not np.any(spots.is_spot):
+        return np.zeros(0, int), None
+    k = np.flatnonzero(spots.is_spot)
+    rows = np.asarray(spots.rows, float)[:, k]
+    return k, shading.Light(lights[:, k], None, shading.Spot(tuple(rows[..., i, :] for i in range(3)),
+                                                              np.asarray(spots.cos_half, float)[k],
+                                                              np.asarray(spots.blend, float)[k]))
+
+
+def _spot_glow(m, models, beta, k, light, rays):
+    """(P, K) the glow per unit intensity of the spots ``k`` (``_spot_lights``) with their ``models``."""
+    cam, d, _, sky, d_vp, d_sv, along, h = rays
+    args = (beta, d_sv[:, k], along[:, k], h[:, k])
+    ray = shading.spot_ray(m, light, models.airlight, cam, d)
+    return np.where(sky, m.run(models.background, *args, *ray), m.run(models.airlight, *args, d_vp, *ray))
+
+
+def rim_deviation(samples, intensity, beta, g=0.0):
+    """(R, P, N, 3) W/(m^2 sr): how far each spot's glow moves at every sample when its rim takes the point
+    count ``spot.RIM_LADDER[1 + r]`` instead of spot.RIM_NODES (0 for point lights)."""
+    m = _numpy_ops(g)
+    preference = _preference(g)
+    rays = _rays(m, samples)
+    k, light = _spot_lights(samples, rays[2])
+    ladder = spot_mod.RIM_LADDER[1:]
+    out = np.zeros((len(ladder),) + rays[2].shape)
+    if k.size:
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            glow = [np.nan_to_num(_spot_glow(m, rungs.choose(preference, 0, g, True, n), beta, k, light, rays),
+                                  nan=0.0, posinf=0.0) for n in spot_mod.RIM_LADDER]
+        for r in range(len(ladder)):
+            out[r][:, k] = np.abs(glow[1 + r] - glow[0])[..., None] * np.asarray(intensity, float)[None, k, :]
+    return out
+
+
+def choose_steps(glow, scatter, target, budget=None, rim_dev=None):
+    """Each light's step down the ladder so that the predicted error stays within ``target``, and each spot's
+    rim (``rim_dev``: :func:`rim_deviation`).
 
     glow, scatter: (P, N, 3) from :func:`light_fog`; target: relative error
     (None: every light full).  Greedy: the candidate drops (a light's scatter,
@@ -167,6 +210,10 @@ def choose_steps(glow, scatter, target, budget=None):
     cost in error, until they do (``limited``; the error is still predicted
     the same way, and may exceed the target); a light off is then left out
     (``rungs.LEFT_OUT``, no fog error of its own) right after it is switched off.
+
+    Then each light whose glow stays takes the fewest rim points (``spot.RIM_LADDER``) whose deviation,
+    counted RIM_SAFETY times, still keeps the sum within ``target`` (the lights in the order of their
+    deviation's largest share, smallest first).  A point light's deviation is 0: its count is meaningless.
     """
     glow = np.asarray(glow, float)
     scatter = np.asarray(scatter, float)
@@ -199,13 +246,23 @@ def choose_steps(glow, scatter, target, budget=None):
         if steps[i] == step - 1:
             dropped, steps[i], limited = dropped + drop(i, step), step, True
     light_drop = np.where(steps[None, :, None] >= 1, scatter, 0.0) + np.where(steps[None, :, None] >= 2, glow, 0.0)
+    rims = np.full(n, spot_mod.RIM_NODES)
+    if rim_dev is not None and target is not None and peak > 0.0:
+        rim_dev = RIM_SAFETY * np.asarray(rim_dev, float)
+        for i in np.argsort((rim_dev[0] * inv[:, None, :]).max(axis=(0, 2)), kind="stable"):
+            for r in reversed(range(len(rim_dev))) if steps[i] < 2 else ():   # the fewest points first
+                trial = dropped + rim_dev[r][:, i]
+                if (trial * inv).max() <= target:
+                    dropped, rims[i] = trial, spot_mod.RIM_LADDER[1 + r]
+                    light_drop[:, i] += rim_dev[r][:, i]
+                    break
     light_error = (light_drop * inv[:, None, :]).max(axis=(0, 2)) if fog.size else np.zeros(n)
     error = float((dropped * inv).max()) if fog.size else 0.0
     fits = budget is None or budget.fits(steps)
-    return Prediction(steps, light_error, error, int(judged.any(axis=1).sum()), limited, fits)
+    return Prediction(steps, light_error, error, int(judged.any(axis=1).sum()), limited, fits, rims)
 
 
 def predict(samples, intensity, beta, quality, budget=None, g=0.0):
     """The choice for a view at a Quality (preset name, number or None): :class:`Prediction`."""
     glow, scatter = light_fog(samples, intensity, beta, g)
-    return choose_steps(glow, scatter, target_error(quality), budget)
+    return choose_steps(glow, scatter, target_error(quality), budget, rim_deviation(samples, intensity, beta, g))

@@ -181,21 +181,25 @@ def anisotropic_rungs(g):
                                      hg_scatter_error(g))))
 
 
-SPOT_RIM_ERROR = 3e-3   # the rim's quadrature (spot.RIM_NODES points): max 2.3e-3 of the whole glow, tests/test_spot.py
+# The rim's quadrature by its point count (spot.RIM_LADDER): max of the whole glow over random spots, tests/test_spot.py
+# (2.0e-3, 1.4e-2, 4.6e-2 measured).  Fewer points than spot.RIM_NODES are chosen per light where the view's
+# samples show the glow move little (predict.py), which bounds them in a scene better than these maxima.
+SPOT_RIM_ERROR = {10: 3e-3, 6: 2e-2, 4: 6e-2}
 
 
 @functools.lru_cache(maxsize=None)
-def spot_rungs(air, background, g):
+def spot_rungs(air, background, g, rim_nodes=spot.RIM_NODES):
     """(airlight, background) rungs of a spot light for the point light's rungs ``air`` and ``background``
     (anisotropy g): ``air``'s kernel on the inner cone's piece of the ray (on the sky's rays too: the piece
-    stops at optical depth spot.INNER_DEPTH), the rim by quadrature (``spot.airlight``)."""
-    kernels = (functools.partial(spot.airlight, inner=air.kernel, g=float(g)),
-               functools.partial(spot.airlight_background, inner=air.kernel, g=float(g)))
+    stops at optical depth spot.INNER_DEPTH), the rim by quadrature of ``rim_nodes`` points (``spot.airlight``)."""
+    rim = dict(inner=air.kernel, g=float(g), rim_nodes=int(rim_nodes))
+    kernels = (functools.partial(spot.airlight, **rim), functools.partial(spot.airlight_background, **rim))
     domain = air.domain + "; spot size 1-180 degrees, blend 0-1, any orientation and scale"
     evidence = "tests/test_spot.py, tests/test_spot_strict.py: Eq. 5 with Blender's spot factor, scipy quadrature"
-    pair = functools.partial(spot.airlight_pair, inner=air.kernel, g=float(g))
-    return tuple(replace(r, name="spot " + r.name, kernel=k, domain=domain, spot=True, evidence=evidence,
-                         max_error=air.max_error + SPOT_RIM_ERROR, pair=p)
+    pair = functools.partial(spot.airlight_pair, **rim)
+    tag = "" if rim_nodes == spot.RIM_NODES else f", {rim_nodes}-point rim"
+    return tuple(replace(r, name="spot " + r.name + tag, kernel=k, domain=domain, spot=True, evidence=evidence,
+                         max_error=air.max_error + SPOT_RIM_ERROR[rim_nodes], pair=p)
                  for r, k, p in ((air, kernels[0], pair), (background, kernels[1], None)))
 
 
@@ -219,10 +223,10 @@ def spot_scatter_rung(scatter, g):
                    evidence="tests/test_spot_scatter.py: Eq. 15 by hemisphere quadrature of the spot's airlight")
 
 
-def choose(preference="nodes", step=0, g=0.0, spot=False):
+def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NODES):
     """The models for one light's terms, honouring the user's ``preference`` (PREFERENCES), ``step``
     (index into STEPS) rungs down the ladder, for Henyey-Greenstein anisotropy ``g``; ``spot``: for a
-    spot light (``spot_rungs``, DIRECT_SPOT).
+    spot light (``spot_rungs``, DIRECT_SPOT) whose glow's rim takes ``rim_nodes`` points (spot.RIM_LADDER).
 
     "nodes": every term from the node groups' tables; "osl": the glow by
     quadrature in OSL (Cycles only), the other terms as "nodes" (they have no
@@ -245,7 +249,7 @@ def choose(preference="nodes", step=0, g=0.0, spot=False):
         models = LightModels(air_table, bg_table, scatter, DIRECT_EXACT)
     if spot:
         models = models._replace(direct=DIRECT_SPOT, scatter=spot_scatter_rung(models.scatter, g))._replace(
-            **dict(zip(("airlight", "background"), spot_rungs(models.airlight, models.background, g))))
+            **dict(zip(("airlight", "background"), spot_rungs(models.airlight, models.background, g, rim_nodes))))
     if step >= 1:
         models = models._replace(scatter=SCATTER_OFF)
     if step >= 2:

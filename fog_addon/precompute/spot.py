@@ -32,10 +32,17 @@ import numpy as np
 from . import model, tables
 
 RIM_NODES = 10    # Gauss-Legendre points per rim interval (tests/test_spot.py, 200 random spots per case: max
-                  # 2.3e-3 of the whole glow with non-uniform scale and g = -0.5; 8 points 6.4e-3, 12 points 1.1e-3)
+                  # 2.0e-3 of the whole glow with non-uniform scale and g = -0.5)
+RIM_LADDER = (RIM_NODES, 6, 4)   # the rim's point counts a spot's glow can take, exact first: fewer where the
+#                                  view's samples show they move no pixel beyond the Quality's target (predict.py);
+#                                  over random spots (tests/test_spot.py) 6 points are within 1.4e-2, 4 within 4.6e-2
 RIM_DEPTH = 12.0   # the rim's quadrature stops this optical depth past its start (e^-12 = 6e-6)
 INNER_DEPTH = 60.0   # the inner segment stops this optical depth past its start (e^-60 = 1e-26)
-_GL = tuple((float(x), float(w)) for x, w in zip(*np.polynomial.legendre.leggauss(RIM_NODES)))
+
+
+@functools.lru_cache(maxsize=None)
+def _gauss_legendre(n):
+    return tuple((float(x), float(w)) for x, w in zip(*np.polynomial.legendre.leggauss(n)))
 
 
 def ramp_end(m, cos_half, blend):
@@ -358,7 +365,7 @@ def cone_hit(m, px, py, pz, dx, dy, dz, cos_half, t_end):
 def _kernel_name(fn):
     """A name for the kernel ``fn`` (a function or a functools.partial of one), its bound values included."""
     base = getattr(fn, "func", fn)
-    bound = ", ".join(f"{k} {_kernel_name(v) if callable(v) else f'{v:+.3f}'}"
+    bound = ", ".join(f"{k} {_kernel_name(v) if callable(v) else v if isinstance(v, int) else f'{v:+.3f}'}"
                       for k, v in sorted(getattr(fn, "keywords", {}).items()))
     return base.__name__ + (f" ({bound})" if bound else "")
 
@@ -372,7 +379,8 @@ def _inner(m, beta, along, h, t0, t1, *, inner):
     return m.select(m.less(t0, t1), m.exp(-beta * t0) * inner(m, beta, d0, a0, h, seg), 0.0)
 
 
-def _rim(m, beta, d_sv, along, h, neg_pz, neg_dz, a, t_l, h_l2, t0, t1, cos_half, cos_end, g=0.0):
+def _rim(m, beta, d_sv, along, h, neg_pz, neg_dz, a, t_l, h_l2, t0, t1, cos_half, cos_end, g=0.0,
+         nodes=RIM_NODES):
     """f(c) times the point light's airlight over [t0, t1] (1/m^2), by Gauss-Legendre quadrature in
     u = tan(xi / 2), xi = atan(Q / h) Sun's angle (Eq. 9: in xi the integrand beta/(2 pi h) e^{-beta (D_sv +
     Q - Q_0)} w is smooth and bounded however close the ray passes the light; dxi = 2 du / (1 + u^2), and
@@ -397,7 +405,7 @@ def _rim(m, beta, d_sv, along, h, neg_pz, neg_dz, a, t_l, h_l2, t0, t1, cos_half
     half, centre = 0.5 * (ub - ua), 0.5 * (ub + ua)
     two_h, beta_q0 = 2.0 * h, beta * q0
     total = 0.0
-    for x, w in _GL:
+    for x, w in _gauss_legendre(nodes):
         u = m.mul_add(half, x, centre)
         cos_part = m.mul_add(u, -u, 1.0)   # 1 - u^2 (0 where a float32 u rounds to 1: Q clamps to qb)
         q = m.minimum(m.maximum(two_h * u / cos_part, qa), qb)
@@ -424,7 +432,7 @@ def _ray_quadratic(m, px, py, pz, dx, dy, dz):
 
 
 def airlight(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend, *,
-             inner=model.airlight_segment, g=0.0):
+             inner=model.airlight_segment, g=0.0, rim_nodes=RIM_NODES):
     """Airlight of a spot light per unit intensity, 1/m^2, along a camera ray (module docstring).
 
     (d_sv, along, h): the ray's geometry about the light (``model.ray_light_geometry``); d_vp: the
@@ -434,7 +442,7 @@ def airlight(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, bl
     Henyey-Greenstein anisotropy of the rim's integrand (Python float).  Shader nodes share it, and its
     parts, as node groups (``m.group``).
     """
-    fn = functools.partial(_airlight, inner=inner, g=float(g))
+    fn = functools.partial(_airlight, inner=inner, g=float(g), **_rim_keyword(rim_nodes))
     return m.group(f"Spot Airlight [{_kernel_name(fn)}]", fn, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz,
                    cos_half, blend)
 
@@ -461,17 +469,23 @@ def _clip(m, ray, cos_half, blend, t_end):
                  ramp_end(m, cos_half, blend))
 
 
-def _parts(inner, g):
+def _rim_keyword(rim_nodes):
+    """The rim's point count as a kernel's keyword, none for RIM_NODES (the groups' names stay as they were)."""
+    return {} if int(rim_nodes) == RIM_NODES else {"rim_nodes": int(rim_nodes)}
+
+
+def _parts(inner, g, rim_nodes):
     """(the inner piece's kernel group, the rim's kernel group) as ``m.group`` names and functions."""
-    rim = functools.partial(_rim, g=float(g))
+    rim = functools.partial(_rim, g=float(g), **{"nodes": v for v in _rim_keyword(rim_nodes).values()})
     return ((f"Spot Inner [{_kernel_name(inner)}]", functools.partial(_inner, inner=inner)),
             (f"Spot Rim [{_kernel_name(rim)}]", rim))
 
 
-def _airlight(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend, *, inner, g):
+def _airlight(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend, *, inner, g,
+              rim_nodes=RIM_NODES):
     ray = (px, py, pz, dx, dy, dz)
     c = _clip(m, ray, cos_half, blend, d_vp)
-    (inner_name, inner_fn), (rim_name, rim) = _parts(inner, g)
+    (inner_name, inner_fn), (rim_name, rim) = _parts(inner, g, rim_nodes)
     value = m.group(inner_name, inner_fn, beta, along, h, c.lo_in, c.hi_in)
     # the rim: [lo_out, lo_in] and [hi_in, hi_out], or the whole outer interval when the inner is empty
     rim_args = (beta, d_sv, along, h, *_ray_quadratic(m, *ray))
@@ -480,20 +494,21 @@ def _airlight(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, b
 
 
 def airlight_pair(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend, *,
-                  inner=model.airlight_segment, g=0.0):
+                  inner=model.airlight_segment, g=0.0, rim_nodes=RIM_NODES):
     """(:func:`airlight` to the surface at ``d_vp``, :func:`airlight_background`) of one ray, 1/m^2, for a
     backend that needs both per pixel (the compositor: a pixel partly covered mixes the two).  The same
     formulas, sharing what they have in common: the cone intervals (the ray's to infinity, clipped at
     d_vp) and every rim d_vp does not cut, so three rims are integrated instead of four."""
-    fn = functools.partial(_airlight_pair, inner=inner, g=float(g))
+    fn = functools.partial(_airlight_pair, inner=inner, g=float(g), **_rim_keyword(rim_nodes))
     return m.group(f"Spot Airlight Pair [{_kernel_name(fn)}]", fn, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy,
                    dz, cos_half, blend)
 
 
-def _airlight_pair(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend, *, inner, g):
+def _airlight_pair(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend, *, inner, g,
+                   rim_nodes=RIM_NODES):
     ray = (px, py, pz, dx, dy, dz)
     c = _clip(m, ray, cos_half, blend, model.FAR)
-    (inner_name, inner_fn), (rim_name, rim) = _parts(inner, g)
+    (inner_name, inner_fn), (rim_name, rim) = _parts(inner, g, rim_nodes)
     rim_args = (beta, d_sv, along, h, *_ray_quadratic(m, *ray))
     first = m.group(rim_name, rim, *rim_args, c.lo_out, c.first_end, cos_half, c.cos_end)
     second = (1.0 - c.empty_in) * m.group(rim_name, rim, *rim_args, c.hi_in, c.hi_out, cos_half, c.cos_end)
@@ -510,15 +525,15 @@ def _airlight_pair(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_ha
 
 
 def airlight_background(m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, cos_half, blend, *,
-                        inner=model.airlight_segment, g=0.0):
+                        inner=model.airlight_segment, g=0.0, rim_nodes=RIM_NODES):
     """:func:`airlight` of a ray that meets no surface (Sun et al. 2005 Eq. 12), 1/m^2."""
     return airlight(m, beta, d_sv, along, h, model.FAR, px, py, pz, dx, dy, dz, cos_half, blend,
-                    inner=inner, g=g)
+                    inner=inner, g=g, rim_nodes=rim_nodes)
 
 
-def airlight_spot(m, beta, origin, direction, light, rows, cos_half, blend, d_vp, g=0.0):
+def airlight_spot(m, beta, origin, direction, light, rows, cos_half, blend, d_vp, g=0.0, rim_nodes=RIM_NODES):
     """:func:`airlight` from world vectors (origin, unit direction, light position: m; rows: the light's
     inverse 3x3 matrix as three row vectors), with the table's point-light segment for anisotropy g."""
     d_sv, along, h = model.ray_light_geometry(m, origin, direction, light)
     return airlight(m, beta, d_sv, along, h, d_vp, *light_space_ray(m, rows, origin, direction, light),
-                    cos_half, blend, inner=functools.partial(model.airlight_segment, g=g), g=g)
+                    cos_half, blend, inner=functools.partial(model.airlight_segment, g=g), g=g, rim_nodes=rim_nodes)

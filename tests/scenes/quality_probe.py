@@ -111,7 +111,8 @@ def main(out, name, quality, method="nodes", width=128, height=72):
     print(json.dumps({"scene": name, "beta": beta, "quality": quality, "predicted": choice["error"],
                       "steps": {k: v[0] for k, v in choice["lights"].items()},
                       "light_error": {k: v[1] for k, v in choice["lights"].items()},
-                      "lights": len(choice["lights"]), "explain": apply.explain()}))
+                      "rims": choice.get("rims", {}), "lights": len(choice["lights"]),
+                      "explain": apply.explain(choice)}))
 
 
 if __name__ == "__main__":
