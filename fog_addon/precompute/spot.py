@@ -508,19 +508,20 @@ def _airlight_pair(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_ha
                    rim_nodes=RIM_NODES):
     ray = (px, py, pz, dx, dy, dz)
     c = _clip(m, ray, cos_half, blend, model.FAR)
-    (inner_name, inner_fn), (rim_name, rim) = _parts(inner, g, rim_nodes)
+    # the pieces inline, not as kernel groups: operations on the same inputs are then built once (the two
+    # inner pieces' common start, what the rims share), which node groups would hide from each other
+    (_, inner_fn), (_, rim) = _parts(inner, g, rim_nodes)
     rim_args = (beta, d_sv, along, h, *_ray_quadratic(m, *ray))
-    first = m.group(rim_name, rim, *rim_args, c.lo_out, c.first_end, cos_half, c.cos_end)
-    second = (1.0 - c.empty_in) * m.group(rim_name, rim, *rim_args, c.hi_in, c.hi_out, cos_half, c.cos_end)
-    background = m.group(inner_name, inner_fn, beta, along, h, c.lo_in, c.hi_in) + first + second
+    first = rim(m, *rim_args, c.lo_out, c.first_end, cos_half, c.cos_end)
+    second = (1.0 - c.empty_in) * rim(m, *rim_args, c.hi_in, c.hi_out, cos_half, c.cos_end)
+    background = inner_fn(m, beta, along, h, c.lo_in, c.hi_in) + first + second
     # to the surface: d_vp cuts at most one rim, the first (before first_end) or else the second, whose
     # piece [hi_in, d_vp] is empty unless d_vp lies in it
     before_first_end = m.less(d_vp, c.first_end)
-    cut = m.group(rim_name, rim, *rim_args, m.select(before_first_end, c.lo_out, c.hi_in), d_vp, cos_half,
-                  c.cos_end)
+    cut = rim(m, *rim_args, m.select(before_first_end, c.lo_out, c.hi_in), d_vp, cos_half, c.cos_end)
     second_cut = (1.0 - c.empty_in) * m.select(m.less(d_vp, c.hi_out), cut, second)
     rims = m.select(before_first_end, cut, first + second_cut)
-    surface = m.group(inner_name, inner_fn, beta, along, h, c.lo_in, m.maximum(m.minimum(c.hi_in, d_vp), c.lo_in))
+    surface = inner_fn(m, beta, along, h, c.lo_in, m.maximum(m.minimum(c.hi_in, d_vp), c.lo_in))
     return surface + rims, background
 
 

@@ -100,8 +100,9 @@ def shared():
     m = comp_fog.CompOps(spot_tree, images.all_table_images())
     spot.airlight_pair(m, *(m.wrap(o) for o in spot_tree.nodes.new("NodeGroupInput").outputs[:13]))
     pair = next(n.node_tree for n in spot_tree.nodes if n.bl_idname == "CompositorNodeGroup")
-    rims = [n for n in pair.nodes if n.bl_idname == "CompositorNodeGroup" and "Spot Rim" in n.node_tree.name]
-    return {"same": a.sock == b.sock, "different": c.sock != a.sock, "math": kinds, "pair_rims": len(rims),
+    # the rims are inline in the pair (so they share what they can): each of their points has one Map Range node
+    ramps = sum(n.bl_idname == "ShaderNodeMapRange" for n in pair.nodes)
+    return {"same": a.sock == b.sock, "different": c.sock != a.sock, "math": kinds, "pair_rims": ramps / spot.RIM_NODES,
             "same_in_shader": same_in_shader}
 
 

@@ -78,7 +78,7 @@ def build(engine, method, case, g=0.0, kind="point"):
     bsdf.inputs["Specular IOR Level"].default_value = c["ior_level"]
     s.world = bpy.data.worlds.new("W")
     s.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0, 0, 0, 1)
-    apply.apply_fog(s, BETA, albedo=ALBEDO, method=method, anisotropy=g)
+    apply.apply_fog(s, BETA, albedo=ALBEDO, method=method, anisotropy=g, error=None)   # Exact: the twin's models
     probe_common.tiny_render(s, engine, W, H)
     return s, cam
 
