@@ -17,7 +17,8 @@ convex, so a ray meets the set where c >= k in one interval (``cone_interval``):
   unchanged on that sub-segment (Pegoraro et al.: the segment's bounds are free; here the viewer moved
   to the segment's start, any point-light airlight rung of ``rungs.py``, times the extinction to it);
 * on the blend rim (c_h < c < c_in, at most two intervals) f varies smoothly and the integral is taken
-  by Gauss-Legendre quadrature (``RIM_NODES`` points per interval).
+  by Gauss-Legendre quadrature in u = tan(xi / 2), xi Sun's angle (``_rim``: ``RIM_NODES`` points per
+  interval, or fewer, ``RIM_LADDER``, where the Quality allows).
 
 The kernels take scalars only (so OSL runs them as they are): the point light's ray geometry
 (d_sv, along, h) and the ray in the light's space, p = M^-1 (origin - light) and d = M^-1 direction
