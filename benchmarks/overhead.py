@@ -590,7 +590,7 @@ def chart(rows, path):
     ax.set_xticks(list(LIGHTS) + [BOULEVARD_LIGHTS])
     ax.set_xticklabels([str(n) for n in LIGHTS] + [str(BOULEVARD_LIGHTS)])
     ax.set_xlim(0.7, 370)
-    ax.set_xlabel("point lights")
+    ax.set_xlabel("spots" if any(str(r.get("spots")) == "True" for r in rows) else "point lights")
     ax.set_ylabel("render CPU time with fog / without fog")
     res = rows[0].get("resolution", "") if rows else ""
     spp = rows[0].get("samples", "") if rows else ""
