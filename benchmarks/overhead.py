@@ -685,6 +685,12 @@ def main(argv=None):
         cases.sort(key=lambda c: c[1])
     rows = []
     kept = read_csv(csv_path) if args.update and csv_path.exists() else []
+    run_now = {(case, n, method) for method in args.methods.split(",") for case, n in cases}
+    lost = [r for r in (read_csv(csv_path) if not args.update and csv_path.exists() else [])
+            if (r["case"], int(r["lights"]), r["method"]) not in run_now]
+    if lost:   # a run of some methods or cases would drop the others' rows (and the chart's curves)
+        raise SystemExit(f"{csv_path} holds {len(lost)} rows this run would drop (e.g. {lost[0]['method']} at "
+                         f"{int(lost[0]['lights'])} lights): pass --update to keep them, or --out for another CSV")
     for method in args.methods.split(","):
         stopped_at = apply_stopped_at = None
         args.skip_note = "--apply-only: no renders with fog"
