@@ -6,7 +6,8 @@ after it moved again and the frame-change handler ran.
 
 Measured (one render thread, so both renders sum in the same order; with threads the same comparison
 drifted up to 2.5e-6 of the peak, rel RMSE 1.8e-6, from run to run): the pictures agree within 6.5e-9 of the
-peak in landscape and 6.4e-7 in portrait.  With the handler's window update switched off
+peak in landscape and 6.4e-7 in portrait (at 3d21982; 5.4e-8 in landscape after a88217b).  With the handler's
+window update switched off
 (``comp_fog.set_windows`` a no-op) the moved spot's case fails: 63 pixels off, up to 0.4 % of the peak; with
 the frame-change handler's (``apply.grow_windows`` a no-op) the moved-again case: 12 pixels, up to 0.22 %."""
 import json

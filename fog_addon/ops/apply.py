@@ -144,8 +144,8 @@ def choose_models(scene, lights, preference, quality):
         steps = [int(k) for k in pred.steps]
         choice["error"] = pred.error
         choice["lights"] = {o.name: [int(k), float(e)] for o, k, e in zip(lights, pred.steps, pred.light_error)}
-        choice["rims"] = {o.name: int(n) for o, k, n in zip(lights, pred.steps, pred.rims)
-                          if view.is_spot(o) and k < rungs.OFF and n != spot.RIM_NODES}
+        choice["rims"] = {o.name: int(n) for o, n in zip(lights, pred.rims)   # (a light off keeps RIM_NODES)
+                          if view.is_spot(o) and n != spot.RIM_NODES}
         if pred.limited or not pred.fits:
             choice["limited"] = budget.name + ("" if pred.fits else ": too many lights even with every light off")
     else:

@@ -177,21 +177,21 @@ def _spot_glow(m, models, beta, k, light, rays):
     return np.where(sky, m.run(models.background, *args, *ray), m.run(models.airlight, *args, d_vp, *ray))
 
 
-def rim_deviation(samples, intensity, beta, g=0.0):
+def rim_deviation(samples, intensity, beta, glow, g=0.0):
     """(R, P, N, 3) W/(m^2 sr): how far each spot's glow moves at every sample when its rim takes the point
-    count ``spot.RIM_LADDER[1 + r]`` instead of spot.RIM_NODES (0 for point lights)."""
+    count ``spot.RIM_LADDER[1 + r]`` instead of spot.RIM_NODES (0 for point lights); ``glow``: the exact
+    glows of :func:`light_fog` (spot.RIM_NODES points), which it does not compute again."""
     m = _numpy_ops(g)
     preference = _preference(g)
     rays = _rays(m, samples)
     k, light = _spot_lights(samples, rays[2])
     ladder = spot_mod.RIM_LADDER[1:]
     out = np.zeros((len(ladder),) + rays[2].shape)
-    if k.size:
+    for r, n in enumerate(ladder if k.size else ()):
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            glow = [np.nan_to_num(_spot_glow(m, rungs.choose(preference, 0, g, True, n), beta, k, light, rays),
-                                  nan=0.0, posinf=0.0) for n in spot_mod.RIM_LADDER]
-        for r in range(len(ladder)):
-            out[r][:, k] = np.abs(glow[1 + r] - glow[0])[..., None] * np.asarray(intensity, float)[None, k, :]
+            cheap = _spot_glow(m, rungs.choose(preference, 0, g, True, n), beta, k, light, rays)
+        cheap = np.asarray(intensity, float)[None, k, :] * np.nan_to_num(cheap, nan=0.0, posinf=0.0)[..., None]
+        out[r][:, k] = np.abs(cheap - glow[:, k])
     return out
 
 
@@ -265,4 +265,5 @@ def choose_steps(glow, scatter, target, budget=None, rim_dev=None):
 def predict(samples, intensity, beta, quality, budget=None, g=0.0):
     """The choice for a view at a Quality (preset name, number or None): :class:`Prediction`."""
     glow, scatter = light_fog(samples, intensity, beta, g)
-    return choose_steps(glow, scatter, target_error(quality), budget, rim_deviation(samples, intensity, beta, g))
+    return choose_steps(glow, scatter, target_error(quality), budget,
+                        rim_deviation(samples, intensity, beta, glow, g))

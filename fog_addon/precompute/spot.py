@@ -170,7 +170,7 @@ def _ray_terms(t, alpha, g):
 
 
 def bake_scatter_tables(g=0.0):
-    """{name: float32 (height, width, 4) table} of ``tables.SPOT_MOMENTS`` for anisotropy g: F, the first
+    """The float32 (height, width, 4) table ``tables.SPOT_MOMENTS`` for anisotropy g: F, the first
     moment along e_l and the one towards the axis divided by sin psi, both over the point light's total
     (module section above), and the point light's first moment.  The last slice is the whole sphere (the
     point light: F = 1)."""
@@ -381,7 +381,7 @@ def _inner(m, beta, along, h, t0, t1, *, inner):
 
 
 def _rim(m, beta, d_sv, along, h, neg_pz, neg_dz, a, t_l, h_l2, t0, t1, cos_half, cos_end, g=0.0,
-         nodes=RIM_NODES):
+         rim_nodes=RIM_NODES):
     """f(c) times the point light's airlight over [t0, t1] (1/m^2), by Gauss-Legendre quadrature in
     u = tan(xi / 2), xi = atan(Q / h) Sun's angle (Eq. 9: in xi the integrand beta/(2 pi h) e^{-beta (D_sv +
     Q - Q_0)} w is smooth and bounded however close the ray passes the light; dxi = 2 du / (1 + u^2), and
@@ -406,7 +406,7 @@ def _rim(m, beta, d_sv, along, h, neg_pz, neg_dz, a, t_l, h_l2, t0, t1, cos_half
     half, centre = 0.5 * (ub - ua), 0.5 * (ub + ua)
     two_h, beta_q0 = 2.0 * h, beta * q0
     total = 0.0
-    for x, w in _gauss_legendre(nodes):
+    for x, w in _gauss_legendre(rim_nodes):
         u = m.mul_add(half, x, centre)
         cos_part = m.mul_add(u, -u, 1.0)   # 1 - u^2 (0 where a float32 u rounds to 1: Q clamps to qb)
         q = m.minimum(m.maximum(two_h * u / cos_part, qa), qb)
@@ -477,7 +477,7 @@ def _rim_keyword(rim_nodes):
 
 def _parts(inner, g, rim_nodes):
     """(the inner piece's kernel group, the rim's kernel group) as ``m.group`` names and functions."""
-    rim = functools.partial(_rim, g=float(g), **{"nodes": v for v in _rim_keyword(rim_nodes).values()})
+    rim = functools.partial(_rim, g=float(g), **_rim_keyword(rim_nodes))
     return ((f"Spot Inner [{_kernel_name(inner)}]", functools.partial(_inner, inner=inner)),
             (f"Spot Rim [{_kernel_name(rim)}]", rim))
 
