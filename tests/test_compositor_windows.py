@@ -1,15 +1,18 @@
 """The Compositor method's windows (``precompute/footprint.py``, ``nodes/comp_fog.py``) change no pixel:
 tests/scenes/compositor_windows.py renders spots at hard cases (the camera inside a cone, a squashed cone
-aimed sideways, a 10-degree hard-edged cone, a 170-degree cone animated across the picture) with and
-without windows, at frames 1 and 5, after a spot moved and the depsgraph handler's refresh ran, and at frame 5
-after it moved again and the frame-change handler ran.
+aimed sideways, a 10-degree hard-edged cone, a 170-degree cone animated across the picture, a cone beside the
+ground's edge whose beam the ground hides in part) with and without windows, at frames 1 and 5, after a spot
+moved and the depsgraph handler's refresh ran, and at frame 5 after it moved again and the frame-change
+handler ran.
 
 Measured (one render thread, so both renders sum in the same order; with threads the same comparison
-drifted up to 2.5e-6 of the peak, rel RMSE 1.8e-6, from run to run): the pictures agree within 6.5e-9 of the
-peak in landscape and 6.4e-7 in portrait (at 3d21982; 5.4e-8 in landscape after a88217b).  With the handler's
-window update switched off
-(``comp_fog.set_windows`` a no-op) the moved spot's case fails: 63 pixels off, up to 0.4 % of the peak; with
-the frame-change handler's (``apply.grow_windows`` a no-op) the moved-again case: 12 pixels, up to 0.22 %."""
+drifted up to 2.5e-6 of the peak, rel RMSE 1.8e-6, from run to run): the pictures agree within 2.1e-7 of the
+peak in landscape and 2.5e-6 in portrait (6.5e-9 and 6.4e-7 at 3d21982, before the spot beside the ground's
+edge).  With the handler's window update switched off (``comp_fog.set_windows`` a no-op) the moved spot's case
+fails: 63 pixels off, up to 0.4 % of the peak; with the frame-change handler's (``apply.grow_windows`` a no-op)
+the moved-again case: 12 pixels, up to 0.22 %; with the occluder's window dropping what lies beyond the
+ground's plane (``footprint.occluded_window`` returning the near part's window) every case: up to 4.8e-4 of
+the peak."""
 import json
 
 import numpy as np
@@ -43,10 +46,12 @@ def test_windows_change_no_pixel(res, case):
 
 def test_windows_crop(res):
     """The windows are smaller than the picture where they can be: the narrow spot's, the surfaces' (the
-    sky above the ground), but not the spot holding the camera."""
+    sky above the ground), but not the spot holding the camera; the ground cuts the spots aimed at it."""
     shares = res["shares"]
     assert shares["L000"] == 1.0
     assert shares["L002"] < 0.25 and shares["surfaces"] < 0.8
+    print({k: round(v, 4) for k, v in shares.items() if isinstance(v, float)})
+    assert shares["L002"] <= 0.5 * shares["L002 plain"] and shares["L004"] < shares["L004 plain"]
 
 
 def test_grown_windows_are_computed_again_before_saving(res):
@@ -56,3 +61,11 @@ def test_grown_windows_are_computed_again_before_saving(res):
     shares = res["shares"]
     assert shares["grown"] == shares["grown, frame 5"] == (not res["portrait"])
     assert not shares["saved"]
+
+
+def test_occluders_are_only_what_ends_every_ray(res):
+    """The ground is an occluder as built, and not when it is left out of renders (itself or its collection),
+    lets light through, or when the picture holds an unfogged object or a holdout, or with depth of field."""
+    cases = res["shares"]["occluders"]
+    assert cases.pop("as built") and cases.pop("undone"), cases
+    assert not any(cases.values()), cases

@@ -17,6 +17,7 @@ import bpy
 import numpy as np
 from mathutils.bvhtree import BVHTree
 
+from ..nodes import graph, owned
 from ..precompute import footprint, predict, surface, tables
 
 MAX_SAMPLES = 160 * 90          # rays per frame at most: one per pixel centre up to this, else a coarser grid
@@ -311,7 +312,8 @@ def _camera_frame(scene, camera):
 
 
 def _frame_windows(scene, depsgraph, lights):
-    """(surfaces' window, [each spot's glow window, None for a point light]) at the current frame."""
+    """(surfaces' window, [each spot's glow window, None for a point light]) at the current frame; a spot's
+    glow window heeds the picture's occluders (``occluders``, ``footprint.occluded_window``)."""
     camera = scene.camera.evaluated_get(depsgraph)
     mw = np.array(camera.matrix_world)
     mw[:3, :3] /= np.linalg.norm(mw[:3, :3], axis=0)   # the view's axes (a camera's scale does not scale its rays)
@@ -319,10 +321,137 @@ def _frame_windows(scene, depsgraph, lights):
     boxes = [footprint.box_points(inst.object.bound_box, inst.matrix_world)
              for inst in depsgraph.object_instances if inst.object.type in GEOMETRY]
     surfaces = footprint.boxes_window(np.array(boxes), mw, frame) if boxes else footprint.EMPTY
-    glows = [footprint.window(footprint.spot_points(o.evaluated_get(depsgraph).matrix_world,
-                                                    math.cos(o.data.spot_size / 2)), mw, frame)
-             if is_spot(o) else None for o in lights]
+    margin = occlusion_margin(scene)
+    faces = occluders(depsgraph, camera, mw, frame, margin) if any(is_spot(o) for o in lights) else []
+    glows = []
+    for o in lights:
+        if not is_spot(o):
+            glows.append(None)
+            continue
+        points = footprint.spot_points(o.evaluated_get(depsgraph).matrix_world, math.cos(o.data.spot_size / 2))
+        win = footprint.window(points, mw, frame)
+        for face, shade in faces:   # (a face whose picture misses the window hides nothing in it)
+            if footprint.intersection(win, shade) != footprint.EMPTY:
+                win = footprint.intersection(win, footprint.occluded_window(
+                    points, face, mw, frame, margin, camera.data.clip_start, footprint.CONE_EDGES,
+                    footprint.clip_depth(camera.data.clip_end, frame)))
+        glows.append(win)
     return surfaces, glows
+
+
+OCCLUDER_FACES = 4          # faces tried as occluders of the spots' glows: those largest in the picture ...
+OCCLUDER_CANDIDATES = 64    # ... among the largest in the world
+OCCLUDER_OBJECTS = 8        # ... in the meshes largest in the picture (their bounding boxes)
+OCCLUDER_POLYGONS = 65536   # objects with more faces are not searched for them
+OCCLUSION_MARGIN_PX = 2.0   # px beyond the pixel filter's width (``occlusion_margin``)
+
+
+def occlusion_margin(scene):
+    """(mu, mv): how far, in normalised picture units, an occluder's picture is shrunk (``footprint.
+    occluded_window``): the pixel filter's width (a pixel averages its samples over it; at 1 px or less where
+    a filter is narrower) and OCCLUSION_MARGIN_PX, at the render's size."""
+    r = scene.render
+    width = scene.cycles.filter_width if r.engine == "CYCLES" else r.filter_size
+    px = max(float(width), 1.0) + OCCLUSION_MARGIN_PX
+    scale = r.resolution_percentage / 100.0
+    return px / max(r.resolution_x * scale, 1.0), px / max(r.resolution_y * scale, 1.0)
+
+
+def _fogged(mat, cache):
+    """True if the fog's Surface node is in material ``mat`` (it writes the pixel's coverage)."""
+    if mat is None:
+        return False
+    if ("fogged", mat.name) not in cache:
+        cache["fogged", mat.name] = mat.node_tree is not None and owned.find(mat.node_tree, "Surface") is not None
+    return cache["fogged", mat.name]
+
+
+def _opaque(mat, cache):
+    """True if nothing in fogged material ``mat`` lets light through (no Transparent BSDF, Holdout or Alpha,
+    no backface culling)."""
+    if ("opaque", mat.name) not in cache:
+        cache["opaque", mat.name] = not getattr(mat, "use_backface_culling", False) and all(
+            not k.passes and not k.hidden for k in graph.plan(mat.node_tree)[2].values())
+    return cache["opaque", mat.name]
+
+
+def occluders(depsgraph, camera, camera_matrix, frame, margin):
+    """[(face, its window)] of flat convex polygons ((K, 3) world corners in order) that end every camera ray
+    meeting them: the faces of rendered meshes (not instances) seen by the camera whose materials are all
+    fogged and opaque, and such a mesh's outline where its faces tile a flat convex region
+    (``footprint.flat_outline``: a floor of many faces), searched in the OCCLUDER_OBJECTS meshes largest in
+    the picture; the OCCLUDER_FACES largest in the picture (among the OCCLUDER_CANDIDATES largest in the
+    world; none smaller than twice ``margin``, which ``footprint.occluded_window`` shrinks them by).  None at
+    all unless every surface the camera can see is fogged (elsewhere the compositor takes a pixel for sky
+    and adds its ray's glow to the sky), and none with depth of field (rays from the whole lens)."""
+    if camera.data.dof.use_dof:
+        return []
+    cache, hidden, meshes = {}, _render_hidden_collections(), []
+    for inst in depsgraph.object_instances:
+        obj = inst.object
+        if obj.type not in GEOMETRY - {"VOLUME"} or not obj.visible_camera:
+            continue
+        mats = [slot.material for slot in obj.material_slots]
+        if not mats or not all(_fogged(m, cache) for m in mats) or obj.is_holdout or obj.is_shadow_catcher:
+            return []
+        if (obj.type == "MESH" and not inst.is_instance and len(obj.data.polygons) <= OCCLUDER_POLYGONS
+                and not obj.original.hide_render and not (hidden and hidden & set(obj.original.users_collection))):
+            meshes.append((obj, np.array(inst.matrix_world), mats))
+    boxes = np.array([footprint.box_points(obj.bound_box, mw) for obj, mw, _ in meshes]).reshape(-1, 8, 3)
+    found = []
+    for k in np.argsort(-footprint.boxes_areas(boxes, camera_matrix, frame))[:OCCLUDER_OBJECTS]:
+        obj, mw, mats = meshes[k]
+        if all(_opaque(m, cache) for m in mats):
+            faces, area, corners = _flat_convex_faces(obj.data, mw)
+            outline = footprint.flat_outline(corners, area) if len(faces) != 1 else None
+            found += faces + ([(area, outline)] if outline is not None else [])
+    found.sort(key=lambda area_face: -area_face[0])
+    seen = []
+    for _, face in found[:OCCLUDER_CANDIDATES]:
+        u0, u1, v0, v1 = footprint.window(face, camera_matrix, frame)
+        if u1 - u0 > 2.0 * margin[0] and v1 - v0 > 2.0 * margin[1]:
+            seen.append(((u1 - u0) * (v1 - v0), face, (u0, u1, v0, v1)))
+    seen.sort(key=lambda area_face: -area_face[0])
+    return [(face, shade) for _, face, shade in seen[:OCCLUDER_FACES]]
+
+
+def _render_hidden_collections():
+    """The collections a render leaves out (their own or a parent's Disable in Renders): the viewport's
+    depsgraph still holds their objects, which must not count as occluders."""
+    hidden = set()
+    for c in bpy.data.collections:
+        if c.hide_render:
+            hidden |= {c, *c.children_recursive}
+    return hidden
+
+
+def _flat_convex_faces(mesh, matrix):
+    """([(area m^2, (K, 3) world corners)] of the mesh's faces that are flat and convex (within float rounding),
+    the area of all its faces (m^2), the world corners of its faces), faces of each corner count at once."""
+    n = len(mesh.polygons)
+    if not n:
+        return [], 0.0, np.zeros((0, 3))
+    co = np.empty(3 * len(mesh.vertices))
+    mesh.vertices.foreach_get("co", co)
+    co = co.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3]
+    starts, totals, verts = (np.empty(n, int), np.empty(n, int), np.empty(len(mesh.loops), int))
+    mesh.polygons.foreach_get("loop_start", starts)
+    mesh.polygons.foreach_get("loop_total", totals)
+    mesh.loops.foreach_get("vertex_index", verts)
+    out, total = [], 0.0
+    for k in np.unique(totals):
+        start = starts[totals == k]
+        faces = co[verts[start[:, None] + np.arange(k)]]                              # (M, k, 3)
+        after = np.roll(faces, -1, axis=1)
+        normal = 0.5 * np.cross(faces, after).sum(axis=1)                            # Newell: area times unit
+        area = np.linalg.norm(normal, axis=1)
+        total += float(area.sum())
+        unit = normal / np.maximum(area, 1e-300)[:, None]
+        off_plane = np.abs(np.einsum("mkd,md->mk", faces - faces.mean(axis=1, keepdims=True), unit)).max(axis=1)
+        turns = np.einsum("mkd,md->mk", np.cross(after - faces, np.roll(after, -1, axis=1) - after), unit)
+        good = (area > 0.0) & (off_plane <= 1e-6 * np.sqrt(area)) & (turns >= -1e-9 * area[:, None]).all(axis=1)
+        out += [(float(a), f) for a, f in zip(area[good], faces[good])]
+    return out, total, co[np.unique(verts)]
 
 
 def full_windows(lights):

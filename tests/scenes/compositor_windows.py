@@ -5,14 +5,17 @@ renders without them (every term over the whole picture), the same scene, frame 
 
 The many-lights scene with four spots set to hard cases: one whose cone holds the camera, one aimed sideways
 with a non-uniform scale, a 10-degree cone with no blend, a 170-degree cone animated across the picture over
-frames 1-5 (the windows hold the whole range).  Renders (Cycles, 1 spp, Gaussian filter at pixel centres):
-frame 1 and frame 5, then frame 1 again after a spot moved and ``apply.refresh_lights`` ran as the
-depsgraph handler runs it (this frame only), and at frame 5 after it moved again and the frame-change
-handler ran (``apply.grow_windows``), each with and without windows; then whether the windows were marked
-grown (``comp_fog.windows_partial``) and are no longer after the refresh that saving a file runs.  Writes
-the pictures as EXR and prints one line ``WINDOWS_JSON {...}``: the pictures' paths by case and each window's
-share of the picture.  ``portrait``: the same at 41 x 73 px at 150 % (odd sizes), the sensor fitted vertically, the lens
-shifted.
+frames 1-5 (the windows hold the whole range); and a fifth just beyond the ground's right edge (the ground
+narrowed to 12 m, its edges in the picture, and cut into 4 x 4 faces) aimed down past it: the ground hides the
+beam below its plane only where the ground is in front (the ground is an occluder:
+``footprint.occluded_window``). Renders (Cycles, 1 spp, Gaussian filter at pixel centres): frame 1 and frame
+5, then frame 1 again after a spot moved and ``apply.refresh_lights`` ran as the depsgraph handler runs it
+(this frame only), and at frame 5 after it moved again and the frame-change handler ran
+(``apply.grow_windows``), each with and without windows; then whether the windows were marked grown
+(``comp_fog.windows_partial``) and are no longer after the refresh that saving a file runs. Writes the
+pictures as EXR and prints one line ``WINDOWS_JSON {...}``: the pictures' paths by case and each window's
+share of the picture, and each spot's without occluders ("<name> plain"). ``portrait``: the same at 41 x 73 px
+at 150 % (odd sizes), the sensor fitted vertically, the lens shifted.
 """
 import json
 import math
@@ -37,6 +40,7 @@ W, H = (61, 109) if PORTRAIT else (96, 54)   # the render's pixels
 
 
 def build():
+    import bmesh   # (after bpy)
     scene, _ = many_lights.build_scene(4, direct_light=True)
     spots = sorted((o for o in scene.objects if o.type == "LIGHT"), key=lambda o: o.name)
     for o in spots:
@@ -49,6 +53,18 @@ def build():
     spots[1].scale = (1.0, 0.3, 1.0)
     spots[2].data.spot_size, spots[2].data.spot_blend = math.radians(10.0), 0.0
     spots[3].data.spot_size = math.radians(170.0)
+    edge = bpy.data.objects.new("L004", bpy.data.lights.new("L004", "SPOT"))
+    edge.data.energy, edge.data.spot_size, edge.data.spot_blend = 400.0, math.radians(40.0), 0.2
+    edge.location = (6.5, 8.0, 1.5)
+    ground = scene.objects["ground"]
+    ground.scale.x = 0.2   # x in [-6, 6] m, of 4 x 4 faces: the occluder is its outline (footprint.flat_outline)
+    bm = bmesh.new()
+    bm.from_mesh(ground.data)
+    bmesh.ops.subdivide_edges(bm, edges=bm.edges[:], cuts=3, use_grid_fill=True)
+    bm.to_mesh(ground.data)
+    bm.free()
+    scene.collection.objects.link(edge)
+    spots.append(edge)
     for frame, x in ((1, -6.0), (5, 6.0)):
         spots[3].location.x = x
         spots[3].keyframe_insert("location", index=0, frame=frame)
@@ -109,7 +125,59 @@ def run(out, windowed):
         shares = flags
         surfaces, glows = view.windows(scene, lights)
         shares.update({"surfaces": _share(surfaces), **{o.name: _share(g) for o, g in zip(lights, glows)}})
+        found, view.occluders = view.occluders, lambda *args: []   # the windows without occluders
+        shares.update({o.name + " plain": _share(g) for o, g in zip(lights, view.windows(scene, lights)[1])})
+        view.occluders = found
+        shares["occluders"] = occluder_cases(scene)
     return paths, shares
+
+
+def occluder_cases(scene):
+    """{case: the ground is among ``view.occluders``}: as built, then with each change that must take it (or
+    every occluder) away, undone after: the ground left out of renders (itself or its collection), its
+    material letting light through (Alpha), an unfogged object in the picture, a holdout, depth of field."""
+    import numpy as np
+
+    def ground_found():
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+        cam = scene.camera.evaluated_get(depsgraph)
+        mw = np.array(cam.matrix_world)
+        faces = view.occluders(depsgraph, cam, mw, view._camera_frame(scene, cam), view.occlusion_margin(scene))
+        return any(np.abs(face[:, 2]).max() < 1e-6 and len(face) == 4 for face, _ in faces)
+
+    ground = scene.objects["ground"]
+    out = {"as built": ground_found()}
+    bsdf = next(n for n in ground.active_material.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    folder = bpy.data.collections.new("Hidden")
+    scene.collection.children.link(folder)
+    cube = bpy.data.objects.new("Unfogged", bpy.data.meshes.new("Unfogged"))
+    cube.data.from_pydata([(0, 5, 1), (1, 5, 1), (1, 6, 1)], [], [(0, 1, 2)])
+    cube.data.materials.append(bpy.data.materials.new("Unfogged"))
+
+    def toggle(case, on):
+        if case == "hidden in renders":
+            ground.hide_render = on
+        elif case == "collection hidden in renders":
+            (folder.objects.link if on else folder.objects.unlink)(ground)
+            (scene.collection.objects.unlink if on else scene.collection.objects.link)(ground)
+            folder.hide_render = on
+        elif case == "alpha":
+            bsdf.inputs["Alpha"].default_value = 0.5 if on else 1.0
+        elif case == "unfogged object":
+            (scene.collection.objects.link if on else scene.collection.objects.unlink)(cube)
+        elif case == "holdout":
+            scene.objects["matte"].is_holdout = on
+        elif case == "depth of field":
+            scene.camera.data.dof.use_dof = on
+        bpy.context.view_layer.update()
+
+    for case in ("hidden in renders", "collection hidden in renders", "alpha", "unfogged object", "holdout",
+                 "depth of field"):
+        toggle(case, True)
+        out[case] = ground_found()
+        toggle(case, False)
+    out["undone"] = ground_found()
+    return out
 
 
 def _share(win):
