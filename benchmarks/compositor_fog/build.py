@@ -23,16 +23,9 @@ from fog_addon import measure  # noqa: E402
 from fog_addon.nodes import comp_fog, groups, images, passes  # noqa: E402
 from fog_addon.ops import apply, view  # noqa: E402
 from fog_addon.precompute import rungs  # noqa: E402
+from probe_common import light_pixel  # noqa: E402,F401  (peaks.py reads it here)
 
 W, H, SPP = 320, 180, 16
-
-
-def light_pixel(scene, light):
-    """The light's position in the picture, px from the bottom-left corner (far away behind the camera)."""
-    from bpy_extras.object_utils import world_to_camera_view
-    p = world_to_camera_view(scene, scene.camera, light.matrix_world.translation)
-    w, h = view.render_size(scene)
-    return (p.x * w, p.y * h, 0.0) if p.z > 0 else (1e6, 1e6, 0.0)
 
 
 def write_light_pixels(scene, path):

@@ -117,7 +117,22 @@ class CompOps(NodeOps):
 
 
 def glow_group_name(models, peak):
-    return f"{LIGHT_GROUP} Glow [{models.airlight.name}, {models.background.name}]" + (" Peak" if peak else "")
+    """``peak``: the pixel filter's table (``pixel.filter_table``) or None."""
+    suffix = "" if peak is None else " Peak" + (" EEVEE" if peak is pixel.EEVEE_FILTER else "")
+    return f"{LIGHT_GROUP} Glow [{models.airlight.name}, {models.background.name}]" + suffix
+
+
+def pixel_filter(scene):
+    """(the pixel filter's type for ``pixel.filter_scale``, the data path of its width) where a peak factor
+    applies, else None: Cycles' Blackman-Harris filter, EEVEE's film filter (not at 1 sample, where EEVEE
+    takes each pixel's centre), a width above 0."""
+    if scene.render.engine == "CYCLES":
+        kind, path = scene.cycles.pixel_filter_type, "cycles.filter_width"
+    elif scene.render.engine == groups.EEVEE_ENGINE and scene.eevee.taa_render_samples > 1:
+        kind, path = "EEVEE", "render.filter_size"
+    else:
+        return None
+    return (kind, path) if pixel.filter_scale(kind, scene.path_resolve(path)) is not None else None
 
 
 def scatter_group_name(models):
@@ -144,8 +159,8 @@ def _light_group(name, shared, terms, models, images):
 def build_glow_group(models, images, peak):
     """One light's glows at a pixel (compositor group), shared by every light with these models: Airlight
     (the glow along the pixel's ray up to the surface, Sun et al. 2005 Eq. 11) and Background (the glow of
-    the ray to the sky, Eq. 12), from ``shading.glow_pair``.  ``peak``: times the peak factor
-    (``pixel.peak_factor``) where the ray passes the light, seen in the picture at
+    the ray to the sky, Eq. 12), from ``shading.glow_pair``.  ``peak``: the pixel filter's table or None;
+    with one, times the peak factor (``pixel.peak_factor``) where the ray passes the light, seen in the picture at
     ``pixel.picture_position`` (Corner, Across, Up: the image plane, Size: the picture's, ``camera_frame``
     and ``_picture_scale``).  Reads GLOW_SHARED (Incoming and Pixel only with ``peak``)."""
     name = glow_group_name(models, peak)
@@ -155,10 +170,10 @@ def build_glow_group(models, images, peak):
     air_unit, back_unit = shading.glow_pair(m, g["Camera"], g["Direction"], g["View Distance"], light,
                                             groups._medium(m, g["Beta"]), models)
     air, back = m.scale(light.intensity, air_unit), m.scale(light.intensity, back_unit)
-    if peak:   # the sky's rays pass every light before the end of the world: its factor is 1 + excess
+    if peak is not None:   # the sky's rays pass every light before the end of the world: its factor is 1 + excess
         to_light = g["Light"] - g["Camera"]
         seen_at = pixel.picture_position(m, to_light, g["Corner"], g["Across"], g["Up"], g["Size"])
-        excess = pixel.peak_excess(m, g["Pixel"], seen_at)
+        excess = pixel.peak_excess(m, g["Pixel"], seen_at, peak)
         along = m.dot(to_light, -1.0 * g["Incoming"])
         air = m.scale(air, pixel.peak_factor(m, excess, along, g["View Distance"]))
         back = m.scale(back, 1.0 + excess)
@@ -302,12 +317,12 @@ def _location(m, label, obj, col=0):
     return m.wrap(node.outputs[0], vector=True)
 
 
-def _picture_scale(m, scene, peak):
+def _picture_scale(m, scene, filter_path):
     """(w, h, 0): the picture's size in the filter table's pixels (``pixel.filter_scale``), driven by the
-    render's resolution and percentage and the filter's width."""
+    render's resolution and percentage and the filter's width (``filter_path``: ``pixel_filter``'s; None: 0)."""
     r = [("rx", scene, "render.resolution_x"), ("ry", scene, "render.resolution_y"),
-         ("pc", scene, "render.resolution_percentage"), ("fw", scene, "cycles.filter_width")]
-    k = f"pc/100*{pixel.DEFAULT_FILTER_WIDTH!r}/fw" if peak else "0"
+         ("pc", scene, "render.resolution_percentage"), ("fw", scene, filter_path or "cycles.filter_width")]
+    k = f"pc/100*{pixel.DEFAULT_FILTER_WIDTH!r}/fw" if filter_path else "0"
     return _vector(m, "Picture Size", [f"rx*{k}", f"ry*{k}", "0"], r)
 
 
@@ -334,7 +349,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows):
     m = CompOps(ng, images)
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
     # what a glow group reads per pixel: cropped to its light's window
-    per_pixel = ("Direction", "View Distance") + (("Incoming", "Pixel") if peak else ())
+    per_pixel = ("Direction", "View Distance") + (("Incoming", "Pixel") if peak is not None else ())
     air, back, scat = _zero(m, g["Direction"]), _zero(m, g["Direction"]), _zero(m, g[SURFACE + "Position"])
     for k, (light, mod) in enumerate(zip(lights, models), start=first):
         position = _location(m, f"Light {k} Location", light, col=4)
@@ -429,10 +444,10 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False):
     ``footprint.py`` (``view.windows``), or None to evaluate every term over the whole picture; ``partial``:
     they do not hold the animation's range (``PARTIAL``).  Rebuilt in place, so the scene's compositor keeps
     its group node.  Returns the table images it reads (``images`` and the pixel filter's)."""
-    peak = scene.render.engine == "CYCLES" and pixel.filter_scale(
-        scene.cycles.pixel_filter_type, scene.cycles.filter_width) is not None
-    if peak:
-        images = dict(images, **{pixel.FILTER.name: images_.table_image(pixel.FILTER, pixel.bake_filter)})
+    filt, peak = pixel_filter(scene), None
+    if filt is not None:
+        peak, baker = pixel.filter_table(filt[0])
+        images = dict(images, **{peak.name: images_.table_image(peak, baker)})
     eevee = scene.render.engine == groups.EEVEE_ENGINE
     inputs = (("Image", "COLOR"),) + aovs(scene.render.engine) + (((compositor.DEPTH, "VALUE"),) if eevee else ())
     ng = bpy.data.node_groups.get(FOG_GROUP)
@@ -473,8 +488,8 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False):
     incoming = m.scale(to_cam, 1.0 / m.maximum(d_vp, 1e-9))
     summed = m.scale(p["Fog Normal"], 2.0) - m.scale(m.wrap((1.0, 1.0, 1.0)), cover)   # written as (1 + n) / 2
     normal = m.scale(summed, 1.0 / m.maximum(m.length(summed), 1e-9))
-    size = _picture_scale(m, scene, peak)
-    pix = uv * size if peak else m.wrap((0.0, 0.0, 0.0))
+    size = _picture_scale(m, scene, filt and filt[1])
+    pix = uv * size if peak is not None else m.wrap((0.0, 0.0, 0.0))
     diffuse, specular, level = surface.principled_to_phong(
         m, m.scale(p["Fog Base Color"], inv), p["Fog Metallic"] * inv, p["Fog Roughness"] * inv,
         p["Fog Specular IOR Level"] * inv, m.dot(incoming, normal))
