@@ -12,8 +12,6 @@ ENGINE_NOTES = {
 
 
 MAX_LISTED = 12   # lights listed by name in the panel; the rest are counted
-MANY_LIGHTS = 8   # from this many fog lights on, the panel suggests the Compositor method (16 lights in Cycles:
-#                   29x the fog-free render with node groups, 1.6x with the compositor; README "The Compositor method")
 
 
 def _draw_models(layout, settings):
@@ -76,7 +74,7 @@ def draw_fog(layout, context):
             box.label(text=line, icon="ERROR" if i == 0 else "BLANK1")
     lights, notes = apply.fog_lights(scene)
     layout.label(text=f"{len(lights)} light(s) light the fog", icon="LIGHT_POINT")
-    if len(lights) >= MANY_LIGHTS and s.method != "COMPOSITOR":
+    if len(lights) >= apply.MANY_LIGHTS and s.method != "COMPOSITOR":
         layout.label(text="With this many lights the Compositor method renders far faster", icon="INFO")
     for name, why in notes:
         layout.label(text=f"{name}: {why}", icon="ERROR")

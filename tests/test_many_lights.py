@@ -206,14 +206,32 @@ def test_closure_sum_renders_every_closure(tmp_path):
             assert all(abs(x - 1.0) < 1e-5 for x in r[key]), (n, key, r[key])
 
 
-def test_switching_to_eevee_rechooses_within_its_budget():
-    """25 lights fit Cycles fully modelled but not EEVEE's uniform block (16 do since 709fad8): switching the engine makes the
-    add-on's handler choose again (EEVEE: within the block, saying it is limited), and back."""
+@pytest.fixture(scope="module")
+def switched():
+    """tests/scenes/engine_switch.py's result."""
     proc = h.run([h.ROOT / "tests" / "scenes" / "engine_switch.py"], timeout=300)
     line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("ENGINE_SWITCH_JSON "))
-    res = json.loads(line.split(" ", 1)[1])
+    return json.loads(line.split(" ", 1)[1])
+
+
+def test_switching_to_eevee_rechooses_within_its_budget(switched):
+    """25 lights fit Cycles fully modelled but not EEVEE's uniform block (16 do since 709fad8): switching the
+    engine makes the add-on's handler choose again (EEVEE: within the block, saying it is limited), and back."""
+    res = switched
     assert res["cycles"]["engine"] == "CYCLES" and not res["cycles"]["fits_eevee"], res["cycles"]
     assert res["eevee"]["engine"] == "BLENDER_EEVEE" and res["eevee"]["fits_eevee"], res["eevee"]
     assert res["eevee"]["limited"] and res["eevee"]["error"] > 0.0, res["eevee"]
     assert res["cycles_again"]["engine"] == "CYCLES" and res["cycles_again"]["limited"] is None, res["cycles_again"]
     assert res["cycles_again"]["steps"] == res["cycles"]["steps"], res
+
+
+def test_many_lights_in_cycles_node_groups_are_told_of_the_compositor(switched):
+    """With MANY_LIGHTS or more lights in Cycles, the node groups' report says what each material holds (about
+    248 nodes a fully modelled light, ``groups.material_nodes``) and points to the Compositor method, whose
+    report does not (tests/scenes/engine_switch.py: 25 lights)."""
+    res = switched
+    said = [why for _, why in res["notes"]["nodes"] if "Compositor method" in why]
+    assert len(said) == 1 and said[0].startswith("25 lights: each fogged material holds about "), res["notes"]
+    nodes = int(said[0].split("about ")[1].split(" ")[0].replace(",", ""))
+    assert 25 * 63 <= nodes <= 25 * 248, said   # between every light glow only and every light full
+    assert not any("Compositor method" in why for _, why in res["notes"]["compositor"]), res["notes"]

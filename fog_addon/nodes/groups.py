@@ -192,6 +192,13 @@ def _per_light(costs, extra, spots):
                  for cost, more in zip(costs, extra))
 
 
+def material_nodes(steps, spots):
+    """About how many nodes the fog's lights add to each fogged material, inlined (OSL_MATERIAL_LAYERS and
+    OSL_SPOT_EXTRA: Cycles' SVM sets up the same graph as OSL); ``steps``: each light's (rungs.STEPS),
+    ``spots``: True for a spot."""
+    return sum(OSL_MATERIAL_LAYERS[k] + (OSL_SPOT_EXTRA[0][k] if spot else 0) for k, spot in zip(steps, spots))
+
+
 def osl_budget(spots=()):
     """What a fogged material and the World can hold as one OSL shader group (predict.Budget); ``spots``:
     one bool per light, True for a spot."""

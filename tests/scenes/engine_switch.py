@@ -3,9 +3,10 @@
     python tests/scenes/engine_switch.py
 
 The many-lights scene with 25 lights, the fog added in Cycles with the add-on registered (its
-depsgraph handler on); the engine switched to EEVEE, then back to Cycles.  Prints one line
-``ENGINE_SWITCH_JSON {...}``: after each step the stored choice's engine, steps, "limited" and
-whether its steps fit EEVEE's budget (``groups.eevee_budget``).
+depsgraph handler on); the engine switched to EEVEE, then back to Cycles; then the Compositor method.
+Prints one line ``ENGINE_SWITCH_JSON {...}``: after each step the stored choice's engine, steps, "limited"
+and whether its steps fit EEVEE's budget (``groups.eevee_budget``); the notes the node groups' and the
+Compositor method's ``apply_fog`` returned.
 """
 import json
 import pathlib
@@ -35,7 +36,7 @@ def main():
     scene, _ = many_lights.build_scene(25, direct_light=True)
     scene.render.engine = "CYCLES"
     scene.render.resolution_x, scene.render.resolution_y = many_lights.W, many_lights.H
-    apply.apply_fog(scene, many_lights.BETA)
+    notes = apply.apply_fog(scene, many_lights.BETA)
     scene.analytic_fog.enabled = True   # as the Add Fog operator leaves it: the handler follows the scene
     out = {"cycles": state()}
     scene.render.engine = "BLENDER_EEVEE"
@@ -44,6 +45,7 @@ def main():
     scene.render.engine = "CYCLES"
     bpy.context.view_layer.update()
     out["cycles_again"] = state()
+    out["notes"] = {"nodes": notes, "compositor": apply.apply_fog(scene, many_lights.BETA, method="compositor")}
     print("ENGINE_SWITCH_JSON " + json.dumps(out), flush=True)
 
 
