@@ -87,7 +87,7 @@ class _Terms(NodeOps):
         self.count, self.memo = 0, {}
 
     def node(self, bl_idname, col, **props):
-        n = owned.mark(super().node(bl_idname, col, **props), f"Term {self.count}")
+        n = owned.mark(super().node(bl_idname, col, **props), f"Term {self.count}", named=False)
         self.count += 1
         return n
 
@@ -216,7 +216,7 @@ def _build(tree, anchor, outs, srcs, kinds, copies):
     x0, y0 = anchor or (max((n.location.x for n in tree.nodes), default=0) + 300,
                         min((n.location.y for n in tree.nodes), default=0) - 300)
     ops = _Terms(tree, x0 - 400, y0 - 900)
-    fog = owned.add(tree, "ShaderNodeGroup", "Surface", (x0, y0))
+    fog = owned.add(tree, "ShaderNodeGroup", "Surface", (x0, y0))   # named: where a script finds the fog
     fog.node_tree = bpy.data.node_groups[groups.SURFACE]
     for name, v, _ in copies:
         _set_copy(tree, fog.inputs[name], v)
@@ -235,7 +235,7 @@ def _build(tree, anchor, outs, srcs, kinds, copies):
         # 1 - scale of the user's shader: e^{-beta D_vp}, in EEVEE times the Direct Attenuation
         # (EEVEE ignores light node trees: direct light is attenuated here)
         mix_factor = fog.outputs[f"{'EEVEE' if target == 'EEVEE' else 'Cycles'} Mix Factor"]
-        mix = owned.add(tree, "ShaderNodeMixShader", f"{target} Attenuate", (x0 + 500, y))
+        mix = owned.add(tree, "ShaderNodeMixShader", f"{target} Attenuate", (x0 + 500, y), named=False)
         tree.links.new(mix_factor, mix.inputs[0])
         tree.links.new(src, mix.inputs[1])
         if passed is not None:   # what lets light through keeps its weight: s P + (1 - s) P
@@ -246,19 +246,20 @@ def _build(tree, anchor, outs, srcs, kinds, copies):
             total = ops.wrap(BLACK)
             for w, c, s in emitting:
                 total = total + _colour(ops, c) * _scalar(ops, s) * _weight(ops, w, ops.memo)
-            back = owned.add(tree, "ShaderNodeEmission", f"{target} Emission Restore", (x0 + 500, y - 120))
+            back = owned.add(tree, "ShaderNodeEmission", f"{target} Emission Restore", (x0 + 500, y - 120), named=False)
             ops.feed(back.inputs["Color"], total * (transmittance - (1.0 - _scalar(ops, mix_factor))))
-            add_back = owned.add(tree, "ShaderNodeAddShader", f"{target} Add Restore", (x0 + 575, y - 60))
+            add_back = owned.add(tree, "ShaderNodeAddShader", f"{target} Add Restore", (x0 + 575, y - 60), named=False)
             tree.links.new(last, add_back.inputs[0])
             tree.links.new(back.outputs[0], add_back.inputs[1])
             last = add_back.outputs[0]
-        add = owned.add(tree, "ShaderNodeAddShader", f"{target} Add", (x0 + 650, y))
+        add = owned.add(tree, "ShaderNodeAddShader", f"{target} Add", (x0 + 650, y), named=False)
         tree.links.new(last, add.inputs[0])
         tree.links.new(fog_shader, add.inputs[1])
         if out.target == target:   # the user's own output for this engine: route it through the fog
             tree.links.new(add.outputs[0], out.inputs["Surface"])
             continue
-        new_out = owned.add(tree, "ShaderNodeOutputMaterial", f"{target} Output", (x0 + 800, y), target=target)
+        new_out = owned.add(tree, "ShaderNodeOutputMaterial", f"{target} Output", (x0 + 800, y), named=False,
+                            target=target)
         tree.links.new(add.outputs[0], new_out.inputs["Surface"])
         for sock in out.inputs:
             link = graph.link_into(sock)
@@ -281,14 +282,14 @@ def _fog_light(ops, tree, kd, fog, n, origin):
         passes.weight_surface(ops, fog, opacity)
         fog_shader = fog.outputs["Fog"]
     else:
-        emit = owned.add(tree, "ShaderNodeEmission", f"Emission {n + 1}", (x0 + 200, y0 - 120 * n))
+        emit = owned.add(tree, "ShaderNodeEmission", f"Emission {n + 1}", (x0 + 200, y0 - 120 * n), named=False)
         ops.feed(emit.inputs["Color"], _colour(ops, fog.outputs["Emission"]) * opacity)
         fog_shader = emit.outputs[0]
     passed = None
     for w, (_, shader, _) in zip(weights, kd.passes):
         if shader is None:   # Principled 1 - Alpha: a white Transparent BSDF
-            shader = (owned.find(tree, "Transparent")
-                      or owned.add(tree, "ShaderNodeBsdfTransparent", "Transparent", (x0 - 200, y0 - 700))).outputs[0]
+            shader = (owned.find(tree, "Transparent") or owned.add(
+                tree, "ShaderNodeBsdfTransparent", "Transparent", (x0 - 200, y0 - 700), named=False)).outputs[0]
         term = shader
         if w.const != 1.0:
             mix = ops.node("ShaderNodeMixShader", w.col + 1)

@@ -295,14 +295,15 @@ def bake_specular_albedo(spec=tables.SPECULAR_ALBEDO):
     and E in three slices of rows), float32.
 
     Quadrature over the half vector h drawn from D cos(theta_h): u -> cos^2 theta_h = (1 - u) / (1 + (a^2 - 1) u)
-    by 96-point Gauss-Legendre in u, 64 points in azimuth; the integrand f cos(theta_l) / pdf is then
-    G (v.h) / (mu cos theta_h), smooth however narrow the lobe."""
+    by 96-point Gauss-Legendre in u, 64 midpoints in azimuth (the integrand depends on its cosine only:
+    the 32 in [0, pi] give the same mean); the integrand f cos(theta_l) / pdf is then G (v.h) /
+    (mu cos theta_h), smooth however narrow the lobe."""
     mu = np.maximum(np.linspace(0.0, 1.0, spec.width), 1e-3)[None, :, None, None]
     r = np.linspace(0.0, 1.0, tables.SPECULAR_ROUGHNESS)[:, None, None, None]
     a2 = np.maximum(r * r, 1e-3) ** 2
     x, w = np.polynomial.legendre.leggauss(96)
     u, wu = (0.5 * (x + 1.0))[None, None, :, None], (0.5 * w)[None, None, :, None]
-    phi = ((np.arange(64) + 0.5) * (2.0 * math.pi / 64))[None, None, None, :]
+    phi = ((np.arange(32) + 0.5) * (math.pi / 32))[None, None, None, :]
     cos_h = np.sqrt((1.0 - u) / (1.0 + (a2 - 1.0) * u))
     sin_h = np.sqrt(np.maximum(1.0 - cos_h * cos_h, 0.0))
     sin_v = np.sqrt(1.0 - mu * mu)

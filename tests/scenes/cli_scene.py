@@ -67,7 +67,7 @@ def main_build(outdir):
     s.selected_only = True
     bpy.data.objects[LAMP_OFF].data.analytic_fog.use = False
     res = {"add": sorted(bpy.ops.fog.add(density=DENSITY))}
-    res["fogged"] = {name: any(n.name.startswith("AnalyticFog") for n in bpy.data.objects[name]
+    res["fogged"] = {name: any(n.get("analytic_fog") is not None for n in bpy.data.objects[name]
                                .material_slots[0].material.node_tree.nodes) for name in (GROUND, WALL)}
     render_like_the_command(scene, outdir / "panel.exr")
     bpy.ops.wm.save_as_mainfile(filepath=str(outdir / "scene.blend"))

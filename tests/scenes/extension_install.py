@@ -149,7 +149,7 @@ def build_tiny_scene():
 
 def _fogged(idblock):
     tree = idblock.node_tree
-    return tree is not None and any(n.name.startswith("AnalyticFog") for n in tree.nodes)
+    return tree is not None and any(n.get("analytic_fog") is not None for n in tree.nodes)   # the fog's tag
 
 
 def cycle(steps, label, enable, disable, prefix):
