@@ -302,7 +302,7 @@ def many_lights_note(lights, choice):
     return (f"{len(lights)} lights: each fogged material holds about {nodes:,} fog nodes and evaluates them on "
             "every sample, and Cycles' set-up before the first sample grows with their square (64 lights on 4 "
             "materials: about 20 s of CPU per render, 256 lights: about 30 min); the Compositor method's "
-            "materials do not depend on the lights (1.3-1.9x the fog-free render at 16 to 64 lights)")
+            "materials do not depend on the lights (1.5-1.9x the fog-free render at 16 to 64 lights)")
 
 
 def dimming_lights(scene, lights, preference):
