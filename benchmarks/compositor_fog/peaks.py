@@ -29,22 +29,12 @@ def main(n, path):
     import build
     import many_lights
     from fog_addon import measure
-    from fog_addon.ops import apply, view
-    from fog_addon.precompute import model, pixel, predict, rungs
+    from fog_addon.ops import apply
+    from fog_addon.precompute import pixel
     scene, _ = many_lights.build_scene(n, direct_light=True)
     measure.set_resolution(scene, build.W, build.H)
     bpy.context.view_layer.update()
-    lights, _ = apply.fog_lights(scene)
-    intensity = view.light_intensities(lights)
-    positions = np.array([list(o.matrix_world.translation) for o in lights])
-    cam = np.array(scene.camera.matrix_world.translation)
-    _, rays = view._frame_rays(scene, scene.camera, (build.W, build.H))
-    rays = rays.reshape(build.H, build.W, 3)
-    forward = -np.array(scene.camera.matrix_world.to_3x3().col[2])
-    plane = rays / (rays @ forward)[..., None]          # on the plane at unit depth: linear in pixel coords
-    ex, ey = plane[0, 1] - plane[0, 0], plane[1, 0] - plane[0, 0]
-    m = predict._numpy_ops(0.0)
-    full = rungs.choose("nodes", 0, 0.0)
+    through, glow = many_lights.pixel_rays(scene, build.W, build.H), many_lights.sky_glow(scene)
     steps = 241
     s = (np.arange(steps) + 0.5) / steps * pixel.FILTER_WIDTH - pixel.FILTER_WIDTH / 2
     w = pixel.blackman_harris(s)
@@ -52,17 +42,13 @@ def main(n, path):
     sx, sy = np.meshgrid(s, s)
     ref = shader.copy()
     window = np.zeros(cover.shape, bool)
-    for light in lights:
+    for light in apply.fog_lights(scene)[0]:
         lx, ly, _ = build.light_pixel(scene, light)
         for j in range(int(ly) - 3, int(ly) + 4):
             for i in range(int(lx) - 3, int(lx) + 4):
                 if not (0 <= i < build.W and 0 <= j < build.H) or cover[j, i] > 0:
                     continue
-                v = plane[0, 0] + (i + sx)[..., None] * ex + (j + sy)[..., None] * ey
-                d = v / np.linalg.norm(v, axis=-1, keepdims=True)
-                d_sv, along, h = model.ray_light_geometry(m, cam, d[..., None, :], positions)
-                glow = (m.run(full.background, many_lights.BETA, d_sv, along, h)[..., None] * intensity).sum(-2)
-                ref[j, i] = (glow * weights[..., None]).sum((0, 1)) * np.array(many_lights.ALBEDO)
+                ref[j, i] = (glow(through(i, j, sx, sy)) * weights[..., None]).sum((0, 1))
                 window[j, i] = True
     den = (ref ** 2).sum()
 

@@ -31,8 +31,7 @@ import many_lights  # noqa: E402
 from probe_common import light_pixel  # noqa: E402
 from fog_addon import imageio, measure  # noqa: E402
 from fog_addon.nodes import comp_fog  # noqa: E402
-from fog_addon.ops import apply, view  # noqa: E402
-from fog_addon.precompute import model, predict, rungs  # noqa: E402
+from fog_addon.ops import apply  # noqa: E402
 
 W, H = 96, 54
 SIGMA = 0.284   # EEVEE's film filter: a Gaussian of sigma SIGMA x its radius (Blender 5.0)
@@ -62,17 +61,7 @@ def render(out, n, method, samples, radius, peak=True):
 
 def reference(scene, radius):
     """(the filtered means at the peak pixels, the mask of those pixels)."""
-    lights = apply.fog_lights(scene)[0]
-    intensity = view.light_intensities(lights)
-    positions = np.array([list(o.matrix_world.translation) for o in lights])
-    cam = np.array(scene.camera.matrix_world.translation)
-    _, rays = view._frame_rays(scene, scene.camera, (W, H))
-    rays = rays.reshape(H, W, 3)
-    forward = -np.array(scene.camera.matrix_world.to_3x3().col[2])
-    plane = rays / (rays @ forward)[..., None]
-    ex, ey = plane[0, 1] - plane[0, 0], plane[1, 0] - plane[0, 0]
-    m = predict._numpy_ops(0.0)
-    full = rungs.choose("nodes", 0, 0.0)
+    through, glow = many_lights.pixel_rays(scene, W, H), many_lights.sky_glow(scene)
     steps = 241
     s = (np.arange(steps) + 0.5) / steps * 2 * radius - radius
     sx, sy = np.meshgrid(s, s)
@@ -80,19 +69,16 @@ def reference(scene, radius):
     weights = np.where(r2 <= radius ** 2, np.exp(-0.5 * r2 / (SIGMA * radius) ** 2), 0.0)
     weights /= weights.sum()
     ref, mask = np.zeros((H, W, 3)), np.zeros((H, W), bool)
-    for light in lights:
+    for light in apply.fog_lights(scene)[0]:
         lx, ly, _ = light_pixel(scene, light)
         for j in range(int(ly) - 3, int(ly) + 4):
             for i in range(int(lx) - 3, int(lx) + 4):
                 if not (0 <= i < W and 0 <= j < H):
                     continue
-                v = plane[0, 0] + (i + sx)[..., None] * ex + (j + sy)[..., None] * ey
-                d = v / np.linalg.norm(v, axis=-1, keepdims=True)
+                d = through(i, j, sx, sy)
                 if (d[..., 2] < 0).any():   # a ray that can meet the ground: not a sky pixel
                     continue
-                d_sv, along, h = model.ray_light_geometry(m, cam, d[..., None, :], positions)
-                glow = (m.run(full.background, many_lights.BETA, d_sv, along, h)[..., None] * intensity).sum(-2)
-                ref[j, i] = (glow * weights[..., None]).sum((0, 1)) * np.array(many_lights.ALBEDO)
+                ref[j, i] = (glow(d) * weights[..., None]).sum((0, 1))
                 mask[j, i] = True
     return ref, mask
 

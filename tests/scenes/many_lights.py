@@ -41,8 +41,8 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 from fog_addon import imageio, measure  # noqa: E402
-from fog_addon.ops import apply  # noqa: E402
-from fog_addon.precompute import bakers, rungs, shading, surface  # noqa: E402
+from fog_addon.ops import apply, view  # noqa: E402
+from fog_addon.precompute import bakers, model, predict, rungs, shading, surface  # noqa: E402
 from fog_addon.precompute.medium import Medium  # noqa: E402
 from fog_addon.precompute.ops import NumpyOps  # noqa: E402
 from probe_common import add_point_lights, camera_rays, look_at, tiny_render  # noqa: E402
@@ -143,6 +143,38 @@ def build(engine, method, n):
     apply.apply_fog(s, BETA, albedo=ALBEDO, method=method)
     measure.set_pixel_centre_filter(s)   # again: the fog may set up its own compositor
     return s, cam, time.perf_counter() - t0
+
+
+def pixel_rays(scene, width, height):
+    """A function (i, j, sx, sy) -> the unit directions (..., 3) of the camera rays through pixel (i, j) (from the
+    bottom-left) at offsets sx, sy px from its centre (arrays of one shape), for a render of width x height."""
+    _, rays = view._frame_rays(scene, scene.camera, (width, height))
+    rays = rays.reshape(height, width, 3)
+    forward = -np.array(scene.camera.matrix_world.to_3x3().col[2])
+    plane = rays / (rays @ forward)[..., None]          # on the plane at unit depth: linear in pixel coords
+    origin, ex, ey = plane[0, 0], plane[0, 1] - plane[0, 0], plane[1, 0] - plane[0, 0]
+
+    def through(i, j, sx, sy):
+        v = origin + (i + sx)[..., None] * ex + (j + sy)[..., None] * ey
+        return v / np.linalg.norm(v, axis=-1, keepdims=True)
+    return through
+
+
+def sky_glow(scene):
+    """A function: unit directions (..., 3) of camera rays to the sky -> the fog's light along them (..., 3):
+    every fog light's background glow (Sun et al. 2005 Eq. 12; the numpy twin of the full models) times
+    ALBEDO.  With ``pixel_rays``, the reference of a pixel's mean under a pixel filter near lights
+    (benchmarks/compositor_fog/peaks.py, tests/scenes/eevee_peaks.py)."""
+    lights = apply.fog_lights(scene)[0]
+    intensity = view.light_intensities(lights)
+    positions = np.array([list(o.matrix_world.translation) for o in lights])
+    cam = np.array(scene.camera.matrix_world.translation)
+    m, full = predict._numpy_ops(0.0), rungs.choose("nodes", 0, 0.0)
+
+    def glow(d):
+        d_sv, along, h = model.ray_light_geometry(m, cam, d[..., None, :], positions)
+        return (m.run(full.background, BETA, d_sv, along, h)[..., None] * intensity).sum(-2) * np.array(ALBEDO)
+    return glow
 
 
 def hits(c, d):
