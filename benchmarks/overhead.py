@@ -112,6 +112,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 OUT = ROOT / "benchmarks" / "out"
 CSV = OUT / "overhead.csv"
+DATA = ROOT / "docs" / "measurements" / "data"   # the committed CSVs (benchmarks/out is not tracked)
 PNG = ROOT / "docs" / "figures" / "overhead.png"
 
 LIGHTS = (1, 4, 16, 64, 256)
@@ -666,8 +667,10 @@ def main(argv=None):
         f"_g{args.anisotropy:g}" if args.anisotropy else "") + ("_spots" if args.spots else "")
     csv_path = pathlib.Path(args.out) if args.out else OUT / f"overhead{suffix}.csv"
     png_path = pathlib.Path(args.chart) if args.chart else PNG.with_name(f"overhead{suffix}.png")
+    # read a run of one's own in benchmarks/out if there is one, else the committed CSV of that name
+    read_path = csv_path if args.out or csv_path.exists() else DATA / csv_path.name
     if args.chart_only:
-        rows = read_csv(csv_path)
+        rows = read_csv(read_path)
         chart(rows, png_path)
         print_table(rows)
         return 0
@@ -684,7 +687,7 @@ def main(argv=None):
         cases.append(("boulevard", BOULEVARD_LIGHTS))
         cases.sort(key=lambda c: c[1])
     rows = []
-    kept = read_csv(csv_path) if args.update and csv_path.exists() else []
+    kept = read_csv(read_path) if args.update and read_path.exists() else []
     run_now = {(case, n, method) for method in args.methods.split(",") for case, n in cases}
     lost = [r for r in (read_csv(csv_path) if not args.update and csv_path.exists() else [])
             if (r["case"], int(r["lights"]), r["method"]) not in run_now]

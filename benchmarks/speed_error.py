@@ -105,6 +105,8 @@ from fog_addon import cli, compare  # noqa: E402  (no bpy at import)
 OUT = ROOT / "benchmarks" / "out"
 CSV = OUT / "speed_error.csv"
 SUMMARY_CSV = OUT / "speed_error_summary.csv"
+DATA = ROOT / "docs" / "measurements" / "data"   # the committed CSVs (benchmarks/out is not tracked)
+READ_CSV = CSV if CSV.is_file() else DATA / CSV.name   # a run of one's own, else the committed rows
 PNG = ROOT / "docs" / "figures" / "speed_error.png"
 
 SCENES = [("street_lamps", 0.08), ("spheres", 0.15)]   # (demo scene, fog density 1/m)
@@ -514,7 +516,7 @@ def read_rows(path):
 
 def replot(key):
     """The summary CSV, the chart and the printed summary again from ``CSV`` (no renders)."""
-    rows = read_rows(CSV)
+    rows = read_rows(READ_CSV)
     ok = [r for r in rows if r["status"] == "ok"]
     cfg = {"resolution": tuple(int(x) for x in ok[0]["resolution"].split("x")), "gt_samples": ok[0]["gt_spp"],
            "threads": ok[0]["threads"], "qualities": tuple(q for q in QUALITIES
@@ -523,7 +525,7 @@ def replot(key):
     csv_rows.write(SUMMARY_CSV, summary, SUMMARY_FIELDS, digits=6)
     chart(rows, summary, cfg, key)
     print_summary(summary)
-    print(f"\nwrote {SUMMARY_CSV.relative_to(ROOT)}, {PNG.relative_to(ROOT)} from {CSV.relative_to(ROOT)}")
+    print(f"\nwrote {SUMMARY_CSV.relative_to(ROOT)}, {PNG.relative_to(ROOT)} from {READ_CSV.relative_to(ROOT)}")
     return 0
 
 
@@ -584,9 +586,9 @@ def main(argv=None):
             gt = ground_truth(scene, beta, blend, cfg, args.regen, scratch)
             for case in cases(cfg, beta):
                 rows += measure_case(case, scene, beta, blend, gt, cfg, scratch)
-    if args.update and CSV.is_file():   # the rows of the cases not run now stay
+    if args.update and READ_CSV.is_file():   # the rows of the cases not run now stay
         run = {(r["scene"], family(r["method"], r["engine"])) for r in rows}
-        rows = [r for r in read_rows(CSV) if (r["scene"], family(r["method"], r["engine"])) not in run] + rows
+        rows = [r for r in read_rows(READ_CSV) if (r["scene"], family(r["method"], r["engine"])) not in run] + rows
     csv_rows.write(CSV, rows, FIELDS, digits=6)
     summary = equal_error(rows, cfg["gt_samples"], key)
     csv_rows.write(SUMMARY_CSV, summary, SUMMARY_FIELDS, digits=6)
