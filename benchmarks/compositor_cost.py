@@ -2,7 +2,7 @@
 
     .venv/bin/python benchmarks/compositor_cost.py [--lights 16] [--repeats 3] [--out CSV]
 
-The many-lights scene (tests/scenes/many_lights.py, its lights lighting the surfaces) with N point lights
+The many-lights scene (fog_scenes/many_lights.py, its lights lighting the surfaces) with N point lights
 or N spots (60 degrees, blend 0.3, aimed down, as ``overhead.py --spots``), Cycles CPU at 320x180 and
 1 spp, so the render is a small part and the compositor most of the frame: render CPU time with the fog
 (Compositor method, Quality Final) minus without, divided by N.  Each row also cuts some outputs of the
@@ -30,9 +30,9 @@ FIELDS = ["kind", "lights", "cut", "nofog_cpu_s", "fog_cpu_s", "ms_per_light", "
 
 
 def worker(spec):
-    sys.path[:0] = [str(ROOT), str(ROOT / "tests" / "scenes")]
+    sys.path.insert(0, str(ROOT))   # a script run by path: the repository root
     import bpy
-    import many_lights
+    from fog_scenes import many_lights
     from fog_addon import measure
     from fog_addon.nodes import comp_fog
     from fog_addon.ops import apply

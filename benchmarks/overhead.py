@@ -5,7 +5,7 @@
                                             [--samples N] [--resolution WxH] [--spots] [--out CSV] [--chart PNG]
     .venv/bin/python benchmarks/overhead.py --chart-only [--out CSV] [--chart PNG]
 
-Scenes: tests/scenes/many_lights.py (a ground plane, matte, glossy and metallic
+Scenes: fog_scenes/many_lights.py (a ground plane, matte, glossy and metallic
 spheres, N point lights on a grid; here with the lights lighting the surfaces
 as in any scene, fog beta = 0.1 1/m) for N in 1, 4, 16, 64, 256, and
 demo_scenes/boulevard.py (45 lights, its default density).  ``--spots``: every light of the
@@ -51,7 +51,7 @@ shader set-up runs on one, so the CPU ratio weighs the set-up less.)
   lights); ``error``.
 
 The picture is checked two ways (``picture_ok`` False if either fails):
-the worker's log (tests/render_harness.py ``log_errors``: shaders too big for
+the worker's log (fog_scenes/render_harness.py ``log_errors``: shaders too big for
 Cycles' SVM stack or EEVEE's uniform block, GPU/OSL shader errors), and the
 pictures themselves (off the clock, the last render without and the first with
 fog saved as EXR): ``mean_nofog``, ``mean_fog`` (mean luminance),
@@ -107,8 +107,7 @@ import time
 import csv_rows
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT))   # a script run by path: the repository root (fog_addon, fog_scenes)
 
 OUT = ROOT / "benchmarks" / "out"
 CSV = OUT / "overhead.csv"
@@ -306,8 +305,7 @@ def worker(spec):
         boulevard.build(scene)
         density = boulevard.DEFAULT_DENSITY
     else:
-        sys.path.insert(0, str(ROOT / "tests" / "scenes"))
-        import many_lights
+        from fog_scenes import many_lights
         scene, _ = many_lights.build_scene(spec["lights"], direct_light=True)
         density = DENSITY
         if spec.get("spots"):
@@ -364,13 +362,13 @@ def worker(spec):
 # ---------------------------------------------------------------- driver
 
 def log_errors(text):
-    import render_harness as h
+    from fog_scenes import render_harness as h
     return h.log_errors(text)
 
 
 def run_worker(spec, budget):
     """Run a worker with a hard time limit; (last result, last heartbeat, log text, timed out?, wall s, CPU s)."""
-    import render_harness as h
+    from fog_scenes import render_harness as h
     env = h._env()
     env["PYTHONUNBUFFERED"] = "1"
     cmd = [h.PYTHON, str(pathlib.Path(__file__).resolve()), "--worker", json.dumps(spec)]

@@ -7,7 +7,7 @@ volumetrics at equal error.
     .venv/bin/python benchmarks/speed_error.py --replot [--time cpu|wall]   # summary + chart from the CSV
 
 For each demo scene case in ``SCENES`` (pixel-centre filter, cast shadows and
-interreflection off, as tests/render_harness.py renders them), all at one resolution:
+interreflection off, as fog_scenes/render_harness.py renders them), all at one resolution:
 
 * ground truth: the Cycles path-traced single-scattering reference
   (``python -m fog_addon reference``, seed 0) at ``gt_samples`` spp, cached as
@@ -96,10 +96,9 @@ import numpy as np
 import csv_rows
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT))   # a script run by path: the repository root (fog_addon, fog_scenes)
 
-import render_harness as h  # noqa: E402
+from fog_scenes import render_harness as h  # noqa: E402
 from fog_addon import cli, compare  # noqa: E402  (no bpy at import)
 
 OUT = ROOT / "benchmarks" / "out"

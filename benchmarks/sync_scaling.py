@@ -15,13 +15,13 @@ time in that loop (``std::_Rb_tree_increment`` under ``deduplicate_nodes``,
 So the set-up per material grows as (lights x nodes)^2, and with the
 number of materials linearly.
 
-Scene: tests/scenes/many_lights.py (ground, three spheres: 4 materials) with
+Scene: fog_scenes/many_lights.py (ground, three spheres: 4 materials) with
 N point lights lighting the surfaces, fog beta = 0.1 /m at Quality "exact"
 (every light gets every term: the same group per light, a clean scaling
 law); ``--materials`` adds small cubes with materials of their own at 16
 lights.  Cycles CPU, one thread, 16x9 pixels, 1 spp: the render is all
 set-up.  Each case runs in its own bpy process (``--worker``) with Cycles'
-debug log on (tests/scenes/cycles_debug_log.py) and records:
+debug log on (fog_scenes/cycles_debug_log.py) and records:
 
 * ``sync_s``: Cycles' "Total time spent synchronizing data" (wall) of the
   first render with fog (``nofog_sync_s`` without);
@@ -59,13 +59,11 @@ FIT_FROM = 9   # lights: the fit of sync time against lights uses N >= this
 
 
 def worker(n_lights, n_materials, result):
-    sys.path.insert(0, str(ROOT))
-    sys.path.insert(0, str(ROOT / "tests" / "scenes"))
+    sys.path.insert(0, str(ROOT))   # a script run by path: the repository root
     import re
 
     import bpy
-    import cycles_debug_log
-    import many_lights
+    from fog_scenes import cycles_debug_log, many_lights
     from fog_addon import measure
     from fog_addon.ops import apply
 

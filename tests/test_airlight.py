@@ -12,20 +12,15 @@ fresh subset with another seed is integrated live on every run so the cache
 cannot go stale.
 """
 import math
-import sys
 
 import numpy as np
 import pytest
 from scipy.special import exp1
 
-from conftest import ROOT
-
-sys.path.insert(0, str(ROOT / "tools"))
-import airlight_reference as ref  # noqa: E402
-from shader_float32 import Float32Ops, airlight_float32  # noqa: E402  (float32 as the shaders)
-
-from fog_addon.precompute import airlight as al  # noqa: E402
-from fog_addon.precompute import model, rungs, tables  # noqa: E402
+from fog_addon.precompute import airlight as al
+from fog_addon.precompute import model, rungs, tables
+from tools import airlight_reference as ref
+from tools.shader_float32 import Float32Ops, airlight_float32  # float32 as the shaders
 
 TOL = 5e-3            # the requirement: 0.5 % max relative error, sample by sample
 QUAD_TOL = 1e-5       # the OSL method's in-shader quadrature (model.airlight_quadrature) measured 1.1e-6

@@ -1,7 +1,7 @@
 """The command line refuses what it can't do with a clear message and a non-zero exit."""
 import pytest
 
-import render_harness as h
+from fog_scenes import render_harness as h
 
 
 @pytest.mark.parametrize("flags,message", [

@@ -12,7 +12,7 @@ import json
 import numpy as np
 import pytest
 
-import render_harness as h
+from fog_scenes import render_harness as h
 from fog_addon import imageio
 
 SCRIPT = h.ROOT / "tests" / "scenes" / "cli_scene.py"

@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-import render_harness as h
+from fog_scenes import render_harness as h
 
 FOG_AOVS = ["Fog Coverage", "Fog Position", "Fog Normal", "Fog Base Color", "Fog Metallic", "Fog Roughness",
             "Fog Specular IOR Level"]

@@ -10,7 +10,7 @@ own film over the node groups' per-sample glow converges to the same reference: 
 (the nodes at 64 samples 3.0 %)."""
 import json
 
-import render_harness as h
+from fog_scenes import render_harness as h
 
 
 def test_eevee_peak_pixels_are_the_film_filters_means(tmp_path):

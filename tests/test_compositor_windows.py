@@ -23,7 +23,7 @@ import json
 import numpy as np
 import pytest
 
-import render_harness as h
+from fog_scenes import render_harness as h
 from fog_addon import imageio
 
 TOLERANCE = 1e-5   # of the picture's peak: float rounding (the cropped floats pass through colour sockets)

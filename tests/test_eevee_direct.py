@@ -5,7 +5,7 @@ one average of the lights' e^(-beta D_sp) (``shading.shade_point``'s weight).
 Against the Cycles path-traced reference (cast shadows and interreflection
 off), as the other render tests.
 """
-import render_harness as h
+from fog_scenes import render_harness as h
 
 SCENE, DENSITY = "glossy_lamps", 0.08
 SAMPLES = 4096   # the reference's own noise: see the README

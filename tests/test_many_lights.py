@@ -1,7 +1,7 @@
 """Many lights: 1, 4, 16, 64 and 256 point lights, Cycles (node groups, OSL, compositor) and EEVEE, against the
 numpy twin.
 
-Each case runs tests/scenes/many_lights.py in a fresh process (48x27, 1 spp,
+Each case runs fog_scenes/many_lights.py in a fresh process (48x27, 1 spp,
 pixel centres; a ground plane and matte, glossy and metallic spheres; the
 lights on a grid, out of the surfaces' direct light so each pixel is exactly
 the fog's emission) with a hard timeout, and
@@ -46,9 +46,9 @@ import subprocess
 
 import pytest
 
-import render_harness as h
+from fog_scenes import render_harness as h
 
-SCRIPT = h.ROOT / "tests" / "scenes" / "many_lights.py"
+SCRIPT = ("-m", "fog_scenes.many_lights")
 LIGHTS = (1, 4, 16, 64, 256)
 METHODS = {"cycles_nodes": ("CYCLES", "nodes"), "cycles_osl": ("CYCLES", "osl"), "eevee": ("BLENDER_EEVEE", "nodes"),
            "cycles_compositor": ("CYCLES", "compositor"), "eevee_compositor": ("BLENDER_EEVEE", "compositor")}
@@ -125,7 +125,7 @@ def run_case(tmp_path, n, method, timeout):
     """Run the scene script for ``n`` lights and ``method``; (result dict or None, log text, problems)."""
     engine, preference = METHODS[method]
     try:
-        proc = h.run([SCRIPT, tmp_path, engine, preference, n, SAMPLES], timeout=timeout, check=False)
+        proc = h.run([*SCRIPT, tmp_path, engine, preference, n, SAMPLES], timeout=timeout, check=False)
     except subprocess.TimeoutExpired as exc:
         out = (exc.stdout or b"") + (exc.stderr or b"")
         text = out.decode(errors="replace") if isinstance(out, bytes) else out

@@ -13,7 +13,7 @@ import sys
 
 import pytest
 
-import render_harness as h
+from fog_scenes import render_harness as h
 from conftest import ROOT
 
 SCRIPT = ROOT / "tests" / "scenes" / "material_kinds.py"

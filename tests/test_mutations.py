@@ -8,14 +8,11 @@ one unmutated baseline of all the killers); set FOG_SKIP_MUTATIONS=1 to skip it.
 """
 import os
 import subprocess
-import sys
 
 import pytest
 
 from conftest import ROOT
-
-sys.path.insert(0, str(ROOT / "tools"))
-import mutations  # noqa: E402
+from tools import mutations
 
 
 def test_every_mutation_still_applies():

@@ -19,16 +19,13 @@ Both renders run at once (two processes), about 15 s on 2 cores.
 """
 import concurrent.futures
 import json
-import sys
 
 import numpy as np
 import pytest
 
-import render_harness as h
 from fog_addon import imageio
-
-sys.path.insert(0, str(h.ROOT / "tests" / "scenes"))
-import cycles_debug_log  # noqa: E402
+from fog_scenes import cycles_debug_log
+from fog_scenes import render_harness as h
 
 SCRIPT = h.ROOT / "tests" / "scenes" / "passes_many_lights.py"
 LIGHTS = 24          # the World ran out of SVM stack at 17

@@ -18,7 +18,7 @@ import sys
 import numpy as np
 import pytest
 
-import render_harness as h
+from fog_scenes import render_harness as h
 from conftest import ROOT
 from fog_addon import imageio
 from fog_addon.precompute import predict

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy import integrate, special
 
-import render_harness as rh
+from fog_scenes import render_harness as rh
 from fog_addon import compare, imageio
 
 # Builds a probe scene, makes it the reference, renders it, and dumps the camera.

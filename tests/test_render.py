@@ -1,6 +1,6 @@
 """Headless renders of the demo scenes with the analytic fog against cached Cycles path-traced references.
 
-References: tests/references/<scene>_<density>.exr (tests/render_harness.py;
+References: tests/references/<scene>_<density>.exr (fog_scenes/render_harness.py;
 regenerate with --regen-references).  Cast shadows and surface-to-surface
 light are off in both renders (the model has neither); pixel-centre sampling.
 A failing comparison writes tests/_failures/<case>_diff.png.
@@ -14,7 +14,7 @@ import os
 
 import pytest
 
-import render_harness as h
+from fog_scenes import render_harness as h
 
 THICK = [("street_lamps", 0.08), ("spheres", 0.15)]
 THIN = [("street_lamps", 0.03), ("spheres", 0.05)]
@@ -139,7 +139,7 @@ def test_boulevard_eevee_compositor(tmp_path, regen):
 
 
 # Anisotropic fog (issue 9): Henyey-Greenstein g = 0.85 (the fog preset's), the World volume's Anisotropy
-# set to the same g in the reference (tests/render_harness.py REFERENCE_SAMPLES_ANISOTROPIC: Cycles does
+# set to the same g in the reference (fog_scenes/render_harness.py REFERENCE_SAMPLES_ANISOTROPIC: Cycles does
 # not sample the phase peak towards its lights, so the references need 16-32x the samples).  Measured:
 # street lamps Cycles nodes / OSL / EEVEE relative RMSE 0.60 / 0.60 / 0.72 %, spheres 0.52 / 0.52 / 0.39 %
 # (references at 131 072 and 65 536 spp).

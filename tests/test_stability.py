@@ -23,21 +23,16 @@ Error of a sample: |L_m - L| / max(L, tiny), tiny the smallest normal number
 of the format (tools/stability_map.py).
 """
 import math
-import sys
 
 import numpy as np
 import pytest
 
-from conftest import ROOT
-
-sys.path.insert(0, str(ROOT / "tools"))
-import airlight_reference as ref  # noqa: E402
-import shader_float32 as f32  # noqa: E402
-import stability_map as sm  # noqa: E402
-
-from fog_addon.precompute import airlight as al  # noqa: E402
-from fog_addon.precompute import model  # noqa: E402
-from fog_addon.precompute.ops import NumpyOps  # noqa: E402
+from fog_addon.precompute import airlight as al
+from fog_addon.precompute import model
+from fog_addon.precompute.ops import NumpyOps
+from tools import airlight_reference as ref
+from tools import shader_float32 as f32
+from tools import stability_map as sm
 
 SHIPPED = ("table_f64", "table_f32", "quad_f64", "quad_f32")
 DOCUMENTED = {"table_f64": 1.6e-4, "table_f32": 1.6e-4, "quad_f64": 1.1e-6, "quad_f32": 1.1e-6}

@@ -3,7 +3,7 @@ World volume extinguishes it, kept when the artist asks (``apply_fog(world_light
 World Light, ``render --world-light on``)."""
 import json
 
-import render_harness as h
+from fog_scenes import render_harness as h
 
 
 def test_world_light_is_extinguished_unless_kept(tmp_path):

@@ -37,10 +37,9 @@ import time
 import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tools"))
+sys.path.insert(0, str(ROOT))   # a script run by path: the repository root
 
-import airlight_reference as ref  # noqa: E402
+from tools import airlight_reference as ref  # noqa: E402
 from fog_addon.precompute import airlight as al  # noqa: E402
 from fog_addon.precompute import tables  # noqa: E402
 

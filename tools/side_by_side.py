@@ -51,10 +51,9 @@ import time
 import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT))   # a script run by path: the repository root (fog_addon, fog_scenes)
 
-import render_harness as harness  # noqa: E402  (subprocess runner, scene builder)
+from fog_scenes import render_harness as harness  # noqa: E402  (subprocess runner, scene builder)
 from fog_addon import compare, imageio  # noqa: E402  (numpy only)
 from fog_addon.precompute import presets  # noqa: E402  (Koschmieder visibility)
 

@@ -88,11 +88,10 @@ import numpy as np
 from scipy import integrate
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tools"))
+sys.path.insert(0, str(ROOT))   # a script run by path: the repository root
 
-import airlight_reference as ref  # noqa: E402
-import shader_float32 as f32  # noqa: E402
+from tools import airlight_reference as ref  # noqa: E402
+from tools import shader_float32 as f32  # noqa: E402
 from fog_addon.precompute import airlight as al  # noqa: E402
 from fog_addon.precompute import model  # noqa: E402
 from fog_addon.precompute import phase_series as ps  # noqa: E402

@@ -14,16 +14,16 @@ import sys
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests" / "scenes")]
+sys.path.insert(0, str(ROOT))   # a script run by path: the repository root
 
 import bpy  # noqa: E402
 
-import many_lights  # noqa: E402
+from fog_scenes import many_lights  # noqa: E402
 from fog_addon import measure  # noqa: E402
 from fog_addon.nodes import comp_fog, groups, images, passes  # noqa: E402
 from fog_addon.ops import apply, view  # noqa: E402
 from fog_addon.precompute import rungs  # noqa: E402
-from probe_common import light_pixel  # noqa: E402,F401  (peaks.py reads it here)
+from fog_scenes.probe_common import light_pixel  # noqa: E402,F401  (peaks.py reads it here)
 
 W, H, SPP = 320, 180, 16
 

@@ -20,7 +20,7 @@ import numpy as np  # noqa: E402
 from fog_addon import imageio, measure  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 from fog_addon.precompute import airlight  # noqa: E402
-import probe_common  # noqa: E402
+from fog_scenes import probe_common  # noqa: E402
 
 BETA, POWER, W, H = 0.2, 1000.0, 64, 48
 

@@ -24,11 +24,10 @@ import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests" / "scenes"))
 
 import bpy  # noqa: E402
 
-import many_lights  # noqa: E402
+from fog_scenes import many_lights  # noqa: E402
 from fog_addon import measure  # noqa: E402
 from fog_addon.nodes import comp_fog  # noqa: E402
 from fog_addon.ops import apply, view  # noqa: E402

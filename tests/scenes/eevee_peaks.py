@@ -22,13 +22,13 @@ import pathlib
 import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests" / "scenes")]
+sys.path.insert(0, str(ROOT))
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
-import many_lights  # noqa: E402
-from probe_common import light_pixel  # noqa: E402
+from fog_scenes import many_lights  # noqa: E402
+from fog_scenes.probe_common import light_pixel  # noqa: E402
 from fog_addon import imageio, measure  # noqa: E402
 from fog_addon.nodes import comp_fog  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402

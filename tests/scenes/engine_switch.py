@@ -14,12 +14,11 @@ import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests" / "scenes"))
 
 import bpy  # noqa: E402
 
 import fog_addon  # noqa: E402
-import many_lights  # noqa: E402
+from fog_scenes import many_lights  # noqa: E402
 from fog_addon.nodes import groups  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 

@@ -14,7 +14,6 @@ import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
 import bpy  # noqa: E402
 

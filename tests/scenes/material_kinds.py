@@ -28,7 +28,6 @@ import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests" / "scenes"))
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
@@ -36,7 +35,7 @@ import numpy as np  # noqa: E402
 from fog_addon import imageio, measure  # noqa: E402
 from fog_addon.nodes import graph, owned  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
-from probe_common import tiny_render  # noqa: E402
+from fog_scenes.probe_common import tiny_render  # noqa: E402
 import add_remove  # noqa: E402  (snapshot, differing)
 
 DENSITY = 0.1                 # 1/m

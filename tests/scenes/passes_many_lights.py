@@ -26,14 +26,13 @@ import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests" / "scenes"))
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
-import cycles_debug_log  # noqa: E402
+from fog_scenes import cycles_debug_log  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
-from probe_common import add_point_lights, camera_rays, look_at, tiny_render  # noqa: E402
+from fog_scenes.probe_common import add_point_lights, camera_rays, look_at, tiny_render  # noqa: E402
 
 W, H = 64, 36
 BETA = 0.05

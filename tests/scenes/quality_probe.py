@@ -26,14 +26,13 @@ import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests" / "scenes"))
 
 import bpy  # noqa: E402
 from mathutils import Vector  # noqa: E402
 
 import demo_scenes  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
-from probe_common import light_fog_only, tiny_render  # noqa: E402
+from fog_scenes.probe_common import light_fog_only, tiny_render  # noqa: E402
 
 
 def random_scene(scene, seed, spots=False):

@@ -34,7 +34,7 @@ from fog_addon.ops import apply  # noqa: E402
 from fog_addon.precompute import bakers, rungs, shading, surface  # noqa: E402
 from fog_addon.precompute.medium import Medium  # noqa: E402
 from fog_addon.precompute.ops import NumpyOps  # noqa: E402
-import probe_common  # noqa: E402
+from fog_scenes import probe_common  # noqa: E402
 
 BETA, W, H = 0.2, 64, 48
 ALBEDO = (0.9, 0.8, 0.7)

@@ -14,12 +14,11 @@ import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests" / "scenes"))
 
 import bpy  # noqa: E402
 
 from fog_addon import imageio, measure  # noqa: E402
-import probe_common  # noqa: E402
+from fog_scenes import probe_common  # noqa: E402
 
 ROUGHNESS = (0.2, 0.45, 0.7)
 COS_VIEW = (1.0, 0.5, 0.2, 0.1)

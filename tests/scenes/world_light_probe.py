@@ -15,14 +15,13 @@ import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests" / "scenes"))
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 from fog_addon import imageio, measure  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
-import probe_common  # noqa: E402
+from fog_scenes import probe_common  # noqa: E402
 
 BETA, HEIGHT, SIZE = 0.2, 2.0, 4
 

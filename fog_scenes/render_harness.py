@@ -3,7 +3,7 @@ render test images and compare them -- each Blender job in a fresh process.
 
 Typical use in a test::
 
-    from render_harness import ensure_reference, render_test, assert_close
+    from fog_scenes.render_harness import ensure_reference, render_test, assert_close
 
     def test_street_lamps_nodes(regen, tmp_path):
         ref = ensure_reference("street_lamps", 0.08, regen=regen)
@@ -23,15 +23,12 @@ import subprocess
 import sys
 import tempfile
 
+from fog_addon import compare as _compare   # (pure numpy)
+
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 REFERENCES = ROOT / "tests" / "references"
 FAILURES = ROOT / "tests" / "_failures"
 DEMO_SCENES = ROOT / "demo_scenes"
-
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-from fog_addon import compare as _compare   # noqa: E402  (pure numpy)
 
 PYTHON = os.environ.get("FOG_PYTHON") or str(ROOT / ".venv" / "bin" / "python")
 if not os.path.exists(PYTHON):

@@ -1,6 +1,6 @@
 """Many point lights: a tiny render of the whole fog against its numpy twin, per pixel.
 
-    python tests/scenes/many_lights.py OUT_DIR ENGINE METHOD N_LIGHTS [SAMPLES]
+    python -m fog_scenes.many_lights OUT_DIR ENGINE METHOD N_LIGHTS [SAMPLES]   (from the repository root)
 
 ENGINE: CYCLES | BLENDER_EEVEE; METHOD: nodes | osl; N_LIGHTS: a square
 number (1, 4, 16, 64, 256) of point lights (radius 0, different powers and
@@ -33,19 +33,15 @@ import pathlib
 import sys
 import time
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests" / "scenes"))
+import bpy
+import numpy as np
 
-import bpy  # noqa: E402
-import numpy as np  # noqa: E402
-
-from fog_addon import imageio, measure  # noqa: E402
-from fog_addon.ops import apply, view  # noqa: E402
-from fog_addon.precompute import bakers, model, predict, rungs, shading, surface  # noqa: E402
-from fog_addon.precompute.medium import Medium  # noqa: E402
-from fog_addon.precompute.ops import NumpyOps  # noqa: E402
-from probe_common import add_point_lights, camera_rays, look_at, tiny_render  # noqa: E402
+from fog_addon import imageio, measure
+from fog_addon.ops import apply, view
+from fog_addon.precompute import bakers, model, predict, rungs, shading, surface
+from fog_addon.precompute.medium import Medium
+from fog_addon.precompute.ops import NumpyOps
+from fog_scenes.probe_common import add_point_lights, camera_rays, look_at, tiny_render
 
 BETA = 0.1                      # 1/m: optical thickness ~1.2 to the spheres, ~2 to the far lights
 ALBEDO = (0.9, 0.9, 0.85)
