@@ -29,6 +29,7 @@ import numpy as np
 
 from . import bakers, model, rungs, shading
 from . import spot as spot_mod
+from .medium import Medium
 from .ops import NumpyOps
 
 FLOOR = 1e-3          # samples below this fraction of the peak fog are not judged (issue 8 §2)
@@ -108,37 +109,22 @@ def light_fog(samples, intensity, beta, g=0.0):
 
     intensity: (N, 3) RGB radiant intensity I0, W/sr; beta: 1/m; g: Henyey-Greenstein anisotropy.
     The full rungs of the "nodes" preference (its tables; the quadrature where g is below the
-    tables' range), the shaders' twin.
+    tables' range), the shaders' twin: ``shading.py``'s terms and composition, run once on broadcast
+    (P, N, 3) arrays for the point lights and once for the spots.
     """
     m = _numpy_ops(g)
-    preference = _preference(g)
-    full = rungs.choose(preference, 0, g)
-    cam, d, lights, sky, d_vp, d_sv, along, h = rays = _rays(m, samples)
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        air = np.where(sky, m.run(full.background, beta, d_sv, along, h),
-                       m.run(full.airlight, beta, d_sv, along, h, d_vp))
-        to_l = lights - (cam + m.scale(d, d_vp))
-        d_sp = np.maximum(m.length(to_l), model.MIN_DISTANCE)
-        n = np.asarray(samples.normal, float)[:, None, :]
-        cos_n = m.dot(to_l, n) / d_sp
-        cos_r = m.dot(to_l, shading.mirror(m, -d, n)) / d_sp
-        level = np.broadcast_to(np.asarray(samples.level, float)[:, None], cos_r.shape)
-        diffuse = m.run(full.scatter, beta, d_sp, cos_n, np.zeros_like(level))
-        glossy = m.run(full.scatter, beta, d_sp, cos_r, level)
-        k, light = _spot_lights(samples, lights)
-        if k.size:   # the spots' glow and cone (shading.shade_point)
-            spot = rungs.choose(preference, 0, g, spot=True)
-            air[:, k] = _spot_glow(m, spot, beta, k, light, rays)
-            cone = shading.surface_cone(m, light, cam + m.scale(d, d_vp))
-            axis = spot_mod.world_axis(m, light.spot.rows)
-            diffuse[:, k], glossy[:, k] = m.run(spot.scatter, beta, d_sp[:, k], cos_n[:, k], cos_r[:, k], level[:, k],
-                                                *cone, m.dot(n, axis), m.dot(shading.mirror(m, -d, n), axis))
-    t_vp = np.exp(-beta * d_vp)[..., None]
-    reflected = (np.asarray(samples.rho_d, float)[:, None, :] * diffuse[..., None]
-                 + np.asarray(samples.rho_s, float)[:, None, :] * glossy[..., None])
-    intensity = np.asarray(intensity, float)[None, :, :]
-    glow = intensity * np.nan_to_num(air, nan=0.0, posinf=0.0)[..., None]
-    scatter = np.where(sky[..., None], 0.0, intensity * t_vp * np.nan_to_num(reflected, nan=0.0, posinf=0.0))
+    view = _view(m, samples)
+    intensity = np.asarray(intensity, float)
+    glow = np.zeros(np.shape(samples.lights))
+    scatter = np.zeros_like(glow)
+    for k, light in _light_kinds(samples, intensity):
+        models = rungs.choose(_preference(g), 0, g, spot=light.spot is not None)
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            values = shading.light_glows(m, view.camera, view.direction, view.geometry.view_distance, light,
+                                         Medium(beta), models)
+            terms = shading.shade_point(m, view.geometry, view.material, light, Medium(beta), models, air=0.0)
+        values[rungs.SCATTERED_OUT] = terms.scattered
+        glow[:, k], scatter[:, k] = _pixel_parts(m, values, beta, view)
     return glow, scatter
 
 
@@ -147,34 +133,62 @@ def _preference(g):
     return "nodes" if g >= rungs.MIN_TABLE_ANISOTROPY else "osl"
 
 
-def _rays(m, samples):
-    """(camera (P, 1, 3), direction (P, 1, 3), lights (P, N, 3), sky (P, 1), d_vp (P, 1), d_sv, along, h (P, N))."""
+class _View(NamedTuple):
+    """The view samples as ``shading.py`` takes them, broadcast against the lights' axis: (P, 1, 3) vectors,
+    (P, 1) scalars (a ray to the background ends at the camera: D_vp = 0, coverage 0)."""
+    camera: Any
+    direction: Any
+    geometry: Any     # shading.Geometry
+    material: Any     # shading.Material
+    coverage: Any     # (P, 1): 1 where the sample's ray meets a surface, 0 where it goes to the background
+
+
+def _view(m, samples):
     cam = np.asarray(samples.camera, float)[:, None, :]
     d = np.asarray(samples.direction, float)[:, None, :]
-    lights = np.asarray(samples.lights, float)
     dist = np.asarray(samples.distance, float)[:, None]
     sky = ~np.isfinite(dist)
-    return (cam, d, lights, sky, np.where(sky, 0.0, dist), *model.ray_light_geometry(m, cam, d, lights))
+    d_vp = np.where(sky, 0.0, dist)
+    geo = shading.Geometry(cam, cam + m.scale(d, d_vp), -d, d_vp, np.asarray(samples.normal, float)[:, None, :])
+    material = shading.Material(np.asarray(samples.rho_d, float)[:, None, :],
+                                np.asarray(samples.rho_s, float)[:, None, :],
+                                np.asarray(samples.level, float)[:, None])
+    return _View(cam, d, geo, material, (~sky).astype(float))
 
 
-def _spot_lights(samples, lights):
-    """(indices k of the spots, shading.Light of them (no intensity)); k is empty for point lights only."""
+def _light_kinds(samples, intensity):
+    """[(indices k, shading.Light of the lights k as (P, K, 3) arrays)]: the point lights', then the spots'
+    (``shading.Spot`` of their cones), each only if there is one."""
+    lights = np.asarray(samples.lights, float)
     spots = samples.spots
-    if spots is None or not np.any(spots.is_spot):
-        return np.zeros(0, int), None
-    k = np.flatnonzero(spots.is_spot)
-    rows = np.asarray(spots.rows, float)[:, k]
-    return k, shading.Light(lights[:, k], None, shading.Spot(tuple(rows[..., i, :] for i in range(3)),
-                                                              np.asarray(spots.cos_half, float)[k],
-                                                              np.asarray(spots.blend, float)[k]))
+    is_spot = np.zeros(lights.shape[1], bool) if spots is None else np.asarray(spots.is_spot, bool)
+    out = []
+    if not is_spot.all():
+        k = np.flatnonzero(~is_spot)
+        out.append((k, shading.Light(lights[:, k], intensity[k])))
+    if is_spot.any():
+        k = np.flatnonzero(is_spot)
+        rows = np.asarray(spots.rows, float)[:, k]
+        out.append((k, shading.Light(lights[:, k], intensity[k],
+                                     shading.Spot(tuple(rows[..., i, :] for i in range(3)),
+                                                  np.asarray(spots.cos_half, float)[k],
+                                                  np.asarray(spots.blend, float)[k]))))
+    return out
 
 
-def _spot_glow(m, models, beta, k, light, rays):
-    """(P, K) the glow per unit intensity of the spots ``k`` (``_spot_lights``) with their ``models``."""
-    cam, d, _, sky, d_vp, d_sv, along, h = rays
-    args = (beta, d_sv[:, k], along[:, k], h[:, k])
-    ray = shading.spot_ray(m, light, models.airlight, cam, d)
-    return np.where(sky, m.run(models.background, *args, *ray), m.run(models.airlight, *args, d_vp, *ray))
+def _finite(v):
+    """A term with what numpy's overflow left (NaN, inf) taken as 0: the predictor then judges the rest."""
+    return np.nan_to_num(np.asarray(v, float), nan=0.0, posinf=0.0)
+
+
+def _pixel_parts(m, values, beta, view):
+    """(glow, scatter), (P, K, 3): ``shading.pixel_light`` of the GLOW and of the REFLECTED quantities in
+    ``values`` (Output -> value) on their own, the parts the ladder drops (rungs.STEPS: the scattered fog
+    light first, then the glows); a sample's coverage (0 or 1) selects its surface's or the sky's glow."""
+    t_vp = model.transmittance(m, beta, view.geometry.view_distance)
+    finite = {o: _finite(v) for o, v in values.items()}
+    return tuple(shading.pixel_light(m, {o: v for o, v in finite.items() if o.kind == kind}, t_vp, view.coverage)
+                 for kind in (rungs.GLOW, rungs.REFLECTED))
 
 
 def rim_deviation(samples, intensity, beta, glow, g=0.0):
@@ -182,16 +196,17 @@ def rim_deviation(samples, intensity, beta, glow, g=0.0):
     count ``spot.RIM_LADDER[1 + r]`` instead of spot.RIM_NODES (0 for point lights); ``glow``: the exact
     glows of :func:`light_fog` (spot.RIM_NODES points), which it does not compute again."""
     m = _numpy_ops(g)
-    preference = _preference(g)
-    rays = _rays(m, samples)
-    k, light = _spot_lights(samples, rays[2])
+    view = _view(m, samples)
     ladder = spot_mod.RIM_LADDER[1:]
-    out = np.zeros((len(ladder),) + rays[2].shape)
-    for r, n in enumerate(ladder if k.size else ()):
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            cheap = _spot_glow(m, rungs.choose(preference, 0, g, True, n), beta, k, light, rays)
-        cheap = np.asarray(intensity, float)[None, k, :] * np.nan_to_num(cheap, nan=0.0, posinf=0.0)[..., None]
-        out[r][:, k] = np.abs(cheap - glow[:, k])
+    out = np.zeros((len(ladder),) + np.shape(samples.lights))
+    spots = [(k, light) for k, light in _light_kinds(samples, np.asarray(intensity, float)) if light.spot is not None]
+    for r, n in enumerate(ladder):
+        for k, light in spots:
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                values = shading.light_glows(m, view.camera, view.direction, view.geometry.view_distance, light,
+                                             Medium(beta), rungs.choose(_preference(g), 0, g, True, n))
+            cheap, _ = _pixel_parts(m, values, beta, view)
+            out[r][:, k] = np.abs(cheap - glow[:, k])
     return out
 
 

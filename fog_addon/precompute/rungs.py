@@ -134,6 +134,57 @@ class LightModels(NamedTuple):
     direct: Rung
 
 
+# What a light's terms hand on to the composition of Eq. 19 and 12 (``shading.py``), one descriptor per
+# quantity: the fog's groups derive their sockets from OUTPUTS (``nodes/groups.py``: a light's shader groups
+# and the bundles that read them; ``nodes/comp_fog.py``: the compositor's per-light groups and bundles), and
+# ``shading.surface_light`` / ``pixel_light`` compose them by kind.  A new physical term adds its descriptor
+# here; no builder lists terms by hand.
+GLOW = "glow"             # RGB radiance gathered along the ray up to its end, W/(m^2 sr): added as it is
+REFLECTED = "reflected"   # RGB radiance leaving the ray's surface point: dimmed by e^{-beta D_vp} on its way
+DIMMING = "dimming"       # grey factor on the light's direct light at the surface (EEVEE's shared dimming)
+WEIGHT = "weight"         # grey weight of that dimming in the average over the lights (EEVEE)
+GATE = "gate"             # grey 0/1: the glow is worth computing only where it is 1 (a spot's cone, ``shading.Gated``)
+SURFACE_POINT, SKY = "surface", "sky"   # where a quantity is taken: a camera ray's surface point, a ray to infinity
+
+
+class Output(NamedTuple):
+    """One quantity of one light that the composition reads (OUTPUTS)."""
+    name: str             # its socket on the light's shader group (saved files and farms read it: never rename)
+    field: str            # its field of shading.LightTerms (at SURFACE_POINT) or shading.SkyTerms (at SKY)
+    at: str               # SURFACE_POINT or SKY
+    term: str             # the TERMS entry whose rung computes it
+    kind: str             # how shading composes it: GLOW, REFLECTED, DIMMING, WEIGHT or GATE
+    per_light: bool = True   # one per light (all today; a term of the whole sky would not be)
+    compositor: str = ""     # its socket in the compositor's groups (``nodes/comp_fog.py``), "" if the
+    #                          compositor does not evaluate it per pixel (its materials dim direct light)
+
+    @property
+    def colour(self):
+        """True for an RGB quantity (a colour socket), False for a grey one."""
+        return self.kind in (GLOW, REFLECTED)
+
+    def present(self, models):
+        """True if a light with ``models`` (LightModels) has this quantity: a gate only where its term's rung is
+        a spot's (``shading.LightTerms.seen``)."""
+        return self.kind != GATE or getattr(models, self.term).spot
+
+
+AIRLIGHT_OUT = Output("Airlight", "airlight", SURFACE_POINT, "airlight", GLOW, compositor="Airlight")
+SCATTERED_OUT = Output("Scattered", "scattered", SURFACE_POINT, "scatter", REFLECTED, compositor="Scattered")
+BACKGROUND_OUT = Output("Airlight", "background", SKY, "background", GLOW, compositor="Background")
+OUTPUTS = (
+    AIRLIGHT_OUT, SCATTERED_OUT,
+    Output("Attenuation", "attenuation", SURFACE_POINT, "direct", DIMMING),
+    Output("Weight", "weight", SURFACE_POINT, "direct", WEIGHT),
+    Output("Seen", "seen", SURFACE_POINT, "airlight", GATE),
+    BACKGROUND_OUT,
+    Output("Seen", "seen", SKY, "background", GATE),
+)
+SURFACE_OUTPUTS = tuple(o for o in OUTPUTS if o.at == SURFACE_POINT)   # a light's surface group (shade_point)
+SKY_OUTPUTS = tuple(o for o in OUTPUTS if o.at == SKY)                 # a light's World group (sky_terms)
+COMPOSITOR_OUTPUTS = tuple(o for o in OUTPUTS if o.compositor)         # what the compositor sums per pixel
+
+
 # Henyey-Greenstein anisotropy g: the glow's rungs integrate 4 pi p_HG along the ray (model.hg_weight), from
 # a table baked for g (tables.anisotropic) or by quadrature; the scatter table is baked for g the same way
 # (surface.radiance_profile), its bound hg_scatter_error(g) (measured: tests/test_surface.py).  Measured

@@ -8,13 +8,44 @@ functions; numpy runs them as the shaders' twin (tests compare the two pixel
 by pixel).  Every term's formula is a rung of ``rungs.py``, run through
 ``m.run`` so each light can get its own models.
 
+The composition of a light's terms into the pixel's fog (Eq. 19 at a surface
+point, Eq. 12 on a ray to the sky) is written here only, against the
+quantities of ``rungs.OUTPUTS`` (each with its kind: a glow, reflected light,
+a dimming factor, its weight, a gate): ``surface_light`` (Eq. 19's L_a before
+the albedo), ``pixel_light`` (a pixel that sees a surface over a fraction of
+its area and the sky over the rest), ``sum_lights`` / ``surface_fog`` (the
+materials' sums), ``shade_background`` (the World).  Every backend calls them:
+the node groups through ``NodeOps``, the compositor's per-pixel sum through
+``CompOps`` (``nodes/comp_fog.py``), the error predictor with broadcast
+(P, N, 3) numpy arrays (``predict.light_fog``).  The groups' sockets are
+derived from ``rungs.OUTPUTS`` too.
+
+Adding a physical term (a light's new quantity) touches:
+
+* its kernel and rungs (``model.py`` or a module of its own, ``tables.py`` /
+  ``bakers.py`` / ``nodes/images.py`` if it reads a table), and in
+  ``rungs.py`` its TERMS entry, LightModels field, rungs (an "off" rung for
+  the ladder), ``choose``, and its ``Output`` descriptor in OUTPUTS;
+* here: the kernel's call in ``shade_point`` (or ``light_glows`` /
+  ``sky_terms`` for a glow) and a field of LightTerms / SkyTerms; the
+  composition picks it up by its kind;
+* ``osl.py`` / ``sockets.py`` only if the kernel needs an operation the ops
+  lack, ``groups.py``'s budgets (measured costs per light) and
+  ``tools/mutations.py`` (a mutation that removes it).
+
+The builders (``groups.py``, ``comp_fog.py``) and the predictor
+(``predict.py``) need no edit: they take their sockets and sums from OUTPUTS
+and these functions.  A term that needs new inputs from the scene (a light's
+or the camera's property: ``nodes/light.py``, ``ops/view.py``, the settings)
+adds them there.
+
 Units: positions and distances in m, beta in 1/m, light intensity I0 in W/sr
 (RGB: power * colour / 4 pi), radiances in W/(m^2 sr).
 """
 import math
 from typing import Any, NamedTuple
 
-from . import model, spot, tables
+from . import model, rungs, spot, tables
 
 
 class Geometry(NamedTuple):
@@ -163,13 +194,59 @@ def total(values):
     return result
 
 
+def _light_values(values):
+    """(Output, value) pairs of ``values`` (a dict, pairs, or LightTerms / SkyTerms: their fields of
+    ``rungs.OUTPUTS``) that carry light (GLOW, REFLECTED), missing ones (None) left out."""
+    if isinstance(values, (LightTerms, SkyTerms)):
+        at = rungs.SURFACE_POINT if isinstance(values, LightTerms) else rungs.SKY
+        values = [(o, getattr(values, o.field)) for o in rungs.OUTPUTS if o.at == at]
+    pairs = values.items() if isinstance(values, dict) else values
+    return [(o, v) for o, v in pairs if v is not None and o.kind in (rungs.GLOW, rungs.REFLECTED)]
+
+
+def surface_light(m, values, t_vp):
+    """Eq. 19's L_a over the albedo at a surface point seen at optical depth beta D_vp, W/(m^2 sr) (RGB): the
+    glows along the camera ray as they are, plus the light the surface reflects dimmed by ``t_vp`` =
+    e^{-beta D_vp} on its way to the camera.  ``values``: the quantities at the surface (``rungs.OUTPUTS`` at
+    SURFACE_POINT; a dict or pairs Output -> value, or LightTerms) of one light or summed over lights (the
+    composition is linear); any subset of them, None if it holds none."""
+    pairs = [(o, v) for o, v in _light_values(values) if o.at == rungs.SURFACE_POINT]
+    glow = [v for o, v in pairs if o.kind == rungs.GLOW]
+    reflected = [v for o, v in pairs if o.kind == rungs.REFLECTED]
+    parts = ([total(glow)] if glow else []) + ([m.scale(total(reflected), t_vp)] if reflected else [])
+    return total(parts) if parts else None
+
+
+def pixel_light(m, values, t_vp, coverage):
+    """The fog light over the albedo of a pixel whose rays meet a surface at D_vp over a fraction ``coverage``
+    of its area and go to infinity over the rest, W/(m^2 sr) (RGB): coverage * Eq. 19's L_a
+    (``surface_light``) + (1 - coverage) * the glows to infinity (Eq. 12).  ``values``: quantities of
+    ``rungs.OUTPUTS`` (Output -> value) at the surface and the sky, of one light or summed over lights, any
+    subset (the error predictor composes the ones a ladder step drops on their own: coverage 0 or 1 there
+    selects the sky or the surface); None if it holds none.  The compositor's per-pixel sum; the materials
+    and the World compose the same quantities through ``sum_lights`` and ``shade_background``."""
+    pairs = _light_values(values)
+    surface = surface_light(m, pairs, t_vp)
+    sky = [v for o, v in pairs if o.at == rungs.SKY]
+    parts = ([m.scale(surface, coverage)] if surface is not None else []) + \
+        ([m.scale(total(sky), 1.0 - coverage)] if sky else [])
+    return total(parts) if parts else None
+
+
 def sum_lights(m, terms, medium, t_vp, is_camera):
     """LightSums of the lights' ``terms`` (LightTerms, at least one): each light's fog light on camera rays
-    (Eq. 19's L_a: albedo * (airlight + e^{-beta D_vp} * reflected fog light)) and EEVEE's weights."""
+    (Eq. 19's L_a: albedo * (airlight + e^{-beta D_vp} * reflected fog light), ``surface_light``) and EEVEE's
+    weights.  A light with a gate (``LightTerms.seen``) keeps its glows apart from the rest (``Gated``)."""
     albedo = medium.albedo
-    emissions = [m.scale(albedo * (t.airlight + m.scale(t.scattered, t_vp)), is_camera) if t.seen is None else
-                 Gated(t.seen, m.scale(albedo * t.airlight, is_camera), m.scale(albedo * m.scale(t.scattered, t_vp),
-                                                                              is_camera)) for t in terms]
+    emissions = []
+    for t in terms:
+        pairs = _light_values(t)
+        if t.seen is None:
+            emissions.append(m.scale(albedo * surface_light(m, pairs, t_vp), is_camera))
+            continue
+        glow, rest = ([(o, v) for o, v in pairs if (o.kind == rungs.GLOW) == want] for want in (True, False))
+        emissions.append(Gated(t.seen, m.scale(albedo * surface_light(m, glow, t_vp), is_camera),
+                               m.scale(albedo * surface_light(m, rest, t_vp), is_camera)))
     colours = [e.glow + e.rest if isinstance(e, Gated) else e for e in emissions]
     return LightSums(emissions, total(colours), total([t.weight * t.attenuation for t in terms]),
                      total([t.weight for t in terms]))
@@ -230,6 +307,19 @@ def background_seen(m, camera, direction, light, models):
                          model.FAR)
 
 
+class SkyTerms(NamedTuple):
+    """One light's quantities on a ray to infinity (``sky_terms``; ``rungs.OUTPUTS`` at SKY)."""
+    background: Any      # RGB glow along the ray (Eq. 12 times I0), W/(m^2 sr), before the albedo
+    seen: Any = None     # a spot's: 1 if the ray meets its cone (else its glow is 0), None for a point light
+
+
+def sky_terms(m, camera, direction, light, medium, models):
+    """SkyTerms of one light on a camera ray to infinity (unit ``direction``): ``background_point`` and
+    ``background_seen``."""
+    return SkyTerms(background_point(m, camera, direction, light, medium, models),
+                    background_seen(m, camera, direction, light, models))
+
+
 def background_point(m, camera, direction, light, medium, models):
     """One light's RGB glow along a camera ray to infinity (Sun et al. 2005 Eq. 12 times I0), W/(m^2 sr)."""
     d_sv, along, h = model.ray_light_geometry(m, camera, direction, light.position)
@@ -250,6 +340,15 @@ def glow_pair(m, camera, direction, view_distance, light, medium, models):
     return (m.run(models.airlight, medium.beta, d_sv, along, h, view_distance, *air_ray),
             m.run(models.background, medium.beta, d_sv, along, h,
                   *spot_ray(m, light, models.background, camera, direction)))
+
+
+def light_glows(m, camera, direction, view_distance, light, medium, models):
+    """One light's glows along one ray, W/(m^2 sr) (RGB), for a backend that needs the ray's glow to the surface
+    and to infinity at once (the compositor's pixels, the error predictor's samples): {Output: value} of the
+    GLOW quantities of ``rungs.OUTPUTS`` (Airlight at the surface at ``view_distance``, Eq. 11, and the
+    Background, Eq. 12), I0 times ``glow_pair``."""
+    air, back = glow_pair(m, camera, direction, view_distance, light, medium, models)
+    return {rungs.AIRLIGHT_OUT: m.scale(light.intensity, air), rungs.BACKGROUND_OUT: m.scale(light.intensity, back)}
 
 
 def shade_background(m, airlights, medium, is_camera, world_light=0.0):
