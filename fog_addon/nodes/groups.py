@@ -18,19 +18,18 @@ One shared copy of each group per .blend:
   their models change leaves every material untouched.
 
 Each group records the fingerprint of the code that built it
-(``owned.BUILT``, from the source of the kernels, the shading and the builders): a
+(``owned.BUILT``, ``code_fingerprint``: all of the add-on's source): a
 saved file made by other code rebuilds it.
 """
 import functools
 import math
 import re
-import sys
 
 import bpy
 
-from ..precompute import fingerprint, model, ops, predict, rungs, shading, spot, surface, tables
+from ..precompute import fingerprint, predict, rungs, shading, spot, surface
 from ..precompute.medium import Medium
-from . import osl, owned, passes, sockets
+from . import owned, passes, sockets
 from .sockets import NodeOps
 
 PARAMS = "AnalyticFog Params"
@@ -48,9 +47,9 @@ BUILDING = " (building)"     # name suffix of a group being built beside the one
 
 
 def code_fingerprint():
-    """Fingerprint of everything that decides a group's content (kernels, tables, shading, builders)."""
-    return fingerprint.source_fingerprint(model, spot, surface, tables, shading, rungs, ops, sockets, osl, passes,
-                                          sys.modules[__name__])
+    """Fingerprint of the code that decides a group's content: all of the add-on's source
+    (``fingerprint.package_fingerprint``: no list of modules to keep)."""
+    return fingerprint.package_fingerprint()
 
 
 def light_group_name(models):

@@ -2,16 +2,16 @@
 import bpy
 import numpy as np
 
-from ..precompute import bakers, fingerprint, tables
+from ..precompute import bakers, fingerprint
 from . import owned
 
 VERSION_KEY = "analytic_fog_table_version"   # on each image: the fingerprint of the code that baked it
 
 
 def table_version(spec):
-    """Fingerprint of the layouts and bakers of every table, and ``spec``: a changed bake rebakes."""
-    from ..precompute import airlight, pixel, spot, surface
-    return fingerprint.source_fingerprint(tables, bakers, airlight, surface, spot, pixel, extra=(spec,))
+    """The package's fingerprint with ``spec``: the image of a table whose baker, layout or packing (here)
+    changed is made again (``fingerprint``'s docstring says why the whole package)."""
+    return fingerprint.package_fingerprint(spec)
 
 
 def table_image(spec, bake):
@@ -28,7 +28,7 @@ def table_image(spec, bake):
         return img
     if img is not None:
         bpy.data.images.remove(img)
-    arr = np.asarray(bake(), np.float32)
+    arr = np.asarray(bakers.cached_bake(spec, bake), np.float32)   # from the table cache if there
     shape = (spec.height, spec.width) + ((spec.channels,) if spec.channels > 1 else ())
     assert arr.shape == shape and spec.channels in (1, 4), (arr.shape, spec)
     img = bpy.data.images.new(spec.name, spec.width, spec.height, alpha=True, float_buffer=True, is_data=True)

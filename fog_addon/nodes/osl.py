@@ -199,7 +199,7 @@ def kernel_source(rung):
     body = "\n".join(m.lines)
     params = "".join(f"    float {n} = 0.0,\n" for n in names)
     fn = getattr(rung.kernel, "func", rung.kernel)   # a kernel with g bound (rungs.anisotropic_rungs)
-    version = fingerprint.source_fingerprint(sys.modules[fn.__module__], sys.modules[__name__])
+    version = fingerprint.package_fingerprint()   # of all the add-on's source
     return (f"{HEADER} {version}: {rung.name} ({rung.term}), {fn.__module__}.{fn.__name__}\n"
             f"// Printed by fog_addon/nodes/osl.py from fog_addon/precompute; do not edit.\n"
             f"shader {SHADER_PREFIX}{re.sub(r'[^A-Za-z0-9_]', '_', rung.name)}(\n"

@@ -5,7 +5,6 @@ a ``Val`` wraps an output socket (or a Python constant, folded at build time)
 and overloads arithmetic so the formulas read the same in both.
 """
 import math
-import sys
 
 import bpy
 
@@ -51,16 +50,6 @@ _FOLD1 = {
     "EXPONENT": math.exp, "SQRT": lambda a: math.sqrt(a) if a > 0 else 0.0, "SINE": math.sin,
     "COSINE": math.cos, "FLOOR": math.floor, "ABSOLUTE": abs, "TANGENT": math.tan,
 }
-
-
-def _modules(fn):
-    """The modules whose source decides what ``fn`` builds: its own, and for a functools.partial those of
-    the callables bound into it (a spot kernel's inner point-light kernel)."""
-    found = [sys.modules[getattr(fn, "func", fn).__module__]]
-    for v in getattr(fn, "keywords", {}).values():
-        if callable(v):
-            found += [mod for mod in _modules(v) if mod not in found]
-    return found
 
 
 class NodeOps:
@@ -374,7 +363,7 @@ class NodeOps:
         return outs[0] if len(outs) == 1 else tuple(outs)
 
     def _kernel_group(self, name, fn, count):
-        built = fingerprint.source_fingerprint(*_modules(fn), sys.modules[__name__], extra=(name,))
+        built = fingerprint.package_fingerprint(name)
         ng = bpy.data.node_groups.get(name)
         if ng is not None and ng.get(owned.BUILT) == built:
             return ng
