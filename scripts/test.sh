@@ -1,7 +1,19 @@
 #!/usr/bin/env bash
-# Set up if needed, then run every test.  Exit code is pytest's (5 = no tests = failure).
+# Set up if needed, then run the tests (docs/testing.md):
+#   bash scripts/test.sh             the default tier, -m "not slow": every contract once (what .ci/run runs)
+#   bash scripts/test.sh --all       everything: the slow tier and the whole mutation check too
+#   bash scripts/test.sh ARGS...     ARGS go to pytest as well (e.g. -k NAME, -x; a -m of yours replaces
+#                                    the tier's, e.g. -m mutation)
+# The exit code is pytest's, and any non-zero code fails: 5 means no test was collected or selected (a
+# marker expression that selects nothing, a wrong -k) and is an error, never a pass.  tests/conftest.py
+# also refuses a -m expression that names an unregistered marker (tests/pytest.ini lists them).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 export TMPDIR="${TMPDIR:-/tmp}"
-exec .venv/bin/python -m pytest -q "$@" tests
+tier=(-m "not slow")
+args=()
+for a in "$@"; do
+  if [[ "$a" == "--all" ]]; then tier=(); else args+=("$a"); fi
+done
+exec .venv/bin/python -m pytest -q ${tier[@]+"${tier[@]}"} ${args[@]+"${args[@]}"} tests

@@ -1,11 +1,20 @@
 """Shared test options.
 
+Markers (registered in pytest.ini): ``render``, ``slow``, ``mutation``; scripts/test.sh runs
+``-m "not slow"`` by default and everything with ``--all``.  A ``-m`` expression naming a marker
+that is not registered is a usage error here (pytest itself would silently select nothing, or
+everything under ``not``).
+
+The repository root goes on ``sys.path`` once, here: tests import ``fog_addon``, ``fog_scenes``
+(shared scenes and the render harness), ``demo_scenes`` and ``tools`` as packages.
+
 ``--regen-references`` recomputes cached reference data (path-traced renders,
 quadrature samples) instead of reading it, as Blender's own render tests do
 with BLENDER_TEST_UPDATE.  Failing image tests write diffs to tests/_failures/.
 """
 import os
 import pathlib
+import re
 import sys
 
 import pytest
@@ -15,6 +24,17 @@ sys.path.insert(0, str(ROOT))
 
 FAILURES = ROOT / "tests" / "_failures"
 REFERENCES = ROOT / "tests" / "references"
+
+
+def pytest_configure(config):
+    """Refuse a ``-m`` expression that names an unregistered marker (a typo would select nothing or all)."""
+    expr = config.getoption("markexpr", default="") or ""
+    known = {line.split(":")[0].split("(")[0].strip() for line in config.getini("markers")}
+    names = set(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", expr)) - {"and", "or", "not", "True", "False"}
+    unknown = sorted(names - known)
+    if unknown:
+        raise pytest.UsageError(f"-m {expr!r} names unregistered marker(s) {unknown}; "
+                                f"registered (tests/pytest.ini): {sorted(known)}")
 
 
 def pytest_addoption(parser):

@@ -35,13 +35,12 @@ passes with every light fully modelled: 1 / 4 / 16 / 64 lights relative RMSE 0.1
 ``MEASURED`` holds what each case did on 2 CPU cores (bpy 5.0.1, other jobs
 running); failing cases that finish in about 2 minutes are
 ``xfail(strict=True)``, so they turn into failures the day they pass (then
-drop their entry); slower ones are skipped with the measured time, passing or
-not.  ``FOG_SLOW_TESTS=1`` runs the skipped cases too (timeout
-``SLOW_TIMEOUT_S``): use it to re-measure.  ``test_closure_sum_renders_every_closure``
+drop their entry); slower ones are marked ``slow`` with the measured time as the
+marker's reason, passing or not: ``scripts/test.sh --all`` (or ``-m slow``) runs
+them (timeout ``SLOW_TIMEOUT_S``): use it to re-measure.  ``test_closure_sum_renders_every_closure``
 checks the closure sum itself in SVM and OSL up to 256 closures in seconds.
 """
 import json
-import os
 import subprocess
 
 import pytest
@@ -54,7 +53,7 @@ METHODS = {"cycles_nodes": ("CYCLES", "nodes"), "cycles_osl": ("CYCLES", "osl"),
            "cycles_compositor": ("CYCLES", "compositor"), "eevee_compositor": ("BLENDER_EEVEE", "compositor")}
 SAMPLES = 1
 TIMEOUT_S = 300              # hard limit of one case's process
-SLOW_TIMEOUT_S = 1800        # with FOG_SLOW_TESTS=1
+SLOW_TIMEOUT_S = 1800        # the cases MEASURED marks slow
 MEDIAN_TOL = 0.05            # |median(render / twin) - 1| per object
 REL_RMSE = {"CYCLES": 0.03, "BLENDER_EEVEE": 0.05}
 BLACK = 0.1                  # median render / twin below this: the material renders black
@@ -76,9 +75,9 @@ BLACK = 0.1                  # median render / twin below this: the material ren
 # at 256 lights, but Cycles' first render (node groups) was still not done after 2 177 s of CPU
 # (benchmarks/overhead.py at 709fad8).
 MEASURED = {
-    (16, "cycles_osl"): ("skip", "passes (relative RMSE 0.023 %) but slow for CI: 49 s in the full run at 225f330; "
+    (16, "cycles_osl"): ("slow", "passes (relative RMSE 0.023 %) but slow for CI: 49 s in the full run at 225f330; "
                                  "test_closure_sum_renders_every_closure checks OSL's closure sum up to 256"),
-    (256, "cycles_nodes"): ("skip", "too slow: fog added in 221 s, first render not finished at 300 s (killed); "
+    (256, "cycles_nodes"): ("slow", "too slow: fog added in 221 s, first render not finished at 300 s (killed); "
                                     "with the lights stepped down to 64 full lights' nodes a material (29 full, "
                                     "137 glow only, 90 left out, predicted error 57 %) it passed (relative RMSE "
                                     "8.8e-5) but the first render still took 661 s under load: the time is not "
@@ -89,18 +88,18 @@ MEASURED = {
                                     "in 17 s; 1 796 s of CPU); profiled at 121 lights (bf2080c): 96 % of the first "
                                     "render is Cycles' ShaderGraph::deduplicate_nodes, quadratic in a material's Math "
                                     "nodes (README, Many lights)"),
-    (64, "cycles_osl"): ("skip", "passes (relative RMSE 0.019 %, median render / twin 1.0000-1.0002) but too "
+    (64, "cycles_osl"): ("slow", "passes (relative RMSE 0.019 %, median render / twin 1.0000-1.0002) but too "
                                  "slow for CI: 140-299 s (fog added in 9-19 s, first render 129-277 s; "
                                  "163 s CPU); test_closure_sum_renders_every_closure checks OSL's closure "
                                  "sum in seconds"),
-    (256, "cycles_osl"): ("skip", "passes at 17a658d with OSL's shader-group budget (relative RMSE 7.5e-5; 82 "
+    (256, "cycles_osl"): ("slow", "passes at 17a658d with OSL's shader-group budget (relative RMSE 7.5e-5; 82 "
                                   "full, 153 glow only, 21 left out) but too slow for CI: fog added in 34 s, "
                                   "first render 1 266 s under load; before the budget it crashed (SIGSEGV: "
                                   "OSL's 16-bit layer index overflowed at 53 195 nodes per material)"),
-    (256, "eevee_compositor"): ("skip", "passes (relative RMSE 0.015 %, median render / twin 0.9999-1.0003, every "
+    (256, "eevee_compositor"): ("slow", "passes (relative RMSE 0.015 %, median render / twin 0.9999-1.0003, every "
                                         "light fully modelled) but too slow for CI: 190 s (fog added in 15 s, first "
                                         "render 173 s: EEVEE's own 256 lights)"),
-    (256, "eevee"): ("skip", "passes at f900d1a (relative RMSE 0.041 % against the models it chose: most "
+    (256, "eevee"): ("slow", "passes at f900d1a (relative RMSE 0.041 % against the models it chose: most "
                              "lights left out of the groups to fit EEVEE's uniform block, predicted error 91 %) "
                              "but too slow for CI: 561 s (fog added in 34 s, first render 515 s, load 5-11); "
                              "before: fog added in 253 s and the World's uniform block too big (239728/65536)"),
@@ -115,8 +114,8 @@ def _params():
             marks = []
             if kind == "xfail":
                 marks.append(pytest.mark.xfail(strict=True, reason=why))
-            elif kind == "skip" and os.environ.get("FOG_SLOW_TESTS") != "1":
-                marks.append(pytest.mark.skip(reason=why + " (FOG_SLOW_TESTS=1 runs it)"))
+            elif kind == "slow":
+                marks.append(pytest.mark.slow(reason=why))
             out.append(pytest.param(n, method, marks=marks, id=f"{n}-{method}"))
     return out
 
@@ -158,7 +157,7 @@ def picture_problems(res):
 
 @pytest.mark.parametrize("n,method", _params())
 def test_many_lights(tmp_path, n, method):
-    slow = MEASURED.get((n, method), (None,))[0] == "skip"
+    slow = MEASURED.get((n, method), (None,))[0] == "slow"
     res, text, problems = run_case(tmp_path, n, method, SLOW_TIMEOUT_S if slow else TIMEOUT_S)
     if res is not None:
         problems += picture_problems(res)

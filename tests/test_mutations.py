@@ -3,10 +3,11 @@
 tools/mutations.py removes one term at a time in a scratch copy of the
 repository and runs the tests meant to catch it (README, "Tests that fail
 when a term is missing").  A mutation that survives is a gap in the tests.
-The full run takes about 2 minutes on 2 cores (one pytest per mutation plus
-one unmutated baseline of all the killers); set FOG_SKIP_MUTATIONS=1 to skip it.
+Each run is one pytest per mutation plus one unmutated baseline of their
+killers.  The default tier runs ``mutations.QUICK`` (one mutation of each kind
+of promise, cheap killers); the slow tier the rest (``-m mutation`` runs both:
+every mutation once).
 """
-import os
 import subprocess
 
 import pytest
@@ -36,17 +37,29 @@ def test_readme_table_is_the_tools():
         "README.md's mutation table is stale: run .venv/bin/python tools/mutations.py --update-readme"
 
 
-@pytest.mark.skipif(os.environ.get("FOG_SKIP_MUTATIONS") == "1", reason="FOG_SKIP_MUTATIONS=1")
-def test_every_mutation_is_killed():
-    """The killers pass on an unmutated copy, and each mutation makes one of them fail."""
+def _check_killed(chosen):
+    """The killers of ``chosen`` pass on an unmutated copy, and each mutation makes one of them fail."""
     try:
         mutations.repo_files()
     except (OSError, subprocess.CalledProcessError):
         pytest.skip("not a git checkout: tools/mutations.py copies the files git ls-files lists")
-    results, base = mutations.run_all(mutations.MUTATIONS, with_baseline=True)
+    results, base = mutations.run_all(chosen, with_baseline=True)
     assert base["ok"], f"the killer tests fail without any mutation:\n{base['output']}"
     report = mutations.table(results)
     bad = [r for r in results if r["status"] != "killed"]
     assert not bad, report + "".join(f"\n--- {r['name']} {r['status']} ---\n{r['output']}" for r in bad)
-    for r, mu in zip(results, mutations.MUTATIONS):   # killed by a test meant to kill it, not by something else
+    for r, mu in zip(results, chosen):   # killed by a test meant to kill it, not by something else
         assert r["killed_by"] and r["killed_by"].split("[")[0] in {k.split("[")[0] for k in mu.killers}, report
+
+
+@pytest.mark.mutation
+def test_quick_mutations_are_killed():
+    """The default tier's subset (``mutations.QUICK``) is killed."""
+    _check_killed(mutations.quick())
+
+
+@pytest.mark.mutation
+@pytest.mark.slow
+def test_other_mutations_are_killed():
+    """Every mutation not in ``mutations.QUICK`` is killed (with the quick ones: all of them)."""
+    _check_killed(mutations.rest())

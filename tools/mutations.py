@@ -1,6 +1,7 @@
 """Mutation check: remove each physical term of the fog in turn and make sure some test fails.
 
-    .venv/bin/python tools/mutations.py [--list] [--markdown] [--update-readme] [--json] [--baseline] [--rev REV] [--keep] [NAME ...]
+    .venv/bin/python tools/mutations.py [--list] [--markdown] [--update-readme] [--json] [--baseline] [--rev REV] [--keep]
+                                        [--quick | --rest] [NAME ...]
 
 Each mutation is data (``MUTATIONS``): a name, what it breaks, a file, the
 exact text it replaces (found exactly once, or the tool refuses, so the list
@@ -23,6 +24,11 @@ mutations, ``--markdown`` the README's table (one source for both;
 tests/test_mutations.py checks they agree), ``--json`` the results (with
 pytest's one-line reason for each kill).  Exit code 0 when every mutation
 was killed (and the baseline passed).
+
+``QUICK`` names the subset the default test tier runs (``--quick``;
+tests/test_mutations.py, marker ``mutation``): one mutation of each kind of
+promise, each with a killer of seconds.  ``--rest`` runs the others (the slow
+tier); together they are every mutation, each once.
 
 A mutation of ``fog_addon/precompute/shading.py`` changes the shaders and
 their numpy twin alike, so a twin comparison (tests/test_nodes.py) cannot
@@ -143,6 +149,24 @@ MUTATIONS = [
              "pass",
              ("tests/test_ops.py::test_add_twice_remove_restores",)),
 ]
+
+
+# The default tier's subset: one mutation of each kind of promise, each killed by a test of seconds -- a term
+# of the shading against quadrature (Sun et al. 2005's equations), Eq. 19 written out by hand, the node wiring
+# against the numpy twin, a setting Remove must give back.  (A Cycles path-traced killer, test_render's, costs
+# a demo scene and a render: the slow tier runs those.)
+QUICK = ("glow_on_surfaces", "view_attenuation", "albedo_nodes", "restore_light_use_nodes")
+
+
+def quick(mutations=None):
+    """The mutations named in ``QUICK`` (KeyError for a name that is not a mutation)."""
+    known = {mu.name: mu for mu in (MUTATIONS if mutations is None else mutations)}
+    return [known[name] for name in QUICK]
+
+
+def rest(mutations=None):
+    """Every mutation not in ``QUICK``, in ``MUTATIONS``' order."""
+    return [mu for mu in (MUTATIONS if mutations is None else mutations) if mu.name not in QUICK]
 
 
 # --- scratch copies ---------------------------------------------------------------------------------
@@ -354,12 +378,19 @@ def main(argv=None):
     ap.add_argument("--baseline", action="store_true", help="first check every killer passes unmutated")
     ap.add_argument("--keep", action="store_true", help="keep the scratch copies")
     ap.add_argument("--rev", help="mutate this commit's tree (git archive) instead of the working tree")
+    which = ap.add_mutually_exclusive_group()
+    which.add_argument("--quick", action="store_true", help="only the default test tier's subset (QUICK)")
+    which.add_argument("--rest", action="store_true", help="only the mutations not in QUICK (the slow tier)")
     args = ap.parse_args(argv)
     known = {mu.name: mu for mu in MUTATIONS}
     unknown = [n for n in args.names if n not in known]
     if unknown:
         ap.error(f"unknown mutation(s) {unknown}; --list shows them")
     chosen = [known[n] for n in args.names] if args.names else MUTATIONS
+    if args.quick or args.rest:
+        if args.names:
+            ap.error("--quick / --rest choose the mutations: give no NAME with them")
+        chosen = quick() if args.quick else rest()
     if args.list:
         print(list_text(chosen))
         return 0
