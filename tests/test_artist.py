@@ -10,6 +10,8 @@ import pytest
 
 from conftest import ROOT
 
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
+
 KOSCHMIEDER = -math.log(0.02)   # independent of fog_addon.precompute.presets
 
 

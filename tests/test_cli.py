@@ -3,6 +3,8 @@ import pytest
 
 from fog_scenes import render_harness as h
 
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
+
 
 @pytest.mark.parametrize("flags,message", [
     (["--engine", "eevee", "--method", "osl", "--density", "0.1"], "needs --engine cycles"),

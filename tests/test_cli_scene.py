@@ -15,6 +15,8 @@ import pytest
 from fog_scenes import render_harness as h
 from fog_addon import imageio
 
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
+
 SCRIPT = h.ROOT / "tests" / "scenes" / "cli_scene.py"
 # Both processes render the same node trees with the same seed and sample count: measured bit-identical.
 REL_TOL, ABS_TOL = 1e-5, 1e-7

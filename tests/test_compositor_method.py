@@ -9,6 +9,8 @@ import pytest
 
 from fog_scenes import render_harness as h
 
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
+
 FOG_AOVS = ["Fog Coverage", "Fog Position", "Fog Normal", "Fog Base Color", "Fog Metallic", "Fog Roughness",
             "Fog Specular IOR Level"]
 

@@ -10,7 +10,11 @@ own film over the node groups' per-sample glow converges to the same reference: 
 (the nodes at 64 samples 3.0 %)."""
 import json
 
+import pytest
+
 from fog_scenes import render_harness as h
+
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
 
 
 def test_eevee_peak_pixels_are_the_film_filters_means(tmp_path):

@@ -26,6 +26,8 @@ import pytest
 from fog_scenes import render_harness as h
 from fog_addon import imageio
 
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
+
 TOLERANCE = 1e-5   # of the picture's peak: float rounding (the cropped floats pass through colour sockets)
 
 

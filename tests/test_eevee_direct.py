@@ -5,7 +5,11 @@ one average of the lights' e^(-beta D_sp) (``shading.shade_point``'s weight).
 Against the Cycles path-traced reference (cast shadows and interreflection
 off), as the other render tests.
 """
+import pytest
+
 from fog_scenes import render_harness as h
+
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
 
 SCENE, DENSITY = "glossy_lamps", 0.08
 SAMPLES = 4096   # the reference's own noise: see the README

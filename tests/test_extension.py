@@ -19,6 +19,8 @@ import pytest
 
 from conftest import ROOT
 
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
+
 SRC = ROOT                  # the extension's source directory: blender_manifest.toml, __init__.py
 ADDON = ROOT / "fog_addon"  # the add-on package the root __init__.py hands on
 SCRIPT = ROOT / "tests" / "scenes" / "extension_install.py"

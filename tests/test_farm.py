@@ -37,6 +37,8 @@ import pytest
 from conftest import FAILURES, ROOT
 from fog_addon import compare, imageio
 
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
+
 SCENES = ROOT / "tests" / "scenes"
 BUILD = SCENES / "farm_build.py"
 RENDER = SCENES / "farm_render.py"

@@ -155,6 +155,7 @@ def picture_problems(res):
     return problems
 
 
+@pytest.mark.render
 @pytest.mark.parametrize("n,method", _params())
 def test_many_lights(tmp_path, n, method):
     slow = MEASURED.get((n, method), (None,))[0] == "slow"
@@ -187,6 +188,7 @@ def test_log_scan_catches_known_errors():
     assert h.log_errors("\n".join(good)) == []
 
 
+@pytest.mark.render
 def test_closure_sum_renders_every_closure(tmp_path):
     """The fog's per-light closure sum (``groups._closure_sum``, surfaces' Emission and the World's
     Background) renders whole in SVM and OSL, for 1 to 256 closures, in a few seconds.
@@ -213,6 +215,7 @@ def switched():
     return json.loads(line.split(" ", 1)[1])
 
 
+@pytest.mark.render
 def test_switching_to_eevee_rechooses_within_its_budget(switched):
     """25 lights fit Cycles fully modelled but not EEVEE's uniform block (16 do since 709fad8): switching the
     engine makes the add-on's handler choose again (EEVEE: within the block, saying it is limited), and back."""
@@ -224,6 +227,7 @@ def test_switching_to_eevee_rechooses_within_its_budget(switched):
     assert res["cycles_again"]["steps"] == res["cycles"]["steps"], res
 
 
+@pytest.mark.render
 def test_many_lights_in_cycles_node_groups_are_told_of_the_compositor(switched):
     """With MANY_LIGHTS or more lights in Cycles, the node groups' report says what each material holds (about
     248 nodes a fully modelled light, ``groups.material_nodes``) and points to the Compositor method, whose

@@ -16,6 +16,8 @@ import pytest
 from fog_scenes import render_harness as h
 from conftest import ROOT
 
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
+
 SCRIPT = ROOT / "tests" / "scenes" / "material_kinds.py"
 
 FOGGED = ["Backdrop", "Diffuse", "Edit Resync", "Emission", "Group Principled", "Holdout Mix", "Mix Transparent",

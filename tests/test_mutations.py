@@ -53,12 +53,14 @@ def _check_killed(chosen):
 
 
 @pytest.mark.mutation
+@pytest.mark.render
 def test_quick_mutations_are_killed():
     """The default tier's subset (``mutations.QUICK``) is killed."""
     _check_killed(mutations.quick())
 
 
 @pytest.mark.mutation
+@pytest.mark.render
 @pytest.mark.slow
 def test_other_mutations_are_killed():
     """Every mutation not in ``mutations.QUICK`` is killed (with the quick ones: all of them)."""

@@ -7,6 +7,8 @@ import pytest
 
 from conftest import ROOT
 
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
+
 
 def _probe(tmp_path, engine, method="nodes"):
     r = subprocess.run([sys.executable, str(ROOT / "tests" / "scenes" / "airlight_probe.py"), str(tmp_path), engine,

@@ -3,7 +3,11 @@ import json
 import subprocess
 import sys
 
+import pytest
+
 from conftest import ROOT
+
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
 
 
 def test_add_twice_remove_restores(tmp_path):

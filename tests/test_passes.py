@@ -33,6 +33,8 @@ from conftest import ROOT
 from fog_addon import imageio
 from fog_addon.precompute import airlight
 
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
+
 SCENES = ROOT / "tests" / "scenes"
 PROBE = SCENES / "passes_probe.py"
 FARM_RENDER = SCENES / "farm_render.py"

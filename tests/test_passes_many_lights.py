@@ -27,6 +27,8 @@ from fog_addon import imageio
 from fog_scenes import cycles_debug_log
 from fog_scenes import render_harness as h
 
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
+
 SCRIPT = h.ROOT / "tests" / "scenes" / "passes_many_lights.py"
 LIGHTS = 24          # the World ran out of SVM stack at 17
 FEW = 4              # peaks stop growing from 4 lights on (measured: 31-33 / 112-115 / 99-102 at 2-64)

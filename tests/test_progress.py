@@ -4,6 +4,8 @@ import json
 import subprocess
 import sys
 
+import pytest
+
 from conftest import ROOT
 from fog_addon.ops import progress
 
@@ -27,6 +29,7 @@ print(json.dumps({"add": calls, "remove": removed}))
 """
 
 
+@pytest.mark.render
 def test_apply_and_remove_report_every_stage_and_material():
     r = subprocess.run([sys.executable, "-c", _SCENE, str(ROOT)], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr[-3000:]

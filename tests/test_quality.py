@@ -23,6 +23,8 @@ from conftest import ROOT
 from fog_addon import imageio
 from fog_addon.precompute import predict
 
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
+
 SCRIPT = ROOT / "tests" / "scenes" / "quality_probe.py"
 CASES = [("street_lamps", "draft"), ("boulevard", "final"), ("random:0", "draft"), ("random:1", "draft"),
          ("random:2", "draft"), ("random:4", "final"), ("randomspot:3", "draft"), ("randomspot:5", "final"),

@@ -15,6 +15,8 @@ from scipy import integrate, special
 from fog_scenes import render_harness as rh
 from fog_addon import compare, imageio
 
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
+
 # Builds a probe scene, makes it the reference, renders it, and dumps the camera.
 # argv: out.exr out.json mode density samples W H
 PROBE = r'''

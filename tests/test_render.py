@@ -14,6 +14,8 @@ import pytest
 
 from fog_scenes import render_harness as h
 
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
+
 THICK = [("street_lamps", 0.08), ("spheres", 0.15)]
 THIN = [("street_lamps", 0.03), ("spheres", 0.05)]
 

@@ -10,6 +10,8 @@ from conftest import ROOT
 from fog_addon.nodes import groups, osl
 from fog_addon.precompute import rungs
 
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
+
 SCENES = ROOT / "tests" / "scenes"
 A_DENSITY = 0.05           # shared_append.py: scene A's fog; B's is 0.3
 SURFACE = groups.SURFACE

@@ -3,7 +3,11 @@ World volume extinguishes it, kept when the artist asks (``apply_fog(world_light
 World Light, ``render --world-light on``)."""
 import json
 
+import pytest
+
 from fog_scenes import render_harness as h
+
+pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
 
 
 def test_world_light_is_extinguished_unless_kept(tmp_path):
