@@ -20,7 +20,7 @@ error, never as a kill.
 ``--baseline`` first runs every killer on an unmutated copy: they must pass,
 or a kill proves nothing (no mutation runs then).  ``--list`` prints the
 mutations, ``--markdown`` the README's table (one source for both;
-``--update-readme`` writes it between the README's markers, and
+``--update-readme`` writes it between the markers in docs/testing.md, and
 tests/test_mutations.py checks they agree), ``--json`` the results (with
 pytest's one-line reason for each kill).  Exit code 0 when every mutation
 was killed (and the baseline passed).
@@ -337,7 +337,7 @@ def markdown(mutations):
     return "\n".join(rows)
 
 
-README = ROOT / "README.md"
+README = ROOT / "docs" / "testing.md"   # where the table lives
 BEGIN, END = "<!-- tools/mutations.py --markdown: begin -->", "<!-- tools/mutations.py --markdown: end -->"
 
 
@@ -373,7 +373,7 @@ def main(argv=None):
     ap.add_argument("names", nargs="*", help="run only these mutations")
     ap.add_argument("--list", action="store_true", help="print the mutations and their killers")
     ap.add_argument("--markdown", action="store_true", help="print the README table")
-    ap.add_argument("--update-readme", action="store_true", help="write that table into README.md")
+    ap.add_argument("--update-readme", action="store_true", help="write that table into docs/testing.md")
     ap.add_argument("--json", action="store_true", help="print the results as JSON")
     ap.add_argument("--baseline", action="store_true", help="first check every killer passes unmutated")
     ap.add_argument("--keep", action="store_true", help="keep the scratch copies")
@@ -398,7 +398,7 @@ def main(argv=None):
         print(markdown(chosen))
         return 0
     if args.update_readme:
-        print("README.md " + ("updated" if update_readme(MUTATIONS) else "already up to date"))
+        print(f"{README.relative_to(ROOT)} " + ("updated" if update_readme(MUTATIONS) else "already up to date"))
         return 0
     try:
         results, base = run_all(chosen, args.keep, args.baseline, args.rev,
