@@ -61,8 +61,14 @@ SURFACE_SHARED = (("Beta", F), ("Camera", V), ("Position", V), ("Incoming", V), 
 SURFACE_IMAGES = tuple(name for name, _ in SURFACE_SHARED[2:])   # per pixel: cropped to the surfaces' window
 SURFACE = "Surface "   # a bundle's inputs of SURFACE_IMAGES: "Surface Position", ...
 SHARED = GLOW_SHARED + tuple((SURFACE + name, kind) for name, kind in SURFACE_SHARED[2:])   # a bundle's inputs
-GLOW_TERMS = (("Airlight", V), ("Background", V))
-TERMS = (("Airlight", V), ("Scattered", V), ("Background", V))
+# the quantities the compositor sums per pixel (``rungs.COMPOSITOR_OUTPUTS``, by their compositor sockets): a light's
+# glows (rungs.GLOW) in its glow group, over the picture or the light's window; the light its surface reflects
+# (the rest) in its scatter group, over the surfaces' window
+GLOW_OUTPUTS = tuple(o for o in rungs.COMPOSITOR_OUTPUTS if o.kind == rungs.GLOW)
+SCATTER_OUTPUTS = tuple(o for o in rungs.COMPOSITOR_OUTPUTS if o.kind != rungs.GLOW)
+GLOW_TERMS = tuple((o.compositor, V) for o in GLOW_OUTPUTS)            # Airlight, Background
+SCATTER_TERMS = tuple((o.compositor, V) for o in SCATTER_OUTPUTS)      # Scattered
+TERMS = tuple((o.compositor, V) for o in rungs.COMPOSITOR_OUTPUTS)     # a bundle's: Airlight, Scattered, Background
 WINDOW = "Fog Window"   # ID properties (u0, u1, v0, v1) of the windows (``footprint.py``): a bundle's "<WINDOW> <k>"
 #                         for its k-th light's glow, the fog group's "<WINDOW> Surface" for the fog light on surfaces
 
@@ -167,18 +173,18 @@ def build_glow_group(models, images, peak):
     if (ng := groups._up_to_date(name)) is not None:
         return ng
     ng, m, g, gout, light = _light_group(name, GLOW_SHARED, GLOW_TERMS, models, images)
-    air_unit, back_unit = shading.glow_pair(m, g["Camera"], g["Direction"], g["View Distance"], light,
-                                            groups._medium(m, g["Beta"]), models)
-    air, back = m.scale(light.intensity, air_unit), m.scale(light.intensity, back_unit)
+    glows = shading.light_glows(m, g["Camera"], g["Direction"], g["View Distance"], light,
+                                groups._medium(m, g["Beta"]), models)
     if peak is not None:   # the sky's rays pass every light before the end of the world: its factor is 1 + excess
         to_light = g["Light"] - g["Camera"]
         seen_at = pixel.picture_position(m, to_light, g["Corner"], g["Across"], g["Up"], g["Size"])
         excess = pixel.peak_excess(m, g["Pixel"], seen_at, peak)
         along = m.dot(to_light, -1.0 * g["Incoming"])
-        air = m.scale(air, pixel.peak_factor(m, excess, along, g["View Distance"]))
-        back = m.scale(back, 1.0 + excess)
-    m.feed(gout.inputs["Airlight"], air)
-    m.feed(gout.inputs["Background"], back)
+        factors = {rungs.SURFACE_POINT: pixel.peak_factor(m, excess, along, g["View Distance"]),
+                   rungs.SKY: 1.0 + excess}
+        glows = {o: m.scale(v, factors[o.at]) for o, v in glows.items()}
+    for o in GLOW_OUTPUTS:
+        m.feed(gout.inputs[o.compositor], glows[o])
     ng[owned.BUILT] = groups.code_fingerprint()
     return groups._install(ng, name)
 
@@ -190,11 +196,12 @@ def build_scatter_group(models, images):
     name = scatter_group_name(models)
     if (ng := groups._up_to_date(name)) is not None:
         return ng
-    ng, m, g, gout, light = _light_group(name, SURFACE_SHARED, (("Scattered", V),), models, images)
+    ng, m, g, gout, light = _light_group(name, SURFACE_SHARED, SCATTER_TERMS, models, images)
     geo = shading.Geometry(g["Camera"], g["Position"], g["Incoming"], m.wrap(0.0), g["Normal"])
     material = shading.Material(g["Diffuse"], g["Specular"], g["Level"])
     terms = shading.shade_point(m, geo, material, light, groups._medium(m, g["Beta"]), models, air=m.wrap(0.0))
-    m.feed(gout.inputs["Scattered"], m.wrap(terms.scattered))
+    for o in SCATTER_OUTPUTS:
+        m.feed(gout.inputs[o.compositor], m.wrap(getattr(terms, o.field)))
     ng[owned.BUILT] = groups.code_fingerprint()
     return groups._install(ng, name)
 
@@ -350,7 +357,9 @@ def build_bundle(scene, first, lights, models, images, peak, windows):
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
     # what a glow group reads per pixel: cropped to its light's window
     per_pixel = ("Direction", "View Distance") + (("Incoming", "Pixel") if peak is not None else ())
-    air, back, scat = _zero(m, g["Direction"]), _zero(m, g["Direction"]), _zero(m, g[SURFACE + "Position"])
+    # each sum starts black over its domain: the picture for the glows, the surfaces' window for the rest
+    sums = {o: _zero(m, g["Direction"] if o in GLOW_OUTPUTS else g[SURFACE + "Position"])
+            for o in rungs.COMPOSITOR_OUTPUTS}
     for k, (light, mod) in enumerate(zip(lights, models), start=first):
         position = _location(m, f"Light {k} Location", light, col=4)
         intensity = m.node("ShaderNodeCombineXYZ", 4)
@@ -362,10 +371,9 @@ def build_bundle(scene, first, lights, models, images, peak, windows):
             win = None if windows is None or windows[k - first] is None else _window(m, scene, k, windows[k - first])
             for socket, _ in GLOW_SHARED:
                 m.feed(glow.inputs[socket], _crop(m, g[socket], win) if win and socket in per_pixel else g[socket])
-            terms = [m.wrap(glow.outputs[term], vector=True) for term, _ in GLOW_TERMS]
-            if win is not None:
-                terms = [_uncrop(m, v, win) for v in terms]
-            air, back = _accumulate(m, air, terms[0]), _accumulate(m, back, terms[1])
+            for o in GLOW_OUTPUTS:
+                v = m.wrap(glow.outputs[o.compositor], vector=True)
+                sums[o] = _accumulate(m, sums[o], v if win is None else _uncrop(m, v, win))
             built.append(glow)
         if mod.scatter is not rungs.SCATTER_OFF:
             scatter = m.node("CompositorNodeGroup", 6)
@@ -373,7 +381,8 @@ def build_bundle(scene, first, lights, models, images, peak, windows):
             scatter.label = f"Light {k} Scatter: {light.name}"
             for socket, _ in SURFACE_SHARED:
                 m.feed(scatter.inputs[socket], g[socket if socket not in SURFACE_IMAGES else SURFACE + socket])
-            scat = _accumulate(m, scat, m.wrap(scatter.outputs["Scattered"], vector=True))
+            for o in SCATTER_OUTPUTS:
+                sums[o] = _accumulate(m, sums[o], m.wrap(scatter.outputs[o.compositor], vector=True))
             built.append(scatter)
         for node in built:
             m.feed(node.inputs["Light"], position)
@@ -383,8 +392,8 @@ def build_bundle(scene, first, lights, models, images, peak, windows):
             for node in built[1:]:
                 for socket, _ in groups._spot_inputs(mod):
                     ng.links.new(built[0].inputs[socket].links[0].from_socket, node.inputs[socket])
-    for term, v in (("Airlight", air), ("Scattered", scat), ("Background", back)):
-        m.feed(gout.inputs[term], v)
+    for o, v in sums.items():
+        m.feed(gout.inputs[o.compositor], v)
     return groups._install(ng, name)
 
 
@@ -501,7 +510,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False):
     if win is not None:   # the fog light on surfaces: only where the picture has surfaces
         surface_in = {k: _crop(m, v, win) for k, v in surface_in.items()}
     shared.update({SURFACE + k: v for k, v in surface_in.items()})
-    air = scat = back = None
+    sums = {}   # Output -> the sum over the bundles
     for first in range(0, len(lights), BUNDLE_SIZE):
         node = m.node("CompositorNodeGroup", 5)
         node.node_tree = build_bundle(scene, first, lights[first:first + BUNDLE_SIZE],
@@ -509,15 +518,16 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False):
                                       None if windows is None else windows[1][first:first + BUNDLE_SIZE])
         for name, v in shared.items():
             m.feed(node.inputs[name], v)
-        terms = [m.wrap(node.outputs[name], vector=True) for name, _ in TERMS]
-        air, scat, back = terms if air is None else (_accumulate(m, t, u) for t, u in zip((air, scat, back), terms))
-    if scat is not None and win is not None:
-        scat = _accumulate(m, _zero(m, direction), _uncrop(m, scat, win))
-    if air is None:
+        for o in rungs.COMPOSITOR_OUTPUTS:
+            v = m.wrap(node.outputs[o.compositor], vector=True)
+            sums[o] = v if o not in sums else _accumulate(m, sums[o], v)
+    if win is not None:   # the sums over the surfaces' window back in place, on the picture's domain
+        sums.update({o: _accumulate(m, _zero(m, direction), _uncrop(m, sums[o], win))
+                     for o in SCATTER_OUTPUTS if o in sums})
+    if not sums:
         fog = m.wrap((0.0, 0.0, 0.0))
-    else:
-        t_vp = model.transmittance(m, beta, d_vp)
-        fog = albedo * (m.scale(air + m.scale(scat, t_vp), cover) + m.scale(back, 1.0 - cover))
+    else:   # Eq. 19 where the pixel sees its surface, Eq. 12 where it sees the sky
+        fog = albedo * shading.pixel_light(m, sums, model.transmittance(m, beta, d_vp), cover)
     m.feed(gout.inputs["Fog Light"], fog)
     m.feed(gout.inputs["Image"], fog + p["Image"])
     ng[PARTIAL] = partial

@@ -291,9 +291,15 @@ def _spot_inputs(models):
     return [(n, V) for n in SPOT_ROWS] + [(SPOT_COS, F), (SPOT_BLEND, F)] if rungs.is_spot(models) else []
 
 
-def _seen_output(rung):
-    """A spot glow's gate output ("Seen": 1 if the ray meets the cone, ``shading.LightTerms.seen``)."""
-    return [("Seen", F)] if rung.spot else []
+def _outputs(outputs, models):
+    """A light group's outputs (name, socket type) for ``models``: the quantities ``outputs`` of
+    ``rungs.OUTPUTS`` a light with these models has (``rungs.Output.present``)."""
+    return [(o.name, C if o.colour else F) for o in outputs if o.present(models)]
+
+
+def _read(m, node, outputs, kind):
+    """``kind`` (shading.LightTerms or SkyTerms) from the outputs of a light group's instance ``node``."""
+    return kind(**{o.field: m.wrap(node.outputs[o.name], vector=o.colour) for o in outputs if o.name in node.outputs})
 
 
 def _light(g, models):
@@ -310,8 +316,7 @@ def build_light(models, images):
     ng, gin, gout = _new_group(name, [
         ("Beta", F), ("Light", V), ("Intensity", C), ("Position", V), ("Incoming", V),
         ("View Distance", F), ("Normal", V), ("Diffuse", C), ("Specular", C), ("Glossy Level", F),
-        *_spot_inputs(models)], [("Airlight", C), ("Scattered", C), ("Attenuation", F), ("Weight", F),
-                                 *_seen_output(models.airlight)])
+        *_spot_inputs(models)], _outputs(rungs.SURFACE_OUTPUTS, models))
     m = NodeOps(ng, images)
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
     pos, incoming, d_vp = g["Position"], g["Incoming"], g["View Distance"]
@@ -319,9 +324,9 @@ def build_light(models, images):
     material = shading.Material(g["Diffuse"], g["Specular"], g["Glossy Level"])
     light = _light(g, models)
     terms = shading.shade_point(m, geo, material, light, _medium(m, g["Beta"]), models)
-    for key, v in terms._asdict().items():
-        if v is not None:
-            m.feed(gout.inputs[key.title()], m.wrap(v))
+    for o in rungs.SURFACE_OUTPUTS:
+        if o.present(models):
+            m.feed(gout.inputs[o.name], m.wrap(getattr(terms, o.field)))
     ng[owned.BUILT] = code_fingerprint()
     return _install(ng, name)
 
@@ -333,14 +338,14 @@ def build_background_light(models, images):
         return ng
     ng, gin, gout = _new_group(name, [
         ("Beta", F), ("Light", V), ("Intensity", C), ("Camera", V), ("Direction", V), *_spot_inputs(models),
-    ], [("Airlight", C), *_seen_output(models.background)])
+    ], _outputs(rungs.SKY_OUTPUTS, models))
     m = NodeOps(ng, images)
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
     light = _light(g, models)
-    air = shading.background_point(m, g["Camera"], g["Direction"], light, _medium(m, g["Beta"]), models)
-    m.feed(gout.inputs["Airlight"], air)
-    if models.background.spot:
-        m.feed(gout.inputs["Seen"], m.wrap(shading.background_seen(m, g["Camera"], g["Direction"], light, models)))
+    terms = shading.sky_terms(m, g["Camera"], g["Direction"], light, _medium(m, g["Beta"]), models)
+    for o in rungs.SKY_OUTPUTS:
+        if o.present(models):
+            m.feed(gout.inputs[o.name], m.wrap(getattr(terms, o.field)))
     ng[owned.BUILT] = code_fingerprint()
     return _install(ng, name)
 
@@ -522,9 +527,7 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained):
     for k, (light, mod) in enumerate(zip(lights, models)):
         node = _light_instance(ng, first + k, light, build_light(mod, images).name,
                                [(g[n], n) for n, _ in _SURFACE_SHARED])
-        terms.append(shading.LightTerms(*(m.wrap(node.outputs[f], vector=node.outputs[f].type != "VALUE")
-                                          for f in ("Airlight", "Scattered", "Attenuation", "Weight")),
-                                        seen=m.wrap(node.outputs["Seen"]) if "Seen" in node.outputs else None))
+        terms.append(_read(m, node, rungs.SURFACE_OUTPUTS, shading.LightTerms))
     sums = shading.sum_lights(m, terms, _medium(m, g["Beta"], g["Albedo"]), m.wrap(g["View Transmittance"]),
                               m.wrap(g["Is Camera"]))
     opacity = m.wrap(g[passes.OPACITY], vector=True)
@@ -772,10 +775,11 @@ def build_world_bundle(images, first, lights, models, with_passes, chained):
         node = _light_instance(ng, first + k, light, build_background_light(mod, images).name,
                                [(g[n], n) for n in ("Beta", "Camera", "Direction")])
         nodes.append(node)
-        airlights.append(m.wrap(node.outputs["Airlight"], vector=True))
+        sky = _read(m, node, rungs.SKY_OUTPUTS, shading.SkyTerms)
+        airlights.append(sky.background)
         colour = m.wrap(shading.shade_background(m, [airlights[-1]], medium, is_camera)[0], vector=True)
-        gated = "Seen" in node.outputs and not with_passes
-        colours.append(shading.Gated(m.wrap(node.outputs["Seen"]), colour, None) if gated else colour)
+        gated = sky.seen is not None and not with_passes
+        colours.append(shading.Gated(sky.seen, colour, None) if gated else colour)
     _closure_sum(m, gout.inputs["Fog"], "ShaderNodeBackground", colours)   # see build_surface for why closures
     m.feed(gout.inputs["Airlight"], shading.total(airlights))
     if with_passes:
@@ -857,6 +861,6 @@ def _world_pass_instances(m, ng, nodes, direction, total):
                                                                  else None)
             if src is not None:
                 ng.links.new(src, twin.inputs[sock.name])
-        airlight = m.wrap(twin.outputs["Airlight"], vector=True)
+        airlight = m.wrap(twin.outputs[rungs.BACKGROUND_OUT.name], vector=True)
         total = airlight if total is None else total + airlight
     return total
