@@ -365,7 +365,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows):
         intensity = m.node("ShaderNodeCombineXYZ", 4)
         groups._drive_intensity(intensity, light.data)
         built = []   # a term the light's step leaves out (rungs.STEPS) gets no group at all
-        if mod.airlight is not rungs.AIRLIGHT_OFF:
+        if any(o.computed(mod) for o in GLOW_OUTPUTS):
             glow = m.node("CompositorNodeGroup", 6)
             glow.node_tree, glow.label = build_glow_group(mod, images, peak), f"Light {k}: {light.name}"
             win = None if windows is None or windows[k - first] is None else _window(m, scene, k, windows[k - first])
@@ -375,7 +375,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows):
                 v = m.wrap(glow.outputs[o.compositor], vector=True)
                 sums[o] = _accumulate(m, sums[o], v if win is None else _uncrop(m, v, win))
             built.append(glow)
-        if mod.scatter is not rungs.SCATTER_OFF:
+        if any(o.computed(mod) for o in SCATTER_OUTPUTS):
             scatter = m.node("CompositorNodeGroup", 6)
             scatter.node_tree = build_scatter_group(mod, images)
             scatter.label = f"Light {k} Scatter: {light.name}"

@@ -681,7 +681,7 @@ def _chained_closure_sum(m, sock, total=None):
 
 def _lit(models):
     """False for a light whose every fog term is off (``rungs.STEPS`` "off"): it adds no fog light."""
-    return models.airlight is not rungs.AIRLIGHT_OFF or models.scatter is not rungs.SCATTER_OFF
+    return any(o.computed(models) for o in rungs.SURFACE_OUTPUTS if o.colour)
 
 
 def _times(m, emission, factor, flat):
@@ -811,7 +811,8 @@ def build_world(lights, models, camera, images, with_passes=False):
               "Direction": direction.sock, "Is Camera": path.outputs["Is Camera Ray"]}
     if with_passes:   # the pass's direction, given another way (``_world_pass_instances``)
         shared["Pass Direction"] = m.vmath("NORMALIZE", m.vmath("SCALE", m.wrap(geo.outputs["Incoming"]), -1.0)).sock
-    kept = [(light, mod) for light, mod in zip(lights, models) if mod.background is not rungs.BACKGROUND_OFF]
+    kept = [(light, mod) for light, mod in zip(lights, models)
+            if any(o.computed(mod) for o in rungs.SKY_OUTPUTS if o.colour)]
     placed, bundles, running = _place_bundles(
         ng, [light for light, _ in kept], [mod for _, mod in kept],
         functools.partial(build_world_bundle, images), shared, with_passes)

@@ -123,7 +123,7 @@ def light_fog(samples, intensity, beta, g=0.0):
             values = shading.light_glows(m, view.camera, view.direction, view.geometry.view_distance, light,
                                          Medium(beta), models)
             terms = shading.shade_point(m, view.geometry, view.material, light, Medium(beta), models, air=0.0)
-        values[rungs.SCATTERED_OUT] = terms.scattered
+        values.update({o: getattr(terms, o.field) for o in rungs.SURFACE_OUTPUTS if o.kind == rungs.REFLECTED})
         glow[:, k], scatter[:, k] = _pixel_parts(m, values, beta, view)
     return glow, scatter
 

@@ -113,6 +113,14 @@ BACKGROUND_OFF = Rung("background off", "background", no_background, frozenset(B
                       AIRLIGHT_OFF.evidence)
 SCATTER_OFF = Rung("scatter off", "scatter", no_scatter, frozenset(BACKENDS), (), _OFF, 1.0, AIRLIGHT_OFF.evidence)
 
+OFF_RUNGS = (AIRLIGHT_OFF, BACKGROUND_OFF, SCATTER_OFF)
+
+
+def is_off(rung):
+    """True for a rung that leaves its term out (OFF_RUNGS: the ladder's bottom)."""
+    return any(rung is r for r in OFF_RUNGS)
+
+
 RUNGS = (AIRLIGHT_TABLE, BACKGROUND_TABLE, AIRLIGHT_QUADRATURE, BACKGROUND_QUADRATURE, SCATTER_TABLE, DIRECT_EXACT,
          DIRECT_SPOT, AIRLIGHT_OFF, BACKGROUND_OFF, SCATTER_OFF)
 
@@ -162,6 +170,10 @@ class Output(NamedTuple):
     def colour(self):
         """True for an RGB quantity (a colour socket), False for a grey one."""
         return self.kind in (GLOW, REFLECTED)
+
+    def computed(self, models):
+        """True if a light with ``models`` (LightModels) computes this quantity: its term's rung is not off."""
+        return not is_off(getattr(models, self.term))
 
     def present(self, models):
         """True if a light with ``models`` (LightModels) has this quantity: a gate only where its term's rung is
