@@ -174,3 +174,23 @@ def test_parallel_writers_leave_a_readable_entry(cache):
     counting = Counting(spec, bake)
     assert _same(bakers.cached_bake(spec, counting), bake()) and counting.calls == 0
     assert [p.name for p in path.parent.iterdir()] == [path.name]   # no temporary file left
+
+
+def test_numpy_helpers_read_the_cache(cache, monkeypatch):
+    """``surface.specular_table`` (the view's albedos at Add) and ``surface.surface_table`` bake through the
+    cache too: a second process reads what the first baked."""
+    from fog_addon.precompute import surface
+    spec = tables.SPECULAR_ALBEDO
+    monkeypatch.setattr(surface, "_TABLE_CACHE", {})
+    first = surface.specular_table()
+    assert bakers.cache_path(spec).is_file()
+    monkeypatch.setattr(surface, "_TABLE_CACHE", {})
+
+    def baked_again(*args):
+        pytest.fail("baked again")
+    baked_again.__module__ = surface.__name__   # a baker of precompute/, so cached
+    monkeypatch.setattr(surface, "bake_specular_albedo", baked_again)
+    assert _same(surface.specular_table(), first)
+    monkeypatch.setattr(surface, "_TABLE_CACHE", {})
+    surface.surface_table()
+    assert bakers.cache_path(tables.SURFACE).is_file()

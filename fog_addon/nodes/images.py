@@ -19,7 +19,8 @@ def table_image(spec, bake):
 
     A one-channel table's values go to all four channels; the node tree reads Alpha, an exact float
     output (CHANNEL_PACKED keeps it independent of RGB).  A table of ``spec.channels`` = 4 fills RGBA.
-    ``use_half_precision`` is off or EEVEE would upload half floats.
+    ``use_half_precision`` is off or EEVEE would upload half floats.  ``bake``: a baker of ``precompute/``
+    (read from the table cache if there: ``bakers.cached_bake``) or a callable returning the array.
     """
     version = table_version(spec)
     img = bpy.data.images.get(spec.name)
@@ -44,8 +45,11 @@ def table_image(spec, bake):
 
 
 def all_table_images(g=0.0):
-    """{TableSpec.name: image} for every table the node groups use with Henyey-Greenstein anisotropy g."""
-    return {name: table_image(spec, bake) for name, (spec, bake) in bakers.bakers(g).items()}
+    """{TableSpec.name: image} for every table the node groups use with Henyey-Greenstein anisotropy g.  A
+    missing or stale image takes its array from ``bakers.numpy_tables`` (the table cache, and the arrays this
+    process already holds for the predictor)."""
+    return {name: table_image(spec, lambda name=name: bakers.numpy_tables(float(g))[name])
+            for name, (spec, _) in bakers.bakers(g).items()}
 
 
 def table_names():

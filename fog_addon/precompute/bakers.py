@@ -41,7 +41,7 @@ def bakers(g=0.0):
     response and the specular albedo are the same for every g)."""
     air, surf = tables.anisotropic(tables.AIRLIGHT, g), tables.anisotropic(tables.SURFACE, g)
     out = {air.name: (air, lambda: airlight.bake_airlight_table(air)),
-           surf.name: (surf, lambda: surface.surface_table(g)),   # cached per process
+           surf.name: (surf, lambda: surface.bake_surface_table(surf)),
            tables.LOBE_RESPONSE.name: (tables.LOBE_RESPONSE, spot.bake_lobe_response),
            tables.SPECULAR_ALBEDO.name: (tables.SPECULAR_ALBEDO, surface.bake_specular_albedo)}
     spot_spec = tables.anisotropic(tables.SPOT_MOMENTS, g)

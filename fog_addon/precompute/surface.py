@@ -393,10 +393,11 @@ _TABLE_CACHE = {}
 
 
 def surface_table(g=0.0):
-    """The baked table for anisotropy g (cached per process)."""
+    """The baked table for anisotropy g (cached per process, and on disk: ``bakers.cached_bake``)."""
     spec = tables.anisotropic(tables.SURFACE, g)
     if spec.name not in _TABLE_CACHE:
-        _TABLE_CACHE[spec.name] = bake_surface_table(spec)
+        from . import bakers   # (not at the top: bakers imports this module)
+        _TABLE_CACHE[spec.name] = bakers.cached_bake(spec, lambda: bake_surface_table(spec))
     return _TABLE_CACHE[spec.name]
 
 
@@ -446,7 +447,8 @@ def principled_albedos(base_color, metallic=0.0, roughness=0.5, specular_ior_lev
 
 
 def specular_table():
-    """The specular albedo table (cached per process)."""
+    """The specular albedo table (cached per process, and on disk: ``bakers.cached_bake``)."""
     if tables.SPECULAR_ALBEDO.name not in _TABLE_CACHE:
-        _TABLE_CACHE[tables.SPECULAR_ALBEDO.name] = bake_specular_albedo()
+        from . import bakers   # (not at the top: bakers imports this module)
+        _TABLE_CACHE[tables.SPECULAR_ALBEDO.name] = bakers.cached_bake(tables.SPECULAR_ALBEDO, bake_specular_albedo)
     return _TABLE_CACHE[tables.SPECULAR_ALBEDO.name]
