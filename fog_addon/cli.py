@@ -1,6 +1,6 @@
 """Command line: ``python -m fog_addon render|reference|compare ...``.
 
-    render SCENE.blend --engine cycles|eevee [--method nodes|osl|compositor] [--preset NAME | --density BETA]
+    render SCENE.blend --engine cycles|eevee [--method auto|nodes|osl|compositor] [--preset NAME | --density BETA]
            [--color R,G,B] [--scene-scale S] [--anisotropy G] [--error E|draft|final|exact] [--explain]
            [--samples N] [--resolution WxH] --out OUT.png|OUT.exr
     reference SCENE.blend [--preset NAME | --density BETA] [--anisotropy G] [--samples N]
@@ -133,9 +133,11 @@ def build_parser():
     from_file = " (default: the file's setting)"
     r.add_argument("--passes", action="store_const", const=True, default=None,
                    help="write the Fog Light and Fog Transmittance passes (default: the file's setting)")
-    r.add_argument("--method", choices=["nodes", "osl", "compositor"], default=None,
-                   help="node groups (Cycles, EEVEE), OSL (Cycles) or compositor (the fog's light once per pixel "
-                        "in the compositor, Cycles and EEVEE) (default: the file's Method)")
+    r.add_argument("--method", choices=["auto", "nodes", "osl", "compositor"], default=None,
+                   help="auto (node groups or compositor, whichever the scene is predicted to render faster with, "
+                        "unless it needs one: --explain says which and why), node groups (Cycles, EEVEE), OSL "
+                        "(Cycles) or compositor (the fog's light once per pixel in the compositor, Cycles and "
+                        "EEVEE) (default: the file's Method, Auto in a new scene)")
     _add_fog_flags(r, from_file)
     r.add_argument("--color", type=_color, metavar="R,G,B",
                    help="the fog's colour (single-scattering albedo), each in [0, 1]" + from_file)

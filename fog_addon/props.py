@@ -1,53 +1,80 @@
 """The fog's settings: ``scene.analytic_fog`` and each light's ``light.analytic_fog``.
 
-Changing a setting while the fog is on updates the shared node groups at
-once (the viewport follows); materials are never rebuilt for it.
+These properties are the one store of the fog's settings: ``apply.spec_of`` reads them as a validated
+``precompute.spec.FogSpec``, and everything that decides reads that.  Changing a setting while the fog is on
+schedules a sync (``schedule_sync``): the shared node groups follow (the viewport too); materials are never
+rebuilt for it.  A sync that fails keeps the fog as it was, and the panel says why.
 """
+import contextlib
+
 import bpy
 
 from .precompute import predict, presets, tables
 
 
+_quiet = []   # non-empty while the add-on itself writes the settings (``quiet``): no sync for those writes
+_pending = {}   # scene name -> the sync level (``apply.SYNC_LEVELS``) waiting for the timer
+
+
+@contextlib.contextmanager
+def quiet():
+    """Write settings without scheduling a sync (``apply.store_spec``: the fog is being built from them)."""
+    _quiet.append(True)
+    try:
+        yield
+    finally:
+        _quiet.pop()
+
+
+def schedule_sync(scene, level):
+    """A setting changed: the fog follows it (``apply.sync``) once the change is done.
+
+    With a user interface, a timer runs the sync after the callback returns (several changes at once, such
+    as a preset's, sync once, at the highest level asked for); a background process (scripts, the command
+    line, farms) has no event loop to run timers, so it syncs at once.  A failed sync keeps the fog as it
+    was built, and the panel says why (``apply.sync_error``)."""
+    if _quiet or not scene.analytic_fog.enabled:
+        return
+    from .ops import apply
+    if bpy.app.background:
+        apply.sync(scene, level)
+        return
+    levels = apply.SYNC_LEVELS
+    old = _pending.get(scene.name)
+    _pending[scene.name] = level if old is None or levels.index(level) > levels.index(old) else old
+    if not bpy.app.timers.is_registered(_run_pending):
+        bpy.app.timers.register(_run_pending, first_interval=0.0)
+
+
+def _run_pending():
+    from .ops import apply
+    pending = dict(_pending)
+    _pending.clear()
+    for name, level in pending.items():
+        scene = bpy.data.scenes.get(name)
+        if scene is not None and scene.analytic_fog.enabled:
+            apply.sync(scene, level)
+    return None
+
+
 def _push(self, context):
-    """A density, colour or scale change: rewrite the shared params group (if the fog is on)."""
-    from .ops import apply
-    if self.enabled:
-        apply.update_params(context.scene)
+    """A density, colour, scale or World Light change: the shared params group follows."""
+    schedule_sync(context.scene, "params")
 
 
-def _method_changed(self, context):
-    from .ops import apply
-    if self.enabled:
-        try:
-            apply.set_method(context.scene, self.method.lower())
-        except ValueError as e:
-            print(f"Analytic Fog: the fog keeps its method: {e}")
+def _rebuild(self, context):
+    """A method, anisotropy or fog passes change: the scene groups follow (the lights keep their steps)."""
+    schedule_sync(context.scene, "groups")
 
 
-def _anisotropy_changed(self, context):
-    from .ops import apply
-    if self.enabled:
-        try:
-            apply.set_anisotropy(context.scene, self.anisotropy)
-        except ValueError as e:
-            print(f"Analytic Fog: the fog keeps its anisotropy: {e}")
+def _quality_changed(self, context):
+    """A Quality change: every light's models are chosen again."""
+    schedule_sync(context.scene, "rechoose")
 
 
 def quality_setting(settings):
     """The Quality as ``apply.apply_fog`` takes it: a preset name of ``predict.QUALITY`` or a target error."""
     return settings.target_error if settings.quality == "CUSTOM" else settings.quality.lower()
-
-
-def _quality_changed(self, context):
-    from .ops import apply
-    if self.enabled:
-        apply.set_quality(context.scene, quality_setting(self))
-
-
-def _passes_changed(self, context):
-    from .ops import apply
-    if self.enabled:
-        apply.set_passes(context.scene, self.use_passes)
 
 
 def _light_changed(self, context):
@@ -86,13 +113,16 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
         description="Single-scattering albedo of the fog: the fraction of extinguished light it scatters")
     anisotropy: bpy.props.FloatProperty(
         name="Anisotropy", default=0.0, min=-tables.MAX_ANISOTROPY, max=tables.MAX_ANISOTROPY,
-        update=_anisotropy_changed,
+        update=_rebuild,
         description="Henyey-Greenstein g of the fog's phase function: 0 isotropic, > 0 forward scattering "
                     "(droplets: haze about 0.7, fog about 0.85), so lamps glow brighter seen against their "
                     "light. Below -0.8 only the OSL method serves it")
     method: bpy.props.EnumProperty(
-        name="Method", default="NODES", update=_method_changed,
-        items=[("NODES", "Node Groups", "Every model from shader node groups with packed tables: Cycles and EEVEE"),
+        name="Method", default="AUTO", update=_rebuild,
+        items=[("AUTO", "Auto", "Per scene, the Node Groups or the Compositor method, whichever is predicted to "
+                                "render faster, unless the scene needs what only one has (fog passes, a panoramic "
+                                "camera, see-through materials): the choice and its reason are shown below"),
+               ("NODES", "Node Groups", "Every model from shader node groups with packed tables: Cycles and EEVEE"),
                ("OSL", "OSL", "Prefer OSL models where one exists (the glow by quadrature in an OSL script): "
                               "Cycles only (switches Cycles' OSL on)"),
                ("COMPOSITOR", "Compositor", "The node groups' models evaluated once per pixel in the compositor "
@@ -121,7 +151,7 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
                     "the lamps light the scene alone. On: surfaces keep the World's light, an artistic "
                     "ambient (the camera still sees the fog, not the World)")
     use_passes: bpy.props.BoolProperty(
-        name="Fog Passes", default=False, update=_passes_changed,
+        name="Fog Passes", default=False, update=_rebuild,
         description="Write the render passes Fog Light (the light the fog adds) and Fog Transmittance "
                     "(e^-beta*distance) for compositing. They cost render time (about a quarter more in "
                     "Cycles); the denoising set-up does not need them")
@@ -140,7 +170,17 @@ CLASSES = (AnalyticFogSettings, AnalyticFogLight)
 _register_classes, _unregister_classes = bpy.utils.register_classes_factory(CLASSES)
 
 
+def ensure_registered():
+    """Register the property groups unless they are: the settings' one store exists even in a process that
+    adds the fog without enabling the add-on (scripts, the command line, farms).  Without them Blender keeps a
+    file's ``scene.analytic_fog`` and ``light.analytic_fog`` as bare ID properties that nothing reads."""
+    if not hasattr(bpy.types.Scene, "analytic_fog") or not hasattr(bpy.types.Light, "analytic_fog"):
+        register()
+
+
 def register():
+    if AnalyticFogSettings.is_registered:   # (``ensure_registered`` did, before the add-on was enabled)
+        return
     _register_classes()
     bpy.types.Scene.analytic_fog = bpy.props.PointerProperty(type=AnalyticFogSettings)
     bpy.types.Light.analytic_fog = bpy.props.PointerProperty(type=AnalyticFogLight)

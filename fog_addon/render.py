@@ -11,6 +11,7 @@ import bpy
 
 from . import measure, props
 from .ops import apply, progress
+from .precompute.spec import FogSpec
 
 DEFAULT_SAMPLES = {"CYCLES": 16, "BLENDER_EEVEE": 16}
 CYCLES_ONLY = {"osl": "EEVEE cannot run OSL"}
@@ -18,14 +19,9 @@ EEVEE_LIGHT_THRESHOLD = 1e-4   # EEVEE's default 0.01 windows point lights (rati
 
 
 def ensure_properties():
-    """Register the add-on's property groups unless they are (the add-on need not be enabled).
-
-    Without them Blender keeps a file's ``scene.analytic_fog`` and
-    ``light.analytic_fog`` as bare ID properties that nothing reads: the saved
-    settings and per-light Fog Glow toggles would be ignored.
-    """
-    if not hasattr(bpy.types.Scene, "analytic_fog") or not hasattr(bpy.types.Light, "analytic_fog"):
-        props.register()
+    """Register the add-on's property groups unless they are (``props.ensure_registered``): the file's fog
+    settings and per-light Fog Glow toggles are read from them."""
+    props.ensure_registered()
 
 
 def _flag(args, name):
@@ -35,46 +31,39 @@ def _flag(args, name):
 def fog_settings(scene, args):
     """The fog to render: each setting from its flag, else from the file's ``scene.analytic_fog``.
 
-    Returns (keyword arguments for ``apply.apply_fog``, {setting: (value, "flag" | "file")},
-    [notes]).  Without a flag the method is the file's; a file whose method
-    is OSL rendered with EEVEE gets the node groups, with a note.  Selected Only in the
-    file fogs only the materials of the objects selected in the file (as *Update Fog* would with it open).
+    Returns (the ``FogSpec``, the objects whose materials to fog (None: all), {setting: (value, "flag" |
+    "file")}, [notes]).  Without a flag the method is the file's (Auto by default); a file whose method is
+    OSL rendered with EEVEE gets the node groups, with a note.  Selected Only in the file fogs only the
+    materials of the objects selected in the file (as *Update Fog* would with it open).  Raises ValueError
+    for settings that fail validation.
     """
     ensure_properties()
     s = scene.analytic_fog
-    notes, source = [], {}
-
-    def pick(key, flag, from_file):
-        value = _flag(args, flag)
-        source[key] = "flag" if value is not None else "file"
-        return from_file() if value is None else value
-
-    density = pick("density", "density", lambda: s.density)
-    albedo = tuple(float(c) for c in pick("colour", "color", lambda: tuple(s.color)))
-    scene_scale = pick("scene scale", "scene_scale", lambda: s.scene_scale)
-    anisotropy = pick("anisotropy", "anisotropy", lambda: s.anisotropy)
-    method = pick("method", "method", lambda: s.method.lower())
-    with_passes = bool(pick("fog passes", "passes", lambda: s.use_passes))
-    quality = pick("quality", "error", lambda: props.quality_setting(s))
-    world_light = pick("world light", "world_light", lambda: "on" if s.world_light else "off")
-    if method in CYCLES_ONLY and args.engine_id != "CYCLES":
+    notes = []
+    flags = dict(density=_flag(args, "density"), albedo=_flag(args, "color"), scene_scale=_flag(args, "scene_scale"),
+                 anisotropy=_flag(args, "anisotropy"), method=_flag(args, "method"), passes=_flag(args, "passes"),
+                 quality=_flag(args, "error"),
+                 world_light=None if _flag(args, "world_light") is None else _flag(args, "world_light") == "on")
+    spec = FogSpec.from_settings(s).replace(**flags)
+    source = {k: "flag" if v is not None else "file" for k, v in flags.items()}
+    if spec.method in CYCLES_ONLY and args.engine_id != "CYCLES":
         if source["method"] == "flag":
-            raise SystemExit(f"error: --method {method} needs --engine cycles ({CYCLES_ONLY[method]}); "
-                             "use --method nodes")
-        notes.append(("method", f"the file's method is {method}, which needs Cycles ({CYCLES_ONLY[method]}): "
-                                "rendering with the node groups"))
-        method = "nodes"
+            raise SystemExit(f"error: --method {spec.method} needs --engine cycles ({CYCLES_ONLY[spec.method]}); "
+                             "use --method nodes or auto")
+        notes.append(("method", f"the file's method is {spec.method}, which needs Cycles "
+                                f"({CYCLES_ONLY[spec.method]}): rendering with the node groups"))
+        spec = spec.replace(method="nodes")
     objects = None
     if s.selected_only:
         objects = [o for o in scene.objects if o.select_get()]
-        source["materials"] = "file"
         notes.append(("materials", f"the file's fog is Selected Only: fogging the materials of "
                                    f"{len(objects)} selected object(s) (and those fogged already)"))
-    kwargs = dict(density=density, albedo=albedo, anisotropy=anisotropy, method=method, objects=objects,
-                  scene_scale=scene_scale, with_passes=with_passes, error=quality, world_light=world_light == "on")
-    shown = {"density": density, "colour": albedo, "scene scale": scene_scale, "anisotropy": anisotropy,
-             "method": method, "fog passes": with_passes, "quality": quality, "world light": world_light}
-    return kwargs, {k: (v, source[k]) for k, v in shown.items()}, notes
+    shown = {"density": ("density", spec.density), "colour": ("albedo", spec.albedo),
+             "scene scale": ("scene_scale", spec.scene_scale), "anisotropy": ("anisotropy", spec.anisotropy),
+             "method": ("method", spec.method), "fog passes": ("passes", spec.passes),
+             "quality": ("quality", spec.quality),
+             "world light": ("world_light", "on" if spec.world_light else "off")}
+    return spec, objects, {k: (v, source[f]) for k, (f, v) in shown.items()}, notes
 
 
 def describe(shown):
@@ -90,7 +79,7 @@ def apply_and_render(scene, args):
     to ``args.out``.  Keeps the scene's camera, lights, materials and colour management.
     """
     engine = args.engine_id
-    kwargs, shown, notes = fog_settings(scene, args)
+    spec, objects, shown, notes = fog_settings(scene, args)
     # the render settings first: the fog keeps Cycles' denoiser off its light only if the scene
     # still denoises once they are made (``nodes/compositor.py``)
     scene.render.engine = engine
@@ -104,12 +93,14 @@ def apply_and_render(scene, args):
         from . import reference
         reference.disable_interreflection(scene)
     t0 = time.perf_counter()
-    skipped = apply.apply_fog(scene, **kwargs, progress=progress.ConsoleProgress())
+    skipped = apply.apply(scene, spec, objects, progress=progress.ConsoleProgress())
     print(f"fog: {describe(shown)}")
     for name, why in notes + list(skipped):
         print(f"note: {name}: {why}")
     lines = apply.explain()
     for line in lines if getattr(args, "explain", False) else lines[:1]:
+        print(f"models: {line}")
+    if not getattr(args, "explain", False) and (line := apply.method_line(apply.stored_choice() or {})):
         print(f"models: {line}")
     t1 = time.perf_counter()
     measure.render_to_file(scene, args.out)

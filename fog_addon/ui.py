@@ -5,6 +5,7 @@ from .ops import FOG_MT_presets, apply
 from .precompute import presets, rungs
 
 ENGINE_NOTES = {
+    "AUTO": "Auto: Node Groups or Compositor, per scene",
     "NODES": "Node groups: Cycles and EEVEE",
     "OSL": "OSL: Cycles only (EEVEE shows no glow)",
     "COMPOSITOR": "Compositor: Cycles and EEVEE, Compositing on",
@@ -22,12 +23,16 @@ def _draw_models(layout, settings):
     if settings.quality == "CUSTOM":
         col.prop(settings, "target_error")
     box = layout.box()
-    full = rungs.choose(settings.method.lower())
-    box.label(text="Full models: " + ", ".join(f"{r.name} ({r.predicted_error():.0e})" for r in full[:3]))
     choice = apply.stored_choice() if settings.enabled else None
+    preference = settings.method.lower() if settings.method != "AUTO" else (choice or {}).get("method", "nodes")
+    full = rungs.choose(preference)
+    box.label(text="Full models: " + ", ".join(f"{r.name} ({r.predicted_error():.0e})" for r in full[:3]))
     if choice is None:
         box.label(text="Add the fog to see each light's models")
         return
+    if (line := apply.method_line(choice)) is not None:
+        for i, part in enumerate(line.split(" (", 1)):
+            box.label(text=part if i == 0 else "(" + part, icon="SETTINGS" if i == 0 else "BLANK1")
     box.label(text=apply.quality_head(choice))
     if (limit := apply.limit_text(choice)) is not None:   # EEVEE's uniform block: a warning of its own
         box.label(text=limit[0].upper() + limit[1:], icon="ERROR")
@@ -43,6 +48,10 @@ def _draw_models(layout, settings):
 def draw_fog(layout, context):
     scene = context.scene
     s = scene.analytic_fog
+    if s.enabled and (why := apply.sync_error(scene)) is not None:
+        box = layout.box()
+        box.label(text="The fog keeps what it was built with:", icon="ERROR")
+        box.label(text=why, icon="BLANK1")
     row = layout.row(align=True)
     if s.enabled:
         row.operator("fog.add", text="Update Fog", icon="FILE_REFRESH")
@@ -74,7 +83,7 @@ def draw_fog(layout, context):
             box.label(text=line, icon="ERROR" if i == 0 else "BLANK1")
     lights, notes = apply.fog_lights(scene)
     layout.label(text=f"{len(lights)} light(s) light the fog", icon="LIGHT_POINT")
-    if len(lights) >= apply.MANY_LIGHTS and s.method != "COMPOSITOR":
+    if len(lights) >= apply.MANY_LIGHTS and s.method in ("NODES", "OSL"):
         layout.label(text="With this many lights the Compositor method renders far faster", icon="INFO")
     for name, why in notes:
         layout.label(text=f"{name}: {why}", icon="ERROR")

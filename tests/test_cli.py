@@ -11,7 +11,7 @@ pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a su
     (["--engine", "cycles", "--preset", "smog"], "unknown preset"),
     (["--engine", "cycles", "--density", "nan"], "density"),
     (["--engine", "cycles", "--anisotropy", "0.96", "--density", "0.1"], "anisotropy"),
-    (["--engine", "cycles", "--anisotropy", "-0.9", "--density", "0.1"], "use the OSL method"),
+    (["--engine", "cycles", "--method", "nodes", "--anisotropy", "-0.9", "--density", "0.1"], "use the OSL method"),
     (["--engine", "cycles", "--error", "2"], "--error must be a fraction"),
     (["--engine", "cycles", "--error", "best"], "--error must be a fraction"),
 ])
@@ -33,5 +33,6 @@ def test_render_explains_the_models(tmp_path):
     assert r.returncode == 0, text[-2000:]
     lines = [line for line in text.splitlines() if line.startswith("models: ")]
     assert lines[0].startswith("models: Quality 0.5: predicted error"), lines
-    assert len(lines) == 4 and all(": " in line for line in lines[1:]), lines   # the three lamps
+    assert lines[1].startswith("models:   Method Auto: "), lines   # the method Auto chose, and why
+    assert len(lines) == 5 and all(": " in line for line in lines[2:]), lines   # the three lamps
     assert "quality 0.5 (flag)" in text

@@ -62,7 +62,7 @@ def test_renders_the_files_fog(panel):
     _assert_same(img, _read(panel, "panel.exr"), "command without fog flags vs the panel's render", out)
     line = next(ln for ln in out.splitlines() if ln.startswith("fog: "))
     for setting in ("density 0.06 (file)", "colour (0.9, 0.7, 0.5) (file)", "scene scale 2 (file)",
-                    "method nodes (file)"):
+                    "method auto (file)"):
         assert setting in line, f"{setting!r} not in {line!r}"
 
 

@@ -5,7 +5,6 @@ import bpy
 from bl_operators.presets import AddPresetBase
 
 from . import apply, progress
-from .. import props
 from ..precompute import presets
 
 PRESET_SUBDIR = "analytic_fog"
@@ -46,27 +45,25 @@ class FOG_OT_add(bpy.types.Operator):
     def execute(self, context):
         scene = context.scene
         settings = scene.analytic_fog
-        density = settings.density
-        if self.preset != "NONE":
-            density = presets.PRESETS[self.preset.lower()]
-        elif self.density >= 0 or math.isnan(self.density):
-            density = self.density
         only = settings.selected_only if self.selected_only == "SCENE" else self.selected_only == "SELECTED"
         objects = list(context.selected_objects) if only else None
         try:
+            spec = apply.spec_of(scene)
+            if self.preset != "NONE":
+                spec = spec.replace(density=presets.PRESETS[self.preset.lower()])
+            elif self.density >= 0 or math.isnan(self.density):
+                spec = spec.replace(density=self.density)
             with progress.window_progress(context.window_manager) as report:
-                skipped = apply.apply_fog(scene, density, tuple(settings.color), settings.anisotropy,
-                                          settings.method.lower(), objects, settings.scene_scale,
-                                          with_passes=settings.use_passes,
-                                          error=props.quality_setting(settings),
-                                          world_light=settings.world_light, progress=report)
+                skipped = apply.apply(scene, spec, objects, progress=report)
         except ValueError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        settings.density = density
         settings.enabled = True
         _report_skipped(self, skipped)
-        self.report({"INFO"}, apply.explain()[0])
+        lines = apply.explain()
+        self.report({"INFO"}, lines[0])
+        if len(lines) > 1 and lines[1].strip().startswith("Method"):
+            self.report({"INFO"}, lines[1].strip())
         return {"FINISHED"}
 
 

@@ -1,29 +1,32 @@
 """Adding, updating and removing the fog on a scene (what the operators, handlers and command line call)."""
-import functools
 import json
+from typing import Any, NamedTuple
 
 import bpy
 
+from .. import methods
 from ..nodes import comp_fog, compositor, dedupe, groups, images, osl, passes
 from ..nodes.light import unwrap_light, wrap_light
 from ..nodes.material import unwrap_material, wrap_material
 from ..nodes.owned import is_fogged
 from ..nodes.world import unwrap_world, wrap_world
-from ..precompute import medium, predict, presets, rungs, spot
+from ..precompute import predict, presets, rungs, spot
+from ..precompute.spec import FogSpec
 from . import progress as progress_
 from . import view
 
 SUPPORTED_LIGHTS = ("POINT", "SPOT")
 OSL_WAS = "analytic_fog_osl_was"   # scene custom property: Cycles' OSL switch before the OSL method set it
 LIGHTS_KEY = "analytic_fog_lights"  # on the Surface group: the lights, their models and the camera it was built for
-PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method preference it was built with
-PASSES_KEY = "analytic_fog_passes"   # on the Surface group: built with the fog passes (AOV outputs)
-CHOICE_KEY = "analytic_fog_choice"   # on the Surface group: the Quality, {light: [step, predicted error]}, the total
+PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method it was built with (methods.get)
+SPEC_KEY = "analytic_fog_spec"   # on the Surface group: a copy of the FogSpec it was built with (for farms and
+#                                  people reading the file; the add-on reads the scene's settings, never this)
+CHOICE_KEY = "analytic_fog_choice"   # on the Surface group: the Quality, {light: [step, predicted error]}, the total,
+#                                      the method and why (Auto)
 AOV_KINDS = dict(passes.AOVS + comp_fog.AOVS + comp_fog.EEVEE_AOVS)   # every AOV the fog adds to view layers
-COMPOSITOR = "compositor"   # the method that adds the fog's light in the compositor (``nodes/comp_fog.py``)
-MANY_LIGHTS = 8   # from this many fog lights on, the panel and (in Cycles) the report suggest the Compositor method
-#                   (16 lights in Cycles: 29x the fog-free render with node groups, 1.6x with the compositor;
-#                   README "The Compositor method")
+COMPOSITOR = "compositor"   # the method that adds the fog's light in the compositor (``methods/compositor.py``)
+MANY_LIGHTS = methods.node_groups.MANY_LIGHTS   # from this many fog lights on, the panel and (in Cycles) the
+#                                                 report say that the node groups cost far more than the compositor
 
 
 def fog_lights(scene):
@@ -92,16 +95,22 @@ def use_osl(scene, on):
         del scene[OSL_WAS]
 
 
-def _signature(scene, lights, models, preference, with_passes):
-    camera = scene.camera
-    extra = []
-    if preference == COMPOSITOR:   # what the compositor's graph is built for (the rest it reads by drivers)
-        c = scene.cycles
-        extra = [f"compositor:{scene.render.engine}:{c.pixel_filter_type}:{comp_fog.horizontal_fit(scene)}:"
-                 f"{camera.data.sensor_fit}"]
-    return "|".join([groups.code_fingerprint()] + [f"{o.name_full}:{'/'.join(r.name for r in mod)}"
-                                                    for o, mod in zip(lights, models)]
-                     + ["camera:" + (camera.name_full if camera else ""), f"passes:{with_passes}"] + extra)
+def spec_of(scene):
+    """The scene's fog settings as a validated ``FogSpec`` (``scene.analytic_fog``); raises ValueError."""
+    from .. import props
+    props.ensure_registered()
+    return FogSpec.from_settings(scene.analytic_fog)
+
+
+def store_spec(scene, spec):
+    """Write ``spec`` into ``scene.analytic_fog`` (the one store of the fog's settings), without its callbacks."""
+    from .. import props
+    props.ensure_registered()
+    settings = scene.analytic_fog
+    with props.quiet():
+        for key, value in spec.settings_values().items():
+            if key == "color" or getattr(settings, key) != value:
+                setattr(settings, key, value)
 
 
 def quality_value(quality):
@@ -110,40 +119,26 @@ def quality_value(quality):
     return "exact" if quality is None else quality
 
 
-def _budget(scene, preference, lights):
-    """What the renderer can hold (predict.Budget) with ``lights``, or None (Cycles' SVM, the Compositor
-    method): EEVEE's uniform block, Cycles OSL's shader group layers."""
-    spots = [view.is_spot(o) for o in lights]
-    if preference == COMPOSITOR:   # the compositor's groups hold any number; EEVEE's materials: dimming_lights
-        return None
-    if scene.render.engine == groups.EEVEE_ENGINE:
-        return groups.eevee_budget(groups.get_anisotropy(), spots)
-    if preference == "osl":
-        return groups.osl_budget(spots)
-    return None
-
-
-def choose_models(scene, lights, preference, quality):
-    """Each light's models (rungs.LightModels) at ``quality``, and the choice for reports.
+def choose_models(scene, spec, method, lights):
+    """Each light's models (rungs.LightModels) at the spec's Quality with ``method``, and the choice for reports.
 
     The view is sampled by ray casts (``view.py``) and every light's step down
-    the ladder chosen by the predicted error (``predict.py``).  In EEVEE the
-    steps must also fit its uniform block (``groups.eevee_budget``), with Cycles' OSL its shader group's
-    layers (``groups.osl_budget``): lights
-    step down beyond the target, least error first, until they do.  Returns
+    the ladder chosen by the predicted error (``predict.py``).  Where the method has a budget
+    (``method.budget``: EEVEE's uniform block, Cycles OSL's shader group layers), lights
+    step down beyond the target, least error first, until they fit.  Returns
     (models, choice) with choice = {"lights": {name: [step, error]}, "rims": {name: point count} of the spots
     whose glow's rim takes fewer than spot.RIM_NODES points, "error": total, "target": t, "engine": the render
     engine chosen for, "limited": what forced steps beyond the target, or None}.
     """
-    target = predict.target_error(quality)
+    target = spec.target_error
     engine = scene.render.engine
-    budget = _budget(scene, preference, lights)
+    budget = method.budget(scene, spec, lights)
     steps = [0] * len(lights)
     choice = {"target": target, "error": 0.0, "lights": {}, "rims": {}, "engine": engine, "limited": None}
     if lights and (target is not None or (budget is not None and not budget.fits(steps))):
         samples = view.view_samples(scene, lights)
-        pred = predict.predict(samples, view.light_intensities(lights), groups.get_beta(), target, budget,
-                               groups.get_anisotropy())
+        pred = predict.predict(samples, view.light_intensities(lights), spec.beta_per_unit, target, budget,
+                               spec.anisotropy)
         steps = [int(k) for k in pred.steps]
         choice["error"] = pred.error
         choice["lights"] = {o.name: [int(k), float(e)] for o, k, e in zip(lights, pred.steps, pred.light_error)}
@@ -153,13 +148,12 @@ def choose_models(scene, lights, preference, quality):
             choice["limited"] = budget.name + ("" if pred.fits else ": too many lights even with every light off")
     else:
         choice["lights"] = {o.name: [0, 0.0] for o in lights}
-    return _models(preference, lights, steps, choice["rims"]), choice
+    return _models(spec, method, lights, steps, choice["rims"]), choice
 
 
-def _models(preference, lights, steps, rims):
+def _models(spec, method, lights, steps, rims):
     """Each light's models at its step, a spot's glow with its rim's point count (``rims``: by name)."""
-    g = groups.get_anisotropy()
-    return [rungs.choose(preference, k, g, view.is_spot(o), rims.get(o.name, spot.RIM_NODES))
+    return [rungs.choose(method.preference, k, spec.anisotropy, view.is_spot(o), rims.get(o.name, spot.RIM_NODES))
             for o, k in zip(lights, steps)]
 
 
@@ -169,6 +163,16 @@ def stored_choice():
     if surface is None or CHOICE_KEY not in surface:
         return None
     return json.loads(surface[CHOICE_KEY])
+
+
+def method_line(choice):
+    """One line: the method ``choice`` was built with, and why where Auto chose it; None before this was stored."""
+    name = choice.get("method")
+    if name is None:
+        return None
+    label = methods.get(name).label
+    reason = choice.get("method_reason")
+    return f"Method Auto: {label} ({reason})" if reason else f"Method {label}"
 
 
 def quality_head(choice):
@@ -194,6 +198,8 @@ def explain(choice=None):
         return ["the fog is not on"]
     limit = limit_text(choice)
     lines = [quality_head(choice) + (f"; {limit}" if limit else "")]
+    if (line := method_line(choice)) is not None:
+        lines.append("  " + line)
     rims = choice.get("rims", {})
     for name, (step, err) in sorted(choice["lights"].items()):
         rim = f", {rims[name]}-point rim" if name in rims else ""
@@ -208,60 +214,112 @@ def _in_groups(lights, choice):
     return [o for o in lights if choice["lights"].get(o.name, [0])[0] != rungs.LEFT_OUT]
 
 
-def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.DEFAULT_QUALITY, rechoose=True,
-                        this_frame=False):
-    """(Re)build the Surface and World groups for ``lights``, their models and the fog passes (on or off)
-    unless built for them already; per-light groups no longer used are deleted, lights that no longer
-    take part lose the fog's attenuation, Cycles' OSL is switched on while some model needs it, and the
-    view layers have the passes' AOVs while the passes are on.
+class Plan(NamedTuple):
+    """What a method builds (``Method.build``): the lights' models, where they go, and the choice for reports."""
+    lights: list              # the lights taking part
+    models: list              # their models (rungs.LightModels)
+    choice: dict              # ``choose_models``'s, with "quality", "method" and "method_reason"
+    in_groups: list           # the lights the fog's groups hold (``_in_groups``)
+    grouped_models: list      # their models
+    shader_lights: list       # the lights the materials' and World's groups hold (``Method.shader_lights``)
+    shader_models: list
+    windows: Any              # where the compositor evaluates each term (``view.windows``), or None
+    partial: bool             # the windows are this frame's only (the handlers')
 
-    ``quality``: the target error of the lights' models.  ``rechoose``: choose the lights' models again
-    from the view (``choose_models``); else keep the stored steps (lights new to the fog get the full
-    models).  Returns [(name, reason)] for lights left unfogged, clashing AOVs and a choice the render
-    engine limited (EEVEE's uniform block).
-    """
+
+def built_method():
+    """The method the scene groups were built with (``methods.Method``), or None."""
+    surface = bpy.data.node_groups.get(groups.SURFACE)
+    name = surface.get(PREFERENCE_KEY) if surface is not None else None
+    return methods.METHODS_BY_NAME.get(name) if name else None
+
+
+_resolved = {}   # scene name -> (spec JSON, lights, method name, reason) of Auto's last choice
+
+
+def resolve_method(scene, spec, lights, keep=False):
+    """(method, reason) for ``spec`` (``methods.resolve``; Auto chooses by the scene).  ``keep``: Auto keeps its
+    last choice for this scene while the spec and the lights are the same (the handlers' cheap path)."""
+    key = (spec.to_json(), tuple(o.name_full for o in lights))
+    last = _resolved.get(scene.name)
+    if keep and spec.method == "auto" and last is not None and last[:2] == key:
+        return methods.get(last[2]), last[3]
+    method, reason = methods.resolve(scene, spec, lights, scene_materials(scene))
+    _resolved[scene.name] = key + (method.name, reason)
+    return method, reason
+
+
+def check_method(scene, spec, method):
+    """Raise ValueError unless ``method`` can serve ``scene`` with ``spec`` (and its models the anisotropy)."""
+    rungs.choose(method.preference, 0, spec.anisotropy)   # raises for a g the method's models don't serve
+    why = method.check(scene, spec)
+    if why is not None:
+        raise ValueError(why)
+
+
+def plan(scene, spec, method, lights, reason=None, rechoose=True, this_frame=False):
+    """The ``Plan`` of ``method`` for ``lights`` at the spec's Quality.
+
+    ``rechoose``: choose the lights' models again from the view (``choose_models``); else keep the stored
+    steps (lights new to the fog get the full models).  ``this_frame``: the handlers' call (no stepping through
+    frames: an animation's windows grow by this frame's)."""
     old = stored_choice()
     kept = None
-    if not (rechoose or old is None or old.get("quality") != quality_value(quality)
+    quality = quality_value(spec.quality)
+    if not (rechoose or old is None or old.get("quality") != quality or old.get("method") != method.name
             or (old.get("engine") == groups.EEVEE_ENGINE) != (scene.render.engine == groups.EEVEE_ENGINE)):
         kept = [old["lights"].get(o.name, [0, 0.0])[0] for o in lights]
-        budget = _budget(scene, preference, lights)
+        budget = method.budget(scene, spec, lights)
         if budget is not None and not budget.fits(kept):   # e.g. the method switched to OSL: choose again
             kept = None
     if kept is None:
-        models, choice = choose_models(scene, lights, preference, quality)
+        models, choice = choose_models(scene, spec, method, lights)
     else:
         rims = {o.name: old["rims"][o.name] for o in lights if o.name in old.get("rims", {})}
-        models = _models(preference, lights, kept, rims)
+        models = _models(spec, method, lights, kept, rims)
         choice = dict(old, lights={o.name: old["lights"].get(o.name, [0, 0.0]) for o in lights}, rims=rims)
-    choice["quality"] = quality_value(quality)
+    choice.update(quality=quality, method=method.name, method_reason=reason)
     # lights stepped out of the groups to fit a budget (rungs.LEFT_OUT) keep their own dimming (wrap_light)
     in_groups = _in_groups(lights, choice)
-    grouped_models = [mod for o, mod in zip(lights, models) if o in in_groups]
-    in_compositor = preference == COMPOSITOR
-    # the materials' lights: none in the Compositor method (Cycles' lights dim their own direct light), in
-    # EEVEE's only the shared dimming of those that fit its uniform block
-    in_shaders = dimming_lights(scene, in_groups, preference) if in_compositor else (in_groups, grouped_models)
-    signature = _signature(scene, in_groups, grouped_models, preference, with_passes) + (
-        "|dimming:" + ",".join(o.name_full for o in in_shaders[0]) if in_compositor else "")
-    # where the compositor evaluates each term (``view.windows``); over an animation's frames, or (the handlers'
-    # ``this_frame``: no stepping through frames) this frame's, added to the windows the groups have
+    grouped = [mod for o, mod in zip(lights, models) if o in in_groups]
+    shader_lights, shader_models = method.shader_lights(scene, spec, in_groups, grouped)
     partial = this_frame and view.animated(scene)
-    windows = view.windows(scene, in_groups, [scene.frame_current] if partial else None) if in_compositor else None
+    return Plan(lights, models, choice, in_groups, grouped, shader_lights, shader_models,
+                method.windows(scene, in_groups, partial), partial)
+
+
+def _signature(scene, spec, method, plan_):
+    camera = scene.camera
+    return "|".join([groups.code_fingerprint()] + [f"{o.name_full}:{'/'.join(r.name for r in mod)}"
+                                                    for o, mod in zip(plan_.in_groups, plan_.grouped_models)]
+                     + ["camera:" + (camera.name_full if camera else ""), f"passes:{spec.passes}",
+                        f"method:{method.name}", method.signature(scene, spec, plan_.shader_lights)])
+
+
+_rebuilt = set()   # names of scenes whose groups ``_build_scene_groups`` rebuilt since ``refresh_lights`` asked
+
+
+def _build_scene_groups(scene, spec, lights, method=None, reason=None, rechoose=True, this_frame=False):
+    """(Re)build the Surface and World groups (and the method's own) for ``spec`` and ``lights`` with ``method``
+    (default: ``resolve_method``) unless built for them already; per-light groups no longer used are deleted,
+    lights that no longer take part lose the fog's attenuation, Cycles' OSL is switched on while some model
+    needs it, and the view layers have the method's AOVs.  ``rechoose``, ``this_frame``: see ``plan``.
+
+    Returns [(name, reason)] for lights left unfogged, clashing AOVs and a choice the render engine limited.
+    """
+    if method is None:
+        method, reason = resolve_method(scene, spec, lights, keep=not rechoose)
+    old_method = built_method()
+    plan_ = plan(scene, spec, method, lights, reason, rechoose, this_frame)
+    signature = _signature(scene, spec, method, plan_)
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if (surface is None or bpy.data.node_groups.get(groups.WORLD) is None
-            or surface.get(LIGHTS_KEY) != signature
-            or (in_compositor and bpy.data.node_groups.get(comp_fog.FOG_GROUP) is None)):
-        imgs = images.all_table_images(groups.get_anisotropy())
-        aovs = functools.partial(comp_fog.add_surface_aovs, engine=scene.render.engine) if in_compositor else None
-        surface = groups.build_surface(*in_shaders, imgs, with_passes, extra=aovs)
-        if in_compositor:
-            imgs = comp_fog.build_fog_group(scene, in_groups, grouped_models, imgs,
-                                            view.full_windows(in_groups) if partial else windows, partial)
+            or surface.get(LIGHTS_KEY) != signature or not method.is_built()):
+        imgs = method.build(scene, spec, plan_, images.all_table_images(spec.anisotropy))
+        _rebuilt.add(scene.name)   # the compositor's chain must take the new groups (``refresh_lights``)
+        surface = bpy.data.node_groups[groups.SURFACE]
         surface[LIGHTS_KEY] = signature
-        surface[PREFERENCE_KEY] = preference
-        surface[PASSES_KEY] = with_passes
-        groups.build_world(*(([], []) if in_compositor else in_shaders), scene.camera, imgs, with_passes)
+        surface[PREFERENCE_KEY] = method.name
         for name in comp_fog.all_group_names()[1:] + groups.all_group_names():
             ng = bpy.data.node_groups.get(name)
             if ng is not None and ng.users == 0 and name not in (groups.PARAMS, groups.SURFACE, groups.WORLD):
@@ -274,60 +332,33 @@ def _build_scene_groups(scene, lights, preference, with_passes, quality=predict.
         for light in bpy.data.lights:
             if light.users and light not in taking_part and is_fogged(light):
                 unwrap_light(light)
-    elif windows is not None:
-        comp_fog.set_windows(in_groups, windows, grow=partial)
-    if surface.get(CHOICE_KEY) != json.dumps(choice):
-        surface[CHOICE_KEY] = json.dumps(choice)
-    use_osl(scene, any(rungs.needs_osl(mod) for mod in models))
+    else:
+        method.update(scene, spec, plan_)
+    if old_method is not None and old_method is not method:
+        old_method.teardown(scene)
+    if surface.get(SPEC_KEY) != spec.to_json():
+        surface[SPEC_KEY] = spec.to_json()
+    if surface.get(CHOICE_KEY) != json.dumps(plan_.choice):
+        surface[CHOICE_KEY] = json.dumps(plan_.choice)
+    use_osl(scene, any(rungs.needs_osl(mod) for mod in plan_.models))
     notes = [(light.data.name, why) for light in lights if (why := wrap_light(light.data))]
-    if (limit := limit_text(choice)) is not None:
-        notes.append((scene.render.engine, f"{limit}, predicted error {choice['error']:.2%} "
+    if (limit := limit_text(plan_.choice)) is not None:
+        notes.append((scene.render.engine, f"{limit}, predicted error {plan_.choice['error']:.2%} "
                                            "(render --explain lists each light's models)"))
-    if in_compositor and scene.render.engine == groups.EEVEE_ENGINE and len(in_shaders[0]) < len(in_groups):
-        notes.append((scene.render.engine, f"{len(in_groups) - len(in_shaders[0])} of {len(in_groups)} lights are "
-                      "not in the materials' shared dimming of direct light (EEVEE's uniform block): their direct "
-                      "light is dimmed as the nearer lights' is"))
-    if not in_compositor and scene.render.engine == "CYCLES" and len(in_groups) >= MANY_LIGHTS:
-        notes.append((scene.render.engine, many_lights_note(in_groups, choice)))
-    aovs = (passes.AOVS if with_passes else ()) + (comp_fog.aovs(scene.render.engine) if in_compositor else ())
+    notes += method.notes(scene, spec, plan_)
+    aovs = tuple(method.passes(scene, spec))
     passes.remove_view_layer_aovs(scene, AOV_KINDS, keep=[name for name, _ in aovs])
     return notes + passes.add_view_layer_aovs(scene, aovs)
 
 
 def many_lights_note(lights, choice):
-    """Why the Compositor method suits ``lights`` (as many as MANY_LIGHTS or more) in Cycles better than the
-    materials' node groups or OSL: what each fogged material holds (``groups.material_nodes``)."""
-    nodes = groups.material_nodes([choice["lights"].get(o.name, [0])[0] for o in lights],
-                                  [view.is_spot(o) for o in lights])
-    return (f"{len(lights)} lights: each fogged material holds about {nodes:,} fog nodes and evaluates them on "
-            "every sample, and Cycles' set-up before the first sample grows with their square (64 lights on 4 "
-            "materials: about 20 s of CPU per render, 256 lights: about 30 min); the Compositor method's "
-            "materials do not depend on the lights (1.5-1.9x the fog-free render at 16 to 64 lights)")
+    """``methods.node_groups.many_lights_note``."""
+    return methods.node_groups.many_lights_note(lights, choice)
 
 
-def dimming_lights(scene, lights, preference):
-    """The Compositor method's materials' lights: ([], []) in Cycles, whose lights dim their own direct light
-    (``light.py``); in EEVEE, which has no light node trees, (lights, models) of the lights whose direct
-    light the materials dim by the shared weights of ``shading.surface_fog`` (rungs step "off": no fog light,
-    which the compositor adds), as many as EEVEE's uniform block holds (``groups.eevee_budget``), the
-    brightest at the camera first (radiant intensity over squared distance)."""
-    if scene.render.engine != groups.EEVEE_ENGINE or not lights:
-        return [], []
-    spots = [view.is_spot(o) for o in lights]
-    budget = groups.eevee_budget(0.0, spots)   # step "off" has no phase weight: its cost does not depend on g
-    eye = scene.camera.matrix_world.translation
-    intensity = view.light_intensities(lights).sum(axis=1)
-    order = sorted(range(len(lights)), key=lambda i: -intensity[i] / max(
-        (lights[i].matrix_world.translation - eye).length_squared, 1e-12))
-    steps = [rungs.LEFT_OUT] * len(lights)
-    for i in order:
-        steps[i] = rungs.OFF
-        if not budget.fits(steps):
-            steps[i] = rungs.LEFT_OUT
-            break
-    kept = [i for i in range(len(lights)) if steps[i] == rungs.OFF]
-    g = groups.get_anisotropy()
-    return [lights[i] for i in kept], [rungs.choose(preference, rungs.OFF, g, spots[i]) for i in kept]
+def dimming_lights(scene, spec, lights):
+    """``methods.compositor.dimming_lights``: the Compositor method's materials' lights in EEVEE."""
+    return methods.compositor.dimming_lights(scene, spec, lights)
 
 
 def merge_appended():
@@ -340,46 +371,33 @@ def merge_appended():
             for name in pulled]
 
 
-def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="nodes", objects=None,
-              scene_scale=1.0, with_passes=False, error=predict.DEFAULT_QUALITY, world_light=False,
-              progress=progress_.silent):
-    """Add (or update) the fog on ``scene``; adding twice is the same as once.
+def apply(scene, spec, objects=None, progress=progress_.silent):
+    """Add (or update) the fog of ``spec`` (a ``FogSpec``) on ``scene``; adding twice is the same as once.
 
-    ``method``: the user's preference for the models (``rungs.PREFERENCES``):
-    "nodes" (node-group tables, Cycles and EEVEE), "osl" (the glow by
-    quadrature in an OSL script, Cycles only; switches Cycles' OSL on) or "compositor" (the node
-    groups' models once per pixel in the compositor, Cycles and EEVEE: ``nodes/comp_fog.py``).
-    ``objects``: fog only their materials (default: all in the scene).
-    ``scene_scale``: real metres per Blender unit (the groups get density *
-    scene_scale per unit).  Returns a list of (data-block name, reason) for
-    what was left out or fogged with a caveat.  Raises ValueError for bad
-    settings before anything is changed.  ``with_passes``: write the fog
-    passes (``passes.py``; they cost render time).  ``error``: the Quality, a
-    target relative error or a preset name of ``predict.QUALITY`` ("exact" or
-    None: every light fully modelled); each light gets the cheapest models whose
-    predicted error stays within it (``choose_models``).  ``world_light``: the World keeps lighting
-    surfaces through the fog (default off: the fog fills all space and extinguishes it, as Cycles'
-    World volume does; ``shading.shade_background``).  ``progress(stage, done, total)``
-    is called as the work advances (``progress.py``).
+    The spec is stored in ``scene.analytic_fog`` (the one store of the fog's settings); then the lights
+    taking part are found, the method resolved (``spec.method`` "auto": ``methods/auto.py`` chooses),
+    checked, planned (each light's models for the Quality) and built.  ``objects``: fog only their
+    materials (default: all in the scene).  Returns a list of (data-block name, reason) for what was left
+    out or fogged with a caveat.  Raises ValueError for bad settings before anything is changed.
+    ``progress(stage, done, total)`` is called as the work advances (``progress.py``).
     """
-    fog = medium.medium(density, albedo, anisotropy, scene_scale)
-    rungs.choose(method, 0, fog.g)   # an unknown preference or unserved g raises here, before anything changes
-    predict.target_error(error)
+    spec = spec.validated()
     check_camera(scene.camera)
-    if method == COMPOSITOR:
-        check_compositor_method(scene, with_passes)
+    lights, notes = fog_lights(scene)
+    method, reason = methods.resolve(scene, spec, lights, scene_materials(scene, objects))
+    check_method(scene, spec, method)
+    store_spec(scene, spec)
     progress("appended fog", 0, 1)
     skipped = merge_appended()   # first: the tables and groups are looked up by name below
-    lights, notes = fog_lights(scene)
     skipped += notes
     progress("lights and tables", 0, 1)
-    groups.set_params(fog.beta, fog.albedo, fog.g, world_light=bool(world_light))
+    groups.set_params(spec.beta_per_unit, spec.albedo, spec.anisotropy, world_light=spec.world_light)
     if bpy.data.node_groups.get(groups.SURFACE) is None:
         # The materials are wrapped around a Surface group without lights, which the lights' group then
         # replaces (``groups._install``): every node Blender's API adds to a material costs more the
         # bigger the groups it links (1 000 materials, 64 lights: 25.9 -> 16.1 s CPU,
         # benchmarks/apply_order.py).
-        groups.build_surface([], [], images.all_table_images(fog.g), with_passes)
+        groups.build_surface([], [], images.all_table_images(spec.anisotropy), spec.passes)
     mats = scene_materials(scene, objects)
     for k, mat in enumerate(mats):
         progress("materials", k, len(mats))
@@ -388,7 +406,7 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
             skipped.append((mat.name, why))
     progress("materials", len(mats), len(mats))
     progress("world", 0, 1)
-    skipped += _build_scene_groups(scene, lights, method, with_passes, error)
+    skipped += _build_scene_groups(scene, spec, lights, method, reason)
     if scene.world is None:
         skipped.append((scene.name, "has no World: no airlight on the background"))
     else:
@@ -398,120 +416,149 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     skipped += follow_compositor(scene, rebuild=True)   # Cycles' denoiser kept off the fog's light
     if not lights:
         skipped.append((scene.name, "has no point light taking part: the fog only dims"))
-    note = presets.invisible_fog_note(fog.beta, scene_size(scene))
+    note = presets.invisible_fog_note(spec.beta_per_unit, scene_size(scene))
     if note:
         skipped.append((scene.name, note))
     return skipped
 
 
+def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="nodes", objects=None,
+              scene_scale=1.0, with_passes=False, error=predict.DEFAULT_QUALITY, world_light=False,
+              progress=progress_.silent):
+    """``apply`` with the spec's fields as arguments, for scripts: ``density`` (1/m), ``albedo``, ``anisotropy``
+    (g), ``method`` ("auto", "nodes", "osl", "compositor"; this function's default is the node groups, the
+    panel's and the command line's is Auto), ``scene_scale`` (m per unit), ``with_passes``, ``error`` (the
+    Quality: a preset name or a target error; None is Exact), ``world_light``.  See ``precompute/spec.py``."""
+    spec = FogSpec(density=density, scene_scale=scene_scale, albedo=tuple(albedo), anisotropy=anisotropy,
+                   method=method, quality=quality_value(error), passes=with_passes, world_light=world_light)
+    return apply(scene, spec, objects, progress)
+
+
 def follow_compositor(scene, rebuild=False):
-    """The scene's compositor set-up as the fog's method needs it (``compositor.follow``): the Compositor
+    """The scene's compositor set-up as the built method needs it (``Method.follow``): the Compositor
     method's chain, else the denoiser's where Cycles denoises; returns [(name, note)]."""
-    surface = bpy.data.node_groups.get(groups.SURFACE)
-    in_compositor = surface is not None and surface.get(PREFERENCE_KEY) == COMPOSITOR
-    fog = bpy.data.node_groups.get(comp_fog.FOG_GROUP) if in_compositor else None
-    notes = compositor.follow(scene, rebuild, fog)
-    old = bpy.data.node_groups.get(comp_fog.FOG_GROUP)
-    if not in_compositor and old is not None and old.users == 0:   # the method changed from Compositor
-        bpy.data.node_groups.remove(old)
+    method = built_method() or methods.get("nodes")
+    notes = method.follow(scene, rebuild)
+    if method.name != COMPOSITOR:
+        methods.get(COMPOSITOR).teardown(scene)   # the method changed from Compositor: its unused group goes
     return notes
 
 
 def check_compositor_method(scene, with_passes):
-    """Raise ValueError unless ``scene`` can take the Compositor method (``comp_fog.py``'s limits)."""
-    if scene.render.engine not in ("CYCLES", groups.EEVEE_ENGINE):
-        raise ValueError(f"the Compositor method needs Cycles or EEVEE, not {scene.render.engine}")
-    if scene.camera.data.type != "PERSP":
-        raise ValueError(f"the Compositor method needs a perspective camera ({scene.camera.name!r} is "
-                         f"{scene.camera.data.type.lower()}): use the Node Groups method")
-    if with_passes:
-        raise ValueError("the Compositor method adds the fog's light in the compositor, so there are no fog "
-                         "passes: switch Fog Passes off or use the Node Groups method")
+    """Raise ValueError unless ``scene`` can take the Compositor method (``methods.compositor``)."""
+    why = methods.get(COMPOSITOR).check(scene, spec_of(scene).replace(passes=bool(with_passes)))
+    if why is not None:
+        raise ValueError(why)
+
+
+SYNC_LEVELS = ("params", "groups", "rechoose")   # what a sync does: the params group; + the scene groups
+#                                                  (lights keep their steps); + every light's models chosen again
+_sync_errors = {}   # scene name -> why the last sync failed (the panel shows it), absent if it succeeded
+
+
+def sync(scene, level="groups"):
+    """Make the fog follow the scene's settings (``spec_of``): the params group, and at ``level`` "groups" or
+    "rechoose" the scene groups (materials are not touched).  A failure (a setting the method can't serve)
+    changes nothing, and is kept for the panel (``sync_error``) and returned."""
+    try:
+        spec = spec_of(scene)
+        surface = bpy.data.node_groups.get(groups.SURFACE)
+        if surface is not None and surface.library is not None:
+            return None
+        if level != "params" and surface is not None:
+            lights = fog_lights(scene)[0]
+            method, reason = resolve_method(scene, spec, lights)
+            check_method(scene, spec, method)
+            groups.set_params(spec.beta_per_unit, spec.albedo, spec.anisotropy, world_light=spec.world_light)
+            _build_scene_groups(scene, spec, lights, method, reason, rechoose=level == "rechoose")
+            follow_compositor(scene, rebuild=True)
+        else:
+            groups.set_params(spec.beta_per_unit, spec.albedo, world_light=spec.world_light)
+    except ValueError as e:
+        _sync_errors[scene.name] = str(e)
+        print(f"Analytic Fog: the fog keeps what it was built with: {e}")
+        return str(e)
+    _sync_errors.pop(scene.name, None)
+    return None
+
+
+def sync_error(scene):
+    """Why the fog could not follow the scene's last settings change, or None."""
+    return _sync_errors.get(scene.name)
 
 
 def update_params(scene):
-    """Push the scene's density, colour and scale into the shared params group."""
-    s = scene.analytic_fog
-    groups.set_params(s.density * s.scene_scale, tuple(s.color), world_light=s.world_light)
-
-
-_KEEP = object()   # _rebuild: keep the setting the scene groups were built with
-
-
-def _rebuild(scene, surface, preference=_KEEP, with_passes=_KEEP, quality=_KEEP, rechoose=False,
-             this_frame=False):
-    """Rebuild the scene groups (materials are not touched) for the settings given, keeping the rest as
-    ``surface`` (the Surface group) was built."""
-    choice = stored_choice() or {}
-    _build_scene_groups(scene, fog_lights(scene)[0],
-                        surface.get(PREFERENCE_KEY, "nodes") if preference is _KEEP else preference,
-                        bool(surface.get(PASSES_KEY, False)) if with_passes is _KEEP else with_passes,
-                        choice.get("quality", predict.DEFAULT_QUALITY) if quality is _KEEP else quality,
-                        rechoose=rechoose, this_frame=this_frame)
+    """Push the scene's density, colour, scale and World Light into the shared params group."""
+    return sync(scene, "params")
 
 
 def set_anisotropy(scene, g):
-    """The user changed the anisotropy: the lights keep their steps, now with g's models (materials are not
+    """Set the anisotropy and follow it: the lights keep their steps, now with g's models (materials are not
     touched).  Raises ValueError, changing nothing, for a g outside the range or one the method's models
     don't serve."""
-    fog = medium.medium(1.0, (1.0, 1.0, 1.0), g)
-    surface = bpy.data.node_groups.get(groups.SURFACE)
-    if surface is None or fog.g == groups.get_anisotropy():
-        return
-    rungs.choose(surface.get(PREFERENCE_KEY, "nodes"), 0, fog.g)
-    groups.set_anisotropy(fog.g)
-    _rebuild(scene, surface)
+    _set_and_sync(scene, anisotropy=g)
 
 
 def set_method(scene, method):
-    """The user changed the method preference: the lights keep their steps, now with ``method``'s models."""
-    surface = bpy.data.node_groups.get(groups.SURFACE)
-    if surface is not None:
-        rungs.choose(method, 0, groups.get_anisotropy())   # raises (nothing changed) for a g it can't serve
-        if method == COMPOSITOR:
-            check_compositor_method(scene, bool(surface.get(PASSES_KEY, False)))
-        _rebuild(scene, surface, preference=method)
-        follow_compositor(scene, rebuild=True)
+    """Set the method and follow it: the lights keep their steps, now with ``method``'s models."""
+    _set_and_sync(scene, method=method)
 
 
 def set_passes(scene, with_passes):
-    """The user switched the fog passes on or off: rebuild the scene groups (materials are not touched)."""
-    surface = bpy.data.node_groups.get(groups.SURFACE)
-    if surface is not None:
-        if with_passes and surface.get(PREFERENCE_KEY) == COMPOSITOR:
-            check_compositor_method(scene, with_passes)
-        _rebuild(scene, surface, with_passes=with_passes)
+    """Switch the fog passes on or off and follow it (materials are not touched)."""
+    _set_and_sync(scene, passes=bool(with_passes))
 
 
 def set_quality(scene, quality):
-    """The user changed the Quality: choose every light's models again (materials are not touched)."""
+    """Set the Quality and choose every light's models again (materials are not touched)."""
+    _set_and_sync(scene, "rechoose", quality=quality_value(quality))
+
+
+def _set_and_sync(scene, level="groups", **changes):
+    """Store ``changes`` to the scene's spec and sync; raises ValueError (the settings kept) if it fails."""
+    old = spec_of(scene)
+    new = old.replace(**changes)
     surface = bpy.data.node_groups.get(groups.SURFACE)
-    if surface is not None and surface.library is None:
-        _rebuild(scene, surface, quality=quality, rechoose=True)
+    if surface is not None:
+        lights = fog_lights(scene)[0]
+        check_method(scene, new, resolve_method(scene, new, lights)[0])
+    store_spec(scene, new)
+    why = sync(scene, level)
+    if why is not None:
+        store_spec(scene, old)
+        raise ValueError(why)
 
 
 def refresh_lights(scene, rechoose=False, this_frame=False):
     """Rebuild the scene groups if the fog lights, their models or the camera changed; materials are not
     touched.  Called from the depsgraph handler: when nothing changed it only compares names (and sets the
-    Compositor method's windows).  ``rechoose``: also choose the lights' models again from the view
-    (camera, lights or objects moved); the handler does that after the scene has stopped changing
+    Compositor method's windows).  ``rechoose``: also choose the lights' models (and Auto's method) again from
+    the view (camera, lights or objects moved); the handler does that after the scene has stopped changing
     (``handlers.py``).  ``this_frame``: the handlers' calls, which do not step through frames (the windows
     of an animation grow by this frame's; saving the file computes them over the range again)."""
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is None or surface.library is not None:
         return
-    _rebuild(scene, surface, rechoose=rechoose, this_frame=this_frame)
-    follow_compositor(scene)   # the engine or the denoiser flag may have changed
+    _rebuilt.discard(scene.name)
+    try:
+        spec = spec_of(scene)
+        _build_scene_groups(scene, spec, fog_lights(scene)[0], rechoose=rechoose, this_frame=this_frame)
+    except ValueError as e:
+        _sync_errors[scene.name] = str(e)
+        return
+    # the engine or the denoiser flag may have changed; rebuilt groups need the chain built anew
+    follow_compositor(scene, rebuild=scene.name in _rebuilt)
 
 
 def grow_windows(scene):
-    """The frame changed (an animation plays or renders): the Compositor method's windows grow by this frame's
-    (``view.windows``), so a light moved since they were computed over the range is not cut on this frame."""
-    surface = bpy.data.node_groups.get(groups.SURFACE)
-    if surface is None or surface.get(PREFERENCE_KEY) != COMPOSITOR or comp_fog.FOG_GROUP not in bpy.data.node_groups:
+    """The frame changed (an animation plays or renders): the built method follows (``Method.frame_change``:
+    the Compositor method's windows grow by this frame's, so a light moved since they were computed over the
+    range is not cut on this frame)."""
+    method = built_method()
+    if method is None:
         return
     lights = _in_groups(fog_lights(scene)[0], stored_choice() or {"lights": {}})
-    comp_fog.set_windows(lights, view.windows(scene, lights, [scene.frame_current]), grow=True)
+    method.frame_change(scene, lights)
 
 
 def remove_fog(scene, progress=progress_.silent):

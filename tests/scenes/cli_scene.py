@@ -92,10 +92,10 @@ def main_settings(blend):
     def case(engine, method=None):
         args = argparse.Namespace(engine_id=engine, method=method)
         try:
-            kwargs, shown, notes = render.fog_settings(scene, args)
+            spec, _, shown, notes = render.fog_settings(scene, args)
         except SystemExit as e:
             return {"exit": str(e)}
-        return {"method": kwargs["method"], "source": shown["method"][1], "notes": [n for _, n in notes]}
+        return {"method": spec.method, "source": shown["method"][1], "notes": [n for _, n in notes]}
 
     res["cycles_file_osl"] = case("CYCLES")
     res["eevee_file_osl"] = case("BLENDER_EEVEE")

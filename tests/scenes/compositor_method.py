@@ -240,7 +240,7 @@ def main():
         scene.collection.objects.link(lamp)
         lamps.append(lamp)
     bpy.context.view_layer.update()
-    kept, models = apply.dimming_lights(scene, lamps, "compositor")
+    kept, models = apply.dimming_lights(scene, apply.spec_of(scene), lamps)
     score = {o.name: o.data.energy / (o.matrix_world.translation - eye).length_squared for o in lamps}
     res["dimming"] = {"kept": len(kept), "models": sorted({m.airlight.name for m in models}),
                       "fits": groups.eevee_budget(0.0).fits([2] * len(kept)),
@@ -248,7 +248,7 @@ def main():
                       "brightest": min(score[o.name] for o in kept) >= max(
                           [score[o.name] for o in lamps if o not in kept], default=0.0)}
     scene.render.engine = "CYCLES"   # Cycles' lights dim their own direct light: none in the materials
-    res["dimming"]["cycles"] = len(apply.dimming_lights(scene, lamps, "compositor")[0])
+    res["dimming"]["cycles"] = len(apply.dimming_lights(scene, apply.spec_of(scene), lamps)[0])
     res["shared"] = shared()
     print("COMPOSITOR_JSON " + json.dumps(res), flush=True)
 

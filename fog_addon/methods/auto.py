@@ -1,0 +1,150 @@
+"""Method Auto: per scene, the node groups or the compositor, by predicted cost and by what the scene needs.
+
+The predicted cost of a method is the render time with the fog over the same render without it, from
+the scene's lights, fogged materials, pixels, samples and engine (``predicted_ratio``; the model and the
+measurements it is fitted to: docs/decisions/auto-method.md):
+
+* node groups: every fogged material evaluates every light on every sample, so their share of the render
+  does not depend on pixels or samples, and grows with the lights (Cycles: 1 + 2.9 N^0.85; EEVEE:
+  1 + 0.05 N^0.8), plus, in Cycles, the set-up before the first sample, which grows with materials x N^2
+  (Cycles' node deduplication), against the fog-free render's time (pixels x samples);
+* the compositor: a cost per pixel and frame, fixed plus a part per light, against the render's cost per
+  pixel, which grows with the samples (Cycles: 1 + (0.27 + 0.0105 N) 16 / samples; EEVEE: 1 + (0.05 +
+  0.001 N) 16 / samples).
+
+N counts lights; a scene's Quality steps some of them down the ladder, which both methods profit from.
+
+What the scene needs comes first:
+
+* fog passes, or a camera that is not perspective (panoramic): the node groups (hard: the compositor has
+  neither);
+* anisotropy below the node groups' tables (g < rungs.MIN_TABLE_ANISOTROPY): OSL in Cycles;
+* EEVEE's uniform block can't hold every light's node groups: the compositor (the node groups would step
+  lights down beyond the Quality's target);
+* surfaces the compositor's one point per pixel would get wrong (transparent, glass or refracting
+  materials on objects the camera sees, depth of field, motion blur): the node groups, unless their
+  predicted cost exceeds SOFT_COST_LIMIT; then the compositor, and the choice says what it gets wrong.
+"""
+from . import METHODS_BY_NAME
+
+SOFT_COST_LIMIT = 6.0   # a soft need keeps the node groups while they cost at most this (x the fog-free render)
+_REFERENCE_SAMPLES = 16
+_CYCLES_S_PER_PIXEL_SAMPLE = 7.2e-7   # the fog-free render's time per pixel and sample (Cycles CPU, 2 cores)
+_CYCLES_SETUP_S = 1.2e-3              # Cycles' node set-up per fogged material and light squared (first render)
+_COST = {   # (node groups: a, p of 1 + a N^p), (compositor: fixed, per light, at 16 samples)
+    "CYCLES": ((2.9, 0.85), (0.27, 0.0105)),
+    "BLENDER_EEVEE": ((0.05, 0.8), (0.05, 0.001)),
+}
+_SEE_THROUGH = ("ShaderNodeBsdfTransparent", "ShaderNodeBsdfGlass", "ShaderNodeBsdfRefraction",
+                "ShaderNodeBsdfTranslucent", "ShaderNodeBsdfHairPrincipled", "ShaderNodeBsdfHair")
+
+
+def predicted_ratio(method, engine, lights, materials=1, pixels=320 * 180, samples=16):
+    """The render time with the fog over without it (dimensionless) that ``method`` is predicted to cost
+    (module docstring): ``lights`` taking part, fogged ``materials``, ``pixels`` and ``samples`` per pixel."""
+    (a, p), (fixed, per_light) = _COST.get(engine, _COST["CYCLES"])
+    n = max(int(lights), 0)
+    samples = max(int(samples), 1)
+    if method == "compositor":
+        return 1.0 + (fixed + per_light * n) * _REFERENCE_SAMPLES / samples
+    ratio = 1.0 + (a * n ** p if n else 0.0)
+    if engine == "CYCLES":
+        base_s = _CYCLES_S_PER_PIXEL_SAMPLE * max(pixels, 1) * samples
+        ratio += _CYCLES_SETUP_S * max(materials, 1) * n * n / base_s
+    return ratio * (1.1 if method == "osl" else 1.0)
+
+
+def samples_of(scene):
+    """Samples per pixel the scene renders with."""
+    if scene.render.engine == "CYCLES":
+        return int(scene.cycles.samples)
+    return int(getattr(scene.eevee, "taa_render_samples", 16))
+
+
+def pixels_of(scene):
+    r = scene.render
+    return int(r.resolution_x * r.resolution_y * (r.resolution_percentage / 100.0) ** 2)
+
+
+def see_through_materials(materials, objects):
+    """Names of ``materials`` that let the camera see through them (transparent, glass, refraction, a
+    Principled BSDF with transmission or alpha below 1) on ``objects`` the camera sees."""
+    seen = {slot.material for obj in objects if obj.visible_camera
+            for slot in getattr(obj, "material_slots", ()) if slot.material is not None}
+    names = []
+    for mat in materials:
+        if mat not in seen or mat.node_tree is None:
+            continue
+        for node in mat.node_tree.nodes:
+            if node.mute:
+                continue
+            if node.bl_idname in _SEE_THROUGH or (node.bl_idname == "ShaderNodeBsdfPrincipled"
+                                                  and _principled_see_through(node)):
+                names.append(mat.name)
+                break
+    return names
+
+
+def _principled_see_through(node):
+    for name, clear in (("Transmission Weight", 0.0), ("Alpha", 1.0)):
+        sock = node.inputs.get(name)
+        if sock is not None and (sock.is_linked or sock.default_value != clear):
+            return True
+    return False
+
+
+def _soft_needs(scene, materials):
+    """What the compositor's one surface point per pixel would get wrong in ``scene``, as phrases."""
+    needs = []
+    cam = scene.camera
+    if cam is not None and cam.data.dof.use_dof:
+        needs.append("depth of field")
+    if scene.render.use_motion_blur:
+        needs.append("motion blur")
+    see = see_through_materials(materials, scene.objects)
+    if see:
+        shown = ", ".join(see[:3]) + (f" and {len(see) - 3} more" if len(see) > 3 else "")
+        needs.append(f"see-through materials ({shown})")
+    return needs
+
+
+def choose(scene, spec, lights, materials):
+    """(method name, reason) for ``scene``: Auto's choice (module docstring).  ``lights``: the lights taking
+    part; ``materials``: the fogged materials."""
+    from ..nodes import groups
+    from ..ops import view
+    from ..precompute import rungs
+    engine = scene.render.engine
+    if spec.anisotropy < rungs.MIN_TABLE_ANISOTROPY:
+        if engine == "CYCLES":
+            return "osl", f"anisotropy {spec.anisotropy:g} is below the node groups' tables: OSL serves it"
+        return "nodes", "no method serves this anisotropy in EEVEE"   # (the node groups' check says why)
+    compositor = METHODS_BY_NAME["compositor"]
+    hard = compositor.check(scene, spec)
+    n, m = len(lights), len(materials)
+    px, spp = pixels_of(scene), samples_of(scene)
+    cost = {name: predicted_ratio(name, engine, n, m, px, spp) for name in ("nodes", "compositor")}
+    costs = f"predicted {cost['nodes']:.2f}x with node groups, {cost['compositor']:.2f}x with the compositor"
+    if hard is not None:
+        why = hard.split(":")[0].replace("the Compositor method", "the compositor")
+        return "nodes", f"{why}"
+    if engine == groups.EEVEE_ENGINE and n:
+        budget = groups.eevee_budget(spec.anisotropy, [view.is_spot(o) for o in lights])
+        if not budget.fits([0] * n):
+            return "compositor", (f"EEVEE's uniform block can't hold the node groups of {n} lights at full models; "
+                                  f"{costs}")
+    soft = _soft_needs(scene, materials)
+    if soft and cost["nodes"] <= SOFT_COST_LIMIT:
+        return "nodes", f"{' and '.join(soft)}: the compositor sees one surface point per pixel; {costs}"
+    if cost["compositor"] < cost["nodes"]:
+        if soft:
+            return "compositor", (f"{costs}; the compositor's one surface point per pixel is approximate with "
+                                  f"{' and '.join(soft)}")
+        return "compositor", costs
+    return "nodes", costs
+
+
+def describe(name, reason):
+    """One line for the panel, the operator's report and ``render --explain``."""
+    return f"Method Auto: {METHODS_BY_NAME[name].label} ({reason})"
+

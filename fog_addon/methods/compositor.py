@@ -1,0 +1,107 @@
+"""The Compositor method: the fog's light added once per pixel in the compositor (``nodes/comp_fog.py``).
+
+The materials keep only what depends on each sample's depth (the camera ray's extinction, and in EEVEE
+the lights' shared dimming of direct light: ``dimming_lights``); the compositor's group evaluates each
+light's glows and the fog light its pixel's surface reflects, within the light's window
+(``precompute/footprint.py``).  Limits: one surface point per pixel, perspective cameras, no fog passes.
+"""
+import functools
+
+import bpy
+
+from ..nodes import comp_fog, compositor, groups
+from ..ops import view
+from ..precompute import rungs
+from .base import Method
+
+
+class Compositor(Method):
+    name = "compositor"
+    label = "Compositor"
+    preference = "compositor"
+
+    def check(self, scene, spec):
+        why = super().check(scene, spec)
+        if why is not None:
+            return why
+        camera = scene.camera
+        if camera is not None and camera.data.type != "PERSP":
+            return (f"the Compositor method needs a perspective camera ({camera.name!r} is "
+                    f"{camera.data.type.lower()}): use the Node Groups method")
+        if spec.passes:
+            return ("the Compositor method adds the fog's light in the compositor, so there are no fog passes: "
+                    "switch Fog Passes off or use the Node Groups method")
+        return None
+
+    def shader_lights(self, scene, spec, lights, models):
+        return dimming_lights(scene, spec, lights)
+
+    def signature(self, scene, spec, shader_lights):
+        c = scene.cycles
+        return (f"compositor:{scene.render.engine}:{c.pixel_filter_type}:{comp_fog.horizontal_fit(scene)}:"
+                f"{scene.camera.data.sensor_fit}|dimming:" + ",".join(o.name_full for o in shader_lights))
+
+    def windows(self, scene, lights, partial):
+        return view.windows(scene, lights, [scene.frame_current] if partial else None)
+
+    def is_built(self):
+        return bpy.data.node_groups.get(comp_fog.FOG_GROUP) is not None
+
+    def build(self, scene, spec, plan, images):
+        aovs = functools.partial(comp_fog.add_surface_aovs, engine=scene.render.engine)
+        groups.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs)
+        images = comp_fog.build_fog_group(scene, plan.in_groups, plan.grouped_models, images,
+                                          view.full_windows(plan.in_groups) if plan.partial else plan.windows,
+                                          plan.partial)
+        groups.build_world([], [], scene.camera, images, spec.passes)
+        return images
+
+    def update(self, scene, spec, plan):
+        if plan.windows is not None:
+            comp_fog.set_windows(plan.in_groups, plan.windows, grow=plan.partial)
+
+    def passes(self, scene, spec):
+        return comp_fog.aovs(scene.render.engine)
+
+    def notes(self, scene, spec, plan):
+        n, kept = len(plan.in_groups), len(plan.shader_lights)
+        if scene.render.engine == groups.EEVEE_ENGINE and kept < n:
+            return [(scene.render.engine, f"{n - kept} of {n} lights are not in the materials' shared dimming of "
+                     "direct light (EEVEE's uniform block): their direct light is dimmed as the nearer lights' is")]
+        return []
+
+    def frame_change(self, scene, lights):
+        if comp_fog.FOG_GROUP in bpy.data.node_groups:
+            comp_fog.set_windows(lights, view.windows(scene, lights, [scene.frame_current]), grow=True)
+
+    def follow(self, scene, rebuild):
+        return compositor.follow(scene, rebuild, bpy.data.node_groups.get(comp_fog.FOG_GROUP))
+
+    def teardown(self, scene):
+        old = bpy.data.node_groups.get(comp_fog.FOG_GROUP)
+        if old is not None and old.users == 0:
+            bpy.data.node_groups.remove(old)
+
+
+def dimming_lights(scene, spec, lights):
+    """The Compositor method's materials' lights: ([], []) in Cycles, whose lights dim their own direct light
+    (``light.py``); in EEVEE, which has no light node trees, (lights, models) of the lights whose direct
+    light the materials dim by the shared weights of ``shading.surface_fog`` (rungs step "off": no fog light,
+    which the compositor adds), as many as EEVEE's uniform block holds (``groups.eevee_budget``), the
+    brightest at the camera first (radiant intensity over squared distance)."""
+    if scene.render.engine != groups.EEVEE_ENGINE or not lights:
+        return [], []
+    spots = [view.is_spot(o) for o in lights]
+    budget = groups.eevee_budget(0.0, spots)   # step "off" has no phase weight: its cost does not depend on g
+    eye = scene.camera.matrix_world.translation
+    intensity = view.light_intensities(lights).sum(axis=1)
+    order = sorted(range(len(lights)), key=lambda i: -intensity[i] / max(
+        (lights[i].matrix_world.translation - eye).length_squared, 1e-12))
+    steps = [rungs.LEFT_OUT] * len(lights)
+    for i in order:
+        steps[i] = rungs.OFF
+        if not budget.fits(steps):
+            steps[i] = rungs.LEFT_OUT
+            break
+    kept = [i for i in range(len(lights)) if steps[i] == rungs.OFF]
+    return [lights[i] for i in kept], [rungs.choose("compositor", rungs.OFF, spec.anisotropy, spots[i]) for i in kept]

@@ -1,0 +1,126 @@
+"""The fog's settings as one validated value: :class:`FogSpec`.
+
+Every decision the add-on makes (which method, which models, which passes, what the groups hold) reads
+a ``FogSpec``.  It is built from the scene's ``scene.analytic_fog`` (``FogSpec.from_settings``), or from
+the command line's flags over it (``FogSpec.replace``); nothing reads a setting back out of a node group.
+The node groups hold a copy (``to_json``) so that a farm without the add-on, or a person reading the
+file, can see what the fog was built with.
+
+Units, stated once:
+
+* ``density``: the extinction coefficient beta of the fog in 1/m of the real world (Sun et al. 2005
+  section 3: extinction = scattering, no absorption); Koschmieder's visibility is 3.912 / beta.
+* ``scene_scale``: real metres per Blender unit, so the shaders' beta is ``beta_per_unit`` =
+  density x scene_scale (1/unit).
+* ``albedo``: the single-scattering albedo per RGB channel, in [0, 1] (the fog's colour).
+* ``anisotropy``: the Henyey-Greenstein g of the phase function, in [-MAX_ANISOTROPY, MAX_ANISOTROPY].
+* ``method``: "auto" (``fog_addon/methods/auto.py`` picks per scene), or a method of
+  ``METHODS``: "nodes", "osl", "compositor".
+* ``quality``: a Quality preset name of ``predict.QUALITY`` ("draft", "final", "exact") or a target
+  relative error in (0, 1).
+* ``passes``: write the Fog Light and Fog Transmittance render passes.
+* ``world_light``: the World keeps lighting surfaces through the fog (an artistic ambient).
+
+Settings of the terms still to come (shadows, multiple scattering, daylight) become fields here.
+"""
+import dataclasses
+import json
+
+from . import medium, predict, presets
+
+METHODS = ("nodes", "osl", "compositor")   # the methods a user can pick besides "auto" (``fog_addon/methods``)
+AUTO = "auto"
+DEFAULT_METHOD = AUTO
+
+
+def validate_method(method):
+    """``method`` lower-cased if it is "auto" or one of METHODS, else ValueError with the choices."""
+    m = str(method).lower()
+    if m != AUTO and m not in METHODS:
+        raise ValueError(f"unknown method {method!r}; use one of {', '.join((AUTO,) + METHODS)}")
+    return m
+
+
+def validate_quality(quality):
+    """The stored form of a Quality: a preset name ("draft", "final", "exact") or a float; raises ValueError."""
+    if quality is None:
+        return "exact"
+    if isinstance(quality, str):
+        q = quality.strip().lower()
+        predict.target_error(q)
+        return q
+    predict.target_error(quality)
+    return float(quality)
+
+
+@dataclasses.dataclass(frozen=True)
+class FogSpec:
+    """The fog's settings (units: module docstring); construct with :func:`spec` or ``FogSpec(...).validated()``."""
+    density: float = presets.PRESETS["fog"]
+    scene_scale: float = 1.0
+    albedo: tuple = (1.0, 1.0, 1.0)
+    anisotropy: float = 0.0
+    method: str = DEFAULT_METHOD
+    quality: object = predict.DEFAULT_QUALITY
+    passes: bool = False
+    world_light: bool = False
+
+    @property
+    def beta_per_unit(self):
+        """The shaders' extinction coefficient, 1/(Blender unit): density x scene_scale."""
+        return self.density * self.scene_scale
+
+    @property
+    def medium(self):
+        """The fog as ``medium.Medium`` (beta per Blender unit, albedo, g)."""
+        return medium.Medium(self.beta_per_unit, self.albedo, self.anisotropy)
+
+    @property
+    def target_error(self):
+        """The Quality as a target relative error, None for Exact (``predict.target_error``)."""
+        return predict.target_error(self.quality)
+
+    def validated(self):
+        """This spec with every field checked and normalised; raises ValueError with a message a user understands."""
+        fog = medium.medium(self.density, self.albedo, self.anisotropy, self.scene_scale)
+        return dataclasses.replace(
+            self, density=presets.validate_density(self.density), scene_scale=float(self.scene_scale),
+            albedo=tuple(float(a) for a in fog.albedo), anisotropy=fog.g, method=validate_method(self.method),
+            quality=validate_quality(self.quality), passes=bool(self.passes), world_light=bool(self.world_light))
+
+    def replace(self, **changes):
+        """A validated copy with ``changes`` (None values keep this spec's: the command line's unset flags)."""
+        return dataclasses.replace(self, **{k: v for k, v in changes.items() if v is not None}).validated()
+
+    def to_json(self):
+        return json.dumps(dataclasses.asdict(self), sort_keys=True)
+
+    @classmethod
+    def from_json(cls, text):
+        data = json.loads(text)
+        data["albedo"] = tuple(data["albedo"])
+        return cls(**{f.name: data[f.name] for f in dataclasses.fields(cls) if f.name in data}).validated()
+
+    @classmethod
+    def from_settings(cls, settings):
+        """The spec of a ``scene.analytic_fog`` (``props.AnalyticFogSettings``, or anything with its fields)."""
+        quality = settings.target_error if settings.quality == "CUSTOM" else settings.quality.lower()
+        return cls(density=settings.density, scene_scale=settings.scene_scale, albedo=tuple(settings.color),
+                   anisotropy=settings.anisotropy, method=settings.method.lower(), quality=quality,
+                   passes=settings.use_passes, world_light=settings.world_light).validated()
+
+    def settings_values(self):
+        """{property: value} that store this spec in a ``scene.analytic_fog`` (the inverse of ``from_settings``)."""
+        values = dict(density=self.density, scene_scale=self.scene_scale, color=self.albedo,
+                      anisotropy=self.anisotropy, method=self.method.upper(), use_passes=self.passes,
+                      world_light=self.world_light)
+        if isinstance(self.quality, str):
+            values["quality"] = self.quality.upper()
+        else:
+            values.update(quality="CUSTOM", target_error=self.quality)
+        return values
+
+
+def spec(**fields):
+    """A validated FogSpec (keyword fields as in :class:`FogSpec`); raises ValueError for bad input."""
+    return FogSpec(**fields).validated()
