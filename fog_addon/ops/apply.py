@@ -5,6 +5,7 @@ from typing import Any, NamedTuple
 import bpy
 
 from .. import methods
+from ..methods.node_groups import MANY_LIGHTS  # noqa: F401  (the panel's)
 from ..nodes import comp_fog, compositor, dedupe, groups, images, osl, passes
 from ..nodes.light import unwrap_light, wrap_light
 from ..nodes.material import unwrap_material, wrap_material
@@ -25,8 +26,8 @@ CHOICE_KEY = "analytic_fog_choice"   # on the Surface group: the Quality, {light
 #                                      the method and why (Auto)
 AOV_KINDS = dict(passes.AOVS + comp_fog.AOVS + comp_fog.EEVEE_AOVS)   # every AOV the fog adds to view layers
 COMPOSITOR = "compositor"   # the method that adds the fog's light in the compositor (``methods/compositor.py``)
-MANY_LIGHTS = methods.node_groups.MANY_LIGHTS   # from this many fog lights on, the panel and (in Cycles) the
-#                                                 report say that the node groups cost far more than the compositor
+# MANY_LIGHTS: from this many fog lights on, the panel and (in Cycles) the report say that the node groups cost
+# far more than the compositor
 
 
 def fog_lights(scene):

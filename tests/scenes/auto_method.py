@@ -1,0 +1,97 @@
+"""Method Auto's choice on the many-lights scene, without rendering; prints one JSON line (tests/test_auto_method.py).
+
+Each case builds the scene (``fog_scenes.many_lights.build_scene``: a ground, three spheres, N lamps, Cycles
+or EEVEE at 320x180, 16 samples), changes one thing and records ``methods.resolve``'s (method, reason) for
+the default spec (Method Auto), then adds the fog through the operator for a few cases and records what the
+operator reported, what was built and what a refused settings change left behind.
+"""
+import json
+import pathlib
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+import bpy  # noqa: E402
+
+import fog_addon  # noqa: E402
+from fog_addon import methods  # noqa: E402
+from fog_addon.ops import apply  # noqa: E402
+from fog_scenes import many_lights  # noqa: E402
+
+RES = {}
+
+
+def scene_with(n, engine="CYCLES", samples=16):
+    scene, _ = many_lights.build_scene(n, direct_light=True)
+    scene.render.engine = engine
+    scene.render.resolution_x, scene.render.resolution_y = 320, 180
+    scene.cycles.samples = samples
+    scene.eevee.taa_render_samples = samples
+    return scene
+
+
+def choice(scene, **changes):
+    spec = apply.spec_of(scene).replace(**changes)
+    lights = apply.fog_lights(scene)[0]
+    method, reason = methods.resolve(scene, spec, lights, apply.scene_materials(scene))
+    return [method.name, reason]
+
+
+def glass(scene):
+    mat = bpy.data.materials.new("Window Glass")
+    nodes = mat.node_tree.nodes
+    out = next(n for n in nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    g = nodes.new("ShaderNodeBsdfGlass")
+    mat.node_tree.links.new(g.outputs[0], out.inputs["Surface"])
+    bpy.data.objects["glossy"].material_slots[0].material = mat
+
+
+def main():
+    fog_addon.register()
+    scene = scene_with(1)
+    RES["cycles_1"] = choice(scene)
+    RES["cycles_1_passes"] = choice(scene, passes=True)
+    RES["cycles_1_explicit_nodes"] = choice(scene, method="nodes")
+    RES["cycles_1_g_below_tables"] = choice(scene, anisotropy=-0.9)
+    scene.camera.data.type = "PANO"
+    RES["cycles_1_panoramic"] = choice(scene)
+    scene.camera.data.type = "PERSP"
+    scene.cycles.samples = 1
+    RES["cycles_1_one_sample"] = choice(scene)
+    scene.cycles.samples = 16
+    glass(scene)
+    RES["cycles_1_glass"] = choice(scene)
+
+    scene = scene_with(25)
+    RES["cycles_25"] = choice(scene)
+    glass(scene)
+    RES["cycles_25_glass"] = choice(scene)
+
+    scene = scene_with(64, "BLENDER_EEVEE")
+    RES["eevee_64"] = choice(scene)
+    scene = scene_with(1, "BLENDER_EEVEE")
+    RES["eevee_1"] = choice(scene)
+
+    # through the operator: what it reports and builds, then a change the chosen method can't serve
+    scene = scene_with(4)
+    reports = []
+    RES["add"] = sorted(bpy.ops.fog.add(density=many_lights.BETA))
+    RES["stored"] = apply.stored_choice()
+    RES["built"] = apply.built_method().name
+    RES["explain"] = apply.explain()
+    RES["spec_method"] = scene.analytic_fog.method
+    s = scene.analytic_fog
+    s.method = "COMPOSITOR"
+    s.use_passes = True   # the Compositor method has no passes: refused, the fog keeps what it has
+    RES["refused"] = {"error": apply.sync_error(scene), "built": apply.built_method().name,
+                      "passes_aovs": [a.name for a in scene.view_layers[0].aovs if a.name.startswith("Fog Light")]}
+    s.method = "AUTO"   # Auto serves fog passes with the node groups: the error clears
+    RES["auto_with_passes"] = {"error": apply.sync_error(scene), "built": apply.built_method().name,
+                               "line": apply.method_line(apply.stored_choice())}
+    del reports
+    print("AUTO_JSON " + json.dumps(RES), flush=True)
+
+
+if __name__ == "__main__":
+    main()

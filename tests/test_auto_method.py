@@ -1,0 +1,71 @@
+"""Method Auto (``fog_addon/methods/auto.py``), the default: per scene, the node groups or the compositor, by
+predicted cost and by what the scene needs; the choice and its reason shown (tests/scenes/auto_method.py, one
+process, no render).  Its cost goals are a benchmark (benchmarks/overhead.py --methods cycles_auto), not a test."""
+import json
+
+import pytest
+
+from fog_scenes import render_harness as h
+
+pytestmark = pytest.mark.render   # starts Blender (bpy) in a subprocess
+
+
+@pytest.fixture(scope="module")
+def res():
+    proc = h.run([h.ROOT / "tests" / "scenes" / "auto_method.py"], timeout=600)
+    line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("AUTO_JSON "))
+    return json.loads(line.split(" ", 1)[1])
+
+
+def test_cost_picks_the_compositor_in_cycles(res):
+    """Cycles' node groups cost about 4x the fog-free render with one lamp and ~30x with 16; the compositor
+    1.3-1.5x: Auto takes the compositor, and says the predicted figures."""
+    for case in ("cycles_1", "cycles_25"):
+        name, reason = res[case]
+        assert name == "compositor" and "predicted" in reason, (case, res[case])
+
+
+def test_few_samples_keep_the_node_groups(res):
+    """The compositor's cost is per pixel and frame, the render's per sample: at 1 sample the node groups win."""
+    assert res["cycles_1_one_sample"][0] == "nodes", res["cycles_1_one_sample"]
+
+
+def test_what_only_the_node_groups_have(res):
+    assert res["cycles_1_passes"][0] == "nodes" and "fog passes" in res["cycles_1_passes"][1]
+    assert res["cycles_1_panoramic"][0] == "nodes" and "perspective" in res["cycles_1_panoramic"][1]
+    assert res["cycles_1_g_below_tables"][0] == "osl", res["cycles_1_g_below_tables"]
+
+
+def test_see_through_materials(res):
+    """Glass in view: the compositor's one surface point per pixel is wrong there; the node groups while they
+    cost little (1 lamp), else the compositor with the caveat said."""
+    name, reason = res["cycles_1_glass"]
+    assert name == "nodes" and "Window Glass" in reason, res["cycles_1_glass"]
+    name, reason = res["cycles_25_glass"]
+    assert name == "compositor" and "Window Glass" in reason and "approximate" in reason, res["cycles_25_glass"]
+
+
+def test_eevee(res):
+    """EEVEE's uniform block can't hold 64 lamps' node groups: the compositor; one lamp costs EEVEE's node
+    groups little (1.03x measured): they keep it."""
+    assert res["eevee_64"][0] == "compositor" and "uniform block" in res["eevee_64"][1], res["eevee_64"]
+    assert res["eevee_1"][0] == "nodes", res["eevee_1"]
+
+
+def test_explicit_method_has_no_reason(res):
+    assert res["cycles_1_explicit_nodes"] == ["nodes", None]
+
+
+def test_operator_reports_and_stores_the_choice(res):
+    assert res["add"] == ["FINISHED"] and res["spec_method"] == "AUTO"
+    assert res["built"] == res["stored"]["method"] == "compositor" and res["stored"]["method_reason"]
+    assert any(line.strip().startswith("Method Auto: Compositor (predicted") for line in res["explain"]), res["explain"]
+
+
+def test_refused_change_is_shown_and_changes_nothing(res):
+    """Fog passes with Method Compositor: refused; the fog keeps its groups, the panel shows why; Auto then
+    serves the passes with the node groups and the message clears."""
+    r = res["refused"]
+    assert r["error"] and "no fog passes" in r["error"] and r["built"] == "compositor" and not r["passes_aovs"], r
+    a = res["auto_with_passes"]
+    assert a["error"] is None and a["built"] == "nodes" and "fog passes" in a["line"], a
