@@ -78,8 +78,8 @@ def quality_setting(settings):
 
 
 def _light_changed(self, context):
-    from .ops import apply
-    apply.refresh_lights(context.scene)
+    """A light's Fog Glow toggle: the scene groups follow (the light joins or leaves them)."""
+    schedule_sync(context.scene, "groups")
 
 
 def _get_visibility(self):
