@@ -118,7 +118,8 @@ LIGHTS = (1, 4, 16, 64, 256)
 BOULEVARD_LIGHTS = 45
 # name: (engine, method preference); the order of the table and the chart
 METHODS = {"cycles_nodes": ("CYCLES", "nodes"), "cycles_osl": ("CYCLES", "osl"), "eevee": ("BLENDER_EEVEE", "nodes"),
-           "cycles_compositor": ("CYCLES", "compositor"), "eevee_compositor": ("BLENDER_EEVEE", "compositor")}
+           "cycles_compositor": ("CYCLES", "compositor"), "eevee_compositor": ("BLENDER_EEVEE", "compositor"),
+           "cycles_auto": ("CYCLES", "auto"), "eevee_auto": ("BLENDER_EEVEE", "auto")}
 RESOLUTION = (320, 180)
 SAMPLES = 16
 DENSITY = 0.1                  # 1/m for the many-lights scenes (the boulevard uses its own default)
@@ -340,6 +341,8 @@ def worker(spec):
     c, t = time.process_time(), time.perf_counter()
     apply.apply_fog(scene, density, anisotropy=spec.get("anisotropy", 0.0), method=method, **kwargs)
     res["fog_apply_s"], res["fog_apply_cpu_s"] = time.perf_counter() - t, time.process_time() - c
+    if hasattr(apply, "method_line"):   # the method Auto chose, and why
+        res["note"] = apply.method_line(apply.stored_choice() or {}) or ""
     scene.cycles.use_denoising = False
     _emit(res)
     if spec.get("apply_only"):
@@ -472,6 +475,8 @@ def measure_case(case, n, method, args, apply_only=False):
                      f"{100 * row.get('dark_frac', float('nan')):.0f} % of lit pixels dark")
     if res.get("error_passed") is False:
         notes.append("apply_fog has no error= keyword: --error ignored (the add-on's default used)")
+    if res.get("note"):
+        notes.insert(0, res["note"])
     row["note"] = "; ".join(notes)
     return row
 
@@ -543,7 +548,8 @@ def chart(rows, path):
 
     fig, ax = plt.subplots(figsize=(12, 6.5))
     labels = {"cycles_nodes": "Cycles, node groups", "cycles_osl": "Cycles, OSL", "eevee": "EEVEE, node groups",
-              "cycles_compositor": "Cycles, compositor", "eevee_compositor": "EEVEE, compositor"}
+              "cycles_compositor": "Cycles, compositor", "eevee_compositor": "EEVEE, compositor",
+              "cycles_auto": "Cycles, Auto (default)", "eevee_auto": "EEVEE, Auto (default)"}
 
     def point(x, y, r, colour, big, est=None):
         ms = 12 if big else 7
