@@ -39,13 +39,20 @@ class NodeGroups(Method):
 
 
 class Osl(NodeGroups):
+    """Builds in any engine (the groups follow when the user switches to Cycles), but only Cycles runs OSL:
+    elsewhere the fog has no glow and no fog light, which ``notes`` says (the command line refuses it)."""
     name = "osl"
     label = "OSL"
     preference = "osl"
-    engines = ("CYCLES",)
 
     def budget(self, scene, spec, lights):
         return groups.osl_budget([view.is_spot(o) for o in lights])
+
+    def notes(self, scene, spec, plan):
+        if scene.render.engine != "CYCLES":
+            return [(scene.render.engine, "the OSL method runs in Cycles only: switch the render engine to Cycles "
+                                          "to see the fog's glow and light")]
+        return super().notes(scene, spec, plan)
 
 
 def many_lights_note(lights, choice):
