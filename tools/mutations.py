@@ -148,6 +148,27 @@ MUTATIONS = [
              "light_data.use_nodes = light_data[_USE_NODES]",
              "pass",
              ("tests/test_ops.py::test_add_twice_remove_restores",)),
+    Mutation("composer_reflected_extinction", "the composer adds the fog light a surface reflects without its "
+             "extinction e^{−β D_vp} on the way to the camera (Eq. 19)", SHADING,
+             "([m.scale(total(reflected), t_vp)] if reflected else [])",
+             "([total(reflected)] if reflected else [])",
+             ("tests/test_composer.py::test_pixel_light_is_eq19_over_the_surface_and_eq12_over_the_sky",
+              f"{SHADE_TEST}::test_shade_surface_is_eq19")),
+    Mutation("composer_sky_coverage", "the compositor's pixel takes the glows to infinity over its whole area, "
+             "not over the part its rays reach the sky (Eq. 12 weighted by 1 − coverage)", SHADING,
+             "([m.scale(total(sky), 1.0 - coverage)] if sky else [])",
+             "([total(sky)] if sky else [])",
+             ("tests/test_composer.py::test_pixel_light_is_eq19_over_the_surface_and_eq12_over_the_sky",)),
+    Mutation("segment_lit_clip", "a segment's lit intervals not clipped to the segment: light beyond its end "
+             "glows (Biri 2006 §III.D over [0, length])", "fog_addon/precompute/segments.py",
+             "    return m.minimum(m.maximum(t, 0.0), end)",
+             "    return m.maximum(t, 0.0)",
+             ("tests/test_segments.py::test_empty_and_out_of_range_intervals",)),
+    Mutation("auto_needs_before_cost", "Method Auto ignores what the scene needs (fog passes, a panoramic "
+             "camera): the compositor by cost alone", "fog_addon/methods/auto.py",
+             "    if hard is not None:\n",
+             "    if False:\n",
+             ("tests/test_auto_method.py::test_what_only_the_node_groups_have",)),
 ]
 
 
