@@ -39,7 +39,7 @@ def compositor_fog_alone(scene):
     compositor whose Composite is the compositor's fog light alone, to compare with the Fog Light pass.
     Each light gets the models its Quality chose (the stored choice)."""
     lights = apply.fog_lights(scene)[0]
-    g = groups.get_anisotropy()
+    g = apply.spec_of(scene).anisotropy
     choice = apply.stored_choice()
     lights, models = zip(*[(o, rungs.choose("nodes", choice["lights"][o.name][0], g, view.is_spot(o)))
                            for o in lights])

@@ -232,19 +232,6 @@ WORLD_LIGHT = "World Light"   # the params group's 0/1: the World lights surface
 ANISOTROPY_KEY = "analytic_fog_anisotropy"   # on the params group: the g the lights' models are built for
 
 
-def get_beta():
-    """The fog's density per scene unit in the params group (1/unit), 0 if there is none."""
-    ng = bpy.data.node_groups.get(PARAMS)
-    return float(ng.nodes["Beta"].outputs[0].default_value) if ng is not None else 0.0
-
-
-def get_anisotropy():
-    """The fog's Henyey-Greenstein g in the params group (0 if there is none): the rungs' g
-    (``rungs.choose``); unlike beta it is folded into the groups, which change with it."""
-    ng = bpy.data.node_groups.get(PARAMS)
-    return float(ng.get(ANISOTROPY_KEY, 0.0)) if ng is not None else 0.0
-
-
 def set_anisotropy(g):
     """Store the fog's anisotropy g in the params group (which must exist)."""
     bpy.data.node_groups[PARAMS][ANISOTROPY_KEY] = float(g)
