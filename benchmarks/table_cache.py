@@ -25,12 +25,12 @@ _TABLES = r"""
 import json, sys, time
 sys.path.insert(0, sys.argv[1])
 t = time.perf_counter()
-from fog_addon.precompute import bakers, pixel
+from fog_addon.precompute import bakers, pixel, table_cache
 g = float(sys.argv[2])
 t0 = time.perf_counter()
 bakers.numpy_tables(g)
 for spec, bake in pixel.FILTERS.values():
-    bakers.cached_bake(spec, bake)
+    table_cache.cached_bake(spec, bake)
 print(json.dumps({"bake_s": time.perf_counter() - t0}))
 """
 

@@ -14,7 +14,8 @@ import bpy
 from bpy.app.handlers import persistent
 
 from .nodes import comp_fog, dedupe
-from .ops import apply, view
+from . import view
+from .ops import apply
 
 
 def _merge_appended():

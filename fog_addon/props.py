@@ -13,7 +13,15 @@ from .precompute import predict, presets, tables
 
 
 _quiet = []   # non-empty while the add-on itself writes the settings (``quiet``): no sync for those writes
-_pending = {}   # scene name -> the sync level (``apply.SYNC_LEVELS``) waiting for the timer
+_pending = {}   # scene name -> the sync level (``SYNC_LEVELS``) waiting for the timer
+SYNC_LEVELS = ("params", "groups", "rechoose")   # what a sync does: the params group; + the scene groups
+#                                                  (lights keep their steps); + every light's models chosen again
+_sync = []   # the sync function (``set_sync``: ``apply.sync``, which builds the fog from these settings)
+
+
+def set_sync(fn):
+    """``fn(scene, level)`` makes the fog follow the settings (``ops/apply.py`` sets it when imported)."""
+    _sync[:] = [fn]
 
 
 @contextlib.contextmanager
@@ -33,27 +41,24 @@ def schedule_sync(scene, level):
     as a preset's, sync once, at the highest level asked for); a background process (scripts, the command
     line, farms) has no event loop to run timers, so it syncs at once.  A failed sync keeps the fog as it
     was built, and the panel says why (``apply.sync_error``)."""
-    if _quiet or not scene.analytic_fog.enabled:
+    if _quiet or not scene.analytic_fog.enabled or not _sync:
         return
-    from .ops import apply
     if bpy.app.background:
-        apply.sync(scene, level)
+        _sync[0](scene, level)
         return
-    levels = apply.SYNC_LEVELS
     old = _pending.get(scene.name)
-    _pending[scene.name] = level if old is None or levels.index(level) > levels.index(old) else old
+    _pending[scene.name] = level if old is None or SYNC_LEVELS.index(level) > SYNC_LEVELS.index(old) else old
     if not bpy.app.timers.is_registered(_run_pending):
         bpy.app.timers.register(_run_pending, first_interval=0.0)
 
 
 def _run_pending():
-    from .ops import apply
     pending = dict(_pending)
     _pending.clear()
     for name, level in pending.items():
         scene = bpy.data.scenes.get(name)
-        if scene is not None and scene.analytic_fog.enabled:
-            apply.sync(scene, level)
+        if scene is not None and scene.analytic_fog.enabled and _sync:
+            _sync[0](scene, level)
     return None
 
 
@@ -73,7 +78,7 @@ def _quality_changed(self, context):
 
 
 def quality_setting(settings):
-    """The Quality as ``apply.apply_fog`` takes it: a preset name of ``predict.QUALITY`` or a target error."""
+    """The Quality as ``FogSpec`` takes it: a preset name of ``predict.QUALITY`` or a target error."""
     return settings.target_error if settings.quality == "CUSTOM" else settings.quality.lower()
 
 

@@ -7,8 +7,6 @@ flags the file's fog is rendered as the artist left it.
 """
 import time
 
-import bpy
-
 from . import measure, props
 from .ops import apply, progress
 from .precompute.spec import FogSpec

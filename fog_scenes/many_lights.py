@@ -37,7 +37,8 @@ import bpy
 import numpy as np
 
 from fog_addon import imageio, measure
-from fog_addon.ops import apply, view
+from fog_addon import view
+from fog_addon.ops import apply
 from fog_addon.precompute import bakers, model, predict, rungs, shading, surface
 from fog_addon.precompute.medium import Medium
 from fog_addon.precompute.ops import NumpyOps

@@ -84,7 +84,7 @@ def light_pixel(scene, light):
     """The light's position in the picture, px from the bottom-left corner (far away behind the camera)."""
     from bpy_extras.object_utils import world_to_camera_view
 
-    from fog_addon.ops import view
+    from fog_addon import view
     p = world_to_camera_view(scene, scene.camera, light.matrix_world.translation)
     w, h = view.render_size(scene)
     return (p.x * w, p.y * h, 0.0) if p.z > 0 else (1e6, 1e6, 0.0)

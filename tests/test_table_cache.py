@@ -12,13 +12,13 @@ import shutil
 import numpy as np
 import pytest
 
-from fog_addon.precompute import bakers, fingerprint, pixel, tables
+from fog_addon.precompute import bakers, fingerprint, pixel, table_cache, tables
 
 
 @pytest.fixture
 def cache(tmp_path, monkeypatch):
     folder = tmp_path / "cache"
-    monkeypatch.setenv(bakers.ENV, str(folder))
+    monkeypatch.setenv(table_cache.ENV, str(folder))
     return folder
 
 
@@ -47,9 +47,9 @@ def test_cached_tables_are_the_baked_bits(cache):
     baked = {}
     for spec, bake in _all_bakers(0.0):
         counting = Counting(spec, bake)
-        baked[spec.name] = np.asarray(bakers.cached_bake(spec, counting))   # cold: the baker's own array
-        assert counting.calls == 1 and bakers.cache_path(spec).is_file(), spec
-        warm = bakers.cached_bake(spec, counting)
+        baked[spec.name] = np.asarray(table_cache.cached_bake(spec, counting))   # cold: the baker's own array
+        assert counting.calls == 1 and table_cache.cache_path(spec).is_file(), spec
+        warm = table_cache.cached_bake(spec, counting)
         assert counting.calls == 1, f"{spec.name}: baked again although cached"
         assert _same(warm, baked[spec.name]), spec.name
     tabs = bakers.numpy_tables.__wrapped__(0.0)
@@ -68,81 +68,81 @@ def _corruptions(path):
 def test_corrupt_entries_are_baked_again(cache):
     spec, bake = tables.LOBE_RESPONSE, bakers.bakers()[tables.LOBE_RESPONSE.name][1]
     fresh = bake()
-    bakers.cached_bake(spec, bake)
-    path = bakers.cache_path(spec)
+    table_cache.cached_bake(spec, bake)
+    path = table_cache.cache_path(spec)
     for what, data in list(_corruptions(path)):
         path.write_bytes(data)
         counting = Counting(spec, bake)
-        assert _same(bakers.cached_bake(spec, counting), fresh) and counting.calls == 1, what
-        assert _same(bakers.cached_bake(spec, counting), fresh) and counting.calls == 1, f"{what}: not rewritten"
+        assert _same(table_cache.cached_bake(spec, counting), fresh) and counting.calls == 1, what
+        assert _same(table_cache.cached_bake(spec, counting), fresh) and counting.calls == 1, f"{what}: not rewritten"
     # an entry of another table at this path (a hash collision or a copied file) is not taken for this one
     other = tables.SPECULAR_ALBEDO
-    bakers._store(path, other, np.zeros((other.height, other.width), np.float32))
+    table_cache._store(path, other, np.zeros((other.height, other.width), np.float32))
     counting = Counting(spec, bake)
-    assert _same(bakers.cached_bake(spec, counting), fresh) and counting.calls == 1
+    assert _same(table_cache.cached_bake(spec, counting), fresh) and counting.calls == 1
 
 
 def test_unwritable_cache_is_not_an_error(tmp_path, monkeypatch):
     blocker = tmp_path / "file"
     blocker.write_text("")
-    monkeypatch.setenv(bakers.ENV, str(blocker / "cache"))   # a folder inside a file: mkdir fails
+    monkeypatch.setenv(table_cache.ENV, str(blocker / "cache"))   # a folder inside a file: mkdir fails
     spec, bake = tables.LOBE_RESPONSE, bakers.bakers()[tables.LOBE_RESPONSE.name][1]
-    assert _same(bakers.cached_bake(spec, bake), bake())
+    assert _same(table_cache.cached_bake(spec, bake), bake())
 
 
 @pytest.mark.parametrize("value", ["", "off", "OFF"])
 def test_cache_off(tmp_path, monkeypatch, value):
-    monkeypatch.setenv(bakers.ENV, value)
+    monkeypatch.setenv(table_cache.ENV, value)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     monkeypatch.setenv("HOME", str(tmp_path))
-    assert bakers.cache_dir() is None and bakers.cache_path(tables.LOBE_RESPONSE) is None
+    assert table_cache.cache_dir() is None and table_cache.cache_path(tables.LOBE_RESPONSE) is None
     spec, bake = tables.LOBE_RESPONSE, bakers.bakers()[tables.LOBE_RESPONSE.name][1]
     counting = Counting(spec, bake)
-    bakers.cached_bake(spec, counting)
-    bakers.cached_bake(spec, counting)
+    table_cache.cached_bake(spec, counting)
+    table_cache.cached_bake(spec, counting)
     assert counting.calls == 2 and not any(tmp_path.iterdir())
 
 
 def test_default_location(tmp_path, monkeypatch):
-    monkeypatch.delenv(bakers.ENV, raising=False)
+    monkeypatch.delenv(table_cache.ENV, raising=False)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
-    assert bakers.cache_dir() == tmp_path / "xdg" / "analytic_fog"
+    assert table_cache.cache_dir() == tmp_path / "xdg" / "analytic_fog"
     monkeypatch.delenv("XDG_CACHE_HOME")
     monkeypatch.setenv("HOME", str(tmp_path / "home"))
-    assert bakers.cache_dir() == tmp_path / "home" / ".cache" / "analytic_fog"
+    assert table_cache.cache_dir() == tmp_path / "home" / ".cache" / "analytic_fog"
 
 
 def test_key_holds_precompute_source_and_spec(cache, tmp_path, monkeypatch):
     """Another g, size or precompute source: another entry; another source outside precompute: the same."""
     spec = tables.AIRLIGHT
-    path = bakers.cache_path(spec)
+    path = table_cache.cache_path(spec)
     assert path.parent.parent == cache and fingerprint.precompute_fingerprint() in path.parent.name
-    assert bakers.cache_path(tables.anisotropic(spec, 0.85)) != path
-    assert bakers.cache_path(tables.TableSpec(spec.name, spec.width, spec.height + 1)) != path
+    assert table_cache.cache_path(tables.anisotropic(spec, 0.85)) != path
+    assert table_cache.cache_path(tables.TableSpec(spec.name, spec.width, spec.height + 1)) != path
     copy = tmp_path / "fog_addon"
     shutil.copytree(fingerprint.PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
     monkeypatch.setattr(fingerprint, "PACKAGE", copy)
     with open(copy / "nodes" / "comp_fog.py", "a", encoding="utf-8") as f:
         f.write("# edited\n")
-    assert bakers.cache_path(spec) == path
+    assert table_cache.cache_path(spec) == path
     monkeypatch.setattr(fingerprint, "PRECOMPUTE", copy / "precompute")
     with open(copy / "precompute" / "pixel.py", "a", encoding="utf-8") as f:
         f.write("# edited\n")
-    assert bakers.cache_path(spec) != path
+    assert table_cache.cache_path(spec) != path
 
 
 def test_bakers_outside_precompute_are_not_cached(cache):
     spec, calls = tables.LOBE_RESPONSE, []
     bake = lambda: calls.append(1) or np.zeros((spec.height, spec.width), np.float32)  # noqa: E731
-    bakers.cached_bake(spec, bake)
-    bakers.cached_bake(spec, bake)
+    table_cache.cached_bake(spec, bake)
+    table_cache.cached_bake(spec, bake)
     assert len(calls) == 2 and not cache.exists()
 
 
 def test_old_fingerprints_are_pruned(cache):
     cache.mkdir()
     old = []
-    for k in range(bakers.KEEP + 3):
+    for k in range(table_cache.KEEP + 3):
         d = cache / f"{k:012x}-numpy1.0"
         d.mkdir()
         os.utime(d, (1e9 + k, 1e9 + k))
@@ -151,10 +151,10 @@ def test_old_fingerprints_are_pruned(cache):
     foreign.mkdir()
     os.utime(foreign, (1e8, 1e8))
     spec, bake = tables.LOBE_RESPONSE, bakers.bakers()[tables.LOBE_RESPONSE.name][1]
-    bakers.cached_bake(spec, bake)
+    table_cache.cached_bake(spec, bake)
     kept = sorted(p.name for p in cache.iterdir())
-    assert foreign.exists() and bakers.cache_path(spec).is_file()
-    assert [d.exists() for d in old] == [False] * 4 + [True] * (bakers.KEEP - 1), kept
+    assert foreign.exists() and table_cache.cache_path(spec).is_file()
+    assert [d.exists() for d in old] == [False] * 4 + [True] * (table_cache.KEEP - 1), kept
 
 
 def _write(path):
@@ -162,17 +162,17 @@ def _write(path):
     child computing its own would see another fingerprint if a source file changed in between)."""
     spec, bake = tables.LOBE_RESPONSE, bakers.bakers()[tables.LOBE_RESPONSE.name][1]
     for _ in range(5):
-        bakers._store(pathlib.Path(path), spec, bake())
+        table_cache._store(pathlib.Path(path), spec, bake())
     return True
 
 
 def test_parallel_writers_leave_a_readable_entry(cache):
     spec, bake = tables.LOBE_RESPONSE, bakers.bakers()[tables.LOBE_RESPONSE.name][1]
-    path = bakers.cache_path(spec)
+    path = table_cache.cache_path(spec)
     with multiprocessing.get_context("spawn").Pool(3) as pool:
         assert all(pool.map(_write, [str(path)] * 3))
     counting = Counting(spec, bake)
-    assert _same(bakers.cached_bake(spec, counting), bake()) and counting.calls == 0
+    assert _same(table_cache.cached_bake(spec, counting), bake()) and counting.calls == 0
     assert [p.name for p in path.parent.iterdir()] == [path.name]   # no temporary file left
 
 
@@ -183,7 +183,7 @@ def test_numpy_helpers_read_the_cache(cache, monkeypatch):
     spec = tables.SPECULAR_ALBEDO
     monkeypatch.setattr(surface, "_TABLE_CACHE", {})
     first = surface.specular_table()
-    assert bakers.cache_path(spec).is_file()
+    assert table_cache.cache_path(spec).is_file()
     monkeypatch.setattr(surface, "_TABLE_CACHE", {})
 
     def baked_again(*args):
@@ -193,4 +193,4 @@ def test_numpy_helpers_read_the_cache(cache, monkeypatch):
     assert _same(surface.specular_table(), first)
     monkeypatch.setattr(surface, "_TABLE_CACHE", {})
     surface.surface_table()
-    assert bakers.cache_path(tables.SURFACE).is_file()
+    assert table_cache.cache_path(tables.SURFACE).is_file()

@@ -112,7 +112,7 @@ def choose(scene, spec, lights, materials):
     """(method name, reason) for ``scene``: Auto's choice (module docstring).  ``lights``: the lights taking
     part; ``materials``: the fogged materials."""
     from ..nodes import groups
-    from ..ops import view
+    from .. import view
     from ..precompute import rungs
     engine = scene.render.engine
     if spec.anisotropy < rungs.MIN_TABLE_ANISOTROPY:

@@ -10,7 +10,7 @@ import functools
 import bpy
 
 from ..nodes import comp_fog, compositor, groups
-from ..ops import view
+from .. import view
 from ..precompute import rungs
 from .base import Method
 

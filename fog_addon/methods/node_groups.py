@@ -7,7 +7,7 @@ OSL's shader group cap what one material holds (``budget``): lights step down th
 target until they fit.
 """
 from ..nodes import groups
-from ..ops import view
+from .. import view
 from .base import Method
 
 MANY_LIGHTS = 8   # from this many fog lights on, Cycles' node groups get a note (``many_lights_note``)

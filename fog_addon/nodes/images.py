@@ -2,7 +2,7 @@
 import bpy
 import numpy as np
 
-from ..precompute import bakers, fingerprint
+from ..precompute import bakers, fingerprint, table_cache
 from . import owned
 
 VERSION_KEY = "analytic_fog_table_version"   # on each image: the fingerprint of the code that baked it
@@ -20,7 +20,7 @@ def table_image(spec, bake):
     A one-channel table's values go to all four channels; the node tree reads Alpha, an exact float
     output (CHANNEL_PACKED keeps it independent of RGB).  A table of ``spec.channels`` = 4 fills RGBA.
     ``use_half_precision`` is off or EEVEE would upload half floats.  ``bake``: a baker of ``precompute/``
-    (read from the table cache if there: ``bakers.cached_bake``) or a callable returning the array.
+    (read from the table cache if there: ``table_cache.cached_bake``) or a callable returning the array.
     """
     version = table_version(spec)
     img = bpy.data.images.get(spec.name)
@@ -29,7 +29,7 @@ def table_image(spec, bake):
         return img
     if img is not None:
         bpy.data.images.remove(img)
-    arr = np.asarray(bakers.cached_bake(spec, bake), np.float32)   # from the table cache if there
+    arr = np.asarray(table_cache.cached_bake(spec, bake), np.float32)   # from the table cache if there
     shape = (spec.height, spec.width) + ((spec.channels,) if spec.channels > 1 else ())
     assert arr.shape == shape and spec.channels in (1, 4), (arr.shape, spec)
     img = bpy.data.images.new(spec.name, spec.width, spec.height, alpha=True, float_buffer=True, is_data=True)

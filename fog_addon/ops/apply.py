@@ -4,7 +4,7 @@ from typing import Any, NamedTuple
 
 import bpy
 
-from .. import methods
+from .. import methods, props
 from ..methods.node_groups import MANY_LIGHTS  # noqa: F401  (the panel's)
 from ..nodes import comp_fog, compositor, dedupe, groups, images, osl, passes
 from ..nodes.light import unwrap_light, wrap_light
@@ -14,7 +14,7 @@ from ..nodes.world import unwrap_world, wrap_world
 from ..precompute import predict, presets, rungs, spot
 from ..precompute.spec import FogSpec
 from . import progress as progress_
-from . import view
+from .. import view
 
 SUPPORTED_LIGHTS = ("POINT", "SPOT")
 OSL_WAS = "analytic_fog_osl_was"   # scene custom property: Cycles' OSL switch before the OSL method set it
@@ -98,14 +98,12 @@ def use_osl(scene, on):
 
 def spec_of(scene):
     """The scene's fog settings as a validated ``FogSpec`` (``scene.analytic_fog``); raises ValueError."""
-    from .. import props
     props.ensure_registered()
     return FogSpec.from_settings(scene.analytic_fog)
 
 
 def store_spec(scene, spec):
     """Write ``spec`` into ``scene.analytic_fog`` (the one store of the fog's settings), without its callbacks."""
-    from .. import props
     props.ensure_registered()
     settings = scene.analytic_fog
     with props.quiet():
@@ -452,8 +450,7 @@ def check_compositor_method(scene, with_passes):
         raise ValueError(why)
 
 
-SYNC_LEVELS = ("params", "groups", "rechoose")   # what a sync does: the params group; + the scene groups
-#                                                  (lights keep their steps); + every light's models chosen again
+SYNC_LEVELS = props.SYNC_LEVELS
 _sync_errors = {}   # scene name -> why the last sync failed (the panel shows it), absent if it succeeded
 
 
@@ -592,3 +589,6 @@ def remove_fog(scene, progress=progress_.silent):
     use_osl(scene, False)
     for s in bpy.data.scenes:
         passes.remove_view_layer_aovs(s, AOV_KINDS)
+
+
+props.set_sync(sync)   # the settings' changes reach the fog through ``sync`` (props never imports this module)

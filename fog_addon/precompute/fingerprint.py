@@ -20,7 +20,7 @@ the file holds.
   (channels, precision), so stamping images with ``precompute_fingerprint`` alone would let an edited
   packing hide behind an old image.  The package's fingerprint is correct and needs no list; it rebuilds the
   images whenever any code changes, as it does the node groups that read them (the two change together).
-* The baked arrays themselves (``bakers.cached_bake``) depend only on ``precompute/`` (pure numpy, no import
+* The baked arrays themselves (``table_cache.cached_bake``) depend only on ``precompute/`` (pure numpy, no import
   from outside the folder) and on numpy: the on-disk cache is keyed by ``precompute_fingerprint``, so an
   image rebuilt after an edit elsewhere reloads its array instead of baking it again.
 """

@@ -12,7 +12,7 @@ domain smaller (``nodes/comp_fog.py``).  Two terms have a support smaller than t
 * the fog light surfaces reflect (Eq. 17-18) is needed only where a surface is.
 
 A spot's glow window also heeds **occluders**: flat convex polygons that every camera ray meeting them ends on
-(``occluded_window``; ``ops/view.py`` finds them: opaque fogged faces, or the outline of a flat mesh that
+(``occluded_window``; ``view.py`` finds them: opaque fogged faces, or the outline of a flat mesh that
 tiles a convex region (``flat_outline``), in a picture where every surface is fogged). The glow integrates a
 ray only up to its surface, so the part of the cone beyond such a face's plane is seen only by pixels whose
 rays pass beside the face; a spot aimed at a floor is then cropped to the cone above the floor (issue 9's 64
@@ -120,7 +120,7 @@ def clip_depth(clip_end, frame):
 def boxes_areas(corners, camera_matrix, frame):
     """(M,) share of the picture each box (M, 8, 3 world corners, ``box_points``) covers at most: the bounding
     box of its projected corners within the picture, 1 for a box crossing the camera's plane, 0 behind it.
-    For ranking (``ops/view.py`` searches the largest for occluders)."""
+    For ranking (``view.py`` searches the largest for occluders)."""
     front, crossing, bounds = _corner_bounds(corners, camera_matrix, frame)
     lo_u, hi_u, lo_v, hi_v = (np.clip(b, 0.0, 1.0) for b in bounds)
     return np.where(front, (hi_u - lo_u) * (hi_v - lo_v), np.where(crossing, 1.0, 0.0))

@@ -3,7 +3,7 @@
 Issue 8 §2: for every light, the rungs below "full" (``rungs.STEPS``) leave
 terms out; the error a step makes in a pixel is the fog light it leaves out,
 relative to that pixel's fog value.  Both come from the scene, not from a
-render: the camera's view is sampled by rays (``ops/view.py`` casts them
+render: the camera's view is sampled by rays (``view.py`` casts them
 into the scene and reads each hit's position, normal and material), and the
 numpy twin of the shaders (the same rung kernels, ``shading.py``'s terms)
 gives every light's glow and scattered fog light there.

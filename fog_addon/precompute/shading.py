@@ -36,7 +36,7 @@ Adding a physical term (a light's new quantity) touches:
 The builders (``groups.py``, ``comp_fog.py``) and the predictor
 (``predict.py``) need no edit: they take their sockets and sums from OUTPUTS
 and these functions.  A term that needs new inputs from the scene (a light's
-or the camera's property: ``nodes/light.py``, ``ops/view.py``, the settings)
+or the camera's property: ``nodes/light.py``, ``view.py``, the settings)
 adds them there.
 
 Units: positions and distances in m, beta in 1/m, light intensity I0 in W/sr

@@ -60,7 +60,7 @@ import math
 
 import numpy as np
 
-from . import tables
+from . import table_cache, tables
 from .airlight import k_inf
 from .ops import NumpyOps
 
@@ -393,11 +393,10 @@ _TABLE_CACHE = {}
 
 
 def surface_table(g=0.0):
-    """The baked table for anisotropy g (cached per process, and on disk: ``bakers.cached_bake``)."""
+    """The baked table for anisotropy g (cached per process, and on disk: ``table_cache.cached_bake``)."""
     spec = tables.anisotropic(tables.SURFACE, g)
     if spec.name not in _TABLE_CACHE:
-        from . import bakers   # (not at the top: bakers imports this module)
-        _TABLE_CACHE[spec.name] = bakers.cached_bake(spec, lambda: bake_surface_table(spec))
+        _TABLE_CACHE[spec.name] = table_cache.cached_bake(spec, lambda: bake_surface_table(spec))
     return _TABLE_CACHE[spec.name]
 
 
@@ -447,8 +446,8 @@ def principled_albedos(base_color, metallic=0.0, roughness=0.5, specular_ior_lev
 
 
 def specular_table():
-    """The specular albedo table (cached per process, and on disk: ``bakers.cached_bake``)."""
+    """The specular albedo table (cached per process, and on disk: ``table_cache.cached_bake``)."""
     if tables.SPECULAR_ALBEDO.name not in _TABLE_CACHE:
-        from . import bakers   # (not at the top: bakers imports this module)
-        _TABLE_CACHE[tables.SPECULAR_ALBEDO.name] = bakers.cached_bake(tables.SPECULAR_ALBEDO, bake_specular_albedo)
+        _TABLE_CACHE[tables.SPECULAR_ALBEDO.name] = table_cache.cached_bake(tables.SPECULAR_ALBEDO,
+                                                                            bake_specular_albedo)
     return _TABLE_CACHE[tables.SPECULAR_ALBEDO.name]

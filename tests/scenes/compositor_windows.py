@@ -30,7 +30,8 @@ import bpy  # noqa: E402
 from fog_scenes import many_lights  # noqa: E402
 from fog_addon import measure  # noqa: E402
 from fog_addon.nodes import comp_fog  # noqa: E402
-from fog_addon.ops import apply, view  # noqa: E402
+from fog_addon import view  # noqa: E402
+from fog_addon.ops import apply  # noqa: E402
 from fog_addon.precompute import footprint  # noqa: E402
 
 BETA = 0.1

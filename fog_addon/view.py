@@ -17,8 +17,8 @@ import bpy
 import numpy as np
 from mathutils.bvhtree import BVHTree
 
-from ..nodes import graph, owned
-from ..precompute import footprint, predict, surface, tables
+from .nodes import graph, owned
+from .precompute import footprint, predict, surface, tables
 
 MAX_SAMPLES = 160 * 90          # rays per frame at most: one per pixel centre up to this, else a coarser grid
 MAX_FRAMES = 8                  # an animation: at most this many frames, evenly spread over the range
