@@ -31,7 +31,8 @@ pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a su
 TOLERANCE = 1e-5   # of the picture's peak: float rounding (the cropped floats pass through colour sockets)
 
 
-@pytest.fixture(scope="module", params=["landscape", "portrait"])
+@pytest.fixture(scope="module", params=["landscape", pytest.param("portrait", marks=pytest.mark.slow(
+    reason="the default tier renders the landscape case; portrait (another 30 s) in the slow tier"))])
 def res(request, tmp_path_factory):
     """The scene's renders; "portrait": odd sizes at 150 %, the sensor fitted vertically, the lens shifted."""
     out = tmp_path_factory.mktemp("windows")

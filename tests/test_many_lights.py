@@ -54,6 +54,7 @@ METHODS = {"cycles_nodes": ("CYCLES", "nodes"), "cycles_osl": ("CYCLES", "osl"),
 SAMPLES = 1
 TIMEOUT_S = 300              # hard limit of one case's process
 SLOW_TIMEOUT_S = 1800        # the cases MEASURED marks slow
+FAST_LIGHTS = 4              # the default tier: every method x engine at 1 and 4 lights; 16 to 256 in the slow tier
 MEDIAN_TOL = 0.05            # |median(render / twin) - 1| per object
 REL_RMSE = {"CYCLES": 0.03, "BLENDER_EEVEE": 0.05}
 BLACK = 0.1                  # median render / twin below this: the material renders black
@@ -116,6 +117,8 @@ def _params():
                 marks.append(pytest.mark.xfail(strict=True, reason=why))
             elif kind == "slow":
                 marks.append(pytest.mark.slow(reason=why))
+            elif n > FAST_LIGHTS:
+                marks.append(pytest.mark.slow(reason=f"the default tier runs each method at <= {FAST_LIGHTS} lights"))
             out.append(pytest.param(n, method, marks=marks, id=f"{n}-{method}"))
     return out
 

@@ -54,7 +54,13 @@ def test_cycles_whole_fog_matches_numpy_twin(tmp_path, method):
     assert abs(s["median"] - 1) < 2e-5 and s["max_dev"] < 5e-4, s
 
 
-@pytest.mark.parametrize("method", ["nodes", "osl"])
+# The default tier keeps each method x engine's twin once (isotropic), the anisotropic twin in OSL (its own
+# quadrature with the phase function; the tables' g is path-traced in test_render.test_anisotropic) and the
+# spot twin at g = 0; the other variants (20-80 s each) run in the slow tier.
+SLOW = pytest.mark.slow(reason="a variant of a twin comparison the default tier checks once")
+
+
+@pytest.mark.parametrize("method", [pytest.param("nodes", marks=SLOW), "osl"])
 def test_cycles_anisotropic_fog_matches_numpy_twin(tmp_path, method):
     """The same with forward-scattering fog (Henyey-Greenstein g = 0.85, issue 9): the tables baked for g
     (node groups) or the quadrature with the phase function (OSL), every term, per pixel.
@@ -64,7 +70,8 @@ def test_cycles_anisotropic_fog_matches_numpy_twin(tmp_path, method):
     assert abs(s["median"] - 1) < 2e-5 and s["max_dev"] < 5e-4, s
 
 
-@pytest.mark.parametrize("method,g", [("nodes", 0.0), ("nodes", 0.7), ("osl", 0.7)])
+@pytest.mark.parametrize("method,g", [("nodes", 0.0), pytest.param("nodes", 0.7, marks=SLOW),
+                                      pytest.param("osl", 0.7, marks=SLOW)])
 def test_cycles_spot_fog_matches_numpy_twin(tmp_path, method, g):
     """Two spot lights (40 and 70 degree cones, blend 0.3 and 0.8, one scaled non-uniformly; issue 9): their
     glow clipped to the cones with the rims (the spot kernels as shared node groups, or printed into OSL),
@@ -76,6 +83,7 @@ def test_cycles_spot_fog_matches_numpy_twin(tmp_path, method, g):
     assert abs(s["median"] - 1) < 2e-5 and s["max_dev"] < 1.5e-3 and s["dark_max"] < 1e-7, s
 
 
+@SLOW
 def test_eevee_spot_fog_matches_numpy_twin(tmp_path):
     """The spot probe in EEVEE (g = 0.7): pixels above 1e-3 of the peak within EEVEE's half floats."""
     s = _shading_probe(tmp_path, "BLENDER_EEVEE", "nodes", "principled", 0.7, "spot")
@@ -93,7 +101,7 @@ def test_cycles_glossy_probe_smooth_metal(tmp_path):
     assert s["glossy_max_dev"] < 1e-4 and s["max_dev"] < 1e-4, s
 
 
-@pytest.mark.parametrize("g", [0.0, 0.85])
+@pytest.mark.parametrize("g", [0.0, pytest.param(0.85, marks=SLOW)])
 def test_eevee_whole_fog_matches_numpy_twin(tmp_path, g):
     s = _shading_probe(tmp_path, "BLENDER_EEVEE", "nodes", "principled", g)
     assert s["surface_pixels"] > 1000 and s["glossy_pixels"] > 500, s

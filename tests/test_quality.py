@@ -67,7 +67,14 @@ def results(tmp_path_factory):
     return get
 
 
-@pytest.mark.parametrize("scene,quality", CASES, ids=[f"{s}-{q}" for s, q in CASES])
+# The default tier: a demo scene at Draft, the boulevard at Final (Compositor method) and one random scene; the
+# other random scenes, the random spots and the concert stage (10-210 s each) run in the slow tier.
+FAST_CASES = {("street_lamps", "draft"), ("boulevard", "final"), ("random:2", "draft")}
+SLOW = pytest.mark.slow(reason="the default tier checks the prediction on FAST_CASES")
+
+
+@pytest.mark.parametrize("scene,quality", [c if c in FAST_CASES else pytest.param(*c, marks=SLOW) for c in CASES],
+                         ids=[f"{s}-{q}" for s, q in CASES])
 def test_measured_error_within_prediction(results, scene, quality):
     info = results(scene, quality)
     target = predict.target_error(quality)

@@ -38,11 +38,14 @@ def test_add_remove_add_keeps_one_copy(tmp_path):
         _one_copy_each(step, step["expect"], step["step"])
 
 
+SLOW = pytest.mark.slow(reason="the default tier appends once (with renders); the other ways in the slow tier")
+
+
 @pytest.mark.parametrize("mode, method, render", [
     ("append", "nodes", True),        # bpy.ops.wm.append, merged, pulled lamp removed, tiny Cycles renders
-    ("append_keep", "nodes", False),  # the same, pulled lamp kept in A
-    ("load", "nodes", False),         # bpy.data.libraries.load(link=False): the sphere and B's World
-    ("load", "osl", False),           # OSL method: B's shader text comes along too
+    pytest.param("append_keep", "nodes", False, marks=SLOW),  # the same, pulled lamp kept in A
+    pytest.param("load", "nodes", False, marks=SLOW),  # bpy.data.libraries.load(link=False): the sphere and B's World
+    pytest.param("load", "osl", False, marks=SLOW),    # OSL method: B's shader text comes along too
 ])
 def test_append_from_fogged_file(tmp_path, mode, method, render):
     res = _run("shared_append.py", tmp_path, mode, method, *(["render"] if render else []))

@@ -76,6 +76,7 @@ def test_cache_is_sound(cache):
     assert 0.45 < np.mean(cache["scaled"]) < 0.55
 
 
+@pytest.mark.slow(reason="29 s on 40 000 samples; tests/test_spot.py checks random spots against live quadrature")
 def test_spots_strict_against_quadrature(cache):
     """Every sample within 0.5 % of the quadrature (exact zeros: the model below 1e-30), no NaN or Inf."""
     import time
