@@ -114,6 +114,7 @@ print(json.dumps(out))
 """
 
 
+@pytest.mark.render
 def test_builders_stamp_the_package_fingerprint(copy, tmp_path):
     """Node and compositor groups (``groups.code_fingerprint``), table images and OSL texts change with an
     edit of ``nodes/comp_fog.py``, which the hand-kept list of modules used to leave out."""
