@@ -174,9 +174,8 @@ MUTATIONS = [
 
 # The default tier's subset: one mutation of each kind of promise, each killed by a test of seconds -- a term
 # of the shading against quadrature (Sun et al. 2005's equations), Eq. 19 written out by hand, the node wiring
-# against the numpy twin, a setting Remove must give back.  (A Cycles path-traced killer, test_render's, costs
-# a demo scene and a render: the slow tier runs those.)
-QUICK = ("glow_on_surfaces", "view_attenuation", "albedo_nodes", "restore_light_use_nodes")
+# against the numpy twin, the light's node tree against Cycles path tracing, a setting Remove must give back.
+QUICK = ("glow_on_surfaces", "view_attenuation", "albedo_nodes", "direct_attenuation_cycles", "restore_light_use_nodes")
 
 
 def quick(mutations=None):
