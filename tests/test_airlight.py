@@ -432,7 +432,8 @@ def test_hg_reference_cache_is_sound(hg_cache):
     assert c["eq9_rel_diff"].max() < REF_AGREEMENT   # Eq. 5 (in x) vs Eq. 9 (in xi) quadrature, with the phase
 
 
-@pytest.mark.slow(reason="25 s (16 tables baked); test_anisotropic_random_rays checks the tables against live quadrature")
+@pytest.mark.slow(reason="25 s (16 tables baked); test_anisotropic_random_rays checks the tables against "
+                         "live quadrature")
 def test_anisotropic_40000_cache(hg_cache):
     """The node tables against the 40 000 cached samples: 16 values of g in [-0.8, 0.95] x 2 500 rays (250 to the
     sky), one table baked per g, relative error sample by sample below rungs.hg_table_error(g)."""

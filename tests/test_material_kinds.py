@@ -92,7 +92,8 @@ def test_cycles_pixels(cycles, name):
     assert px["rgb_err"] < 1e-4 and px["alpha_err"] < 1e-5, px
 
 
-@pytest.mark.slow(reason="36 s: an EEVEE render of its own; the Cycles pixels of every material kind stay in the default tier")
+@pytest.mark.slow(reason="36 s: an EEVEE render of its own; the Cycles pixels of every material kind stay in "
+                         "the default tier")
 def test_eevee_emission_dimmed_by_view_transmittance_only(tmp_path):
     res = _run(tmp_path, "BLENDER_EEVEE")
     assert res["changed_by_second_add"] == [] and res["not_restored"] == [], res

@@ -1,7 +1,7 @@
 """Mutation check: remove each physical term of the fog in turn and make sure some test fails.
 
-    .venv/bin/python tools/mutations.py [--list] [--markdown] [--update-readme] [--json] [--baseline] [--rev REV] [--keep]
-                                        [--quick | --rest] [NAME ...]
+    .venv/bin/python tools/mutations.py [--list] [--markdown] [--update-readme] [--json] [--baseline]
+                                        [--rev REV] [--keep] [--quick | --rest] [NAME ...]
 
 Each mutation is data (``MUTATIONS``): a name, what it breaks, a file, the
 exact text it replaces (found exactly once, or the tool refuses, so the list
