@@ -70,6 +70,7 @@ def nodes(outdir):
     scene = build(bpy.context.scene)
     timed(log, "nofog_cycles", render_exr, scene, os.path.join(outdir, "nofog_cycles.exr"))
     fog_addon.register()
+    scene.analytic_fog.method = "NODES"   # (Auto would pick the compositor: its own lanes below)
     assert bpy.ops.fog.add(density=DENSITY) == {"FINISHED"}
     timed(log, "nodes_cycles", render_exr, scene, os.path.join(outdir, "nodes_cycles.exr"))
     render_settings(scene, "BLENDER_EEVEE")
