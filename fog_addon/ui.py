@@ -81,6 +81,11 @@ def draw_fog(layout, context):
         box = layout.box()
         for i, line in enumerate(note.replace(": ", ". ").split(". ")):
             box.label(text=line, icon="ERROR" if i == 0 else "BLANK1")
+    for note in apply.stored_caveats() if s.enabled else ():
+        box = layout.box()
+        head, _, rest = note.partition(": ")
+        box.label(text=head[0].upper() + head[1:], icon="ERROR")
+        box.label(text=rest, icon="BLANK1")
     lights, notes = apply.fog_lights(scene)
     layout.label(text=f"{len(lights)} light(s) light the fog", icon="LIGHT_POINT")
     if len(lights) >= apply.MANY_LIGHTS and s.method in ("NODES", "OSL"):

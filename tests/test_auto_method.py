@@ -69,3 +69,15 @@ def test_refused_change_is_shown_and_changes_nothing(res):
     assert r["error"] and "no fog passes" in r["error"] and r["built"] == "compositor" and not r["passes_aovs"], r
     a = res["auto_with_passes"]
     assert a["error"] is None and a["built"] == "nodes" and "fog passes" in a["line"], a
+
+
+def test_what_is_not_modelled_is_said(res):
+    """No light shafts yet: a lamp with the spheres under it is named, a lamp over a bare ground is not (the
+    ground's shadow lies under it, out of sight) unless the camera is below the ground; glass in view is said.
+    The operator stores both notes for the panel (and reports them, as ``render`` prints them)."""
+    assert set(res["shadows_spheres"]) == {"L000"} and res["shadows_spheres"]["L000"] >= 3, res["shadows_spheres"]
+    assert res["shadows_ground_only"] == {}, res["shadows_ground_only"]
+    assert res["shadows_ground_from_below"] == {"L000": 1}, res["shadows_ground_from_below"]
+    assert res["glass_add"] == ["FINISHED"]
+    text = " | ".join(res["caveats"])
+    assert "light shafts are not modelled" in text and "Window Glass" in text, res["caveats"]

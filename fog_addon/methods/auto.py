@@ -25,6 +25,7 @@ What the scene needs comes first:
   materials on objects the camera sees, depth of field, motion blur): the node groups, unless their
   predicted cost exceeds SOFT_COST_LIMIT; then the compositor, and the choice says what it gets wrong.
 """
+from .. import caveats
 from . import METHODS_BY_NAME
 
 SOFT_COST_LIMIT = 6.0   # a soft need keeps the node groups while they cost at most this (x the fog-free render)
@@ -35,8 +36,6 @@ _COST = {   # (node groups: a, p of 1 + a N^p), (compositor: fixed, per light, a
     "CYCLES": ((2.9, 0.85), (0.27, 0.0105)),
     "BLENDER_EEVEE": ((0.05, 0.8), (0.05, 0.001)),
 }
-_SEE_THROUGH = ("ShaderNodeBsdfTransparent", "ShaderNodeBsdfGlass", "ShaderNodeBsdfRefraction",
-                "ShaderNodeBsdfTranslucent", "ShaderNodeBsdfHairPrincipled", "ShaderNodeBsdfHair")
 
 
 def predicted_ratio(method, engine, lights, materials=1, pixels=320 * 180, samples=16):
@@ -66,33 +65,6 @@ def pixels_of(scene):
     return int(r.resolution_x * r.resolution_y * (r.resolution_percentage / 100.0) ** 2)
 
 
-def see_through_materials(materials, objects):
-    """Names of ``materials`` that let the camera see through them (transparent, glass, refraction, a
-    Principled BSDF with transmission or alpha below 1) on ``objects`` the camera sees."""
-    seen = {slot.material for obj in objects if obj.visible_camera
-            for slot in getattr(obj, "material_slots", ()) if slot.material is not None}
-    names = []
-    for mat in materials:
-        if mat not in seen or mat.node_tree is None:
-            continue
-        for node in mat.node_tree.nodes:
-            if node.mute:
-                continue
-            if node.bl_idname in _SEE_THROUGH or (node.bl_idname == "ShaderNodeBsdfPrincipled"
-                                                  and _principled_see_through(node)):
-                names.append(mat.name)
-                break
-    return names
-
-
-def _principled_see_through(node):
-    for name, clear in (("Transmission Weight", 0.0), ("Alpha", 1.0)):
-        sock = node.inputs.get(name)
-        if sock is not None and (sock.is_linked or sock.default_value != clear):
-            return True
-    return False
-
-
 def _soft_needs(scene, materials):
     """What the compositor's one surface point per pixel would get wrong in ``scene``, as phrases."""
     needs = []
@@ -101,7 +73,7 @@ def _soft_needs(scene, materials):
         needs.append("depth of field")
     if scene.render.use_motion_blur:
         needs.append("motion blur")
-    see = see_through_materials(materials, scene.objects)
+    see = caveats.see_through(materials, scene.objects)
     if see:
         shown = ", ".join(see[:3]) + (f" and {len(see) - 3} more" if len(see) > 3 else "")
         needs.append(f"see-through materials ({shown})")

@@ -4,7 +4,7 @@ from typing import Any, NamedTuple
 
 import bpy
 
-from .. import methods, props
+from .. import caveats, methods, props
 from ..methods.node_groups import MANY_LIGHTS  # noqa: F401  (the panel's)
 from ..nodes import comp_fog, compositor, dedupe, groups, images, osl, passes
 from ..nodes.light import unwrap_light, wrap_light
@@ -22,6 +22,7 @@ LIGHTS_KEY = "analytic_fog_lights"  # on the Surface group: the lights, their mo
 PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method it was built with (methods.get)
 SPEC_KEY = "analytic_fog_spec"   # on the Surface group: a copy of the FogSpec it was built with (for farms and
 #                                  people reading the file; the add-on reads the scene's settings, never this)
+CAVEATS_KEY = "analytic_fog_caveats"   # on the Surface group: what the fog can't model in the scene (notes)
 CHOICE_KEY = "analytic_fog_choice"   # on the Surface group: the Quality, {light: [step, predicted error]}, the total,
 #                                      the method and why (Auto)
 AOV_KINDS = dict(passes.AOVS + comp_fog.AOVS + comp_fog.EEVEE_AOVS)   # every AOV the fog adds to view layers
@@ -418,7 +419,23 @@ def apply(scene, spec, objects=None, progress=progress_.silent):
     note = presets.invisible_fog_note(spec.beta_per_unit, scene_size(scene))
     if note:
         skipped.append((scene.name, note))
-    return skipped
+    notes = not_modelled(scene, spec, lights, mats)
+    surface = bpy.data.node_groups[groups.SURFACE]
+    surface[CAVEATS_KEY] = json.dumps(notes)
+    return skipped + [(scene.name, n) for n in notes]
+
+
+def not_modelled(scene, spec, lights, materials):
+    """What the fog can't model in ``scene`` yet (``caveats.py``: light shafts, glass and mirrors), as notes."""
+    notes = [caveats.shadow_note(scene, lights, spec.beta_per_unit, max(scene_size(scene), 1e-6)),
+             caveats.glass_note(materials, scene.objects)]
+    return [n for n in notes if n]
+
+
+def stored_caveats():
+    """The notes of ``not_modelled`` from the last Add/Update Fog (the panel shows them), [] if none."""
+    surface = bpy.data.node_groups.get(groups.SURFACE)
+    return json.loads(surface[CAVEATS_KEY]) if surface is not None and CAVEATS_KEY in surface else []
 
 
 def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="nodes", objects=None,
