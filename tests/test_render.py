@@ -138,6 +138,9 @@ def test_boulevard_cycles_osl(tmp_path, regen):
 
 
 @_slow(BOULEVARD_TODAY["eevee"])
+@pytest.mark.xfail(strict=True, reason="EEVEE's node groups hold about 20 of the boulevard's 45 lamps: the rest step "
+                   "down, and the fog says so (predicted error 42 %); Auto picks the compositor here "
+                   "(test_boulevard_eevee_compositor: 4.15 %)")
 def test_boulevard_eevee(tmp_path, regen):
     _boulevard(tmp_path, regen, "eevee", "nodes", None, 0.05, 0.02)
 
