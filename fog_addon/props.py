@@ -77,11 +77,6 @@ def _quality_changed(self, context):
     schedule_sync(context.scene, "rechoose")
 
 
-def quality_setting(settings):
-    """The Quality as ``FogSpec`` takes it: a preset name of ``predict.QUALITY`` or a target error."""
-    return settings.target_error if settings.quality == "CUSTOM" else settings.quality.lower()
-
-
 def _light_changed(self, context):
     """A light's Fog Glow toggle: the scene groups follow (the light joins or leaves them)."""
     schedule_sync(context.scene, "groups")

@@ -1,6 +1,7 @@
 """The "Analytic Fog" panel in Properties > World and the 3D viewport sidebar, and each light's toggle."""
 import bpy
 
+from .methods.node_groups import MANY_LIGHTS
 from .ops import FOG_MT_presets, apply
 from .precompute import presets, rungs
 
@@ -88,7 +89,7 @@ def draw_fog(layout, context):
         box.label(text=rest, icon="BLANK1")
     lights, notes = apply.fog_lights(scene)
     layout.label(text=f"{len(lights)} light(s) light the fog", icon="LIGHT_POINT")
-    if len(lights) >= apply.MANY_LIGHTS and s.method in ("NODES", "OSL"):
+    if len(lights) >= MANY_LIGHTS and s.method in ("NODES", "OSL"):
         layout.label(text="With this many lights the Compositor method renders far faster", icon="INFO")
     for name, why in notes:
         layout.label(text=f"{name}: {why}", icon="ERROR")

@@ -69,7 +69,7 @@ def test_switching_engines(res):
 
 
 def test_eevee_dimming_holds_what_fits_brightest_first(res):
-    """apply.dimming_lights on 200 lamps in EEVEE: as many as the budget holds at step off (no fog light in
+    """methods.compositor.dimming_lights on 200 lamps in EEVEE: as many as the budget holds at step off (no fog light in
     the materials), the brightest at the camera (power over squared distance); none in Cycles."""
     d = res["dimming"]
     assert 100 < d["kept"] < 200 and d["fits"] and not d["one_more_fits"], d

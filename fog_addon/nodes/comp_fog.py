@@ -24,7 +24,7 @@ animation): a saved file renders any frame on a farm without the add-on.
 
 In EEVEE, which writes AOVs as half floats accumulated with a loss and clamps negatives, the surface point
 is the Depth pass's (float32) on the pixel's ray (``EEVEE_AOVS``), and the materials keep the lights' shared
-dimming of direct light (EEVEE has no light node trees: ``apply.dimming_lights``).
+dimming of direct light (EEVEE has no light node trees: ``methods.compositor.dimming_lights``).
 
 Limits (README "The Compositor method"): one surface point per pixel, so a pixel that sees two surfaces
 gets the fog light of one point (Cycles: their mean position; EEVEE: the one its centre sees); perspective

@@ -5,14 +5,13 @@ from typing import Any, NamedTuple
 import bpy
 
 from .. import caveats, methods, props
-from ..methods.node_groups import MANY_LIGHTS  # noqa: F401  (the panel's)
 from ..nodes import comp_fog, compositor, dedupe, groups, images, osl, passes
 from ..nodes.light import unwrap_light, wrap_light
 from ..nodes.material import unwrap_material, wrap_material
 from ..nodes.owned import is_fogged
 from ..nodes.world import unwrap_world, wrap_world
 from ..precompute import predict, presets, rungs, spot
-from ..precompute.spec import FogSpec
+from ..precompute.spec import FogSpec, validate_quality
 from . import progress as progress_
 from .. import view
 
@@ -26,9 +25,6 @@ CAVEATS_KEY = "analytic_fog_caveats"   # on the Surface group: what the fog can'
 CHOICE_KEY = "analytic_fog_choice"   # on the Surface group: the Quality, {light: [step, predicted error]}, the total,
 #                                      the method and why (Auto)
 AOV_KINDS = dict(passes.AOVS + comp_fog.AOVS + comp_fog.EEVEE_AOVS)   # every AOV the fog adds to view layers
-COMPOSITOR = "compositor"   # the method that adds the fog's light in the compositor (``methods/compositor.py``)
-# MANY_LIGHTS: from this many fog lights on, the panel and (in Cycles) the report say that the node groups cost
-# far more than the compositor
 
 
 def fog_lights(scene):
@@ -111,12 +107,6 @@ def store_spec(scene, spec):
         for key, value in spec.settings_values().items():
             if key == "color" or getattr(settings, key) != value:
                 setattr(settings, key, value)
-
-
-def quality_value(quality):
-    """The stored form of a Quality: a preset name ("draft", "final", "exact") or a number; raises ValueError."""
-    predict.target_error(quality)
-    return "exact" if quality is None else quality
 
 
 def choose_models(scene, spec, method, lights):
@@ -265,7 +255,7 @@ def plan(scene, spec, method, lights, reason=None, rechoose=True, this_frame=Fal
     frames: an animation's windows grow by this frame's)."""
     old = stored_choice()
     kept = None
-    quality = quality_value(spec.quality)
+    quality = spec.quality
     if not (rechoose or old is None or old.get("quality") != quality or old.get("method") != method.name
             or (old.get("engine") == groups.EEVEE_ENGINE) != (scene.render.engine == groups.EEVEE_ENGINE)):
         kept = [old["lights"].get(o.name, [0, 0.0])[0] for o in lights]
@@ -309,7 +299,6 @@ def _build_scene_groups(scene, spec, lights, method=None, reason=None, rechoose=
     """
     if method is None:
         method, reason = resolve_method(scene, spec, lights, keep=not rechoose)
-    old_method = built_method()
     plan_ = plan(scene, spec, method, lights, reason, rechoose, this_frame)
     signature = _signature(scene, spec, method, plan_)
     surface = bpy.data.node_groups.get(groups.SURFACE)
@@ -334,8 +323,6 @@ def _build_scene_groups(scene, spec, lights, method=None, reason=None, rechoose=
                 unwrap_light(light)
     else:
         method.update(scene, spec, plan_)
-    if old_method is not None and old_method is not method:
-        old_method.teardown(scene)
     if surface.get(SPEC_KEY) != spec.to_json():
         surface[SPEC_KEY] = spec.to_json()
     if surface.get(CHOICE_KEY) != json.dumps(plan_.choice):
@@ -349,16 +336,6 @@ def _build_scene_groups(scene, spec, lights, method=None, reason=None, rechoose=
     aovs = tuple(method.passes(scene, spec))
     passes.remove_view_layer_aovs(scene, AOV_KINDS, keep=[name for name, _ in aovs])
     return notes + passes.add_view_layer_aovs(scene, aovs)
-
-
-def many_lights_note(lights, choice):
-    """``methods.node_groups.many_lights_note``."""
-    return methods.node_groups.many_lights_note(lights, choice)
-
-
-def dimming_lights(scene, spec, lights):
-    """``methods.compositor.dimming_lights``: the Compositor method's materials' lights in EEVEE."""
-    return methods.compositor.dimming_lights(scene, spec, lights)
 
 
 def merge_appended():
@@ -446,7 +423,7 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     panel's and the command line's is Auto), ``scene_scale`` (m per unit), ``with_passes``, ``error`` (the
     Quality: a preset name or a target error; None is Exact), ``world_light``.  See ``precompute/spec.py``."""
     spec = FogSpec(density=density, scene_scale=scene_scale, albedo=tuple(albedo), anisotropy=anisotropy,
-                   method=method, quality=quality_value(error), passes=with_passes, world_light=world_light)
+                   method=method, quality=error, passes=with_passes, world_light=world_light)
     return apply(scene, spec, objects, progress)
 
 
@@ -455,19 +432,12 @@ def follow_compositor(scene, rebuild=False):
     method's chain, else the denoiser's where Cycles denoises; returns [(name, note)]."""
     method = built_method() or methods.get("nodes")
     notes = method.follow(scene, rebuild)
-    if method.name != COMPOSITOR:
-        methods.get(COMPOSITOR).teardown(scene)   # the method changed from Compositor: its unused group goes
+    for other in methods.METHODS_BY_NAME.values():   # a method the scene changed from: what it left behind goes
+        if other is not method:
+            other.teardown(scene)
     return notes
 
 
-def check_compositor_method(scene, with_passes):
-    """Raise ValueError unless ``scene`` can take the Compositor method (``methods.compositor``)."""
-    why = methods.get(COMPOSITOR).check(scene, spec_of(scene).replace(passes=bool(with_passes)))
-    if why is not None:
-        raise ValueError(why)
-
-
-SYNC_LEVELS = props.SYNC_LEVELS
 _sync_errors = {}   # scene name -> why the last sync failed (the panel shows it), absent if it succeeded
 
 
@@ -526,7 +496,7 @@ def set_passes(scene, with_passes):
 
 def set_quality(scene, quality):
     """Set the Quality and choose every light's models again (materials are not touched)."""
-    _set_and_sync(scene, "rechoose", quality=quality_value(quality))
+    _set_and_sync(scene, "rechoose", quality=validate_quality(quality))
 
 
 def _set_and_sync(scene, level="groups", **changes):

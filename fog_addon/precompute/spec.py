@@ -71,11 +71,6 @@ class FogSpec:
         return self.density * self.scene_scale
 
     @property
-    def medium(self):
-        """The fog as ``medium.Medium`` (beta per Blender unit, albedo, g)."""
-        return medium.Medium(self.beta_per_unit, self.albedo, self.anisotropy)
-
-    @property
     def target_error(self):
         """The Quality as a target relative error, None for Exact (``predict.target_error``)."""
         return predict.target_error(self.quality)

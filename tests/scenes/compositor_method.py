@@ -32,6 +32,7 @@ from demo_scenes import spheres  # noqa: E402
 from fog_addon.nodes import comp_fog, compositor, groups, images, owned  # noqa: E402
 from fog_addon.precompute import spot  # noqa: E402
 from fog_addon.nodes.sockets import NodeOps  # noqa: E402
+from fog_addon.methods.compositor import dimming_lights  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 
 BETA = 0.15
@@ -240,7 +241,7 @@ def main():
         scene.collection.objects.link(lamp)
         lamps.append(lamp)
     bpy.context.view_layer.update()
-    kept, models = apply.dimming_lights(scene, apply.spec_of(scene), lamps)
+    kept, models = dimming_lights(scene, apply.spec_of(scene), lamps)
     score = {o.name: o.data.energy / (o.matrix_world.translation - eye).length_squared for o in lamps}
     res["dimming"] = {"kept": len(kept), "models": sorted({m.airlight.name for m in models}),
                       "fits": groups.eevee_budget(0.0).fits([2] * len(kept)),
@@ -248,7 +249,7 @@ def main():
                       "brightest": min(score[o.name] for o in kept) >= max(
                           [score[o.name] for o in lamps if o not in kept], default=0.0)}
     scene.render.engine = "CYCLES"   # Cycles' lights dim their own direct light: none in the materials
-    res["dimming"]["cycles"] = len(apply.dimming_lights(scene, apply.spec_of(scene), lamps)[0])
+    res["dimming"]["cycles"] = len(dimming_lights(scene, apply.spec_of(scene), lamps)[0])
     res["shared"] = shared()
     print("COMPOSITOR_JSON " + json.dumps(res), flush=True)
 
