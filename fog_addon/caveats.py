@@ -42,12 +42,6 @@ def _principled_see_through(node):
     return False
 
 
-def _box_distance(corners, point):
-    """Distance (m) from ``point`` to the axis-aligned box around ``corners`` (8, 3): 0 inside."""
-    lo, hi = corners.min(axis=0), corners.max(axis=0)
-    return float(np.linalg.norm(np.maximum(np.maximum(lo - point, point - hi), 0.0)))
-
-
 def _flat_side(obj):
     """(centre, unit normal) in world space of a flat object (its bounding box has no thickness along one local
     axis: a plane, a wall of one face), else None."""
@@ -65,27 +59,28 @@ def shadowing_lights(scene, lights, beta, reach_m):
     """{light name: number of objects} for the ``lights`` with a shadow-casting object (a mesh, curve or the
     like, visible to shadow rays) within their glow's reach: GLOW_OPTICAL_DEPTH / ``beta`` (1/unit), at most
     ``reach_m`` (scene units).  A flat object (a ground plane) counts only where the camera sees its far side
-    from the light, where its shadow in the fog lies."""
+    from the light, where its shadow in the fog lies.  All lights against all objects at once (N x M)."""
     reach = min(GLOW_OPTICAL_DEPTH / beta, reach_m) if beta > 0.0 else reach_m
-    eye = np.array(scene.camera.matrix_world.translation) if scene.camera is not None else None
-    objects = [(np.array(footprint.box_points(o.bound_box, o.matrix_world)).reshape(8, 3), _flat_side(o))
-               for o in scene.objects if o.type in ("MESH", "CURVE", "SURFACE", "META", "FONT")
+    casters = [o for o in scene.objects if o.type in ("MESH", "CURVE", "SURFACE", "META", "FONT")
                and not o.hide_render and o.visible_shadow]
-    found = {}
-    for light in lights:
-        p = np.array(light.matrix_world.translation)
-        n = 0
-        for box, flat in objects:
-            if _box_distance(box, p) >= reach:
-                continue
-            if flat is not None and eye is not None:
-                centre, normal = flat
-                if np.sign(np.dot(normal, p - centre)) == np.sign(np.dot(normal, eye - centre)):
-                    continue   # the light and the camera on the same side: its shadow is out of sight
-            n += 1
-        if n:
-            found[light.name] = n
-    return found
+    if not casters or not lights:
+        return {}
+    corners = np.array([footprint.box_points(o.bound_box, o.matrix_world) for o in casters]).reshape(-1, 8, 3)
+    lo, hi = corners.min(axis=1), corners.max(axis=1)                                  # (M, 3) world boxes
+    p = np.array([tuple(light.matrix_world.translation) for light in lights])          # (N, 3)
+    gap = np.maximum(np.maximum(lo[None] - p[:, None], p[:, None] - hi[None]), 0.0)   # (N, M, 3)
+    near = np.linalg.norm(gap, axis=2) < reach                                        # (N, M)
+    eye = np.array(scene.camera.matrix_world.translation) if scene.camera is not None else None
+    flats = [(k, f) for k, o in enumerate(casters) if (f := _flat_side(o)) is not None]
+    if eye is not None and flats:
+        k = np.array([k for k, _ in flats])
+        centre = np.array([f[0] for _, f in flats])                                   # (F, 3)
+        normal = np.array([f[1] for _, f in flats])
+        eye_side = np.sign(np.einsum("fi,fi->f", normal, eye - centre))                # (F,)
+        light_side = np.sign(np.einsum("fi,nfi->nf", normal, p[:, None] - centre))    # (N, F)
+        near[:, k] &= light_side != eye_side   # light and camera on one side: its shadow is out of sight
+    counts = near.sum(axis=1)
+    return {light.name: int(n) for light, n in zip(lights, counts) if n}
 
 
 def shadow_note(scene, lights, beta, reach_m):

@@ -6,7 +6,7 @@ Their cost grows with lights x materials x samples (``auto.py`` predicts it); EE
 OSL's shader group cap what one material holds (``budget``): lights step down the ladder beyond the
 target until they fit.
 """
-from ..nodes import groups
+from ..nodes import groups, passes
 from .. import view
 from .base import Method
 
@@ -29,7 +29,6 @@ class NodeGroups(Method):
         return images
 
     def passes(self, scene, spec):
-        from ..nodes import passes
         return passes.AOVS if spec.passes else ()
 
     def notes(self, scene, spec, plan):
