@@ -26,6 +26,8 @@ What the scene needs comes first:
   predicted cost exceeds SOFT_COST_LIMIT; then the compositor, and the choice says what it gets wrong.
 """
 from .. import caveats
+from ..nodes import groups
+from ..precompute import rungs
 from . import METHODS_BY_NAME
 
 SOFT_COST_LIMIT = 6.0   # a soft need keeps the node groups while they cost at most this (x the fog-free render)
@@ -83,9 +85,6 @@ def _soft_needs(scene, materials):
 def choose(scene, spec, lights, materials):
     """(method name, reason) for ``scene``: Auto's choice (module docstring).  ``lights``: the lights taking
     part; ``materials``: the fogged materials."""
-    from ..nodes import groups
-    from .. import view
-    from ..precompute import rungs
     engine = scene.render.engine
     if spec.anisotropy < rungs.MIN_TABLE_ANISOTROPY:
         if engine == "CYCLES":
@@ -99,10 +98,9 @@ def choose(scene, spec, lights, materials):
     costs = f"predicted {cost['nodes']:.2f}x with node groups, {cost['compositor']:.2f}x with the compositor"
     if hard is not None:
         why = hard.split(":")[0].replace("the Compositor method", "the compositor")
-        return "nodes", f"{why}"
+        return "nodes", why
     if engine == groups.EEVEE_ENGINE and n:
-        budget = groups.eevee_budget(spec.anisotropy, [view.is_spot(o) for o in lights])
-        if not budget.fits([0] * n):
+        if not METHODS_BY_NAME["nodes"].budget(scene, spec, lights).fits([0] * n):
             return "compositor", (f"EEVEE's uniform block can't hold the node groups of {n} lights at full models; "
                                   f"{costs}")
     soft = _soft_needs(scene, materials)
@@ -114,9 +112,3 @@ def choose(scene, spec, lights, materials):
                                   f"{' and '.join(soft)}")
         return "compositor", costs
     return "nodes", costs
-
-
-def describe(name, reason):
-    """One line for the panel, the operator's report and ``render --explain``."""
-    return f"Method Auto: {METHODS_BY_NAME[name].label} ({reason})"
-

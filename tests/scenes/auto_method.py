@@ -91,7 +91,6 @@ def main():
 
     # through the operator: what it reports and builds, then a change the chosen method can't serve
     scene = scene_with(4)
-    reports = []
     RES["add"] = sorted(bpy.ops.fog.add(density=many_lights.BETA))
     RES["stored"] = apply.stored_choice()
     RES["built"] = apply.built_method().name
@@ -105,7 +104,6 @@ def main():
     s.method = "AUTO"   # Auto serves fog passes with the node groups: the error clears
     RES["auto_with_passes"] = {"error": apply.sync_error(scene), "built": apply.built_method().name,
                                "line": apply.method_line(apply.stored_choice())}
-    del reports
     print("AUTO_JSON " + json.dumps(RES), flush=True)
 
 
