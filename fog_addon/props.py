@@ -150,6 +150,11 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
                     "the fog fills all space, so no light from the infinitely far World gets through it and "
                     "the lamps light the scene alone. On: surfaces keep the World's light, an artistic "
                     "ambient (the camera still sees the fog, not the World)")
+    use_shafts: bpy.props.BoolProperty(
+        name="Light Shafts", default=True, update=_rebuild,
+        description="Objects cast shadows into the fog: beams through windows, shafts between columns, no glow "
+                    "above a lamp's hood. Only lights with an object near them get a shadow map (Compositor "
+                    "method: Cycles and EEVEE)")
     use_passes: bpy.props.BoolProperty(
         name="Fog Passes", default=False, update=_rebuild,
         description="Write the render passes Fog Light (the light the fog adds) and Fog Transmittance "

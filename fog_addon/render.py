@@ -41,6 +41,7 @@ def fog_settings(scene, args):
     flags = dict(density=_flag(args, "density"), albedo=_flag(args, "color"), scene_scale=_flag(args, "scene_scale"),
                  anisotropy=_flag(args, "anisotropy"), method=_flag(args, "method"), passes=_flag(args, "passes"),
                  quality=_flag(args, "error"),
+                 shafts=None if _flag(args, "shafts") is None else _flag(args, "shafts") == "on",
                  world_light=None if _flag(args, "world_light") is None else _flag(args, "world_light") == "on")
     spec = FogSpec.from_settings(s).replace(**flags)
     source = {k: "flag" if v is not None else "file" for k, v in flags.items()}
@@ -60,7 +61,8 @@ def fog_settings(scene, args):
              "scene scale": ("scene_scale", spec.scene_scale), "anisotropy": ("anisotropy", spec.anisotropy),
              "method": ("method", spec.method), "fog passes": ("passes", spec.passes),
              "quality": ("quality", spec.quality),
-             "world light": ("world_light", "on" if spec.world_light else "off")}
+             "world light": ("world_light", "on" if spec.world_light else "off"),
+             "light shafts": ("shafts", "on" if spec.shafts else "off")}
     return spec, objects, {k: (v, source[f]) for k, (f, v) in shown.items()}, notes
 
 

@@ -10,8 +10,8 @@ import functools
 import bpy
 
 from ..nodes import comp_fog, compositor, groups
-from .. import view
-from ..precompute import rungs
+from .. import caveats, shadow_maps, view
+from ..precompute import rungs, shafts
 from .base import Method
 
 
@@ -39,7 +39,7 @@ class Compositor(Method):
     def signature(self, scene, spec, shader_lights):
         c = scene.cycles
         return (f"compositor:{scene.render.engine}:{c.pixel_filter_type}:{comp_fog.horizontal_fit(scene)}:"
-                f"{scene.camera.data.sensor_fit}|dimming:" + ",".join(o.name_full for o in shader_lights))
+                f"{scene.camera.data.sensor_fit}|shafts:{spec.shafts}|dimming:" + ",".join(o.name_full for o in shader_lights))
 
     def windows(self, scene, lights, partial):
         return view.windows(scene, lights, [scene.frame_current] if partial else None)
@@ -50,9 +50,13 @@ class Compositor(Method):
     def build(self, scene, spec, plan, images):
         aovs = functools.partial(comp_fog.add_surface_aovs, engine=scene.render.engine)
         groups.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs)
+        shafted = shafted_lights(scene, spec, plan.in_groups) if spec.shafts else []
+        maps, shadow_images = shadow_maps.ensure(scene, shafted)
+        shadow_maps.remove_unused(set(shadow_images))
+        images = dict(images, **shadow_images)
         images = comp_fog.build_fog_group(scene, plan.in_groups, plan.grouped_models, images,
                                           view.full_windows(plan.in_groups) if plan.partial else plan.windows,
-                                          plan.partial)
+                                          plan.partial, (maps, shafts.samples_for(spec.quality), spec.anisotropy))
         groups.build_world([], [], scene.camera, images, spec.passes)
         return images
 
@@ -105,3 +109,11 @@ def dimming_lights(scene, spec, lights):
             break
     kept = [i for i in range(len(lights)) if steps[i] == rungs.OFF]
     return [lights[i] for i in kept], [rungs.choose("compositor", rungs.OFF, spec.anisotropy, spots[i]) for i in kept]
+
+
+def shafted_lights(scene, spec, lights):
+    """The ``lights`` whose shadows fall in fog the camera may see (``caveats.shadowing_lights``: an object
+    casting shadows within the glow's reach): only they get a shadow map and a shaft group."""
+    from ..ops.apply import scene_size
+    found = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(scene_size(scene), 1e-6))
+    return [light for light in lights if light.name in found]

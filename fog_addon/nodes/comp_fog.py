@@ -30,9 +30,12 @@ Limits (README "The Compositor method"): one surface point per pixel, so a pixel
 gets the fog light of one point (Cycles: their mean position; EEVEE: the one its centre sees); perspective
 cameras; no fog passes (the fog's light is the compositor's).
 """
+import hashlib
+import math
+
 import bpy
 
-from ..precompute import footprint, model, pixel, rungs, shading, surface
+from ..precompute import footprint, model, pixel, rungs, shading, shafts, spot as spot_, surface
 from . import compositor, groups, images as images_, owned
 from .sockets import KERNEL_GROUP, NodeOps, Val
 
@@ -60,7 +63,16 @@ SURFACE_SHARED = (("Beta", F), ("Camera", V), ("Position", V), ("Incoming", V), 
                   ("Specular", V), ("Level", F))
 SURFACE_IMAGES = tuple(name for name, _ in SURFACE_SHARED[2:])   # per pixel: cropped to the surfaces' window
 SURFACE = "Surface "   # a bundle's inputs of SURFACE_IMAGES: "Surface Position", ...
-SHARED = GLOW_SHARED + tuple((SURFACE + name, kind) for name, kind in SURFACE_SHARED[2:])   # a bundle's inputs
+# what a light's shaft group reads (``build_shaft_group``): the ray's length to its surface (or far beyond the
+# world where the pixel sees the sky) and the pixel's interleaving offset (``shafts.offset``)
+SHAFT_SHARED = (("Beta", F), ("Camera", V), ("Direction", V), ("Shaft Length", F), ("Shaft Offset", F))
+SHAFT_PER_PIXEL = ("Direction", "Shaft Length", "Shaft Offset")
+SKY_LENGTH = 1.0e6   # m: a ray to the sky's length for the shafts (its far nodes weigh e^{-beta t})
+SHAFT_GROUP = f"{LIGHT_GROUP} Shaft"      # per shafted light: "<SHAFT_GROUP> <light name>"
+SHAFT_BLUR = 2        # px: the Bilateral Blur's size over the 4 x 4 interleaved share (``shafts.offset``)
+SHAFT_EDGE = 0.05     # the blur's threshold on log distance: neighbours 5 % nearer or farther are not mixed
+SHARED = (GLOW_SHARED + tuple((SURFACE + name, kind) for name, kind in SURFACE_SHARED[2:])
+          + SHAFT_SHARED[3:])   # a bundle's inputs
 # the quantities the compositor sums per pixel (``rungs.COMPOSITOR_OUTPUTS``, by their compositor sockets): a light's
 # glows (rungs.GLOW) in its glow group, over the picture or the light's window; the light its surface reflects
 # (the rest) in its scatter group, over the surfaces' window
@@ -206,6 +218,48 @@ def build_scatter_group(models, images):
     return groups._install(ng, name)
 
 
+def build_shaft_group(light, shadow, images, nodes, g):
+    """``light``'s lit share of its glow along the pixel's ray (compositor group: Share, ``shafts.lit_share``)
+    from its shadow map ``shadow`` (``shadow_maps.ShadowMap``), and the visibility of the pixel's surface from
+    the light (Visible, ``shafts.surface_lit``), which shadows the fog light the surface reflects (Sun et al.
+    2005 Eq. 17-18 take every fog point as lit; the shafted fog around a shadowed surface lights it little).
+    ``nodes``: K; ``g``: the Henyey-Greenstein anisotropy.  The spot's frame and cone are the map's (baked at
+    its pose)."""
+    name = f"{SHAFT_GROUP} {light.name}"
+    ng, gin, gout = groups._new_group(name, [*SHAFT_SHARED, ("Light", V), ("Surface Position", V)],
+                                      [("Share", F), ("Visible", F)], tree_type="CompositorNodeTree")
+    m = CompOps(ng, images)
+    g_ = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
+    falloff, kind = None, f"point {shadow.spec.width}x{shadow.spec.height}"
+    if shadow.spot is not None:
+        frame, half = shadow.spot
+        forward = frame[2]
+        cos_half = math.cos(0.5 * light.data.spot_size)
+        blend = float(light.data.spot_blend)
+        falloff = lambda m, u, d: spot_.spot_falloff(m, m.dot(u, forward) / d, cos_half, blend)
+        kind = "spot " + hashlib.sha1(repr((shadow.spec.width, frame, half, cos_half, blend)).encode()).hexdigest()[:12]
+    share = shafts.lit_share(m, g_["Camera"], g_["Direction"], g_["Shaft Length"], g_["Light"], g_["Beta"],
+                             (shadow.spec, shadow.spot), nodes, shift=g_["Shaft Offset"], g=g, falloff=falloff,
+                             name=f"Shaft Node {shadow.spec.name} {kind} g {g:.6g}")
+    m.feed(gout.inputs["Share"], share)
+    u = g_["Surface Position"] - g_["Light"]
+    m.feed(gout.inputs["Visible"], shafts.surface_lit(m, m.length(u), shafts.map_depth(m, shadow.spec, shadow.spot, u)))
+    ng[owned.BUILT] = groups.code_fingerprint()
+    return groups._install(ng, name)
+
+
+def _blurred_share(m, share, length):
+    """The interleaved share averaged over its 4 x 4 pattern (``shafts.offset``) by a Bilateral Blur whose
+    determinator is the log of the ray's length: no mixing across a silhouette."""
+    log = m.math("LOGARITHM", m.maximum(length, 1e-3), math.e)
+    node = m.node("CompositorNodeBilateralblur", max(share.col, log.col) + 1)
+    m.feed(node.inputs["Image"], m.combine(share, share, share))
+    m.feed(node.inputs["Determinator"], m.combine(log, log, log))
+    node.inputs["Size"].default_value = SHAFT_BLUR
+    node.inputs["Threshold"].default_value = SHAFT_EDGE
+    return m.dot(m.wrap(node.outputs[0], vector=True), (1.0, 0.0, 0.0))
+
+
 def _window(m, scene, label, win):
     """The crop of the window ``win`` (u0, u1, v0, v1: ``footprint.py``) as nodes, ((start, extent, shift) in x,
     the same in y) px: Value nodes driven by ``footprint.START``, ``EXTENT`` and ``SIZE`` of the tree's ID
@@ -343,15 +397,17 @@ def bundle_name(first, count):
     return f"{BUNDLE} {first + 1}-{first + count}"
 
 
-def build_bundle(scene, first, lights, models, images, peak, windows):
+def build_bundle(scene, first, lights, models, images, peak, windows, shafted=None):
     """The compositor group of the scene's lights ``first`` + 1 .. ``first`` + len(lights) (at most
     BUNDLE_SIZE): SHARED in, each light's glow and scatter groups (``build_glow_group``,
     ``build_scatter_group``) with its position, intensity and cone driven by the light
     (``groups._drive_intensity``, ``_drive_spot``), TERMS summed out: Airlight and Background over the
     picture, Scattered over the Surface inputs' window.  ``windows``: each light's glow window
     (``footprint.py``), or None for none (the whole picture): a light with one gets its glow group's
-    inputs cropped to it (``_window``)."""
+    inputs cropped to it (``_window``).  ``shafted``: (shadow maps by light name, K, g) of the lights whose
+    glows are shadowed (``build_shaft_group``), or None."""
     name = bundle_name(first, len(lights))
+    maps, nodes, g_ = shafted or ({}, 0, 0.0)
     ng, gin, gout = groups._new_group(name, SHARED, TERMS, tree_type="CompositorNodeTree")
     m = CompOps(ng, images)
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
@@ -365,14 +421,27 @@ def build_bundle(scene, first, lights, models, images, peak, windows):
         intensity = m.node("ShaderNodeCombineXYZ", 4)
         groups._drive_intensity(intensity, light.data)
         built = []   # a term the light's step leaves out (rungs.STEPS) gets no group at all
+        win = None if windows is None or windows[k - first] is None else _window(m, scene, k, windows[k - first])
+        crop = lambda socket: _crop(m, g[socket], win) if win else g[socket]
+        shaft = None
+        if light.name in maps:   # its glows times the lit share, its surfaces' fog light times their visibility
+            shaft = m.node("CompositorNodeGroup", 6)
+            shaft.node_tree = build_shaft_group(light, maps[light.name], images, nodes, g_)
+            shaft.label = f"Light {k} Shaft: {light.name}"
+            for socket, _ in SHAFT_SHARED:
+                m.feed(shaft.inputs[socket], crop(socket) if socket in SHAFT_PER_PIXEL else g[socket])
+            m.feed(shaft.inputs["Surface Position"], g[SURFACE + "Position"])
+            m.feed(shaft.inputs["Light"], position)
+            share = _blurred_share(m, m.wrap(shaft.outputs["Share"]), crop("Shaft Length"))
         if any(o.computed(mod) for o in GLOW_OUTPUTS):
             glow = m.node("CompositorNodeGroup", 6)
             glow.node_tree, glow.label = build_glow_group(mod, images, peak), f"Light {k}: {light.name}"
-            win = None if windows is None or windows[k - first] is None else _window(m, scene, k, windows[k - first])
             for socket, _ in GLOW_SHARED:
-                m.feed(glow.inputs[socket], _crop(m, g[socket], win) if win and socket in per_pixel else g[socket])
+                m.feed(glow.inputs[socket], crop(socket) if socket in per_pixel else g[socket])
             for o in GLOW_OUTPUTS:
                 v = m.wrap(glow.outputs[o.compositor], vector=True)
+                if shaft is not None:
+                    v = m.scale(v, share)
                 sums[o] = _accumulate(m, sums[o], v if win is None else _uncrop(m, v, win))
             built.append(glow)
         if any(o.computed(mod) for o in SCATTER_OUTPUTS):
@@ -382,7 +451,10 @@ def build_bundle(scene, first, lights, models, images, peak, windows):
             for socket, _ in SURFACE_SHARED:
                 m.feed(scatter.inputs[socket], g[socket if socket not in SURFACE_IMAGES else SURFACE + socket])
             for o in SCATTER_OUTPUTS:
-                sums[o] = _accumulate(m, sums[o], m.wrap(scatter.outputs[o.compositor], vector=True))
+                v = m.wrap(scatter.outputs[o.compositor], vector=True)
+                if shaft is not None:
+                    v = m.scale(v, m.wrap(shaft.outputs["Visible"]))
+                sums[o] = _accumulate(m, sums[o], v)
             built.append(scatter)
         for node in built:
             m.feed(node.inputs["Light"], position)
@@ -446,12 +518,12 @@ def _params(m):
     return beta, albedo
 
 
-def build_fog_group(scene, lights, models, images, windows=None, partial=False):
+def build_fog_group(scene, lights, models, images, windows=None, partial=False, shafted=None):
     """(Re)build the compositor group ``FOG_GROUP``: Image (the render) and the AOVs in; Image (the render
     plus the fog's light) and Fog Light out.  ``lights``: the fog's lights, ``models``: each light's
     rungs.LightModels; ``windows``: (the surfaces' window, [each light's glow window or None]) of
     ``footprint.py`` (``view.windows``), or None to evaluate every term over the whole picture; ``partial``:
-    they do not hold the animation's range (``PARTIAL``).  Rebuilt in place, so the scene's compositor keeps
+    they do not hold the animation's range (``PARTIAL``); ``shafted``: ``build_bundle``'s.  Rebuilt in place, so the scene's compositor keeps
     its group node.  Returns the table images it reads (``images`` and the pixel filter's)."""
     filt, peak = pixel_filter(scene), None
     if filt is not None:
@@ -510,12 +582,15 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False):
     if win is not None:   # the fog light on surfaces: only where the picture has surfaces
         surface_in = {k: _crop(m, v, win) for k, v in surface_in.items()}
     shared.update({SURFACE + k: v for k, v in surface_in.items()})
+    pixel_xy = m.wrap(coords.outputs["Pixel"], vector=True)
+    shared["Shaft Length"] = m.select(m.less(0.5, cover), d_vp, SKY_LENGTH)
+    shared["Shaft Offset"] = shafts.offset(m, m.dot(pixel_xy, (1.0, 0.0, 0.0)), m.dot(pixel_xy, (0.0, 1.0, 0.0)))
     sums = {}   # Output -> the sum over the bundles
     for first in range(0, len(lights), BUNDLE_SIZE):
         node = m.node("CompositorNodeGroup", 5)
         node.node_tree = build_bundle(scene, first, lights[first:first + BUNDLE_SIZE],
                                       models[first:first + BUNDLE_SIZE], images, peak,
-                                      None if windows is None else windows[1][first:first + BUNDLE_SIZE])
+                                      None if windows is None else windows[1][first:first + BUNDLE_SIZE], shafted)
         for name, v in shared.items():
             m.feed(node.inputs[name], v)
         for o in rungs.COMPOSITOR_OUTPUTS:

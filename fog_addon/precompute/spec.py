@@ -20,6 +20,7 @@ Units, stated once:
   relative error in (0, 1).
 * ``passes``: write the Fog Light and Fog Transmittance render passes.
 * ``world_light``: the World keeps lighting surfaces through the fog (an artistic ambient).
+* ``shafts``: objects cast shadows into the fog (light shafts, ``shafts.py``), where a light needs them.
 
 Settings of the terms still to come (shadows, multiple scattering, daylight) become fields here.
 """
@@ -64,6 +65,7 @@ class FogSpec:
     quality: object = predict.DEFAULT_QUALITY
     passes: bool = False
     world_light: bool = False
+    shafts: bool = True
 
     @property
     def beta_per_unit(self):
@@ -81,7 +83,8 @@ class FogSpec:
         return dataclasses.replace(
             self, density=presets.validate_density(self.density), scene_scale=float(self.scene_scale),
             albedo=tuple(float(a) for a in fog.albedo), anisotropy=fog.g, method=validate_method(self.method),
-            quality=validate_quality(self.quality), passes=bool(self.passes), world_light=bool(self.world_light))
+            quality=validate_quality(self.quality), passes=bool(self.passes), world_light=bool(self.world_light),
+            shafts=bool(self.shafts))
 
     def replace(self, **changes):
         """A validated copy with ``changes`` (None values keep this spec's: the command line's unset flags)."""
@@ -102,13 +105,14 @@ class FogSpec:
         quality = settings.target_error if settings.quality == "CUSTOM" else settings.quality.lower()
         return cls(density=settings.density, scene_scale=settings.scene_scale, albedo=tuple(settings.color),
                    anisotropy=settings.anisotropy, method=settings.method.lower(), quality=quality,
-                   passes=settings.use_passes, world_light=settings.world_light).validated()
+                   passes=settings.use_passes, world_light=settings.world_light,
+                   shafts=getattr(settings, "use_shafts", True)).validated()
 
     def settings_values(self):
         """{property: value} that store this spec in a ``scene.analytic_fog`` (the inverse of ``from_settings``)."""
         values = dict(density=self.density, scene_scale=self.scene_scale, color=self.albedo,
                       anisotropy=self.anisotropy, method=self.method.upper(), use_passes=self.passes,
-                      world_light=self.world_light)
+                      world_light=self.world_light, use_shafts=self.shafts)
         if isinstance(self.quality, str):
             values["quality"] = self.quality.upper()
         else:

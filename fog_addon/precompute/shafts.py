@@ -1,0 +1,214 @@
+"""Light shafts: the share of a light's glow along a camera ray that the light reaches, from a shadow map.
+
+The glow of a light along a ray segment [0, L] (Sun et al. 2005 Eq. 5) with the visibility function H of
+Dobashi, Yamamoto and Nishita 2002 (Eq. 2: H = 1 where the light reaches the point, 0 behind an occluder) is
+
+    G_H = int_0^L H(t) f(t) w(t) e^{-beta (t + d(t))} / d(t)^2 dt      (times beta I0 / 4 pi)
+
+with d(t) the distance from the ray point to the light, w the Henyey-Greenstein weight and f a spot's
+factor.  The fog computes G (H = 1) exactly with its kernels; shafts multiply it by the lit share
+
+    S = G_H / G  in [0, 1],
+
+which is 1 wherever nothing stands in the light's way, so an open scene keeps its exact glow to the bit.
+
+**The lit share by quadrature in the angle around the light.**  With h the ray's distance to the light and
+t = t_c + h tan(theta) (t_c: the foot of the perpendicular), dt / d^2 = d(theta) / h: in theta the
+integrand's 1/d^2 peak is flat (the substitution of Sun et al. 2005 Eq. 6; Kulla and Fajardo 2012 sample
+it as "equiangular").  The rest of the integrand, e^{-beta (t + d)} w f, is smooth in theta, so K midpoint
+nodes theta_k over [theta_0, theta_L] integrate numerator and denominator alike:
+
+    S ~ sum_k H_k e_k / sum_k e_k,   e_k = e^{-beta (t_k + d_k)} w_k f_k,
+
+exact when H is constant along the ray.  H_k comes from a shadow map of the light (``point_map_xy``,
+``spot_map_xy``): the distance D(u) from the light to the first surface in each direction u, baked by
+ray casts from the light (``nodes/shafts.py``); the ray point is lit where d_k < D(u_k) (``lit``).  Biri
+2006 §III.D sums the primitive over lit segments found from shadow volumes; here the K nodes find them.
+
+**Interleaved nodes.**  The nodes of neighbouring pixels are offset by a fixed 4 x 4 pattern (``offset``,
+Keller and Heidrich 2001, "Interleaved sampling"): 16 pixels together hold 16 K nodes, and a 4-pixel
+depth-aware blur of S (the compositor's Bilateral Blur) averages them.  Without it a shaft's edge moves
+node by node as the camera moves: S steps by 1/K between neighbouring pixels (banding) and between frames
+(flicker).  The pattern is fixed to the picture and the map to the world, so nothing is random: no noise.
+
+Every function takes an ops namespace ``m`` first (``ops.py``): numpy, the compositor's nodes.
+"""
+import math
+
+import numpy as np
+
+SHAFT_NODES = {"draft": 12, "preview": 16, "final": 24, "exact": 32}   # K per Quality (``samples_for``)
+DEFAULT_NODES = 16
+POINT_MAP = (1024, 512)   # longitude x latitude grid points of a point light's map (0.35 deg apart)
+SPOT_MAP = 512            # grid points across a spot's map (its cone plus SPOT_MARGIN)
+SPOT_MARGIN = 1.05        # a spot's map spans tan(half angle) x this
+NO_HIT = 1.0e30           # m: the map's distance where a direction meets nothing
+FOG_BIAS = (0.002, 0.003)   # (relative, m): a fog point is lit if d < D (1 - rel) - abs: contact shadows
+SURFACE_BIAS = (0.02, 0.02)   # (relative, m): a surface point is lit if d < D (1 + rel) + abs: no acne
+MIN_SHARE = 1e-30         # the weights' sum below which S is 1 (no light arrives at all)
+BAYER = (0, 8, 2, 10, 12, 4, 14, 6, 3, 11, 1, 9, 15, 7, 13, 5)   # 4 x 4 ordered-dither ranks, row by row
+INTERLEAVE = 4            # the pattern's side (px)
+
+
+def samples_for(quality):
+    """K, the nodes per ray and light for a Quality (``spec.FogSpec.quality``)."""
+    return SHAFT_NODES.get(quality, DEFAULT_NODES)
+
+
+# --- maps -----------------------------------------------------------------------------------------------
+
+def point_map_directions(width=POINT_MAP[0], height=POINT_MAP[1]):
+    """(height, width, 3) unit world directions of a point light's map: grid point (j, i) at longitude
+    -pi + 2 pi i / (width - 1), latitude -pi/2 + pi j / (height - 1) (the first and last columns meet at
+    the seam, so bilinear lookups need no wrap)."""
+    lon = -math.pi + 2.0 * math.pi * np.arange(width) / (width - 1)
+    lat = -0.5 * math.pi + math.pi * np.arange(height) / (height - 1)
+    lo, la = np.meshgrid(lon, lat)
+    return np.stack([np.cos(la) * np.cos(lo), np.cos(la) * np.sin(lo), np.sin(la)], axis=-1)
+
+
+def point_map_xy(m, u):
+    """(x, y) in [0, 1] of the world direction ``u`` (any length) in a point light's map."""
+    ux, uy = m.dot(u, (1.0, 0.0, 0.0)), m.dot(u, (0.0, 1.0, 0.0))
+    horizontal = m.sqrt(ux * ux + uy * uy)
+    x = m.atan2(uy, ux) * (0.5 / math.pi) + 0.5
+    y = m.atan2(m.dot(u, (0.0, 0.0, 1.0)), horizontal) * (1.0 / math.pi) + 0.5
+    return x, y
+
+
+def spot_half_width(cos_half):
+    """tan of the half angle the spot's map spans (its cone's, times SPOT_MARGIN; at most 89 deg)."""
+    half = math.acos(min(max(cos_half, -1.0), 1.0))
+    return math.tan(min(half, math.radians(89.0))) * SPOT_MARGIN
+
+
+def spot_frame(matrix3):
+    """(right, up, forward) unit world vectors of a spot whose world 3x3 matrix is ``matrix3`` (its axis,
+    ``forward``, is the light's local -Z, as Blender's)."""
+    m3 = np.asarray(matrix3, float)
+    forward = -m3[:, 2] / max(np.linalg.norm(m3[:, 2]), 1e-30)
+    up = m3[:, 1] - forward * np.dot(m3[:, 1], forward)
+    up /= max(np.linalg.norm(up), 1e-30)
+    return np.cross(up, -forward), up, forward
+
+
+def spot_map_directions(frame, half_width, size=SPOT_MAP):
+    """(size, size, 3) unit world directions of a spot's map: grid point (j, i) looks along forward +
+    a right + b up with a, b = half_width (2 i / (size - 1) - 1), (2 j / (size - 1) - 1)."""
+    right, up, forward = (np.asarray(v, float) for v in frame)
+    a = half_width * (2.0 * np.arange(size) / (size - 1) - 1.0)
+    aa, bb = np.meshgrid(a, a)
+    d = forward + aa[..., None] * right + bb[..., None] * up
+    return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+
+def spot_map_xy(m, u, frame, half_width):
+    """(x, y) in [0, 1] of the world direction ``u`` in a spot's map (clamped at its edges; behind the
+    light the lookup is meaningless and the spot's factor is 0 there)."""
+    right, up, forward = (tuple(float(c) for c in v) for v in frame)
+    z = m.maximum(m.dot(u, forward), 1e-9)
+    scale = 0.5 / half_width
+    return m.dot(u, right) / z * scale + 0.5, m.dot(u, up) / z * scale + 0.5
+
+
+def nearest(m, x, n):
+    """x in [0, 1] moved to the nearest of n grid points (i / (n - 1)): the map's depths are read, not blended
+    across an occluder's silhouette (a blend of a near and a far distance is the distance of nothing)."""
+    return m.floor(x * (n - 1.0) + 0.5) * (1.0 / (n - 1.0))
+
+
+def lit(m, d, depth):
+    """1 where a fog point d m from the light is in front of the first surface, depth m away in its
+    direction (less a bias of FOG_BIAS: a lamp 2 cm under a hood lights no fog above it)."""
+    return m.less(d, depth * (1.0 - FOG_BIAS[0]) - FOG_BIAS[1])
+
+
+def surface_lit(m, d, depth):
+    """``lit`` for a surface point (a surface is its own first hit: the bias lets it see the light)."""
+    return m.less(d, depth * (1.0 + SURFACE_BIAS[0]) + SURFACE_BIAS[1])
+
+
+# --- the lit share ------------------------------------------------------------------------------------
+
+def offset(m, pixel_x, pixel_y):
+    """The interleaving offset in [0, 1) of the pixel (pixel_x, pixel_y) (whole pixels): its rank in the
+    4 x 4 ordered-dither pattern (``BAYER``) over 16, plus 1/32 (the nodes sit mid-way in their strata)."""
+    n = float(INTERLEAVE)
+    i = pixel_x - m.floor(pixel_x * (1.0 / n)) * n
+    j = pixel_y - m.floor(pixel_y * (1.0 / n)) * n
+    # the 4 x 4 Bayer rank from the bits of i and j: 8 (i0 ^ j0) + 4 j0 + 2 (i1 ^ j1) + j1 (rows: j)
+    i1 = m.floor(i * 0.5)
+    j1 = m.floor(j * 0.5)
+    i0, j0 = i - 2.0 * i1, j - 2.0 * j1
+    x0 = (i0 - j0) * (i0 - j0)          # xor of two bits
+    x1 = (i1 - j1) * (i1 - j1)
+    rank = 8.0 * x0 + 4.0 * j0 + 2.0 * x1 + j1
+    return rank * (1.0 / 16.0) + 1.0 / 32.0
+
+
+def bayer_rank(i, j):
+    """The rank ``offset`` gives pixel (i, j) of the pattern (a reference for the tests: BAYER[4 j + i])."""
+    return BAYER[4 * (j % 4) + (i % 4)]
+
+
+def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.5, g=0.0, falloff=None,
+              name=None):
+    """S in [0, 1], the share of the glow along the segment [0, ``length``] m of the ray from ``camera``
+    along the unit ``direction`` that the light at ``light`` (world, m) reaches (module docstring).
+
+    ``shadow``: (spec, spot) of the light's map (``map_depth``); ``nodes``: K; ``shift`` in [0, 1): where
+    the nodes sit in their strata (0.5: midpoints; ``offset`` interleaves them); ``g``: the
+    Henyey-Greenstein anisotropy; ``falloff(m, u, d)``: a spot's factor at the ray point light + u,
+    d = |u| (None: a point light).  ``name``: one node group for every node (``node_terms``) that says all
+    of what it builds (the map, the spot's frame and cone, g), or None.  The segment's length may be
+    huge (a ray to the sky): its far nodes weigh e^{-beta t}.
+    """
+    spec, spot = shadow
+    v = light - camera
+    t_c = m.dot(v, direction)
+    h = m.maximum(m.sqrt(m.dot(v, v) - t_c * t_c), 1e-6 * m.length(v) + 1e-9)
+    theta0 = m.atan2(-1.0 * t_c, h)
+    step = (m.atan2(length - t_c, h) - theta0) * (1.0 / nodes)
+    axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+    args = (t_c, h, *(m.dot(v, a) for a in axes), *(m.dot(direction, a) for a in axes), beta)
+
+    def terms(mm, theta, t_c, h, vx, vy, vz, dx, dy, dz, beta):
+        return node_terms(mm, theta, t_c, h, mm.combine(vx, vy, vz), mm.combine(dx, dy, dz), beta, shadow, g, falloff)
+    lit_sum, total = 0.0, 0.0
+    for k in range(nodes):
+        theta = theta0 + step * (k + shift)
+        lit_weight, weight = m.group(name, terms, theta, *args) if name else terms(m, theta, *args)
+        lit_sum = lit_sum + lit_weight
+        total = total + weight
+    return (lit_sum + MIN_SHARE) / (total + MIN_SHARE)
+
+
+def node_terms(m, theta, t_c, h, v, direction, beta, shadow, g, falloff):
+    """(H weight, weight) of the quadrature node at the angle ``theta`` around the light (``lit_share``): its
+    weight e^{-beta (t + d)} w f (the Henyey-Greenstein weight w, the spot's factor f), and that times H,
+    1 if the node is lit (``lit``, the map's distance at its grid point, ``map_depth``)."""
+    spec, spot = shadow
+    sin, cos = m.sin(theta), m.cos(theta)
+    t = t_c + h * sin / cos
+    d = h / cos
+    u = m.scale(direction, t) - v                 # from the light to the ray point
+    weight = m.exp(-1.0 * beta * (t + d))
+    if g:   # the scattering angle towards the camera has cosine -sin(theta)
+        weight = weight * _hg(m, g, -1.0 * sin)
+    if falloff is not None:
+        weight = weight * falloff(m, u, d)
+    return weight * lit(m, d, map_depth(m, spec, spot, u)), weight
+
+
+def _hg(m, g, mu):
+    """4 pi p_HG(mu) = (1 - g^2) / (1 + g^2 - 2 g mu)^{3/2} (Henyey and Greenstein 1941)."""
+    base = (1.0 + g * g) - (2.0 * g) * mu
+    return (1.0 - g * g) / (base * m.sqrt(base))
+
+
+def map_depth(m, spec, spot, u):
+    """The map's distance (m) from the light to its first surface in the world direction ``u``: the grid
+    point nearest to u in the map ``spec`` (``nearest``); ``spot``: (frame, half_width) of a spot's map, None
+    for a point light's."""
+    x, y = point_map_xy(m, u) if spot is None else spot_map_xy(m, u, *spot)
+    return m.table(spec, nearest(m, x, spec.width), nearest(m, y, spec.height))

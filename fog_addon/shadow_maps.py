@@ -1,0 +1,187 @@
+"""Shadow maps of the lights whose shadows fall in the fog: the visibility source of light shafts.
+
+For each such light (``caveats.shadowing_lights``: an object casting shadows within its glow's reach) the
+distance from the light to the first surface is ray cast in every direction of its map
+(``precompute/shafts.py``: a longitude-latitude grid for a point light, a square grid over the cone for a
+spot) against one BVH of the scene's shadow casters (``mathutils.bvhtree``, evaluated meshes in world
+space: modifiers, instances and curves included), and stored as a packed float image, so the saved file
+renders without the add-on (the compositor reads it with Map UV).  The map holds the light's pose and the
+geometry of the frame it was baked at (``ShadowMap.key``): when either changes, the map is baked again
+(the frame handler, ``render``); a farm rendering an animation whose lights or occluders move needs the
+add-on (``animated_note``).
+
+Objects that Cycles lets shadow rays through (hidden from shadow rays, not rendered) cast none here; every
+other surface is opaque (glass included, as Cycles' shadow rays treat it).
+"""
+import hashlib
+import math
+from typing import NamedTuple
+
+import bpy
+import numpy as np
+from mathutils import Vector
+from mathutils.bvhtree import BVHTree
+
+from .nodes import owned
+from .precompute import shafts
+from .precompute.tables import TableSpec
+
+IMAGE_PREFIX = f"{owned.PREFIX} Shadow "   # a light's map: "<IMAGE_PREFIX><light name>"
+KEY = "analytic_fog_shadow_key"            # on the image: what the map was baked from (``ShadowMap.key``)
+CASTER_TYPES = ("MESH", "CURVE", "SURFACE", "META", "FONT")
+
+
+class ShadowMap(NamedTuple):
+    """A light's baked map: ``spec`` (its image's name and grid), ``spot``: (frame, half_width) of a spot's
+    map (``shafts.spot_frame``, ``shafts.spot_half_width``) or None for a point light's; ``origin``: the
+    light's position (m) it was cast from."""
+    spec: TableSpec
+    spot: tuple
+    origin: tuple
+
+
+def casters(scene):
+    """The objects that cast shadows into the fog (rendered, visible to shadow rays)."""
+    return [o for o in scene.objects if o.type in CASTER_TYPES and not o.hide_render and o.visible_shadow]
+
+
+def _triangles(depsgraph, objects):
+    """(vertices (V, 3) world m, triangles (T, 3) indices) of ``objects`` as evaluated."""
+    verts, tris, base = [], [], 0
+    for obj in objects:
+        ev = obj.evaluated_get(depsgraph)
+        try:
+            mesh = ev.to_mesh()
+        except RuntimeError:
+            continue
+        if mesh is None:
+            continue
+        try:
+            mesh.calc_loop_triangles()
+            n, t = len(mesh.vertices), len(mesh.loop_triangles)
+            if n and t:
+                co = np.empty(n * 3, np.float64)
+                mesh.vertices.foreach_get("co", co)
+                idx = np.empty(t * 3, np.int64)
+                mesh.loop_triangles.foreach_get("vertices", idx)
+                mw = np.asarray(ev.matrix_world, float)
+                verts.append(co.reshape(-1, 3) @ mw[:3, :3].T + mw[:3, 3])
+                tris.append(idx.reshape(-1, 3) + base)
+                base += n
+        finally:
+            ev.to_mesh_clear()
+    if not verts:
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
+    return np.concatenate(verts), np.concatenate(tris)
+
+
+class Scene(NamedTuple):
+    """The shadow casters of a frame as one BVH, and a digest of their geometry."""
+    bvh: object
+    digest: str
+
+
+def scene_bvh(scene, depsgraph=None):
+    """The BVH of ``scene``'s shadow casters (``casters``) in world space, and their digest."""
+    depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
+    verts, tris = _triangles(depsgraph, casters(scene))
+    digest = hashlib.sha1(np.ascontiguousarray(verts, np.float32).tobytes()
+                          + np.ascontiguousarray(tris, np.int32).tobytes()).hexdigest()
+    bvh = BVHTree.FromPolygons(verts.tolist(), tris.tolist(), all_triangles=True) if len(tris) else None
+    return Scene(bvh, digest)
+
+
+def cast(bvh, origin, directions):
+    """Distance (m) from ``origin`` along each unit direction (N, 3) to the first triangle, NO_HIT if none."""
+    out = np.full(len(directions), shafts.NO_HIT, np.float32)
+    if bvh is None:
+        return out
+    o = Vector(tuple(origin))
+    ray_cast = bvh.ray_cast
+    for i, d in enumerate(directions.tolist()):
+        hit = ray_cast(o, Vector(d))
+        if hit[0] is not None:
+            out[i] = hit[3]
+    return out
+
+
+def _is_spot(light):
+    return light.data.type == "SPOT" and light.data.spot_size < math.radians(179.0)
+
+
+def bake(light, geometry):
+    """(ShadowMap, depths (rows, columns) float32) of ``light`` against ``geometry`` (``scene_bvh``)."""
+    origin = tuple(light.matrix_world.translation)
+    if _is_spot(light):
+        frame = shafts.spot_frame(np.asarray(light.matrix_world)[:3, :3])
+        half = shafts.spot_half_width(math.cos(0.5 * light.data.spot_size))
+        dirs = shafts.spot_map_directions(frame, half)
+        spot = (tuple(tuple(float(c) for c in v) for v in frame), half)
+    else:
+        dirs, spot = shafts.point_map_directions(), None
+    depth = cast(geometry.bvh, origin, dirs.reshape(-1, 3)).reshape(dirs.shape[:2])
+    spec = TableSpec(IMAGE_PREFIX + light.name, dirs.shape[1], dirs.shape[0])
+    return ShadowMap(spec, spot, origin), depth
+
+
+def key(light, geometry):
+    """What a light's map depends on: its pose, its cone and the casters' geometry."""
+    m = tuple(round(v, 6) for row in light.matrix_world for v in row)
+    cone = round(light.data.spot_size, 6) if _is_spot(light) else None
+    return hashlib.sha1(repr((m, cone, geometry.digest)).encode()).hexdigest()
+
+
+def _store(spec, depth, version):
+    img = bpy.data.images.get(spec.name)
+    if img is not None and tuple(img.size) != (spec.width, spec.height):
+        bpy.data.images.remove(img)
+        img = None
+    if img is None:
+        img = bpy.data.images.new(spec.name, spec.width, spec.height, alpha=True, float_buffer=True, is_data=True)
+        img.colorspace_settings.name = "Non-Color"
+        img.alpha_mode = "CHANNEL_PACKED"
+        img.use_half_precision = False
+    img.pixels.foreach_set(np.repeat(np.asarray(depth, np.float32)[..., None], 4, axis=-1).ravel())
+    img.update()
+    img.pack()
+    img.use_fake_user = True
+    img[KEY] = version
+    return img
+
+
+def ensure(scene, lights, geometry=None):
+    """{light name: ShadowMap} of ``lights``, each baked unless its image holds this pose and geometry;
+    returns (maps, images by spec name)."""
+    if not lights:
+        return {}, {}
+    geometry = geometry or scene_bvh(scene)
+    maps, images = {}, {}
+    for light in lights:
+        version = key(light, geometry)
+        name = IMAGE_PREFIX + light.name
+        img = bpy.data.images.get(name)
+        if img is not None and img.get(KEY) == version and img.packed_file is not None:
+            shadow = describe(light, img)
+        else:
+            shadow, depth = bake(light, geometry)
+            img = _store(shadow.spec, depth, version)
+        maps[light.name], images[shadow.spec.name] = shadow, img
+    return maps, images
+
+
+def describe(light, img):
+    """The ShadowMap of an image baked for ``light`` (its grid from the image, its frame from the light)."""
+    spec = TableSpec(img.name, img.size[0], img.size[1])
+    spot = None
+    if _is_spot(light):
+        frame = shafts.spot_frame(np.asarray(light.matrix_world)[:3, :3])
+        spot = (tuple(tuple(float(c) for c in v) for v in frame),
+                shafts.spot_half_width(math.cos(0.5 * light.data.spot_size)))
+    return ShadowMap(spec, spot, tuple(light.matrix_world.translation))
+
+
+def remove_unused(keep=()):
+    """Remove the shadow maps of lights no longer shafted (names not in ``keep``)."""
+    for img in list(bpy.data.images):
+        if img.name.startswith(IMAGE_PREFIX) and img.name not in keep:
+            bpy.data.images.remove(img)

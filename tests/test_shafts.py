@@ -1,0 +1,137 @@
+"""The lit share of a glow (precompute/shafts.py) against adaptive quadrature with exact visibility.
+
+Occluders are spheres and boxes whose shadows are known in closed form: the expected share is scipy's
+quad of the single-scattering integrand times the exact visibility over quad of the integrand (both
+independent of the code under test); the map is baked from the same closed-form ray casts at the map's
+grid points, as ``nodes/shafts.py`` bakes it with Blender's BVH.
+"""
+import math
+
+import numpy as np
+import pytest
+from scipy import integrate
+
+from fog_addon.precompute import shafts
+from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.tables import TableSpec
+
+
+def sphere_hit(origin, dirs, centre, radius):
+    """Distance along unit ``dirs`` from ``origin`` to a sphere, NO_HIT where missed."""
+    oc = np.asarray(origin, float) - np.asarray(centre, float)
+    b = dirs @ oc
+    c = oc @ oc - radius * radius
+    disc = b * b - c
+    t = -b - np.sqrt(np.maximum(disc, 0.0))
+    return np.where((disc > 0) & (t > 0), t, shafts.NO_HIT)
+
+
+def point_map(light, occluders, size=(512, 256)):
+    dirs = shafts.point_map_directions(*size)
+    flat = dirs.reshape(-1, 3)
+    depth = np.full(len(flat), shafts.NO_HIT)
+    for centre, radius in occluders:
+        depth = np.minimum(depth, sphere_hit(light, flat, centre, radius))
+    spec = TableSpec("shadow", size[0], size[1])
+    return spec, depth.reshape(dirs.shape[:2])
+
+
+def expected_share(camera, direction, length, light, beta, occluders, g=0.0):
+    camera, direction, light = (np.asarray(a, float) for a in (camera, direction, light))
+
+    def integrand(t, visible):
+        x = camera + t * direction
+        u = x - light
+        d = np.linalg.norm(u)
+        w = 1.0
+        if g:
+            mu = np.dot(u / d, -direction)
+            w = (1 - g * g) / (1 + g * g - 2 * g * mu) ** 1.5
+        f = math.exp(-beta * (t + d)) * w / (d * d)
+        if visible:
+            for centre, radius in occluders:
+                if sphere_hit(light, (u / d)[None], centre, radius)[0] < d:
+                    return 0.0
+        return f
+    t_c = float(np.dot(light - camera, direction))
+    points = [p for p in (t_c,) if 0 < p < length]
+    lim = 400
+    num = integrate.quad(integrand, 0, length, args=(True,), points=points, limit=lim, epsabs=0, epsrel=1e-7)[0]
+    den = integrate.quad(integrand, 0, length, args=(False,), points=points, limit=lim, epsabs=0, epsrel=1e-9)[0]
+    return num / den
+
+
+def share(camera, direction, length, light, beta, spec, depth, nodes=64, shift=0.5, g=0.0):
+    m = NumpyOps({spec.name: depth})
+    light = np.asarray(light, float)
+
+    return shafts.lit_share(m, np.asarray(camera, float), np.asarray(direction, float), length, light, beta,
+                            (spec, None), nodes, shift=shift, g=g)
+
+
+CAMERA = np.array([0.0, -10.0, 1.5])
+
+
+def _ray(target):
+    d = np.asarray(target, float) - CAMERA
+    return d / np.linalg.norm(d)
+
+
+def test_open_ray_is_exactly_one():
+    spec, depth = point_map((0, 0, 3), [((50, 50, 50), 1.0)])
+    s = share(CAMERA, _ray((0.5, 0, 2.5)), 30.0, (0, 0, 3), 0.1, spec, depth)
+    assert s == 1.0
+
+
+@pytest.mark.parametrize("g", [0.0, 0.7])
+@pytest.mark.parametrize("target,length", [((0.3, 0.0, 0.5), 25.0), ((0.1, 4.0, 3.2), 1e6), ((0.2, 1.0, 1.0), 11.0)])
+def test_sphere_shadow_matches_quadrature(target, length, g):
+    light = (0.0, 0.0, 3.0)
+    occluders = [((0.0, 0.0, 2.0), 0.6), ((0.0, 1.2, 3.0), 0.3)]
+    spec, depth = point_map(light, occluders, (1024, 512))
+    direction = _ray(target)
+    got = np.mean([share(CAMERA, direction, length, light, 0.1, spec, depth, nodes=64, shift=(k + 0.5) / 16, g=g)
+                   for k in range(16)])   # the 16 interleaved pixels' mean, as the blur takes it
+    want = expected_share(CAMERA, direction, min(length, 400.0), light, 0.1, occluders, g=g)
+    assert want < (0.999 if g else 0.97)   # the ray does cross a shadow
+    assert abs(got - want) < 0.02, (got, want)
+
+
+def test_thin_pole_casts_its_shaft():
+    """A 5 cm pole (a row of small spheres) 4 m from the light: a ray through its shadow loses light."""
+    light = np.array([0.0, 0.0, 3.0])
+    occluders = [((0.0, 4.0, z), 0.025) for z in np.arange(0.0, 6.0, 0.02)]
+    spec, depth = point_map(light, occluders, shafts.POINT_MAP)
+    direction = np.array([1.0, 0.0, 0.0])
+    camera = np.array([-10.0, 8.0, 3.0])   # the ray crosses the pole's shadow 8 m from the light
+    got = share(camera, direction, 20.0, light, 0.05, spec, depth, nodes=256)
+    want = expected_share(camera, direction, 20.0, light, 0.05, occluders[140:160])
+    assert want < 0.999 and abs(got - want) < 0.01, (got, want)
+
+
+def test_offset_is_the_bayer_pattern():
+    m = NumpyOps()
+    for j in range(8):
+        for i in range(8):
+            rank = round((float(shafts.offset(m, np.float64(i), np.float64(j))) - 1 / 32) * 16)
+            assert rank == shafts.bayer_rank(i, j)
+
+
+def test_spot_map_round_trip():
+    frame = shafts.spot_frame(np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]], float).T)
+    half = shafts.spot_half_width(math.cos(math.radians(30)))
+    dirs = shafts.spot_map_directions(frame, half, 9)
+    m = NumpyOps()
+    x, y = shafts.spot_map_xy(m, dirs.reshape(-1, 3), frame, half)
+    i, j = np.meshgrid(np.arange(9), np.arange(9))
+    assert np.allclose(x, i.ravel() / 8) and np.allclose(y, j.ravel() / 8)
+
+
+def test_point_map_round_trip():
+    dirs = shafts.point_map_directions(17, 9)
+    m = NumpyOps()
+    x, y = shafts.point_map_xy(m, dirs[1:-1].reshape(-1, 3))
+    i, j = np.meshgrid(np.arange(17), np.arange(1, 8))
+    x_want = i.ravel() / 16
+    ok = np.isclose(x, x_want) | (np.isclose(x_want, 0) & np.isclose(x, 1)) | (np.isclose(x_want, 1) & np.isclose(x, 0))
+    assert ok.all() and np.allclose(y, j.ravel() / 8)
