@@ -1,10 +1,11 @@
 """What the fog does not model in a scene yet, said plainly (the panel, the operator's report, ``render``).
 
-* **Light shafts.** The glow of a light integrates every camera ray as if nothing stood between the light and
-  the fog (Sun et al. 2005 Eq. 5 without a visibility term; Dobashi et al. 2002 Eq. 2's H = 1): objects cast
-  no shadow into the fog, and a lamp under an opaque hood lights the fog above it.  ``shadow_note`` names
-  the lights with an object in their glow: an object whose bounding box comes within the distance at which
-  the light's glow has fallen by e^-3 (``GLOW_OPTICAL_DEPTH`` / beta, at most the scene's size).
+* **Light shafts.** The Compositor method casts objects' shadows into the fog from shadow maps
+  (``precompute/shafts.py``); the node groups and OSL integrate every camera ray as if nothing stood between
+  the light and the fog (Dobashi et al. 2002 Eq. 2's H = 1).  ``shadowing_lights`` finds the lights with an
+  object in their glow (an object whose bounding box comes within the distance at which the light's glow
+  has fallen by e^-3: ``GLOW_OPTICAL_DEPTH`` / beta, at most the scene's size): only they get shadow maps,
+  and ``shadow_notes`` says what their shafts don't do (or that there are none).
 * **Glass and mirrors.** A camera ray that passes through a see-through material or reflects off a mirror gets
   the fog of its first segment only: the fog behind the pane is not seen through it (``see_through``).
 """
@@ -83,16 +84,50 @@ def shadowing_lights(scene, lights, beta, reach_m):
     return {light.name: int(n) for light, n in zip(lights, counts) if n}
 
 
-def shadow_note(scene, lights, beta, reach_m):
-    """A note if objects stand in the glow of some of ``lights`` (they cast no shadow into the fog), else None."""
+def _names(names):
+    names = sorted(names)
+    return ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+
+
+def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None):
+    """Notes on the shadows of ``lights`` in the fog: with ``shafts`` (the Compositor method casts them from
+    shadow maps), what the maps don't do (soft shadows, moving lights or objects on a farm); without, that
+    the objects near the lights cast no shadow into the fog (``why_off``: why, else the method has none)."""
     found = shadowing_lights(scene, lights, beta, reach_m)
     if not found:
-        return None
-    names = sorted(found)
-    shown = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
-    return (f"light shafts are not modelled yet: objects cast no shadow into the fog, so the glow of "
-            f"{len(names)} light(s) ({shown}) passes through the objects near them (a lamp's hood, a wall, a "
-            "window frame)")
+        return []
+    if not shafts:
+        why = why_off or "only the Compositor method casts them (Method Compositor, or Auto)"
+        return [f"light shafts are not modelled ({why}): objects cast no shadow into the fog, so the glow of "
+                f"{len(found)} light(s) ({_names(found)}) passes through the objects near them (a lamp's hood, "
+                "a wall, a window frame)"]
+    notes = []
+    shafted = [o for o in lights if o.name in found]
+    soft = [o.name for o in shafted if getattr(o.data, "shadow_soft_size", 0.0) > 0.0]
+    if soft:
+        notes.append(f"light shafts are sharp: the Radius of {_names(soft)} softens their shadows on surfaces "
+                     "(Cycles) but not in the fog")
+    moving = [o.name for o in [*shafted, *_casters(scene)] if _animated(o)]
+    if moving:
+        notes.append(f"{_names(moving)} move: the shadow maps of the shafts are baked for each frame as it "
+                     "renders, so a farm needs the add-on installed for this animation (a still frame renders "
+                     "without it)")
+    return notes
+
+
+def _casters(scene):
+    return [o for o in scene.objects if o.type in ("MESH", "CURVE", "SURFACE", "META", "FONT")
+            and not o.hide_render and o.visible_shadow]
+
+
+def _animated(obj):
+    """True if ``obj`` (or an object it hangs from) has an action, drivers or constraints."""
+    while obj is not None:
+        ad = obj.animation_data
+        if (ad is not None and (ad.action is not None or len(ad.drivers))) or len(obj.constraints):
+            return True
+        obj = obj.parent
+    return False
 
 
 def glass_note(materials, objects):

@@ -21,6 +21,8 @@ What the scene needs comes first:
 * anisotropy below the node groups' tables (g < rungs.MIN_TABLE_ANISOTROPY): OSL in Cycles;
 * EEVEE's uniform block can't hold every light's node groups: the compositor (the node groups would step
   lights down beyond the Quality's target);
+* light shafts (objects casting shadows into a light's glow, ``caveats.shadowing_lights``, with Light Shafts
+  on): the compositor, which alone models them;
 * surfaces the compositor's one point per pixel would get wrong (transparent, glass or refracting
   materials on objects the camera sees, depth of field, motion blur): the node groups, unless their
   predicted cost exceeds SOFT_COST_LIMIT; then the compositor, and the choice says what it gets wrong.
@@ -104,6 +106,13 @@ def choose(scene, spec, lights, materials):
             return "compositor", (f"EEVEE's uniform block can't hold the node groups of {n} lights at full models; "
                                   f"{costs}")
     soft = _soft_needs(scene, materials)
+    if spec.shafts and lights:
+        from ..ops.apply import scene_size
+        shafted = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(scene_size(scene), 1e-6))
+        if shafted:
+            caveat = (f"; its one surface point per pixel is approximate with {' and '.join(soft)}" if soft else "")
+            return "compositor", (f"light shafts: objects cast shadows into the glow of {len(shafted)} light(s), "
+                                  f"and only the compositor models them{caveat}; {costs}")
     if soft and cost["nodes"] <= SOFT_COST_LIMIT:
         return "nodes", f"{' and '.join(soft)}: the compositor sees one surface point per pixel; {costs}"
     if cost["compositor"] < cost["nodes"]:

@@ -77,6 +77,7 @@ class Compositor(Method):
     def frame_change(self, scene, lights):
         if comp_fog.FOG_GROUP in bpy.data.node_groups:
             comp_fog.set_windows(lights, view.windows(scene, lights, [scene.frame_current]), grow=True)
+            follow_shadows(scene, lights)
 
     def follow(self, scene, rebuild):
         return compositor.follow(scene, rebuild, bpy.data.node_groups.get(comp_fog.FOG_GROUP))
@@ -117,3 +118,21 @@ def shafted_lights(scene, spec, lights):
     from ..ops.apply import scene_size
     found = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(scene_size(scene), 1e-6))
     return [light for light in lights if light.name in found]
+
+
+def follow_shadows(scene, lights):
+    """The frame changed: the shadow maps of the shafted lights follow the lights and objects that move
+    (baked again where a light's pose or the casters' geometry changed, ``shadow_maps.ensure``), and a spot
+    whose map turned gets its shaft group again (its frame is built in)."""
+    maps_now = [bpy.data.images.get(shadow_maps.IMAGE_PREFIX + o.name) for o in lights]
+    shafted = [o for o, img in zip(lights, maps_now) if img is not None]
+    if not shafted or not any(caveats._animated(o) for o in [*shafted, *shadow_maps.casters(scene)]):
+        return
+    from ..ops.apply import spec_of
+    spec = spec_of(scene)
+    before = {o.name: bpy.data.images[shadow_maps.IMAGE_PREFIX + o.name].get(shadow_maps.KEY) for o in shafted}
+    maps, images = shadow_maps.ensure(scene, shafted)
+    for light in shafted:
+        shadow = maps[light.name]
+        if shadow.spot is not None and images[shadow.spec.name].get(shadow_maps.KEY) != before[light.name]:
+            comp_fog.build_shaft_group(light, shadow, images, shafts.samples_for(spec.quality), spec.anisotropy)

@@ -396,15 +396,18 @@ def apply(scene, spec, objects=None, progress=progress_.silent):
     note = presets.invisible_fog_note(spec.beta_per_unit, scene_size(scene))
     if note:
         skipped.append((scene.name, note))
-    notes = not_modelled(scene, spec, lights, mats)
+    notes = not_modelled(scene, spec, lights, mats, method)
     surface = bpy.data.node_groups[groups.SURFACE]
     surface[CAVEATS_KEY] = json.dumps(notes)
     return skipped + [(scene.name, n) for n in notes]
 
 
-def not_modelled(scene, spec, lights, materials):
-    """What the fog can't model in ``scene`` yet (``caveats.py``: light shafts, glass and mirrors), as notes."""
-    notes = [caveats.shadow_note(scene, lights, spec.beta_per_unit, max(scene_size(scene), 1e-6)),
+def not_modelled(scene, spec, lights, materials, method=None):
+    """What the fog can't model in ``scene`` (``caveats.py``: light shafts where ``method`` (a method name)
+    has none or they are off, their limits where it has them; glass and mirrors), as notes."""
+    shafts = bool(spec.shafts and getattr(method, "name", method) == "compositor")
+    notes = [*caveats.shadow_notes(scene, lights, spec.beta_per_unit, max(scene_size(scene), 1e-6), shafts,
+                                   None if spec.shafts else "Light Shafts is off"),
              caveats.glass_note(materials, scene.objects)]
     return [n for n in notes if n]
 
