@@ -169,13 +169,29 @@ MUTATIONS = [
              "    if hard is not None:\n",
              "    if False:\n",
              ("tests/test_auto_method.py::test_what_only_the_node_groups_have",)),
+    Mutation("shaft_visibility", "light shafts: the lit share counts every node as lit (Dobashi 2002 Eq. 2's H = 1)",
+             "fog_addon/precompute/shafts.py",
+             "        lit_sum = lit_sum + lit_weight\n",
+             "        lit_sum = lit_sum + weight\n",
+             ("tests/test_shafts.py::test_sphere_shadow_matches_quadrature",)),
+    Mutation("shaft_extinction", "light shafts: the nodes' weights lose the extinction from the light, e^{-beta d}",
+             "fog_addon/precompute/shafts.py",
+             "    weight = m.exp(-1.0 * beta * (t + d))\n",
+             "    weight = m.exp(-1.0 * beta * t)\n",
+             ("tests/test_shafts.py::test_sphere_shadow_matches_quadrature",)),
+    Mutation("shaft_phase", "light shafts: the nodes' Henyey-Greenstein weight turned backwards",
+             "fog_addon/precompute/shafts.py",
+             "        weight = weight * _hg(m, g, -1.0 * sin)\n",
+             "        weight = weight * _hg(m, g, sin)\n",
+             ("tests/test_shafts.py::test_sphere_shadow_matches_quadrature",)),
 ]
 
 
 # The default tier's subset: one mutation of each kind of promise, each killed by a test of seconds -- a term
 # of the shading against quadrature (Sun et al. 2005's equations), Eq. 19 written out by hand, the node wiring
 # against the numpy twin, the light's node tree against Cycles path tracing, a setting Remove must give back.
-QUICK = ("glow_on_surfaces", "view_attenuation", "albedo_nodes", "direct_attenuation_cycles", "restore_light_use_nodes")
+QUICK = ("glow_on_surfaces", "view_attenuation", "albedo_nodes", "direct_attenuation_cycles", "restore_light_use_nodes",
+         "shaft_visibility")
 
 
 def quick(mutations=None):
