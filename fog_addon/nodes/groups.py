@@ -39,8 +39,10 @@ SURFACE = "AnalyticFog Surface"
 WORLD = "AnalyticFog World"
 SURFACE_LIGHTS = SURFACE + " Lights"   # bundles: "AnalyticFog Surface Lights 1-8", ... (``_bundles``)
 WORLD_LIGHTS = WORLD + " Lights"
+SURFACE_TAILS = SURFACE + " Tails"     # bundles of the glows past glass and mirrors (``build_tail_bundle``)
 BUNDLE = 8   # lights per bundle group (``_bundles``)
-_BUNDLE_NAME = re.compile(rf"^({re.escape(SURFACE_LIGHTS)}|{re.escape(WORLD_LIGHTS)}) \d+-\d+$")
+_BUNDLE_NAME = re.compile(
+    rf"^({re.escape(SURFACE_LIGHTS)}|{re.escape(WORLD_LIGHTS)}|{re.escape(SURFACE_TAILS)}) \d+-\d+$")
 
 FOG_PROP = "analytic_fog"   # custom-property key marking data the fog made or changed
 BUILDING = " (building)"     # name suffix of a group being built beside the one in use
@@ -492,6 +494,8 @@ def _place_bundles(ng, lights, models, build, shared, with_passes):
 _SURFACE_SHARED = (("Beta", F), ("Position", V), ("Incoming", V), ("View Distance", F), ("Normal", V),
                    ("Diffuse", C), ("Specular", C), ("Glossy Level", F))   # a light group's inputs but its own
 RUNNING = "Running Sum"   # a bundle's input and output with the fog passes: the Fog Light pass so far
+GLASS_COLOR, GLASS_IOR = "Glass Color", "Glass IOR"   # the Surface group's inputs for a Glass BSDF (material.py)
+SEE_THROUGH = "See Through"   # its output: the glows past glass and mirrors (Cycles; ``_place_tails``)
 
 
 def build_surface_bundle(images, first, lights, models, with_passes, chained):
@@ -550,9 +554,13 @@ def build_surface(lights, models, images, with_passes=False, extra=None):
     """
     ng, gin, gout = _new_group(SURFACE, [
         ("Base Color", C), ("Metallic", F), ("Roughness", F), ("Specular IOR Level", F), (passes.OPACITY, C),
+        (GLASS_COLOR, C), (GLASS_IOR, F),
     ], [("Fog", "NodeSocketShader"), ("Emission", C), ("Transmittance", F), ("Direct Attenuation", F),
-        ("Cycles Mix Factor", F), ("EEVEE Mix Factor", F)])
-    next(i for i in ng.interface.items_tree if i.name == passes.OPACITY).default_value = (1.0, 1.0, 1.0, 1.0)
+        ("Cycles Mix Factor", F), ("EEVEE Mix Factor", F), (SEE_THROUGH, "NodeSocketShader")])
+    items = {i.name: i for i in ng.interface.items_tree if i.item_type == "SOCKET" and i.in_out == "INPUT"}
+    items[passes.OPACITY].default_value = (1.0, 1.0, 1.0, 1.0)
+    items[GLASS_COLOR].default_value = (0.0, 0.0, 0.0, 1.0)
+    items[GLASS_IOR].default_value = 1.5
     m = NodeOps(ng, images)
     params = ng.nodes.new("ShaderNodeGroup")
     params.node_tree = bpy.data.node_groups[PARAMS]
@@ -565,12 +573,18 @@ def build_surface(lights, models, images, with_passes=False, extra=None):
         m.wrap(g["Specular IOR Level"]), m.dot(m.wrap(geo.outputs["Incoming"], vector=True),
                                                m.wrap(geo.outputs["Normal"], vector=True)))
     is_camera = m.wrap(path.outputs["Is Camera Ray"])
-    t_vp, transmit = shading.view_transmittance(m, m.wrap(params.outputs["Beta"]),
-                                                m.wrap(cam.outputs["View Distance"]), is_camera)
+    segment = specular_segment(m, path)
+    fogged = is_camera + segment   # the rays the fog shades: 0 or 1
+    view = m.wrap(cam.outputs["View Distance"])
+    # the segment's length: from the camera on camera rays (Ray Length starts at the near clip there), from the
+    # pane or mirror on a specular segment (Ray Length: the point is P + Incoming x Ray Length's end)
+    length = m.select(segment, m.wrap(path.outputs["Ray Length"]), view)
+    t_vp, transmit = shading.view_transmittance(m, m.wrap(params.outputs["Beta"]), length, fogged)
+    glow_length = view * (1.0 - segment)   # a specular segment's glow is the tails' (``build_tail_bundle``)
     shared = {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"], "Position": geo.outputs["Position"],
-              "Incoming": geo.outputs["Incoming"], "View Distance": cam.outputs["View Distance"],
+              "Incoming": geo.outputs["Incoming"], "View Distance": glow_length.sock,
               "Normal": geo.outputs["Normal"], "Diffuse": diffuse.sock, "Specular": specular.sock,
-              "Glossy Level": level.sock, "View Transmittance": t_vp.sock, "Is Camera": is_camera.sock,
+              "Glossy Level": level.sock, "View Transmittance": t_vp.sock, "Is Camera": fogged.sock,
               passes.OPACITY: g[passes.OPACITY]}
     placed, bundles, running = _place_bundles(
         ng, lights, models, functools.partial(build_surface_bundle, images), shared, with_passes)
@@ -590,16 +604,121 @@ def build_surface(lights, models, images, with_passes=False, extra=None):
         passes.write_group(m, ng, light, m.wrap(fog.transmittance), m.wrap(g[passes.OPACITY], vector=True),
                            light_weighted=True)
     else:
-        _camera_rays_only(ng, gout.inputs["Fog"], path.outputs["Is Camera Ray"])
+        _camera_rays_only(ng, gout.inputs["Fog"], fogged.sock)
+    tails = _place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
+                         {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"],
+                          "Position": geo.outputs["Position"]}, len(placed))
     if extra is not None:   # before it replaces the group the materials use: adding a node there costs more
         extra(ng)
     ng = _install(ng, SURFACE)
-    _name_bundles(bundles)
+    _name_bundles(bundles + tails)
     return ng
 
 
-def _camera_rays_only(ng, sock, is_camera):
-    """Put the shader linked into ``sock`` behind a Mix Shader whose factor is Is Camera Ray.
+def specular_segment(m, path):
+    """1 on a ray that leaves a glass pane or a mirror on a path of sharp bounces from the camera (Cycles'
+    Light Path: not a camera ray, Is Singular Ray, Diffuse Depth 0), else 0.  Such a ray is a segment of
+    its own: it starts at P + Incoming x Ray Length (Ray Length is the segment's length on every ray but
+    the camera's, which Cycles measures from the near clip plane).  EEVEE traces no such rays (its Is
+    Singular Ray is 0): what it refracts or reflects is its picture or its probes."""
+    singular = m.wrap(path.outputs["Is Singular Ray"])
+    first = m.less(m.wrap(path.outputs["Diffuse Depth"]), 0.5)
+    return (1.0 - m.wrap(path.outputs["Is Camera Ray"])) * singular * first
+
+
+def _place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp, shared, below):
+    """The Surface group's See Through shader (Cycles only: ``material.py`` adds it to the Cycles output):
+    the glows of the segments past a glass pane or a mirror, by differences of tails.
+
+    The glow of a light along a segment from a to b is G_inf(a) - e^{-beta |ab|} G_inf(b) (Sun et al. 2005
+    Eq. 12's glow to infinity, ``shading.background_point``, from each end in the segment's direction; the
+    sum of differences of one primitive, Biri 2006 §III.D).  So each vertex of a sharp path adds what it
+    can compute without knowing where the next segment ends, the glow to infinity of the segments leaving
+    it, weighted as Cycles weights them; and each vertex a sharp segment reaches takes away the tail past
+    itself, dimmed by its own segment, e^{-beta Ray Length}.  A segment that escapes to the sky keeps its
+    whole tail: the World, which knows no ray origin, adds nothing on those rays (``build_world``).
+    Cycles multiplies by the path's throughput, so each segment's glow and extinction compose along the
+    path (Eq. 19 applied at every vertex).  The leaving segments' weights:
+
+    * a Glass BSDF (``GLASS_COLOR``, ``GLASS_IOR`` fed by ``material.py``): colour x (1 - F) straight on
+      (the segment's direction through a thin pane, exact for IOR 1 and for a parallel slab up to its
+      thickness) and colour x F about the mirrored direction, F the dielectric Fresnel factor (Fresnel
+      node, as Cycles' glass);
+    * a mirror (Principled, roughness 0): its glossy fog light (``shading.shade_point``'s Phong lobe of
+      the highest exponent, which is a blurred tail to infinity) already is.
+
+    ``below``: the Surface group's light bundles placed (their rows).  Returns the bundle groups built.
+    """
+    kept = [(light, mod) for light, mod in zip(lights, models)
+            if any(o.computed(mod) for o in rungs.SKY_OUTPUTS if o.colour)]
+    if not kept:
+        return []
+    fresnel = ng.nodes.new("ShaderNodeFresnel")
+    fresnel.location = (-600, 600)
+    ng.links.new(g[GLASS_IOR], fresnel.inputs["IOR"])
+    f = m.wrap(fresnel.outputs[0])
+    glass = m.wrap(g[GLASS_COLOR], vector=True)
+    incoming = m.wrap(geo.outputs["Incoming"], vector=True)
+    seg3 = m.combine(segment, segment, segment)
+    inputs = dict(shared, **{"Straight": m.scale(incoming, -1.0).sock,
+                             "Mirrored": shading.mirror(m, incoming, m.wrap(geo.outputs["Normal"], vector=True)).sock,
+                             "Straight Weight": (m.scale(glass, 1.0 - f) - seg3).sock,
+                             "Mirrored Weight": m.scale(glass, f).sock, "Transmittance": t_vp.sock})
+    fogs, trees = [], []
+    for first, some, mods in _bundles([light for light, _ in kept], [mod for _, mod in kept]):
+        tree = build_tail_bundle(images, first, some, mods)
+        trees.append(tree)
+        node = _group_node(ng, tree, tree.name.removesuffix(BUILDING), -300, -300 * (below + len(fogs)),
+                           [(src, n) for n, src in inputs.items()])
+        fogs.append(node.outputs["Fog"])
+    out = next(n for n in ng.nodes if n.bl_idname == "NodeGroupOutput").inputs[SEE_THROUGH]
+    _shader_tree(ng, out, fogs)
+    # only on a specular segment, or on a camera ray that meets glass: a factor of exactly 0 elsewhere, where
+    # Cycles' SVM jumps over the tails (``_camera_rays_only``)
+    has_glass = m.less(0.0, m.dot(glass, m.combine(1.0, 1.0, 1.0)))
+    gate = m.clamp(segment + is_camera * has_glass)
+    _camera_rays_only(ng, out, gate.sock, "Specular Paths Only")
+    return trees
+
+
+def build_tail_bundle(images, first, lights, models):
+    """One bundle of the Surface group's See Through shader (``_place_tails``): for each light, the albedo
+    times Transmittance times (Straight Weight x its glow to infinity from Position along Straight + Mirrored
+    Weight x along Mirrored), from two instances of its World group (``build_background_light``), as one
+    Emission closure (its colour may be negative: Cycles passes negative emission through)."""
+    name = _bundle_name(SURFACE_TAILS, first, lights)
+    ng, gin, gout = _new_group(name, [("Beta", F), ("Albedo", C), ("Position", V), ("Straight", V), ("Mirrored", V),
+                                      ("Straight Weight", C), ("Mirrored Weight", C), ("Transmittance", F)],
+                               [("Fog", "NodeSocketShader")])
+    m = NodeOps(ng, {})
+    g = {s.name: s for s in gin.outputs if s.name}
+    albedo = m.wrap(g["Albedo"], vector=True)
+    scale = m.scale(albedo, m.wrap(g["Transmittance"]))
+    colours = []
+    for k, (light, mod) in enumerate(zip(lights, models)):
+        straight = _light_instance(ng, first + k, light, build_background_light(mod, images).name,
+                                   [(g["Beta"], "Beta"), (g["Position"], "Camera"), (g["Straight"], "Direction")])
+        mirrored = ng.nodes.new("ShaderNodeGroup")
+        mirrored.node_tree = straight.node_tree
+        mirrored.name = mirrored.label = f"{straight.name} (mirrored)"
+        mirrored.location = (straight.location.x, straight.location.y - 150)
+        for sock in straight.inputs:
+            src = g["Mirrored"] if sock.name == "Direction" else (sock.links[0].from_socket if sock.is_linked
+                                                                  else None)
+            if src is not None:
+                ng.links.new(src, mirrored.inputs[sock.name])
+        tail = (m.wrap(straight.outputs[rungs.BACKGROUND_OUT.name], vector=True) * m.wrap(g["Straight Weight"],
+                                                                                        vector=True)
+                + m.wrap(mirrored.outputs[rungs.BACKGROUND_OUT.name], vector=True) * m.wrap(g["Mirrored Weight"],
+                                                                                          vector=True))
+        colours.append(tail * scale)
+    _closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", colours)
+    return ng
+
+
+def _camera_rays_only(ng, sock, is_camera, label="Camera Rays Only"):
+    """Put the shader linked into ``sock`` behind a Mix Shader whose factor is Is Camera Ray (or the
+    socket ``is_camera``: a factor of exactly 0 or 1).
 
     The fog's light is added on camera rays only (``shading.shade_surface``); on every other ray the
     Mix Shader's factor is exactly 0 and Cycles' SVM jumps over the nodes that feed only its second
@@ -613,7 +732,7 @@ def _camera_rays_only(ng, sock, is_camera):
         return
     src = sock.links[0].from_socket
     mix = ng.nodes.new("ShaderNodeMixShader")
-    mix.name = mix.label = "Camera Rays Only"
+    mix.name = mix.label = label
     mix.location = (sock.node.location.x - 200, sock.node.location.y)
     ng.links.new(is_camera, mix.inputs[0])
     ng.links.new(src, mix.inputs[2])

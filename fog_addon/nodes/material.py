@@ -195,6 +195,8 @@ def wrap_material(mat):
     lost = [name for name, _, ok in copies if not ok]
     built = graph.built_from(outs, srcs, kinds, copies)
     built["passes"] = passes.VERSION   # a material fogged before the fog passes is rebuilt once
+    glass = _glass_copies(srcs)
+    built["glass"] = [(name, graph.skey(v) if isinstance(v, bpy.types.NodeSocket) else v) for name, v in glass]
     fog = owned.find(tree, "Surface")
     if (fog is not None and fog.bl_idname == "ShaderNodeGroup"
             and fog.node_tree == bpy.data.node_groups.get(groups.SURFACE)
@@ -203,7 +205,7 @@ def wrap_material(mat):
     # rebuild from the user's current nodes (the sockets found above are all the user's), in the same place
     anchor = tuple(fog.location) if fog is not None else None
     unwrap_material(mat)
-    fog = _build(tree, anchor, outs, srcs, kinds, copies)
+    fog = _build(tree, anchor, outs, srcs, kinds, copies + [(name, v, True) for name, v in glass])
     fog[STAMP] = graph.stamp(built, tree)
     if not any(k.emitters for k in kinds.values()):
         # the fog's emission is for camera rays only: as a light it would only steal light samples
@@ -255,6 +257,11 @@ def _build(tree, anchor, outs, srcs, kinds, copies):
         add = owned.add(tree, "ShaderNodeAddShader", f"{target} Add", (x0 + 650, y), named=False)
         tree.links.new(last, add.inputs[0])
         tree.links.new(fog_shader, add.inputs[1])
+        if target == "CYCLES":   # the glows past glass and mirrors: Cycles traces those segments, EEVEE doesn't
+            see = owned.add(tree, "ShaderNodeAddShader", f"{target} See Through", (x0 + 725, y - 60), named=False)
+            tree.links.new(add.outputs[0], see.inputs[0])
+            tree.links.new(fog.outputs[groups.SEE_THROUGH], see.inputs[1])
+            add = see
         if out.target == target:   # the user's own output for this engine: route it through the fog
             tree.links.new(add.outputs[0], out.inputs["Surface"])
             continue
@@ -266,6 +273,18 @@ def _build(tree, anchor, outs, srcs, kinds, copies):
             if sock.name != "Surface" and link is not None and sock.name in new_out.inputs:
                 tree.links.new(link.from_socket, new_out.inputs[sock.name])
     return fog
+
+
+def _glass_copies(srcs):
+    """[(Surface group input, value or source socket)] for a Glass BSDF that is a material's shader (its
+    Color and IOR: ``groups._place_tails`` adds the glow past it in Cycles), else []."""
+    for src in srcs.values():
+        if src is not None and src.node.bl_idname == "ShaderNodeBsdfGlass":
+            node = src.node
+            colour = graph.source(node.inputs["Color"]) or tuple(node.inputs["Color"].default_value)[:3]
+            ior = graph.source(node.inputs["IOR"]) or float(node.inputs["IOR"].default_value)
+            return [(groups.GLASS_COLOR, colour), (groups.GLASS_IOR, ior)]
+    return []
 
 
 def _fog_light(ops, tree, kd, fog, n, origin):
