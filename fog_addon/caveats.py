@@ -6,8 +6,9 @@
   object in their glow (an object whose bounding box comes within the distance at which the light's glow
   has fallen by e^-3: ``GLOW_OPTICAL_DEPTH`` / beta, at most the scene's size): only they get shadow maps,
   and ``shadow_notes`` says what their shafts don't do (or that there are none).
-* **Glass and mirrors.** A camera ray that passes through a see-through material or reflects off a mirror gets
-  the fog of its first segment only: the fog behind the pane is not seen through it (``see_through``).
+* **Glass and mirrors.** In Cycles the node groups shade the fog along a ray's segments after a Glass BSDF or a
+  sharp mirror (``groups.specular_segment``); elsewhere a camera ray gets the fog of its first segment only
+  (``see_through`` names the materials, ``glass_note`` says which cases hold).
 """
 import numpy as np
 
@@ -136,5 +137,7 @@ def glass_note(materials, objects):
     if not names:
         return None
     shown = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
-    return (f"see-through materials ({shown}): the fog and the glows behind glass or in a mirror are not seen "
-            "through it yet (the camera ray's fog ends at the first surface)")
+    return (f"see-through materials ({shown}): in Cycles with the Node Groups method, the fog behind a Glass BSDF "
+            "(straight through the pane) and in sharp mirrors is shaded along the path (a mirror shows lamps "
+            "blurred by about 2 degrees); rough glass, Principled transmission, glass mixed with other shaders, "
+            "the OSL and Compositor methods and EEVEE show only the fog in front of the first surface")

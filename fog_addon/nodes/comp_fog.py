@@ -220,9 +220,8 @@ def build_scatter_group(models, images):
 
 def build_shaft_group(light, shadow, images, nodes, g):
     """``light``'s lit share of its glow along the pixel's ray (compositor group: Share, ``shafts.lit_share``)
-    from its shadow map ``shadow`` (``shadow_maps.ShadowMap``), and the visibility of the pixel's surface from
-    the light (Visible, ``shafts.surface_lit``), which shadows the fog light the surface reflects (Sun et al.
-    2005 Eq. 17-18 take every fog point as lit; the shafted fog around a shadowed surface lights it little).
+    from its shadow map ``shadow`` (``shadow_maps.ShadowMap``), and the share of the fog light the pixel's
+    surface reflects that the shadows leave (Visible, ``shafts.surface_lit``).
     ``nodes``: K; ``g``: the Henyey-Greenstein anisotropy.  The spot's frame and cone are the map's (baked at
     its pose)."""
     name = f"{SHAFT_GROUP} {light.name}"

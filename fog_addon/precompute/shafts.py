@@ -124,7 +124,12 @@ def lit(m, d, depth):
 
 
 def surface_lit(m, d, depth):
-    """``lit`` for a surface point (a surface is its own first hit: the bias lets it see the light)."""
+    """``lit`` for a surface point (a surface is its own first hit: the bias lets it see the light).
+
+    It stands for the share of the fog light reaching the surface (Sun et al. 2005 Eq. 17-18, G_0 and G_n)
+    that the light's shadows leave: 1 where the surface sees the light, 0 where it is in shadow.  An
+    approximation (docs/physics.md, "Light shafts", measures it): a shadowed surface beside a lit beam
+    gets some of the beam's fog light, a lit surface beside shadowed fog less than all of it."""
     return m.less(d, depth * (1.0 + SURFACE_BIAS[0]) + SURFACE_BIAS[1])
 
 
