@@ -113,7 +113,7 @@ def test_offset_is_the_bayer_pattern():
     m = NumpyOps()
     for j in range(8):
         for i in range(8):
-            rank = round((float(shafts.offset(m, np.float64(i), np.float64(j))) - 1 / 32) * 16)
+            rank = round(float(shafts.offset(m, np.float64(i), np.float64(j))) * 4 - 0.5)
             assert rank == shafts.bayer_rank(i, j)
 
 

@@ -64,13 +64,13 @@ SURFACE_SHARED = (("Beta", F), ("Camera", V), ("Position", V), ("Incoming", V), 
 SURFACE_IMAGES = tuple(name for name, _ in SURFACE_SHARED[2:])   # per pixel: cropped to the surfaces' window
 SURFACE = "Surface "   # a bundle's inputs of SURFACE_IMAGES: "Surface Position", ...
 # what a light's shaft group reads (``build_shaft_group``): the ray's length to its surface (or far beyond the
-# world where the pixel sees the sky) and the pixel's interleaving offset (``shafts.offset``)
+# world where the pixel sees only the sky)
 SHAFT_SHARED = (("Beta", F), ("Camera", V), ("Direction", V), ("Shaft Length", F), ("Shaft Offset", F))
 SHAFT_PER_PIXEL = ("Direction", "Shaft Length", "Shaft Offset")
+SHAFT_BLUR = 1        # px: the Bilateral Blur's size over the 2 x 2 interleaved shares (``shafts.offset``)
+SHAFT_EDGE = 0.05     # the blur's threshold on log distance: neighbours 5 % nearer or farther are not mixed
 SKY_LENGTH = 1.0e6   # m: a ray to the sky's length for the shafts (its far nodes weigh e^{-beta t})
 SHAFT_GROUP = f"{LIGHT_GROUP} Shaft"      # per shafted light: "<SHAFT_GROUP> <light name>"
-SHAFT_BLUR = 2        # px: the Bilateral Blur's size over the 4 x 4 interleaved share (``shafts.offset``)
-SHAFT_EDGE = 0.05     # the blur's threshold on log distance: neighbours 5 % nearer or farther are not mixed
 SHARED = (GLOW_SHARED + tuple((SURFACE + name, kind) for name, kind in SURFACE_SHARED[2:])
           + SHAFT_SHARED[3:])   # a bundle's inputs
 # the quantities the compositor sums per pixel (``rungs.COMPOSITOR_OUTPUTS``, by their compositor sockets): a light's
@@ -221,12 +221,13 @@ def build_scatter_group(models, images):
 def build_shaft_group(light, shadow, images, nodes, g):
     """``light``'s lit share of its glow along the pixel's ray (compositor group: Share, ``shafts.lit_share``)
     from its shadow map ``shadow`` (``shadow_maps.ShadowMap``), and the share of the fog light the pixel's
-    surface reflects that the shadows leave (Visible, ``shafts.surface_lit``).
+    surface reflects that the shadows leave (Visible, ``shafts.surface_share``).
     ``nodes``: K; ``g``: the Henyey-Greenstein anisotropy.  The spot's frame and cone are the map's (baked at
     its pose)."""
     name = f"{SHAFT_GROUP} {light.name}"
-    ng, gin, gout = groups._new_group(name, [*SHAFT_SHARED, ("Light", V), ("Surface Position", V)],
-                                      [("Share", F), ("Visible", F)], tree_type="CompositorNodeTree")
+    ng, gin, gout = groups._new_group(name, [*SHAFT_SHARED, ("Light", V), ("Surface Position", V), ("Surface Normal", V)],
+                                      [("Share", F), ("Share Far", F), ("Visible", F)],
+                                      tree_type="CompositorNodeTree")
     m = CompOps(ng, images)
     g_ = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
     falloff, kind = None, f"point {shadow.spec.width}x{shadow.spec.height}"
@@ -237,18 +238,20 @@ def build_shaft_group(light, shadow, images, nodes, g):
         blend = float(light.data.spot_blend)
         falloff = lambda m, u, d: spot_.spot_falloff(m, m.dot(u, forward) / d, cos_half, blend)
         kind = "spot " + hashlib.sha1(repr((shadow.spec.width, frame, half, cos_half, blend)).encode()).hexdigest()[:12]
-    share = shafts.lit_share(m, g_["Camera"], g_["Direction"], g_["Shaft Length"], g_["Light"], g_["Beta"],
-                             (shadow.spec, shadow.spot), nodes, shift=g_["Shaft Offset"], g=g, falloff=falloff,
-                             name=f"Shaft Node {shadow.spec.name} {kind} g {g:.6g}")
+    share, far = shafts.lit_share(m, g_["Camera"], g_["Direction"], g_["Shaft Length"], g_["Light"], g_["Beta"],
+                                  (shadow.spec, shadow.spot), nodes, shift=g_["Shaft Offset"], g=g, falloff=falloff,
+                                  name=f"Shaft Node {shadow.spec.name} {kind} g {g:.6g}",
+                                  tail_nodes=max(nodes // shafts.TAIL_SHARE, 2), far=SKY_LENGTH)
     m.feed(gout.inputs["Share"], share)
-    u = g_["Surface Position"] - g_["Light"]
-    m.feed(gout.inputs["Visible"], shafts.surface_lit(m, m.length(u), shafts.map_depth(m, shadow.spec, shadow.spot, u)))
+    m.feed(gout.inputs["Share Far"], far)
+    m.feed(gout.inputs["Visible"], shafts.surface_share(m, g_["Surface Position"], g_["Surface Normal"], g_["Light"],
+                                                         (shadow.spec, shadow.spot)))
     ng[owned.BUILT] = groups.code_fingerprint()
     return groups._install(ng, name)
 
 
-def _blurred_share(m, share, length):
-    """The interleaved share averaged over its 4 x 4 pattern (``shafts.offset``) by a Bilateral Blur whose
+def _blurred(m, share, length):
+    """The interleaved share averaged over its 2 x 2 pattern (``shafts.offset``) by a Bilateral Blur whose
     determinator is the log of the ray's length: no mixing across a silhouette."""
     log = m.math("LOGARITHM", m.maximum(length, 1e-3), math.e)
     node = m.node("CompositorNodeBilateralblur", max(share.col, log.col) + 1)
@@ -430,8 +433,10 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
             for socket, _ in SHAFT_SHARED:
                 m.feed(shaft.inputs[socket], crop(socket) if socket in SHAFT_PER_PIXEL else g[socket])
             m.feed(shaft.inputs["Surface Position"], g[SURFACE + "Position"])
+            m.feed(shaft.inputs["Surface Normal"], g[SURFACE + "Normal"])
             m.feed(shaft.inputs["Light"], position)
-            share = _blurred_share(m, m.wrap(shaft.outputs["Share"]), crop("Shaft Length"))
+            share = {o: _blurred(m, m.wrap(shaft.outputs["Share" if o.at == rungs.SURFACE_POINT else "Share Far"]),
+                                 crop("Shaft Length")) for o in GLOW_OUTPUTS}
         if any(o.computed(mod) for o in GLOW_OUTPUTS):
             glow = m.node("CompositorNodeGroup", 6)
             glow.node_tree, glow.label = build_glow_group(mod, images, peak), f"Light {k}: {light.name}"
@@ -440,7 +445,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
             for o in GLOW_OUTPUTS:
                 v = m.wrap(glow.outputs[o.compositor], vector=True)
                 if shaft is not None:
-                    v = m.scale(v, share)
+                    v = m.scale(v, share[o])
                 sums[o] = _accumulate(m, sums[o], v if win is None else _uncrop(m, v, win))
             built.append(glow)
         if any(o.computed(mod) for o in SCATTER_OUTPUTS):
@@ -581,8 +586,8 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     if win is not None:   # the fog light on surfaces: only where the picture has surfaces
         surface_in = {k: _crop(m, v, win) for k, v in surface_in.items()}
     shared.update({SURFACE + k: v for k, v in surface_in.items()})
+    shared["Shaft Length"] = m.select(m.less(1e-3, cover), d_vp, SKY_LENGTH)
     pixel_xy = m.wrap(coords.outputs["Pixel"], vector=True)
-    shared["Shaft Length"] = m.select(m.less(0.5, cover), d_vp, SKY_LENGTH)
     shared["Shaft Offset"] = shafts.offset(m, m.dot(pixel_xy, (1.0, 0.0, 0.0)), m.dot(pixel_xy, (0.0, 1.0, 0.0)))
     sums = {}   # Output -> the sum over the bundles
     for first in range(0, len(lights), BUNDLE_SIZE):

@@ -37,8 +37,9 @@ import math
 
 import numpy as np
 
-SHAFT_NODES = {"draft": 12, "preview": 16, "final": 24, "exact": 32}   # K per Quality (``samples_for``)
-DEFAULT_NODES = 16
+SHAFT_NODES = {"draft": 12, "final": 24, "exact": 48}   # K per Quality (``samples_for``)
+TAIL_SHARE = 4            # the sky past a surface takes K / TAIL_SHARE nodes (``lit_share``)
+DEFAULT_NODES = 24
 POINT_MAP = (1024, 512)   # longitude x latitude grid points of a point light's map (0.35 deg apart)
 SPOT_MAP = 512            # grid points across a spot's map (its cone plus SPOT_MARGIN)
 SPOT_MARGIN = 1.05        # a spot's map spans tan(half angle) x this
@@ -46,8 +47,7 @@ NO_HIT = 1.0e30           # m: the map's distance where a direction meets nothin
 FOG_BIAS = (0.002, 0.003)   # (relative, m): a fog point is lit if d < D (1 - rel) - abs: contact shadows
 SURFACE_BIAS = (0.02, 0.02)   # (relative, m): a surface point is lit if d < D (1 + rel) + abs: no acne
 MIN_SHARE = 1e-30         # the weights' sum below which S is 1 (no light arrives at all)
-BAYER = (0, 8, 2, 10, 12, 4, 14, 6, 3, 11, 1, 9, 15, 7, 13, 5)   # 4 x 4 ordered-dither ranks, row by row
-INTERLEAVE = 4            # the pattern's side (px)
+BAYER = (0, 2, 3, 1)      # 2 x 2 ordered-dither ranks, row by row (``offset``)
 
 
 def samples_for(quality):
@@ -133,31 +133,56 @@ def surface_lit(m, d, depth):
     return m.less(d, depth * (1.0 + SURFACE_BIAS[0]) + SURFACE_BIAS[1])
 
 
+SURFACE_REACH = (0.05, 0.2, 0.6)   # the surface's fog samples lie these fractions of its distance to the light away
+SURFACE_TILT = 0.8            # rad: the four tilted sample directions' angle from the normal
+
+
+def surface_share(m, point, normal, light, shadow):
+    """The share of the fog light reaching a surface ``point`` (Sun et al. 2005 Eq. 17-18, G_0 and G_n) that
+    the light's shadows leave: half the point's own visibility (``surface_lit``), half the lit share of ten
+    fog points over it (along the unit ``normal`` and four directions tilted SURFACE_TILT from it, at
+    SURFACE_REACH of the point's distance to the light).  The fog that lights a surface lies over it and
+    towards the light; a wall's face in the light's shadow still gets the light of the lit fog just over
+    its top edge, the ground beside a beam some of the beam's.  An approximation: 1 in open air and 0 where
+    all the fog around the point is in shadow, as Eq. 15 with H gives; between, docs/physics.md ("Light
+    shafts") measures it."""
+    spec, spot = shadow
+    to_light = light - point
+    dist = m.length(to_light)
+    own = surface_lit(m, dist, map_depth(m, spec, spot, m.scale(to_light, -1.0)))
+    # a tangent frame: any vector not along the normal, crossed
+    side = m.cross(normal, (0.0, 0.0, 1.0)) + m.cross(normal, (0.0, 1.0, 0.0)) * 0.01
+    t1 = m.scale(side, 1.0 / m.maximum(m.length(side), 1e-9))
+    t2 = m.cross(normal, t1)
+    c, s = math.cos(SURFACE_TILT), math.sin(SURFACE_TILT)
+    dirs = [normal] + [m.scale(normal, c) + m.scale(t, sign * s) for t in (t1, t2) for sign in (1.0, -1.0)]
+    total, count = 0.0, 0
+    for f in SURFACE_REACH:
+        for u in dirs:
+            q = point + m.scale(u, dist * f) - light
+            total = total + lit(m, m.length(q), map_depth(m, spec, spot, q))
+            count += 1
+    return 0.5 * own + total * (0.5 / count)
+
+
 # --- the lit share ------------------------------------------------------------------------------------
 
 def offset(m, pixel_x, pixel_y):
-    """The interleaving offset in [0, 1) of the pixel (pixel_x, pixel_y) (whole pixels): its rank in the
-    4 x 4 ordered-dither pattern (``BAYER``) over 16, plus 1/32 (the nodes sit mid-way in their strata)."""
-    n = float(INTERLEAVE)
-    i = pixel_x - m.floor(pixel_x * (1.0 / n)) * n
-    j = pixel_y - m.floor(pixel_y * (1.0 / n)) * n
-    # the 4 x 4 Bayer rank from the bits of i and j: 8 (i0 ^ j0) + 4 j0 + 2 (i1 ^ j1) + j1 (rows: j)
-    i1 = m.floor(i * 0.5)
-    j1 = m.floor(j * 0.5)
-    i0, j0 = i - 2.0 * i1, j - 2.0 * j1
-    x0 = (i0 - j0) * (i0 - j0)          # xor of two bits
-    x1 = (i1 - j1) * (i1 - j1)
-    rank = 8.0 * x0 + 4.0 * j0 + 2.0 * x1 + j1
-    return rank * (1.0 / 16.0) + 1.0 / 32.0
+    """The interleaving offset in (0, 1) of the pixel (pixel_x, pixel_y) (whole pixels): its rank in the
+    2 x 2 ordered-dither pattern [[0, 2], [3, 1]] (Bayer), 2 (i xor j) + j, plus a half, over 4."""
+    i = pixel_x - m.floor(pixel_x * 0.5) * 2.0
+    j = pixel_y - m.floor(pixel_y * 0.5) * 2.0
+    rank = 2.0 * (i - j) * (i - j) + j
+    return rank * 0.25 + 0.125
 
 
 def bayer_rank(i, j):
-    """The rank ``offset`` gives pixel (i, j) of the pattern (a reference for the tests: BAYER[4 j + i])."""
-    return BAYER[4 * (j % 4) + (i % 4)]
+    """The rank ``offset`` gives pixel (i, j) of the pattern (a reference for the tests)."""
+    return BAYER[2 * (j % 2) + (i % 2)]
 
 
 def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.5, g=0.0, falloff=None,
-              name=None):
+              name=None, tail_nodes=0, far=1.0e6):
     """S in [0, 1], the share of the glow along the segment [0, ``length``] m of the ray from ``camera``
     along the unit ``direction`` that the light at ``light`` (world, m) reaches (module docstring).
 
@@ -165,27 +190,40 @@ def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.
     the nodes sit in their strata (0.5: midpoints; ``offset`` interleaves them); ``g``: the
     Henyey-Greenstein anisotropy; ``falloff(m, u, d)``: a spot's factor at the ray point light + u,
     d = |u| (None: a point light).  ``name``: one node group for every node (``node_terms``) that says all
-    of what it builds (the map, the spot's frame and cone, g), or None.  The segment's length may be
-    huge (a ray to the sky): its far nodes weigh e^{-beta t}.
+    of what it builds (the map, the spot's frame and cone, g), or None.
+
+    With ``tail_nodes`` > 0, returns (S, S_far): S_far is the share of the whole ray to ``far`` m, its part
+    beyond ``length`` integrated by that many more nodes (a pixel that sees both a surface and the sky past
+    its edge: the glow to the surface takes S, the glow to the sky S_far).
     """
-    spec, spot = shadow
     v = light - camera
     t_c = m.dot(v, direction)
     h = m.maximum(m.sqrt(m.dot(v, v) - t_c * t_c), 1e-6 * m.length(v) + 1e-9)
     theta0 = m.atan2(-1.0 * t_c, h)
-    step = (m.atan2(length - t_c, h) - theta0) * (1.0 / nodes)
+    theta1 = m.atan2(length - t_c, h)
+    step = (theta1 - theta0) * (1.0 / nodes)
     axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
     args = (t_c, h, *(m.dot(v, a) for a in axes), *(m.dot(direction, a) for a in axes), beta)
 
     def terms(mm, theta, t_c, h, vx, vy, vz, dx, dy, dz, beta):
         return node_terms(mm, theta, t_c, h, mm.combine(vx, vy, vz), mm.combine(dx, dy, dz), beta, shadow, g, falloff)
-    lit_sum, total = 0.0, 0.0
-    for k in range(nodes):
-        theta = theta0 + step * (k + shift)
-        lit_weight, weight = m.group(name, terms, theta, *args) if name else terms(m, theta, *args)
-        lit_sum = lit_sum + lit_weight
-        total = total + weight
-    return (lit_sum + MIN_SHARE) / (total + MIN_SHARE)
+
+    def quadrature(start, width, count):
+        lit_sum, total = 0.0, 0.0
+        for k in range(count):
+            theta = start + width * (k + shift)
+            lit_weight, weight = m.group(name, terms, theta, *args) if name else terms(m, theta, *args)
+            lit_sum = lit_sum + lit_weight
+            total = total + weight
+        return lit_sum, total
+    lit_sum, total = quadrature(theta0, step, nodes)
+    share = (lit_sum + MIN_SHARE) / (total + MIN_SHARE)
+    if not tail_nodes:
+        return share
+    tail_step = (m.atan2(far - t_c, h) - theta1) * (1.0 / tail_nodes)
+    lit_tail, total_tail = quadrature(theta1, tail_step, tail_nodes)
+    lit_all = lit_sum * step + lit_tail * tail_step
+    return share, (lit_all + MIN_SHARE) / (total * step + total_tail * tail_step + MIN_SHARE)
 
 
 def node_terms(m, theta, t_c, h, v, direction, beta, shadow, g, falloff):
