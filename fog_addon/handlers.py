@@ -28,6 +28,7 @@ def _merge_appended():
 
 
 RECHOOSE_DELAY_S = 0.5
+_refreshing = []   # non-empty while the depsgraph handler refreshes the fog (it must not run inside itself)
 _choosing = []   # non-empty while the timer re-chooses (its frame changes must not schedule it again)
 
 
@@ -61,8 +62,14 @@ def on_depsgraph_update(scene, depsgraph):
         if not bpy.app.timers.is_registered(_merge_appended):
             bpy.app.timers.register(_merge_appended, first_interval=0.0)
         return
+    if _refreshing:   # the refresh's own depsgraph evaluation (the shadow maps' meshes) updates again
+        return
     if any(depsgraph.id_type_updated(t) for t in ("OBJECT", "LIGHT", "SCENE", "COLLECTION")):
-        apply.refresh_lights(scene, this_frame=True)
+        _refreshing.append(True)
+        try:
+            apply.refresh_lights(scene, this_frame=True)
+        finally:
+            _refreshing.clear()
         if not bpy.app.is_job_running("RENDER"):
             _schedule_rechoose()
 
