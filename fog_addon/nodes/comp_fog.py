@@ -253,6 +253,8 @@ def build_shaft_group(light, shadow, images, nodes, g):
 def _blurred(m, share, length):
     """The interleaved share averaged over its 2 x 2 pattern (``shafts.offset``) by a Bilateral Blur whose
     determinator is the log of the ray's length: no mixing across a silhouette."""
+    if length.vector:   # cropped to a window: an image with the length in each channel
+        length = m.dot(length, (1.0, 0.0, 0.0))
     log = m.math("LOGARITHM", m.maximum(length, 1e-3), math.e)
     node = m.node("CompositorNodeBilateralblur", max(share.col, log.col) + 1)
     m.feed(node.inputs["Image"], m.combine(share, share, share))
