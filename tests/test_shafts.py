@@ -135,3 +135,16 @@ def test_point_map_round_trip():
     x_want = i.ravel() / 16
     ok = np.isclose(x, x_want) | (np.isclose(x_want, 0) & np.isclose(x, 1)) | (np.isclose(x_want, 1) & np.isclose(x, 0))
     assert ok.all() and np.allclose(y, j.ravel() / 8)
+
+
+@pytest.mark.parametrize("length", [5.0, 1e6])
+def test_ray_through_the_light_is_finite(length):
+    """A pixel whose ray passes through the lamp, to a surface or to the sky, in float32 as the compositor
+    computes: the share is finite and in [0, 1] (it was NaN at the lamp's pixel of a render)."""
+    light = np.array([0.0, 0.0, 3.0], np.float32)
+    spec, depth = point_map(light, [((0.0, 0.0, 2.0), 0.6)], (64, 32))
+    m = NumpyOps({spec.name: depth.astype(np.float32)}, dtype=np.float32)
+    direction = (light - CAMERA.astype(np.float32)) / np.linalg.norm(light - CAMERA.astype(np.float32))
+    s, far = shafts.lit_share(m, CAMERA.astype(np.float32), direction.astype(np.float32), np.float32(length), light,
+                              np.float32(0.08), (spec, None), 24, tail_nodes=6, far=1e6)
+    assert np.isfinite(s) and np.isfinite(far) and 0.0 <= s <= 1.0 and 0.0 <= far <= 1.0, (s, far)

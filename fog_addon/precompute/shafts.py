@@ -47,6 +47,8 @@ NO_HIT = 1.0e30           # m: the map's distance where a direction meets nothin
 FOG_BIAS = (0.002, 0.003)   # (relative, m): a fog point is lit if d < D (1 - rel) - abs: contact shadows
 SURFACE_BIAS = (0.02, 0.02)   # (relative, m): a surface point is lit if d < D (1 + rel) + abs: no acne
 MIN_SHARE = 1e-30         # the weights' sum below which S is 1 (no light arrives at all)
+MIN_OFFSET = 1e-4         # a ray's distance to the light is at least this share of the camera's (h -> 0: no 0/0)
+MAX_ANGLE = 0.5 * math.pi - 1e-3   # rad: the nodes stay this far inside +-pi/2, where cos is 0 in float32
 BAYER = (0, 2, 3, 1)      # 2 x 2 ordered-dither ranks, row by row (``offset``)
 
 
@@ -198,9 +200,10 @@ def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.
     """
     v = light - camera
     t_c = m.dot(v, direction)
-    h = m.maximum(m.sqrt(m.dot(v, v) - t_c * t_c), 1e-6 * m.length(v) + 1e-9)
-    theta0 = m.atan2(-1.0 * t_c, h)
-    theta1 = m.atan2(length - t_c, h)
+    h = m.maximum(m.sqrt(m.dot(v, v) - t_c * t_c), MIN_OFFSET * m.length(v) + 1e-6)
+    theta_far = m.minimum(m.atan2(far - t_c, h), MAX_ANGLE)
+    theta0 = m.maximum(m.atan2(-1.0 * t_c, h), -MAX_ANGLE)
+    theta1 = m.minimum(m.atan2(length - t_c, h), theta_far)
     step = (theta1 - theta0) * (1.0 / nodes)
     axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
     args = (t_c, h, *(m.dot(v, a) for a in axes), *(m.dot(direction, a) for a in axes), beta)
@@ -220,7 +223,7 @@ def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.
     share = (lit_sum + MIN_SHARE) / (total + MIN_SHARE)
     if not tail_nodes:
         return share
-    tail_step = (m.atan2(far - t_c, h) - theta1) * (1.0 / tail_nodes)
+    tail_step = (theta_far - theta1) * (1.0 / tail_nodes)
     lit_tail, total_tail = quadrature(theta1, tail_step, tail_nodes)
     lit_all = lit_sum * step + lit_tail * tail_step
     return share, (lit_all + MIN_SHARE) / (total * step + total_tail * tail_step + MIN_SHARE)
