@@ -86,6 +86,7 @@ class Compositor(Method):
         old = bpy.data.node_groups.get(comp_fog.FOG_GROUP)
         if old is not None and old.users == 0:
             bpy.data.node_groups.remove(old)
+        shadow_maps.remove_unused()
 
 
 def dimming_lights(scene, spec, lights):

@@ -4,7 +4,7 @@ from typing import Any, NamedTuple
 
 import bpy
 
-from .. import caveats, methods, props
+from .. import caveats, methods, props, shadow_maps
 from ..nodes import comp_fog, compositor, dedupe, groups, images, osl, passes
 from ..nodes.light import unwrap_light, wrap_light
 from ..nodes.material import unwrap_material, wrap_material
@@ -572,6 +572,7 @@ def remove_fog(scene, progress=progress_.silent):
         img = bpy.data.images.get(name)
         if img is not None:
             bpy.data.images.remove(img)
+    shadow_maps.remove_unused()
     for name in osl.text_names():
         text = bpy.data.texts.get(name)
         if text is not None:
