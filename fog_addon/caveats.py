@@ -98,7 +98,7 @@ def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None):
     if not found:
         return []
     if not shafts:
-        why = why_off or "only the Compositor method casts them (Method Compositor, or Auto)"
+        why = why_off or "the node groups and OSL have none: Method Compositor or Auto casts them"
         return [f"light shafts are not modelled ({why}): objects cast no shadow into the fog, so the glow of "
                 f"{len(found)} light(s) ({_names(found)}) passes through the objects near them (a lamp's hood, "
                 "a wall, a window frame)"]

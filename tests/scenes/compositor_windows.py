@@ -100,7 +100,7 @@ def run(out, windowed):
     if not windowed:   # every term over the whole picture: the groups built without windows
         view.windows = lambda *args, **kwargs: None
         view.full_windows = lambda lights: None
-    apply.apply_fog(scene, BETA, method="compositor")
+    apply.apply_fog(scene, BETA, method="compositor", shafts=False)   # the windows alone
     paths = {"frame 1": render(scene, out / f"{tag}_f1.exr")}
     scene.frame_set(5)
     paths["frame 5"] = render(scene, out / f"{tag}_f5.exr")
