@@ -10,6 +10,7 @@ import pytest
 
 from fog_addon import compare, imageio
 from fog_scenes import render_harness as h
+from fog_scenes.shafts import lamp_mask   # the lamps' pixels: 20x the median, and their neighbours
 
 pytestmark = pytest.mark.render
 
@@ -18,17 +19,6 @@ RESOLUTION = (96, 54)
 SAMPLES = 8192   # the reference's noise: 0.6 % relative RMSE (a second seed)
 BOUND = {"cycles": 0.13, "eevee": 0.14}   # measured 11.3 % and 11.8 %
 WITHOUT_SHAFTS = 0.5                      # measured 94 %
-
-
-def lamp_mask(ref):
-    """True except on the lamps' pixels (20x the picture's median) and their 8 neighbours."""
-    lum = ref.mean(axis=-1)
-    hot = lum > 20.0 * np.median(lum)
-    grown = hot.copy()
-    for dy in (-1, 0, 1):
-        for dx in (-1, 0, 1):
-            grown |= np.roll(np.roll(hot, dy, 0), dx, 1)
-    return ~grown
 
 
 def _case(tmp_path, regen, engine, shafts):
