@@ -13,6 +13,7 @@ add-on (``animated_note``).
 Objects that Cycles lets shadow rays through (hidden from shadow rays, not rendered) cast none here; every
 other surface is opaque (glass included, as Cycles' shadow rays treat it).
 """
+import functools
 import hashlib
 import math
 from typing import NamedTuple
@@ -91,15 +92,23 @@ def scene_bvh(scene, depsgraph=None):
     return Scene(bvh, digest)
 
 
+@functools.lru_cache(maxsize=1)
+def _point_vectors():
+    """A point light's map directions as mathutils Vectors (every point light's map shares them)."""
+    return [Vector(d) for d in shafts.point_map_directions().reshape(-1, 3).tolist()]
+
+
 def cast(bvh, origin, directions):
-    """Distance (m) from ``origin`` along each unit direction (N, 3) to the first triangle, NO_HIT if none."""
+    """Distance (m) from ``origin`` along each unit direction (N, 3 array, or a list of Vectors) to the first
+    triangle, NO_HIT if none."""
     out = np.full(len(directions), shafts.NO_HIT, np.float32)
     if bvh is None:
         return out
     o = Vector(tuple(origin))
     ray_cast = bvh.ray_cast
-    for i, d in enumerate(directions.tolist()):
-        hit = ray_cast(o, Vector(d))
+    vectors = directions if isinstance(directions, list) else [Vector(d) for d in directions.tolist()]
+    for i, d in enumerate(vectors):
+        hit = ray_cast(o, d)
         if hit[0] is not None:
             out[i] = hit[3]
     return out
@@ -117,10 +126,11 @@ def bake(light, geometry):
         half = shafts.spot_half_width(math.cos(0.5 * light.data.spot_size))
         dirs = shafts.spot_map_directions(frame, half)
         spot = (tuple(tuple(float(c) for c in v) for v in frame), half)
+        depth = cast(geometry.bvh, origin, dirs.reshape(-1, 3)).reshape(dirs.shape[:2])
     else:
-        dirs, spot = shafts.point_map_directions(), None
-    depth = cast(geometry.bvh, origin, dirs.reshape(-1, 3)).reshape(dirs.shape[:2])
-    spec = TableSpec(IMAGE_PREFIX + light.name, dirs.shape[1], dirs.shape[0])
+        spot = None
+        depth = cast(geometry.bvh, origin, _point_vectors()).reshape(shafts.POINT_MAP[1], shafts.POINT_MAP[0])
+    spec = TableSpec(IMAGE_PREFIX + light.name, depth.shape[1], depth.shape[0])
     return ShadowMap(spec, spot, origin), depth
 
 

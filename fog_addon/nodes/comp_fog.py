@@ -245,7 +245,8 @@ def build_shaft_group(light, shadow, images, nodes, g):
     m.feed(gout.inputs["Share"], share)
     m.feed(gout.inputs["Share Far"], far)
     m.feed(gout.inputs["Visible"], shafts.surface_share(m, g_["Surface Position"], g_["Surface Normal"], g_["Light"],
-                                                         (shadow.spec, shadow.spot)))
+                                                         (shadow.spec, shadow.spot),
+                                                         name=f"Shaft Fog Point {shadow.spec.name} {kind}"))
     ng[owned.BUILT] = groups.code_fingerprint()
     return groups._install(ng, name)
 

@@ -139,7 +139,7 @@ SURFACE_REACH = (0.05, 0.2, 0.6)   # the surface's fog samples lie these fractio
 SURFACE_TILT = 0.8            # rad: the four tilted sample directions' angle from the normal
 
 
-def surface_share(m, point, normal, light, shadow):
+def surface_share(m, point, normal, light, shadow, name=None):
     """The share of the fog light reaching a surface ``point`` (Sun et al. 2005 Eq. 17-18, G_0 and G_n) that
     the light's shadows leave: half the point's own visibility (``surface_lit``), half the lit share of ten
     fog points over it (along the unit ``normal`` and four directions tilted SURFACE_TILT from it, at
@@ -147,8 +147,13 @@ def surface_share(m, point, normal, light, shadow):
     towards the light; a wall's face in the light's shadow still gets the light of the lit fog just over
     its top edge, the ground beside a beam some of the beam's.  An approximation: 1 in open air and 0 where
     all the fog around the point is in shadow, as Eq. 15 with H gives; between, docs/physics.md ("Light
-    shafts") measures it."""
+    shafts") measures it.  ``name``: one node group for each fog point's test (``lit``), or None."""
     spec, spot = shadow
+
+    def lit_at(mm, x, y, z):   # the fog point light + (x, y, z): lit?
+        u = mm.combine(x, y, z)
+        return lit(mm, mm.length(u), map_depth(mm, spec, spot, u))
+    axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
     to_light = light - point
     dist = m.length(to_light)
     own = surface_lit(m, dist, map_depth(m, spec, spot, m.scale(to_light, -1.0)))
@@ -162,7 +167,8 @@ def surface_share(m, point, normal, light, shadow):
     for f in SURFACE_REACH:
         for u in dirs:
             q = point + m.scale(u, dist * f) - light
-            total = total + lit(m, m.length(q), map_depth(m, spec, spot, q))
+            parts = [m.dot(q, a) for a in axes]
+            total = total + (m.group(name, lit_at, *parts) if name else lit_at(m, *parts))
             count += 1
     return 0.5 * own + total * (0.5 / count)
 
