@@ -51,6 +51,8 @@ def expected_names(method, scene=None, texts_of=None):
         n = len(apply.fog_lights(scene)[0])
         names += [f"{prefix} {k + 1}-{min(k + groups.BUNDLE, n)}" for prefix in (groups.SURFACE_LIGHTS, groups.WORLD_LIGHTS)
                   for k in range(0, n, groups.BUNDLE)]
+        if method in ("nodes", "osl"):   # the glows past glass and mirrors (Cycles node groups)
+            names += [f"{groups.SURFACE_TAILS} {k + 1}-{min(k + groups.BUNDLE, n)}" for k in range(0, n, groups.BUNDLE)]
     names += images.table_names()
     names += [osl.text_name(r) for r in rungs.choose(texts_of or method) if r.backends == {"numpy", "osl"}]
     tree = scene.compositing_node_group if scene is not None and compositor.is_set_up(scene) else None
