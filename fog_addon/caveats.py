@@ -63,8 +63,7 @@ def shadowing_lights(scene, lights, beta, reach_m):
     ``reach_m`` (scene units).  A flat object (a ground plane) counts only where the camera sees its far side
     from the light, where its shadow in the fog lies.  All lights against all objects at once (N x M)."""
     reach = min(GLOW_OPTICAL_DEPTH / beta, reach_m) if beta > 0.0 else reach_m
-    casters = [o for o in scene.objects if o.type in ("MESH", "CURVE", "SURFACE", "META", "FONT")
-               and not o.hide_render and o.visible_shadow]
+    casters = shadow_casters(scene)
     if not casters or not lights:
         return {}
     corners = np.array([footprint.box_points(o.bound_box, o.matrix_world) for o in casters]).reshape(-1, 8, 3)
@@ -108,7 +107,7 @@ def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None):
     if soft:
         notes.append(f"light shafts are sharp: the Radius of {_names(soft)} softens their shadows on surfaces "
                      "(Cycles) but not in the fog")
-    moving = [o.name for o in [*shafted, *_casters(scene)] if _animated(o)]
+    moving = [o.name for o in [*shafted, *shadow_casters(scene)] if _animated(o)]
     if moving:
         notes.append(f"{_names(moving)} move: the shadow maps of the shafts are baked for each frame as it "
                      "renders, so a farm needs the add-on installed for this animation (a still frame renders "
@@ -116,9 +115,12 @@ def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None):
     return notes
 
 
-def _casters(scene):
-    return [o for o in scene.objects if o.type in ("MESH", "CURVE", "SURFACE", "META", "FONT")
-            and not o.hide_render and o.visible_shadow]
+CASTER_TYPES = ("MESH", "CURVE", "SURFACE", "META", "FONT")
+
+
+def shadow_casters(scene):
+    """The objects that cast shadows into the fog (rendered, visible to shadow rays)."""
+    return [o for o in scene.objects if o.type in CASTER_TYPES and not o.hide_render and o.visible_shadow]
 
 
 def _animated(obj):

@@ -23,27 +23,20 @@ import numpy as np
 from mathutils import Vector
 from mathutils.bvhtree import BVHTree
 
+from . import caveats
 from .nodes import owned
 from .precompute import shafts
 from .precompute.tables import TableSpec
 
 IMAGE_PREFIX = f"{owned.PREFIX} Shadow "   # a light's map: "<IMAGE_PREFIX><light name>"
 KEY = "analytic_fog_shadow_key"            # on the image: what the map was baked from (``ShadowMap.key``)
-CASTER_TYPES = ("MESH", "CURVE", "SURFACE", "META", "FONT")
 
 
 class ShadowMap(NamedTuple):
     """A light's baked map: ``spec`` (its image's name and grid), ``spot``: (frame, half_width) of a spot's
-    map (``shafts.spot_frame``, ``shafts.spot_half_width``) or None for a point light's; ``origin``: the
-    light's position (m) it was cast from."""
+    map (``spot_map``) or None for a point light's."""
     spec: TableSpec
     spot: tuple
-    origin: tuple
-
-
-def casters(scene):
-    """The objects that cast shadows into the fog (rendered, visible to shadow rays)."""
-    return [o for o in scene.objects if o.type in CASTER_TYPES and not o.hide_render and o.visible_shadow]
 
 
 def _triangles(depsgraph, objects):
@@ -85,7 +78,7 @@ class Scene(NamedTuple):
 def scene_bvh(scene, depsgraph=None):
     """The BVH of ``scene``'s shadow casters (``casters``) in world space, and their digest."""
     depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
-    verts, tris = _triangles(depsgraph, casters(scene))
+    verts, tris = _triangles(depsgraph, caveats.shadow_casters(scene))
     digest = hashlib.sha1(np.ascontiguousarray(verts, np.float32).tobytes()
                           + np.ascontiguousarray(tris, np.int32).tobytes()).hexdigest()
     bvh = BVHTree.FromPolygons(verts.tolist(), tris.tolist(), all_triangles=True) if len(tris) else None
@@ -121,17 +114,24 @@ def _is_spot(light):
 def bake(light, geometry):
     """(ShadowMap, depths (rows, columns) float32) of ``light`` against ``geometry`` (``scene_bvh``)."""
     origin = tuple(light.matrix_world.translation)
-    if _is_spot(light):
-        frame = shafts.spot_frame(np.asarray(light.matrix_world)[:3, :3])
-        half = shafts.spot_half_width(math.cos(0.5 * light.data.spot_size))
-        dirs = shafts.spot_map_directions(frame, half)
-        spot = (tuple(tuple(float(c) for c in v) for v in frame), half)
+    spot = spot_map(light)
+    if spot is not None:
+        dirs = shafts.spot_map_directions(*spot)
         depth = cast(geometry.bvh, origin, dirs.reshape(-1, 3)).reshape(dirs.shape[:2])
     else:
-        spot = None
         depth = cast(geometry.bvh, origin, _point_vectors()).reshape(shafts.POINT_MAP[1], shafts.POINT_MAP[0])
     spec = TableSpec(IMAGE_PREFIX + light.name, depth.shape[1], depth.shape[0])
-    return ShadowMap(spec, spot, origin), depth
+    return ShadowMap(spec, spot), depth
+
+
+def spot_map(light):
+    """(frame, half_width) of a spot's map at the light's pose (``shafts.spot_frame``, ``spot_half_width``),
+    None for a point light (or a spot of 179 degrees or more, mapped as one)."""
+    if not _is_spot(light):
+        return None
+    frame = shafts.spot_frame(np.asarray(light.matrix_world)[:3, :3])
+    return (tuple(tuple(float(c) for c in v) for v in frame),
+            shafts.spot_half_width(math.cos(0.5 * light.data.spot_size)))
 
 
 def key(light, geometry):
@@ -181,13 +181,7 @@ def ensure(scene, lights, geometry=None):
 
 def describe(light, img):
     """The ShadowMap of an image baked for ``light`` (its grid from the image, its frame from the light)."""
-    spec = TableSpec(img.name, img.size[0], img.size[1])
-    spot = None
-    if _is_spot(light):
-        frame = shafts.spot_frame(np.asarray(light.matrix_world)[:3, :3])
-        spot = (tuple(tuple(float(c) for c in v) for v in frame),
-                shafts.spot_half_width(math.cos(0.5 * light.data.spot_size)))
-    return ShadowMap(spec, spot, tuple(light.matrix_world.translation))
+    return ShadowMap(TableSpec(img.name, img.size[0], img.size[1]), spot_map(light))
 
 
 def remove_unused(keep=()):

@@ -127,7 +127,7 @@ def follow_shadows(scene, lights):
     whose map turned gets its shaft group again (its frame is built in)."""
     maps_now = [bpy.data.images.get(shadow_maps.IMAGE_PREFIX + o.name) for o in lights]
     shafted = [o for o, img in zip(lights, maps_now) if img is not None]
-    if not shafted or not any(caveats._animated(o) for o in [*shafted, *shadow_maps.casters(scene)]):
+    if not shafted or not any(caveats._animated(o) for o in [*shafted, *caveats.shadow_casters(scene)]):
         return
     from ..ops.apply import spec_of
     spec = spec_of(scene)
