@@ -69,6 +69,9 @@ def test_operator_reports_and_stores_the_choice(res):
     assert res["add"] == ["FINISHED"] and res["spec_method"] == "AUTO"
     assert res["built"] == res["stored"]["method"] == "compositor" and res["stored"]["method_reason"]
     assert any(line.strip().startswith("Method Auto: Compositor (") for line in res["explain"]), res["explain"]
+    # the spheres shadow the lamps' glows: the shafts' nodes a ray are said, and that the prediction leaves them out
+    assert any(line.strip().startswith("Light shafts of") and "not in the prediction" in line
+               for line in res["explain"]), res["explain"]
 
 
 def test_refused_change_is_shown_and_changes_nothing(res):

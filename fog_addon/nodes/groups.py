@@ -660,7 +660,11 @@ def _place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp
     glass = m.wrap(g[GLASS_COLOR], vector=True)
     incoming = m.wrap(geo.outputs["Incoming"], vector=True)
     seg3 = m.combine(segment, segment, segment)
-    inputs = dict(shared, **{"Straight": m.scale(incoming, -1.0).sock,
+    # the tails' own copy of Position (the same value): the light groups' nodes that read Position would
+    # otherwise be one node in Cycles' graph (its deduplication) with the Surface bundles' and, read by both
+    # sides of the closure tree, stay on SVM's stack for both: 4 floats a light (199 floats at 24 lights)
+    position = m.wrap(shared["Position"], vector=True) + _exact_zero(m, incoming)
+    inputs = dict(shared, **{"Position": position.sock, "Straight": m.scale(incoming, -1.0).sock,
                              "Mirrored": shading.mirror(m, incoming, m.wrap(geo.outputs["Normal"], vector=True)).sock,
                              "Straight Weight": (m.scale(glass, 1.0 - f) - seg3).sock,
                              "Mirrored Weight": m.scale(glass, f).sock, "Transmittance": t_vp.sock})

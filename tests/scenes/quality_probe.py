@@ -12,6 +12,8 @@ glossy rays: in Cycles their diffuse and specular factors alone still let
 them light surfaces) and the World is black, so the picture is the fog's
 light alone, without noise and without the Fog Passes' cost.  METHOD: the fog's method (default nodes; with
 "compositor" the same models are evaluated once per pixel, at the pixel centre's surface point here).
+Light shafts are off: the prediction covers the lights' models, not the shafts' quadrature (its nodes per ray
+follow the Quality too; ``apply.explain`` says so, and tests/test_shafts_render.py measures the shafts).
 
 Writes OUT_DIR/auto.exr and OUT_DIR/exact.exr and prints one JSON line: the
 predicted error of the choice, the steps, and the scene's lights and beta.
@@ -102,10 +104,10 @@ def main(out, name, quality, method="nodes", width=128, height=72):
     fog_only(scene)
     tiny_render(scene, "CYCLES", width, height)
     quality = None if quality == "exact" else (float(quality) if quality[0].isdigit() else quality)
-    apply.apply_fog(scene, beta, anisotropy=g, error=quality, method=method)
+    apply.apply_fog(scene, beta, anisotropy=g, error=quality, method=method, shafts=False)
     choice = apply.stored_choice()
     render(scene, out / "auto.exr")
-    apply.apply_fog(scene, beta, anisotropy=g, error=None, method=method)
+    apply.apply_fog(scene, beta, anisotropy=g, error=None, method=method, shafts=False)
     render(scene, out / "exact.exr")
     print(json.dumps({"scene": name, "beta": beta, "quality": quality, "predicted": choice["error"],
                       "steps": {k: v[0] for k, v in choice["lights"].items()},
