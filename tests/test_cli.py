@@ -34,5 +34,7 @@ def test_render_explains_the_models(tmp_path):
     lines = [line for line in text.splitlines() if line.startswith("models: ")]
     assert lines[0].startswith("models: Quality 0.5: predicted error"), lines
     assert lines[1].startswith("models:   Method Auto: "), lines   # the method Auto chose, and why
-    assert len(lines) == 5 and all(": " in line for line in lines[2:]), lines   # the three lamps
+    # the three lamps, then their posts' shafts (the street's posts shadow the lamps' glows)
+    assert len(lines) == 6 and all(": " in line for line in lines[2:5]), lines
+    assert lines[5].startswith("models:   Light shafts of "), lines
     assert "quality 0.5 (flag)" in text

@@ -67,12 +67,15 @@ SURFACE = "Surface "   # a bundle's inputs of SURFACE_IMAGES: "Surface Position"
 # world where the pixel sees only the sky)
 SHAFT_SHARED = (("Beta", F), ("Camera", V), ("Direction", V), ("Shaft Length", F), ("Shaft Offset", F))
 SHAFT_PER_PIXEL = ("Direction", "Shaft Length", "Shaft Offset")
-SHAFT_BLUR = 1        # px: the Bilateral Blur's size over the 2 x 2 interleaved shares (``shafts.offset``)
-SHAFT_EDGE = 0.05     # the blur's threshold on log distance: neighbours 5 % nearer or farther are not mixed
+SHAFT_TAPS = (1, 2, 1)   # the separable filter that averages the 2 x 2 interleaved shares (``_interleave_mean``)
+SHAFT_EDGE = 0.05     # its threshold on log distance: neighbours 5 % nearer or farther are not mixed
 SKY_LENGTH = 1.0e6   # m: a ray to the sky's length for the shafts (its far nodes weigh e^{-beta t})
 SHAFT_GROUP = f"{LIGHT_GROUP} Shaft"      # per shafted light: "<SHAFT_GROUP> <light name>"
+SURFACE_OFFSET = SURFACE + "Offset"   # a surface's interleaving offset (``shafts.surface_offset``)
+SURFACE_TAPS = (1, 2, 2, 2, 1)   # the filter over the 4 x 4 interleaved surface shares (``shafts.surface_offset``)
+SURFACE_EDGE = 0.3    # its threshold on log distance (a floor seen at a grazing angle changes faster than 5 % a row)
 SHARED = (GLOW_SHARED + tuple((SURFACE + name, kind) for name, kind in SURFACE_SHARED[2:])
-          + SHAFT_SHARED[3:])   # a bundle's inputs
+          + ((SURFACE_OFFSET, F),) + SHAFT_SHARED[3:])   # a bundle's inputs
 # the quantities the compositor sums per pixel (``rungs.COMPOSITOR_OUTPUTS``, by their compositor sockets): a light's
 # glows (rungs.GLOW) in its glow group, over the picture or the light's window; the light its surface reflects
 # (the rest) in its scatter group, over the surfaces' window
@@ -225,8 +228,9 @@ def build_shaft_group(light, shadow, images, nodes, g):
     ``nodes``: K; ``g``: the Henyey-Greenstein anisotropy.  The spot's frame and cone are the map's (baked at
     its pose)."""
     name = f"{SHAFT_GROUP} {light.name}"
-    ng, gin, gout = groups._new_group(name, [*SHAFT_SHARED, ("Light", V), ("Surface Position", V), ("Surface Normal", V)],
-                                      [("Share", F), ("Share Far", F), ("Visible", F)],
+    ng, gin, gout = groups._new_group(name, [*SHAFT_SHARED, ("Light", V), ("Surface Position", V), ("Surface Normal", V),
+                                             ("Surface Offset", F)],
+                                      [("Share", F), ("Share Far", F), ("Visible", V)],
                                       tree_type="CompositorNodeTree")
     m = CompOps(ng, images)
     g_ = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
@@ -238,31 +242,56 @@ def build_shaft_group(light, shadow, images, nodes, g):
         blend = float(light.data.spot_blend)
         falloff = lambda m, u, d: spot_.spot_falloff(m, m.dot(u, forward) / d, cos_half, blend)
         kind = "spot " + hashlib.sha1(repr((shadow.spec.width, frame, half, cos_half, blend)).encode()).hexdigest()[:12]
+    node = f"Shaft Node {shadow.spec.name} {kind} g {g:.6g}"   # one group for every quadrature node
     share, far = shafts.lit_share(m, g_["Camera"], g_["Direction"], g_["Shaft Length"], g_["Light"], g_["Beta"],
                                   (shadow.spec, shadow.spot), nodes, shift=g_["Shaft Offset"], g=g, falloff=falloff,
-                                  name=f"Shaft Node {shadow.spec.name} {kind} g {g:.6g}",
-                                  tail_nodes=max(nodes // shafts.TAIL_SHARE, 2), far=SKY_LENGTH)
+                                  name=node, tail_nodes=max(nodes // shafts.TAIL_SHARE, 2), far=SKY_LENGTH)
     m.feed(gout.inputs["Share"], share)
     m.feed(gout.inputs["Share Far"], far)
-    m.feed(gout.inputs["Visible"], shafts.surface_share(m, g_["Surface Position"], g_["Surface Normal"], g_["Light"],
-                                                         (shadow.spec, shadow.spot),
-                                                         name=f"Shaft Fog Point {shadow.spec.name} {kind}"))
+    lit_sum, total = shafts.surface_share(m, g_["Surface Position"], g_["Surface Normal"], g_["Camera"],
+                                          g_["Light"], g_["Beta"], (shadow.spec, shadow.spot),
+                                          shift=g_["Surface Offset"], g=g, falloff=falloff, name=node, parts=True)
+    m.feed(gout.inputs["Visible"], m.combine(lit_sum, total, 1.0))   # their ratio after the mean (``build_bundle``)
     ng[owned.BUILT] = groups.code_fingerprint()
     return groups._install(ng, name)
 
 
-def _blurred(m, share, length):
-    """The interleaved share averaged over its 2 x 2 pattern (``shafts.offset``) by a Bilateral Blur whose
-    determinator is the log of the ray's length: no mixing across a silhouette."""
+def _interleave_mean(m, value, length, taps, edge):
+    """``value`` (an image: a share, or the vector (lit, total, 1) of ``shafts.surface_share``) averaged over
+    an interleaving pattern exactly: a separable filter of the weights ``taps`` (SHAFT_TAPS over the 2 x 2
+    pattern of ``shafts.offset``: (1, 2, 1) gives each of its 4 ranks a quarter; SURFACE_TAPS over the
+    4 x 4 of ``shafts.surface_offset``: (1, 2, 2, 2, 1), a sixteenth each), by pixels shifted with
+    Translate nodes.  A neighbour whose ray is more than ``edge`` longer or shorter in log (``length``)
+    counts for nothing: no mixing across a silhouette.  A scalar ``value`` comes back a scalar, the mean;
+    a vector's third channel carries the weights, so (lit, total) come back as sums over the same pixels."""
     if length.vector:   # cropped to a window: an image with the length in each channel
         length = m.dot(length, (1.0, 0.0, 0.0))
     log = m.math("LOGARITHM", m.maximum(length, 1e-3), math.e)
-    node = m.node("CompositorNodeBilateralblur", max(share.col, log.col) + 1)
-    m.feed(node.inputs["Image"], m.combine(share, share, share))
-    m.feed(node.inputs["Determinator"], m.combine(log, log, log))
-    node.inputs["Size"].default_value = SHAFT_BLUR
-    node.inputs["Threshold"].default_value = SHAFT_EDGE
-    return m.dot(m.wrap(node.outputs[0], vector=True), (1.0, 0.0, 0.0))
+    packed = value if value.vector else m.combine(value, 0.0, 1.0)
+    half = len(taps) // 2
+    for axis in (0, 1):
+        total = m.scale(packed, float(taps[half]))
+        for k, w in enumerate(taps):
+            if k == half:
+                continue
+            near = [_translated(m, img, (k - half) * (axis == 0), (k - half) * (axis == 1)) for img in (packed, log)]
+            same = m.less(m.abs(m.dot(near[1], (1.0, 0.0, 0.0)) - log), edge)
+            total = _accumulate(m, total, m.scale(near[0], same * float(w)))
+        packed = total
+    if value.vector:
+        return packed
+    return m.dot(packed, (1.0, 0.0, 0.0)) / m.maximum(m.dot(packed, (0.0, 0.0, 1.0)), 1e-6)
+
+
+def _translated(m, value, dx, dy):
+    """``value`` (an image) moved by (dx, dy) whole pixels (Translate, nearest); a scalar comes back in every
+    channel of an image."""
+    node = m.node("CompositorNodeTranslate", value.col + 1)
+    node.inputs["Interpolation"].default_value = "Nearest"
+    m.feed(node.inputs["Image"], value if value.vector else m.combine(value, value, value))
+    node.inputs["X"].default_value = float(dx)
+    node.inputs["Y"].default_value = float(dy)
+    return m.wrap(node.outputs[0], vector=True)
 
 
 def _window(m, scene, label, win):
@@ -437,9 +466,11 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
                 m.feed(shaft.inputs[socket], crop(socket) if socket in SHAFT_PER_PIXEL else g[socket])
             m.feed(shaft.inputs["Surface Position"], g[SURFACE + "Position"])
             m.feed(shaft.inputs["Surface Normal"], g[SURFACE + "Normal"])
+            m.feed(shaft.inputs["Surface Offset"], g[SURFACE_OFFSET])
             m.feed(shaft.inputs["Light"], position)
-            share = {o: _blurred(m, m.wrap(shaft.outputs["Share" if o.at == rungs.SURFACE_POINT else "Share Far"]),
-                                 crop("Shaft Length")) for o in GLOW_OUTPUTS}
+            share = {o: _interleave_mean(m, m.wrap(shaft.outputs["Share" if o.at == rungs.SURFACE_POINT
+                                                                  else "Share Far"]),
+                                         crop("Shaft Length"), SHAFT_TAPS, SHAFT_EDGE) for o in GLOW_OUTPUTS}
         if any(o.computed(mod) for o in GLOW_OUTPUTS):
             glow = m.node("CompositorNodeGroup", 6)
             glow.node_tree, glow.label = build_glow_group(mod, images, peak), f"Light {k}: {light.name}"
@@ -452,6 +483,10 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
                 sums[o] = _accumulate(m, sums[o], v if win is None else _uncrop(m, v, win))
             built.append(glow)
         if any(o.computed(mod) for o in SCATTER_OUTPUTS):
+            if shaft is not None:   # its directions interleave as the glow's nodes do (``shafts.surface_share``)
+                parts = _interleave_mean(m, m.wrap(shaft.outputs["Visible"], vector=True),
+                                         m.length(g[SURFACE + "Position"] - g["Camera"]), SURFACE_TAPS, SURFACE_EDGE)
+                visible = shafts.share_of(m.dot(parts, (1.0, 0.0, 0.0)), m.dot(parts, (0.0, 1.0, 0.0)))
             scatter = m.node("CompositorNodeGroup", 6)
             scatter.node_tree = build_scatter_group(mod, images)
             scatter.label = f"Light {k} Scatter: {light.name}"
@@ -460,7 +495,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
             for o in SCATTER_OUTPUTS:
                 v = m.wrap(scatter.outputs[o.compositor], vector=True)
                 if shaft is not None:
-                    v = m.scale(v, m.wrap(shaft.outputs["Visible"]))
+                    v = m.scale(v, visible)
                 sums[o] = _accumulate(m, sums[o], v)
             built.append(scatter)
         for node in built:
@@ -585,13 +620,15 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
               "Pixel": pix, "Corner": corner, "Across": across, "Up": up, "Size": size}
     surface_in = {"Position": pos, "Incoming": incoming, "Normal": normal, "Diffuse": diffuse, "Specular": specular,
                   "Level": level}
+    pixel_xy = m.wrap(coords.outputs["Pixel"], vector=True)
+    px, py = m.dot(pixel_xy, (1.0, 0.0, 0.0)), m.dot(pixel_xy, (0.0, 1.0, 0.0))
+    surface_in["Offset"] = shafts.surface_offset(m, px, py)
     win = None if windows is None else _window(m, scene, "Surface", windows[0])
     if win is not None:   # the fog light on surfaces: only where the picture has surfaces
         surface_in = {k: _crop(m, v, win) for k, v in surface_in.items()}
     shared.update({SURFACE + k: v for k, v in surface_in.items()})
     shared["Shaft Length"] = m.select(m.less(1e-3, cover), d_vp, SKY_LENGTH)
-    pixel_xy = m.wrap(coords.outputs["Pixel"], vector=True)
-    shared["Shaft Offset"] = shafts.offset(m, m.dot(pixel_xy, (1.0, 0.0, 0.0)), m.dot(pixel_xy, (0.0, 1.0, 0.0)))
+    shared["Shaft Offset"] = shafts.offset(m, px, py)
     sums = {}   # Output -> the sum over the bundles
     for first in range(0, len(lights), BUNDLE_SIZE):
         node = m.node("CompositorNodeGroup", 5)

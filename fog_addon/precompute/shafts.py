@@ -25,11 +25,13 @@ exact when H is constant along the ray.  H_k comes from a shadow map of the ligh
 ray casts from the light (``nodes/shafts.py``); the ray point is lit where d_k < D(u_k) (``lit``).  Biri
 2006 §III.D sums the primitive over lit segments found from shadow volumes; here the K nodes find them.
 
-**Interleaved nodes.**  The nodes of neighbouring pixels are offset by a fixed 4 x 4 pattern (``offset``,
-Keller and Heidrich 2001, "Interleaved sampling"): 16 pixels together hold 16 K nodes, and a 4-pixel
-depth-aware blur of S (the compositor's Bilateral Blur) averages them.  Without it a shaft's edge moves
-node by node as the camera moves: S steps by 1/K between neighbouring pixels (banding) and between frames
-(flicker).  The pattern is fixed to the picture and the map to the world, so nothing is random: no noise.
+**Interleaved nodes.**  The nodes of neighbouring pixels are offset by a fixed 2 x 2 pattern (``offset``,
+Keller and Heidrich 2001, "Interleaved sampling"): 4 pixels together hold 4 K nodes, and a depth-aware
+filter that weighs each rank of the pattern alike (the compositor's ``_interleave_mean``) averages them.
+Without it a shaft's edge moves node by node as the camera moves: S steps by 1/K between neighbouring
+pixels (banding) and between frames (flicker).  The pattern is fixed to the picture and the map to the
+world, so nothing is random: no noise.  A surface's share (``surface_share``) interleaves its directions
+over a 4 x 4 pattern (``surface_offset``) the same way.
 
 Every function takes an ops namespace ``m`` first (``ops.py``): numpy, the compositor's nodes.
 """
@@ -135,58 +137,93 @@ def surface_lit(m, d, depth):
     return m.less(d, depth * (1.0 + SURFACE_BIAS[0]) + SURFACE_BIAS[1])
 
 
-SURFACE_REACH = (0.05, 0.2, 0.6)   # the surface's fog samples lie these fractions of its distance to the light away
-SURFACE_TILT = 0.8            # rad: the four tilted sample directions' angle from the normal
+SURFACE_DIRECTIONS = 8   # cosine-weighted directions over a surface's hemisphere (``surface_share``)
+SURFACE_NODES = 12        # quadrature nodes along each of them
+GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))   # rad: the spiral of ``hemisphere_directions``
 
 
-def surface_share(m, point, normal, light, shadow, name=None):
-    """The share of the fog light reaching a surface ``point`` (Sun et al. 2005 Eq. 17-18, G_0 and G_n) that
-    the light's shadows leave: half the point's own visibility (``surface_lit``), half the lit share of ten
-    fog points over it (along the unit ``normal`` and four directions tilted SURFACE_TILT from it, at
-    SURFACE_REACH of the point's distance to the light).  The fog that lights a surface lies over it and
-    towards the light; a wall's face in the light's shadow still gets the light of the lit fog just over
-    its top edge, the ground beside a beam some of the beam's.  An approximation: 1 in open air and 0 where
-    all the fog around the point is in shadow, as Eq. 15 with H gives; between, docs/physics.md ("Light
-    shafts") measures it.  ``name``: one node group for each fog point's test (``lit``), or None."""
-    spec, spot = shadow
-
-    def lit_at(mm, x, y, z):   # the fog point light + (x, y, z): lit?
-        u = mm.combine(x, y, z)
-        return lit(mm, mm.length(u), map_depth(mm, spec, spot, u))
-    axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
-    to_light = light - point
-    dist = m.length(to_light)
-    own = surface_lit(m, dist, map_depth(m, spec, spot, m.scale(to_light, -1.0)))
-    # a tangent frame: any vector not along the normal, crossed
-    side = m.cross(normal, (0.0, 0.0, 1.0)) + m.cross(normal, (0.0, 1.0, 0.0)) * 0.01
+def hemisphere_directions(m, normal, count, turn):
+    """``count`` unit directions spread over the hemisphere about the unit ``normal`` with density cos / pi,
+    each of weight 1 / count in int cos / pi d omega = 1: a spiral, the sine of direction j's polar angle
+    sqrt((j + s) / count) and its azimuth j x the golden angle + 2 pi ``turn``.  ``turn`` in (0, 1) also
+    sets s, the place in the polar strata: frac(4 turn), so 16 pixels' sets (``surface_offset``) hold 4
+    polar places and 4 azimuths of each direction."""
+    side = m.cross(normal, (0.0, 0.0, 1.0)) + m.cross(normal, (0.0, 1.0, 0.0)) * 0.01   # any vector not along it
     t1 = m.scale(side, 1.0 / m.maximum(m.length(side), 1e-9))
     t2 = m.cross(normal, t1)
-    c, s = math.cos(SURFACE_TILT), math.sin(SURFACE_TILT)
-    dirs = [normal] + [m.scale(normal, c) + m.scale(t, sign * s) for t in (t1, t2) for sign in (1.0, -1.0)]
-    total, count = 0.0, 0
-    for f in SURFACE_REACH:
-        for u in dirs:
-            q = point + m.scale(u, dist * f) - light
-            parts = [m.dot(q, a) for a in axes]
-            total = total + (m.group(name, lit_at, *parts) if name else lit_at(m, *parts))
-            count += 1
-    return 0.5 * own + total * (0.5 / count)
+    place = turn * 4.0 - m.floor(turn * 4.0)
+    dirs = []
+    for j in range(count):
+        r2 = (place + j) * (1.0 / count)
+        r = m.sqrt(r2)
+        phi = turn * (2.0 * math.pi) + j * GOLDEN_ANGLE
+        dirs.append(m.scale(t1, m.cos(phi) * r) + m.scale(t2, m.sin(phi) * r) + m.scale(normal, m.sqrt(1.0 - r2)))
+    return dirs
+
+
+def surface_share(m, point, normal, viewer, light, beta, shadow, shift=0.5, g=0.0, falloff=None, name=None,
+                  directions=SURFACE_DIRECTIONS, nodes=SURFACE_NODES, parts=False):
+    """The share of the fog light a diffuse surface ``point`` receives (Sun et al. 2005 Eq. 17's G_0: the
+    airlight of every direction over it, weighted cos / pi) that the light's shadows leave:
+
+        V = int cos/pi L_a,H(omega) d omega / int cos/pi L_a(omega) d omega,
+
+    L_a,H the glow along the ray from the point in direction omega to infinity with Dobashi et al. 2002
+    Eq. 2's visibility H (``ray_integrals``).  ``directions`` cosine-weighted directions
+    (``hemisphere_directions``, turned by ``shift`` so neighbouring pixels' sets interleave) and ``nodes``
+    equiangular nodes along each give both integrals from the same nodes, so V is 1 to the bit where
+    nothing is in the way and 0 where all the fog over the point is in shadow.  A floor in a wall's shadow
+    gets the light of the beam through a window over it, as in the path-traced reference.  The glossy
+    term G_n takes the same V: its lobe is a blurred part of the same hemisphere.  ``normal`` is turned to
+    face ``viewer`` (the camera).  ``g``, ``falloff``, ``name``: as ``lit_share``.  ``parts``: return the two
+    integrals' sums (numerator, denominator), which neighbouring pixels' interleaved sets average before the
+    division (a mean of ratios would weigh a set that misses the bright directions as much as one that
+    holds them)."""
+    facing = m.select(m.less(m.dot(normal, viewer - point), 0.0), -1.0, 1.0)
+    lit_sum, total = 0.0, 0.0
+    for u in hemisphere_directions(m, m.scale(normal, facing), directions, shift):
+        lit_j, total_j = ray_integrals(m, point, u, light, beta, shadow, nodes, shift, g, falloff, name)
+        lit_sum, total = lit_sum + lit_j, total + total_j
+    return (lit_sum, total) if parts else share_of(lit_sum, total)
+
+
+def share_of(lit_sum, total):
+    """lit / total, 1 where nothing arrives at all (both under MIN_SHARE)."""
+    return (lit_sum + MIN_SHARE) / (total + MIN_SHARE)
 
 
 # --- the lit share ------------------------------------------------------------------------------------
 
 def offset(m, pixel_x, pixel_y):
     """The interleaving offset in (0, 1) of the pixel (pixel_x, pixel_y) (whole pixels): its rank in the
-    2 x 2 ordered-dither pattern [[0, 2], [3, 1]] (Bayer), 2 (i xor j) + j, plus a half, over 4."""
+    2 x 2 ordered-dither pattern [[0, 2], [3, 1]] (Bayer), plus a half, over 4."""
+    return _rank2(m, pixel_x, pixel_y) * 0.25 + 0.125
+
+
+def surface_offset(m, pixel_x, pixel_y):
+    """The interleaving offset in (0, 1) of the pixel for ``surface_share``: its rank in the 4 x 4 Bayer
+    pattern, 4 x (rank in the 2 x 2 of (i, j)) + rank in the 2 x 2 of (i // 2, j // 2), plus a half, over
+    16.  A surface's fog light varies slowly across the picture, so 16 pixels share their directions (the
+    compositor's SURFACE_TAPS filter)."""
+    coarse = _rank2(m, m.floor(pixel_x * 0.5), m.floor(pixel_y * 0.5))
+    return (_rank2(m, pixel_x, pixel_y) * 4.0 + coarse) * (1.0 / 16.0) + 1.0 / 32.0
+
+
+def _rank2(m, pixel_x, pixel_y):
+    """The rank of (pixel_x, pixel_y) in the 2 x 2 Bayer pattern (``BAYER``): 2 (i xor j) + j."""
     i = pixel_x - m.floor(pixel_x * 0.5) * 2.0
     j = pixel_y - m.floor(pixel_y * 0.5) * 2.0
-    rank = 2.0 * (i - j) * (i - j) + j
-    return rank * 0.25 + 0.125
+    return 2.0 * (i - j) * (i - j) + j
 
 
 def bayer_rank(i, j):
     """The rank ``offset`` gives pixel (i, j) of the pattern (a reference for the tests)."""
     return BAYER[2 * (j % 2) + (i % 2)]
+
+
+def bayer_rank16(i, j):
+    """The rank ``surface_offset`` gives pixel (i, j) (a reference for the tests)."""
+    return 4 * bayer_rank(i, j) + bayer_rank(i // 2, j // 2)
 
 
 def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.5, g=0.0, falloff=None,
@@ -204,35 +241,57 @@ def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.
     beyond ``length`` integrated by that many more nodes (a pixel that sees both a surface and the sky past
     its edge: the glow to the surface takes S, the glow to the sky S_far).
     """
-    v = light - camera
-    t_c = m.dot(v, direction)
-    h = m.maximum(m.sqrt(m.dot(v, v) - t_c * t_c), MIN_OFFSET * m.length(v) + 1e-6)
+    v, t_c, h, args = _ray_frame(m, camera, direction, light, beta)
     theta_far = m.minimum(m.atan2(far - t_c, h), MAX_ANGLE)
     theta0 = m.maximum(m.atan2(-1.0 * t_c, h), -MAX_ANGLE)
     theta1 = m.minimum(m.atan2(length - t_c, h), theta_far)
     step = (theta1 - theta0) * (1.0 / nodes)
-    axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
-    args = (t_c, h, *(m.dot(v, a) for a in axes), *(m.dot(direction, a) for a in axes), beta)
-
-    def terms(mm, theta, t_c, h, vx, vy, vz, dx, dy, dz, beta):
-        return node_terms(mm, theta, t_c, h, mm.combine(vx, vy, vz), mm.combine(dx, dy, dz), beta, shadow, g, falloff)
-
-    def quadrature(start, width, count):
-        lit_sum, total = 0.0, 0.0
-        for k in range(count):
-            theta = start + width * (k + shift)
-            lit_weight, weight = m.group(name, terms, theta, *args) if name else terms(m, theta, *args)
-            lit_sum = lit_sum + lit_weight
-            total = total + weight
-        return lit_sum, total
-    lit_sum, total = quadrature(theta0, step, nodes)
+    quad = (shadow, g, falloff, name, args)
+    lit_sum, total = _quadrature(m, theta0, step, nodes, shift, *quad)
     share = (lit_sum + MIN_SHARE) / (total + MIN_SHARE)
     if not tail_nodes:
         return share
     tail_step = (theta_far - theta1) * (1.0 / tail_nodes)
-    lit_tail, total_tail = quadrature(theta1, tail_step, tail_nodes)
+    lit_tail, total_tail = _quadrature(m, theta1, tail_step, tail_nodes, shift, *quad)
     lit_all = lit_sum * step + lit_tail * tail_step
     return share, (lit_all + MIN_SHARE) / (total * step + total_tail * tail_step + MIN_SHARE)
+
+
+def ray_integrals(m, origin, direction, light, beta, shadow, nodes, shift=0.5, g=0.0, falloff=None, name=None):
+    """(G_H, G) along the whole ray from ``origin`` along the unit ``direction`` (module docstring, to
+    infinity), each over beta I0 / 4 pi, in 1/m: (1 / h) int e^{-beta (t + d)} w f (H) d theta by ``nodes``
+    equiangular nodes (``lit_share``'s)."""
+    v, t_c, h, args = _ray_frame(m, origin, direction, light, beta)
+    theta0 = m.maximum(m.atan2(-1.0 * t_c, h), -MAX_ANGLE)
+    step = (MAX_ANGLE - theta0) * (1.0 / nodes)
+    lit_sum, total = _quadrature(m, theta0, step, nodes, shift, shadow, g, falloff, name, args)
+    scale = step / h
+    return lit_sum * scale, total * scale
+
+
+def _ray_frame(m, origin, direction, light, beta):
+    """The light seen from a ray: v = light - origin, t_c (the foot of the perpendicular along the ray), h
+    (the ray's distance to the light, at least MIN_OFFSET |v|), and the scalar arguments of ``node_terms``'s
+    group (``_quadrature``)."""
+    v = light - origin
+    t_c = m.dot(v, direction)
+    h = m.maximum(m.sqrt(m.dot(v, v) - t_c * t_c), MIN_OFFSET * m.length(v) + 1e-6)
+    axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+    return v, t_c, h, (t_c, h, *(m.dot(v, a) for a in axes), *(m.dot(direction, a) for a in axes), beta)
+
+
+def _quadrature(m, start, width, count, shift, shadow, g, falloff, name, args):
+    """(sum of H e_k, sum of e_k) over ``count`` nodes at start + width (k + shift) (``node_terms``), each one
+    node group ``name`` (or inline with None)."""
+    def terms(mm, theta, t_c, h, vx, vy, vz, dx, dy, dz, beta):
+        return node_terms(mm, theta, t_c, h, mm.combine(vx, vy, vz), mm.combine(dx, dy, dz), beta, shadow, g, falloff)
+    lit_sum, total = 0.0, 0.0
+    for k in range(count):
+        theta = start + width * (k + shift)
+        lit_weight, weight = m.group(name, terms, theta, *args) if name else terms(m, theta, *args)
+        lit_sum = lit_sum + lit_weight
+        total = total + weight
+    return lit_sum, total
 
 
 def node_terms(m, theta, t_c, h, v, direction, beta, shadow, g, falloff):

@@ -1,0 +1,42 @@
+"""Light shafts in issue 27's kinds of scene against Cycles path tracing with cast shadows: a room lit through
+two windows, a colonnade, a lamp under a hood with a spot behind a hole, a fence and a thin pole, and the open
+street whose posts shadow the lamps (fog_scenes/shafts.py: the cases, their references and their noise).
+
+Cycles, Method Compositor, 16 spp, default Quality, 128x72; relative RMSE with the 3x3 pixels of each lamp the
+camera sees left out (``lamp_pixel_mask``, as the issue allows).  The issue's goals are 5 % (shadowed scenes)
+and 3 % (the open street); each bound here is the measured figure with a margin
+(docs/measurements/2026-11-26-light-shafts.md), so that a regression fails while the goal stays documented.
+The window room runs in the default tier (the hardest case: walls lit only by the beams' fog); the rest are
+slow.  ``--regen`` renders the references again (minutes each: SHAFT_SAMPLES).
+"""
+import numpy as np
+import pytest
+
+from fog_addon import imageio
+from fog_scenes import render_harness as h
+from fog_scenes import shafts as fs
+
+pytestmark = pytest.mark.render
+
+# measured (2026-11-26): window room 5.00 %, colonnade 1.97 %, hooded lamp 2.73 %, fence 1.49 %, street 0.62 %
+BOUND = {"window_room": 0.056, "colonnade": 0.025, "hooded_lamp": 0.032, "fence": 0.018, "street_lamps": 0.008}
+GOAL = {"street_lamps": 0.03}   # the open street: 3 %; the shadowed scenes: 5 %
+DEFAULT_TIER = {"window_room"}
+CASES = [c if c[0] in DEFAULT_TIER else pytest.param(*c, marks=pytest.mark.slow)
+         for c in fs.SHAFT_CASES + fs.OPEN_CASES]
+
+
+@pytest.mark.parametrize("scene,density,anisotropy", CASES, ids=[c[0] for c in fs.SHAFT_CASES + fs.OPEN_CASES])
+def test_shaft_scene_against_path_tracing(tmp_path, regen, scene, density, anisotropy):
+    ref = fs.ensure_shaft_reference(scene, density, regen=regen, anisotropy=anisotropy)
+    log = []
+    out = h.render_test(scene, density, tmp_path / f"{scene}.exr", engine="cycles", method="compositor",
+                        samples=16, resolution=fs.SHAFT_RESOLUTION, cast_shadows=True, log=log,
+                        extra=["--shafts", "on"])
+    assert not h.log_errors(log[0]), h.log_errors(log[0])
+    assert "light shafts are not modelled" not in log[0]
+    assert np.isfinite(imageio.read_rgb(out)).all()
+    m = h.assert_close(out, ref, name=f"shafts_{scene}", rel_rmse=BOUND[scene],
+                       mask=fs.lamp_pixel_mask(scene, fs.SHAFT_RESOLUTION))
+    print(f"{scene}: relative RMSE {m['rel_rmse']:.4f} (bound {BOUND[scene]}, goal {GOAL.get(scene, 0.05)})")
+    assert BOUND[scene] <= GOAL.get(scene, 0.05) * 1.15   # a bound is never far past the issue's goal
