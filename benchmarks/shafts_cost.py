@@ -29,7 +29,7 @@ Each (engine, N, variant) runs in ONE worker process (this script with ``--worke
 * render with fog: a first render, then the minimum of ``repeats`` warm ones.
 
 Variants: ``shafts`` (Light Shafts on, the default; Auto must choose the compositor for the shafts:
-``choice``), ``noshafts`` (Light Shafts off, Method Auto: what Auto then chooses), ``noshafts_comp`` (Light
+``choice``), ``shafts_draft`` (the same at Quality Draft: fewer quadrature nodes, ``shafts.SAMPLES``), ``noshafts`` (Light Shafts off, Method Auto: what Auto then chooses), ``noshafts_comp`` (Light
 Shafts off, Method Compositor: the same method as ``shafts`` without the shafts).  ``shadow_maps``: the
 number of shadow-map images in the file after apply.
 
@@ -87,7 +87,9 @@ CAMERA = ((-20.0, -20.0, 14.0), (0.0, 0.0, 0.0), 24.0)   # position m, target m,
 RESOLUTION, EEVEE_RESOLUTION, SAMPLES = (640, 360), (160, 90), 32
 BUDGET_S = 1800.0
 REPEATS = 2
-VARIANTS = {"shafts": ("auto", True), "noshafts": ("auto", False), "noshafts_comp": ("compositor", False)}
+# variant: (method, Light Shafts, Quality; None: the default, Final)
+VARIANTS = {"shafts": ("auto", True, None), "shafts_draft": ("auto", True, "draft"), "noshafts": ("auto", False, None),
+            "noshafts_comp": ("compositor", False, None)}
 GOALS = ((4, 2.0), (16, 3.0))
 EXTRA_ERRORS = [re.compile(p) for p in (r"(?i)compositor.*\berror\b|\berror\b.*compositor", r"Traceback",
                                         r"(?i)\bexception\b")]
@@ -198,8 +200,9 @@ def worker(spec):
     timers.wrap(shadow_maps, "bake", "bake")
     timers.wrap(comp_fog, "build_shaft_group", "shaft_groups")
     timers.wrap(caveats, "shadowing_lights", "shadowing")
-    method, shafts_on = VARIANTS[spec["variant"]]
-    fog = FogSpec(density=DENSITY, method=method, shafts=shafts_on)
+    method, shafts_on, quality = VARIANTS[spec["variant"]]
+    fog = FogSpec(density=DENSITY, method=method, shafts=shafts_on,
+                  **({"quality": quality} if quality is not None else {}))
     prof = cProfile.Profile() if spec.get("profile") else None
     c, t = time.process_time(), time.perf_counter()
     if prof is not None:
@@ -320,7 +323,7 @@ def chart(rows, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(10, 5.5))
-    labels = {"shafts": "shafts on (Auto)", "noshafts": "shafts off (Auto)",
+    labels = {"shafts": "shafts on (Auto)", "shafts_draft": "shafts on, Quality Draft (Auto)", "noshafts": "shafts off (Auto)",
               "noshafts_comp": "shafts off (Compositor)"}
     i = 0
     for engine in ("cycles", "eevee"):

@@ -187,8 +187,8 @@ MUTATIONS = [
     Mutation("surface_share_hemisphere", "light shafts: a surface's fog light sees the fog within 30 degrees of its "
              "normal only (Sun 2005 Eq. 17's G_0 is over the whole hemisphere, cos-weighted)",
              "fog_addon/precompute/shafts.py",
-             "        r2 = (place + j) * (1.0 / count)\n",
-             "        r2 = (place + j) * (0.25 / count)\n",
+             "    return [((place + j) * (1.0 / count), ",
+             "    return [((place + j) * (0.25 / count), ",
              ("tests/test_shafts.py::test_hemisphere_directions_are_cosine_weighted",
               "tests/test_shafts.py::test_surface_share_matches_quadrature")),
 ]

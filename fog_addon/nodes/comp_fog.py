@@ -72,7 +72,8 @@ SHAFT_EDGE = 0.05     # its threshold on log distance: neighbours 5 % nearer or 
 SKY_LENGTH = 1.0e6   # m: a ray to the sky's length for the shafts (its far nodes weigh e^{-beta t})
 SHAFT_GROUP = f"{LIGHT_GROUP} Shaft"      # per shafted light: "<SHAFT_GROUP> <light name>"
 SURFACE_OFFSET = SURFACE + "Offset"   # a surface's interleaving offset (``shafts.surface_offset``)
-SURFACE_TAPS = (1, 2, 2, 2, 1)   # the filter over the 4 x 4 interleaved surface shares (``shafts.surface_offset``)
+# the filter over the 8 x 8 interleaved surface shares (``shafts.surface_offset``): (1, 2, ..., 2, 1) over 9 pixels
+SURFACE_TAPS = (1,) + (2,) * (2 ** shafts.SURFACE_PATTERN_LEVELS - 1) + (1,)
 SURFACE_EDGE = 0.3    # its threshold on log distance (a floor seen at a grazing angle changes faster than 5 % a row)
 SHARED = (GLOW_SHARED + tuple((SURFACE + name, kind) for name, kind in SURFACE_SHARED[2:])
           + ((SURFACE_OFFSET, F),) + SHAFT_SHARED[3:])   # a bundle's inputs
@@ -221,12 +222,12 @@ def build_scatter_group(models, images):
     return groups._install(ng, name)
 
 
-def build_shaft_group(light, shadow, images, nodes, g):
+def build_shaft_group(light, shadow, images, samples, g):
     """``light``'s lit share of its glow along the pixel's ray (compositor group: Share, ``shafts.lit_share``)
     from its shadow map ``shadow`` (``shadow_maps.ShadowMap``), and the share of the fog light the pixel's
     surface reflects that the shadows leave (Visible, ``shafts.surface_share``).
-    ``nodes``: K; ``g``: the Henyey-Greenstein anisotropy.  The spot's frame and cone are the map's (baked at
-    its pose)."""
+    ``samples``: ``shafts.Samples`` (the Quality's); ``g``: the Henyey-Greenstein anisotropy.  The spot's frame
+    and cone are the map's (baked at its pose)."""
     name = f"{SHAFT_GROUP} {light.name}"
     ng, gin, gout = groups._new_group(name, [*SHAFT_SHARED, ("Light", V), ("Surface Position", V), ("Surface Normal", V),
                                              ("Surface Offset", F)],
@@ -244,16 +245,37 @@ def build_shaft_group(light, shadow, images, nodes, g):
         kind = "spot " + hashlib.sha1(repr((shadow.spec.width, frame, half, cos_half, blend)).encode()).hexdigest()[:12]
     node = f"Shaft Node {shadow.spec.name} {kind} g {g:.6g}"   # one group for every quadrature node
     share, far = shafts.lit_share(m, g_["Camera"], g_["Direction"], g_["Shaft Length"], g_["Light"], g_["Beta"],
-                                  (shadow.spec, shadow.spot), nodes, shift=g_["Shaft Offset"], g=g, falloff=falloff,
-                                  name=node, tail_nodes=max(nodes // shafts.TAIL_SHARE, 2), far=SKY_LENGTH)
+                                  (shadow.spec, shadow.spot), samples.view_nodes, shift=g_["Shaft Offset"], g=g,
+                                  falloff=falloff, name=node, tail_nodes=max(samples.view_nodes // shafts.TAIL_SHARE, 2),
+                                  far=SKY_LENGTH)
     m.feed(gout.inputs["Share"], share)
     m.feed(gout.inputs["Share Far"], far)
     lit_sum, total = shafts.surface_share(m, g_["Surface Position"], g_["Surface Normal"], g_["Camera"],
                                           g_["Light"], g_["Beta"], (shadow.spec, shadow.spot),
-                                          shift=g_["Surface Offset"], g=g, falloff=falloff, name=node, parts=True)
+                                          shift=g_["Surface Offset"], g=g, falloff=falloff, name=node, parts=True,
+                                          directions=samples.surface_directions, nodes=samples.surface_nodes)
     m.feed(gout.inputs["Visible"], m.combine(lit_sum, total, 1.0))   # their ratio after the mean (``build_bundle``)
     ng[owned.BUILT] = groups.code_fingerprint()
     return groups._install(ng, name)
+
+
+def _interleave_mean_group(m, value, length, taps, edge):
+    """``_interleave_mean`` as one compositor group shared by every light (its nodes built once: a tree's node
+    creation slows as it grows)."""
+    name = f"{LIGHT_GROUP} Interleave Mean {'-'.join(map(str, taps))} {edge:g}" + (" Vector" if value.vector else "")
+    if (ng := groups._up_to_date(name)) is None:
+        ng, gin, gout = groups._new_group(name, [("Value", V if value.vector else F), ("Length", F)],
+                                          [("Mean", V if value.vector else F)], tree_type="CompositorNodeTree")
+        sub = CompOps(ng, {})
+        g_ = {s.name: sub.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
+        sub.feed(gout.inputs["Mean"], _interleave_mean(sub, g_["Value"], g_["Length"], taps, edge))
+        ng[owned.BUILT] = groups.code_fingerprint()
+        ng = groups._install(ng, name)
+    node = m.node("CompositorNodeGroup", max(value.col, length.col) + 1)
+    node.node_tree = ng
+    m.feed(node.inputs["Value"], value)
+    m.feed(node.inputs["Length"], m.dot(length, (1.0, 0.0, 0.0)) if length.vector else length)
+    return m.wrap(node.outputs["Mean"], vector=value.vector)
 
 
 def _interleave_mean(m, value, length, taps, edge):
@@ -441,7 +463,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
     inputs cropped to it (``_window``).  ``shafted``: (shadow maps by light name, K, g) of the lights whose
     glows are shadowed (``build_shaft_group``), or None."""
     name = bundle_name(first, len(lights))
-    maps, nodes, g_ = shafted or ({}, 0, 0.0)
+    maps, samples, g_ = shafted or ({}, None, 0.0)
     ng, gin, gout = groups._new_group(name, SHARED, TERMS, tree_type="CompositorNodeTree")
     m = CompOps(ng, images)
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
@@ -460,7 +482,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
         shaft = None
         if light.name in maps:   # its glows times the lit share, its surfaces' fog light times their visibility
             shaft = m.node("CompositorNodeGroup", 6)
-            shaft.node_tree = build_shaft_group(light, maps[light.name], images, nodes, g_)
+            shaft.node_tree = build_shaft_group(light, maps[light.name], images, samples, g_)
             shaft.label = f"Light {k} Shaft: {light.name}"
             for socket, _ in SHAFT_SHARED:
                 m.feed(shaft.inputs[socket], crop(socket) if socket in SHAFT_PER_PIXEL else g[socket])
@@ -468,7 +490,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
             m.feed(shaft.inputs["Surface Normal"], g[SURFACE + "Normal"])
             m.feed(shaft.inputs["Surface Offset"], g[SURFACE_OFFSET])
             m.feed(shaft.inputs["Light"], position)
-            share = {o: _interleave_mean(m, m.wrap(shaft.outputs["Share" if o.at == rungs.SURFACE_POINT
+            share = {o: _interleave_mean_group(m, m.wrap(shaft.outputs["Share" if o.at == rungs.SURFACE_POINT
                                                                   else "Share Far"]),
                                          crop("Shaft Length"), SHAFT_TAPS, SHAFT_EDGE) for o in GLOW_OUTPUTS}
         if any(o.computed(mod) for o in GLOW_OUTPUTS):
@@ -484,7 +506,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
             built.append(glow)
         if any(o.computed(mod) for o in SCATTER_OUTPUTS):
             if shaft is not None:   # its directions interleave as the glow's nodes do (``shafts.surface_share``)
-                parts = _interleave_mean(m, m.wrap(shaft.outputs["Visible"], vector=True),
+                parts = _interleave_mean_group(m, m.wrap(shaft.outputs["Visible"], vector=True),
                                          m.length(g[SURFACE + "Position"] - g["Camera"]), SURFACE_TAPS, SURFACE_EDGE)
                 visible = shafts.share_of(m.dot(parts, (1.0, 0.0, 0.0)), m.dot(parts, (0.0, 1.0, 0.0)))
             scatter = m.node("CompositorNodeGroup", 6)

@@ -198,7 +198,7 @@ def explain(choice=None):
     shafted = sorted(i.name.removeprefix(shadow_maps.IMAGE_PREFIX) for i in bpy.data.images
                      if i.name.startswith(shadow_maps.IMAGE_PREFIX))
     if shafted:
-        lines.append(f"  Light shafts of {len(shafted)} light(s): {shafts.samples_for(choice.get('quality'))} nodes a "
+        lines.append(f"  Light shafts of {len(shafted)} light(s): {shafts.samples_for(choice.get('quality')).view_nodes} nodes a "
                      f"ray; their error is not in the prediction ({SHAFT_ERROR_NOTE})")
     return lines
 

@@ -36,18 +36,27 @@ over a 4 x 4 pattern (``surface_offset``) the same way.
 Every function takes an ops namespace ``m`` first (``ops.py``): numpy, the compositor's nodes.
 """
 import math
+from typing import NamedTuple
 
 import numpy as np
 
-SHAFT_NODES = {"draft": 12, "final": 24, "exact": 48}   # K per Quality (``samples_for``)
+
+
+class Samples(NamedTuple):
+    """How finely a Quality integrates the shafts (``samples_for``)."""
+    view_nodes: int           # K: nodes along a pixel's ray (``lit_share``)
+    surface_directions: int   # directions over a surface's hemisphere a pixel (``surface_share``)
+    surface_nodes: int        # nodes along each
+
+
+SAMPLES = {"draft": Samples(12, 4, 8), "final": Samples(24, 8, 12), "exact": Samples(48, 12, 16)}
 TAIL_SHARE = 4            # the sky past a surface takes K / TAIL_SHARE nodes (``lit_share``)
-DEFAULT_NODES = 24
+DEFAULT_SAMPLES = SAMPLES["final"]   # a Quality given as a target error
 POINT_MAP = (1024, 512)   # longitude x latitude grid points of a point light's map (0.35 deg apart)
 SPOT_MAP = 512            # grid points across a spot's map (its cone plus SPOT_MARGIN)
 SPOT_MARGIN = 1.05        # a spot's map spans tan(half angle) x this
 NO_HIT = 1.0e30           # m: the map's distance where a direction meets nothing
 FOG_BIAS = (0.002, 0.003)   # (relative, m): a fog point is lit if d < D (1 - rel) - abs: contact shadows
-SURFACE_BIAS = (0.02, 0.02)   # (relative, m): a surface point is lit if d < D (1 + rel) + abs: no acne
 MIN_SHARE = 1e-30         # the weights' sum below which S is 1 (no light arrives at all)
 MIN_OFFSET = 1e-4         # a ray's distance to the light is at least this share of the camera's (h -> 0: no 0/0)
 MAX_ANGLE = 0.5 * math.pi - 1e-3   # rad: the nodes stay this far inside +-pi/2, where cos is 0 in float32
@@ -55,8 +64,8 @@ BAYER = (0, 2, 3, 1)      # 2 x 2 ordered-dither ranks, row by row (``offset``)
 
 
 def samples_for(quality):
-    """K, the nodes per ray and light for a Quality (``spec.FogSpec.quality``)."""
-    return SHAFT_NODES.get(quality, DEFAULT_NODES)
+    """The ``Samples`` of a Quality (``spec.FogSpec.quality``: a preset name, or a target error)."""
+    return SAMPLES.get(quality, DEFAULT_SAMPLES)
 
 
 # --- maps -----------------------------------------------------------------------------------------------
@@ -127,42 +136,38 @@ def lit(m, d, depth):
     return m.less(d, depth * (1.0 - FOG_BIAS[0]) - FOG_BIAS[1])
 
 
-def surface_lit(m, d, depth):
-    """``lit`` for a surface point (a surface is its own first hit: the bias lets it see the light).
-
-    It stands for the share of the fog light reaching the surface (Sun et al. 2005 Eq. 17-18, G_0 and G_n)
-    that the light's shadows leave: 1 where the surface sees the light, 0 where it is in shadow.  An
-    approximation (docs/physics.md, "Light shafts", measures it): a shadowed surface beside a lit beam
-    gets some of the beam's fog light, a lit surface beside shadowed fog less than all of it."""
-    return m.less(d, depth * (1.0 + SURFACE_BIAS[0]) + SURFACE_BIAS[1])
-
-
-SURFACE_DIRECTIONS = 8   # cosine-weighted directions over a surface's hemisphere (``surface_share``)
-SURFACE_NODES = 12        # quadrature nodes along each of them
+SURFACE_PATTERN_LEVELS = 2   # a surface's directions interleave over 2^2 x 2^2 pixels (``surface_offset``)
 GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))   # rad: the spiral of ``hemisphere_directions``
 
 
 def hemisphere_directions(m, normal, count, turn):
     """``count`` unit directions spread over the hemisphere about the unit ``normal`` with density cos / pi,
-    each of weight 1 / count in int cos / pi d omega = 1: a spiral, the sine of direction j's polar angle
-    sqrt((j + s) / count) and its azimuth j x the golden angle + 2 pi ``turn``.  ``turn`` in (0, 1) also
-    sets s, the place in the polar strata: frac(4 turn), so 16 pixels' sets (``surface_offset``) hold 4
-    polar places and 4 azimuths of each direction."""
-    side = m.cross(normal, (0.0, 0.0, 1.0)) + m.cross(normal, (0.0, 1.0, 0.0)) * 0.01   # any vector not along it
+    each of weight 1 / count in int cos / pi d omega = 1 (``hemisphere_angles``, ``hemisphere_direction``)."""
+    return [hemisphere_direction(m, normal, r2, phi) for r2, phi in hemisphere_angles(m, count, turn)]
+
+
+def hemisphere_angles(m, count, turn):
+    """[(sin^2 of the polar angle, azimuth in rad)] of ``count`` directions of density cos / pi: a spiral,
+    direction j at sin^2 = (j + s) / count and azimuth j x the golden angle + 2 pi ``turn``.  ``turn`` in
+    (0, 1) also sets s, the place in the polar strata: frac(P turn), P = 2^SURFACE_PATTERN_LEVELS, so the
+    P x P pixels of ``surface_offset``'s pattern hold P polar places and P azimuths of each direction."""
+    places = 2 ** SURFACE_PATTERN_LEVELS
+    place = turn * places - m.floor(turn * places)
+    return [((place + j) * (1.0 / count), turn * (2.0 * math.pi) + j * GOLDEN_ANGLE) for j in range(count)]
+
+
+def hemisphere_direction(m, normal, r2, phi):
+    """The unit direction at sin^2 of the polar angle ``r2`` and azimuth ``phi`` (rad) about the unit ``normal``
+    (its tangent frame: any vector not along it, crossed)."""
+    side = m.cross(normal, (0.0, 0.0, 1.0)) + m.cross(normal, (0.0, 1.0, 0.0)) * 0.01
     t1 = m.scale(side, 1.0 / m.maximum(m.length(side), 1e-9))
     t2 = m.cross(normal, t1)
-    place = turn * 4.0 - m.floor(turn * 4.0)
-    dirs = []
-    for j in range(count):
-        r2 = (place + j) * (1.0 / count)
-        r = m.sqrt(r2)
-        phi = turn * (2.0 * math.pi) + j * GOLDEN_ANGLE
-        dirs.append(m.scale(t1, m.cos(phi) * r) + m.scale(t2, m.sin(phi) * r) + m.scale(normal, m.sqrt(1.0 - r2)))
-    return dirs
+    r = m.sqrt(r2)
+    return m.scale(t1, m.cos(phi) * r) + m.scale(t2, m.sin(phi) * r) + m.scale(normal, m.sqrt(1.0 - r2))
 
 
 def surface_share(m, point, normal, viewer, light, beta, shadow, shift=0.5, g=0.0, falloff=None, name=None,
-                  directions=SURFACE_DIRECTIONS, nodes=SURFACE_NODES, parts=False):
+                  directions=DEFAULT_SAMPLES.surface_directions, nodes=DEFAULT_SAMPLES.surface_nodes, parts=False):
     """The share of the fog light a diffuse surface ``point`` receives (Sun et al. 2005 Eq. 17's G_0: the
     airlight of every direction over it, weighted cos / pi) that the light's shadows leave:
 
@@ -180,9 +185,18 @@ def surface_share(m, point, normal, viewer, light, beta, shadow, shift=0.5, g=0.
     division (a mean of ratios would weigh a set that misses the bright directions as much as one that
     holds them)."""
     facing = m.select(m.less(m.dot(normal, viewer - point), 0.0), -1.0, 1.0)
+    normal = m.scale(normal, facing)
+
+    def ray(mm, px, py, pz, nx, ny, nz, lx, ly, lz, beta_, r2, phi, shift_):   # one direction's two integrals
+        u = hemisphere_direction(mm, mm.combine(nx, ny, nz), r2, phi)
+        return ray_integrals(mm, mm.combine(px, py, pz), u, mm.combine(lx, ly, lz), beta_, shadow, nodes, shift_, g,
+                             falloff, name)
+    axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+    xyz = [m.dot(v, a) for v in (point, normal, light) for a in axes]
     lit_sum, total = 0.0, 0.0
-    for u in hemisphere_directions(m, m.scale(normal, facing), directions, shift):
-        lit_j, total_j = ray_integrals(m, point, u, light, beta, shadow, nodes, shift, g, falloff, name)
+    for r2, phi in hemisphere_angles(m, directions, shift):
+        args = (*xyz, beta, r2, phi, shift)
+        lit_j, total_j = m.group(f"{name} Hemisphere Ray {nodes}", ray, *args) if name else ray(m, *args)
         lit_sum, total = lit_sum + lit_j, total + total_j
     return (lit_sum, total) if parts else share_of(lit_sum, total)
 
@@ -200,13 +214,19 @@ def offset(m, pixel_x, pixel_y):
     return _rank2(m, pixel_x, pixel_y) * 0.25 + 0.125
 
 
-def surface_offset(m, pixel_x, pixel_y):
-    """The interleaving offset in (0, 1) of the pixel for ``surface_share``: its rank in the 4 x 4 Bayer
-    pattern, 4 x (rank in the 2 x 2 of (i, j)) + rank in the 2 x 2 of (i // 2, j // 2), plus a half, over
-    16.  A surface's fog light varies slowly across the picture, so 16 pixels share their directions (the
-    compositor's SURFACE_TAPS filter)."""
-    coarse = _rank2(m, m.floor(pixel_x * 0.5), m.floor(pixel_y * 0.5))
-    return (_rank2(m, pixel_x, pixel_y) * 4.0 + coarse) * (1.0 / 16.0) + 1.0 / 32.0
+def surface_offset(m, pixel_x, pixel_y, levels=None):
+    """The interleaving offset in (0, 1) of the pixel for ``surface_share``: its rank in the 2^levels square
+    Bayer pattern (default SURFACE_PATTERN_LEVELS: 8 x 8), built as Bayer's recursion: the rank in the 2 x 2 of
+    (i, j) is the most significant digit (base 4), that of (i // 2, j // 2) the next, ..., plus a half, over
+    the pattern's size.  A surface's fog light varies slowly across the picture, so the pixels of a pattern
+    share their directions (the compositor's SURFACE_TAPS filter)."""
+    levels = SURFACE_PATTERN_LEVELS if levels is None else levels
+    rank, x, y = 0.0, pixel_x, pixel_y
+    for level in range(levels):
+        rank = rank + _rank2(m, x, y) * float(4 ** (levels - 1 - level))
+        x, y = m.floor(x * 0.5), m.floor(y * 0.5)
+    size = 4 ** levels
+    return rank * (1.0 / size) + 0.5 / size
 
 
 def _rank2(m, pixel_x, pixel_y):
@@ -221,9 +241,10 @@ def bayer_rank(i, j):
     return BAYER[2 * (j % 2) + (i % 2)]
 
 
-def bayer_rank16(i, j):
+def bayer_rank_surface(i, j, levels=None):
     """The rank ``surface_offset`` gives pixel (i, j) (a reference for the tests)."""
-    return 4 * bayer_rank(i, j) + bayer_rank(i // 2, j // 2)
+    levels = SURFACE_PATTERN_LEVELS if levels is None else levels
+    return sum(bayer_rank(i >> k, j >> k) * 4 ** (levels - 1 - k) for k in range(levels))
 
 
 def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.5, g=0.0, falloff=None,
@@ -243,8 +264,10 @@ def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.
     """
     v, t_c, h, args = _ray_frame(m, camera, direction, light, beta)
     theta_far = m.minimum(m.atan2(far - t_c, h), MAX_ANGLE)
-    theta0 = m.maximum(m.atan2(-1.0 * t_c, h), -MAX_ANGLE)
     theta1 = m.minimum(m.atan2(length - t_c, h), theta_far)
+    # a segment that ends more than h / 1e-3 before the light lies within MAX_ANGLE of -pi/2: its nodes sit at
+    # its end (width 0, S = H there), not between its end and the light
+    theta0 = m.minimum(m.maximum(m.atan2(-1.0 * t_c, h), -MAX_ANGLE), theta1)
     step = (theta1 - theta0) * (1.0 / nodes)
     quad = (shadow, g, falloff, name, args)
     lit_sum, total = _quadrature(m, theta0, step, nodes, shift, *quad)
@@ -285,13 +308,18 @@ def _quadrature(m, start, width, count, shift, shadow, g, falloff, name, args):
     node group ``name`` (or inline with None)."""
     def terms(mm, theta, t_c, h, vx, vy, vz, dx, dy, dz, beta):
         return node_terms(mm, theta, t_c, h, mm.combine(vx, vy, vz), mm.combine(dx, dy, dz), beta, shadow, g, falloff)
-    lit_sum, total = 0.0, 0.0
-    for k in range(count):
-        theta = start + width * (k + shift)
-        lit_weight, weight = m.group(name, terms, theta, *args) if name else terms(m, theta, *args)
-        lit_sum = lit_sum + lit_weight
-        total = total + weight
-    return lit_sum, total
+
+    def nodes(mm, start_, width_, shift_, *args_):
+        lit_sum, total = 0.0, 0.0
+        for k in range(count):
+            theta = start_ + width_ * (k + shift_)
+            lit_weight, weight = mm.group(name, terms, theta, *args_) if name else terms(mm, theta, *args_)
+            lit_sum = lit_sum + lit_weight
+            total = total + weight
+        return lit_sum, total
+    # with a name, the ``count`` nodes are one group too: a tree's node creation slows as it grows
+    return m.group(f"{name} x{count}", nodes, start, width, shift, *args) if name else nodes(m, start, width, shift,
+                                                                                            *args)
 
 
 def node_terms(m, theta, t_c, h, v, direction, beta, shadow, g, falloff):
