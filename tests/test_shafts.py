@@ -173,7 +173,8 @@ def test_hemisphere_directions_are_cosine_weighted():
     m = NumpyOps()
     normal = np.array([0.3, -0.2, 0.9]) / np.linalg.norm([0.3, -0.2, 0.9])
     dirs = np.array([d for k in range(PATTERN) for d in
-                     shafts.hemisphere_directions(m, normal, shafts.DEFAULT_SAMPLES.surface_directions, (k + 0.5) / PATTERN)])
+                     shafts.hemisphere_directions(m, normal, shafts.DEFAULT_SAMPLES.surface_directions,
+                                                  (k + 0.5) / PATTERN)])
     assert np.allclose(np.linalg.norm(dirs, axis=1), 1.0)
     c = dirs @ normal
     assert (c > 0).all()
@@ -262,3 +263,22 @@ def test_segment_ending_far_before_the_light_is_dark_behind_an_occluder():
     m = NumpyOps({spec.name: depth})
     s, far = shafts.lit_share(m, camera, direction, 5.0, light, 0.1, (spec, None), 24, g=0.7, tail_nodes=6)
     assert s < 1e-6 and 0.0 <= far <= 1.0, (s, far)
+
+
+@pytest.mark.parametrize("quality", ["draft", "final", "exact", 0.02])
+def test_many_shafted_lights_keep_the_per_pixel_budget(quality):
+    """Up to BUDGET_LIGHTS lights take their Quality's own samples; beyond, all of them together evaluate no
+    more nodes a pixel than BUDGET_LIGHTS lights at the Quality's own (Draft's is the floor), the samples never
+    grow with more lights, and Exact never steps down."""
+    own = shafts.samples_for(quality)
+    budget = shafts.BUDGET_LIGHTS * shafts.nodes_per_pixel(own)
+    last = own
+    for n in range(1, 80):
+        s = shafts.samples_for(quality, n)
+        if quality == "exact" or n <= shafts.BUDGET_LIGHTS:
+            assert s == own
+        elif s != shafts.SAMPLES["draft"]:
+            assert n * shafts.nodes_per_pixel(s) <= budget, (n, s)
+        assert shafts.nodes_per_pixel(s) <= shafts.nodes_per_pixel(last), (n, s, last)
+        last = s
+    assert quality == "exact" or shafts.samples_for(quality, 79) == shafts.SAMPLES["draft"]

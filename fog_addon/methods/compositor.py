@@ -56,7 +56,8 @@ class Compositor(Method):
         images = dict(images, **shadow_images)
         images = comp_fog.build_fog_group(scene, plan.in_groups, plan.grouped_models, images,
                                           view.full_windows(plan.in_groups) if plan.partial else plan.windows,
-                                          plan.partial, (maps, shafts.samples_for(spec.quality), spec.anisotropy))
+                                          plan.partial, (maps, shafts.samples_for(spec.quality, len(maps)),
+                                                         spec.anisotropy))
         groups.build_world([], [], scene.camera, images, spec.passes)
         return images
 
@@ -136,4 +137,5 @@ def follow_shadows(scene, lights):
     for light in shafted:
         shadow = maps[light.name]
         if shadow.spot is not None and images[shadow.spec.name].get(shadow_maps.KEY) != before[light.name]:
-            comp_fog.build_shaft_group(light, shadow, images, shafts.samples_for(spec.quality), spec.anisotropy)
+            comp_fog.build_shaft_group(light, shadow, images, shafts.samples_for(spec.quality, len(shafted)),
+                                       spec.anisotropy)

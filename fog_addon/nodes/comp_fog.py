@@ -229,8 +229,8 @@ def build_shaft_group(light, shadow, images, samples, g):
     ``samples``: ``shafts.Samples`` (the Quality's); ``g``: the Henyey-Greenstein anisotropy.  The spot's frame
     and cone are the map's (baked at its pose)."""
     name = f"{SHAFT_GROUP} {light.name}"
-    ng, gin, gout = groups._new_group(name, [*SHAFT_SHARED, ("Light", V), ("Surface Position", V), ("Surface Normal", V),
-                                             ("Surface Offset", F)],
+    ng, gin, gout = groups._new_group(name, [*SHAFT_SHARED, ("Light", V), ("Surface Position", V),
+                                             ("Surface Normal", V), ("Surface Offset", F)],
                                       [("Share", F), ("Share Far", F), ("Visible", V)],
                                       tree_type="CompositorNodeTree")
     m = CompOps(ng, images)
@@ -246,8 +246,8 @@ def build_shaft_group(light, shadow, images, samples, g):
     node = f"Shaft Node {shadow.spec.name} {kind} g {g:.6g}"   # one group for every quadrature node
     share, far = shafts.lit_share(m, g_["Camera"], g_["Direction"], g_["Shaft Length"], g_["Light"], g_["Beta"],
                                   (shadow.spec, shadow.spot), samples.view_nodes, shift=g_["Shaft Offset"], g=g,
-                                  falloff=falloff, name=node, tail_nodes=max(samples.view_nodes // shafts.TAIL_SHARE, 2),
-                                  far=SKY_LENGTH)
+                                  falloff=falloff, name=node,
+                                  tail_nodes=max(samples.view_nodes // shafts.TAIL_SHARE, 2), far=SKY_LENGTH)
     m.feed(gout.inputs["Share"], share)
     m.feed(gout.inputs["Share Far"], far)
     lit_sum, total = shafts.surface_share(m, g_["Surface Position"], g_["Surface Normal"], g_["Camera"],

@@ -198,8 +198,12 @@ def explain(choice=None):
     shafted = sorted(i.name.removeprefix(shadow_maps.IMAGE_PREFIX) for i in bpy.data.images
                      if i.name.startswith(shadow_maps.IMAGE_PREFIX))
     if shafted:
-        lines.append(f"  Light shafts of {len(shafted)} light(s): {shafts.samples_for(choice.get('quality')).view_nodes} nodes a "
-                     f"ray; their error is not in the prediction ({SHAFT_ERROR_NOTE})")
+        own, used = shafts.samples_for(choice.get("quality")), shafts.samples_for(choice.get("quality"), len(shafted))
+        fewer = (f", fewer than the Quality's {own.view_nodes} beyond {shafts.BUDGET_LIGHTS} shafted lights"
+                 if used != own else "")
+        lines.append(f"  Light shafts of {len(shafted)} light(s): {used.view_nodes} nodes a ray, "
+                     f"{used.surface_directions} directions x {used.surface_nodes} nodes over surfaces{fewer}; their "
+                     f"error is not in the prediction ({SHAFT_ERROR_NOTE})")
     return lines
 
 

@@ -63,9 +63,28 @@ MAX_ANGLE = 0.5 * math.pi - 1e-3   # rad: the nodes stay this far inside +-pi/2,
 BAYER = (0, 2, 3, 1)      # 2 x 2 ordered-dither ranks, row by row (``offset``)
 
 
-def samples_for(quality):
-    """The ``Samples`` of a Quality (``spec.FogSpec.quality``: a preset name, or a target error)."""
-    return SAMPLES.get(quality, DEFAULT_SAMPLES)
+SAMPLE_LADDER = (SAMPLES["final"], Samples(16, 6, 8), SAMPLES["draft"])   # what many shafted lights step down
+BUDGET_LIGHTS = 4   # shafted lights that each take their Quality's own samples (``samples_for``)
+
+
+def nodes_per_pixel(samples):
+    """Quadrature nodes a ``Samples`` evaluates at a pixel for one light: the ray's K, its tail's, the surface's."""
+    tail = max(samples.view_nodes // TAIL_SHARE, 2)
+    return samples.view_nodes + tail + samples.surface_directions * samples.surface_nodes
+
+
+def samples_for(quality, lights=1):
+    """The ``Samples`` of a Quality (``spec.FogSpec.quality``: a preset name, or a target error) for each of
+    ``lights`` shafted lights.  The compositor's cost is per pixel and light, so beyond BUDGET_LIGHTS lights
+    each light steps down SAMPLE_LADDER until all of them evaluate no more nodes a pixel than BUDGET_LIGHTS
+    lights at the Quality's own samples (never below Draft's; Exact never steps).  Each light then holds a
+    smaller share of the picture's fog light, so its quadrature error moves the picture less."""
+    own = SAMPLES.get(quality, DEFAULT_SAMPLES)
+    if quality == "exact" or lights <= BUDGET_LIGHTS:
+        return own
+    budget = BUDGET_LIGHTS * nodes_per_pixel(own)
+    ladder = [s for s in SAMPLE_LADDER if nodes_per_pixel(s) <= nodes_per_pixel(own)]
+    return next((s for s in ladder if lights * nodes_per_pixel(s) <= budget), SAMPLES["draft"])
 
 
 # --- maps -----------------------------------------------------------------------------------------------
