@@ -82,12 +82,13 @@ import csv_rows  # noqa: E402
 from fog_addon.precompute import shafts  # noqa: E402
 from fog_addon.precompute.ops import NumpyOps  # noqa: E402
 from fog_addon.precompute.tables import TableSpec  # noqa: E402
+from fog_scenes.occluders import sphere_hit  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "out"
 KEPT = ROOT / "docs" / "measurements" / "data" / "shafts_stability_2026-11-27.csv"
 WIDTH, HEIGHT = shafts.POINT_MAP
 CELL = 2.0 * math.pi / (WIDTH - 1)     # rad: one cell of the map
-K = getattr(shafts.samples_for("final"), "view_nodes", shafts.samples_for("final"))   # 24
+K = shafts.samples_for("final").view_nodes   # 24
 SHIFTS = [(k + 0.5) / 4 for k in range(4)]
 BETA = 0.1                             # 1/m
 LIGHT = np.array([0.3, -0.2, 3.0])
@@ -130,16 +131,6 @@ def grid_frame(fi, fj):
     e_lon = np.array([-math.sin(lo), math.cos(lo), 0.0])
     e_lat = np.array([-math.sin(la) * math.cos(lo), -math.sin(la) * math.sin(lo), math.cos(la)])
     return a, e_lon, e_lat
-
-
-def sphere_hit(origin, dirs, centre, radius):
-    """Distance along unit ``dirs`` from ``origin`` to a sphere, NO_HIT where missed (tests/test_shafts.py)."""
-    oc = np.asarray(origin, float) - np.asarray(centre, float)
-    b = dirs @ oc
-    c = oc @ oc - radius * radius
-    disc = b * b - c
-    t = -b - np.sqrt(np.maximum(disc, 0.0))
-    return np.where((disc > 0) & (t > 0), t, shafts.NO_HIT)
 
 
 def sphere_first(origin, dirs, centre, radius):

@@ -85,6 +85,12 @@ def add_box(scene, name, center, half_extents, mat):
     return ob
 
 
+def add_box_between(scene, name, x0, x1, y0, y1, z0, z1, mat):
+    """An axis-aligned box from (x0, y0, z0) to (x1, y1, z1) m (``add_box`` by its corners)."""
+    return add_box(scene, name, (0.5 * (x0 + x1), 0.5 * (y0 + y1), 0.5 * (z0 + z1)),
+                   (0.5 * (x1 - x0), 0.5 * (y1 - y0), 0.5 * (z1 - z0)), mat)
+
+
 def add_point_light(scene, name, location, power):
     """Point light of radius 0 (a true point: Sun's isotropic source, I0 = P / 4 pi)."""
     light = bpy.data.lights.new(name, 'POINT')

@@ -16,7 +16,7 @@ import sys
 if __name__ == "__main__":
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from demo_scenes import (add_box, add_camera, add_point_light, add_spot_light, main, material,
+from demo_scenes import (add_box, add_box_between, add_camera, add_point_light, add_spot_light, main, material,
                          render_settings, set_world)
 
 DEFAULT_DENSITY = 0.08     # 1/m
@@ -30,11 +30,6 @@ WALL_HEIGHT = 4.0          # m
 HOLE = (3.5, 2.0, 0.5)     # m: the hole's centre (x, z) and half side
 SPOT = ((4.5, 14.0, 2.4), (0.5, 4.0, 0.5), 15000.0)   # (position m, target m, power W)
 SPOT_SIZE, SPOT_BLEND = 60.0, 0.2                     # degrees: the cone covers the hole with room to spare
-
-
-def _box(scene, name, x0, x1, y0, y1, z0, z1, mat):
-    add_box(scene, name, (0.5 * (x0 + x1), 0.5 * (y0 + y1), 0.5 * (z0 + z1)),
-            (0.5 * (x1 - x0), 0.5 * (y1 - y0), 0.5 * (z1 - z0)), mat)
 
 
 def build(scene):
@@ -53,10 +48,10 @@ def build(scene):
     x0, x1 = WALL_X
     hx, hzc, s = HOLE
     y0, y1 = WALL_Y, WALL_Y + 0.2
-    _box(scene, "Wall Left", x0, hx - s, y0, y1, 0.0, WALL_HEIGHT, brick)
-    _box(scene, "Wall Right", hx + s, x1, y0, y1, 0.0, WALL_HEIGHT, brick)
-    _box(scene, "Wall Below", hx - s, hx + s, y0, y1, 0.0, hzc - s, brick)
-    _box(scene, "Wall Above", hx - s, hx + s, y0, y1, hzc + s, WALL_HEIGHT, brick)
+    add_box_between(scene, "Wall Left", x0, hx - s, y0, y1, 0.0, WALL_HEIGHT, brick)
+    add_box_between(scene, "Wall Right", hx + s, x1, y0, y1, 0.0, WALL_HEIGHT, brick)
+    add_box_between(scene, "Wall Below", hx - s, hx + s, y0, y1, 0.0, hzc - s, brick)
+    add_box_between(scene, "Wall Above", hx - s, hx + s, y0, y1, hzc + s, WALL_HEIGHT, brick)
     pos, target, spot_power = SPOT
     add_spot_light(scene, "Spot Behind", pos, target, spot_power, SPOT_SIZE, SPOT_BLEND)
     add_camera(scene, (-2.0, -1.5, 2.2), (1.5, 9.0, 2.4), lens=26.0)

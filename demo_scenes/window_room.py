@@ -15,7 +15,7 @@ import sys
 if __name__ == "__main__":
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from demo_scenes import (add_box, add_camera, add_spot_light, main, material, render_settings,
+from demo_scenes import (add_box_between, add_camera, add_spot_light, main, material, render_settings,
                          set_world)
 
 DEFAULT_DENSITY = 0.1     # 1/m
@@ -29,32 +29,27 @@ SPOT = ((0.0, 10.0, 5.0), (0.0, -1.0, 0.0), 30000.0)   # (position m, target m, 
 SPOT_SIZE, SPOT_BLEND = 40.0, 0.2                      # degrees; both windows lie well inside the cone
 
 
-def _box(scene, name, x0, x1, y0, y1, z0, z1, mat):
-    add_box(scene, name, (0.5 * (x0 + x1), 0.5 * (y0 + y1), 0.5 * (z0 + z1)),
-            (0.5 * (x1 - x0), 0.5 * (y1 - y0), 0.5 * (z1 - z0)), mat)
-
-
 def build(scene):
     render_settings(scene)
     set_world(scene)
     plaster = material("Plaster", (0.6, 0.6, 0.6), roughness=0.9)
     boards = material("Floor", (0.45, 0.4, 0.35), roughness=0.7)
     h, t, z1 = HALF, WALL, HEIGHT
-    _box(scene, "Floor", -h - t, h + t, -h - t, h + t, -t, 0.0, boards)
-    _box(scene, "Ceiling", -h - t, h + t, -h - t, h + t, z1, z1 + t, plaster)
-    _box(scene, "Wall West", -h - t, -h, -h, h, 0.0, z1, plaster)
-    _box(scene, "Wall East", h, h + t, -h, h, 0.0, z1, plaster)
-    _box(scene, "Wall South", -h - t, h + t, -h - t, -h, 0.0, z1, plaster)
+    add_box_between(scene, "Floor", -h - t, h + t, -h - t, h + t, -t, 0.0, boards)
+    add_box_between(scene, "Ceiling", -h - t, h + t, -h - t, h + t, z1, z1 + t, plaster)
+    add_box_between(scene, "Wall West", -h - t, -h, -h, h, 0.0, z1, plaster)
+    add_box_between(scene, "Wall East", h, h + t, -h, h, 0.0, z1, plaster)
+    add_box_between(scene, "Wall South", -h - t, h + t, -h - t, -h, 0.0, z1, plaster)
     # The window wall (y from h to h + t), in pieces around the two holes.
     zs, zl = WINDOW_Z
-    _box(scene, "Wall North Below", -h - t, h + t, h, h + t, 0.0, zs, plaster)
-    _box(scene, "Wall North Above", -h - t, h + t, h, h + t, zl, z1, plaster)
+    add_box_between(scene, "Wall North Below", -h - t, h + t, h, h + t, 0.0, zs, plaster)
+    add_box_between(scene, "Wall North Above", -h - t, h + t, h, h + t, zl, z1, plaster)
     edges = [-h - t]
     for x in WINDOW_X:
         edges += [x - WINDOW_HALF_WIDTH, x + WINDOW_HALF_WIDTH]
     edges.append(h + t)
     for i in range(0, len(edges), 2):
-        _box(scene, f"Wall North Pier {i // 2 + 1}", edges[i], edges[i + 1], h, h + t, zs, zl, plaster)
+        add_box_between(scene, f"Wall North Pier {i // 2 + 1}", edges[i], edges[i + 1], h, h + t, zs, zl, plaster)
     pos, target, power = SPOT
     add_spot_light(scene, "Sun Spot", pos, target, power, SPOT_SIZE, SPOT_BLEND)
     add_camera(scene, (2.7, -2.7, 1.5), (-1.0, 1.2, 1.1), lens=18.0)

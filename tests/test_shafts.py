@@ -14,16 +14,7 @@ from scipy import integrate
 from fog_addon.precompute import shafts
 from fog_addon.precompute.ops import NumpyOps
 from fog_addon.precompute.tables import TableSpec
-
-
-def sphere_hit(origin, dirs, centre, radius):
-    """Distance along unit ``dirs`` from ``origin`` to a sphere, NO_HIT where missed."""
-    oc = np.asarray(origin, float) - np.asarray(centre, float)
-    b = dirs @ oc
-    c = oc @ oc - radius * radius
-    disc = b * b - c
-    t = -b - np.sqrt(np.maximum(disc, 0.0))
-    return np.where((disc > 0) & (t > 0), t, shafts.NO_HIT)
+from fog_scenes.occluders import sphere_hit
 
 
 def point_map(light, occluders, size=(512, 256)):
