@@ -477,7 +477,11 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
         intensity = m.node("ShaderNodeCombineXYZ", 4)
         groups._drive_intensity(intensity, light.data)
         built = []   # a term the light's step leaves out (rungs.STEPS) gets no group at all
-        win = None if windows is None or windows[k - first] is None else _window(m, scene, k, windows[k - first])
+        # the light's glow window, made only where a glow or a shaft group reads it (a window no group reads
+        # would still grow with the frames and mark the windows partial, ``set_windows``)
+        has_window = windows is not None and windows[k - first] is not None
+        win = (_window(m, scene, k, windows[k - first]) if has_window and (
+            light.name in maps or any(o.computed(mod) for o in GLOW_OUTPUTS)) else None)
         crop = lambda socket: _crop(m, g[socket], win) if win else g[socket]
         shaft = None
         if light.name in maps:   # its glows times the lit share, its surfaces' fog light times their visibility
