@@ -36,6 +36,33 @@ def see_through(materials, objects):
     return names
 
 
+SHARP = 1e-3   # a roughness at or below which a glossy or metallic surface is a mirror (``specular_paths``)
+
+
+def specular_paths(materials):
+    """True if some of ``materials`` starts a path of sharp bounces the fog shades segment by segment in
+    Cycles (``groups._place_tails``): a Glass BSDF, or a mirror (a Glossy BSDF, or a Principled BSDF with
+    metallic above 0, of roughness at most SHARP, unlinked).  Without one the Surface group holds no tails:
+    they cost SVM stack in every material (out of stack space with 16 spots)."""
+    for mat in materials:
+        if mat.node_tree is None:
+            continue
+        for node in mat.node_tree.nodes:
+            if node.mute:
+                continue
+            if node.bl_idname == "ShaderNodeBsdfGlass":
+                return True
+            rough = node.inputs.get("Roughness")
+            if rough is None or rough.is_linked or rough.default_value > SHARP:
+                continue
+            metal = node.inputs.get("Metallic")
+            if node.bl_idname in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic") or (
+                    node.bl_idname == "ShaderNodeBsdfPrincipled" and metal is not None
+                    and (metal.is_linked or metal.default_value > 0.0)):
+                return True
+    return False
+
+
 def _principled_see_through(node):
     for name, clear in (("Transmission Weight", 0.0), ("Alpha", 1.0)):
         sock = node.inputs.get(name)

@@ -49,7 +49,8 @@ class Compositor(Method):
 
     def build(self, scene, spec, plan, images):
         aovs = functools.partial(comp_fog.add_surface_aovs, engine=scene.render.engine)
-        groups.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs)
+        groups.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs,
+                             tails=caveats.specular_paths(bpy.data.materials))
         shafted = shafted_lights(scene, spec, plan.in_groups) if spec.shafts else []
         maps, shadow_images = shadow_maps.ensure(scene, shafted)
         shadow_maps.remove_unused(set(shadow_images))

@@ -6,8 +6,10 @@ Their cost grows with lights x materials x samples (``auto.py`` predicts it); EE
 OSL's shader group cap what one material holds (``budget``): lights step down the ladder beyond the
 target until they fit.
 """
+import bpy
+
 from ..nodes import groups, passes
-from .. import view
+from .. import caveats, view
 from .base import Method
 
 MANY_LIGHTS = 8   # from this many fog lights on, Cycles' node groups get a note (``many_lights_note``)
@@ -24,7 +26,8 @@ class NodeGroups(Method):
         return None
 
     def build(self, scene, spec, plan, images):
-        groups.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes)
+        groups.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes,
+                             tails=caveats.specular_paths(bpy.data.materials))
         groups.build_world(plan.shader_lights, plan.shader_models, scene.camera, images, spec.passes)
         return images
 

@@ -532,7 +532,7 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained):
     return ng
 
 
-def build_surface(lights, models, images, with_passes=False, extra=None):
+def build_surface(lights, models, images, with_passes=False, extra=None, tails=True):
     """Scene group for materials: ``shading.shade_surface`` (Sun et al. 2005 Eq. 19) over ``lights``.
 
     ``models``: one rungs.LightModels per light.  Inputs mirror the Principled
@@ -543,7 +543,9 @@ def build_surface(lights, models, images, with_passes=False, extra=None):
     (EEVEE's stand-in for the per-light e^{-beta D_sp}) and per engine the
     Mix Factor 1 - scale of the user's shader.  ``with_passes``: it writes the
     fog passes (``passes.py``), weighted by the Opacity input (white: opaque).  ``extra(group)``: adds
-    nodes of its own (the Compositor method's AOVs, ``comp_fog.add_surface_aovs``).
+    nodes of its own (the Compositor method's AOVs, ``comp_fog.add_surface_aovs``).  ``tails``: the glows
+    past glass and mirrors (See Through, ``_place_tails``), only where the scene has them
+    (``caveats.specular_paths``).
     The lights sit in bundle groups (``_bundles``, ``build_surface_bundle``).
 
     Why closures: Cycles' SVM emits a shader's value nodes in the order of
@@ -607,7 +609,7 @@ def build_surface(lights, models, images, with_passes=False, extra=None):
         _camera_rays_only(ng, gout.inputs["Fog"], fogged.sock)
     tails = _place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
                          {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"],
-                          "Position": geo.outputs["Position"]}, len(placed))
+                          "Position": geo.outputs["Position"]}, len(placed)) if tails else []
     if extra is not None:   # before it replaces the group the materials use: adding a node there costs more
         extra(ng)
     ng = _install(ng, SURFACE)

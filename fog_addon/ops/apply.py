@@ -296,7 +296,8 @@ def _signature(scene, spec, method, plan_):
     return "|".join([groups.code_fingerprint()] + [f"{o.name_full}:{'/'.join(r.name for r in mod)}"
                                                     for o, mod in zip(plan_.in_groups, plan_.grouped_models)]
                      + ["camera:" + (camera.name_full if camera else ""), f"passes:{spec.passes}",
-                        f"method:{method.name}", method.signature(scene, spec, plan_.shader_lights)])
+                        f"method:{method.name}", f"tails:{caveats.specular_paths(bpy.data.materials)}",
+                        method.signature(scene, spec, plan_.shader_lights)])
 
 
 _rebuilt = set()   # names of scenes whose groups ``_build_scene_groups`` rebuilt since ``refresh_lights`` asked

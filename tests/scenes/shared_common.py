@@ -9,6 +9,7 @@ if str(ROOT) not in sys.path:
 
 import bpy  # noqa: E402
 
+from fog_addon import caveats  # noqa: E402
 from fog_addon.nodes import compositor, groups, images, osl, owned  # noqa: E402
 from fog_addon.precompute import rungs  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
@@ -51,7 +52,7 @@ def expected_names(method, scene=None, texts_of=None):
         n = len(apply.fog_lights(scene)[0])
         names += [f"{prefix} {k + 1}-{min(k + groups.BUNDLE, n)}" for prefix in (groups.SURFACE_LIGHTS, groups.WORLD_LIGHTS)
                   for k in range(0, n, groups.BUNDLE)]
-        if method in ("nodes", "osl"):   # the glows past glass and mirrors (Cycles node groups)
+        if method in ("nodes", "osl") and caveats.specular_paths(bpy.data.materials):   # past glass and mirrors
             names += [f"{groups.SURFACE_TAILS} {k + 1}-{min(k + groups.BUNDLE, n)}" for k in range(0, n, groups.BUNDLE)]
     names += images.table_names()
     names += [osl.text_name(r) for r in rungs.choose(texts_of or method) if r.backends == {"numpy", "osl"}]
