@@ -72,7 +72,7 @@ SHAFT_EDGE = 0.05     # its threshold on log distance: neighbours 5 % nearer or 
 SKY_LENGTH = 1.0e6   # m: a ray to the sky's length for the shafts (its far nodes weigh e^{-beta t})
 SHAFT_GROUP = f"{LIGHT_GROUP} Shaft"      # per shafted light: "<SHAFT_GROUP> <light name>"
 SURFACE_OFFSET = SURFACE + "Offset"   # a surface's interleaving offset (``shafts.surface_offset``)
-# the filter over the 8 x 8 interleaved surface shares (``shafts.surface_offset``): (1, 2, ..., 2, 1) over 9 pixels
+# the filter over the 4 x 4 interleaved surface shares (``shafts.surface_offset``): (1, 2, 2, 2, 1)
 SURFACE_TAPS = (1,) + (2,) * (2 ** shafts.SURFACE_PATTERN_LEVELS - 1) + (1,)
 SURFACE_EDGE = 0.3    # its threshold on log distance (a floor seen at a grazing angle changes faster than 5 % a row)
 SHARED = (GLOW_SHARED + tuple((SURFACE + name, kind) for name, kind in SURFACE_SHARED[2:])
@@ -285,9 +285,8 @@ def _interleave_mean(m, value, length, taps, edge):
     4 x 4 of ``shafts.surface_offset``: (1, 2, 2, 2, 1), a sixteenth each), by pixels shifted with
     Translate nodes.  A neighbour whose ray is more than ``edge`` longer or shorter in log (``length``)
     counts for nothing: no mixing across a silhouette.  A scalar ``value`` comes back a scalar, the mean;
-    a vector's third channel carries the weights, so (lit, total) come back as sums over the same pixels."""
-    if length.vector:   # cropped to a window: an image with the length in each channel
-        length = m.dot(length, (1.0, 0.0, 0.0))
+    a vector's third channel carries the weights, so (lit, total) come back as sums over the same pixels.
+    ``length``: a scalar image (``_interleave_mean_group`` takes a cropped one's first channel)."""
     log = m.math("LOGARITHM", m.maximum(length, 1e-3), math.e)
     packed = value if value.vector else m.combine(value, 0.0, 1.0)
     half = len(taps) // 2

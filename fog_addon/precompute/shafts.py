@@ -235,7 +235,7 @@ def offset(m, pixel_x, pixel_y):
 
 def surface_offset(m, pixel_x, pixel_y, levels=None):
     """The interleaving offset in (0, 1) of the pixel for ``surface_share``: its rank in the 2^levels square
-    Bayer pattern (default SURFACE_PATTERN_LEVELS: 8 x 8), built as Bayer's recursion: the rank in the 2 x 2 of
+    Bayer pattern (default SURFACE_PATTERN_LEVELS: 4 x 4), built as Bayer's recursion: the rank in the 2 x 2 of
     (i, j) is the most significant digit (base 4), that of (i // 2, j // 2) the next, ..., plus a half, over
     the pattern's size.  A surface's fog light varies slowly across the picture, so the pixels of a pattern
     share their directions (the compositor's SURFACE_TAPS filter)."""
@@ -281,7 +281,7 @@ def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.
     beyond ``length`` integrated by that many more nodes (a pixel that sees both a surface and the sky past
     its edge: the glow to the surface takes S, the glow to the sky S_far).
     """
-    v, t_c, h, args = _ray_frame(m, camera, direction, light, beta)
+    t_c, h, args = _ray_frame(m, camera, direction, light, beta)
     theta_far = m.minimum(m.atan2(far - t_c, h), MAX_ANGLE)
     theta1 = m.minimum(m.atan2(length - t_c, h), theta_far)
     # a segment that ends more than h / 1e-3 before the light lies within MAX_ANGLE of -pi/2: its nodes sit at
@@ -290,20 +290,19 @@ def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.
     step = (theta1 - theta0) * (1.0 / nodes)
     quad = (shadow, g, falloff, name, args)
     lit_sum, total = _quadrature(m, theta0, step, nodes, shift, *quad)
-    share = (lit_sum + MIN_SHARE) / (total + MIN_SHARE)
+    share = share_of(lit_sum, total)
     if not tail_nodes:
         return share
     tail_step = (theta_far - theta1) * (1.0 / tail_nodes)
     lit_tail, total_tail = _quadrature(m, theta1, tail_step, tail_nodes, shift, *quad)
-    lit_all = lit_sum * step + lit_tail * tail_step
-    return share, (lit_all + MIN_SHARE) / (total * step + total_tail * tail_step + MIN_SHARE)
+    return share, share_of(lit_sum * step + lit_tail * tail_step, total * step + total_tail * tail_step)
 
 
 def ray_integrals(m, origin, direction, light, beta, shadow, nodes, shift=0.5, g=0.0, falloff=None, name=None):
     """(G_H, G) along the whole ray from ``origin`` along the unit ``direction`` (module docstring, to
     infinity), each over beta I0 / 4 pi, in 1/m: (1 / h) int e^{-beta (t + d)} w f (H) d theta by ``nodes``
     equiangular nodes (``lit_share``'s)."""
-    v, t_c, h, args = _ray_frame(m, origin, direction, light, beta)
+    t_c, h, args = _ray_frame(m, origin, direction, light, beta)
     theta0 = m.maximum(m.atan2(-1.0 * t_c, h), -MAX_ANGLE)
     step = (MAX_ANGLE - theta0) * (1.0 / nodes)
     lit_sum, total = _quadrature(m, theta0, step, nodes, shift, shadow, g, falloff, name, args)
@@ -312,14 +311,14 @@ def ray_integrals(m, origin, direction, light, beta, shadow, nodes, shift=0.5, g
 
 
 def _ray_frame(m, origin, direction, light, beta):
-    """The light seen from a ray: v = light - origin, t_c (the foot of the perpendicular along the ray), h
+    """The light seen from a ray, v = light - origin: t_c (the foot of the perpendicular along the ray), h
     (the ray's distance to the light, at least MIN_OFFSET |v|), and the scalar arguments of ``node_terms``'s
     group (``_quadrature``)."""
     v = light - origin
     t_c = m.dot(v, direction)
     h = m.maximum(m.sqrt(m.dot(v, v) - t_c * t_c), MIN_OFFSET * m.length(v) + 1e-6)
     axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
-    return v, t_c, h, (t_c, h, *(m.dot(v, a) for a in axes), *(m.dot(direction, a) for a in axes), beta)
+    return t_c, h, (t_c, h, *(m.dot(v, a) for a in axes), *(m.dot(direction, a) for a in axes), beta)
 
 
 def _quadrature(m, start, width, count, shift, shadow, g, falloff, name, args):
