@@ -191,6 +191,18 @@ MUTATIONS = [
              "    return [((place + j) * (0.25 / count), ",
              ("tests/test_shafts.py::test_hemisphere_directions_are_cosine_weighted",
               "tests/test_shafts.py::test_surface_share_matches_quadrature")),
+    Mutation("mc_crossing_radiance", "multiple scattering: the Monte Carlo tallies flux, not radiance (a crossing "
+             "at mu counts 1, not 1 / |mu|)",
+             "fog_addon/precompute/point_source_mc.py",
+             "                    val = w[hit] * np.exp(-s[hit]) / np.maximum(np.abs(mu), 1e-3)\n",
+             "                    val = w[hit] * np.exp(-s[hit])\n",
+             ("tests/test_apsf.py::test_monte_carlo_single_scattering_matches_quadrature",)),
+    Mutation("mc_expected_crossing", "multiple scattering: the Monte Carlo's expected-value crossings drop their "
+             "e^{-s} (every crossing ahead counts as if reached)",
+             "fog_addon/precompute/point_source_mc.py",
+             "                    val = w[hit] * np.exp(-s[hit]) / np.maximum(np.abs(mu), 1e-3)\n",
+             "                    val = w[hit] / np.maximum(np.abs(mu), 1e-3)\n",
+             ("tests/test_apsf.py::test_monte_carlo_single_scattering_matches_quadrature",)),
 ]
 
 

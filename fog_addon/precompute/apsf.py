@@ -1,0 +1,103 @@
+"""The atmospheric point spread function (APSF): multiple scattering around an isotropic point source in an
+infinite homogeneous medium, after Narasimhan, Ramamoorthi and Nayar, "Analytic Rendering of Multiple
+Scattering in Participating Media" (``002``), numpy only.
+
+The light field of a point source of radiant intensity I0 depends on the optical distance T = sigma R and on
+mu, the cosine of the angle between the light's direction and the outward radial one.  A viewer at distance R
+from the source sees, at the angle theta from the source's direction, I(T, cos theta): the APSF is the glow's
+profile directly, with no integral along the ray.
+
+Their solution (§2, Eq. 24-27) with the Henyey-Greenstein phase function of parameter q and albedo W0:
+
+    W_k = W0 (2k + 1) q^k                                  (Eq. 12, scaled by W0 as §2.2.1 says),
+    alpha_m = m + 1,  beta_m = (2m + 1) / m (1 - W_{m-1} / (2m - 1)) = (2m + 1) / m (1 - W0 q^{m-1})   (Eq. 25),
+    g_m(T) = I0 e^{-beta_m T - alpha_m log T},  g_0 = 0                                              (Eq. 24),
+    I(T, mu) = sum_{m>=0} (g_m(T) + g_{m+1}(T)) L_m(mu)                                             (Eq. 27).
+
+It converges for T > 1 only (§2.1: each g_{m+1} / g_m ~ q / T for large m), and peaked profiles (small T, q near
+1) need many terms and ring when cut (Fig. 2).  ``apsf_series`` is the series as printed, for the seed's own
+check; the glow the renderer adds is built from it in ``multiple_scattering`` (see there).
+
+Units: T dimensionless (optical thickness), I per unit source intensity I0 in units of sigma^2 (radiance
+I0 sigma^2 / sr at extinction sigma: multiply by sigma^2 for 1/m^2).
+"""
+import math
+
+import numpy as np
+
+MIN_T = 1.0 + 1e-6   # the series diverges at and below T = 1 (§2.1)
+
+
+def legendre_table(mu, count):
+    """L_0 .. L_{count-1} at ``mu`` (shape (count,) + mu.shape) by Bonnet's recurrence."""
+    mu = np.asarray(mu, float)
+    out = np.empty((count,) + mu.shape)
+    out[0] = 1.0
+    if count > 1:
+        out[1] = mu
+    for m in range(1, count - 1):
+        out[m + 1] = ((2 * m + 1) * mu * out[m] - m * out[m - 1]) / (m + 1)
+    return out
+
+
+def apsf_exponents(q, albedo, count):
+    """(alpha_m, beta_m) for m = 0 .. count-1 (Eq. 25; m = 0 unused: g_0 = 0)."""
+    m = np.arange(count, dtype=float)
+    alpha = m + 1.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        beta = (2.0 * m + 1.0) / m * (1.0 - float(albedo) * float(q) ** np.maximum(m - 1.0, 0.0))
+    beta[0] = np.inf
+    return alpha, beta
+
+
+def apsf_g(T, q, albedo, count):
+    """g_m(T) / I0 for m = 0 .. count (Eq. 24; g_0 = 0): shape (count + 1,) + T.shape."""
+    T = np.asarray(T, float)
+    alpha, beta = apsf_exponents(q, albedo, count + 1)
+    g = np.exp(-beta[:, None] * T.reshape(1, -1) - alpha[:, None] * np.log(T.reshape(1, -1)))
+    g[0] = 0.0
+    return g.reshape((count + 1,) + T.shape)
+
+
+def apsf_series(T, mu, q, albedo=1.0, terms=200):
+    """I(T, mu) / I0 by Eq. 27 cut after ``terms`` terms, for T > 1 (``T`` broadcast against ``mu``)."""
+    T, mu = np.broadcast_arrays(np.asarray(T, float), np.asarray(mu, float))
+    if np.any(T <= 1.0):
+        raise ValueError("the APSF series converges for T > 1 only (Narasimhan et al. §2.1)")
+    g = apsf_g(T, q, albedo, terms)
+    L = legendre_table(mu, terms)
+    return np.sum((g[:-1] + g[1:]) * L, axis=0)
+
+
+# --- the multiply scattered glow: a table of the field by order, and its segments -----------------------
+
+MS_T = np.geomspace(0.05, 40.0, 32)   # optical distances of the table's rows (log-spaced)
+MS_THETA0 = 1.0                       # deg: the angle grid is uniform in u = log(1 + theta / THETA0) / log(1 + 180 / THETA0)
+MS_BINS = 64                          # angle bins (uniform in u)
+MS_PHOTONS = 200_000                  # photons of a baked table (``multiple_scattering_table``)
+
+
+def theta_to_u(theta_deg):
+    """The table's angle coordinate u in [0, 1] of theta (deg): close to linear below MS_THETA0, log above."""
+    return np.log1p(np.asarray(theta_deg, float) / MS_THETA0) / math.log1p(180.0 / MS_THETA0)
+
+
+def u_to_theta(u):
+    """theta (deg) of the table's coordinate u (``theta_to_u``'s inverse)."""
+    return MS_THETA0 * np.expm1(np.asarray(u, float) * math.log1p(180.0 / MS_THETA0))
+
+
+def ms_edges_deg():
+    """The table's angle bins' edges (deg), MS_BINS + 1 of them, uniform in u."""
+    return u_to_theta(np.linspace(0.0, 1.0, MS_BINS + 1))
+
+
+def multiple_scattering_table(q, albedo, photons=MS_PHOTONS, seed=0):
+    """I_{>=2}(T, theta) / I0 on (MS_T, the bins of ``ms_edges_deg``): the radiance of the light scattered two
+    or more times around an isotropic point source (extinction 1, albedo ``albedo``, Henyey-Greenstein
+    ``q``), by Monte Carlo (``point_source_mc.radiance``).  The single scattering is left out: the renderer's
+    own is exact.  Shape (len(MS_T), MS_BINS), float64, in units of I0 sigma^2 / sr."""
+    from . import point_source_mc
+    r = point_source_mc.radiance(MS_T, q, albedo, photons=photons, edges_deg=ms_edges_deg(), seed=seed,
+                                 r_max=MS_T[-1] + 40.0)
+    return np.stack([r[float(T)][1] for T in MS_T])
