@@ -155,6 +155,11 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
         description="Objects cast shadows into the fog: beams through windows, shafts between columns, no glow "
                     "above a lamp's hood. Only lights with an object near them get a shadow map (Compositor "
                     "method: Cycles and EEVEE)")
+    use_multiple_scattering: bpy.props.BoolProperty(
+        name="Dense Fog (Multiple Scattering)", default=False, update=_rebuild,
+        description="Add the light scattered more than once around point lights: the wide halo of thick fog "
+                    "(optical distance to a lamp above about 1). The first use of an anisotropy bakes its "
+                    "table (about a minute, then cached)")
     use_passes: bpy.props.BoolProperty(
         name="Fog Passes", default=False, update=_rebuild,
         description="Write the render passes Fog Light (the light the fog adds) and Fog Transmittance "

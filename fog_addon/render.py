@@ -42,6 +42,8 @@ def fog_settings(scene, args):
                  anisotropy=_flag(args, "anisotropy"), method=_flag(args, "method"), passes=_flag(args, "passes"),
                  quality=_flag(args, "error"),
                  shafts=None if _flag(args, "shafts") is None else _flag(args, "shafts") == "on",
+                 multiple_scattering=(None if _flag(args, "multiple_scattering") is None
+                                      else _flag(args, "multiple_scattering") == "on"),
                  world_light=None if _flag(args, "world_light") is None else _flag(args, "world_light") == "on")
     spec = FogSpec.from_settings(s).replace(**flags)
     source = {k: "flag" if v is not None else "file" for k, v in flags.items()}
@@ -62,7 +64,8 @@ def fog_settings(scene, args):
              "method": ("method", spec.method), "fog passes": ("passes", spec.passes),
              "quality": ("quality", spec.quality),
              "world light": ("world_light", "on" if spec.world_light else "off"),
-             "light shafts": ("shafts", "on" if spec.shafts else "off")}
+             "light shafts": ("shafts", "on" if spec.shafts else "off"),
+             "multiple scattering": ("multiple_scattering", "on" if spec.multiple_scattering else "off")}
     return spec, objects, {k: (v, source[f]) for k, (f, v) in shown.items()}, notes
 
 

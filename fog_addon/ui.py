@@ -76,6 +76,7 @@ def draw_fog(layout, context):
     col.prop(s, "selected_only")
     col.prop(s, "world_light")
     col.prop(s, "use_shafts")
+    col.prop(s, "use_multiple_scattering")
     col.prop(s, "use_passes")
     _draw_models(layout, s)
     note = presets.invisible_fog_note(s.density * s.scene_scale, apply.scene_size(scene))

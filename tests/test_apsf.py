@@ -111,10 +111,3 @@ def test_series_converges_above_one_and_refuses_below():
     np.testing.assert_allclose(a, b, rtol=1e-9)
     with pytest.raises(ValueError, match="T > 1"):
         apsf.apsf_series(1.0, mu, 0.8, 0.95)
-
-
-def test_table_angle_coordinates_round_trip():
-    theta = np.array([0.0, 0.1, 1.0, 10.0, 180.0])
-    np.testing.assert_allclose(apsf.u_to_theta(apsf.theta_to_u(theta)), theta, atol=1e-9)
-    edges = apsf.ms_edges_deg()
-    assert edges[0] == 0.0 and abs(edges[-1] - 180.0) < 1e-9 and np.all(np.diff(edges) > 0)

@@ -203,6 +203,19 @@ MUTATIONS = [
              "                    val = w[hit] * np.exp(-s[hit]) / np.maximum(np.abs(mu), 1e-3)\n",
              "                    val = w[hit] / np.maximum(np.abs(mu), 1e-3)\n",
              ("tests/test_apsf.py::test_monte_carlo_single_scattering_matches_quadrature",)),
+    Mutation("multiple_segment_attenuation", "multiple scattering: the field beyond a surface is not dimmed on its "
+             "way back to the camera (the segment's e^{-beta D})",
+             "fog_addon/precompute/multiple.py",
+             "    return multiple_background(m, spec, beta, d_sv, along, h) - m.exp(-1.0 * beta * d_vp) * beyond\n",
+             "    return multiple_background(m, spec, beta, d_sv, along, h) - beyond\n",
+             ("tests/test_multiple.py::test_segment_formula_on_the_single_scattering_field",)),
+    Mutation("multiple_albedo_power", "multiple scattering: order k weighted W0^k per unit albedo (it is W0^(k-1): "
+             "the shading multiplies by W0 once more)",
+             "fog_addon/precompute/multiple.py",
+             "    weights = float(albedo) ** np.arange(0, MAX_ORDER, dtype=float)",
+             "    weights = float(albedo) ** np.arange(1, MAX_ORDER + 1, dtype=float)",
+             ("tests/test_multiple.py::test_field_per_unit_albedo_vanishes_with_albedo",
+              "tests/test_multiple.py::test_table_matches_an_independent_monte_carlo")),
 ]
 
 

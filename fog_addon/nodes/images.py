@@ -44,12 +44,15 @@ def table_image(spec, bake):
     return img
 
 
-def all_table_images(g=0.0):
+def all_table_images(g=0.0, extra=()):
     """{TableSpec.name: image} for every table the node groups use with Henyey-Greenstein anisotropy g.  A
     missing or stale image takes its array from ``bakers.numpy_tables`` (the table cache, and the arrays this
-    process already holds for the predictor)."""
-    return {name: table_image(spec, lambda name=name: bakers.numpy_tables(float(g))[name])
-            for name, (spec, _) in bakers.bakers(g).items()}
+    process already holds for the predictor).  ``extra``: TableSpecs of ``bakers.extra_baker`` too (the
+    multiply scattered field's)."""
+    out = {name: table_image(spec, lambda name=name: bakers.numpy_tables(float(g))[name])
+           for name, (spec, _) in bakers.bakers(g).items()}
+    out.update({spec.name: table_image(spec, bakers.extra_baker(spec)) for spec in extra})
+    return out
 
 
 def table_names():

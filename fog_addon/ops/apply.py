@@ -10,7 +10,7 @@ from ..nodes.light import unwrap_light, wrap_light
 from ..nodes.material import unwrap_material, wrap_material
 from ..nodes.owned import is_fogged
 from ..nodes.world import unwrap_world, wrap_world
-from ..precompute import predict, presets, rungs, shafts, spot
+from ..precompute import multiple, predict, presets, rungs, shafts, spot
 from ..precompute.spec import FogSpec, validate_quality
 from . import progress as progress_
 from .. import view
@@ -143,8 +143,16 @@ def choose_models(scene, spec, method, lights):
 
 def _models(spec, method, lights, steps, rims):
     """Each light's models at its step, a spot's glow with its rim's point count (``rims``: by name)."""
-    return [rungs.choose(method.preference, k, spec.anisotropy, view.is_spot(o), rims.get(o.name, spot.RIM_NODES))
+    return [rungs.choose(method.preference, k, spec.anisotropy, view.is_spot(o), rims.get(o.name, spot.RIM_NODES),
+                         multiple_albedo=spec.multiple_albedo)
             for o, k in zip(lights, steps)]
+
+
+def _extra_tables(spec):
+    """The tables beyond ``bakers.bakers``' that ``spec``'s models read: the multiply scattered field's."""
+    if spec.multiple_albedo is None:
+        return ()
+    return (multiple.table_spec(spec.anisotropy, spec.multiple_albedo),)
 
 
 def stored_choice():
@@ -318,7 +326,7 @@ def _build_scene_groups(scene, spec, lights, method=None, reason=None, rechoose=
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if (surface is None or bpy.data.node_groups.get(groups.WORLD) is None
             or surface.get(LIGHTS_KEY) != signature or not method.is_built()):
-        imgs = method.build(scene, spec, plan_, images.all_table_images(spec.anisotropy))
+        imgs = method.build(scene, spec, plan_, images.all_table_images(spec.anisotropy, _extra_tables(spec)))
         _rebuilt.add(scene.name)   # the compositor's chain must take the new groups (``refresh_lights``)
         surface = bpy.data.node_groups[groups.SURFACE]
         surface[LIGHTS_KEY] = signature

@@ -16,7 +16,8 @@ Their solution (§2, Eq. 24-27) with the Henyey-Greenstein phase function of par
 
 It converges for T > 1 only (§2.1: each g_{m+1} / g_m ~ q / T for large m), and peaked profiles (small T, q near
 1) need many terms and ring when cut (Fig. 2).  ``apsf_series`` is the series as printed, for the seed's own
-check; the glow the renderer adds is built from it in ``multiple_scattering`` (see there).
+check (docs/measurements/2026-11-27-apsf.md); the renderer's glow comes from transport instead
+(``multiple.py``).
 
 Units: T dimensionless (optical thickness), I per unit source intensity I0 in units of sigma^2 (radiance
 I0 sigma^2 / sr at extinction sigma: multiply by sigma^2 for 1/m^2).
@@ -67,37 +68,3 @@ def apsf_series(T, mu, q, albedo=1.0, terms=200):
     g = apsf_g(T, q, albedo, terms)
     L = legendre_table(mu, terms)
     return np.sum((g[:-1] + g[1:]) * L, axis=0)
-
-
-# --- the multiply scattered glow: a table of the field by order, and its segments -----------------------
-
-MS_T = np.geomspace(0.05, 40.0, 32)   # optical distances of the table's rows (log-spaced)
-MS_THETA0 = 1.0                       # deg: the angle grid is uniform in u = log(1 + theta / THETA0) / log(1 + 180 / THETA0)
-MS_BINS = 64                          # angle bins (uniform in u)
-MS_PHOTONS = 200_000                  # photons of a baked table (``multiple_scattering_table``)
-
-
-def theta_to_u(theta_deg):
-    """The table's angle coordinate u in [0, 1] of theta (deg): close to linear below MS_THETA0, log above."""
-    return np.log1p(np.asarray(theta_deg, float) / MS_THETA0) / math.log1p(180.0 / MS_THETA0)
-
-
-def u_to_theta(u):
-    """theta (deg) of the table's coordinate u (``theta_to_u``'s inverse)."""
-    return MS_THETA0 * np.expm1(np.asarray(u, float) * math.log1p(180.0 / MS_THETA0))
-
-
-def ms_edges_deg():
-    """The table's angle bins' edges (deg), MS_BINS + 1 of them, uniform in u."""
-    return u_to_theta(np.linspace(0.0, 1.0, MS_BINS + 1))
-
-
-def multiple_scattering_table(q, albedo, photons=MS_PHOTONS, seed=0):
-    """I_{>=2}(T, theta) / I0 on (MS_T, the bins of ``ms_edges_deg``): the radiance of the light scattered two
-    or more times around an isotropic point source (extinction 1, albedo ``albedo``, Henyey-Greenstein
-    ``q``), by Monte Carlo (``point_source_mc.radiance``).  The single scattering is left out: the renderer's
-    own is exact.  Shape (len(MS_T), MS_BINS), float64, in units of I0 sigma^2 / sr."""
-    from . import point_source_mc
-    r = point_source_mc.radiance(MS_T, q, albedo, photons=photons, edges_deg=ms_edges_deg(), seed=seed,
-                                 r_max=MS_T[-1] + 40.0)
-    return np.stack([r[float(T)][1] for T in MS_T])

@@ -5,7 +5,7 @@ takes seconds in every process that needs them.
 """
 import functools
 
-from . import airlight, spot, surface, tables
+from . import airlight, multiple, spot, surface, tables
 from .table_cache import cached_bake
 
 
@@ -32,3 +32,24 @@ def numpy_tables(g=0.0):
     """{name: float32 array} of every table for anisotropy g, baked (or read from the cache) once per process
     (read-only use)."""
     return {name: cached_bake(spec, bake) for name, (spec, bake) in bakers(g).items()}
+
+
+def extra_baker(spec):
+    """The baker of a table that depends on more than g (``multiple.table_spec``: g and the albedo), for
+    ``table_cache.cached_bake``."""
+    if spec.name.startswith("AnalyticFog Multiple ("):
+        return functools.partial(multiple.bake_table, spec)
+    raise KeyError(f"no baker for table {spec.name!r}")
+
+
+def table_array(spec, g=0.0):
+    """The float32 array of any table the models read (``bakers`` or ``extra_baker``), through the cache."""
+    known = bakers(g)
+    if spec.name in known:
+        return numpy_tables(float(g))[spec.name]
+    return _extra_array(spec)
+
+
+@functools.lru_cache(maxsize=None)
+def _extra_array(spec):
+    return cached_bake(spec, extra_baker(spec))

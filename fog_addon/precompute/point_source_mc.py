@@ -54,6 +54,26 @@ def turn(directions, cos_t, phi):
     return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
+def _tally_crossings(tally, radii, edges_rad, b, c, w, kind, kinds, nb):
+    """Add the expected-value crossings of flights (b = p.d, c = p.p at their starts, weights w, each of a
+    ``kind`` in range(kinds)) with every sphere of ``radii`` to ``tally`` (flat: radius, kind, theta bin).  A
+    line p + s d meets the sphere T at s = -b -+ sqrt(b^2 - c + T^2), where mu = x.d / T = -+ sqrt(...) / T."""
+    root = np.sqrt(np.maximum(b[:, None] * b[:, None] - c[:, None] + radii[None, :] ** 2, 0.0))
+    meets = (b[:, None] * b[:, None] - c[:, None] + radii[None, :] ** 2) > 0.0
+    for sign in (-1.0, 1.0):
+        s = -b[:, None] + sign * root
+        mu = sign * root / radii[None, :]
+        hit = meets & (s > 0.0) & (s < EXPECT_LENGTH)
+        if not hit.any():
+            continue
+        i_photon, i_radius = np.nonzero(hit)
+        mu_h = np.clip(mu[hit], -1.0, 1.0)
+        k = np.clip(np.searchsorted(edges_rad, np.arccos(mu_h)) - 1, 0, nb - 1)
+        val = w[i_photon] * np.exp(-s[hit]) / np.maximum(np.abs(mu_h), 1e-3)
+        index = (i_radius * kinds + kind[i_photon]) * nb + k
+        tally += np.bincount(index, weights=val, minlength=len(tally))
+
+
 def radiance(radii, q, albedo, photons=200_000, edges_deg=DEFAULT_EDGES_DEG, max_order=None, r_max=None,
              roulette=1e-2, seed=0, batch=100_000):
     """{T: (I_single, I_multiple)} for each T in ``radii``, each an array over the theta bins ``edges_deg``
@@ -61,9 +81,9 @@ def radiance(radii, q, albedo, photons=200_000, edges_deg=DEFAULT_EDGES_DEG, max
     ``max_order``: stop photons after that many scatterings (None: until roulette or r_max)."""
     radii = np.asarray(radii, float)
     r_max = float(r_max if r_max is not None else radii.max() + 40.0)
-    mu_edges = np.cos(np.radians(edges_deg))[::-1]             # ascending
     nb = len(edges_deg) - 1
-    tally = np.zeros((len(radii), 2, nb))
+    theta_of_bin = np.radians(np.asarray(edges_deg, float))
+    tally = np.zeros(len(radii) * 2 * nb)
     rng = np.random.default_rng(seed)
     done = 0
     while done < photons:
@@ -79,21 +99,9 @@ def radiance(radii, q, albedo, photons=200_000, edges_deg=DEFAULT_EDGES_DEG, max
             b = np.einsum("ij,ij->i", p, d)
             c = np.einsum("ij,ij->i", p, p)
             scattered = order > 0
-            for i, T in enumerate(radii):
-                disc = b * b - (c - T * T)
-                ok = (disc > 0.0) & scattered
-                root = np.sqrt(np.where(ok, disc, 0.0))
-                for s in (-b - root, -b + root):
-                    hit = ok & (s > 0.0) & (s < EXPECT_LENGTH)
-                    if not hit.any():
-                        continue
-                    x = p[hit] + s[hit, None] * d[hit]
-                    mu = np.einsum("ij,ij->i", x, d[hit]) / T
-                    k = np.clip(np.searchsorted(mu_edges, mu) - 1, 0, nb - 1)
-                    k = nb - 1 - k                                  # bins by theta, ascending
-                    val = w[hit] * np.exp(-s[hit]) / np.maximum(np.abs(mu), 1e-3)
-                    kind = np.where(order[hit] == 1, 0, 1)
-                    np.add.at(tally[i], (kind, k), val)
+            if scattered.any():
+                _tally_crossings(tally, radii, theta_of_bin, b[scattered], c[scattered], w[scattered],
+                                 (order[scattered] > 1).astype(np.int64), 2, nb)
             p = p + step[:, None] * d
             w = w * albedo
             order = order + 1
@@ -110,5 +118,43 @@ def radiance(radii, q, albedo, photons=200_000, edges_deg=DEFAULT_EDGES_DEG, max
     out = {"theta": 0.5 * (edges_deg[:-1] + edges_deg[1:]), "edges": np.asarray(edges_deg, float)}
     for i, T in enumerate(radii):
         scale = 4.0 * math.pi / photons / (4.0 * math.pi * T * T) / solid
-        out[float(T)] = (tally[i, 0] * scale, tally[i, 1] * scale)
+        t = tally.reshape(len(radii), 2, nb)
+        out[float(T)] = (t[i, 0] * scale, t[i, 1] * scale)
     return out
+
+
+def radiance_by_order(radii, q, max_order, photons=100_000, edges_deg=DEFAULT_EDGES_DEG, r_max=None, seed=0,
+                      batch=50_000):
+    """I_k(T, theta) / I0 of each scattering order k = 1 .. ``max_order`` without absorption: an array
+    (len(radii), max_order, bins), extinction 1.  Any albedo's field then follows without another run:
+    a photon scattered k times carries W0^k, so I(W0) = sum_k W0^k I_k (the orders above ``max_order``
+    left out: W0^max_order of the light).  Photons farther than ``r_max`` from the source are dropped."""
+    radii = np.asarray(radii, float)
+    r_max = float(r_max if r_max is not None else radii.max() + 40.0)
+    nb = len(edges_deg) - 1
+    theta_of_bin = np.radians(np.asarray(edges_deg, float))
+    tally = np.zeros(len(radii) * max_order * nb)
+    rng = np.random.default_rng(seed)
+    done = 0
+    while done < photons:
+        n = min(batch, photons - done)
+        done += n
+        u = rng.normal(size=(n, 3))
+        d = u / np.linalg.norm(u, axis=1, keepdims=True)
+        p = np.zeros((n, 3))
+        order = 0
+        while len(p) and order <= max_order:
+            if order > 0:
+                b = np.einsum("ij,ij->i", p, d)
+                c = np.einsum("ij,ij->i", p, p)
+                _tally_crossings(tally, radii, theta_of_bin, b, c, np.ones(len(p)),
+                                 np.full(len(p), order - 1, dtype=np.int64), max_order, nb)
+            step = -np.log(1.0 - rng.random(len(p)))
+            p = p + step[:, None] * d
+            d = turn(d, sample_hg(rng, q, len(p)), rng.uniform(0.0, 2.0 * math.pi, len(p)))
+            order += 1
+            keep = np.einsum("ij,ij->i", p, p) < r_max * r_max
+            p, d = p[keep], d[keep]
+    solid = 2.0 * math.pi * (np.cos(np.radians(edges_deg[:-1])) - np.cos(np.radians(edges_deg[1:])))
+    scale = 1.0 / photons / (radii[:, None, None] ** 2) / solid[None, None, :]
+    return tally.reshape(len(radii), max_order, nb) * scale

@@ -36,7 +36,7 @@ from dataclasses import dataclass, replace
 import functools
 from typing import Callable, NamedTuple
 
-from . import model, spot, surface, tables
+from . import model, multiple, spot, surface, tables
 
 TERMS = ("airlight", "background", "scatter", "direct")
 BACKENDS = ("numpy", "nodes", "osl")
@@ -286,7 +286,33 @@ def spot_scatter_rung(scatter, g):
                    evidence="tests/test_spot_scatter.py: Eq. 15 by hemisphere quadrature of the spot's airlight")
 
 
-def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NODES):
+MULTIPLE_ERROR = 0.10   # the multiply scattered glow's bound against path tracing (docs/measurements)
+
+
+def _airlight_with_multiple(base, spec, m, beta, d_sv, along, h, d_vp):
+    return base(m, beta, d_sv, along, h, d_vp) + multiple.multiple_airlight(m, spec, beta, d_sv, along, h, d_vp)
+
+
+def _background_with_multiple(base, spec, m, beta, d_sv, along, h):
+    return base(m, beta, d_sv, along, h) + multiple.multiple_background(m, spec, beta, d_sv, along, h)
+
+
+def multiple_rungs(air, background, g, albedo):
+    """(airlight, background) rungs of a point light with the multiply scattered glow (``multiple.py``: the
+    field's table for anisotropy ``g`` and grey albedo ``albedo``) added to ``air``'s and ``background``'s
+    single scattering.  They run where the table does (numpy, nodes)."""
+    spec = multiple.table_spec(g, albedo)
+    tag = spec.name.split("(", 1)[1].rstrip(")")
+    out = []
+    for rung, fn in ((air, _airlight_with_multiple), (background, _background_with_multiple)):
+        out.append(replace(rung, name=f"{rung.name} + multiple {tag}", kernel=functools.partial(fn, rung.kernel, spec),
+                           backends=rung.backends & {"numpy", "nodes"}, tables=rung.tables + (spec,),
+                           max_error=max(rung.max_error, MULTIPLE_ERROR),
+                           evidence="tests/test_multiple.py; docs/measurements/2026-11-27-apsf.md"))
+    return tuple(out)
+
+
+def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NODES, multiple_albedo=None):
     """The models for one light's terms, honouring the user's ``preference`` (PREFERENCES), ``step``
     (index into STEPS) rungs down the ladder, for Henyey-Greenstein anisotropy ``g``; ``spot``: for a
     spot light (``spot_rungs``, DIRECT_SPOT) whose glow's rim takes ``rim_nodes`` points (spot.RIM_LADDER).
@@ -296,7 +322,8 @@ def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NOD
     OSL rung); "compositor": the models of "nodes", evaluated once per pixel in the compositor
     (``nodes/comp_fog.py``).  ``predict.choose_steps`` picks each light's step from the
     error it would make in the camera's view.  Raises ValueError for what no rung
-    serves (tables below MIN_TABLE_ANISOTROPY).
+    serves (tables below MIN_TABLE_ANISOTROPY).  ``multiple_albedo``: a grey albedo to add a point light's
+    multiply scattered glow with (``multiple_rungs``; the node groups' tables, not OSL's quadrature), or None.
     """
     if preference not in PREFERENCES:
         raise ValueError(f"unknown method {preference!r}; use one of {', '.join(PREFERENCES)}")
@@ -313,6 +340,9 @@ def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NOD
     if spot:
         models = models._replace(direct=DIRECT_SPOT, scatter=spot_scatter_rung(models.scatter, g))._replace(
             **dict(zip(("airlight", "background"), spot_rungs(models.airlight, models.background, g, rim_nodes))))
+    if multiple_albedo is not None and not spot and preference != "osl" and step < 2:
+        models = models._replace(**dict(zip(("airlight", "background"), multiple_rungs(
+            models.airlight, models.background, g, multiple_albedo))))
     if step >= 1:
         models = models._replace(scatter=SCATTER_OFF)
     if step >= 2:

@@ -66,11 +66,22 @@ class FogSpec:
     passes: bool = False
     world_light: bool = False
     shafts: bool = True
+    multiple_scattering: bool = False
 
     @property
     def beta_per_unit(self):
         """The shaders' extinction coefficient, 1/(Blender unit): density x scene_scale."""
         return self.density * self.scene_scale
+
+    @property
+    def grey_albedo(self):
+        """The albedo the multiply scattered glow is modelled with (``multiple.py``): the channels' mean."""
+        return sum(self.albedo) / 3.0
+
+    @property
+    def multiple_albedo(self):
+        """``rungs.choose``'s multiple_albedo: the grey albedo with multiple scattering on, else None."""
+        return self.grey_albedo if self.multiple_scattering else None
 
     @property
     def target_error(self):
@@ -84,7 +95,7 @@ class FogSpec:
             self, density=presets.validate_density(self.density), scene_scale=float(self.scene_scale),
             albedo=tuple(float(a) for a in fog.albedo), anisotropy=fog.g, method=validate_method(self.method),
             quality=validate_quality(self.quality), passes=bool(self.passes), world_light=bool(self.world_light),
-            shafts=bool(self.shafts))
+            shafts=bool(self.shafts), multiple_scattering=bool(self.multiple_scattering))
 
     def replace(self, **changes):
         """A validated copy with ``changes`` (None values keep this spec's: the command line's unset flags)."""
@@ -106,13 +117,15 @@ class FogSpec:
         return cls(density=settings.density, scene_scale=settings.scene_scale, albedo=tuple(settings.color),
                    anisotropy=settings.anisotropy, method=settings.method.lower(), quality=quality,
                    passes=settings.use_passes, world_light=settings.world_light,
-                   shafts=getattr(settings, "use_shafts", True)).validated()
+                   shafts=getattr(settings, "use_shafts", True),
+                   multiple_scattering=getattr(settings, "use_multiple_scattering", False)).validated()
 
     def settings_values(self):
         """{property: value} that store this spec in a ``scene.analytic_fog`` (the inverse of ``from_settings``)."""
         values = dict(density=self.density, scene_scale=self.scene_scale, color=self.albedo,
                       anisotropy=self.anisotropy, method=self.method.upper(), use_passes=self.passes,
-                      world_light=self.world_light, use_shafts=self.shafts)
+                      world_light=self.world_light, use_shafts=self.shafts,
+                      use_multiple_scattering=self.multiple_scattering)
         if isinstance(self.quality, str):
             values["quality"] = self.quality.upper()
         else:

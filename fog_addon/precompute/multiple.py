@@ -1,0 +1,180 @@
+"""Multiple scattering around point lights: the glow of the light scattered two or more times, numpy only.
+
+The renderer's single scattering is exact (``airlight.py``, ``model.py``); this module adds the orders it
+leaves out.  Narasimhan, Ramamoorthi and Nayar (``002``, §2) give the field of an isotropic point source in an
+infinite homogeneous medium as a Legendre series (``apsf.py``); as printed it is off by factors of 0.02 to 70
+against transport (docs/measurements/2026-11-27-apsf.md), so the field here is the transport's own:
+
+* **The field by order.**  ``point_source_mc.radiance_by_order`` follows photons from the source without
+  absorption and tallies the radiance I_k(T, theta) of each scattering order k on spheres of optical radius T
+  (extinction 1, Henyey-Greenstein g).  A photon scattered k times carries W0^k, so one run serves every
+  albedo: I_{>=2}(W0) = sum_{k>=2} W0^k I_k, the orders past MAX_ORDER extrapolated (``_order_tail``).  It
+  depends on g only, and is baked once per g into the table cache (``orders_spec``).
+* **The table.**  ln(I_{>=2} / W0) on (T, theta) (``table_spec``, ``bake_table``): divided by W0 because the
+  shading multiplies every glow by the albedo afterwards.  Rows at T = T_MAX y^4 (``table_y``), columns at
+  theta = 180 deg u^(1 / U_POWER) (``table_x``), so that both the narrow core (0.01 deg) and the whole sphere
+  fit in 64 columns; logs, because the field falls by decades along both and log-linear interpolation follows
+  an exponential exactly.
+* **Segments.**  A camera ray that ends on a surface at distance D receives from its part in front of the
+  surface the infinite ray's field less what crosses the surface point along the same line:
+
+      L_ms = beta^2 I0 [ I(beta d_sv, theta_camera) - e^{-beta D} I(beta d_s, theta_surface) ]
+
+  (``multiple_airlight``; d_s and theta_surface: the light seen from the surface point, along the ray).  It is
+  exact for the infinite medium's field, as Biri 2006's lit segments are a difference of one primitive; the
+  surface's own shadow on the fog behind it is not in it.  A ray to the sky takes the first term alone
+  (``multiple_background``).
+
+Units: beta in 1/m, distances in m, results per unit radiant intensity and per unit albedo in 1/m^2 (as the
+single-scattering kernels'); table values dimensionless (radiance / (I0 sigma^2)).
+"""
+import math
+
+import numpy as np
+
+from . import point_source_mc, tables
+
+T_MAX = 40.0           # optical distance of the table's last row (beyond: the last row, a bound noted in the docs)
+T_MIN = 0.02           # first row (below: clamped; the single scattering outweighs the rest there by far)
+ROWS = 48
+COLUMNS = 64
+U_POWER = 0.35         # theta = 180 u^(1 / U_POWER) deg: column 1 at 0.002 deg, u = 0.1 at 0.25 deg, 0.3 at 6 deg
+MAX_ORDER = 200        # orders followed; the rest by ``_order_tail``
+TAIL_POWER = 1.5       # I_k ~ k^-1.5 past MAX_ORDER (a random walk's return to a sphere in 3D)
+PHOTONS = 100_000      # of a baked field (seconds per g; 3-5 % noise a column before smoothing)
+R_MAX = T_MAX + 40.0   # photons farther than this are dropped
+SEED = 20261127
+FLOOR = 1e-30          # ln of the table never below ln FLOOR
+SMOOTH = (1.0, 2.0, 3.0, 2.0, 1.0)   # weights of the moving mean over columns of the log table (``_smooth``)
+CAP_DEG = 0.25         # the columns within this angle of the light take their cap's mean (``_merge_cap``)
+
+_Y_MIN = (T_MIN / T_MAX) ** 0.25
+
+
+def row_distances():
+    """The table rows' optical distances T (ROWS of them, T_MIN .. T_MAX)."""
+    y = np.linspace(_Y_MIN, 1.0, ROWS)
+    return T_MAX * y ** 4
+
+
+def column_angles_deg():
+    """The table columns' angles from the light (deg): COLUMNS, 0 .. 180."""
+    return 180.0 * np.linspace(0.0, 1.0, COLUMNS) ** (1.0 / U_POWER)
+
+
+def column_edges_deg():
+    """Bin edges around the columns (midpoints in u), 0 and 180 at the ends: the Monte Carlo's bins."""
+    u = np.linspace(0.0, 1.0, COLUMNS)
+    mid = 0.5 * (u[1:] + u[:-1])
+    return 180.0 * np.concatenate([[0.0], mid, [1.0]]) ** (1.0 / U_POWER)
+
+
+def orders_spec(g):
+    """The cached array of I_k (``bake_orders``): ROWS x MAX_ORDER rows of COLUMNS (not an image)."""
+    return tables.TableSpec(f"AnalyticFog Multiple Orders (g {float(g):+.3f})", COLUMNS, ROWS * MAX_ORDER, float(g))
+
+
+def bake_orders(spec):
+    """I_k(T, theta) for k = 1 .. MAX_ORDER at the rows and columns, float64 (ROWS * MAX_ORDER, COLUMNS)."""
+    arr = point_source_mc.radiance_by_order(row_distances(), spec.g, MAX_ORDER, photons=PHOTONS,
+                                            edges_deg=column_edges_deg(), r_max=R_MAX, seed=SEED)
+    return arr.reshape(ROWS * MAX_ORDER, COLUMNS)
+
+
+def table_spec(g, albedo):
+    """The image of ln(I_{>=2} / W0) for anisotropy g and grey albedo W0 (rounded to 3 decimals)."""
+    return tables.TableSpec(f"AnalyticFog Multiple (g {float(g):+.3f}, W0 {round(float(albedo), 3):.3f})",
+                            COLUMNS, ROWS, float(g))
+
+
+def albedo_of(spec):
+    """The albedo a ``table_spec`` was named for."""
+    return float(spec.name.rsplit("W0 ", 1)[1].rstrip(")"))
+
+
+def _order_tail(last, albedo):
+    """sum_{k > MAX_ORDER} W0^(k-1) I_k with I_k = I_K (k / K)^-TAIL_POWER (``last`` = I_K), per unit W0."""
+    k = np.arange(MAX_ORDER + 1, 40 * MAX_ORDER + 1, dtype=float)
+    weights = albedo ** (k - 1.0) * (k / MAX_ORDER) ** -TAIL_POWER
+    return last * float(np.sum(weights))
+
+
+def field_of_orders(orders, albedo):
+    """I_{>=2} / W0 (ROWS, COLUMNS) from I_k (ROWS * MAX_ORDER, COLUMNS): sum_{k>=2} W0^(k-1) I_k + the tail."""
+    per = np.asarray(orders, float).reshape(ROWS, MAX_ORDER, COLUMNS)
+    weights = float(albedo) ** np.arange(0, MAX_ORDER, dtype=float)   # W0^(k-1) for k = 1 .. K
+    field = np.einsum("rkc,k->rc", per[:, 1:], weights[1:])
+    return field + _order_tail(per[:, -1], float(albedo))
+
+
+def _merge_cap(field):
+    """Each row's columns within CAP_DEG of the light set to the field's mean over that cap (their bins' solid
+    angles hold too few crossings for a value each; the multiply scattered field is flat there)."""
+    edges = np.radians(column_edges_deg())
+    solid = np.cos(edges[:-1]) - np.cos(edges[1:])
+    cap = column_angles_deg() <= CAP_DEG
+    out = field.copy()
+    out[:, cap] = (field[:, cap] @ solid[cap] / solid[cap].sum())[:, None]
+    return out
+
+
+def _smooth(log_table):
+    """A moving mean (SMOOTH) of each row of the log table over its columns (edges: the weights that fit)."""
+    w = np.asarray(SMOOTH)
+    half = len(w) // 2
+    out = np.empty_like(log_table)
+    n = log_table.shape[1]
+    for c in range(n):
+        lo, hi = max(0, c - half), min(n, c + half + 1)
+        ww = w[lo - c + half:hi - c + half]
+        out[:, c] = log_table[:, lo:hi] @ ww / ww.sum()
+    return out
+
+
+def bake_table(spec, orders=None):
+    """ln(I_{>=2} / W0) (ROWS, COLUMNS) float32 for ``spec`` (``table_spec``); ``orders``: ``bake_orders``'s
+    array for spec.g (baked through the table cache if None)."""
+    if orders is None:
+        from .table_cache import cached_bake
+        o_spec = orders_spec(spec.g)
+        orders = cached_bake(o_spec, lambda: bake_orders(o_spec))
+    field = _merge_cap(field_of_orders(orders, albedo_of(spec)))
+    return _smooth(np.log(np.maximum(field, FLOOR))).astype(np.float32)
+
+
+# --- the kernel (any backend: ``ops.ShaderOps``) ----------------------------------------------------------
+
+def table_x(m, cos_theta):
+    """The column coordinate in [0, 1] of the angle whose cosine is ``cos_theta``: (theta / pi)^U_POWER."""
+    c = m.maximum(m.minimum(cos_theta, 1.0), -1.0)
+    theta = m.atan2(m.sqrt(1.0 - c * c), c)
+    return m.power(theta * (1.0 / math.pi), U_POWER)
+
+
+def table_y(m, optical_distance):
+    """The row coordinate in [0, 1] of the optical distance T: ((T / T_MAX)^(1/4) - y_min) / (1 - y_min)."""
+    y = m.power(m.maximum(optical_distance * (1.0 / T_MAX), 1e-12), 0.25)
+    return (y - _Y_MIN) * (1.0 / (1.0 - _Y_MIN))
+
+
+def field(m, spec, optical_distance, cos_theta):
+    """I_{>=2} / (W0 I0 sigma^2) at optical distance T from the light, theta from its direction (``spec``'s
+    table, log-bilinear)."""
+    return m.exp(m.table(spec, table_x(m, cos_theta), table_y(m, optical_distance)))
+
+
+def multiple_background(m, spec, beta, d_sv, along, h):
+    """The multiply scattered glow along a ray to infinity, per unit intensity and albedo, 1/m^2:
+    beta^2 I(beta d_sv, theta) with cos theta = along / d_sv (``model.ray_light_geometry``)."""
+    cos_c = along / m.maximum(d_sv, 1e-9)
+    return beta * beta * field(m, spec, beta * d_sv, cos_c)
+
+
+def multiple_airlight(m, spec, beta, d_sv, along, h, d_vp):
+    """The multiply scattered glow along the ray's first ``d_vp`` m, per unit intensity and albedo, 1/m^2:
+    the ray's field less e^{-beta d_vp} times the field crossing its end point along the same line (module
+    docstring)."""
+    far = along - d_vp                      # the light's offset along the ray from the end point
+    d_s = m.sqrt(far * far + h * h)
+    beyond = beta * beta * field(m, spec, beta * d_s, far / m.maximum(d_s, 1e-9))
+    return multiple_background(m, spec, beta, d_sv, along, h) - m.exp(-1.0 * beta * d_vp) * beyond
