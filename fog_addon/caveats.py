@@ -142,6 +142,31 @@ def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None):
     return notes
 
 
+DENSE_T = 1.0   # optical distance camera to light from which the multiply scattered glow is large
+#                (docs/measurements/2026-11-27-apsf.md: it outweighs the single a few degrees out from T ~ 2)
+
+
+def multiple_notes(lights, multiple, method_name, is_spot, optical_distance=None):
+    """Notes on the multiply scattered light (Dense Fog): what it leaves out with it on (spot lights, the OSL
+    method); with it off, the lights seen through dense fog (``optical_distance(light)``: beta times the
+    camera's distance to it, at least DENSE_T), whose wide halo is then missing."""
+    if not multiple:
+        dense = [o.name for o in lights if optical_distance is not None and optical_distance(o) >= DENSE_T]
+        if not dense:
+            return []
+        return [f"the fog is dense around {len(dense)} light(s) ({_names(dense)}; optical distance up to "
+                f"{max(optical_distance(o) for o in lights):.1f} from the camera) and multiple scattering is "
+                "off: their glow lacks its wide halo; turn on Dense Fog"]
+    if method_name == "osl":
+        return ["multiple scattering is not modelled by Method OSL (its glow is quadrature, the dense fog's a "
+                "table): use Node Groups, Compositor or Auto"]
+    spots = [o.name for o in lights if is_spot(o)]
+    if spots:
+        return [f"multiple scattering is modelled for point lights only: the glow of {len(spots)} spot light(s) "
+                f"({_names(spots)}) is single scattering"]
+    return []
+
+
 CASTER_TYPES = ("MESH", "CURVE", "SURFACE", "META", "FONT")
 
 

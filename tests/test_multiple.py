@@ -107,3 +107,32 @@ def test_segment_formula_on_the_single_scattering_field():
             got = mu.multiple_airlight(m, spec, beta, d_sv, along, h, d_vp)
             want = air_q.kernel(m0, beta, d_sv, along, h, d_vp)
             assert abs(got / want - 1.0) < 0.03, (angle, d_vp, got, want)
+
+
+def single_scattering_log_table(g=G):
+    """ln of the single scattering of an endless ray (Sun et al. 2005 Eq. 12, by quadrature) on the table's
+    field grid, sigma = 1: a field of an infinite medium with closed forms of its own to check against."""
+    bg_q = rungs.anisotropic_rungs(g)[3]
+    T = mu.row_distances()[:, None]
+    theta = np.radians(mu.column_angles_deg())[None, :]
+    with np.errstate(all="ignore"):
+        ss = bg_q.kernel(NumpyOps(), 1.0, T + 0 * theta, T * np.cos(theta), T * np.sin(theta))
+    return np.log(np.maximum(ss, mu.FLOOR))
+
+
+@pytest.mark.parametrize("g", [0.0, 0.85])
+def test_irradiance_of_the_single_scattering_field_is_sun_g0(g):
+    """The irradiance bake (hemisphere quadrature of a field) fed the single-scattering field gives Sun et al.
+    2005's G_0 (Eq. 17, the surface table, by its own quadrature), and its glossy lobe the field itself."""
+    from fog_addon.precompute import bakers, surface
+    log_field = single_scattering_log_table(g)
+    spec = mu.table_spec(g, 0.5)
+    arr = np.concatenate([log_field, mu.irradiance_of_field(log_field)]).astype(np.float32)
+    m = NumpyOps({**bakers.numpy_tables(g), spec.name: arr})
+    beta = 0.3
+    for d in (3.0, 10.0, 25.0):
+        for psi in (0.0, 40.0, 80.0, 120.0):
+            c = np.cos(np.radians(psi))
+            got = mu.multiple_scatter(m, spec, beta, d, c, 0.0)
+            want = surface.surface_scatter(m, beta, d, c, 0.0, g)
+            assert abs(got / want - 1.0) < 0.05, (d, psi, got, want)

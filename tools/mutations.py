@@ -194,14 +194,14 @@ MUTATIONS = [
     Mutation("mc_crossing_radiance", "multiple scattering: the Monte Carlo tallies flux, not radiance (a crossing "
              "at mu counts 1, not 1 / |mu|)",
              "fog_addon/precompute/point_source_mc.py",
-             "                    val = w[hit] * np.exp(-s[hit]) / np.maximum(np.abs(mu), 1e-3)\n",
-             "                    val = w[hit] * np.exp(-s[hit])\n",
+             "        val = w[i_photon] * np.exp(-s[hit]) / np.maximum(np.abs(mu_h), 1e-3)\n",
+             "        val = w[i_photon] * np.exp(-s[hit])\n",
              ("tests/test_apsf.py::test_monte_carlo_single_scattering_matches_quadrature",)),
     Mutation("mc_expected_crossing", "multiple scattering: the Monte Carlo's expected-value crossings drop their "
              "e^{-s} (every crossing ahead counts as if reached)",
              "fog_addon/precompute/point_source_mc.py",
-             "                    val = w[hit] * np.exp(-s[hit]) / np.maximum(np.abs(mu), 1e-3)\n",
-             "                    val = w[hit] / np.maximum(np.abs(mu), 1e-3)\n",
+             "        val = w[i_photon] * np.exp(-s[hit]) / np.maximum(np.abs(mu_h), 1e-3)\n",
+             "        val = w[i_photon] / np.maximum(np.abs(mu_h), 1e-3)\n",
              ("tests/test_apsf.py::test_monte_carlo_single_scattering_matches_quadrature",)),
     Mutation("multiple_segment_attenuation", "multiple scattering: the field beyond a surface is not dimmed on its "
              "way back to the camera (the segment's e^{-beta D})",
@@ -216,6 +216,12 @@ MUTATIONS = [
              "    weights = float(albedo) ** np.arange(1, MAX_ORDER + 1, dtype=float)",
              ("tests/test_multiple.py::test_field_per_unit_albedo_vanishes_with_albedo",
               "tests/test_multiple.py::test_table_matches_an_independent_monte_carlo")),
+    Mutation("multiple_irradiance_cosine", "multiple scattering: a surface's irradiance from the field without "
+             "the cosine of incidence (Narasimhan §7.4 / Sun Eq. 17 weigh by cos)",
+             "fog_addon/precompute/multiple.py",
+             "    weight = (cp * sp * (0.5 * math.pi / n_polar)",
+             "    weight = (sp * (0.5 * math.pi / n_polar)",
+             ("tests/test_multiple.py::test_irradiance_of_the_single_scattering_field_is_sun_g0",)),
 ]
 
 

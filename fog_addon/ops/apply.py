@@ -424,13 +424,24 @@ def apply(scene, spec, objects=None, progress=progress_.silent):
     return skipped + [(scene.name, n) for n in notes]
 
 
+def _optical_distance(scene, spec):
+    """light -> beta x its distance to the scene's camera (None without a camera)."""
+    camera = scene.camera
+    if camera is None:
+        return None
+    origin = camera.matrix_world.translation
+    return lambda o: spec.beta_per_unit * (o.matrix_world.translation - origin).length
+
+
 def not_modelled(scene, spec, lights, materials, method=None):
     """What the fog can't model in ``scene`` (``caveats.py``: light shafts where ``method`` (a method name)
     has none or they are off, their limits where it has them; glass and mirrors), as notes."""
     casting = bool(spec.shafts and getattr(method, "name", method) == "compositor")
     notes = [*caveats.shadow_notes(scene, lights, spec.beta_per_unit, max(scene_size(scene), 1e-6), casting,
                                    None if spec.shafts else "Light Shafts is off"),
-             caveats.glass_note(materials, scene.objects)]
+             caveats.glass_note(materials, scene.objects),
+             *caveats.multiple_notes(lights, spec.multiple_scattering, getattr(method, "name", method), view.is_spot,
+                                     _optical_distance(scene, spec))]
     return [n for n in notes if n]
 
 

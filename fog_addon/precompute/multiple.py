@@ -24,6 +24,12 @@ against transport (docs/measurements/2026-11-27-apsf.md), so the field here is t
   exact for the infinite medium's field, as Biri 2006's lit segments are a difference of one primitive; the
   surface's own shadow on the fog behind it is not in it.  A ray to the sky takes the first term alone
   (``multiple_background``).
+* **Surfaces** (Narasimhan et al. §7.4: the irradiance from the same field).  A diffuse surface receives
+  E_{>=2}(T, psi) = int I_{>=2}(T, theta(omega)) cos dA over its hemisphere, psi its normal's angle from the
+  light's direction, baked from the field into the same image (``irradiance_of_field``); a glossy lobe the
+  field along its mirrored direction (``multiple_scatter``).  The forward-scattered light that reaches a
+  surface through dense fog (the field near the light's direction) is part of it, beside the direct light
+  e^{-beta d}.
 
 Units: beta in 1/m, distances in m, results per unit radiant intensity and per unit albedo in 1/m^2 (as the
 single-scattering kernels'); table values dimensionless (radiance / (I0 sigma^2)).
@@ -82,9 +88,10 @@ def bake_orders(spec):
 
 
 def table_spec(g, albedo):
-    """The image of ln(I_{>=2} / W0) for anisotropy g and grey albedo W0 (rounded to 3 decimals)."""
+    """The image for anisotropy g and grey albedo W0 (rounded to 3 decimals): rows 0 .. ROWS-1 hold
+    ln(I_{>=2} / W0) (``field``), rows ROWS .. 2 ROWS-1 ln(E_{>=2} / (pi W0)) (``irradiance``)."""
     return tables.TableSpec(f"AnalyticFog Multiple (g {float(g):+.3f}, W0 {round(float(albedo), 3):.3f})",
-                            COLUMNS, ROWS, float(g))
+                            COLUMNS, 2 * ROWS, float(g))
 
 
 def albedo_of(spec):
@@ -131,15 +138,40 @@ def _smooth(log_table):
     return out
 
 
+HEMISPHERE = (128, 256)   # polar x azimuth cells of ``irradiance_of_field``'s quadrature
+
+
+def irradiance_of_field(log_field):
+    """ln(E / pi) (ROWS, COLUMNS): E(T, psi) = int over the hemisphere about a normal at psi from the light's
+    direction of I(T, theta(omega)) cos dA (midpoint rule, HEMISPHERE cells), psi = pi c / (COLUMNS - 1) at
+    column c.  ``log_field``: ln I on the table's grid, interpolated linearly in ln I over ``table_x``."""
+    n_polar, n_azimuth = HEMISPHERE
+    polar = (np.arange(n_polar) + 0.5) * (0.5 * math.pi / n_polar)
+    azimuth = (np.arange(n_azimuth) + 0.5) * (2.0 * math.pi / n_azimuth)
+    sp, cp = np.sin(polar)[:, None], np.cos(polar)[:, None]
+    weight = (cp * sp * (0.5 * math.pi / n_polar) * (2.0 * math.pi / n_azimuth)) * np.ones((1, n_azimuth))
+    psi = np.linspace(0.0, math.pi, COLUMNS)
+    cos_theta = (np.sin(psi)[:, None, None] * sp[None] * np.cos(azimuth)[None, None, :]
+                 + np.cos(psi)[:, None, None] * cp[None])
+    x = (np.arccos(np.clip(cos_theta, -1.0, 1.0)) / math.pi) ** U_POWER
+    grid = np.linspace(0.0, 1.0, COLUMNS)
+    out = np.empty_like(log_field)
+    for r in range(ROWS):
+        values = np.exp(np.interp(x, grid, log_field[r]))
+        out[r] = np.log(np.maximum(np.einsum("cpa,pa->c", values, weight) / math.pi, FLOOR))
+    return out
+
+
 def bake_table(spec, orders=None):
-    """ln(I_{>=2} / W0) (ROWS, COLUMNS) float32 for ``spec`` (``table_spec``); ``orders``: ``bake_orders``'s
+    """The two tables of ``spec`` (``table_spec``), float32 (2 ROWS, COLUMNS); ``orders``: ``bake_orders``'s
     array for spec.g (baked through the table cache if None)."""
     if orders is None:
         from .table_cache import cached_bake
         o_spec = orders_spec(spec.g)
         orders = cached_bake(o_spec, lambda: bake_orders(o_spec))
     field = _merge_cap(field_of_orders(orders, albedo_of(spec)))
-    return _smooth(np.log(np.maximum(field, FLOOR))).astype(np.float32)
+    log_field = _smooth(np.log(np.maximum(field, FLOOR)))
+    return np.concatenate([log_field, irradiance_of_field(log_field)]).astype(np.float32)
 
 
 # --- the kernel (any backend: ``ops.ShaderOps``) ----------------------------------------------------------
@@ -160,7 +192,26 @@ def table_y(m, optical_distance):
 def field(m, spec, optical_distance, cos_theta):
     """I_{>=2} / (W0 I0 sigma^2) at optical distance T from the light, theta from its direction (``spec``'s
     table, log-bilinear)."""
-    return m.exp(m.table(spec, table_x(m, cos_theta), table_y(m, optical_distance)))
+    return m.exp(m.table(spec, table_x(m, cos_theta), table_y(m, optical_distance), 0, ROWS))
+
+
+def irradiance(m, spec, optical_distance, cos_psi):
+    """E_{>=2} / (pi W0 I0 sigma^2): the multiply scattered light a surface facing psi from the light's
+    direction receives, over pi (``irradiance_of_field``; log-bilinear)."""
+    c = m.maximum(m.minimum(cos_psi, 1.0), -1.0)
+    x = m.atan2(m.sqrt(1.0 - c * c), c) * (1.0 / math.pi)
+    return m.exp(m.table(spec, x, table_y(m, optical_distance), ROWS, ROWS))
+
+
+def multiple_scatter(m, spec, beta, d_sp, cos_theta, level):
+    """The multiply scattered light a surface reflects, per unit intensity and albedo, 1/m^2 (the scatter
+    term's signature, ``rungs.py``): a diffuse lobe (``level`` 0) takes the hemisphere's irradiance over pi
+    at the normal's angle from the light; a glossy lobe the field along the mirrored direction (the field
+    varies over degrees, wider than the lobes a glossy surface shows)."""
+    t = beta * d_sp
+    diffuse = irradiance(m, spec, t, cos_theta)
+    glossy = field(m, spec, t, cos_theta)
+    return beta * beta * m.select(m.less(level, 0.5), diffuse, glossy)
 
 
 def multiple_background(m, spec, beta, d_sv, along, h):

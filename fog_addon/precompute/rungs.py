@@ -297,14 +297,19 @@ def _background_with_multiple(base, spec, m, beta, d_sv, along, h):
     return base(m, beta, d_sv, along, h) + multiple.multiple_background(m, spec, beta, d_sv, along, h)
 
 
-def multiple_rungs(air, background, g, albedo):
-    """(airlight, background) rungs of a point light with the multiply scattered glow (``multiple.py``: the
-    field's table for anisotropy ``g`` and grey albedo ``albedo``) added to ``air``'s and ``background``'s
-    single scattering.  They run where the table does (numpy, nodes)."""
+def _scatter_with_multiple(base, spec, m, beta, d_sp, cos_theta, level):
+    return base(m, beta, d_sp, cos_theta, level) + multiple.multiple_scatter(m, spec, beta, d_sp, cos_theta, level)
+
+
+def multiple_rungs(air, background, scatter, g, albedo):
+    """(airlight, background, scatter) rungs of a point light with the multiply scattered light
+    (``multiple.py``: the field's table for anisotropy ``g`` and grey albedo ``albedo``) added to the single
+    scattering of ``air``, ``background`` and ``scatter``.  They run where the table does (numpy, nodes)."""
     spec = multiple.table_spec(g, albedo)
     tag = spec.name.split("(", 1)[1].rstrip(")")
     out = []
-    for rung, fn in ((air, _airlight_with_multiple), (background, _background_with_multiple)):
+    for rung, fn in ((air, _airlight_with_multiple), (background, _background_with_multiple),
+                     (scatter, _scatter_with_multiple)):
         out.append(replace(rung, name=f"{rung.name} + multiple {tag}", kernel=functools.partial(fn, rung.kernel, spec),
                            backends=rung.backends & {"numpy", "nodes"}, tables=rung.tables + (spec,),
                            max_error=max(rung.max_error, MULTIPLE_ERROR),
@@ -341,8 +346,8 @@ def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NOD
         models = models._replace(direct=DIRECT_SPOT, scatter=spot_scatter_rung(models.scatter, g))._replace(
             **dict(zip(("airlight", "background"), spot_rungs(models.airlight, models.background, g, rim_nodes))))
     if multiple_albedo is not None and not spot and preference != "osl" and step < 2:
-        models = models._replace(**dict(zip(("airlight", "background"), multiple_rungs(
-            models.airlight, models.background, g, multiple_albedo))))
+        models = models._replace(**dict(zip(("airlight", "background", "scatter"), multiple_rungs(
+            models.airlight, models.background, models.scatter, g, multiple_albedo))))
     if step >= 1:
         models = models._replace(scatter=SCATTER_OFF)
     if step >= 2:
