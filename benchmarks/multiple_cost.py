@@ -1,0 +1,106 @@
+"""What multiple scattering costs (issue 28, "Cost"): the render with Dense Fog on over the same render with it
+off (single scattering), same scene, same method, same process, warm renders (the table baked and cached).
+
+    .venv/bin/python benchmarks/multiple_cost.py [--lights 4,16] [--methods compositor,nodes] [--repeats 2]
+
+The scene is shafts_cost.py's hall of columns (N point lamps on a grid), Cycles CPU, 640x360, 32 spp, fog of
+density 0.15/m, g 0.85, albedo 0.9, shafts off (they are measured on their own).  Writes
+benchmarks/out/multiple_cost.csv and .png.  Figures: docs/measurements/2026-11-27-multiple-scattering.md.
+"""
+import argparse
+import csv
+import json
+import pathlib
+import subprocess
+import sys
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+OUT = ROOT / "benchmarks" / "out"
+DENSITY, G, ALBEDO = 0.15, 0.85, 0.9
+
+
+def worker(spec):
+    sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks"), str(ROOT / "tests")]
+    import bpy
+    from shafts_cost import hall
+    from fog_addon import measure
+    from fog_addon.ops import apply
+    from fog_addon.precompute.spec import FogSpec
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = hall(bpy.context.scene, spec["lights"])
+    scene.render.engine = "CYCLES"
+    measure.set_resolution(scene, 640, 360)
+    measure.set_samples(scene, 32)
+    measure.set_cycles_cpu(scene)
+    scene.cycles.use_denoising = False
+
+    def timed_render():
+        c, t = time.process_time(), time.perf_counter()
+        bpy.ops.render.render()
+        return time.perf_counter() - t, time.process_time() - c
+
+    res = {"lights": spec["lights"], "method": spec["method"]}
+    for ms in (False, True):
+        fog = FogSpec(density=DENSITY, anisotropy=G, albedo=(ALBEDO,) * 3, method=spec["method"], shafts=False,
+                      multiple_scattering=ms)
+        t = time.perf_counter()
+        apply.apply(scene, fog)
+        res[f"apply_{'ms' if ms else 'ss'}_s"] = time.perf_counter() - t
+        timed_render()   # first: shader compilation, compositor set-up
+        runs = [timed_render() for _ in range(spec["repeats"])]
+        key = "ms" if ms else "ss"
+        res[f"{key}_s"] = min(r[0] for r in runs)
+        res[f"{key}_cpu_s"] = min(r[1] for r in runs)
+    apply.remove(scene) if hasattr(apply, "remove") else None
+    res["ratio"] = res["ms_s"] / res["ss_s"]
+    res["ratio_cpu"] = res["ms_cpu_s"] / res["ss_cpu_s"]
+    print("RESULT " + json.dumps(res), flush=True)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--lights", default="4,16")
+    ap.add_argument("--methods", default="compositor,nodes")
+    ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--worker")
+    args = ap.parse_args()
+    if args.worker:
+        worker(json.loads(args.worker))
+        return
+    OUT.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for method in args.methods.split(","):
+        for n in (int(x) for x in args.lights.split(",")):
+            spec = {"lights": n, "method": method, "repeats": args.repeats}
+            proc = subprocess.run([sys.executable, __file__, "--worker", json.dumps(spec)], capture_output=True,
+                                  text=True, cwd=str(ROOT))
+            lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")]
+            if not lines:
+                print(proc.stdout[-2000:], proc.stderr[-2000:])
+                continue
+            row = json.loads(lines[-1].split(" ", 1)[1])
+            print(row, flush=True)
+            rows.append(row)
+    with open(OUT / "multiple_cost.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for method in args.methods.split(","):
+        pts = [(r["lights"], r["ratio_cpu"]) for r in rows if r["method"] == method]
+        ax.plot(*zip(*pts), "o-", label=method)
+    ax.axhline(1.3, color="grey", ls="--", label="goal 1.3x")
+    ax.set_xscale("log")
+    ax.set_xlabel("point lamps")
+    ax.set_ylabel("render with Dense Fog / without (CPU)")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(OUT / "multiple_cost.png", dpi=90)
+
+
+if __name__ == "__main__":
+    main()
