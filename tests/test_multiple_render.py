@@ -1,0 +1,72 @@
+"""Dense fog end to end (issue 28): a lamp in fog of optical distance 4.5 rendered with Dense Fog on, against
+Cycles' path-traced World volume with 64 volume bounces (``fog_scenes/dense.py``), by annulus means around the
+lamp's image (the issue's annuli, 1.5 to 50 px at 0.1 deg a pixel; fireflies left out).
+
+Goal: within 10 % in every annulus.  Measured (docs/measurements/2026-11-27-multiple-scattering.md): 1.024,
+1.017, 0.960, 0.990, 1.003 with the Compositor and the Node Groups, Cycles and EEVEE alike.  The bound keeps
+a margin over that; with Dense Fog off the same render is the single-scattering reference's to 0.1 %.
+"""
+import numpy as np
+import pytest
+
+from fog_addon import imageio
+from fog_scenes import dense as dn
+from fog_scenes import render_harness as h
+
+pytestmark = pytest.mark.render
+
+CASE = dict(distance=15.0, density=0.3, anisotropy=0.85, albedo=0.9)
+BOUND = 0.07   # |ours / reference - 1| in every annulus (goal 0.10)
+REFERENCE = dict(samples=2048, seeds=2)
+
+
+def _reference(volume_bounces):
+    return dn.render_ms_reference(CASE["distance"], CASE["density"], CASE["anisotropy"], CASE["albedo"],
+                                  volume_bounces=volume_bounces, **REFERENCE)
+
+
+def _eevee_blend(tmp_path):
+    """The scene with the camera's clip end at 1 000 m: EEVEE renders NaN at its clip ratio of 1e8."""
+    blend = tmp_path / "dense_eevee.blend"
+    code = ("import bpy, sys; bpy.ops.wm.open_mainfile(filepath=sys.argv[-2]); "
+            "bpy.context.scene.camera.data.clip_end = 1000.0; bpy.ops.wm.save_as_mainfile(filepath=sys.argv[-1])")
+    h.run(["-c", code, str(dn.blend_path(CASE["distance"])), str(blend)])
+    return blend
+
+
+@pytest.mark.parametrize("engine,method", [
+    ("cycles", "compositor"),
+    pytest.param("cycles", "nodes", marks=pytest.mark.slow),
+    pytest.param("eevee", "compositor", marks=pytest.mark.slow),
+])
+def test_dense_fog_glow_against_64_bounces(tmp_path, engine, method):
+    ref = imageio.read_rgb(_reference(64))
+    blend = _eevee_blend(tmp_path) if engine == "eevee" else dn.blend_path(CASE["distance"])
+    log = []
+    out = h.render_test("dense", CASE["density"], tmp_path / "ours.exr", engine=engine, method=method,
+                        resolution=dn.RESOLUTION, blend=blend, log=log,
+                        extra=("--anisotropy", repr(CASE["anisotropy"]), "--color",
+                               ",".join([repr(CASE["albedo"])] * 3), "--multiple-scattering", "on"))
+    assert not h.log_errors(log[0]), h.log_errors(log[0])
+    assert "multiple scattering is off" not in log[0]
+    ours = imageio.read_rgb(out)
+    assert np.isfinite(ours).all()
+    centre = dn.lamp_image_centre_from_blend(blend)
+    ratio = np.array(dn.ring_means(ours, centre)) / np.array(dn.ring_means(ref, centre))
+    print(f"{engine} {method}: ours / 64 bounces by annulus {np.round(ratio, 3)}")
+    assert np.all(np.abs(ratio - 1.0) <= BOUND), (dn.ring_labels(), ratio)
+
+
+def test_dense_fog_off_is_the_single_scattering(tmp_path):
+    """The same render with Dense Fog off is single scattering (0 volume bounces) and says the fog is dense."""
+    ref = imageio.read_rgb(_reference(0))
+    blend = dn.blend_path(CASE["distance"])
+    log = []
+    out = h.render_test("dense", CASE["density"], tmp_path / "ours.exr", engine="cycles", method="compositor",
+                        resolution=dn.RESOLUTION, blend=blend, log=log,
+                        extra=("--anisotropy", repr(CASE["anisotropy"]), "--color",
+                               ",".join([repr(CASE["albedo"])] * 3), "--multiple-scattering", "off"))
+    assert "multiple scattering is off" in log[0]
+    centre = dn.lamp_image_centre_from_blend(blend)
+    ratio = np.array(dn.ring_means(imageio.read_rgb(out), centre)) / np.array(dn.ring_means(ref, centre))
+    assert np.all(np.abs(ratio - 1.0) <= 0.02), ratio
