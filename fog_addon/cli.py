@@ -6,6 +6,7 @@
     reference SCENE.blend [--preset NAME | --density BETA] [--anisotropy G] [--samples N]
            [--resolution WxH] --out OUT.exr
     compare TEST.exr REF.exr [--diff OUT.png]
+    weather IMAGE.exr --depth DEPTH.exr --visibility METRES [--anisotropy G] [--sky R,G,B] --out OUT.exr
 
 ``render`` takes every fog setting the flags leave out from the file's own
 ``scene.analytic_fog`` (and each light's Fog Glow toggle): see render.py.
@@ -164,6 +165,22 @@ def build_parser():
     _add_fog_flags(f)
     f.add_argument("--seed", type=int, default=0, help="Cycles sampling seed (noise estimates)")
 
+    w = sub.add_parser("weather", help="add fog (attenuation, airlight, glows) to a linear HDR image with a depth map")
+    w.add_argument("image", metavar="IMAGE.exr")
+    w.add_argument("--depth", required=True, metavar="DEPTH.exr",
+                   help="distance from the camera per pixel: an EXR Z pass or an image in metres (1e6 and beyond: sky)")
+    w.add_argument("--visibility", required=True, type=_finite_float("visibility"), metavar="METRES",
+                   help="meteorological visibility; the density is 3.912 / visibility (Koschmieder)")
+    w.add_argument("--anisotropy", type=_finite_float("anisotropy"), default=0.85, metavar="G",
+                   help="Henyey-Greenstein g of the fog (default 0.85)")
+    w.add_argument("--sky", default="1,1,1", metavar="R,G,B", help="the horizon's radiance (default 1,1,1)")
+    w.add_argument("--fov", type=_finite_float("fov"), default=39.6, metavar="DEG",
+                   help="horizontal field of view of the image (default 39.6: Blender's 50 mm lens)")
+    w.add_argument("--albedo", type=_finite_float("albedo"), default=0.9,
+                   help="single-scattering albedo of the multiply scattered light (default 0.9)")
+    w.add_argument("--scale", type=_finite_float("scale"), default=1.0,
+                   help="metres per unit of the depth map (default 1)")
+    w.add_argument("--out", required=True, metavar="OUT.exr")
     c = sub.add_parser("compare", help="compare a test image with a reference")
     c.add_argument("test", metavar="TEST.exr")
     c.add_argument("ref", metavar="REF.exr")
@@ -292,10 +309,32 @@ def cmd_compare(args):
     return EXIT_OK
 
 
+def cmd_weather(args):
+    """``weather``: fog added to a photograph or render with its depth (``weather.py``)."""
+    from . import weather
+    try:
+        sky = tuple(float(x) for x in args.sky.split(","))
+    except ValueError:
+        raise UsageError(f"--sky needs three numbers R,G,B, got {args.sky!r}")
+    if len(sky) != 3 or not all(math.isfinite(x) and x >= 0.0 for x in sky):
+        raise UsageError(f"--sky needs three numbers >= 0, got {args.sky!r}")
+    if not 0.0 <= args.albedo <= 1.0:
+        raise UsageError(f"--albedo must be in [0, 1], got {args.albedo}")
+    try:
+        weather.run(args.image, args.depth, args.out, args.visibility, args.anisotropy, sky, args.fov, args.albedo,
+                    args.scale)
+    except weather.WeatherError as exc:
+        raise UsageError(str(exc))
+    except (OSError, FileNotFoundError) as exc:
+        raise UsageError(f"cannot read image: {exc}")
+    return EXIT_OK
+
+
 def main(argv=None):
     ap = build_parser()
     args = ap.parse_args(argv)
-    handler = {"render": cmd_render, "reference": cmd_reference, "compare": cmd_compare}[args.command]
+    handler = {"render": cmd_render, "reference": cmd_reference, "compare": cmd_compare,
+               "weather": cmd_weather}[args.command]
     try:
         return handler(args)
     except UsageError as exc:

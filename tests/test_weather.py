@@ -1,0 +1,86 @@
+"""Weather on photographs (issue 28, item 4; ``fog_addon/weather.py``, ``python -m fog_addon weather``).
+
+Independent sources: Cycles' path-traced World volume with 64 volume bounces around a point lamp
+(``fog_scenes/dense.py``'s reference), which a lamp's pixels with their depth must glow like; Koschmieder's
+law (a black surface at depth z takes A (1 - e^{-beta z})); the sky (infinite depth) is the horizon's light.
+"""
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from fog_addon import imageio, weather
+from fog_scenes import dense as dn
+
+REFERENCE = "dense_d15_beta0.3_g0.85_a0.9_vb64_P1000_r0_120x120_2048spp_x2.exr"
+BOUND = 0.09   # measured (docs/measurements/2026-11-27-multiple-scattering.md): 1.061, 1.02, 0.96, 0.99, 1.002
+
+
+def lamp_picture(distance=15.0, power=1000.0, size=120, deg_per_px=0.1):
+    """A fog-free picture of an isotropic lamp of ``power`` W at ``distance`` m on the axis of a camera of
+    ``deg_per_px``: its intensity spread over the 4 pixels around the image centre (radiance I0 / (Omega z^2)),
+    the rest sky."""
+    img = np.zeros((size, size, 3))
+    depth = np.full((size, size), 1e10)
+    omega = math.radians(deg_per_px) ** 2
+    c = size // 2
+    img[c - 1:c + 1, c - 1:c + 1] = power / (4.0 * math.pi) / (omega * distance ** 2) / 4.0
+    depth[c - 1:c + 1, c - 1:c + 1] = distance
+    return img, depth
+
+
+def test_a_lamps_pixels_glow_like_path_traced_fog():
+    """The lamp's pixels, fogged at visibility 13 m (beta 0.3, g 0.85, albedo 0.9, T 4.5), against Cycles with
+    64 volume bounces: the issue's annuli (1.5 to 50 px) within BOUND."""
+    ref = imageio.read_rgb(dn.h.REFERENCES / REFERENCE)
+    img, depth = lamp_picture()
+    out = weather.add_weather(img, depth, 3.912 / 0.3, anisotropy=0.85, sky=(0.0, 0.0, 0.0), fov_deg=12.0,
+                              albedo=0.9)
+    centre = (60.0, 60.0)
+    ratio = np.array(dn.ring_means(out, centre)) / np.array(dn.ring_means(ref, centre))
+    print("weather / 64 bounces:", np.round(ratio, 3))
+    assert np.all(np.abs(ratio - 1.0) <= BOUND), ratio
+
+
+def test_koschmieder_and_the_sky():
+    """A black surface at depth z takes A (1 - e^{-beta z}); the sky is A; nothing glows."""
+    depth = np.full((8, 10), 40.0)
+    depth[:3] = 1e10
+    out = weather.add_weather(np.zeros((8, 10, 3)), depth, 500.0, sky=(0.5, 0.6, 0.7), fov_deg=30.0)
+    beta = 3.912 / 500.0
+    np.testing.assert_allclose(out[5, 5], np.array([0.5, 0.6, 0.7]) * (1.0 - math.exp(-beta * 40.0)), rtol=1e-6)
+    np.testing.assert_allclose(out[0, 0], [0.5, 0.6, 0.7], rtol=1e-6)
+
+
+def test_bad_input_is_refused():
+    img = np.zeros((4, 4, 3))
+    with pytest.raises(weather.WeatherError, match="depth map is"):
+        weather.add_weather(img, np.ones((4, 5)), 100.0)
+    with pytest.raises(weather.WeatherError, match="negative or NaN"):
+        weather.add_weather(img, np.full((4, 4), np.nan), 100.0)
+    with pytest.raises(weather.WeatherError, match="visibility"):
+        weather.add_weather(img, np.ones((4, 4)), 0.0)
+
+
+def test_command_line(tmp_path):
+    """``python -m fog_addon weather`` writes the fogged EXR and reports each layer; a bad flag exits 2."""
+    img, depth = lamp_picture(size=40)
+    img[:] = 0.0
+    img[18:22, 8:12] = 5.0   # a window in a black wall on the left half, 30 m away
+    depth[:, :20] = 30.0
+    imageio.write_exr(tmp_path / "in.exr", img.astype(np.float32))
+    imageio.write_exr(tmp_path / "z.exr", depth[..., None].astype(np.float32))
+    cmd = [sys.executable, "-m", "fog_addon", "weather", str(tmp_path / "in.exr"), "--depth", str(tmp_path / "z.exr"),
+           "--visibility", "50", "--sky", "0.2,0.2,0.3", "--fov", "4", "--out", str(tmp_path / "out.exr")]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert "weather: layer" in proc.stderr and "wrote" in proc.stderr
+    out = imageio.read_rgb(tmp_path / "out.exr")
+    assert out.shape == (40, 40, 3) and np.isfinite(out).all()
+    assert out[20, 10, 0] > out[20, 17, 0] > 0.2 * (1.0 - math.exp(-3.912 / 50.0 * 30.0))   # the window glows
+    np.testing.assert_allclose(out[0, -1], [0.2, 0.2, 0.3], rtol=0.02)   # the sky, and a little of the glow
+    bad = subprocess.run(cmd[:-4] + ["--visibility", "-1", "--out", str(tmp_path / "x.exr")], capture_output=True,
+                         text=True)
+    assert bad.returncode == 2 and "visibility" in bad.stderr
