@@ -222,6 +222,12 @@ MUTATIONS = [
              "    weight = (cp * sp * (0.5 * math.pi / n_polar)",
              "    weight = (sp * (0.5 * math.pi / n_polar)",
              ("tests/test_multiple.py::test_irradiance_of_the_single_scattering_field_is_sun_g0",)),
+    Mutation("weather_source_intensity", "weather: a pixel's intensity without its depth squared (L Omega z^2 is "
+             "the intensity of a patch filling a pixel at depth z)",
+             "fog_addon/weather.py",
+             "    return kern * (pixel_angle ** 2) * t * t\n",
+             "    return kern * (pixel_angle ** 2) * t\n",
+             ("tests/test_weather.py::test_a_lamps_pixels_glow_like_path_traced_fog",)),
 ]
 
 
