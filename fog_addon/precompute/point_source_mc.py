@@ -54,6 +54,17 @@ def turn(directions, cos_t, phi):
     return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
+def _batches(rng, photons, batch):
+    """Photons leaving the source in batches of at most ``batch``: (positions at the origin, isotropic unit
+    directions)."""
+    done = 0
+    while done < photons:
+        n = min(batch, photons - done)
+        done += n
+        u = rng.normal(size=(n, 3))
+        yield np.zeros((n, 3)), u / np.linalg.norm(u, axis=1, keepdims=True)
+
+
 def _tally_crossings(tally, radii, edges_rad, b, c, w, kind, kinds, nb):
     """Add the expected-value crossings of flights (b = p.d, c = p.p at their starts, weights w, each of a
     ``kind`` in range(kinds)) with every sphere of ``radii`` to ``tally`` (flat: radius, kind, theta bin).  A
@@ -85,13 +96,8 @@ def radiance(radii, q, albedo, photons=200_000, edges_deg=DEFAULT_EDGES_DEG, max
     theta_of_bin = np.radians(np.asarray(edges_deg, float))
     tally = np.zeros(len(radii) * 2 * nb)
     rng = np.random.default_rng(seed)
-    done = 0
-    while done < photons:
-        n = min(batch, photons - done)
-        done += n
-        u = rng.normal(size=(n, 3))
-        d = u / np.linalg.norm(u, axis=1, keepdims=True)
-        p = np.zeros((n, 3))
+    for p, d in _batches(rng, photons, batch):
+        n = len(p)
         w = np.ones(n)
         order = np.zeros(n, dtype=np.int64)
         while len(w):
@@ -135,13 +141,7 @@ def radiance_by_order(radii, q, max_order, photons=100_000, edges_deg=DEFAULT_ED
     theta_of_bin = np.radians(np.asarray(edges_deg, float))
     tally = np.zeros(len(radii) * max_order * nb)
     rng = np.random.default_rng(seed)
-    done = 0
-    while done < photons:
-        n = min(batch, photons - done)
-        done += n
-        u = rng.normal(size=(n, 3))
-        d = u / np.linalg.norm(u, axis=1, keepdims=True)
-        p = np.zeros((n, 3))
+    for p, d in _batches(rng, photons, batch):
         order = 0
         while len(p) and order <= max_order:
             if order > 0:
