@@ -56,10 +56,16 @@ RING_EDGES_PX = (1.5, 3.5, 7.5, 15.0, 30.0, 50.0)   # the annuli of issue 28, ra
 FIREFLY_FACTOR = 20.0          # a pixel brighter than this x its annulus' median is left out of the annulus' mean
 REC709 = (0.2126, 0.7152, 0.0722)
 
-# (distance m, density 1/m, anisotropy g, albedo, volume bounces, samples per render, seeds)
+# The cached references (tests/references): (distance m, density 1/m, anisotropy g, albedo, volume bounces,
+# samples per render, seeds).  Render times, noise and the ring tables:
+# docs/measurements/2026-11-27-dense-fog-references.md.
 REFERENCE_CASES = [
-    (15.0, 0.3, 0.85, 0.9, 64, 1024, 2),    # issue 28's case, T = 4.5, multiple scattering
-    (15.0, 0.3, 0.85, 0.9, 0, 1024, 2),     # the same, single scattering
+    (15.0, 0.3, 0.85, 0.9, 64, 2048, 4),    # issue 28's case, T = 4.5, multiple scattering
+    (15.0, 0.3, 0.85, 0.9, 0, 4096, 2),     # the same, single scattering
+    (15.0, 0.1, 0.85, 0.9, 64, 2048, 2),    # T = 1.5
+    (15.0, 0.1, 0.85, 0.9, 0, 4096, 2),
+    (20.0, 0.4, 0.85, 0.9, 64, 2048, 4),    # T = 8
+    (20.0, 0.4, 0.85, 0.9, 0, 4096, 2),
 ]
 
 
@@ -207,9 +213,12 @@ def render_reference_seed(blend, out, density, anisotropy, albedo, volume_bounce
 
 
 def seed_path(path, seed):
-    """Where seed ``seed``'s render of a multi-seed reference ``path`` is kept (beside it, ``keep_seeds``)."""
+    """Where seed ``seed``'s render of a multi-seed reference ``path`` is kept (beside it, ``keep_seeds``): the
+    reference's name without its ``_x<seeds>`` count, so a reference of more seeds reuses the renders of one of
+    fewer."""
     path = pathlib.Path(path)
-    return path.with_name(f"{path.stem}.seed{seed}.exr")
+    stem = path.stem.rsplit("_x", 1)[0]
+    return path.with_name(f"{stem}.seed{seed}.exr")
 
 
 def render_ms_reference(distance, density, anisotropy, albedo, volume_bounces=64, samples=1024, seeds=2,
@@ -221,8 +230,9 @@ def render_ms_reference(distance, density, anisotropy, albedo, volume_bounces=64
     single-scattering albedo, ``volume_bounces`` N (0: single scattering; N > 0: multiple scattering with
     max_bounces = N), ``samples`` spp per render, ``seeds`` renders (seeds 0 .. seeds-1) averaged, ``power`` W,
     ``lamp_radius`` m.  Cached as ``directory`` (default tests/references) / :func:`reference_name`; with
-    ``keep_seeds`` each seed's render stays beside it (:func:`seed_path`; noise estimates).  ``times``: a list
-    to which each render's seconds are appended.
+    ``keep_seeds`` each seed's render stays beside it (:func:`seed_path`; noise estimates) and is reused, unless
+    ``regen``, by a reference of the same settings and more seeds.  ``times``: a list to which each new render's
+    seconds are appended.
     """
     from fog_addon import imageio   # (numpy + OpenImageIO, no bpy)
     directory = pathlib.Path(directory) if directory else h.REFERENCES
@@ -234,6 +244,10 @@ def render_ms_reference(distance, density, anisotropy, albedo, volume_bounces=64
     blend = blend_path(distance, power, lamp_radius)
     parts = []
     for seed in range(int(seeds)):
+        kept = seed_path(path, seed)
+        if kept.is_file() and not regen:
+            parts.append(imageio.read(kept))
+            continue
         tmp = path.with_name(f"{path.stem}.seed{seed}.tmp.exr")
         _, secs = render_reference_seed(blend, tmp, density, anisotropy, albedo, volume_bounces, samples, seed,
                                         resolution)
@@ -241,7 +255,7 @@ def render_ms_reference(distance, density, anisotropy, albedo, volume_bounces=64
             times.append(secs)
         parts.append(imageio.read(tmp))
         if keep_seeds:
-            os.replace(tmp, seed_path(path, seed))
+            os.replace(tmp, kept)
         else:
             os.remove(tmp)
     tmp = path.with_name(path.stem + ".tmp.exr")
@@ -251,11 +265,15 @@ def render_ms_reference(distance, density, anisotropy, albedo, volume_bounces=64
 
 
 def render_ours(distance, density, anisotropy, albedo, out, power=LAMP_POWER_W, lamp_radius=0.0,
-                resolution=RESOLUTION, method="compositor", extra=(), log=None, blend=None):
+                resolution=RESOLUTION, method="compositor", multiple_scattering="off", extra=(), log=None,
+                blend=None):
     """Render the scene (``blend``, default :func:`blend_path`) with the analytic fog (``python -m fog_addon
-    render``, Cycles, pixel centres) at the reference's settings; returns the path of ``out`` (.exr)."""
+    render``, Cycles, pixel centres) at the reference's settings; returns the path of ``out`` (.exr).
+    ``multiple_scattering``: "off" (single scattering), "on" (the Dense Fog model) or None (the file's)."""
     blend = blend or blend_path(distance, power, lamp_radius)
     args = ["--anisotropy", repr(float(anisotropy)), "--color", ",".join([repr(float(albedo))] * 3)]
+    if multiple_scattering is not None:
+        args += ["--multiple-scattering", multiple_scattering]
     return h.render_test("dense", density, out, engine="cycles", method=method, resolution=resolution,
                          blend=blend, extra=tuple(args) + tuple(extra), log=log)
 
