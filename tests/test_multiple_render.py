@@ -2,9 +2,10 @@
 Cycles' path-traced World volume with 64 volume bounces (``fog_scenes/dense.py``), by annulus means around the
 lamp's image (the issue's annuli, 1.5 to 50 px at 0.1 deg a pixel; fireflies left out).
 
-Goal: within 10 % in every annulus.  Measured (docs/measurements/2026-11-27-multiple-scattering.md): 1.024,
-1.017, 0.960, 0.990, 1.003 with the Compositor and the Node Groups, Cycles and EEVEE alike.  The bound keeps
-a margin over that; with Dense Fog off the same render is the single-scattering reference's to 0.1 %.
+Goal: within 10 % in every annulus.  Measured (docs/measurements/2026-11-27-multiple-scattering.md), ours /
+64 bounces: T 1.5 0.990-0.998, T 4.5 0.972-1.009, T 8 1.001-1.033 (Compositor; the Node Groups and EEVEE give
+the same to 0.1 %).  The bound keeps a margin over that and the references' noise (T 8's inner ring: 5.9 %);
+with Dense Fog off the render is the single-scattering reference's to 0.1 %.
 """
 import numpy as np
 import pytest
@@ -15,33 +16,40 @@ from fog_scenes import render_harness as h
 
 pytestmark = pytest.mark.render
 
-CASE = dict(distance=15.0, density=0.3, anisotropy=0.85, albedo=0.9)
+CASE = dict(distance=15.0, density=0.3, anisotropy=0.85, albedo=0.9)   # T 4.5, the issue's
+CASES = {1.5: dict(CASE, density=0.1), 4.5: CASE, 8.0: dict(CASE, distance=20.0, density=0.4)}
+SEEDS = {1.5: 2, 4.5: 4, 8.0: 4}
 BOUND = 0.07   # |ours / reference - 1| in every annulus (goal 0.10)
-REFERENCE = dict(samples=2048, seeds=2)
 
 
-def _reference(volume_bounces):
-    return dn.render_ms_reference(CASE["distance"], CASE["density"], CASE["anisotropy"], CASE["albedo"],
-                                  volume_bounces=volume_bounces, **REFERENCE)
+def _reference(volume_bounces, T=4.5):
+    c = CASES[T]
+    seeds = SEEDS[T] if volume_bounces else 2
+    return dn.render_ms_reference(c["distance"], c["density"], c["anisotropy"], c["albedo"],
+                                  volume_bounces=volume_bounces, samples=2048 if volume_bounces else 4096,
+                                  seeds=seeds)
 
 
-def _eevee_blend(tmp_path):
+def _eevee_blend(tmp_path, distance):
     """The scene with the camera's clip end at 1 000 m: EEVEE renders NaN at its clip ratio of 1e8."""
     blend = tmp_path / "dense_eevee.blend"
     code = ("import bpy, sys; bpy.ops.wm.open_mainfile(filepath=sys.argv[-2]); "
             "bpy.context.scene.camera.data.clip_end = 1000.0; bpy.ops.wm.save_as_mainfile(filepath=sys.argv[-1])")
-    h.run(["-c", code, str(dn.blend_path(CASE["distance"])), str(blend)])
+    h.run(["-c", code, str(dn.blend_path(distance)), str(blend)])
     return blend
 
 
-@pytest.mark.parametrize("engine,method", [
-    ("cycles", "compositor"),
-    pytest.param("cycles", "nodes", marks=pytest.mark.slow),
-    pytest.param("eevee", "compositor", marks=pytest.mark.slow),
+@pytest.mark.parametrize("T,engine,method", [
+    (4.5, "cycles", "compositor"),
+    pytest.param(1.5, "cycles", "compositor", marks=pytest.mark.slow),
+    pytest.param(8.0, "cycles", "compositor", marks=pytest.mark.slow),
+    pytest.param(4.5, "cycles", "nodes", marks=pytest.mark.slow),
+    pytest.param(4.5, "eevee", "compositor", marks=pytest.mark.slow),
 ])
-def test_dense_fog_glow_against_64_bounces(tmp_path, engine, method):
-    ref = imageio.read_rgb(_reference(64))
-    blend = _eevee_blend(tmp_path) if engine == "eevee" else dn.blend_path(CASE["distance"])
+def test_dense_fog_glow_against_64_bounces(tmp_path, T, engine, method):
+    CASE = CASES[T]
+    ref = imageio.read_rgb(_reference(64, T))
+    blend = _eevee_blend(tmp_path, CASE["distance"]) if engine == "eevee" else dn.blend_path(CASE["distance"])
     log = []
     out = h.render_test("dense", CASE["density"], tmp_path / "ours.exr", engine=engine, method=method,
                         resolution=dn.RESOLUTION, blend=blend, log=log,
@@ -53,7 +61,7 @@ def test_dense_fog_glow_against_64_bounces(tmp_path, engine, method):
     assert np.isfinite(ours).all()
     centre = dn.lamp_image_centre_from_blend(blend)
     ratio = np.array(dn.ring_means(ours, centre)) / np.array(dn.ring_means(ref, centre))
-    print(f"{engine} {method}: ours / 64 bounces by annulus {np.round(ratio, 3)}")
+    print(f"T {T} {engine} {method}: ours / 64 bounces by annulus {np.round(ratio, 3)}")
     assert np.all(np.abs(ratio - 1.0) <= BOUND), (dn.ring_labels(), ratio)
 
 

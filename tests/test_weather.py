@@ -14,8 +14,7 @@ import pytest
 from fog_addon import imageio, weather
 from fog_scenes import dense as dn
 
-REFERENCE = "dense_d15_beta0.3_g0.85_a0.9_vb64_P1000_r0_120x120_2048spp_x2.exr"
-BOUND = 0.09   # measured (docs/measurements/2026-11-27-multiple-scattering.md): 1.061, 1.02, 0.96, 0.99, 1.002
+BOUND = 0.09   # measured (docs/measurements/2026-11-27-multiple-scattering.md)
 
 
 def lamp_picture(distance=15.0, power=1000.0, size=120, deg_per_px=0.1):
@@ -34,7 +33,7 @@ def lamp_picture(distance=15.0, power=1000.0, size=120, deg_per_px=0.1):
 def test_a_lamps_pixels_glow_like_path_traced_fog():
     """The lamp's pixels, fogged at visibility 13 m (beta 0.3, g 0.85, albedo 0.9, T 4.5), against Cycles with
     64 volume bounces: the issue's annuli (1.5 to 50 px) within BOUND."""
-    ref = imageio.read_rgb(dn.h.REFERENCES / REFERENCE)
+    ref = imageio.read_rgb(dn.render_ms_reference(15.0, 0.3, 0.85, 0.9, volume_bounces=64, samples=2048, seeds=4))
     img, depth = lamp_picture()
     out = weather.add_weather(img, depth, 3.912 / 0.3, anisotropy=0.85, sky=(0.0, 0.0, 0.0), fov_deg=12.0,
                               albedo=0.9)
