@@ -286,7 +286,7 @@ def spot_scatter_rung(scatter, g):
                    evidence="tests/test_spot_scatter.py: Eq. 15 by hemisphere quadrature of the spot's airlight")
 
 
-MULTIPLE_ERROR = 0.10   # the multiply scattered glow's bound against path tracing (docs/measurements)
+MULTIPLE_ERROR = 0.07   # the multiply scattered glow against Cycles with 64 bounces: 3.3 % measured, tests bound 7 %
 
 
 def _airlight_with_multiple(base, spec, m, beta, d_sv, along, h, d_vp):
