@@ -1,0 +1,296 @@
+"""Surfaces in dense fog (issue 28): a grey ground and wall lit by a point lamp in fog of optical thickness ~3,
+path-traced references with and without volume bounces, and the region metrics that compare our renders to them.
+
+The scene: a large grey diffuse ground (z = 0), a grey wall behind the lamp (its face the plane y = WALL_Y,
+facing the camera), one 1000 W point lamp (radius 0) LAMP_HEIGHT m above the ground at the origin's x, y, and the
+camera CAMERA_DISTANCE m in front of the lamp at CAMERA_HEIGHT m looking at it; World black.  The material is a
+Principled BSDF with base colour 0.5, roughness 1 and Specular IOR Level 0 (Lambertian: no grazing specular
+that the engines would render differently).  At density 0.25/m the lamp is T = 3 from the camera.
+
+References (Cycles World volume, path traced), as ``fog_scenes/dense.py``'s but with surfaces:
+
+* fog of extinction ``density`` and albedo ``albedo``: Volume Scatter (Color white) of density albedo x density
+  plus Volume Absorption (Color black) of density (1 - albedo) x density; Henyey-Greenstein g;
+* ``volume_bounces`` N, ``diffuse_bounces`` = ``glossy_bounces`` = 1 and ``max_bounces`` = N + 1: a camera ray
+  that meets a surface takes the lamp's direct light (through the fog) and one diffuse bounce into the fog, whose
+  path then scatters up to N + 1 times, each event sampling the lamp.  N = 0 is ``fog_addon.reference``'s
+  single-scattering convention (direct light + the singly scattered fog light a surface receives, Sun et al.
+  2005 Sec. 4); N = 64 adds the multiply scattered field's irradiance (0.9^64 = 1e-3 left out);
+* the add-on's test conventions, as ``python -m fog_addon reference --no-cast-shadows --no-interreflection``:
+  objects hidden from shadow rays (no cast shadows; the lamp keeps its shadows, which carry the fog's
+  extinction) and from diffuse/glossy rays (no surface-to-surface light, the fog hemisphere unoccluded), and
+  here also from volume-scatter rays, so that the multiply scattered field is the unbounded medium's, as our
+  model assumes (no light reflected by the ground back into the fog, no fog cut off below the ground);
+* clip start 1 mm, pixel-centre filter, no denoising or clamping (``reference.configure_reference``);
+* the mean of ``seeds`` renders with Cycles seeds 0, 1, ...
+
+Comparisons (:func:`compare`): the whole picture's relative RMSE (||ours - ref|| / ||ref|| over RGB) with the
+lamp's own 3x3 pixels left out, raw and with the reference's fireflies clipped (a pixel's RGB scaled down to
+FIREFLY_FACTOR x the 5x5 median of luminance around it), and the mean ratio ours / reference over the ground
+and the wall regions (each a band of whole pixel rows, a MARGIN_PX rows away from the ground-wall edge, lamp
+pixels left out; fireflies clipped as above).
+
+No bpy at import: every Blender job runs in a fresh process through ``render_harness``.  As a script
+(``python -m fog_scenes.dense_surfaces OUT.blend``) it builds the scene's .blend.
+"""
+import argparse
+import json
+import os
+import pathlib
+import sys
+
+import numpy as np
+
+from fog_scenes import dense
+from fog_scenes import render_harness as h
+
+RESOLUTION = (120, 68)         # px
+LENS_MM = 28.0                 # on a 36 mm sensor: 65 x 39 degrees
+LAMP_POWER_W = 1000.0
+LAMP_HEIGHT = 2.5              # m above the ground
+CAMERA_DISTANCE = 12.0         # m, horizontal, camera to lamp
+CAMERA_HEIGHT = 1.7            # m
+WALL_Y = 3.0                   # m behind the lamp: the wall's face
+WALL_HEIGHT = 12.0             # m
+BASE_COLOR = 0.5
+DENSITY = 0.25                 # 1/m: T = 3.0 camera-lamp
+ANISOTROPY = 0.85
+ALBEDO = 0.9
+FIREFLY_FACTOR = 20.0          # a reference pixel above this x its 5x5 median luminance is clipped to it
+LAMP_HALF_PX = 1.5             # pixels of the lamp's image left out: centres within this in x and y
+BLOCK_PX = 4                   # block means for a whole-picture RMSE that survives the references' noise
+MARGIN_PX = 1                  # rows next to the ground-wall edge left out of both regions
+NAME = "dense_surfaces"
+
+# The cached references (tests/references): (volume bounces, samples per render, seeds).
+REFERENCE_CASES = [(64, 2048, 2), (0, 2048, 2)]
+
+
+# -- the scene (bpy, in a Blender process) ----------------------------------------------------------------------
+
+def build(scene, resolution=RESOLUTION, power=LAMP_POWER_W):
+    """Fill ``scene`` (see the module doc); needs bpy."""
+    from demo_scenes import add_box_between, add_camera, add_plane, add_point_light, material, render_settings, \
+        set_world
+    render_settings(scene, resolution=resolution)
+    set_world(scene, color=(0.0, 0.0, 0.0))
+    grey = material("Grey", (BASE_COLOR,) * 3, roughness=1.0, specular_ior_level=0.0)
+    add_plane(scene, "Ground", -60.0, 60.0, -40.0, 60.0, 0.0, grey)
+    # the wall: its face at y = WALL_Y, its foot under the ground (no face coplanar with the ground)
+    add_box_between(scene, "Wall", -40.0, 40.0, WALL_Y, WALL_Y + 0.2, -0.5, WALL_HEIGHT, grey)
+    lamp = add_point_light(scene, "Lamp", (0.0, 0.0, LAMP_HEIGHT), float(power))
+    lamp.data.shadow_soft_size = 0.0
+    cam = add_camera(scene, (0.0, -CAMERA_DISTANCE, CAMERA_HEIGHT), (0.0, 0.0, LAMP_HEIGHT), lens=LENS_MM)
+    cam.data.sensor_width = 36.0
+    cam.data.clip_start = 0.001
+    cam.data.clip_end = 1000.0
+    scene.view_settings.view_transform = 'Standard'
+    return scene
+
+
+def blend_path(workdir=None):
+    """Path of the scene's .blend in ``workdir`` (default: the harness's scratch folder), built if missing."""
+    workdir = pathlib.Path(workdir) if workdir else pathlib.Path(h._env()["TMPDIR"]) / "fog_dense_surfaces"
+    workdir.mkdir(parents=True, exist_ok=True)
+    blend = workdir / f"{NAME}_{RESOLUTION[0]}x{RESOLUTION[1]}.blend"
+    if not blend.is_file():
+        h.run(["-m", "fog_scenes.dense_surfaces", blend])
+    return blend
+
+
+# -- references -----------------------------------------------------------------------------------------------
+
+_REFERENCE_CODE = r'''
+import sys, json, time
+import bpy
+from fog_addon import measure, reference
+a = json.loads(sys.argv[1])
+scene = measure.open_scene(a["blend"])
+measure.set_resolution(scene, *a["resolution"])
+beta, albedo, g, n = a["density"], a["albedo"], a["anisotropy"], a["volume_bounces"]
+reference.configure_reference(scene, beta * albedo, anisotropy=g, samples=a["samples"], single_scattering=True)
+nt = scene.world.node_tree
+vs = nt.nodes[reference.VOLUME_NODE_NAME]
+out = vs.outputs["Volume"].links[0].to_node
+ab = nt.nodes.new("ShaderNodeVolumeAbsorption")
+ab.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)       # absorbs density x (1 - Color)
+ab.inputs["Density"].default_value = beta * (1.0 - albedo)
+add = nt.nodes.new("ShaderNodeAddShader")
+nt.links.remove(vs.outputs["Volume"].links[0])
+nt.links.new(vs.outputs["Volume"], add.inputs[0])
+nt.links.new(ab.outputs["Volume"], add.inputs[1])
+nt.links.new(add.outputs["Shader"], out.inputs["Volume"])
+reference.disable_cast_shadows(scene)
+reference.disable_interreflection(scene)
+for ob in scene.objects:
+    if ob.type not in {'LIGHT', 'CAMERA', 'EMPTY'}:
+        ob.visible_volume_scatter = False
+c = scene.cycles
+c.volume_bounces = n
+c.diffuse_bounces = c.glossy_bounces = 1
+c.transmission_bounces = 0
+c.max_bounces = n + 1              # max_bounces caps volume bounces too; + 1 for the surface's bounce
+c.seed = a["seed"]
+c.use_animated_seed = False
+assert abs(scene.camera.data.clip_start - 0.001) < 1e-9
+t0 = time.perf_counter()
+measure.render_to_file(scene, a["out"])
+print("RENDER_SECONDS %.2f" % (time.perf_counter() - t0))
+'''
+
+
+def reference_name(volume_bounces, samples, seeds, density=DENSITY, anisotropy=ANISOTROPY, albedo=ALBEDO,
+                   resolution=RESOLUTION):
+    """File name of a cached reference, its parameters in it."""
+    w, hh = resolution
+    return (f"{NAME}_beta{float(density):g}_g{float(anisotropy):g}_a{float(albedo):g}_vb{int(volume_bounces)}"
+            f"_{w}x{hh}_{int(samples)}spp_x{int(seeds)}.exr")
+
+
+def render_reference(volume_bounces, samples, seeds, density=DENSITY, anisotropy=ANISOTROPY, albedo=ALBEDO,
+                     regen=False, directory=None, times=None, timeout=900):
+    """Path of the cached Cycles reference (see the module doc), rendering missing seeds (kept beside it as
+    ``dense.seed_path``).  ``times``: a list to which each new render's seconds are appended."""
+    from fog_addon import imageio
+    directory = pathlib.Path(directory) if directory else h.REFERENCES
+    path = directory / reference_name(volume_bounces, samples, seeds, density, anisotropy, albedo)
+    if path.is_file() and not regen:
+        return path
+    directory.mkdir(parents=True, exist_ok=True)
+    blend = blend_path()
+    parts = []
+    for seed in range(int(seeds)):
+        kept = dense.seed_path(path, seed)
+        if not kept.is_file() or regen:
+            tmp = path.with_name(f"{path.stem}.seed{seed}.tmp.exr")
+            args = dict(blend=str(blend), out=str(tmp), density=float(density), anisotropy=float(anisotropy),
+                        albedo=float(albedo), volume_bounces=int(volume_bounces), samples=int(samples),
+                        seed=seed, resolution=list(RESOLUTION))
+            proc = h.run(["-c", _REFERENCE_CODE, json.dumps(args)], timeout=timeout)
+            secs = next((float(l.split()[1]) for l in proc.stdout.splitlines()
+                         if l.startswith("RENDER_SECONDS")), None)
+            if times is not None:
+                times.append(secs)
+            os.replace(tmp, kept)
+        parts.append(imageio.read(kept))
+    tmp = path.with_name(path.stem + ".tmp.exr")
+    imageio.write_exr(tmp, np.mean(parts, axis=0, dtype=np.float64).astype(np.float32))
+    os.replace(tmp, path)
+    return path
+
+
+def render_ours(out, multiple_scattering="on", method="compositor", density=DENSITY, anisotropy=ANISOTROPY,
+                albedo=ALBEDO, log=None):
+    """Our render of the scene (``python -m fog_addon render``, Cycles, pixel centres, no cast shadows, no
+    interreflection, no light shafts: the references' conventions); returns the path of ``out``."""
+    args = ("--anisotropy", repr(float(anisotropy)), "--color", ",".join([repr(float(albedo))] * 3),
+            "--multiple-scattering", multiple_scattering, "--shafts", "off")
+    return h.render_test(NAME, density, out, engine="cycles", method=method, resolution=RESOLUTION,
+                         blend=blend_path(), extra=args, log=log)
+
+
+# -- regions and metrics (numpy) ------------------------------------------------------------------------------
+
+def geometry(blend=None):
+    """{'lamp': (x, y) px of the lamp's image, 'edge_y': y px (from the top) of the ground-wall edge} by Blender's
+    projection of the scene's camera."""
+    blend = blend or blend_path()
+    pts = [(0.0, 0.0, LAMP_HEIGHT), (-1.0, WALL_Y, 0.0), (1.0, WALL_Y, 0.0)]
+    (lx, ly), (_, e0), (_, e1) = dense.project_from_blend(blend, pts, RESOLUTION)
+    return {"lamp": (lx, ly), "edge_y": 0.5 * (e0 + e1)}
+
+
+def masks(geom, shape=None):
+    """{'picture', 'ground', 'wall'}: boolean (H, W) masks.  'picture' is every pixel but the lamp's (those whose
+    centres lie within LAMP_HALF_PX of its image in x and y: 3x3 if it falls on a pixel centre, 4x4 on a
+    corner); the ground is the rows whose centres lie more than MARGIN_PX below the edge, the wall those more
+    than MARGIN_PX above it, both without the lamp's pixels."""
+    w, hh = RESOLUTION if shape is None else (shape[1], shape[0])
+    yc, xc = np.mgrid[0:hh, 0:w] + 0.5
+    lx, ly = (round(float(v), 3) for v in geom["lamp"])
+    picture = ~((np.abs(xc - lx) <= LAMP_HALF_PX) & (np.abs(yc - ly) <= LAMP_HALF_PX))
+    ground = picture & (yc > geom["edge_y"] + MARGIN_PX)
+    wall = picture & (yc < geom["edge_y"] - MARGIN_PX)
+    return {"picture": picture, "ground": ground, "wall": wall}
+
+
+def clip_fireflies(image, factor=FIREFLY_FACTOR, size=5):
+    """``image`` (H, W, 3) with every pixel whose luminance exceeds ``factor`` x the median luminance of the
+    size x size pixels around it scaled down to that bound; returns (clipped image, number of pixels clipped)."""
+    from scipy.ndimage import median_filter
+    a = np.asarray(image, dtype=np.float64)[..., :3]
+    lum = dense.luminance(a)
+    bound = factor * median_filter(lum, size=size, mode="nearest")
+    hot = lum > bound
+    scale = np.ones_like(lum)
+    scale[hot] = bound[hot] / lum[hot]
+    return a * scale[..., None], int(hot.sum())
+
+
+def rel_rmse(ours, ref, mask=None):
+    """||ours - ref|| / ||ref|| over the RGB of the pixels in ``mask`` (None: every one)."""
+    a, b = np.asarray(ours, np.float64)[..., :3], np.asarray(ref, np.float64)[..., :3]
+    if mask is not None:
+        a, b = a[mask], b[mask]
+    return float(np.linalg.norm(a - b) / np.linalg.norm(b))
+
+
+def block_means(image, mask, size=BLOCK_PX):
+    """(blocks, 3) RGB means of the size x size pixel blocks (from the top-left corner) that lie whole in
+    ``mask``."""
+    a = np.asarray(image, np.float64)[..., :3]
+    hh, w = (a.shape[0] // size) * size, (a.shape[1] // size) * size
+    b = a[:hh, :w].reshape(hh // size, size, w // size, size, 3).mean(axis=(1, 3))
+    keep = np.asarray(mask)[:hh, :w].reshape(hh // size, size, w // size, size).all(axis=(1, 3))
+    return b[keep]
+
+
+def compare(ours, ref, geom):
+    """Dict of the comparison figures of ``ours`` against ``ref`` ((H, W, >=3) arrays): rel_rmse_raw,
+    rel_rmse_clipped (reference fireflies clipped), clipped (pixels), rel_rmse_blocks (the relative RMSE of the
+    BLOCK_PX x BLOCK_PX block means, fireflies clipped, blocks touching the lamp's pixels left out), ground_ratio,
+    wall_ratio (mean luminance ours / reference over the region, fireflies clipped), ground_ref, wall_ref (the
+    reference's region means)."""
+    m = masks(geom, np.asarray(ref).shape)
+    ours = np.asarray(ours, np.float64)[..., :3]
+    refc, n = clip_fireflies(ref)
+    out = {"rel_rmse_raw": rel_rmse(ours, ref, m["picture"]), "rel_rmse_clipped": rel_rmse(ours, refc,
+                                                                                          m["picture"]),
+           "clipped": n,
+           "rel_rmse_blocks": rel_rmse(block_means(ours, m["picture"]), block_means(refc, m["picture"]))}
+    for region in ("ground", "wall"):
+        lo, lr = dense.luminance(ours)[m[region]].mean(), dense.luminance(refc)[m[region]].mean()
+        out[f"{region}_ratio"] = float(lo / lr)
+        out[f"{region}_ref"] = float(lr)
+    return out
+
+
+def reference_noise(seed_images, geom, clip=True, blocks=False):
+    """Relative RMSE that the mean of ``seed_images`` (the renders of one reference with different seeds) is
+    expected to have against the noiseless picture, over :func:`masks`' 'picture': sqrt(sum of the per-pixel
+    sample variance (ddof 1) / seeds) / ||mean||, fireflies clipped in each seed's render first if ``clip``.
+    A comparison's relative RMSE against the reference cannot be expected to fall below this.  ``blocks``: the
+    same for the BLOCK_PX block means (``compare``'s rel_rmse_blocks)."""
+    m = masks(geom, np.asarray(seed_images[0]).shape)["picture"]
+    parts = [clip_fireflies(s)[0] if clip else np.asarray(s, np.float64)[..., :3] for s in seed_images]
+    parts = np.array([block_means(p, m) if blocks else p[m] for p in parts])
+    var = parts.var(axis=0, ddof=1) / len(parts)
+    return float(np.sqrt(var.sum()) / np.linalg.norm(parts.mean(axis=0)))
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description="build the surfaces-in-dense-fog scene's .blend")
+    p.add_argument("out")
+    a = p.parse_args(argv)
+    import bpy
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    build(bpy.context.scene)
+    out = os.path.abspath(a.out)
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    bpy.ops.wm.save_as_mainfile(filepath=out, compress=True)
+    print(f"saved {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
