@@ -83,3 +83,19 @@ def test_command_line(tmp_path):
     bad = subprocess.run(cmd[:-4] + ["--visibility", "-1", "--out", str(tmp_path / "x.exr")], capture_output=True,
                          text=True)
     assert bad.returncode == 2 and "visibility" in bad.stderr
+
+
+@pytest.mark.slow
+def test_a_rendered_glowing_sphere_against_path_traced_fog():
+    """A fog-free Cycles render of an emissive sphere 15 m away with its distance pass, fogged by ``weather``
+    (visibility 39 m: T 1.5, g 0.85, albedo 0.9), against Cycles' World volume with 64 bounces of the same scene
+    (``fog_scenes/glowing_sphere.py``): the annuli within 12 % (measured 1.016, 1.015, 1.078, 1.077, 1.080)."""
+    root = dn.h.REFERENCES / "glowing_sphere_d15_R0.15_L100_120x120"
+    clear = imageio.read_rgb(f"{root}_clear.exr")
+    distance = weather.read_depth(f"{root}_clear_distance.exr")
+    ref = imageio.read_rgb(f"{root}_beta0.1_g0.85_a0.9_vb64_1024spp_x2.exr")
+    out = weather.add_weather(clear, distance, 3.912 / 0.1, anisotropy=0.85, sky=(0.0, 0.0, 0.0), fov_deg=12.0,
+                              albedo=0.9)
+    ratio = np.array(dn.ring_means(out, (60.0, 60.0))) / np.array(dn.ring_means(ref, (60.0, 60.0)))
+    print("weather / 64 bounces (sphere):", np.round(ratio, 3))
+    assert np.all(np.abs(ratio - 1.0) <= 0.12), ratio
