@@ -1,0 +1,340 @@
+"""A glowing sphere seen through fog (issue 28, item 4: weather on photographs): the fog-free render with its
+depth pass, and Cycles' path-traced fog of the same scene as the reference.
+
+The scene is one emissive sphere (Emission shader, white, ``strength`` = its radiance in W/(m^2 sr)) of radius
+``radius`` m at the origin and a camera ``distance`` metres away on -Y looking straight at it; no lights,
+nothing else, World black.  The camera and pixel scale are those of :mod:`fog_scenes.dense` (120 x 120 px, one
+pixel DEG_PER_PX = 0.1 degree at the image centre, so the sphere's image is centred on the pixel corner
+(60, 60)); clip start 1 mm (Cycles starts camera rays and their fog at the near clip) and clip end 1000 m (a
+clip ratio EEVEE copes with).  A sphere of uniform radiance L is a Lambertian emitter: its radiant intensity is
+L pi R^2 in every direction, the intensity of a point lamp of power 4 pi^2 R^2 L (:func:`equivalent_power_w`),
+so far from the sphere's image its glow scales as that of dense.py's lamp.
+
+* :func:`render_clear` renders the scene without fog (Cycles, pixel centres, ``CLEAR_SAMPLES`` spp) with
+  Blender's depth (Z) pass and writes three EXRs: the picture (R, G, B, A from Combined, plus Z), the depth
+  alone (one channel: what Blender writes) and the camera distance alone (one channel, depth / cos of each
+  pixel centre's angle to the view axis).  Cycles' Z pass of a perspective camera is the depth along the view
+  axis, not the distance along the ray (docs/measurements/2026-11-27-glowing-sphere-references.md measures it
+  against ray-sphere intersection); the background holds BACKGROUND_DEPTH = 1e10 in both files, as Blender
+  writes it.
+* :func:`render_fog_reference` renders the scene in Cycles' World-volume fog with
+  :func:`fog_scenes.dense.render_reference_seed` (extinction ``density``, albedo as Volume Scatter + black Volume
+  Absorption, Henyey-Greenstein g, ``volume_bounces`` = ``max_bounces``, pixel centres, clip start 1 mm) and
+  caches the mean over seeds in tests/references, each seed's render beside it.
+* Glows are compared by :func:`fog_scenes.dense.ring_means` around :func:`image_centre`.
+
+Typical use::
+
+    from fog_scenes import glowing_sphere as gs
+    clear = gs.render_clear()            # {"image": ..., "depth": ..., "distance": ...} paths
+    ref = gs.render_fog_reference(0.3, 0.85, 0.9, volume_bounces=64, samples=1024, seeds=2)
+
+and ``python -m fog_addon weather <clear["image"]> --depth <clear["distance"]> ...`` against ``ref``.
+
+No bpy at import: every Blender job runs in a fresh process through ``render_harness``.  As a script
+(``python -m fog_scenes.glowing_sphere OUT.blend``) it builds the scene's .blend; with ``--cases`` it renders
+every case of REFERENCE_CASES that is missing and prints their ring means.
+"""
+import argparse
+import json
+import math
+import os
+import pathlib
+import sys
+
+import numpy as np
+
+from fog_scenes import dense
+from fog_scenes import render_harness as h
+
+RESOLUTION = dense.RESOLUTION
+DEG_PER_PX = dense.DEG_PER_PX
+DISTANCE_M = 15.0
+RADIUS_M = 0.15                # angular radius asin(0.15 / 15) = 0.573 deg = 5.73 px
+RADIANCE = 100.0               # W/(m^2 sr): the Emission strength; intensity L pi R^2 = 7.07 W/sr
+SEGMENTS, RINGS = 128, 64      # UV sphere; the polygon's projected area is within 0.1 % of pi R^2
+CLIP_START_M = 0.001
+CLIP_END_M = 1000.0
+CLEAR_SAMPLES = 16             # one surface hit per pixel centre: the fog-free render is exact at any count
+BACKGROUND_DEPTH = 1.0e10      # what Blender's Z pass holds where a ray hits nothing
+SPHERE_NAME = "GlowingSphere"
+
+# The cached references (tests/references): (density 1/m, anisotropy g, albedo, volume bounces, samples per
+# render, seeds), at DISTANCE_M, RADIUS_M, RADIANCE.  Render times, noise and the ring tables:
+# docs/measurements/2026-11-27-glowing-sphere-references.md.
+REFERENCE_CASES = [
+    (0.1, 0.85, 0.9, 64, 1024, 2),    # T = 1.5, multiple scattering
+    (0.3, 0.85, 0.9, 64, 1024, 2),    # T = 4.5
+    (0.1, 0.85, 0.9, 0, 4096, 2),     # T = 1.5, single scattering
+]
+
+
+def equivalent_power_w(radius=RADIUS_M, strength=RADIANCE):
+    """Power (W) of the point lamp of the same radiant intensity as a sphere of uniform radiance ``strength``
+    (W/(m^2 sr)) and radius ``radius`` (m): I = L pi R^2 = P / (4 pi), so P = 4 pi^2 R^2 L."""
+    return 4.0 * math.pi ** 2 * float(radius) ** 2 * float(strength)
+
+
+def sphere_pixel_radius(distance=DISTANCE_M, radius=RADIUS_M, deg_per_px=DEG_PER_PX):
+    """Radius (px) of the sphere's image (pinhole, sphere on the view axis): its silhouette is the cone of
+    half-angle asin(R / d), which meets the image plane tan(asin(R / d)) / tan(deg_per_px) pixels from the
+    centre."""
+    return math.tan(math.asin(float(radius) / float(distance))) / math.tan(math.radians(deg_per_px))
+
+
+def image_centre(resolution=RESOLUTION):
+    """(x, y) pixels of the sphere's centre's image (x from the left edge, y from the top): the image centre,
+    as :func:`fog_scenes.dense.lamp_image_centre`."""
+    return dense.lamp_image_centre(resolution)
+
+
+def pixel_cos(resolution=RESOLUTION, deg_per_px=DEG_PER_PX):
+    """(H, W) cosine of the angle between the view axis and each pixel centre's ray (pinhole, row 0 = top)."""
+    w, hh = resolution
+    cx, cy = image_centre(resolution)
+    y, x = np.mgrid[0:hh, 0:w]
+    t = math.tan(math.radians(deg_per_px))
+    tan_a = t * np.hypot(x + 0.5 - cx, y + 0.5 - cy)
+    return 1.0 / np.sqrt(1.0 + tan_a ** 2)
+
+
+def depth_to_distance(depth, resolution=RESOLUTION, deg_per_px=DEG_PER_PX):
+    """Camera distance (m) along each pixel centre's ray from Blender's Z (depth along the view axis, m):
+    depth / cos(angle to the axis); the background (>= BACKGROUND_DEPTH) stays as it is."""
+    z = np.asarray(depth, np.float64)
+    d = z / pixel_cos(resolution, deg_per_px)
+    return np.where(z >= BACKGROUND_DEPTH, z, d)
+
+
+def sphere_depth_exact(distance=DISTANCE_M, radius=RADIUS_M, resolution=RESOLUTION, deg_per_px=DEG_PER_PX):
+    """(distance, z) per pixel centre (H, W), m, of the ray's first hit on the ideal sphere (NaN where it misses):
+    t = d cos a - sqrt(R^2 - d^2 sin^2 a), z = t cos a.  An independent check of Blender's Z pass."""
+    c = pixel_cos(resolution, deg_per_px)
+    s2 = 1.0 - c * c
+    disc = float(radius) ** 2 - float(distance) ** 2 * s2
+    t = np.where(disc >= 0.0, float(distance) * c - np.sqrt(np.maximum(disc, 0.0)), np.nan)
+    return t, t * c
+
+
+# -- the scene (bpy, in a Blender process) ----------------------------------------------------------------------
+
+def build(scene, distance=DISTANCE_M, radius=RADIUS_M, strength=RADIANCE, resolution=RESOLUTION):
+    """Fill ``scene``: an emissive UV sphere (Emission shader, white, ``strength`` W/(m^2 sr)) of ``radius`` m at
+    the origin, the camera at (0, -distance, 0) looking along +Y at it (dense.py's lens; clip 1 mm to 1000 m),
+    World black, no lights, Cycles, view transform Standard.  Needs bpy."""
+    import bpy
+    from demo_scenes import add_camera, add_sphere, render_settings, set_world
+    render_settings(scene, resolution=resolution)
+    set_world(scene, color=(0.0, 0.0, 0.0))
+    mat = bpy.data.materials.new(SPHERE_NAME)
+    if mat.node_tree is None:
+        mat.use_nodes = True
+    nt = mat.node_tree
+    for n in list(nt.nodes):
+        nt.nodes.remove(n)
+    em = nt.nodes.new("ShaderNodeEmission")
+    em.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    em.inputs["Strength"].default_value = float(strength)
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    nt.links.new(em.outputs["Emission"], out.inputs["Surface"])
+    add_sphere(scene, SPHERE_NAME, (0.0, 0.0, 0.0), float(radius), mat, segments=SEGMENTS, rings=RINGS)
+    cam = add_camera(scene, (0.0, -float(distance), 0.0), (0.0, 0.0, 0.0), lens=dense.lens_mm(resolution))
+    cam.data.sensor_width = dense.SENSOR_WIDTH_MM
+    cam.data.clip_start = CLIP_START_M
+    cam.data.clip_end = CLIP_END_M
+    scene.view_settings.view_transform = 'Standard'
+    return scene
+
+
+def scene_tag(distance=DISTANCE_M, radius=RADIUS_M, strength=RADIANCE, resolution=RESOLUTION):
+    """The scene's part of every file name: glowing_sphere_d<m>_R<m>_L<radiance>_<W>x<H>."""
+    w, hh = resolution
+    return f"glowing_sphere_d{float(distance):g}_R{float(radius):g}_L{float(strength):g}_{w}x{hh}"
+
+
+def blend_path(distance=DISTANCE_M, radius=RADIUS_M, strength=RADIANCE, workdir=None):
+    """Path of the scene's .blend in ``workdir`` (default: the harness's scratch folder), built if missing."""
+    workdir = pathlib.Path(workdir) if workdir else pathlib.Path(h._env()["TMPDIR"]) / "fog_glowing_sphere"
+    workdir.mkdir(parents=True, exist_ok=True)
+    blend = workdir / f"{scene_tag(distance, radius, strength)}.blend"
+    if not blend.is_file():
+        h.run(["-m", "fog_scenes.glowing_sphere", blend, "--distance", repr(float(distance)), "--radius",
+               repr(float(radius)), "--strength", repr(float(strength))])
+    return blend
+
+
+# -- the fog-free render with depth -----------------------------------------------------------------------------
+
+_CLEAR_CODE = r'''
+import sys, json, time
+import bpy
+from fog_addon import measure, reference
+a = json.loads(sys.argv[1])
+scene = measure.open_scene(a["blend"])
+measure.set_resolution(scene, *a["resolution"])
+reference.set_single_scattering_integrator(scene, a["samples"])   # pixel centres, no denoising, no clamping
+assert scene.world.node_tree.nodes.get(reference.VOLUME_NODE_NAME) is None
+assert abs(scene.camera.data.clip_start - 0.001) < 1e-9
+for vl in scene.view_layers:
+    vl.use_pass_combined = True
+    vl.use_pass_z = True
+im = scene.render.image_settings
+im.media_type = 'MULTI_LAYER_IMAGE'
+im.file_format = 'OPEN_EXR_MULTILAYER'
+im.color_depth = '32'
+im.exr_codec = 'ZIP'
+scene.render.filepath = a["out"]
+scene.render.use_file_extension = False
+scene.render.film_transparent = False
+t0 = time.perf_counter()
+bpy.ops.render.render(write_still=True, scene=scene.name)
+print("RENDER_SECONDS %.2f" % (time.perf_counter() - t0))
+'''
+
+
+def clear_paths(distance=DISTANCE_M, radius=RADIUS_M, strength=RADIANCE, resolution=RESOLUTION, directory=None):
+    """{"image", "depth", "distance"}: where :func:`render_clear` writes by default (tests/references)."""
+    directory = pathlib.Path(directory) if directory else h.REFERENCES
+    stem = f"{scene_tag(distance, radius, strength, resolution)}_clear"
+    return {"image": directory / f"{stem}.exr", "depth": directory / f"{stem}_depth.exr",
+            "distance": directory / f"{stem}_distance.exr"}
+
+
+def _write_channels(path, arr, names):
+    """A single-part float32 EXR of (H, W, C) ``arr`` with channel ``names``."""
+    from fog_addon import imageio
+    o = imageio.oiio()
+    a = np.ascontiguousarray(arr, dtype=np.float32)
+    spec = o.ImageSpec(a.shape[1], a.shape[0], a.shape[2], "float")
+    spec.attribute("compression", "zip")
+    spec.channelnames = tuple(names)
+    imageio._write(path, spec, a)
+
+
+def render_clear(out=None, distance=DISTANCE_M, radius=RADIUS_M, strength=RADIANCE, resolution=RESOLUTION,
+                 samples=CLEAR_SAMPLES, regen=False, times=None):
+    """The fog-free render and its depth, rendering them if missing (or if ``regen``); returns
+    {"image", "depth", "distance"} paths.
+
+    ``out`` (.exr; default :func:`clear_paths`' image in tests/references): R, G, B, A from Combined (linear
+    radiance) and Z (Blender's depth pass, m).  Beside it, ``<out stem>_depth.exr``: Z alone, one channel, as
+    Blender writes it (the depth along the view axis; BACKGROUND_DEPTH where the ray hits nothing) and
+    ``<out stem>_distance.exr``: the camera distance along each pixel centre's ray, one channel
+    (:func:`depth_to_distance`; the background stays BACKGROUND_DEPTH).  Cycles, pixel-centre filter,
+    ``samples`` spp, no fog.  ``times``: a list to which the render's seconds are appended.
+    """
+    from fog_addon import imageio
+    if out is None:
+        paths = clear_paths(distance, radius, strength, resolution)
+    else:
+        out = pathlib.Path(out)
+        paths = {"image": out, "depth": out.with_name(f"{out.stem}_depth.exr"),
+                 "distance": out.with_name(f"{out.stem}_distance.exr")}
+    if all(p.is_file() for p in paths.values()) and not regen:
+        return paths
+    paths["image"].parent.mkdir(parents=True, exist_ok=True)
+    blend = blend_path(distance, radius, strength)
+    raw = paths["image"].with_name(paths["image"].stem + ".multilayer.tmp.exr")
+    args = dict(blend=str(blend), out=str(raw), samples=int(samples), resolution=list(resolution))
+    proc = h.run(["-c", _CLEAR_CODE, json.dumps(args)], timeout=3600)
+    secs = next((float(l.split()[1]) for l in proc.stdout.splitlines() if l.startswith("RENDER_SECONDS")), None)
+    if times is not None:
+        times.append(secs)
+    layers = imageio.read_layers(raw)   # (this process has not rendered)
+    comb = next(v for k, v in layers.items() if k.endswith("Combined"))
+    z = next(v for k, v in layers.items() if k.endswith("Depth") or k.endswith(".Z"))[..., 0]
+    _write_channels(paths["image"], np.dstack([comb[..., :4], z]), ("R", "G", "B", "A", "Z"))
+    _write_channels(paths["depth"], z[..., None], ("Z",))
+    _write_channels(paths["distance"], depth_to_distance(z, resolution)[..., None], ("Z",))
+    os.remove(raw)
+    return paths
+
+
+# -- the fog references -----------------------------------------------------------------------------------------
+
+def reference_name(density, anisotropy, albedo, volume_bounces, samples, seeds, distance=DISTANCE_M,
+                   radius=RADIUS_M, strength=RADIANCE, resolution=RESOLUTION):
+    """File name of a cached fog reference, every parameter in it."""
+    return (f"{scene_tag(distance, radius, strength, resolution)}_beta{float(density):g}_g{float(anisotropy):g}"
+            f"_a{float(albedo):g}_vb{int(volume_bounces)}_{int(samples)}spp_x{int(seeds)}.exr")
+
+
+def seed_file(path, seed):
+    """Where seed ``seed``'s render of the multi-seed reference ``path`` is kept: its name without the
+    ``_x<seeds>`` count, ``.seed<seed>.exr``, so a reference of more seeds reuses the renders of one of fewer."""
+    path = pathlib.Path(path)
+    return path.with_name(f"{path.stem.rsplit('_x', 1)[0]}.seed{int(seed)}.exr")
+
+
+def render_fog_reference(density, anisotropy=0.85, albedo=0.9, volume_bounces=64, samples=1024, seeds=2,
+                         distance=DISTANCE_M, radius=RADIUS_M, strength=RADIANCE, resolution=RESOLUTION,
+                         regen=False, directory=None, times=None):
+    """Path of the cached Cycles reference of the glowing sphere in fog, rendering it if missing (or ``regen``).
+
+    ``density`` extinction 1/m, ``anisotropy`` Henyey-Greenstein g, ``albedo`` single-scattering albedo,
+    ``volume_bounces`` N (0: single scattering; N > 0: multiple scattering, max_bounces = N), ``samples`` spp
+    per render, ``seeds`` renders (seeds 0 .. seeds-1) averaged.  The medium and integrator are
+    :func:`fog_scenes.dense.render_reference_seed`'s.  Cached as ``directory`` (default tests/references) /
+    :func:`reference_name`; each seed's render stays beside it (:func:`seed_file`) and is reused unless
+    ``regen``.  ``times``: a list to which each new render's seconds are appended.
+    """
+    from fog_addon import imageio
+    directory = pathlib.Path(directory) if directory else h.REFERENCES
+    path = directory / reference_name(density, anisotropy, albedo, volume_bounces, samples, seeds, distance,
+                                      radius, strength, resolution)
+    if path.is_file() and not regen:
+        return path
+    directory.mkdir(parents=True, exist_ok=True)
+    blend = blend_path(distance, radius, strength)
+    parts = []
+    for seed in range(int(seeds)):
+        kept = seed_file(path, seed)
+        if not kept.is_file() or regen:
+            tmp = kept.with_name(kept.stem + ".tmp.exr")
+            _, secs = dense.render_reference_seed(blend, tmp, density, anisotropy, albedo, volume_bounces,
+                                                  samples, seed, resolution)
+            if times is not None:
+                times.append(secs)
+            os.replace(tmp, kept)
+        parts.append(imageio.read(kept))
+    tmp = path.with_name(path.stem + ".tmp.exr")
+    imageio.write_exr(tmp, np.mean(parts, axis=0, dtype=np.float64).astype(np.float32))
+    os.replace(tmp, path)
+    return path
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description="build the glowing-sphere scene's .blend, or render the references")
+    p.add_argument("out", nargs="?", help="the .blend to write")
+    p.add_argument("--distance", type=float, default=DISTANCE_M, help="camera-sphere distance (m)")
+    p.add_argument("--radius", type=float, default=RADIUS_M, help="sphere radius (m)")
+    p.add_argument("--strength", type=float, default=RADIANCE, help="sphere radiance (Emission strength)")
+    p.add_argument("--resolution", default=f"{RESOLUTION[0]}x{RESOLUTION[1]}")
+    p.add_argument("--cases", action="store_true", help="render the clear image and REFERENCE_CASES if missing")
+    a = p.parse_args(argv)
+    if a.cases:
+        from fog_addon import imageio
+        c = image_centre()
+        clear = render_clear()
+        print("clear", clear["image"], np.round(dense.ring_means(imageio.read_rgb(clear["image"]), c), 5))
+        for case in REFERENCE_CASES:
+            times = []
+            ref = render_fog_reference(*case, times=times)
+            print(ref.name, times, np.round(dense.ring_means(imageio.read_rgb(ref), c), 5), flush=True)
+        return 0
+    if not a.out:
+        p.error("give OUT.blend or --cases")
+    import bpy
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    res = tuple(int(v) for v in a.resolution.lower().split("x"))
+    build(scene, a.distance, a.radius, a.strength, res)
+    out = os.path.abspath(a.out)
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    bpy.ops.wm.save_as_mainfile(filepath=out, compress=True)
+    print(f"saved {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
