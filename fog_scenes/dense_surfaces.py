@@ -25,9 +25,10 @@ References (Cycles World volume, path traced), as ``fog_scenes/dense.py``'s but 
 * the mean of ``seeds`` renders with Cycles seeds 0, 1, ...
 
 Comparisons (:func:`compare`): the whole picture's relative RMSE (||ours - ref|| / ||ref|| over RGB) with the
-lamp's own 3x3 pixels left out, raw and with the reference's fireflies clipped (a pixel's RGB scaled down to
-FIREFLY_FACTOR x the 5x5 median of luminance around it), and the mean ratio ours / reference over the ground
-and the wall regions (each a band of whole pixel rows, a MARGIN_PX rows away from the ground-wall edge, lamp
+lamp's own pixels left out, raw and with each seed's fireflies clipped before the seeds are averaged (a pixel's
+RGB scaled down to FIREFLY_FACTOR x the 5x5 median of luminance around it), the same over 4x4 block means, the
+part of each that the reference's own noise accounts for, and the mean ratio ours / reference over the ground
+and the wall regions (each a band of whole pixel rows, MARGIN_PX rows away from the ground-wall edge, lamp
 pixels left out; fireflies clipped as above).
 
 No bpy at import: every Blender job runs in a fresh process through ``render_harness``.  As a script
@@ -63,7 +64,7 @@ MARGIN_PX = 1                  # rows next to the ground-wall edge left out of b
 NAME = "dense_surfaces"
 
 # The cached references (tests/references): (volume bounces, samples per render, seeds).
-REFERENCE_CASES = [(64, 2048, 2), (0, 2048, 2)]
+REFERENCE_CASES = [(64, 2048, 4), (0, 2048, 2)]
 
 
 # -- the scene (bpy, in a Blender process) ----------------------------------------------------------------------
@@ -179,6 +180,13 @@ def render_reference(volume_bounces, samples, seeds, density=DENSITY, anisotropy
     return path
 
 
+def reference_seeds(volume_bounces, samples, seeds, regen=False, **kw):
+    """The seeds' renders (list of (H, W, 3) arrays) of the cached reference (:func:`render_reference`)."""
+    from fog_addon import imageio
+    path = render_reference(volume_bounces, samples, seeds, regen=regen, **kw)
+    return [imageio.read_rgb(dense.seed_path(path, i)) for i in range(int(seeds))]
+
+
 def render_ours(out, multiple_scattering="on", method="compositor", density=DENSITY, anisotropy=ANISOTROPY,
                 albedo=ALBEDO, log=None):
     """Our render of the scene (``python -m fog_addon render``, Cycles, pixel centres, no cast shadows, no
@@ -245,19 +253,36 @@ def block_means(image, mask, size=BLOCK_PX):
     return b[keep]
 
 
-def compare(ours, ref, geom):
-    """Dict of the comparison figures of ``ours`` against ``ref`` ((H, W, >=3) arrays): rel_rmse_raw,
-    rel_rmse_clipped (reference fireflies clipped), clipped (pixels), rel_rmse_blocks (the relative RMSE of the
-    BLOCK_PX x BLOCK_PX block means, fireflies clipped, blocks touching the lamp's pixels left out), ground_ratio,
-    wall_ratio (mean luminance ours / reference over the region, fireflies clipped), ground_ref, wall_ref (the
-    reference's region means)."""
-    m = masks(geom, np.asarray(ref).shape)
+def compare(ours, seeds, geom):
+    """Dict of the comparison figures of ``ours`` against a reference given as its seeds' renders ``seeds``
+    (a list of (H, W, >=3) arrays; one array is taken as a single seed):
+
+    * rel_rmse_raw: relative RMSE against the plain mean of the seeds, lamp pixels left out;
+    * rel_rmse_clipped: the same against the mean of the seeds each with its fireflies clipped
+      (:func:`clip_fireflies`); clipped: the pixels clipped over all seeds;
+    * rel_rmse_blocks: the relative RMSE of the BLOCK_PX x BLOCK_PX block means (clipped reference; blocks
+      touching the lamp's pixels left out);
+    * noise_clipped, noise_blocks (two seeds or more): the relative RMSE the clipped reference's own noise
+      accounts for (:func:`reference_noise`), and excess_clipped, excess_blocks: sqrt(rmse^2 - noise^2) (0 when
+      the noise accounts for all of it), the error left to ours;
+    * ground_ratio, wall_ratio: mean luminance ours / clipped reference over the region; ground_ref, wall_ref:
+      the clipped reference's region means.
+    """
+    seeds = [seeds] if np.asarray(seeds[0]).ndim == 2 else list(seeds)
+    m = masks(geom, np.asarray(seeds[0]).shape)
     ours = np.asarray(ours, np.float64)[..., :3]
-    refc, n = clip_fireflies(ref)
-    out = {"rel_rmse_raw": rel_rmse(ours, ref, m["picture"]), "rel_rmse_clipped": rel_rmse(ours, refc,
-                                                                                          m["picture"]),
-           "clipped": n,
+    raw = np.mean([np.asarray(a, np.float64)[..., :3] for a in seeds], axis=0)
+    clipped = [clip_fireflies(a) for a in seeds]
+    refc = np.mean([c[0] for c in clipped], axis=0)
+    out = {"rel_rmse_raw": rel_rmse(ours, raw, m["picture"]),
+           "rel_rmse_clipped": rel_rmse(ours, refc, m["picture"]),
+           "clipped": int(sum(c[1] for c in clipped)),
            "rel_rmse_blocks": rel_rmse(block_means(ours, m["picture"]), block_means(refc, m["picture"]))}
+    if len(seeds) > 1:
+        for kind, blocks in (("clipped", False), ("blocks", True)):
+            noise = reference_noise(seeds, geom, clip=True, blocks=blocks)
+            out[f"noise_{kind}"] = noise
+            out[f"excess_{kind}"] = float(np.sqrt(max(out[f"rel_rmse_{kind}"] ** 2 - noise ** 2, 0.0)))
     for region in ("ground", "wall"):
         lo, lr = dense.luminance(ours)[m[region]].mean(), dense.luminance(refc)[m[region]].mean()
         out[f"{region}_ratio"] = float(lo / lr)
