@@ -90,14 +90,17 @@ def test_command_line(tmp_path):
 def test_a_rendered_glowing_sphere_against_path_traced_fog(beta):
     """A fog-free Cycles render of an emissive sphere 15 m away with its distance pass, fogged by ``weather``
     (T 1.5 and 4.5, g 0.85, albedo 0.9), against Cycles' World volume with 64 bounces of the same scene
-    (``fog_scenes/glowing_sphere.py``): the annuli within 12 % (measured T 1.5: 1.016, 1.015, 1.078, 1.077,
-    1.080; T 4.5: 1.018, 1.036, 1.085, 1.082, 1.080)."""
+    (``fog_scenes/glowing_sphere.py``), in the three annuli off the sphere's disc (7.5 to 50 px): within 4 %
+    (measured 0.989-0.995).  The render samples pixel centres: 112 of them fall on a disc of 103.1 px, so its
+    light is scaled to the disc's area first (unscaled, the glow is that 8.6 % too bright)."""
+    from fog_scenes import glowing_sphere as gs
     root = dn.h.REFERENCES / "glowing_sphere_d15_R0.15_L100_120x120"
     clear = imageio.read_rgb(f"{root}_clear.exr")
     distance = weather.read_depth(f"{root}_clear_distance.exr")
+    clear *= math.pi * gs.sphere_pixel_radius() ** 2 / np.count_nonzero(clear[..., 0] > 0.0)
     ref = imageio.read_rgb(f"{root}_beta{beta}_g0.85_a0.9_vb64_1024spp_x2.exr")
-    out = weather.add_weather(clear, distance, 3.912 / beta, anisotropy=0.85, sky=(0.0, 0.0, 0.0), fov_deg=12.0,
+    out = weather.add_weather(clear, distance, 3.912 / beta, anisotropy=0.85, sky=(0.0, 0.0, 0.0), fov_deg=11.956,
                               albedo=0.9)
-    ratio = np.array(dn.ring_means(out, (60.0, 60.0))) / np.array(dn.ring_means(ref, (60.0, 60.0)))
-    print("weather / 64 bounces (sphere):", np.round(ratio, 3))
-    assert np.all(np.abs(ratio - 1.0) <= 0.12), ratio
+    ratio = (np.array(dn.ring_means(out, gs.image_centre())) / np.array(dn.ring_means(ref, gs.image_centre())))[2:]
+    print("weather / 64 bounces (sphere), 7.5-50 px:", np.round(ratio, 3))
+    assert np.all(np.abs(ratio - 1.0) <= 0.04), ratio
