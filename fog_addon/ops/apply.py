@@ -453,14 +453,15 @@ def stored_caveats():
 
 def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="nodes", objects=None,
               scene_scale=1.0, with_passes=False, error=predict.DEFAULT_QUALITY, world_light=False, shafts=True,
-              progress=progress_.silent):
+              multiple_scattering=False, progress=progress_.silent):
     """``apply`` with the spec's fields as arguments, for scripts: ``density`` (1/m), ``albedo``, ``anisotropy``
     (g), ``method`` ("auto", "nodes", "osl", "compositor"; this function's default is the node groups, the
     panel's and the command line's is Auto), ``scene_scale`` (m per unit), ``with_passes``, ``error`` (the
-    Quality: a preset name or a target error; None is Exact), ``world_light``, ``shafts``.  See
-    ``precompute/spec.py``."""
+    Quality: a preset name or a target error; None is Exact), ``world_light``, ``shafts``, ``multiple_scattering``
+    (Dense Fog).  See ``precompute/spec.py``."""
     spec = FogSpec(density=density, scene_scale=scene_scale, albedo=tuple(albedo), anisotropy=anisotropy,
-                   method=method, quality=error, passes=with_passes, world_light=world_light, shafts=shafts)
+                   method=method, quality=error, passes=with_passes, world_light=world_light, shafts=shafts,
+                   multiple_scattering=multiple_scattering)
     return apply(scene, spec, objects, progress)
 
 

@@ -81,9 +81,10 @@ def nodes(outdir):
     emit({"packed": packed, "render_s": log})
 
 
-def osl(outdir, method="osl", engine="CYCLES"):
+def osl(outdir, method="osl", engine="CYCLES", dense=False):
     """The fog by apply_fog(method=``method``: "osl" or "compositor") in ``engine`` (EEVEE: the compositor
-    only): expectation, then <method>.blend (EEVEE: <method>_eevee.blend)."""
+    only): expectation, then <method>.blend (EEVEE: <method>_eevee.blend); ``dense``: Dense Fog on (its table
+    packed like the others): <method>_dense.blend."""
     from fog_addon.ops import apply
     log = {}
     bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -92,10 +93,12 @@ def osl(outdir, method="osl", engine="CYCLES"):
     render_settings(scene, engine)
     timed(log, f"nofog_{tag}", render_exr, scene, os.path.join(outdir, f"nofog_{tag}.exr"))
     fog_addon.register()
-    skipped = apply.apply_fog(scene, DENSITY, method=method)
-    timed(log, f"{method}_{tag}", render_exr, scene, os.path.join(outdir, f"{method}_{tag}.exr"))
+    skipped = apply.apply_fog(scene, DENSITY, method=method, albedo=(0.9, 0.9, 0.9) if dense else (1.0, 1.0, 1.0),
+                              anisotropy=0.85 if dense else 0.0, multiple_scattering=dense)
+    label = f"{method}_dense" if dense else method
+    timed(log, f"{label}_{tag}", render_exr, scene, os.path.join(outdir, f"{label}_{tag}.exr"))
     packed = packed_report()
-    name = f"{method}.blend" if engine == "CYCLES" else f"{method}_{tag}.blend"
+    name = f"{label}.blend" if engine == "CYCLES" else f"{label}_{tag}.blend"
     bpy.ops.wm.save_as_mainfile(filepath=os.path.join(outdir, name))
     emit({"packed": packed, "skipped": skipped, "shading_system_osl": bool(scene.cycles.shading_system),
           "render_s": log})
@@ -158,4 +161,5 @@ if __name__ == "__main__":
     mode, outdir = sys.argv[1], sys.argv[2]
     {"nodes": nodes, "osl": osl, "anim": anim, "compositor": lambda out: osl(out, "compositor"),
      "compositor_eevee": lambda out: osl(out, "compositor", "BLENDER_EEVEE"),
+     "dense": lambda out: osl(out, "compositor", dense=True),
      "anim_compositor": lambda out: anim(out, "COMPOSITOR")}[mode](outdir)
