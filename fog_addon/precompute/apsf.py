@@ -22,23 +22,12 @@ check (docs/measurements/2026-11-27-apsf.md); the renderer's glow comes from tra
 Units: T dimensionless (optical thickness), I per unit source intensity I0 in units of sigma^2 (radiance
 I0 sigma^2 / sr at extinction sigma: multiply by sigma^2 for 1/m^2).
 """
-import math
-
 import numpy as np
-
-MIN_T = 1.0 + 1e-6   # the series diverges at and below T = 1 (§2.1)
-
+from numpy.polynomial import legendre
 
 def legendre_table(mu, count):
-    """L_0 .. L_{count-1} at ``mu`` (shape (count,) + mu.shape) by Bonnet's recurrence."""
-    mu = np.asarray(mu, float)
-    out = np.empty((count,) + mu.shape)
-    out[0] = 1.0
-    if count > 1:
-        out[1] = mu
-    for m in range(1, count - 1):
-        out[m + 1] = ((2 * m + 1) * mu * out[m] - m * out[m - 1]) / (m + 1)
-    return out
+    """L_0 .. L_{count-1} at ``mu``, shape (count,) + mu.shape (numpy's Legendre-Vandermonde matrix)."""
+    return np.moveaxis(legendre.legvander(np.asarray(mu, float), count - 1), -1, 0)
 
 
 def apsf_exponents(q, albedo, count):

@@ -176,11 +176,15 @@ def bake_table(spec, orders=None):
 
 # --- the kernel (any backend: ``ops.ShaderOps``) ----------------------------------------------------------
 
+def _angle_over_pi(m, cos_theta):
+    """theta / pi in [0, 1] of the angle whose cosine is ``cos_theta`` (clamped to [-1, 1])."""
+    c = m.maximum(m.minimum(cos_theta, 1.0), -1.0)
+    return m.atan2(m.sqrt(1.0 - c * c), c) * (1.0 / math.pi)
+
+
 def table_x(m, cos_theta):
     """The column coordinate in [0, 1] of the angle whose cosine is ``cos_theta``: (theta / pi)^U_POWER."""
-    c = m.maximum(m.minimum(cos_theta, 1.0), -1.0)
-    theta = m.atan2(m.sqrt(1.0 - c * c), c)
-    return m.power(theta * (1.0 / math.pi), U_POWER)
+    return m.power(_angle_over_pi(m, cos_theta), U_POWER)
 
 
 def table_y(m, optical_distance):
@@ -198,20 +202,20 @@ def field(m, spec, optical_distance, cos_theta):
 def irradiance(m, spec, optical_distance, cos_psi):
     """E_{>=2} / (pi W0 I0 sigma^2): the multiply scattered light a surface facing psi from the light's
     direction receives, over pi (``irradiance_of_field``; log-bilinear)."""
-    c = m.maximum(m.minimum(cos_psi, 1.0), -1.0)
-    x = m.atan2(m.sqrt(1.0 - c * c), c) * (1.0 / math.pi)
-    return m.exp(m.table(spec, x, table_y(m, optical_distance), ROWS, ROWS))
+    return m.exp(m.table(spec, _angle_over_pi(m, cos_psi), table_y(m, optical_distance), ROWS, ROWS))
 
 
 def multiple_scatter(m, spec, beta, d_sp, cos_theta, level):
     """The multiply scattered light a surface reflects, per unit intensity and albedo, 1/m^2 (the scatter
     term's signature, ``rungs.py``): a diffuse lobe (``level`` 0) takes the hemisphere's irradiance over pi
     at the normal's angle from the light; a glossy lobe the field along the mirrored direction (the field
-    varies over degrees, wider than the lobes a glossy surface shows)."""
+    varies over degrees, wider than the lobes a glossy surface shows).  A ``level`` given as a Python number
+    (the diffuse lobe's 0.0) reads the one table it needs; a per-material socket reads both and selects."""
     t = beta * d_sp
-    diffuse = irradiance(m, spec, t, cos_theta)
-    glossy = field(m, spec, t, cos_theta)
-    return beta * beta * m.select(m.less(level, 0.5), diffuse, glossy)
+    if isinstance(level, (int, float)):
+        lobe = irradiance(m, spec, t, cos_theta) if level < 0.5 else field(m, spec, t, cos_theta)
+        return beta * beta * lobe
+    return beta * beta * m.select(m.less(level, 0.5), irradiance(m, spec, t, cos_theta), field(m, spec, t, cos_theta))
 
 
 def multiple_background(m, spec, beta, d_sv, along, h):

@@ -289,16 +289,9 @@ def spot_scatter_rung(scatter, g):
 MULTIPLE_ERROR = 0.07   # the multiply scattered glow against Cycles with 64 bounces: 3.3 % measured, tests bound 7 %
 
 
-def _airlight_with_multiple(base, spec, m, beta, d_sv, along, h, d_vp):
-    return base(m, beta, d_sv, along, h, d_vp) + multiple.multiple_airlight(m, spec, beta, d_sv, along, h, d_vp)
-
-
-def _background_with_multiple(base, spec, m, beta, d_sv, along, h):
-    return base(m, beta, d_sv, along, h) + multiple.multiple_background(m, spec, beta, d_sv, along, h)
-
-
-def _scatter_with_multiple(base, spec, m, beta, d_sp, cos_theta, level):
-    return base(m, beta, d_sp, cos_theta, level) + multiple.multiple_scatter(m, spec, beta, d_sp, cos_theta, level)
+def _with_multiple(base, extra, spec, m, *args):
+    """A single-scattering kernel's value plus its multiply scattered twin's (``multiple.py``), same arguments."""
+    return base(m, *args) + extra(m, spec, *args)
 
 
 def multiple_rungs(air, background, scatter, g, albedo):
@@ -308,9 +301,10 @@ def multiple_rungs(air, background, scatter, g, albedo):
     spec = multiple.table_spec(g, albedo)
     tag = spec.name.split("(", 1)[1].rstrip(")")
     out = []
-    for rung, fn in ((air, _airlight_with_multiple), (background, _background_with_multiple),
-                     (scatter, _scatter_with_multiple)):
-        out.append(replace(rung, name=f"{rung.name} + multiple {tag}", kernel=functools.partial(fn, rung.kernel, spec),
+    for rung, extra in ((air, multiple.multiple_airlight), (background, multiple.multiple_background),
+                        (scatter, multiple.multiple_scatter)):
+        out.append(replace(rung, name=f"{rung.name} + multiple {tag}",
+                           kernel=functools.partial(_with_multiple, rung.kernel, extra, spec),
                            backends=rung.backends & {"numpy", "nodes"}, tables=rung.tables + (spec,),
                            max_error=max(rung.max_error, MULTIPLE_ERROR),
                            evidence="tests/test_multiple.py; docs/measurements/2026-11-27-apsf.md"))
