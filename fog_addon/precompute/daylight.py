@@ -26,8 +26,9 @@ Two facts carry everything here (derivations in docs/measurements/2026-11-27-day
   (``sky_airlight``).
 
 Two species of different scale heights (Rayleigh and Mie, ``haze_airlight``) keep the exponent's
-identity (it holds for the total) but the scattering weight sigma_R / beta varies along the ray: that
-part is integrated by product integration, exact in the exponential and piecewise linear in the weight.
+identity (it holds for the total), so the sum of the two species' integrals is the same closed form; the
+share of one species varies along the ray, and it alone is integrated by panels in that species' optical
+depth, exact in the exponential's ends.
 
 No kernel branches (select evaluates both sides): every 0/0 (horizontal rays, k -> 0, v_z -> mu_s,
 H = 0) is a series switched by a select or a denominator held away from 0, and every exponent is
@@ -42,7 +43,7 @@ from . import model
 
 UNBOUNDED = model.FAR       # m; the top of a layer without one (the infinite fog): beta0 everywhere
 EXP_CLAMP = 80.0            # exponents are clamped to [-80, 80] (e^-80 = 1.8e-35, a float32 normal number)
-SERIES_X = 0.05             # phi1 / phi2 switch to their series below this argument (series error < 1e-9)
+SERIES_X = 0.05             # phi1 switches to its series below this argument (series error < 1e-9)
 MIN_SPAN = 1e-12            # m; a ray whose height changes less than this along a segment is horizontal
 MIN_FALLOFF = 1e-6          # m; H below this is a hard top (nothing above h0)
 MIN_MU = 1e-6               # the sun's elevation sine is held above this; mu_s <= 0 (sun down) gives 0
@@ -82,16 +83,6 @@ def phi1(m, x):
     xs = m.minimum(x, SERIES_X)     # the series is evaluated everywhere (select): kept finite for large x
     series = 1.0 + xs * (-0.5 + xs * (1.0 / 6.0 + xs * (-1.0 / 24.0 + xs * (1.0 / 120.0))))
     quotient = (1.0 - exp_neg(m, x)) / m.maximum(x, SERIES_X)
-    return m.select(m.less(x, SERIES_X), series, quotient)
-
-
-def phi2(m, x):
-    """(1 - e^{-x} (1 + x)) / x^2 for x >= 0 (int_0^1 s e^{-x s} ds), 1/2 at x = 0: the series
-    1/2 - x/3 + x^2/8 - x^3/30 + x^4/144 below SERIES_X, the quotient above it."""
-    xs = m.minimum(x, SERIES_X)
-    series = 0.5 + xs * (-1.0 / 3.0 + xs * (1.0 / 8.0 + xs * (-1.0 / 30.0 + xs * (1.0 / 144.0))))
-    xl = m.maximum(x, SERIES_X)
-    quotient = (1.0 - exp_neg(m, xl) * (1.0 + xl)) / (xl * xl)
     return m.select(m.less(x, SERIES_X), series, quotient)
 
 
@@ -318,20 +309,27 @@ def haze_extinctions(m, z, z_ground, rayleigh, mie, mie_albedo=MIE_ALBEDO, h_r=R
     return rayleigh * exp_neg(m, y / h_r), (mie / mie_albedo) * exp_neg(m, y / h_m)
 
 
+def exponential_depth(m, pz, vz, length, beta_ground, z_ground, H):
+    """Optical depth of a segment through one species of density beta_ground e^{-(z - z_ground)/H} (1/m at
+    the ground; flat Earth): beta(z_lo) L phi1(|vz| L / H), z_lo the segment's lower end (heights below the
+    ground count as the ground).  ``optical_depth`` with h0 = z_ground, in a third of the operations."""
+    z_lo = m.minimum(pz, pz + vz * length)
+    return beta_ground * exp_neg(m, m.maximum(z_lo - z_ground, 0.0) / H) * length * phi1(m, m.abs(vz) * length / H)
+
+
 def haze_depth(m, pz, vz, length, z_ground, rayleigh, mie, mie_albedo=MIE_ALBEDO, h_r=RAYLEIGH_HEIGHT,
                h_m=MIE_HEIGHT):
-    """Optical depth of a camera segment through both species (Dobashi et al. 2002 Eq. A.1, flat Earth):
-    each is a layer whose top is the ground (``optical_depth`` with h0 = z_ground)."""
-    return (optical_depth(m, pz, vz, length, rayleigh, z_ground, h_r)
-            + optical_depth(m, pz, vz, length, mie / mie_albedo, z_ground, h_m))
+    """Optical depth of a camera segment through both species (Dobashi et al. 2002 Eq. A.1, flat Earth)."""
+    return (exponential_depth(m, pz, vz, length, rayleigh, z_ground, h_r)
+            + exponential_depth(m, pz, vz, length, mie / mie_albedo, z_ground, h_m))
 
 
 def haze_sun_depth(m, z, mu_s, z_ground, rayleigh, mie, mie_albedo=MIE_ALBEDO, h_r=RAYLEIGH_HEIGHT,
                    h_m=MIE_HEIGHT):
     """Optical depth from height z (m) to the sun through both species (Dobashi et al. 2002 Eq. A.4's
-    exponent, flat Earth): (C_R(z) + C_M(z)) / mu_s."""
-    c = (column_depth(m, z, rayleigh, z_ground, h_r) + column_depth(m, z, mie / mie_albedo, z_ground, h_m))
-    return c / m.maximum(mu_s, MIN_MU)
+    exponent, flat Earth): (beta_R(z) H_R + beta_M(z) H_M) / mu_s."""
+    br, bm = haze_extinctions(m, z, z_ground, rayleigh, mie, mie_albedo, h_r, h_m)
+    return (br * h_r + bm * h_m) / m.maximum(mu_s, MIN_MU)
 
 
 def haze_airlight(m, pz, vz, length, mu_s, cos_theta, z_ground, rayleigh, mie, mie_albedo=MIE_ALBEDO,
@@ -373,9 +371,9 @@ def haze_airlight(m, pz, vz, length, mu_s, cos_theta, z_ground, rayleigh, mie, m
     tau_a = phi_a = None
     for s in grading(panels):
         t = t_end * s
-        tau_b = optical_depth(m, pz, vz, t, beta_m, z_ground, h_m)
+        tau_b = exponential_depth(m, pz, vz, t, beta_m, z_ground, h_m)
         phi_b = (haze_sun_depth(m, pz + vz * t, mu_s, z_ground, rayleigh, mie, mie_albedo, h_r, h_m)
-                 + optical_depth(m, pz, vz, t, rayleigh, z_ground, h_r) + tau_b)
+                 + exponential_depth(m, pz, vz, t, rayleigh, z_ground, h_r) + tau_b)
         if tau_a is not None:
             mie_part = mie_part + (tau_b - tau_a) * exp_neg(m, m.minimum(phi_a, phi_b)) * phi1(
                 m, m.abs(phi_b - phi_a))
