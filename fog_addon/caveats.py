@@ -129,7 +129,11 @@ def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None):
                 f"{len(found)} light(s) ({_names(found)}) passes through the objects near them (a lamp's hood, "
                 "a wall, a window frame)"]
     notes = []
-    shafted = [o for o in lights if o.name in found]
+    areas = [o.name for o in lights if o.name in found and o.data.type == "AREA"]
+    if areas:
+        notes.append(f"area lights cast no shafts yet: the glow of {_names(areas)} passes through the objects "
+                     "near them")
+    shafted = [o for o in lights if o.name in found and o.data.type != "AREA"]
     soft = [o.name for o in shafted if getattr(o.data, "shadow_soft_size", 0.0) > 0.0]
     if soft:
         notes.append(f"light shafts are sharp: the Radius of {_names(soft)} softens their shadows on surfaces "
@@ -156,14 +160,15 @@ def multiple_notes(lights, multiple, method_name, is_spot, optical_distance=None
             return []
         return [f"the fog is dense around {len(dense)} light(s) ({_names(dense)}; optical distance up to "
                 f"{max(optical_distance(o) for o in lights):.1f} from the camera) and multiple scattering is "
-                "off: their glow lacks its wide halo; turn on Dense Fog"]
+                "off: their glow lacks its wide halo; turn on Dense Fog"
+                + (" (it models point lights)" if any(is_spot(o) for o in lights if o.name in dense) else "")]
     if method_name == "osl":
         return ["multiple scattering is not modelled by Method OSL (its glow is quadrature, the dense fog's a "
                 "table): use Node Groups, Compositor or Auto"]
     spots = [o.name for o in lights if is_spot(o)]
     if spots:
-        return [f"multiple scattering is modelled for point lights only: the glow of {len(spots)} spot light(s) "
-                f"({_names(spots)}) is single scattering"]
+        return [f"multiple scattering is modelled for point lights only: the glow of {len(spots)} spot or area "
+                f"light(s) ({_names(spots)}) is single scattering"]
     return []
 
 

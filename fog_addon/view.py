@@ -18,7 +18,7 @@ import numpy as np
 from mathutils.bvhtree import BVHTree
 
 from .nodes import graph, owned
-from .precompute import footprint, predict, surface, tables
+from .precompute import area, footprint, predict, surface, tables
 
 MAX_SAMPLES = 160 * 90          # rays per frame at most: one per pixel centre up to this, else a coarser grid
 MAX_FRAMES = 8                  # an animation: at most this many frames, evenly spread over the range
@@ -237,7 +237,7 @@ def _sample_frame(scene, depsgraph, lights, grid):
             rows.append((d, dist, n, brdf))
     rows = [(d, dist, n, brdf) for (d, dist, n, _), brdf in zip(rows, _albedos(rows))]
     light_pos = np.array([np.array(o.matrix_world.translation) for o in lights]).reshape(-1, 3)
-    inverse = np.array([np.linalg.inv(np.array(o.matrix_world.to_3x3())) if is_spot(o) else np.eye(3)
+    inverse = np.array([np.linalg.inv(np.array(o.matrix_world.to_3x3())) if has_shape(o) else np.eye(3)
                         for o in lights]).reshape(-1, 3, 3)
     return origin, rows, light_pos, inverse
 
@@ -279,10 +279,13 @@ def view_samples(scene, lights, frames=None, grid=None):
             invs.append(inverse)
             fr.append(f)
     n_lights = len(lights)
-    spot = np.array([is_spot(o) for o in lights], bool)
+    areas = np.array([is_area(o) for o in lights], bool)
+    spot = np.array([is_spot(o) for o in lights], bool) | areas
+    shapes = [area_half_sizes(o) if is_area(o) else (math.cos(o.data.spot_size / 2), o.data.spot_blend) if is_spot(o)
+              else (1.0, 0.0) for o in lights]
     spots = predict.SpotSamples(spot, np.array(invs).reshape(-1, n_lights, 3, 3),
-                                np.array([math.cos(o.data.spot_size / 2) if s else 1.0 for o, s in zip(lights, spot)]),
-                                np.array([o.data.spot_blend if s else 0.0 for o, s in zip(lights, spot)]))
+                                np.array([s[0] for s in shapes], float), np.array([s[1] for s in shapes], float),
+                                areas if areas.any() else None)
     return predict.ViewSamples(np.array(cams).reshape(-1, 3), np.array(dirs).reshape(-1, 3), np.array(dists, float),
                                np.array(normals).reshape(-1, 3), np.array(rds).reshape(-1, 3),
                                np.array(rss).reshape(-1, 3), np.array(levels, float),
@@ -294,10 +297,27 @@ def is_spot(light):
     return light.data.type == "SPOT"
 
 
+def has_shape(light):
+    """True for a spot or an area light: its fog takes the spot kernels' arguments (its matrix and two shape
+    values: ``shading.shape_args``), and costs a spot's in the methods' budgets."""
+    return is_spot(light) or is_area(light)
+
+
+def is_area(light):
+    """True for an area light object (its fog: ``precompute/area.py``, ``rungs.choose(..., area=True)``)."""
+    return light.data.type == "AREA"
+
+
 def light_intensities(lights):
-    """(N, 3) RGB radiant intensity I0 = power * colour / (4 pi) of point and spot lights (a spot's inside
-    its cone), W/sr."""
-    return np.array([[o.data.energy * c / (4.0 * math.pi) for c in o.data.color] for o in lights]).reshape(-1, 3)
+    """(N, 3) RGB radiant intensity I0 = power * colour * ``area.intensity_per_watt`` of the lights, W/sr."""
+    return np.array([[o.data.energy * c * area.intensity_per_watt(o.data.type) for c in o.data.color]
+                     for o in lights]).reshape(-1, 3)
+
+
+def area_half_sizes(light):
+    """(a, b) half sizes (m) of an area light's rectangle (``area.half_sizes``), its object's scale included
+    (the largest axis of it: ``ops.apply.fog_lights`` notes a non-uniform one)."""
+    return area.half_sizes(light.data.shape, light.data.size, light.data.size_y, max(light.matrix_world.to_scale()))
 
 
 MAX_WINDOW_FRAMES = 250   # an animation longer than this gets no windows (every frame is bounded)

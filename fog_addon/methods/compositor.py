@@ -99,7 +99,7 @@ def dimming_lights(scene, spec, lights):
     brightest at the camera first (radiant intensity over squared distance)."""
     if scene.render.engine != groups.EEVEE_ENGINE or not lights:
         return [], []
-    spots = [view.is_spot(o) for o in lights]
+    spots = [view.has_shape(o) for o in lights]
     budget = groups.eevee_budget(0.0, spots)   # step "off" has no phase weight: its cost does not depend on g
     eye = scene.camera.matrix_world.translation
     intensity = view.light_intensities(lights).sum(axis=1)
@@ -112,15 +112,17 @@ def dimming_lights(scene, spec, lights):
             steps[i] = rungs.LEFT_OUT
             break
     kept = [i for i in range(len(lights)) if steps[i] == rungs.OFF]
-    return [lights[i] for i in kept], [rungs.choose("compositor", rungs.OFF, spec.anisotropy, spots[i]) for i in kept]
+    return [lights[i] for i in kept], [rungs.choose("compositor", rungs.OFF, spec.anisotropy, spots[i],
+                                                          area=view.is_area(lights[i])) for i in kept]
 
 
 def shafted_lights(scene, spec, lights):
     """The ``lights`` whose shadows fall in fog the camera may see (``caveats.shadowing_lights``: an object
-    casting shadows within the glow's reach): only they get a shadow map and a shaft group."""
+    casting shadows within the glow's reach): only they get a shadow map and a shaft group (area lights none:
+    ``caveats.shadow_notes`` says so)."""
     from ..ops.apply import scene_size
     found = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(scene_size(scene), 1e-6))
-    return [light for light in lights if light.name in found]
+    return [light for light in lights if light.name in found and light.data.type != "AREA"]
 
 
 def follow_shadows(scene, lights):

@@ -22,7 +22,7 @@ class NodeGroups(Method):
 
     def budget(self, scene, spec, lights):
         if scene.render.engine == groups.EEVEE_ENGINE:
-            return groups.eevee_budget(spec.anisotropy, [view.is_spot(o) for o in lights])
+            return groups.eevee_budget(spec.anisotropy, [view.has_shape(o) for o in lights])
         return None
 
     def build(self, scene, spec, plan, images):
@@ -48,7 +48,7 @@ class Osl(NodeGroups):
     preference = "osl"
 
     def budget(self, scene, spec, lights):
-        return groups.osl_budget([view.is_spot(o) for o in lights])
+        return groups.osl_budget([view.has_shape(o) for o in lights])
 
     def notes(self, scene, spec, plan):
         if scene.render.engine != "CYCLES":
@@ -61,7 +61,7 @@ def many_lights_note(lights, choice):
     """Why the Compositor method suits ``lights`` (as many as MANY_LIGHTS or more) in Cycles better than the
     materials' node groups or OSL: what each fogged material holds (``groups.material_nodes``)."""
     nodes = groups.material_nodes([choice["lights"].get(o.name, [0])[0] for o in lights],
-                                  [view.is_spot(o) for o in lights])
+                                  [view.has_shape(o) for o in lights])
     return (f"{len(lights)} lights: each fogged material holds about {nodes:,} fog nodes and evaluates them on "
             "every sample, and Cycles' set-up before the first sample grows with their square (64 lights on 4 "
             "materials: about 20 s of CPU per render, 256 lights: about 30 min); the Compositor method's "

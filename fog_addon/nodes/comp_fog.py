@@ -526,7 +526,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
         for node in built:
             m.feed(node.inputs["Light"], position)
             ng.links.new(intensity.outputs[0], node.inputs["Intensity"])
-        if built and groups.SPOT_COS in built[0].inputs:   # the cone's drivers once, for both groups
+        if built and groups.SPOT_ROWS[0] in built[0].inputs:   # the cone's drivers once, for both groups
             groups._drive_spot(ng, k, light, built[0])
             for node in built[1:]:
                 for socket, _ in groups._spot_inputs(mod):

@@ -27,7 +27,7 @@ import re
 
 import bpy
 
-from ..precompute import fingerprint, predict, rungs, shading, spot, surface
+from ..precompute import area, fingerprint, predict, rungs, shading, spot, surface
 from ..precompute.medium import Medium
 from . import owned, passes, sockets
 from .sockets import NodeOps
@@ -273,11 +273,17 @@ def _medium(m, beta, albedo=None):
 
 SPOT_ROWS = ("Spot X", "Spot Y", "Spot Z")   # a spot light's group inputs: its inverse matrix's rows (shading.Spot)
 SPOT_COS, SPOT_BLEND = "Spot Cos Half", "Spot Blend"
+AREA_HALF_X, AREA_HALF_Y = "Area Half X", "Area Half Y"   # an area light's: its rectangle's half sizes (m)
+
+
+def _shape_names(models):
+    """The names of the two shape inputs of a spot's or an area light's group (``shading.shape_args``)."""
+    return (AREA_HALF_X, AREA_HALF_Y) if rungs.is_area(models) else (SPOT_COS, SPOT_BLEND)
 
 
 def _spot_inputs(models):
-    """The extra inputs of a spot light's group (``rungs.is_spot``), none for a point light's."""
-    return [(n, V) for n in SPOT_ROWS] + [(SPOT_COS, F), (SPOT_BLEND, F)] if rungs.is_spot(models) else []
+    """The extra inputs of a spot's or an area light's group (``rungs.is_spot``), none for a point light's."""
+    return [(n, V) for n in SPOT_ROWS] + [(n, F) for n in _shape_names(models)] if rungs.is_spot(models) else []
 
 
 def _outputs(outputs, models):
@@ -293,7 +299,10 @@ def _read(m, node, outputs, kind):
 
 def _light(g, models):
     """shading.Light from a per-light group's inputs ``g`` (name: value)."""
-    cone = shading.Spot(tuple(g[n] for n in SPOT_ROWS), g[SPOT_COS], g[SPOT_BLEND]) if rungs.is_spot(models) else None
+    cone = None
+    if rungs.is_spot(models):
+        kind = shading.Area if rungs.is_area(models) else shading.Spot
+        cone = kind(tuple(g[n] for n in SPOT_ROWS), *(g[n] for n in _shape_names(models)))
     return shading.Light(g["Light"], g["Intensity"], cone)
 
 
@@ -374,9 +383,10 @@ def _drive_expression(sock, expression, variables):
 
 
 def _drive_intensity(node, light_data):
-    """Inputs 0-2 of ``node`` = radiant intensity P * colour / (4 pi) in W/sr (simple-expression drivers)."""
+    """Inputs 0-2 of ``node`` = radiant intensity P * colour * ``area.intensity_per_watt`` in W/sr
+    (simple-expression drivers)."""
     for i in range(3):
-        _drive_expression(node.inputs[i], f"p * c * {1.0 / (4.0 * math.pi)!r}",
+        _drive_expression(node.inputs[i], f"p * c * {area.intensity_per_watt(light_data.type)!r}",
                           (("p", light_data, "energy"), ("c", light_data, f"color[{i}]")))
 
 
@@ -403,7 +413,7 @@ def _light_instance(ng, k, light, group_name, inputs):
     node.location = (-300, -300 * k)
     for a, b in ((loc.outputs[0], "Light"), (inten.outputs[0], "Intensity"), *inputs):
         ng.links.new(a, node.inputs[b])
-    if SPOT_COS in node.inputs:
+    if SPOT_ROWS[0] in node.inputs:
         _drive_spot(ng, k, light, node)
     return node
 
@@ -422,12 +432,23 @@ def _drive_spot(ng, k, light, node):
                               [(name, light, f"matrix_world[{col}][{row}]")
                                for name, col, row in (("a", cj, a1), ("b", ck, a2), ("c", cj, a2), ("e", ck, a1))])
         ng.links.new(vec.outputs[0], node.inputs[row_name])
-    for sock_name, path, expression in ((SPOT_COS, "spot_size", "cos(v * 0.5)"), (SPOT_BLEND, "spot_blend", "v")):
+    for sock_name, path, expression in _shape_drivers(light):
         value = ng.nodes.new("ShaderNodeValue")
         value.name = value.label = f"Light {k} {sock_name}"
         value.location = (-900, -300 * k - 200)
         _drive_expression(value.outputs[0], expression, (("v", light.data, path),))
         ng.links.new(value.outputs[0], node.inputs[sock_name])
+
+
+def _shape_drivers(light):
+    """(input, light data path, expression of v) of a spot's cone or an area light's half sizes
+    (``area.half_sizes`` of its shape, with the object's scale at the time of building)."""
+    if light.data.type != "AREA":
+        return (SPOT_COS, "spot_size", "cos(v * 0.5)"), (SPOT_BLEND, "spot_blend", "v")
+    shape = light.data.shape
+    per_x, _ = area.half_sizes(shape, 1.0, 1.0, max(light.matrix_world.to_scale()))
+    y_path = "size_y" if shape in ("RECTANGLE", "ELLIPSE") else "size"
+    return (AREA_HALF_X, "size", f"v * {per_x!r}"), (AREA_HALF_Y, y_path, f"v * {per_x!r}")
 
 
 def _bundles(lights, models):

@@ -1,5 +1,6 @@
 """Adding, updating and removing the fog on a scene (what the operators, handlers and command line call)."""
 import json
+import math
 from typing import Any, NamedTuple
 
 import bpy
@@ -15,7 +16,7 @@ from ..precompute.spec import FogSpec, validate_quality
 from . import progress as progress_
 from .. import view
 
-SUPPORTED_LIGHTS = ("POINT", "SPOT")
+SUPPORTED_LIGHTS = ("POINT", "SPOT", "AREA")
 OSL_WAS = "analytic_fog_osl_was"   # scene custom property: Cycles' OSL switch before the OSL method set it
 LIGHTS_KEY = "analytic_fog_lights"  # on the Surface group: the lights, their models and the camera it was built for
 PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method it was built with (methods.get)
@@ -50,6 +51,12 @@ def fog_lights(scene):
                 notes.append((obj.name, "is mirrored (negative scale): its cone in the fog points the other way"))
             elif data.type == "POINT" and max(s) - min(s) > 1e-6 * max(abs(max(s)), 1e-30):
                 notes.append((obj.name, "is scaled non-uniformly: a point light's fog ignores scale"))
+            elif data.type == "AREA" and max(s) - min(s) > 1e-6 * max(abs(max(s)), 1e-30):
+                notes.append((obj.name, "is scaled non-uniformly: its glow takes the emitter as scaled by the "
+                                        "largest axis"))
+            if data.type == "AREA" and data.spread < math.radians(179.9):
+                notes.append((obj.name, f"has a Spread of {math.degrees(data.spread):.0f} degrees: its glow is "
+                                        "that of a Lambertian emitter (Spread 180)"))
     return lights, notes
 
 
@@ -144,7 +151,7 @@ def choose_models(scene, spec, method, lights):
 def _models(spec, method, lights, steps, rims):
     """Each light's models at its step, a spot's glow with its rim's point count (``rims``: by name)."""
     return [rungs.choose(method.preference, k, spec.anisotropy, view.is_spot(o), rims.get(o.name, spot.RIM_NODES),
-                         multiple_albedo=spec.multiple_albedo)
+                         multiple_albedo=spec.multiple_albedo, area=view.is_area(o))
             for o, k in zip(lights, steps)]
 
 
@@ -440,7 +447,8 @@ def not_modelled(scene, spec, lights, materials, method=None):
     notes = [*caveats.shadow_notes(scene, lights, spec.beta_per_unit, max(scene_size(scene), 1e-6), casting,
                                    None if spec.shafts else "Light Shafts is off"),
              caveats.glass_note(materials, scene.objects),
-             *caveats.multiple_notes(lights, spec.multiple_scattering, getattr(method, "name", method), view.is_spot,
+             *caveats.multiple_notes(lights, spec.multiple_scattering, getattr(method, "name", method),
+                                     view.has_shape,
                                      _optical_distance(scene, spec))]
     return [n for n in notes if n]
 

@@ -53,11 +53,13 @@ class ViewSamples(NamedTuple):
 
 
 class SpotSamples(NamedTuple):
-    """The cones of the lights that are spots (``shading.Spot``), as the view samples saw them."""
-    is_spot: Any      # (N,) bool
+    """The cones of the lights that are spots (``shading.Spot``) and the emitters of the area lights
+    (``shading.Area``), as the view samples saw them."""
+    is_spot: Any      # (N,) bool: a spot or an area light (the spot kernels' arguments)
     rows: Any         # (P, N, 3, 3) the inverse of each light's 3x3 world matrix (identity for a point light)
-    cos_half: Any     # (N,) cos(spot_size / 2)
-    blend: Any        # (N,) spot_blend
+    cos_half: Any     # (N,) cos(spot_size / 2); an area light's half size a (m)
+    blend: Any        # (N,) spot_blend; an area light's half size b (m)
+    is_area: Any = None   # (N,) bool: an area light, or None: none is
 
 
 class Prediction(NamedTuple):
@@ -118,7 +120,7 @@ def light_fog(samples, intensity, beta, g=0.0):
     glow = np.zeros(np.shape(samples.lights))
     scatter = np.zeros_like(glow)
     for k, light in _light_kinds(samples, intensity):
-        models = rungs.choose(_preference(g), 0, g, spot=light.spot is not None)
+        models = _models(g, light)
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
             values = shading.light_glows(m, view.camera, view.direction, view.geometry.view_distance, light,
                                          Medium(beta), models)
@@ -157,23 +159,31 @@ def _view(m, samples):
 
 
 def _light_kinds(samples, intensity):
-    """[(indices k, shading.Light of the lights k as (P, K, 3) arrays)]: the point lights', then the spots'
-    (``shading.Spot`` of their cones), each only if there is one."""
+    """[(indices k, shading.Light of the lights k as (P, K, 3) arrays)]: the point lights', the spots'
+    (``shading.Spot`` of their cones), then the area lights' (``shading.Area``), each only if there is one."""
     lights = np.asarray(samples.lights, float)
     spots = samples.spots
-    is_spot = np.zeros(lights.shape[1], bool) if spots is None else np.asarray(spots.is_spot, bool)
+    n = lights.shape[1]
+    is_spot = np.zeros(n, bool) if spots is None else np.asarray(spots.is_spot, bool)
+    is_area = np.zeros(n, bool) if spots is None or spots.is_area is None else np.asarray(spots.is_area, bool)
     out = []
     if not is_spot.all():
         k = np.flatnonzero(~is_spot)
         out.append((k, shading.Light(lights[:, k], intensity[k])))
-    if is_spot.any():
-        k = np.flatnonzero(is_spot)
-        rows = np.asarray(spots.rows, float)[:, k]
-        out.append((k, shading.Light(lights[:, k], intensity[k],
-                                     shading.Spot(tuple(rows[..., i, :] for i in range(3)),
-                                                  np.asarray(spots.cos_half, float)[k],
-                                                  np.asarray(spots.blend, float)[k]))))
+    for kind, chosen in ((shading.Spot, is_spot & ~is_area), (shading.Area, is_area)):
+        if chosen.any():
+            k = np.flatnonzero(chosen)
+            rows = np.asarray(spots.rows, float)[:, k]
+            out.append((k, shading.Light(lights[:, k], intensity[k],
+                                         kind(tuple(rows[..., i, :] for i in range(3)),
+                                              np.asarray(spots.cos_half, float)[k], np.asarray(spots.blend, float)[k]))))
     return out
+
+
+def _models(g, light, rim_nodes=spot_mod.RIM_NODES):
+    """The exact models of ``light`` (a shading.Light of ``_light_kinds``) the predictor judges with."""
+    return rungs.choose(_preference(g), 0, g, light.spot is not None, rim_nodes,
+                        area=isinstance(light.spot, shading.Area))
 
 
 def _finite(v):
@@ -199,12 +209,13 @@ def rim_deviation(samples, intensity, beta, glow, g=0.0):
     view = _view(m, samples)
     ladder = spot_mod.RIM_LADDER[1:]
     out = np.zeros((len(ladder),) + np.shape(samples.lights))
-    spots = [(k, light) for k, light in _light_kinds(samples, np.asarray(intensity, float)) if light.spot is not None]
+    spots = [(k, light) for k, light in _light_kinds(samples, np.asarray(intensity, float))
+             if isinstance(light.spot, shading.Spot)]
     for r, n in enumerate(ladder):
         for k, light in spots:
             with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
                 values = shading.light_glows(m, view.camera, view.direction, view.geometry.view_distance, light,
-                                             Medium(beta), rungs.choose(_preference(g), 0, g, True, n))
+                                             Medium(beta), _models(g, light, n))
             cheap, _ = _pixel_parts(m, values, beta, view)
             out[r][:, k] = np.abs(cheap - glow[:, k])
     return out

@@ -36,7 +36,7 @@ from dataclasses import dataclass, replace
 import functools
 from typing import Callable, NamedTuple
 
-from . import model, multiple, spot, surface, tables
+from . import area, model, multiple, spot, surface, tables
 
 TERMS = ("airlight", "background", "scatter", "direct")
 BACKENDS = ("numpy", "nodes", "osl")
@@ -55,6 +55,7 @@ class Rung:
     max_error: float = 0.0    # max relative error over the domain against adaptive quadrature (measured; see tests)
     evidence: str = ""        # the test that measures max_error
     spot: bool = False        # a spot light's rung (``spot_rungs``, DIRECT_SPOT): the spot kernels' signature
+    area: bool = False        # an area light's rung (``area_rungs``, DIRECT_AREA; with the spot kernels' signature)
     pair: Callable = None     # an airlight rung's (airlight, background) of one ray at once, sharing their work
     #                           (``spot.airlight_pair``), for a backend that needs both per pixel (the compositor)
 
@@ -89,6 +90,9 @@ DIRECT_EXACT = Rung(
     "all inputs", 0.0, "closed form (Eq. 14)")
 # A spot's direct light is the point light's times Blender's cone factor at the surface (``spot.falloff_at``).
 DIRECT_SPOT = replace(DIRECT_EXACT, name="direct exact, spot cone", spot=True)
+# An area light's: the point light's from its centre times Lambert's cosine (``area.lambert_falloff``).
+DIRECT_AREA = replace(DIRECT_EXACT, name="direct exact, area light", spot=True, area=True,
+                      domain="from the emitter's centre")
 
 
 
@@ -286,6 +290,42 @@ def spot_scatter_rung(scatter, g):
                    evidence="tests/test_spot_scatter.py: Eq. 15 by hemisphere quadrature of the spot's airlight")
 
 
+def area_glow_error(g):
+    """Bound on an area light's glow error against quadrature over its emitter (``area.py``: the phase and
+    extinction of each of its cells' centres) on rays that pass at least two half-diagonals from the emitter
+    (tests/test_area.py measures it; nearer, forward-peaked fog's errors grow: ``AREA_NEAR_ERRORS``)."""
+    return 0.01 + 0.07 * float(g) * float(g)
+
+
+# The same nearer the emitter, by the ray's distance to it in half-diagonals (tests/test_area.py, 2000 random
+# rays): {g: (within 0.5, 0.5-1, 1-2)}.  The cells' centres miss how the phase function's forward peak
+# sees the emitter's face behind a fog point right beside it.
+AREA_NEAR_ERRORS = {0.0: (0.07, 0.03, 0.02), 0.5: (0.2, 0.08, 0.03), 0.7: (1.3, 0.14, 0.06), 0.9: (4.6, 0.24, 0.32)}
+
+
+AREA_SCATTER_ERROR = 0.75   # as a spot's: the fog light beside the beam and behind the emitter left out
+
+
+def area_rungs(scatter, g):
+    """(airlight, background, scatter, direct) rungs of an area light (anisotropy g): its glow by quadrature
+    along the ray of the emitter's solid angle (``area.airlight``, no tables), the point light's ``scatter``
+    rung times Lambert's cosine (``area.scatter``) and DIRECT_AREA."""
+    kw = dict(g=float(g))
+    domain = "outside the emitter; any size, orientation and uniform scale; disks and ellipses as rectangles"
+    evidence = "tests/test_area.py: Eq. 5 over the emitter's area, scipy quadrature"
+    common = dict(backends=frozenset(BACKENDS), tables=(), domain=domain, max_error=area_glow_error(g),
+                  evidence=evidence, spot=True, area=True)
+    air = Rung(f"area airlight g{float(g):+.3f}", "airlight", functools.partial(area.airlight, **kw),
+               pair=functools.partial(area.airlight_pair, **kw), **common)
+    background = Rung(f"area background g{float(g):+.3f}", "background",
+                      functools.partial(area.airlight_background, **kw), **common)
+    lit = replace(scatter, name="area " + scatter.name, spot=True, area=True,
+                  kernel=functools.partial(area.scatter, point=scatter.kernel),
+                  domain=scatter.domain + "; relative to the point light's fog light", max_error=AREA_SCATTER_ERROR,
+                  evidence="tests/test_area_render.py: against Cycles")
+    return air, background, lit, DIRECT_AREA
+
+
 MULTIPLE_ERROR = 0.07   # the multiply scattered glow against Cycles with 64 bounces: 3.3 % measured, tests bound 7 %
 
 
@@ -311,10 +351,12 @@ def multiple_rungs(air, background, scatter, g, albedo):
     return tuple(out)
 
 
-def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NODES, multiple_albedo=None):
+def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NODES, multiple_albedo=None,
+           area=False):
     """The models for one light's terms, honouring the user's ``preference`` (PREFERENCES), ``step``
     (index into STEPS) rungs down the ladder, for Henyey-Greenstein anisotropy ``g``; ``spot``: for a
-    spot light (``spot_rungs``, DIRECT_SPOT) whose glow's rim takes ``rim_nodes`` points (spot.RIM_LADDER).
+    spot light (``spot_rungs``, DIRECT_SPOT) whose glow's rim takes ``rim_nodes`` points (spot.RIM_LADDER);
+    ``area``: for an area light (``area_rungs``, whatever ``spot`` says).
 
     "nodes": every term from the node groups' tables; "osl": the glow by
     quadrature in OSL (Cycles only), the other terms as "nodes" (they have no
@@ -336,10 +378,12 @@ def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NOD
                          "with so much back-scattering; use the OSL method (Cycles)")
     else:
         models = LightModels(air_table, bg_table, scatter, DIRECT_EXACT)
-    if spot:
+    if area:
+        models = LightModels(*area_rungs(models.scatter, g))
+    elif spot:
         models = models._replace(direct=DIRECT_SPOT, scatter=spot_scatter_rung(models.scatter, g))._replace(
             **dict(zip(("airlight", "background"), spot_rungs(models.airlight, models.background, g, rim_nodes))))
-    if multiple_albedo is not None and not spot and preference != "osl" and step < 2:
+    if multiple_albedo is not None and not spot and not area and preference != "osl" and step < 2:
         models = models._replace(**dict(zip(("airlight", "background", "scatter"), multiple_rungs(
             models.airlight, models.background, models.scatter, g, multiple_albedo))))
     if step >= 1:
@@ -350,8 +394,14 @@ def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NOD
 
 
 def is_spot(models):
-    """True if ``models`` are a spot light's (``choose(..., spot=True)``)."""
+    """True if ``models`` take the spot kernels' arguments: a spot light's or an area light's
+    (``choose(..., spot=True)``, ``choose(..., area=True)``)."""
     return models.direct.spot
+
+
+def is_area(models):
+    """True if ``models`` are an area light's (``choose(..., area=True)``)."""
+    return models.direct.area
 
 
 def needs_osl(models):

@@ -45,7 +45,7 @@ Units: positions and distances in m, beta in 1/m, light intensity I0 in W/sr
 import math
 from typing import Any, NamedTuple
 
-from . import model, rungs, spot, tables
+from . import area, model, rungs, spot, tables
 
 
 class Geometry(NamedTuple):
@@ -72,10 +72,41 @@ class Spot(NamedTuple):
     blend: Any           # spot_blend in [0, 1]
 
 
+class Area(NamedTuple):
+    """An area light's emitter (``area.py``): a rectangle in the light's local XY plane, shining along -Z."""
+    rows: Any            # as Spot's (a rotation's inverse times a uniform scale: the kernels need metres)
+    half_x: Any          # m, ``area.half_sizes``
+    half_y: Any          # m
+
+
+def shape_args(light):
+    """The spot kernels' last two arguments for ``light.spot``: a spot's (cos_half, blend), an area light's
+    half sizes (a, b)."""
+    s = light.spot
+    return (s.half_x, s.half_y) if isinstance(s, Area) else (s.cos_half, s.blend)
+
+
+def glow_hit(m, light, ray, t_end):
+    """1 if the ray (light space: ``spot.light_space_ray``) reaches the part of space the light shines into
+    before ``t_end`` (a spot's cone, the half space in front of an area light), else 0."""
+    if isinstance(light.spot, Area):
+        return area.front_hit(m, *ray, t_end)
+    return spot.cone_hit(m, *ray, light.spot.cos_half, t_end)
+
+
+def direct_falloff(m, light, cone):
+    """The light's direct intensity at a surface point over its intensity I0, from ``surface_cone``: Blender's
+    spot factor, or an area light's Lambert cosine."""
+    if isinstance(light.spot, Area):
+        return area.lambert_falloff(m, cone[0])
+    return spot.spot_falloff(m, *cone)
+
+
 class Light(NamedTuple):
     position: Any        # m
     intensity: Any       # RGB radiant intensity I0, W/sr
-    spot: Any = None     # Spot for a spot light (its models: rungs.choose(..., spot=True)), None for a point light
+    spot: Any = None     # Spot for a spot light (its models: rungs.choose(..., spot=True)), Area for an area light
+    #                      (rungs.choose(..., spot=True, area=True)), None for a point light
 
 
 class LightTerms(NamedTuple):
@@ -139,7 +170,7 @@ def shade_point(m, geo, material, light, medium, models, air=None):
         air_ray = spot_ray(m, light, models.airlight, geo.camera, -1.0 * geo.incoming)
         air = m.run(models.airlight, beta, d_sv, along, h, geo.view_distance, *air_ray)
         if models.airlight.spot:
-            seen = spot.cone_hit(m, *air_ray[:6], light.spot.cos_half, geo.view_distance)
+            seen = glow_hit(m, light, air_ray[:6], geo.view_distance)
     mirrored = mirror(m, geo.incoming, geo.normal)
     cos_n = m.dot(to_light, geo.normal) * inv_d
     cos_r = m.dot(to_light, mirrored) * inv_d
@@ -153,8 +184,8 @@ def shade_point(m, geo, material, light, medium, models, air=None):
         glossy = m.run(models.scatter, beta, d_sp, cos_r, material.level)
     reflected = m.scale(material.diffuse, diffuse) + m.scale(material.specular, glossy)
     weight = _grey(m, light.intensity) * reflected_lobe(m, material, cos_n, cos_r) * inv_d * inv_d
-    if cone:   # a spot's direct light follows its cone
-        weight = weight * spot.spot_falloff(m, *cone)
+    if cone:   # a spot's direct light follows its cone (an area light's, Lambert's cosine)
+        weight = weight * direct_falloff(m, light, cone)
     return LightTerms(airlight=m.scale(light.intensity, air),
                       scattered=light.intensity * reflected,
                       attenuation=m.run(models.direct, beta, d_sp),
@@ -286,25 +317,23 @@ def shade_surface(m, terms, medium, view_distance, is_camera):
 
 def surface_cone(m, light, point):
     """A spot's cone as its scatter rung and ``spot.spot_falloff`` take it at a surface ``point``: (the
-    point's cosine to the axis, cos_half, blend)."""
-    return (spot.axis_cosine(m, light.spot.rows, point, light.position), light.spot.cos_half, light.spot.blend)
+    point's cosine to the axis, then ``shape_args``)."""
+    return (spot.axis_cosine(m, light.spot.rows, point, light.position), *shape_args(light))
 
 
 def spot_ray(m, light, rung, origin, direction):
     """The spot kernels' extra arguments (``rungs.spot_rungs``) for ``rung``: the ray in the light's space,
-    the cone's cos_half and blend; none for a point light's rung."""
+    then ``shape_args``; none for a point light's rung."""
     if not rung.spot:
         return ()
-    s = light.spot
-    return (*spot.light_space_ray(m, s.rows, origin, direction, light.position), s.cos_half, s.blend)
+    return (*spot.light_space_ray(m, light.spot.rows, origin, direction, light.position), *shape_args(light))
 
 
 def background_seen(m, camera, direction, light, models):
     """1 if a ray to infinity meets a spot's cone (else its glow is 0: ``Gated``), None for a point light."""
     if not models.background.spot:
         return None
-    return spot.cone_hit(m, *spot_ray(m, light, models.background, camera, direction)[:6], light.spot.cos_half,
-                         model.FAR)
+    return glow_hit(m, light, spot_ray(m, light, models.background, camera, direction)[:6], model.FAR)
 
 
 class SkyTerms(NamedTuple):

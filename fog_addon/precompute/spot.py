@@ -380,14 +380,15 @@ def _inner(m, beta, along, h, t0, t1, *, inner):
     return m.select(m.less(t0, t1), m.exp(-beta * t0) * inner(m, beta, d0, a0, h, seg), 0.0)
 
 
-def _rim(m, beta, d_sv, along, h, neg_pz, neg_dz, a, t_l, h_l2, t0, t1, cos_half, cos_end, g=0.0,
-         rim_nodes=RIM_NODES):
-    """f(c) times the point light's airlight over [t0, t1] (1/m^2), by Gauss-Legendre quadrature in
-    u = tan(xi / 2), xi = atan(Q / h) Sun's angle (Eq. 9: in xi the integrand beta/(2 pi h) e^{-beta (D_sv +
-    Q - Q_0)} w is smooth and bounded however close the ray passes the light; dxi = 2 du / (1 + u^2), and
-    Q = 2 h u / (1 - u^2) needs no tangent), up to optical depth RIM_DEPTH.  In xi the Henyey-Greenstein
-    weight is (1 - g^2) / (1 + g^2 - 2 g cos 2 xi)^{3/2} (scattering angle 2 xi, Pegoraro et al. Eq. 8-9;
-    ``model.hg_weight`` in Q), cos xi = (1 - u^2) / (1 + u^2).  (neg_pz, ..., h_l2): ``_ray_quadratic``."""
+def ray_quadrature(m, beta, d_sv, along, h, t0, t1, profile, g=0.0, nodes=RIM_NODES):
+    """int f(t) times the point light's airlight integrand over the camera ray's piece [t0, t1] (1/m^2, per unit
+    intensity), ``profile(t)`` = f the light's relative intensity towards the ray's point t (an ops value), by
+    Gauss-Legendre quadrature in u = tan(xi / 2), xi = atan(Q / h) Sun's angle (Eq. 9: in xi the integrand
+    beta/(2 pi h) e^{-beta (D_sv + Q - Q_0)} w is smooth and bounded however close the ray passes the light;
+    dxi = 2 du / (1 + u^2), and Q = 2 h u / (1 - u^2) needs no tangent), up to optical depth RIM_DEPTH.  In xi
+    the Henyey-Greenstein weight is (1 - g^2) / (1 + g^2 - 2 g cos 2 xi)^{3/2} (scattering angle 2 xi, Pegoraro
+    et al. Eq. 8-9; ``model.hg_weight`` in Q), cos xi = (1 - u^2) / (1 + u^2).  A spot's blend rim
+    (``_rim``) and an area light's whole glow (``area.py``) are this with their own f."""
     h = m.maximum(h, model.MIN_ANGLE * d_sv)
     q0 = model.closest_point_q(m, d_sv, -along, h)
 
@@ -406,14 +407,12 @@ def _rim(m, beta, d_sv, along, h, neg_pz, neg_dz, a, t_l, h_l2, t0, t1, cos_half
     half, centre = 0.5 * (ub - ua), 0.5 * (ub + ua)
     two_h, beta_q0 = 2.0 * h, beta * q0
     total = 0.0
-    for x, w in _gauss_legendre(rim_nodes):
+    for x, w in _gauss_legendre(nodes):
         u = m.mul_add(half, x, centre)
         cos_part = m.mul_add(u, -u, 1.0)   # 1 - u^2 (0 where a float32 u rounds to 1: Q clamps to qb)
         q = m.minimum(m.maximum(two_h * u / cos_part, qa), qb)
         t = m.mul_add(q - h2 / q, 0.5, along)   # the ray's t there: z = (Q^2 - h^2) / 2Q
-        s = t - t_l
-        dist = m.maximum(m.sqrt(m.mul_add(a, s * s, h_l2)), 1e-30)   # |p + t d|; 0 where a ray meets the apex
-        f = ramp(m, m.mul_add(t, neg_dz, neg_pz) / dist, cos_half, cos_end)
+        f = profile(t)
         jacobian = 1.0 / (2.0 - cos_part)   # dxi / du / 2 = 1 / (1 + u^2)
         if g:
             cos_xi = cos_part * jacobian
@@ -421,6 +420,18 @@ def _rim(m, beta, d_sv, along, h, neg_pz, neg_dz, a, t_l, h_l2, t0, t1, cos_half
         total = m.mul_add(f * m.exp(m.mul_add(q, -beta, beta_q0)) * jacobian, w, total)
     value = (beta * (2.0 * model.INV_2PI) * (1.0 - g * g)) * m.exp(-beta * d_sv) / h * half * total
     return m.select(m.less(t0, t1), value, 0.0)
+
+
+def _rim(m, beta, d_sv, along, h, neg_pz, neg_dz, a, t_l, h_l2, t0, t1, cos_half, cos_end, g=0.0,
+         rim_nodes=RIM_NODES):
+    """f(c) times the point light's airlight over [t0, t1] (1/m^2): ``ray_quadrature`` with Blender's spot
+    factor (``ramp``) as f.  (neg_pz, ..., h_l2): ``_ray_quadratic``."""
+    def profile(t):
+        s = t - t_l
+        dist = m.maximum(m.sqrt(m.mul_add(a, s * s, h_l2)), 1e-30)   # |p + t d|; 0 where a ray meets the apex
+        return ramp(m, m.mul_add(t, neg_dz, neg_pz) / dist, cos_half, cos_end)
+
+    return ray_quadrature(m, beta, d_sv, along, h, t0, t1, profile, g, rim_nodes)
 
 
 def _ray_quadratic(m, px, py, pz, dx, dy, dz):
