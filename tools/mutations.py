@@ -228,6 +228,29 @@ MUTATIONS = [
              "    return kern * (pixel_angle ** 2) * t * t\n",
              "    return kern * (pixel_angle ** 2) * t\n",
              ("tests/test_weather.py::test_a_lamps_pixels_glow_like_path_traced_fog",)),
+    Mutation("area_solid_angle_sign", "area lights: the corner terms of the emitter's solid angle all added (the "
+             "rectangle from the foot point to each corner is signed by the side it lies on)",
+             "fog_addon/precompute/area.py",
+             "    return corners[i + 1][j + 1] - corners[i][j + 1] - corners[i + 1][j] + corners[i][j]\n",
+             "    return corners[i + 1][j + 1] + corners[i][j + 1] + corners[i + 1][j] + corners[i][j]\n",
+             ("tests/test_area.py::test_reference_emitter_quadrature_is_the_solid_angle",)),
+    Mutation("area_cell_extinction", "area lights: each cell's extinction taken from the emitter's centre (the "
+             "cells' e^{-beta (r_k - r)} left out)",
+             "fog_addon/precompute/area.py",
+             "                w = omega * m.exp(beta * (r - rk))   # the cell's extinction over the centre's\n",
+             "                w = omega\n",
+             ("tests/test_area.py::test_glow_against_quadrature_far_from_the_emitter",)),
+    Mutation("area_phase_per_cell", "area lights: the phase function of the emitter's centre for every cell "
+             "(the direction from each cell left out)",
+             "fog_addon/precompute/area.py",
+             "                cos_theta = -m.mul_add(cx, dx, m.mul_add(cy, dy, z * dz)) / m.maximum(rk, 1e-30)\n",
+             "                cos_theta = -m.mul_add(x, dx, m.mul_add(y, dy, z * dz)) / m.maximum(r, 1e-30)\n",
+             ("tests/test_area.py::test_glow_near_the_emitter_as_documented",)),
+    Mutation("area_one_sided", "area lights: the emitter shines from both sides (the fog behind it lit)",
+             "fog_addon/precompute/area.py",
+             "    hi = m.select(heads_out, cross, t_end)\n",
+             "    hi = t_end\n",
+             ("tests/test_area.py::test_glow_against_quadrature_far_from_the_emitter",)),
 ]
 
 

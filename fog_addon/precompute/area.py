@@ -125,7 +125,8 @@ def smeared_phase(m, g, cos_theta, omega):
 
 def _profile(m, t, px, py, pz, dx, dy, dz, a, b, beta, *, g, split):
     """f at the ray's point t (light space in metres): the cells' solid angles times their extinction over the
-    centre's and their smeared phase (``smeared_phase``), times r^2 / A; 0 behind the emitter."""
+    centre's and their smeared phase (``smeared_phase``), times r^2 / A (in front of the emitter: the callers
+    integrate over ``front_interval``)."""
     x, y, z = m.mul_add(t, dx, px), m.mul_add(t, dy, py), m.mul_add(t, dz, pz)
     r2 = m.mul_add(x, x, m.mul_add(y, y, z * z))
     r = m.sqrt(r2)
@@ -145,7 +146,7 @@ def _profile(m, t, px, py, pz, dx, dy, dz, a, b, beta, *, g, split):
                 cos_theta = -m.mul_add(cx, dx, m.mul_add(cy, dy, z * dz)) / m.maximum(rk, 1e-30)
                 w = w * smeared_phase(m, g, cos_theta, omega)
             f = f + w
-    return m.select(m.less(z, 0.0), f * r2 / m.maximum(4.0 * a * b, 1e-30), 0.0)
+    return f * r2 / m.maximum(4.0 * a * b, 1e-30)
 
 
 def _glow(m, beta, d_sv, along, h, t0, t1, px, py, pz, dx, dy, dz, a, b, g, nodes, split=SPLIT):
