@@ -215,3 +215,58 @@ def test_half_sizes_of_blender_shapes():
     assert 4.0 * a * b == pytest.approx(math.pi * 2.0 * 1.0) and a == pytest.approx(2.0 * b)
     assert area.half_sizes("SQUARE", 1.0, 9.0) == (0.5, 0.5)
     assert area.half_sizes("RECTANGLE", 2.0, 1.0, scale=3.0) == (3.0, 1.5)
+
+
+# --- the fog light an area light scatters onto surfaces -------------------------------------------------------
+
+def _scatter_case(rng, m, g):
+    """(ours, exact, the point light's, Lambert's cosine times the point light's) of the diffuse lobe at a random
+    Lambertian point 0.5-30 m from a small area light (1 cm, so the emitter's size plays no part), on any
+    side of it.  Exact: Sun et al. 2005 Eq. 15, the area light's airlight (``area.airlight_background``,
+    against quadrature above) along every direction of the hemisphere, times cos / pi
+    (tests/test_spot_scatter.py's quadrature)."""
+    import functools
+    from test_spot_scatter import _hemisphere
+    from fog_addon.precompute import surface
+    beta = math.exp(rng.uniform(math.log(0.01), math.log(0.5)))
+    dist = math.exp(rng.uniform(math.log(0.5), math.log(30.0)))
+    psi, az = math.acos(rng.uniform(-1.0, 1.0)), rng.uniform(0.0, 2.0 * math.pi)
+    p = dist * np.array([math.sin(psi) * math.cos(az), math.sin(psi) * math.sin(az), -math.cos(psi)])
+    n = rng.normal(size=3)
+    n /= np.linalg.norm(n)
+    if n @ -p < 0:
+        n = -n
+    w, wt = _hemisphere(p, np.zeros(3), n)
+    o = np.broadcast_to(p, w.shape)
+    d_sv, along, h = model.ray_light_geometry(m, o, w, np.zeros((1, 3)))
+    half = 0.005
+    with np.errstate(all="ignore"):
+        exact = float(np.sum(area.airlight_background(m, beta, d_sv, along, h, *o.T, *w.T, half, half, g=g) * wt))
+    d_sp = float(np.linalg.norm(p))
+    cos_n = np.asarray(n @ -p / d_sp)
+    point_fn = functools.partial(surface.surface_scatter, g=g)
+    point = float(point_fn(m, np.asarray(beta), np.asarray(d_sp), cos_n, 0.0))
+    c_axis = np.asarray(-p[2] / d_sp)
+    on_axis = np.asarray(-n[2])
+    ours = float(area.scatter(m, np.asarray(beta), np.asarray(d_sp), cos_n, cos_n, 0.0, c_axis, half, half, on_axis,
+                              on_axis, point=point_fn, g=g)[0])
+    return ours, exact, point, max(float(c_axis), 0.0) * point
+
+
+@pytest.mark.parametrize("g", [0.0, 0.85])
+def test_area_diffuse_scatter_against_hemisphere_quadrature(g):
+    """24 random points a g: the diffuse lobe within 0.12 of the point light's fog light (the spot's bound,
+    tests/test_spot_scatter.py), and on the whole closer than Lambert's cosine at the point times the point
+    light's (the light's direct weight, the simple model)."""
+    from fog_addon.precompute import bakers
+    m = NumpyOps(bakers.numpy_tables(g))
+    rng = np.random.default_rng(31 + int(10 * g))
+    ours, plain = [], []
+    for _ in range(24):
+        got, exact, point, simple = _scatter_case(rng, m, g)
+        ours.append(abs(got - exact) / point)
+        plain.append(abs(simple - exact) / point)
+    print(f"g={g}: max {max(ours):.3f} median {np.median(ours):.3f}; cosine alone: max {max(plain):.3f} "
+          f"median {np.median(plain):.3f}")
+    assert max(ours) <= 0.12
+    assert np.median(ours) < 0.5 * np.median(plain)

@@ -201,12 +201,10 @@ def airlight_pair(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, a, b, *
                    d_vp, px, py, pz, dx, dy, dz, a, b)
 
 
-def scatter(m, beta, d_sp, cos_n, cos_r, level, c_axis, a, b, cos_n_axis, cos_r_axis, *, point):
+def scatter(m, beta, d_sp, cos_n, cos_r, level, c_axis, a, b, cos_n_axis, cos_r_axis, *, point, g=0.0):
     """(diffuse, glossy): the fog light an area light scatters onto a surface per unit albedo and unit I_n
-    (1/m^2): the point light's (``point``, a scatter rung's kernel: Sun et al. 2005 Eq. 17-18) times Lambert's
-    cosine towards the surface point (``lambert_falloff``), the weight its direct light has there.  The fog
-    light reaching a point comes mostly from the fog between it and the light, lit at about that cosine;
-    the fog beside the beam (and, behind the emitter, all of it) is what this leaves out, measured in
-    tests/test_area.py."""
-    w = lambert_falloff(m, c_axis)
-    return point(m, beta, d_sp, cos_n, 0.0) * w, point(m, beta, d_sp, cos_r, level) * w
+    (1/m^2): the emitter taken as a point with Lambert's cosine about its axis (its size left out), the spot's
+    mean-direction model with the cosine-weighted share (``spot.lambert_scatter``, Sun et al. 2005 Eq. 15
+    over the fog the emitter lights)."""
+    return spot.lambert_scatter(m, beta, d_sp, cos_n, cos_r, level, c_axis, cos_n_axis, cos_r_axis, point=point,
+                                g=g)

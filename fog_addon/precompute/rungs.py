@@ -303,7 +303,7 @@ def area_glow_error(g):
 AREA_NEAR_ERRORS = {0.0: (0.07, 0.03, 0.02), 0.5: (0.2, 0.08, 0.03), 0.7: (1.3, 0.14, 0.06), 0.9: (4.6, 0.24, 0.32)}
 
 
-AREA_SCATTER_ERROR = 0.75   # as a spot's: the fog light beside the beam and behind the emitter left out
+AREA_SCATTER_ERROR = SPOT_SCATTER_ERROR   # the spot's mean-direction model with a cosine-weighted share
 
 
 def area_rungs(scatter, g):
@@ -320,9 +320,10 @@ def area_rungs(scatter, g):
     background = Rung(f"area background g{float(g):+.3f}", "background",
                       functools.partial(area.airlight_background, **kw), **common)
     lit = replace(scatter, name="area " + scatter.name, spot=True, area=True,
-                  kernel=functools.partial(area.scatter, point=scatter.kernel),
+                  kernel=functools.partial(area.scatter, point=scatter.kernel, g=float(g)),
+                  tables=scatter.tables + (tables.anisotropic(tables.SPOT_MOMENTS, g), tables.LOBE_RESPONSE),
                   domain=scatter.domain + "; relative to the point light's fog light", max_error=AREA_SCATTER_ERROR,
-                  evidence="tests/test_area_render.py: against Cycles")
+                  evidence="tests/test_area.py: Eq. 15 by hemisphere quadrature of the area light's airlight")
     return air, background, lit, DIRECT_AREA
 
 

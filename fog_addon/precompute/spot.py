@@ -130,6 +130,21 @@ def _arc_inside(alpha, psi, theta_c):
             np.where(partial, 2.0 * np.sqrt(1.0 - k * k), 0.0))
 
 
+def _arc_lambert(alpha, psi):
+    """(measure, first moment) as ``_arc_inside``'s, each direction weighted by Lambert's max(0, cos) to the
+    axis: cos = A + B cos(phi), A = cos alpha cos psi, B = sin alpha sin psi, integrated in closed form over the
+    azimuths where it is positive (|phi| < phi_m = arccos(-A / B))."""
+    a = np.cos(alpha) * np.cos(psi)
+    b = np.sin(alpha) * np.sin(psi)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        phim = np.arccos(np.clip(-a / b, -1.0, 1.0))
+    partial = (b > 1e-12) & (np.abs(a) < b)
+    s = np.sin(phim)
+    measure = np.where(partial, 2.0 * (a * phim + b * s), np.where(a > 0.0, 2.0 * np.pi * a, 0.0))
+    moment = np.where(partial, 2.0 * a * s + b * (phim + s * np.cos(phim)), np.where(a > 0.0, np.pi * b, 0.0))
+    return measure, moment
+
+
 # alpha quadrature of the bake: Gauss-Legendre panels graded towards alpha = 0 (G narrows as T grows)
 _ALPHA_EDGES = (0.0, 0.005, 0.02, 0.06, 0.15, 0.35, 0.7, 1.3, 2.2, math.pi)
 _ALPHA_POINTS = 24
@@ -190,13 +205,15 @@ def bake_scatter_tables(g=0.0):
         rows = slice(k * tables.SPOT_PSI, (k + 1) * tables.SPOT_PSI)
         if k < tables.SPOT_CONES:
             arcs, moments = _arc_inside(alpha[None, :], psi[:, None], k * tables.HALF_PI / (tables.SPOT_CONES - 1))
+        elif k == tables.SPOT_LAMBERT_SLICE:
+            arcs, moments = _arc_lambert(alpha[None, :], psi[:, None])
         else:
             arcs, moments = np.full((tables.SPOT_PSI, alpha.size), 2.0 * np.pi), np.zeros((tables.SPOT_PSI, alpha.size))
         out[rows, :, tables.SPOT_SHARE] = (arcs @ g_all.T) / total
         out[rows, :, tables.SPOT_MOMENT_LIGHT] = (arcs @ g_l.T) / total
         out[rows, :, tables.SPOT_MOMENT_AXIS] = (moments @ g_a.T) / (total * np.sin(psi)[:, None])
     out[..., tables.SPOT_SHARE] = np.clip(out[..., tables.SPOT_SHARE], 0.0, 1.0)
-    out[..., tables.SPOT_MOMENT_POINT] = out[tables.SPOT_CONES * tables.SPOT_PSI, :, tables.SPOT_MOMENT_LIGHT]
+    out[..., tables.SPOT_MOMENT_POINT] = out[tables.SPOT_SPHERE_SLICE * tables.SPOT_PSI, :, tables.SPOT_MOMENT_LIGHT]
     return out.astype(np.float32)
 
 
@@ -275,6 +292,27 @@ def _moments(m, beta, d_sp, c_axis, cos_half, blend, g):
     return (*(_lookup(m, spec, x, y0, step, frac, k)
               for k in (tables.SPOT_SHARE, tables.SPOT_MOMENT_LIGHT, tables.SPOT_MOMENT_AXIS)),
             m.table(spec, x, y0, channel=tables.SPOT_MOMENT_POINT))
+
+
+def lambert_moments(m, beta, d_sp, c_axis, g):
+    """``_moments`` of a Lambertian emitter about the axis (the tables' last slice, ``_arc_lambert``): the
+    share of the point light's fog light its cosine lights, its first moment, and the point light's R."""
+    spec, slice_rows = tables.anisotropic(tables.SPOT_MOMENTS, g), tables.SPOT_PSI
+    psi = m.atan2(m.sqrt(1.0 - c_axis * c_axis), c_axis)
+    y0 = m.mul_add(psi, (slice_rows - 1.0) / (math.pi * (spec.height - 1.0)),
+                   tables.SPOT_LAMBERT_SLICE * slice_rows / (spec.height - 1.0))
+    x = tables.surface_x(m, beta * d_sp)
+    return tuple(m.table(spec, x, y0, channel=k) for k in (tables.SPOT_SHARE, tables.SPOT_MOMENT_LIGHT,
+                                                            tables.SPOT_MOMENT_AXIS, tables.SPOT_MOMENT_POINT))
+
+
+def lambert_scatter(m, beta, d_sp, cos_n, cos_r, level, c_axis, cos_n_axis, cos_r_axis, *, point, g=0.0):
+    """(diffuse, glossy) of ``scatter`` for a Lambertian emitter about the axis (an area light far from the
+    point: ``area.scatter``), per unit normal intensity: the same mean-direction model with the moments of
+    ``lambert_moments``."""
+    moments = lambert_moments(m, beta, d_sp, c_axis, float(g))
+    return (_lobe(m, beta, d_sp, cos_n, 0.0, cos_n_axis, c_axis, moments, point, diffuse=True),
+            _lobe(m, beta, d_sp, cos_r, level, cos_r_axis, c_axis, moments, point, diffuse=False))
 
 
 def _lobe(m, beta, d_sp, cos_theta, level, cos_lobe_axis, c_axis, moments, point, diffuse):

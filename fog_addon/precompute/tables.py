@@ -40,14 +40,16 @@ AIRLIGHT_HG_SIZE = (256, 256)
 
 # A spot's fog light on a surface (spot.scatter): tables of X = surface_x(T) (T = beta D_sp) and rows of the
 # angle psi in [0, pi] of the surface point from the cone's axis (SPOT_PSI per slice), stacked in slices of
-# the cone's half-angle theta_c in [0, pi/2] (SPOT_CONES, uniform) and one last slice for the whole sphere
-# (the point light).  Per g, one texel holds four values read by one lookup (``spot.bake_scatter_tables``): the
+# the cone's half-angle theta_c in [0, pi/2] (SPOT_CONES, uniform), one slice for the whole sphere (the point
+# light) and one last slice for a Lambertian emitter (an area light: ``area.scatter``; the share weighted by
+# the cosine to the axis).  Per g, one texel holds four values read by one lookup (``spot.bake_scatter_tables``): the
 # share F of the point light's fog light that the cone lights (R), the two components of the first moment of
 # the directions it arrives from (G, B), and the point light's first moment (A: the last slice's G at that X,
 # in every row).
 SPOT_PSI = 65
 SPOT_CONES = 19
-SPOT_SLICES = SPOT_CONES + 1
+SPOT_SLICES = SPOT_CONES + 2
+SPOT_SPHERE_SLICE, SPOT_LAMBERT_SLICE = SPOT_CONES, SPOT_CONES + 1
 SPOT_MOMENTS = TableSpec("AnalyticFog Spot Moments", 64, SPOT_PSI * SPOT_SLICES, channels=4)
 SPOT_SHARE, SPOT_MOMENT_LIGHT, SPOT_MOMENT_AXIS, SPOT_MOMENT_POINT = range(4)   # its channels
 
