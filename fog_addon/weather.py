@@ -36,18 +36,11 @@ class WeatherError(ValueError):
 
 def _fields(g, albedo):
     """(single, multiple): functions (T, cos theta) -> I_1 and I_{>=2} / W0 per unit intensity (extinction 1)."""
-    from .precompute import bakers, multiple, rungs
+    from .precompute import bakers, emitter_glow, multiple
     from .precompute.ops import NumpyOps
-    background = rungs.anisotropic_rungs(g)[1]
     spec = multiple.table_spec(g, albedo)
-    m = NumpyOps({**bakers.numpy_tables(g), spec.name: bakers.table_array(spec, g)})
-
-    def single(t, c):
-        with np.errstate(all="ignore"):
-            v = background.kernel(m, 1.0, t, t * c, t * np.sqrt(np.maximum(1.0 - c * c, 0.0)))
-        return np.nan_to_num(v, nan=0.0, posinf=0.0)
-
-    return single, (lambda t, c: multiple.field(m, spec, t, c))
+    m = NumpyOps({spec.name: bakers.table_array(spec, g)})
+    return emitter_glow.single_field(g), (lambda t, c: multiple.field(m, spec, t, c))
 
 
 def glow_kernel(shape, pixel_angle, optical_distance, single, multiple_, albedo):

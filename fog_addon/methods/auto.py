@@ -23,6 +23,8 @@ What the scene needs comes first:
   lights down beyond the Quality's target);
 * light shafts (objects casting shadows into a light's glow, ``caveats.shadowing_lights``, with Light Shafts
   on): the compositor, which alone models them;
+* glowing objects the camera sees (emissive materials, ``compositor.glowing_objects``): the compositor, which
+  alone gives them a glow;
 * surfaces the compositor's one point per pixel would get wrong (transparent, glass or refracting
   materials on objects the camera sees, depth of field, motion blur): the node groups, unless their
   predicted cost exceeds SOFT_COST_LIMIT; then the compositor, and the choice says what it gets wrong.
@@ -31,6 +33,12 @@ from .. import caveats
 from ..nodes import groups
 from ..precompute import rungs
 from . import METHODS_BY_NAME
+
+
+def compositor_glowing(scene):
+    """The glowing objects the camera sees (``methods.compositor.glowing_objects``)."""
+    from .compositor import glowing_objects
+    return glowing_objects(scene)
 
 SOFT_COST_LIMIT = 6.0   # a soft need keeps the node groups while they cost at most this (x the fog-free render)
 _REFERENCE_SAMPLES = 16
@@ -106,13 +114,17 @@ def choose(scene, spec, lights, materials):
             return "compositor", (f"EEVEE's uniform block can't hold the node groups of {n} lights at full models; "
                                   f"{costs}")
     soft = _soft_needs(scene, materials)
+    caveat = f"; its one surface point per pixel is approximate with {' and '.join(soft)}" if soft else ""
     if spec.shafts and lights:
         from ..ops.apply import scene_size
         shafted = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(scene_size(scene), 1e-6))
         if shafted:
-            caveat = (f"; its one surface point per pixel is approximate with {' and '.join(soft)}" if soft else "")
             return "compositor", (f"light shafts: objects cast shadows into the glow of {len(shafted)} light(s), "
                                   f"and only the compositor models them{caveat}; {costs}")
+    glowing = compositor_glowing(scene)
+    if glowing:
+        return "compositor", (f"glowing objects ({caveats._names([o.name for o in glowing])}): only the "
+                              f"compositor gives them a glow{caveat}; {costs}")
     if soft and cost["nodes"] <= SOFT_COST_LIMIT:
         return "nodes", f"{' and '.join(soft)}: the compositor sees one surface point per pixel; {costs}"
     if cost["compositor"] < cost["nodes"]:

@@ -39,7 +39,8 @@ class Compositor(Method):
     def signature(self, scene, spec, shader_lights):
         c = scene.cycles
         return (f"compositor:{scene.render.engine}:{c.pixel_filter_type}:{comp_fog.horizontal_fit(scene)}:"
-                f"{scene.camera.data.sensor_fit}|shafts:{spec.shafts}|dimming:" + ",".join(o.name_full for o in shader_lights))
+                f"{scene.camera.data.sensor_fit}|shafts:{spec.shafts}|glow:{bool(glowing_objects(scene))}|dimming:"
+                + ",".join(o.name_full for o in shader_lights))
 
     def windows(self, scene, lights, partial):
         return view.windows(scene, lights, [scene.frame_current] if partial else None)
@@ -58,7 +59,8 @@ class Compositor(Method):
         images = comp_fog.build_fog_group(scene, plan.in_groups, plan.grouped_models, images,
                                           view.full_windows(plan.in_groups) if plan.partial else plan.windows,
                                           plan.partial, (maps, shafts.samples_for(spec.quality, len(maps)),
-                                                         spec.anisotropy))
+                                                         spec.anisotropy),
+                                          emitters=spec.anisotropy if glowing_objects(scene) else None)
         groups.build_world([], [], scene.camera, images, spec.passes)
         return images
 
@@ -114,6 +116,23 @@ def dimming_lights(scene, spec, lights):
     kept = [i for i in range(len(lights)) if steps[i] == rungs.OFF]
     return [lights[i] for i in kept], [rungs.choose("compositor", rungs.OFF, spec.anisotropy, spots[i],
                                                           area=view.is_area(lights[i])) for i in kept]
+
+
+def glowing_objects(scene):
+    """The objects the camera sees whose materials emit (``graph.emits``): they glow in the fog
+    (``comp_fog._emitter_glow``)."""
+    from ..nodes import graph
+    emitting = {}
+    found = []
+    for obj in scene.objects:
+        if obj.hide_render or not getattr(obj, "visible_camera", True):
+            continue
+        for slot in getattr(obj, "material_slots", ()):
+            mat = slot.material
+            if mat is not None and emitting.setdefault(mat.name, graph.emits(mat)):
+                found.append(obj)
+                break
+    return found
 
 
 def shafted_lights(scene, spec, lights):

@@ -30,12 +30,13 @@ Limits (README "The Compositor method"): one surface point per pixel, so a pixel
 gets the fog light of one point (Cycles: their mean position; EEVEE: the one its centre sees); perspective
 cameras; no fog passes (the fog's light is the compositor's).
 """
+import functools
 import hashlib
 import math
 
 import bpy
 
-from ..precompute import footprint, model, pixel, rungs, shading, shafts, spot as spot_, surface
+from ..precompute import emitter_glow, footprint, model, pixel, rungs, shading, shafts, spot as spot_, surface
 from . import compositor, groups, images as images_, owned
 from .sockets import KERNEL_GROUP, NodeOps, Val
 
@@ -585,19 +586,61 @@ def _params(m):
     return beta, albedo
 
 
-def build_fog_group(scene, lights, models, images, windows=None, partial=False, shafted=None):
+EMITTERS = "Emission"   # the fog group's input of the emitters' light: the Render Layers' Emission pass
+GLOW_DEPTH_LIMIT = 14.0  # the emitters' light is the Emission pass times e^{T} (the pass is dimmed), T <= this
+
+
+def emitter_pixel_angle(scene):
+    """rad a pixel at the picture's centre (the emitters' glow kernels are baked for it)."""
+    from .. import view
+    left, right, _, _ = view._camera_frame(scene, scene.camera)
+    return math.atan(float(right - left) / max(view.render_size(scene)[0], 1))
+
+
+def emitter_table(g, pixel_angle):
+    """{name: image} of the emitters' glow weights for anisotropy ``g`` and ``pixel_angle`` (baked once, cached)."""
+    spec = emitter_glow.table_spec(g, pixel_angle)
+    return {spec.name: images_.table_image(spec, functools.partial(emitter_glow.bake_table, g, pixel_angle))}
+
+
+def _emitter_glow(m, p, beta, d_vp, g, pixel_angle):
+    """The glows of the glowing objects the camera sees (``precompute/emitter_glow.py``): the Emission pass made
+    undimmed (times e^{beta D_vp}), weighted per pixel by a_j(T) and blurred by each Blur node of the ladder,
+    summed (per unit albedo)."""
+    spec = emitter_glow.table_spec(g, pixel_angle)
+    t = beta * d_vp
+    light = m.scale(p[EMITTERS], m.exp(m.minimum(t, GLOW_DEPTH_LIMIT)))
+    x = emitter_glow.table_x(m, t)
+    rows = len(emitter_glow.SIZES)
+    total = None
+    for j, size in enumerate(emitter_glow.SIZES):
+        weighted = m.scale(light, m.table(spec, x, j / (rows - 1.0)))
+        blur = m.node("CompositorNodeBlur", 5)
+        blur.inputs["Size"].default_value = (float(size), float(size))
+        m.feed(blur.inputs["Image"], weighted)
+        v = m.wrap(blur.outputs["Image"], vector=True)
+        total = v if total is None else _accumulate(m, total, v)
+    return total
+
+
+def build_fog_group(scene, lights, models, images, windows=None, partial=False, shafted=None, emitters=None):
     """(Re)build the compositor group ``FOG_GROUP``: Image (the render) and the AOVs in; Image (the render
     plus the fog's light) and Fog Light out.  ``lights``: the fog's lights, ``models``: each light's
     rungs.LightModels; ``windows``: (the surfaces' window, [each light's glow window or None]) of
     ``footprint.py`` (``view.windows``), or None to evaluate every term over the whole picture; ``partial``:
-    they do not hold the animation's range (``PARTIAL``); ``shafted``: ``build_bundle``'s.  Rebuilt in place, so the scene's compositor keeps
-    its group node.  Returns the table images it reads (``images`` and the pixel filter's)."""
+    they do not hold the animation's range (``PARTIAL``); ``shafted``: ``build_bundle``'s; ``emitters``: the fog's g
+    if glowing objects get their glows (``_emitter_glow``: an Emission input), else None.  Rebuilt in place, so the
+    scene's compositor keeps its group node.  Returns the table images it reads (``images`` and the pixel
+    filter's and the emitters' weights)."""
     filt, peak = pixel_filter(scene), None
     if filt is not None:
         peak, baker = pixel.filter_table(filt[0])
         images = dict(images, **{peak.name: images_.table_image(peak, baker)})
+    if emitters is not None:
+        images = dict(images, **emitter_table(float(emitters), emitter_pixel_angle(scene)))
     eevee = scene.render.engine == groups.EEVEE_ENGINE
-    inputs = (("Image", "COLOR"),) + aovs(scene.render.engine) + (((compositor.DEPTH, "VALUE"),) if eevee else ())
+    inputs = ((("Image", "COLOR"),) + aovs(scene.render.engine) + (((compositor.DEPTH, "VALUE"),) if eevee else ())
+              + (((EMITTERS, "COLOR"),) if emitters is not None else ()))
     ng = bpy.data.node_groups.get(FOG_GROUP)
     if ng is None:
         ng = bpy.data.node_groups.new(FOG_GROUP, "CompositorNodeTree")
@@ -672,6 +715,8 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
         fog = m.wrap((0.0, 0.0, 0.0))
     else:   # Eq. 19 where the pixel sees its surface, Eq. 12 where it sees the sky
         fog = albedo * shading.pixel_light(m, sums, model.transmittance(m, beta, d_vp), cover)
+    if emitters is not None:
+        fog = fog + albedo * _emitter_glow(m, p, beta, d_vp, float(emitters), emitter_pixel_angle(scene))
     m.feed(gout.inputs["Fog Light"], fog)
     m.feed(gout.inputs["Image"], fog + p["Image"])
     ng[PARTIAL] = partial

@@ -202,8 +202,11 @@ def _store_passes(scene, layers, fog=None):
     if the Denoise node reads them."""
     for vl in layers:
         if fog is not None:
-            if any(i.name == DEPTH for i in fog.interface.items_tree if i.in_out == "INPUT"):
+            names = {i.name for i in fog.interface.items_tree if i.in_out == "INPUT"}
+            if DEPTH in names:
                 overrides.override(vl, "use_pass_z", True)
+            if EMISSION in names:   # the glowing objects' light (comp_fog.EMITTERS)
+                overrides.override(vl, "use_pass_emit", True)
             continue
         overrides.override(vl, "use_pass_emit", True)
         overrides.override(vl, "use_pass_environment", True)

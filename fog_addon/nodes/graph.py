@@ -230,6 +230,14 @@ def plan(tree):
     return outs, srcs, kinds
 
 
+def emits(material):
+    """True if ``material``'s effective shader holds emission that is not black for sure (an Emission shader,
+    a Principled BSDF's emission): a glowing object (``comp_fog``'s emitters' glow)."""
+    if material is None or material.node_tree is None:
+        return False
+    return any(not is_zero(e[0]) for k in plan(material.node_tree)[2].values() for e in k.emitters)
+
+
 # --- the BSDF values the fog copies ------------------------------------------------
 
 def _mirrored(sock, ctx):

@@ -85,6 +85,9 @@ class OslOps:
     def exp(self, x):
         return self.call("exp", x)
 
+    def log(self, x):
+        return self.select(self.less(0.0, x), self.call("log", self.maximum(x, 1e-37)), 0.0)
+
     def sqrt(self, x):
         return self.call("sqrt", self.maximum(x, 0.0))
 

@@ -44,6 +44,7 @@ _FOLD = {
     "DIVIDE": lambda a, b: a / b if b != 0 else 0.0,
     "MINIMUM": min, "MAXIMUM": max, "POWER": lambda a, b: a ** b if a > 0 else 0.0,
     "ARCTAN2": math.atan2, "LESS_THAN": lambda a, b: float(a < b),
+    "LOGARITHM": lambda a, b: math.log(a) / math.log(b) if a > 0 and b > 0 and b != 1 else 0.0,
 }
 _FOLD3 = {"MULTIPLY_ADD": lambda a, b, c: a * b + c}
 _FOLD1 = {
@@ -263,6 +264,9 @@ class NodeOps:
 
     def exp(self, x):
         return self.math("EXPONENT", x)
+
+    def log(self, x):
+        return self.math("LOGARITHM", x, math.e)
 
     def sqrt(self, x):
         return self.math("SQRT", x)

@@ -421,7 +421,9 @@ def apply(scene, spec, objects=None, progress=progress_.silent):
             skipped.append((scene.world.name, why))
     skipped += follow_compositor(scene, rebuild=True)   # Cycles' denoiser kept off the fog's light
     if not lights:
-        skipped.append((scene.name, "has no point light taking part: the fog only dims"))
+        skipped.append((scene.name, "has no light taking part: the fog only dims"
+                        + (" (and the glowing objects glow)" if getattr(method, "name", method) == "compositor"
+                           and methods.compositor.glowing_objects(scene) else "")))
     note = presets.invisible_fog_note(spec.beta_per_unit, scene_size(scene))
     if note:
         skipped.append((scene.name, note))
@@ -449,7 +451,8 @@ def not_modelled(scene, spec, lights, materials, method=None):
              caveats.glass_note(materials, scene.objects),
              *caveats.multiple_notes(lights, spec.multiple_scattering, getattr(method, "name", method),
                                      view.has_shape,
-                                     _optical_distance(scene, spec))]
+                                     _optical_distance(scene, spec)),
+             *caveats.glow_notes(methods.compositor.glowing_objects(scene), getattr(method, "name", method))]
     return [n for n in notes if n]
 
 

@@ -30,6 +30,7 @@ class ShaderOps(Protocol):
 
     def const(self, x: float) -> Any: ...
     def exp(self, x) -> Any: ...
+    def log(self, x) -> Any: ...             # natural logarithm; 0 at and below 0
     def sqrt(self, x) -> Any: ...            # 0 below 0
     def sin(self, x) -> Any: ...
     def cos(self, x) -> Any: ...
@@ -69,6 +70,13 @@ class NumpyOps:
 
     # -- scalar functions (Blender Math node operations) -------------------
     exp = staticmethod(np.exp)
+
+    @staticmethod
+    def log(x):
+        """ln x, 0 at and below 0 (Blender's Math Logarithm)."""
+        x = np.asarray(x, float)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(x > 0.0, np.log(np.where(x > 0.0, x, 1.0)), 0.0)
     sqrt = staticmethod(lambda x: np.sqrt(np.maximum(x, 0.0)))   # Math SQRT returns 0 below 0
     sin = staticmethod(np.sin)
     cos = staticmethod(np.cos)

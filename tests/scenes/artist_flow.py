@@ -121,6 +121,9 @@ def lights_follow(scene):
     lamp.data.type = "AREA"
     bpy.context.view_layer.update()
     R["lights_after_area"] = light_instances()
+    lamp.data.type = "SUN"
+    bpy.context.view_layer.update()
+    R["lights_after_sun"] = light_instances()
     lamp.data.type = "POINT"
     lamp.data.analytic_fog.use = False
     bpy.context.view_layer.update()

@@ -1,0 +1,179 @@
+"""Glows of glowing objects (emissive surfaces) by depth-dependent convolution, as a sum of Gaussian blurs.
+
+Narasimhan, Ramamoorthi, Nayar §7.2-7.3: a source of any shape glows as its image convolved with the point
+spread function of its depth.  A pixel q of an emitter of radiance L_q at optical depth T_q = beta z_q is a
+source of intensity L_q Omega_px z_q^2; its glow at a pixel p an angle gamma away is (``weather.py``)
+
+    L_q K(T_q, gamma),   K(T, gamma) = Omega_px T^2 W0 I_1(T, cos gamma),
+
+I_1 the single-scattering field of an endless ray at extinction 1 (Sun et al. 2005 Eq. 12, per unit
+intensity).  Summing over q is a convolution whose kernel changes with q's depth.  The compositor has
+Gaussian blurs of any size (Blender's Blur node: a separable Gaussian of sigma = size / 3, cut at the size,
+``blur_weights``), so the kernel is written, for every T, as a non-negative sum of a fixed ladder of them,
+
+    K(T, gamma(r)) ~ sum_j a_j(T) B_j(r),
+
+and the glow as  sum_j B_j * (a_j(T(q)) L(q)):  one blur per rung of the ladder, whatever the depths, the
+depth entering only the per-pixel weights a_j(T) (a table over ln T, ``bake_weights``).  The ladder's sizes
+double from 1 px; the fit is least squares, relative, over the kernel's core (supersampled: the kernel
+diverges as 1/gamma at a source's own pixel) and its tail to the largest size; ``fit_error`` measures it.
+
+The weights depend on the camera's pixel angle (rad / px at the picture's centre; the kernel is taken as
+radial there) and on g; they are baked when the fog is applied.
+"""
+import math
+
+import numpy as np
+
+from . import tables
+
+SIZES = tuple(2 ** k for k in range(0, 10))   # the Blur nodes' sizes, px (sigma = size / 3: 0.33 to 171 px)
+T_MIN, T_MAX, T_COUNT = 1e-3, 30.0, 24       # the weights' table over ln T
+CORE_SUBSAMPLES = 8   # the kernel at a source's own pixel and its neighbours, averaged over 8 x 8 points
+CORE = 2              # px: the core's half-width
+HALF = 400            # px: the fit's grid about a source (the largest blur reaches 512)
+
+
+def single_field(g):
+    """I_1(T, cos gamma): the single-scattering field of an endless ray at extinction 1 per unit intensity (Sun et
+    al. 2005 Eq. 12, the background rung of anisotropy g on numpy), T the distance to the source."""
+    from . import bakers, rungs
+    from .ops import NumpyOps
+    background = rungs.anisotropic_rungs(g)[1]
+    m = NumpyOps(bakers.numpy_tables(g))
+
+    def single(t, c):
+        with np.errstate(all="ignore"):
+            v = background.kernel(m, 1.0, t, t * c, t * np.sqrt(np.maximum(1.0 - c * c, 0.0)))
+        return np.nan_to_num(v, nan=0.0, posinf=0.0)
+
+    return single
+
+
+def blur_weights(size):
+    """The 1D weights of Blender's Gaussian Blur node of ``size`` px (sigma = size / 3, cut at |i| <= size:
+    Blender's ``RE_filter_value`` Gaussian on i / size), normalised; a size below 1 is no blur."""
+    n = int(round(size))
+    if n < 1:
+        return np.ones(1)
+    i = np.arange(-n, n + 1, dtype=float)
+    w = np.exp(-4.5 * (i / n) ** 2)
+    return w / w.sum()
+
+
+def blur_kernel_2d(size, half):
+    """The 2D kernel (2 half + 1 square, centred) of the Blur node of ``size``: the outer product of
+    ``blur_weights``, cut to the square."""
+    w = blur_weights(size)
+    n = len(w) // 2
+    k = np.zeros(2 * half + 1)
+    lo, hi = max(0, n - half), min(len(w), n + half + 1)
+    k[half - (n - lo):half + (hi - n)] = w[lo:hi]
+    return np.outer(k, k)
+
+
+def _nnls(a, b, iterations=200):
+    """min |a x - b| with x >= 0 (Lawson and Hanson's active set; a: (M, N), small N)."""
+    m, n = a.shape
+    x = np.zeros(n)
+    passive = np.zeros(n, bool)
+    for _ in range(iterations):
+        w = a.T @ (b - a @ x)
+        if passive.all() or np.max(np.where(passive, -np.inf, w)) <= 1e-12 * max(1.0, np.abs(w).max()):
+            break
+        passive[int(np.argmax(np.where(passive, -np.inf, w)))] = True
+        while True:
+            z = np.zeros(n)
+            z[passive] = np.linalg.lstsq(a[:, passive], b, rcond=None)[0]
+            if np.all(z[passive] > 0.0):
+                x = z
+                break
+            bad = passive & (z <= 0.0)
+            alpha = np.min(x[bad] / np.maximum(x[bad] - z[bad], 1e-300))
+            x = x + alpha * (z - x)
+            passive &= x > 1e-15
+    return x
+
+
+def kernel_grid(t, pixel_angle, single, albedo, half):
+    """K(T, gamma) per unit source radiance on the (2 half + 1)^2 pixel grid about a source (module docstring;
+    ``single(T, cos gamma)``: I_1 per unit intensity at extinction 1), its core supersampled."""
+    d = np.arange(-half, half + 1, dtype=float)
+    dx, dy = np.meshgrid(d, d)
+
+    def k_at(r_px):
+        c = np.cos(r_px * pixel_angle)
+        return albedo * single(np.full(c.shape, float(t)), c)
+
+    kern = k_at(np.hypot(dx, dy))
+    sub = (np.arange(CORE_SUBSAMPLES) + 0.5) / CORE_SUBSAMPLES - 0.5
+    sx, sy = np.meshgrid(sub, sub)
+    for i in range(half - CORE, half + CORE + 1):
+        for j in range(half - CORE, half + CORE + 1):
+            kern[i, j] = float(np.mean(k_at(np.hypot(dx[i, j] + sx, dy[i, j] + sy))))
+    return kern * (pixel_angle ** 2) * float(t) ** 2
+
+
+def _octant(half):
+    """Indices (i, j) of the grid's octant 0 <= dx <= dy about the centre, with the count of grid pixels each
+    stands for (the kernels are symmetric under the square's eight symmetries)."""
+    d = np.arange(0, half + 1)
+    dx, dy = np.meshgrid(d, d)
+    keep = dx <= dy
+    count = np.where(dx == dy, 4.0, 8.0) / np.where(dx == 0, 2.0, 1.0)
+    count = np.where((dx == 0) & (dy == 0), 1.0, count)
+    return (half + dy[keep], half + dx[keep]), count[keep]
+
+
+def fit_weights(kern, sizes=None):
+    """(a_j) >= 0 with sum_j a_j B_j ~ ``kern`` (square, centred), least squares relative to the kernel (each
+    pixel weighted by 1 / K, so the tail counts as much as the core), on the grid's octant (each point weighted
+    by the pixels it stands for)."""
+    sizes = SIZES if sizes is None else sizes
+    half = kern.shape[0] // 2
+    idx, count = _octant(half)
+    basis = np.stack([blur_kernel_2d(s, half)[idx] for s in sizes], axis=1)
+    target = kern[idx]
+    weight = np.sqrt(count) / np.maximum(target, 1e-30 * max(float(target.max()), 1e-300))
+    return _nnls(basis * weight[:, None], target * weight)
+
+
+def fit_error(kern, a, sizes=None):
+    """(max relative error, relative error of the kernel's sum) of the fitted ladder ``a`` on ``kern``."""
+    sizes = SIZES if sizes is None else sizes
+    half = kern.shape[0] // 2
+    approx = sum(w * blur_kernel_2d(s, half) for w, s in zip(a, sizes))
+    rel = np.abs(approx - kern) / np.maximum(kern, 1e-300)
+    return float(rel.max()), float(abs(approx.sum() / kern.sum() - 1.0))
+
+
+def optical_depths(count=T_COUNT):
+    """The T of the weights' table columns: geometric from T_MIN to T_MAX."""
+    return np.geomspace(T_MIN, T_MAX, count)
+
+
+def table_x(m, t):
+    """The weights' table X of optical depth ``t`` (clamped to the table: a source nearer than T_MIN glows as
+    at T_MIN, whose kernel scales as T^2: negligible)."""
+    lo, hi = math.log(T_MIN), math.log(T_MAX)
+    return m.clamp01((m.log(m.maximum(t, T_MIN)) - lo) * (1.0 / (hi - lo)))
+
+
+def table_spec(g, pixel_angle):
+    """The TableSpec of the weights for anisotropy ``g`` and ``pixel_angle`` (rad/px): one row per size."""
+    return tables.TableSpec(f"AnalyticFog Emitter Glow (g {float(g):+.3f}, {float(pixel_angle):.6g} rad/px)",
+                            T_COUNT, len(SIZES), g=float(g))
+
+
+def bake_weights(single, pixel_angle, albedo=1.0, half=None):
+    """(len(SIZES), T_COUNT) float32: a_j(T) per unit albedo (``fit_weights`` at each ``optical_depths``)."""
+    half = half or HALF
+    out = np.zeros((len(SIZES), T_COUNT))
+    for k, t in enumerate(optical_depths()):
+        out[:, k] = fit_weights(kernel_grid(t, pixel_angle, single, albedo, half))
+    return out.astype(np.float32)
+
+
+def bake_table(g, pixel_angle):
+    """The weights' table (``table_spec``) of anisotropy g at ``pixel_angle``: ``bake_weights`` of its field."""
+    return bake_weights(single_field(g), pixel_angle)
