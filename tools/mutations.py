@@ -251,6 +251,18 @@ MUTATIONS = [
              "    hi = m.select(heads_out, cross, t_end)\n",
              "    hi = t_end\n",
              ("tests/test_area.py::test_glow_against_quadrature_far_from_the_emitter",)),
+    Mutation("emitter_glow_undimmed", "glowing objects: the Emission pass taken as the emitters' light (it is dimmed "
+             "by the fog in front of them: their light is the pass times e^{beta D_vp})",
+             "fog_addon/nodes/comp_fog.py",
+             "    light = m.scale(p[EMITTERS], m.exp(m.minimum(t, GLOW_DEPTH_LIMIT)))\n",
+             "    light = p[EMITTERS]\n",
+             ("tests/test_emitter_glow.py::test_glowing_sphere_against_path_traced_fog[cycles]",)),
+    Mutation("emitter_glow_depth_squared", "glowing objects: a pixel's intensity without its depth squared (L "
+             "Omega z^2 is the intensity of a patch filling a pixel at depth z)",
+             "fog_addon/precompute/emitter_glow.py",
+             "    return kern * (pixel_angle ** 2) * float(t) ** 2\n",
+             "    return kern * (pixel_angle ** 2) * float(t)\n",
+             ("tests/test_emitter_glow.py::test_glowing_sphere_against_path_traced_fog[cycles]",)),
 ]
 
 
