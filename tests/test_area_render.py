@@ -4,7 +4,8 @@ albedo 0.9) rendered with the analytic fog against Cycles' path-traced single sc
 
 Goal (the issue): <= 5 % relative RMSE in Cycles, <= 8 % in EEVEE.  Measured
 (docs/measurements/2026-11-27-area-lights.md), against the mean of two 8192-spp seeds (their own seed-to-seed
-difference 2.4 %): g 0, Cycles Node Groups 2.1 %, EEVEE Compositor 2.1 %.  The pixels whose rays cross an
+difference 2.4 %): g 0, Cycles Node Groups 1.5 %, EEVEE Compositor 1.4 %; g 0.7 (four 16384-spp seeds),
+Cycles Node Groups 3.7 %, EEVEE Compositor 3.7 %.  The pixels whose rays cross an
 emitter's surface are left out, as a lamp's own pixels are (the light is invisible to the camera; Cycles'
 light sampling is noisiest there).
 """

@@ -256,13 +256,13 @@ MUTATIONS = [
              "fog_addon/nodes/comp_fog.py",
              "    light = m.scale(p[EMITTERS], m.exp(m.minimum(t, GLOW_DEPTH_LIMIT)))\n",
              "    light = p[EMITTERS]\n",
-             ("tests/test_emitter_glow.py::test_glowing_sphere_against_path_traced_fog[cycles]",)),
+             ("tests/test_emitter_glow.py::test_glowing_sphere_against_path_traced_fog[cycles-0.1-False]",)),
     Mutation("emitter_glow_depth_squared", "glowing objects: a pixel's intensity without its depth squared (L "
              "Omega z^2 is the intensity of a patch filling a pixel at depth z)",
              "fog_addon/precompute/emitter_glow.py",
              "    return kern * (pixel_angle ** 2) * float(t) ** 2\n",
              "    return kern * (pixel_angle ** 2) * float(t)\n",
-             ("tests/test_emitter_glow.py::test_glowing_sphere_against_path_traced_fog[cycles]",)),
+             ("tests/test_emitter_glow.py::test_glowing_sphere_against_path_traced_fog[cycles-0.1-False]",)),
 ]
 
 

@@ -60,7 +60,8 @@ class Compositor(Method):
                                           view.full_windows(plan.in_groups) if plan.partial else plan.windows,
                                           plan.partial, (maps, shafts.samples_for(spec.quality, len(maps)),
                                                          spec.anisotropy),
-                                          emitters=spec.anisotropy if glowing_objects(scene) else None)
+                                          emitters=((spec.anisotropy, spec.multiple_albedo) if glowing_objects(scene)
+                                                    else None))
         groups.build_world([], [], scene.camera, images, spec.passes)
         return images
 

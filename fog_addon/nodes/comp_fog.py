@@ -597,17 +597,19 @@ def emitter_pixel_angle(scene):
     return math.atan(float(right - left) / max(view.render_size(scene)[0], 1))
 
 
-def emitter_table(g, pixel_angle):
-    """{name: image} of the emitters' glow weights for anisotropy ``g`` and ``pixel_angle`` (baked once, cached)."""
-    spec = emitter_glow.table_spec(g, pixel_angle)
-    return {spec.name: images_.table_image(spec, functools.partial(emitter_glow.bake_table, g, pixel_angle))}
+def emitter_table(g, pixel_angle, multiple_albedo=None):
+    """{name: image} of the emitters' glow weights for anisotropy ``g``, ``pixel_angle`` and Dense Fog's albedo
+    (baked once, cached)."""
+    spec = emitter_glow.table_spec(g, pixel_angle, multiple_albedo)
+    return {spec.name: images_.table_image(spec, functools.partial(emitter_glow.bake_table, g, pixel_angle,
+                                                                   multiple_albedo))}
 
 
-def _emitter_glow(m, p, beta, d_vp, g, pixel_angle):
+def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None):
     """The glows of the glowing objects the camera sees (``precompute/emitter_glow.py``): the Emission pass made
     undimmed (times e^{beta D_vp}), weighted per pixel by a_j(T) and blurred by each Blur node of the ladder,
     summed (per unit albedo)."""
-    spec = emitter_glow.table_spec(g, pixel_angle)
+    spec = emitter_glow.table_spec(g, pixel_angle, multiple_albedo)
     t = beta * d_vp
     light = m.scale(p[EMITTERS], m.exp(m.minimum(t, GLOW_DEPTH_LIMIT)))
     x = emitter_glow.table_x(m, t)
@@ -628,8 +630,9 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     plus the fog's light) and Fog Light out.  ``lights``: the fog's lights, ``models``: each light's
     rungs.LightModels; ``windows``: (the surfaces' window, [each light's glow window or None]) of
     ``footprint.py`` (``view.windows``), or None to evaluate every term over the whole picture; ``partial``:
-    they do not hold the animation's range (``PARTIAL``); ``shafted``: ``build_bundle``'s; ``emitters``: the fog's g
-    if glowing objects get their glows (``_emitter_glow``: an Emission input), else None.  Rebuilt in place, so the
+    they do not hold the animation's range (``PARTIAL``); ``shafted``: ``build_bundle``'s; ``emitters``: (the fog's
+    g, Dense Fog's albedo or None) if glowing objects get their glows (``_emitter_glow``: an Emission input), else
+    None.  Rebuilt in place, so the
     scene's compositor keeps its group node.  Returns the table images it reads (``images`` and the pixel
     filter's and the emitters' weights)."""
     filt, peak = pixel_filter(scene), None
@@ -637,7 +640,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
         peak, baker = pixel.filter_table(filt[0])
         images = dict(images, **{peak.name: images_.table_image(peak, baker)})
     if emitters is not None:
-        images = dict(images, **emitter_table(float(emitters), emitter_pixel_angle(scene)))
+        images = dict(images, **emitter_table(*emitters[:1], emitter_pixel_angle(scene), emitters[1]))
     eevee = scene.render.engine == groups.EEVEE_ENGINE
     inputs = ((("Image", "COLOR"),) + aovs(scene.render.engine) + (((compositor.DEPTH, "VALUE"),) if eevee else ())
               + (((EMITTERS, "COLOR"),) if emitters is not None else ()))
@@ -716,7 +719,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     else:   # Eq. 19 where the pixel sees its surface, Eq. 12 where it sees the sky
         fog = albedo * shading.pixel_light(m, sums, model.transmittance(m, beta, d_vp), cover)
     if emitters is not None:
-        fog = fog + albedo * _emitter_glow(m, p, beta, d_vp, float(emitters), emitter_pixel_angle(scene))
+        fog = fog + albedo * _emitter_glow(m, p, beta, d_vp, emitters[0], emitter_pixel_angle(scene), emitters[1])
     m.feed(gout.inputs["Fog Light"], fog)
     m.feed(gout.inputs["Image"], fog + p["Image"])
     ng[PARTIAL] = partial

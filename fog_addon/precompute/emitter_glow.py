@@ -34,6 +34,20 @@ CORE = 2              # px: the core's half-width
 HALF = 400            # px: the fit's grid about a source (the largest blur reaches 512)
 
 
+def glow_field(g, multiple_albedo=None):
+    """The field a glowing pixel's kernel is made of, per unit intensity and unit albedo at extinction 1: I_1
+    (``single_field``), plus I_{>=2} / W0 (``multiple.field``, Narasimhan et al.'s multiply scattered field:
+    Dense Fog) when ``multiple_albedo`` W0 is given."""
+    single = single_field(g)
+    if multiple_albedo is None:
+        return single
+    from . import bakers, multiple
+    from .ops import NumpyOps
+    spec = multiple.table_spec(g, multiple_albedo)
+    m = NumpyOps({spec.name: bakers.table_array(spec, g)})
+    return lambda t, c: single(t, c) + multiple.field(m, spec, t, c)
+
+
 def single_field(g):
     """I_1(T, cos gamma): the single-scattering field of an endless ray at extinction 1 per unit intensity (Sun et
     al. 2005 Eq. 12, the background rung of anisotropy g on numpy), T the distance to the source."""
@@ -159,9 +173,11 @@ def table_x(m, t):
     return m.clamp01((m.log(m.maximum(t, T_MIN)) - lo) * (1.0 / (hi - lo)))
 
 
-def table_spec(g, pixel_angle):
-    """The TableSpec of the weights for anisotropy ``g`` and ``pixel_angle`` (rad/px): one row per size."""
-    return tables.TableSpec(f"AnalyticFog Emitter Glow (g {float(g):+.3f}, {float(pixel_angle):.6g} rad/px)",
+def table_spec(g, pixel_angle, multiple_albedo=None):
+    """The TableSpec of the weights for anisotropy ``g``, ``pixel_angle`` (rad/px) and, with Dense Fog, the
+    multiply scattered field's albedo: one row per size."""
+    dense = "" if multiple_albedo is None else f", multiple W0 {float(multiple_albedo):.3f}"
+    return tables.TableSpec(f"AnalyticFog Emitter Glow (g {float(g):+.3f}, {float(pixel_angle):.6g} rad/px{dense})",
                             T_COUNT, len(SIZES), g=float(g))
 
 
@@ -174,6 +190,7 @@ def bake_weights(single, pixel_angle, albedo=1.0, half=None):
     return out.astype(np.float32)
 
 
-def bake_table(g, pixel_angle):
-    """The weights' table (``table_spec``) of anisotropy g at ``pixel_angle``: ``bake_weights`` of its field."""
-    return bake_weights(single_field(g), pixel_angle)
+def bake_table(g, pixel_angle, multiple_albedo=None):
+    """The weights' table (``table_spec``) of anisotropy g at ``pixel_angle``: ``bake_weights`` of its field
+    (``glow_field``)."""
+    return bake_weights(glow_field(g, multiple_albedo), pixel_angle)
