@@ -151,10 +151,9 @@ DENSE_T = 1.0   # optical distance camera to light from which the multiply scatt
 
 
 def multiple_notes(lights, multiple, method_name, is_spot, optical_distance=None):
-    """Notes on the multiply scattered light (Dense Fog): what it leaves out with it on (``is_spot(light)``:
-    lights it does not model, area lights; the OSL method); with it off, the lights seen through dense fog
-    (``optical_distance(light)``: beta times the camera's distance to it, at least DENSE_T), whose wide halo is
-    then missing."""
+    """Notes on the multiply scattered light (Dense Fog): what it leaves out with it on (spot lights, the OSL
+    method); with it off, the lights seen through dense fog (``optical_distance(light)``: beta times the
+    camera's distance to it, at least DENSE_T), whose wide halo is then missing."""
     if not multiple:
         dense = [o.name for o in lights if optical_distance is not None and optical_distance(o) >= DENSE_T]
         if not dense:
@@ -162,15 +161,14 @@ def multiple_notes(lights, multiple, method_name, is_spot, optical_distance=None
         return [f"the fog is dense around {len(dense)} light(s) ({_names(dense)}; optical distance up to "
                 f"{max(optical_distance(o) for o in lights):.1f} from the camera) and multiple scattering is "
                 "off: their glow lacks its wide halo; turn on Dense Fog"
-                + (" (it models point and spot lights)" if any(is_spot(o) for o in lights if o.name in dense)
-                   else "")]
+                + (" (it models point lights)" if any(is_spot(o) for o in lights if o.name in dense) else "")]
     if method_name == "osl":
         return ["multiple scattering is not modelled by Method OSL (its glow is quadrature, the dense fog's a "
                 "table): use Node Groups, Compositor or Auto"]
     spots = [o.name for o in lights if is_spot(o)]
     if spots:
-        return [f"multiple scattering is modelled for point and spot lights and glowing objects: the glow of "
-                f"{len(spots)} area light(s) ({_names(spots)}) is single scattering"]
+        return [f"multiple scattering is modelled for point lights only: the glow of {len(spots)} spot or area "
+                f"light(s) ({_names(spots)}) is single scattering"]
     return []
 
 

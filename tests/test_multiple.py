@@ -7,7 +7,6 @@ closed limits of the segment formula (a segment of length 0 holds no light; an e
 sky); the rungs' composition (single + multiple) against the kernels summed by hand.
 """
 import functools
-import math
 
 import numpy as np
 import pytest
@@ -85,21 +84,8 @@ def test_multiple_rungs_add_the_multiple_glow_to_the_single():
     assert abs(models.airlight.kernel(m, *args) - want) <= 1e-12 * abs(want)
     want_bg = bg.kernel(m, *args[:4]) + mu.multiple_background(m, spec, *args[:4])
     assert abs(models.background.kernel(m, *args[:4]) - want_bg) <= 1e-12 * abs(want_bg)
-    # a spot: its own single scattering plus the point light's multiply scattered glow times its power share
-    from fog_addon.precompute import spot
-    single, dense = rungs.choose("nodes", 0, G, spot=True), rungs.choose("nodes", 0, G, spot=True,
-                                                                         multiple_albedo=ALBEDO)
-    ray = (3.0, -14.0, 2.0, 0.1, 1.0, -0.05, math.cos(math.radians(30)), 0.15)
-    share = float(spot.power_share(m, ray[-2], ray[-1]))
-    want = single.airlight.kernel(m, *args, *ray) + share * mu.multiple_airlight(m, spec, *args)
-    assert abs(dense.airlight.kernel(m, *args, *ray) - want) <= 1e-12 * abs(want)
-    surface, sky = dense.airlight.pair(m, *args, *ray)
-    assert abs(surface - want) <= 1e-9 * abs(want)
-    want_sky = single.background.kernel(m, *args[:4], *ray) + share * mu.multiple_background(m, spec, *args[:4])
-    assert abs(sky - want_sky) <= 1e-9 * abs(want_sky)
-    assert abs(dense.background.kernel(m, *args[:4], *ray) - want_sky) <= 1e-12 * abs(want_sky)
-    assert [r.name for r in rungs.choose("nodes", 0, G, area=True, multiple_albedo=ALBEDO)] == \
-        [r.name for r in rungs.choose("nodes", 0, G, area=True)]   # area lights: single scattering (said)
+    assert rungs.choose("nodes", 0, G, spot=True, multiple_albedo=ALBEDO).airlight.tables == \
+        rungs.choose("nodes", 0, G, spot=True).airlight.tables   # spots: not modelled (yet)
 
 
 def test_segment_formula_on_the_single_scattering_field():
@@ -150,16 +136,3 @@ def test_irradiance_of_the_single_scattering_field_is_sun_g0(g):
             got = mu.multiple_scatter(m, spec, beta, d, c, 0.0)
             want = surface.surface_scatter(m, beta, d, c, 0.0, g)
             assert abs(got / want - 1.0) < 0.05, (d, psi, got, want)
-
-
-def test_spot_power_share_against_quadrature():
-    """A spot's share of a point light's power (its multiply scattered light's weight with Dense Fog):
-    (1/2) int f(c) dc of Blender's spot factor, by scipy quadrature."""
-    from scipy import integrate
-    from fog_addon.precompute import spot
-    m = NumpyOps()
-    for size_deg, blend in ((60, 0.15), (120, 0.0), (30, 1.0), (179, 0.5), (1, 0.3)):
-        ch = math.cos(math.radians(size_deg) / 2)
-        ref = integrate.quad(lambda c: float(spot.spot_falloff(m, np.asarray(c), ch, blend)), -1, 1, points=[ch],
-                             limit=200)[0] / 2
-        assert float(spot.power_share(m, ch, blend)) == pytest.approx(ref, rel=1e-6, abs=1e-9)

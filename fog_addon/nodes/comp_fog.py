@@ -479,8 +479,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
         built = []   # a term the light's step leaves out (rungs.STEPS) gets no group at all
         # the light's glow window, made only where a glow or a shaft group reads it (a window no group reads
         # would still grow with the frames and mark the windows partial, ``set_windows``)
-        has_window = (windows is not None and windows[k - first] is not None
-                      and not rungs.is_multiple(mod.airlight))   # a spot's multiply scattered halo: everywhere
+        has_window = windows is not None and windows[k - first] is not None
         win = (_window(m, scene, k, windows[k - first]) if has_window and (
             light.name in maps or any(o.computed(mod) for o in GLOW_OUTPUTS)) else None)
         crop = lambda socket: _crop(m, g[socket], win) if win else g[socket]

@@ -450,7 +450,7 @@ def not_modelled(scene, spec, lights, materials, method=None):
                                    None if spec.shafts else "Light Shafts is off"),
              caveats.glass_note(materials, scene.objects),
              *caveats.multiple_notes(lights, spec.multiple_scattering, getattr(method, "name", method),
-                                     view.is_area,
+                                     view.has_shape,
                                      _optical_distance(scene, spec)),
              *caveats.glow_notes(methods.compositor.glowing_objects(scene), getattr(method, "name", method))]
     return [n for n in notes if n]

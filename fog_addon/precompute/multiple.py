@@ -87,13 +87,10 @@ def bake_orders(spec):
     return arr.reshape(ROWS * MAX_ORDER, COLUMNS)
 
 
-TABLE_PREFIX = "AnalyticFog Multiple "   # the field's images' names (``table_spec``; ``rungs.is_multiple``)
-
-
 def table_spec(g, albedo):
     """The image for anisotropy g and grey albedo W0 (rounded to 3 decimals): rows 0 .. ROWS-1 hold
     ln(I_{>=2} / W0) (``field``), rows ROWS .. 2 ROWS-1 ln(E_{>=2} / (pi W0)) (``irradiance``)."""
-    return tables.TableSpec(f"{TABLE_PREFIX}(g {float(g):+.3f}, W0 {round(float(albedo), 3):.3f})",
+    return tables.TableSpec(f"AnalyticFog Multiple (g {float(g):+.3f}, W0 {round(float(albedo), 3):.3f})",
                             COLUMNS, 2 * ROWS, float(g))
 
 

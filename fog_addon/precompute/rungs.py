@@ -181,9 +181,8 @@ class Output(NamedTuple):
 
     def present(self, models):
         """True if a light with ``models`` (LightModels) has this quantity: a gate only where its term's rung is
-        a spot's without the multiply scattered halo (``shading.LightTerms.seen``)."""
-        rung = getattr(models, self.term)
-        return self.kind != GATE or (rung.spot and not is_multiple(rung))
+        a spot's (``shading.LightTerms.seen``)."""
+        return self.kind != GATE or getattr(models, self.term).spot
 
 
 AIRLIGHT_OUT = Output("Airlight", "airlight", SURFACE_POINT, "airlight", GLOW, compositor="Airlight")
@@ -353,56 +352,6 @@ def multiple_rungs(air, background, scatter, g, albedo):
     return tuple(out)
 
 
-def _spot_multiple_glow(base, extra, spec, m, beta, d_sv, along, h, *rest):
-    """A spot's single-scattering glow (``base``, the spot kernels' arguments) plus the point light's multiply
-    scattered glow (``extra``) times the share of a point light's power the cone sends out
-    (``spot.power_share``); ``rest``: [d_vp,] the light-space ray, cos_half, blend."""
-    share = spot.power_share(m, rest[-2], rest[-1])
-    point_args = (beta, d_sv, along, h) + ((rest[0],) if len(rest) == 9 else ())
-    return base(m, beta, d_sv, along, h, *rest) + share * extra(m, spec, *point_args)
-
-
-def _spot_multiple_pair(pair, spec, m, beta, d_sv, along, h, d_vp, *rest):
-    """``spot.airlight_pair`` plus the isotropised multiply scattered glows (``_spot_multiple_glow``)."""
-    surface, sky = pair(m, beta, d_sv, along, h, d_vp, *rest)
-    share = spot.power_share(m, rest[-2], rest[-1])
-    return (surface + share * multiple.multiple_airlight(m, spec, beta, d_sv, along, h, d_vp),
-            sky + share * multiple.multiple_background(m, spec, beta, d_sv, along, h))
-
-
-def _spot_multiple_scatter(base, spec, m, beta, d_sp, cos_n, cos_r, level, c_axis, cos_half, blend, *axes):
-    """A spot's (diffuse, glossy) fog light plus the point light's multiply scattered light on the surface
-    times the cone's power share (``_spot_multiple_glow``)."""
-    diffuse, glossy = base(m, beta, d_sp, cos_n, cos_r, level, c_axis, cos_half, blend, *axes)
-    share = spot.power_share(m, cos_half, blend)
-    return (diffuse + share * multiple.multiple_scatter(m, spec, beta, d_sp, cos_n, 0.0),
-            glossy + share * multiple.multiple_scatter(m, spec, beta, d_sp, cos_r, level))
-
-
-def spot_multiple_rungs(air, background, scatter, g, albedo):
-    """(airlight, background, scatter) rungs of a spot light with Dense Fog: its single scattering exact, its
-    multiply scattered light the point light's (``multiple_rungs``) times the share of the power its cone
-    sends out: the cone's light taken as spread evenly by the many scatterings (measured against Cycles in
-    docs/measurements/2026-11-27-multiple-scattering.md)."""
-    spec = multiple.table_spec(g, albedo)
-    tag = spec.name.split("(", 1)[1].rstrip(")")
-    common = dict(backends=air.backends & {"numpy", "nodes"}, max_error=max(air.max_error, SPOT_MULTIPLE_ERROR),
-                  evidence="docs/measurements/2026-11-27-multiple-scattering.md (a spot against 64 bounces)")
-    out = [replace(air, name=f"{air.name} + multiple {tag}", tables=air.tables + (spec,),
-                   kernel=functools.partial(_spot_multiple_glow, air.kernel, multiple.multiple_airlight, spec),
-                   pair=functools.partial(_spot_multiple_pair, air.pair, spec), **common),
-           replace(background, name=f"{background.name} + multiple {tag}", tables=background.tables + (spec,),
-                   kernel=functools.partial(_spot_multiple_glow, background.kernel, multiple.multiple_background,
-                                            spec), **common),
-           replace(scatter, name=f"{scatter.name} + multiple {tag}", tables=scatter.tables + (spec,),
-                   kernel=functools.partial(_spot_multiple_scatter, scatter.kernel, spec),
-                   **dict(common, max_error=max(scatter.max_error, SPOT_MULTIPLE_ERROR)))]
-    return tuple(out)
-
-
-SPOT_MULTIPLE_ERROR = 0.3   # placeholder bound until measured against Cycles (see spot_multiple_rungs)
-
-
 def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NODES, multiple_albedo=None,
            area=False):
     """The models for one light's terms, honouring the user's ``preference`` (PREFERENCES), ``step``
@@ -435,9 +384,8 @@ def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NOD
     elif spot:
         models = models._replace(direct=DIRECT_SPOT, scatter=spot_scatter_rung(models.scatter, g))._replace(
             **dict(zip(("airlight", "background"), spot_rungs(models.airlight, models.background, g, rim_nodes))))
-    if multiple_albedo is not None and not area and preference != "osl" and step < 2:
-        wrap = spot_multiple_rungs if spot else multiple_rungs
-        models = models._replace(**dict(zip(("airlight", "background", "scatter"), wrap(
+    if multiple_albedo is not None and not spot and not area and preference != "osl" and step < 2:
+        models = models._replace(**dict(zip(("airlight", "background", "scatter"), multiple_rungs(
             models.airlight, models.background, models.scatter, g, multiple_albedo))))
     if step >= 1:
         models = models._replace(scatter=SCATTER_OFF)
@@ -450,12 +398,6 @@ def is_spot(models):
     """True if ``models`` take the spot kernels' arguments: a spot light's or an area light's
     (``choose(..., spot=True)``, ``choose(..., area=True)``)."""
     return models.direct.spot
-
-
-def is_multiple(rung):
-    """True if ``rung`` adds the multiply scattered light (``multiple_rungs``, ``spot_multiple_rungs``): a
-    spot's glow then reaches beyond its cone (no gate, no window)."""
-    return any(t.name.startswith(multiple.TABLE_PREFIX) for t in rung.tables)
 
 
 def is_area(models):

@@ -169,7 +169,7 @@ def shade_point(m, geo, material, light, medium, models, air=None):
         d_sv, along, h = model.ray_light_geometry(m, geo.camera, -1.0 * geo.incoming, light.position)
         air_ray = spot_ray(m, light, models.airlight, geo.camera, -1.0 * geo.incoming)
         air = m.run(models.airlight, beta, d_sv, along, h, geo.view_distance, *air_ray)
-        if models.airlight.spot and not rungs.is_multiple(models.airlight):
+        if models.airlight.spot:
             seen = glow_hit(m, light, air_ray[:6], geo.view_distance)
     mirrored = mirror(m, geo.incoming, geo.normal)
     cos_n = m.dot(to_light, geo.normal) * inv_d
@@ -331,8 +331,8 @@ def spot_ray(m, light, rung, origin, direction):
 
 def background_seen(m, camera, direction, light, models):
     """1 if a ray to infinity meets a spot's cone (else its glow is 0: ``Gated``), None for a point light."""
-    if not models.background.spot or rungs.is_multiple(models.background):   # the multiply scattered halo
-        return None                                                             # reaches beyond the cone
+    if not models.background.spot:
+        return None
     return glow_hit(m, light, spot_ray(m, light, models.background, camera, direction)[:6], model.FAR)
 
 

@@ -83,14 +83,6 @@ def axis_cosine(m, rows, point, light):
     return -z / m.maximum(m.sqrt(x * x + y * y + z * z), 1e-30)
 
 
-def power_share(m, cos_half, blend):
-    """The share of an isotropic point light's power a spot sends out: (1/4 pi) int f(c) d omega =
-    (1/2) int_{-1}^{1} f(c) dc = ((1 - c_in) + (c_in - c_h) / 2) / 2, the smoothstep's mean over the blend ramp
-    being 1/2 (c_in = ``ramp_end``)."""
-    c_in = ramp_end(m, cos_half, blend)
-    return 0.5 * (1.0 - c_in) + 0.25 * (c_in - cos_half)
-
-
 def falloff_at(m, rows, point, light, cos_half, blend):
     """Blender's spot factor f at a world ``point`` (its direct light there is f times the point light's)."""
     return spot_falloff(m, axis_cosine(m, rows, point, light), cos_half, blend)
