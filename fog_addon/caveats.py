@@ -167,8 +167,8 @@ def multiple_notes(lights, multiple, method_name, is_spot, optical_distance=None
                 "table): use Node Groups, Compositor or Auto"]
     spots = [o.name for o in lights if is_spot(o)]
     if spots:
-        return [f"multiple scattering is modelled for point lights only: the glow of {len(spots)} spot or area "
-                f"light(s) ({_names(spots)}) is single scattering"]
+        return [f"multiple scattering is modelled for point lights and glowing objects only: the glow of "
+                f"{len(spots)} spot or area light(s) ({_names(spots)}) is single scattering"]
     return []
 
 
