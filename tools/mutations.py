@@ -263,6 +263,18 @@ MUTATIONS = [
              "    return kern * (pixel_angle ** 2) * float(t) ** 2\n",
              "    return kern * (pixel_angle ** 2) * float(t)\n",
              ("tests/test_emitter_glow.py::test_glowing_sphere_against_path_traced_fog[cycles-0.1-False]",)),
+    Mutation("emitted_light_undimmed", "glowing objects: their light on other surfaces not dimmed by its path through "
+             "the fog (the emission of (e^{-beta L} - 1) times the user's, off camera rays)",
+             "fog_addon/nodes/material.py",
+             "            last = _dim_emitted_light(ops, tree, emitting, last, (x0 + 500, y - 120))\n",
+             "            pass\n",
+             ("tests/test_emitter_glow.py::test_a_glowing_objects_light_on_the_ground_is_dimmed",)),
+    Mutation("emitter_glow_edges_extended", "glowing objects: the Blur nodes extend the picture's edge pixels outwards "
+             "(a glowing object cut by the frame glows as if it went on)",
+             "fog_addon/nodes/comp_fog.py",
+             "            blur.inputs[\"Extend Bounds\"].default_value = True",
+             "            blur.inputs[\"Extend Bounds\"].default_value = False",
+             ("tests/test_emitter_glow.py::test_a_sign_cut_by_the_frame_glows_as_its_pixels_do",)),
 ]
 
 

@@ -605,22 +605,33 @@ def emitter_table(g, pixel_angle, multiple_albedo=None):
                                                                    multiple_albedo))}
 
 
-def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None):
+def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=None):
     """The glows of the glowing objects the camera sees (``precompute/emitter_glow.py``): the Emission pass made
     undimmed (times e^{beta D_vp}), weighted per pixel by a_j(T) and blurred by each Blur node of the ladder,
-    summed (per unit albedo)."""
+    summed (per unit albedo).  Each rung's glow stops at the surfaces in front of its sources
+    (``emitter_glow.segment_share`` at the rung's angle, the sources' optical depth taken as the mean over what the
+    rung blurs in: a second blur of the weights times T); where the pixel sees the sky (``cover`` 0) it is whole."""
     spec = emitter_glow.table_spec(g, pixel_angle, multiple_albedo)
     t = beta * d_vp
     light = m.scale(p[EMITTERS], m.exp(m.minimum(t, GLOW_DEPTH_LIMIT)))
+    grey = m.dot(light, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))
+    t_surface = t if cover is None else m.select(m.less(1e-3, cover), t, 1.0e6)
     x = emitter_glow.table_x(m, t)
     rows = len(emitter_glow.SIZES)
     total = None
     for j, size in enumerate(emitter_glow.SIZES):
-        weighted = m.scale(light, m.table(spec, x, j / (rows - 1.0)))
-        blur = m.node("CompositorNodeBlur", 5)
-        blur.inputs["Size"].default_value = (float(size), float(size))
-        m.feed(blur.inputs["Image"], weighted)
-        v = m.wrap(blur.outputs["Image"], vector=True)
+        a = m.table(spec, x, j / (rows - 1.0))
+        blurred = []
+        for source in (m.scale(light, a), m.combine(grey * a * t, grey * a, 0.0)):
+            blur = m.node("CompositorNodeBlur", 5)
+            blur.inputs["Size"].default_value = (float(size), float(size))
+            blur.inputs["Extend Bounds"].default_value = True   # off, Blender extends the picture's edge pixels
+            m.feed(blur.inputs["Image"], source)                # outwards: a sign cut by the frame glows on
+            blurred.append(m.wrap(blur.outputs["Image"], vector=True))
+        glow, moments = blurred
+        t_source = m.dot(moments, (1.0, 0.0, 0.0)) / m.maximum(m.dot(moments, (0.0, 1.0, 0.0)), 1e-30)
+        share = emitter_glow.segment_share(m, t_surface, t_source, emitter_glow.rung_angle(size, pixel_angle))
+        v = m.scale(glow, share)
         total = v if total is None else _accumulate(m, total, v)
     return total
 
@@ -719,7 +730,8 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     else:   # Eq. 19 where the pixel sees its surface, Eq. 12 where it sees the sky
         fog = albedo * shading.pixel_light(m, sums, model.transmittance(m, beta, d_vp), cover)
     if emitters is not None:
-        fog = fog + albedo * _emitter_glow(m, p, beta, d_vp, emitters[0], emitter_pixel_angle(scene), emitters[1])
+        fog = fog + albedo * _emitter_glow(m, p, beta, d_vp, emitters[0], emitter_pixel_angle(scene), emitters[1],
+                                           cover)
     m.feed(gout.inputs["Fog Light"], fog)
     m.feed(gout.inputs["Image"], fog + p["Image"])
     ng[PARTIAL] = partial

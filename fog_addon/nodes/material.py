@@ -213,6 +213,28 @@ def wrap_material(mat):
     return _notes(mat, kinds, lost) or None
 
 
+def _dim_emitted_light(ops, tree, emitting, last, location):
+    """Cycles: a glowing surface's light that reaches another surface (every ray but the camera's: Ray Length is
+    the path's length through the fog) dimmed by e^{-beta Ray Length} (Sun et al. 2005 Eq. 14, as the lights'
+    own node trees do, ``light.py``): an emission of (e^{-beta L} - 1) times the user's added to ``last``.  The
+    camera's rays are dimmed by the Attenuate mix already."""
+    total = ops.wrap(BLACK)
+    for w, c, s in emitting:
+        total = total + _colour(ops, c) * _scalar(ops, s) * _weight(ops, w, ops.memo)
+    params = owned.add(tree, "ShaderNodeGroup", "Cycles Emission Params", (location[0] - 300, location[1]), named=False)
+    params.node_tree = bpy.data.node_groups[groups.PARAMS]
+    path = owned.add(tree, "ShaderNodeLightPath", "Cycles Emission Path", (location[0] - 300, location[1] - 150),
+                     named=False)
+    beta, length = _scalar(ops, params.outputs["Beta"]), _scalar(ops, path.outputs["Ray Length"])
+    off_camera = 1.0 - _scalar(ops, path.outputs["Is Camera Ray"])
+    dim = owned.add(tree, "ShaderNodeEmission", "Cycles Emission Dimmed", location, named=False)
+    ops.feed(dim.inputs["Color"], total * ((ops.exp(-1.0 * beta * length) - 1.0) * off_camera))
+    add = owned.add(tree, "ShaderNodeAddShader", "Cycles Add Dimmed", (location[0] + 75, location[1] + 60), named=False)
+    tree.links.new(last, add.inputs[0])
+    tree.links.new(dim.outputs[0], add.inputs[1])
+    return add.outputs[0]
+
+
 def _build(tree, anchor, outs, srcs, kinds, copies):
     """Make the fog's nodes in ``tree`` (at ``anchor``, or beside the user's nodes); returns its Surface node."""
     x0, y0 = anchor or (max((n.location.x for n in tree.nodes), default=0) + 300,
@@ -254,6 +276,8 @@ def _build(tree, anchor, outs, srcs, kinds, copies):
             tree.links.new(last, add_back.inputs[0])
             tree.links.new(back.outputs[0], add_back.inputs[1])
             last = add_back.outputs[0]
+        if target == "CYCLES" and emitting:
+            last = _dim_emitted_light(ops, tree, emitting, last, (x0 + 500, y - 120))
         add = owned.add(tree, "ShaderNodeAddShader", f"{target} Add", (x0 + 650, y), named=False)
         tree.links.new(last, add.inputs[0])
         tree.links.new(fog_shader, add.inputs[1])

@@ -452,7 +452,8 @@ def not_modelled(scene, spec, lights, materials, method=None):
              *caveats.multiple_notes(lights, spec.multiple_scattering, getattr(method, "name", method),
                                      view.has_shape,
                                      _optical_distance(scene, spec)),
-             *caveats.glow_notes(methods.compositor.glowing_objects(scene), getattr(method, "name", method))]
+             *caveats.glow_notes(methods.compositor.glowing_objects(scene), getattr(method, "name", method),
+                                 scene.render.engine)]
     return [n for n in notes if n]
 
 

@@ -161,6 +161,29 @@ def fit_error(kern, a, sizes=None):
     return float(rel.max()), float(abs(approx.sum() / kern.sum() - 1.0))
 
 
+def rung_angle(size, pixel_angle):
+    """A rung's typical angle (rad) from its source: the mean radius of the Blur node's Gaussian (sigma = size / 3;
+    a 2D Gaussian's mean radius is sigma sqrt(pi / 2))."""
+    return float(size) / 3.0 * math.sqrt(math.pi / 2.0) * float(pixel_angle)
+
+
+def segment_share(m, t_surface, t_source, gamma):
+    """The share of a source's glow along an endless ray that the ray's first stretch, to a surface at optical
+    depth ``t_surface``, holds: the source at optical depth ``t_source`` seen ``gamma`` (rad, a Python float) off
+    the ray.  The glow's integrand is ~ 1 / r^2 about the ray's closest point to the source (at T cos gamma, T
+    sin gamma from it: Sun et al. 2005 Eq. 5 without the extinction's slow change), whose integral to the
+    surface over its whole is
+
+        [atan((T_p - T cos gamma) / (T sin gamma)) + pi/2 - gamma] / (pi - gamma):
+
+    0 at the camera, 1/2 at the closest point, 1 far behind the source.  A glowing object's glow stops at the
+    surfaces in front of it so (``comp_fog._emitter_glow``, one share per rung of the ladder at its
+    ``rung_angle``)."""
+    c, s_ = math.cos(gamma), max(math.sin(gamma), 1e-6)
+    x = (t_surface - t_source * c) / m.maximum(t_source * s_, 1e-12)
+    return (m.atan2(x, 1.0) + (0.5 * math.pi - gamma)) * (1.0 / (math.pi - gamma))
+
+
 def optical_depths(count=T_COUNT):
     """The T of the weights' table columns: geometric from T_MIN to T_MAX."""
     return np.geomspace(T_MIN, T_MAX, count)
