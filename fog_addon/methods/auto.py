@@ -50,6 +50,16 @@ _COST = {   # (node groups: a, p of 1 + a N^p), (compositor: fixed, per light, a
 }
 
 
+AREA_LIGHT_LOAD = 6   # an area light costs about this many point lights (benchmarks/area_cost.py, the hall at
+#                        g 0.85: fog over no fog 1.69x against 1.13x with 4 lights in the compositor, 65x against 8.7x
+#                        with the node groups; docs/measurements/2026-11-27-area-lights.md)
+
+
+def light_load(lights):
+    """The lights' count for the cost model, an area light weighing AREA_LIGHT_LOAD point lights."""
+    return sum(AREA_LIGHT_LOAD if getattr(o.data, "type", "POINT") == "AREA" else 1 for o in lights)
+
+
 def predicted_ratio(method, engine, lights, materials=1, pixels=320 * 180, samples=16):
     """The render time with the fog over without it (dimensionless) that ``method`` is predicted to cost
     (module docstring): ``lights`` taking part, fogged ``materials``, ``pixels`` and ``samples`` per pixel."""
@@ -102,16 +112,17 @@ def choose(scene, spec, lights, materials):
         return "nodes", "no method serves this anisotropy in EEVEE"   # (the node groups' check says why)
     compositor = METHODS_BY_NAME["compositor"]
     hard = compositor.check(scene, spec)
-    n, m = len(lights), len(materials)
+    n, m = light_load(lights), len(materials)
     px, spp = pixels_of(scene), samples_of(scene)
     cost = {name: predicted_ratio(name, engine, n, m, px, spp) for name in ("nodes", "compositor")}
     costs = f"predicted {cost['nodes']:.2f}x with node groups, {cost['compositor']:.2f}x with the compositor"
     if hard is not None:
         why = hard.split(":")[0].replace("the Compositor method", "the compositor")
         return "nodes", why
-    if engine == groups.EEVEE_ENGINE and n:
-        if not METHODS_BY_NAME["nodes"].budget(scene, spec, lights).fits([0] * n):
-            return "compositor", (f"EEVEE's uniform block can't hold the node groups of {n} lights at full models; "
+    if engine == groups.EEVEE_ENGINE and lights:
+        if not METHODS_BY_NAME["nodes"].budget(scene, spec, lights).fits([0] * len(lights)):
+            return "compositor", (f"EEVEE's uniform block can't hold the node groups of {len(lights)} lights at full "
+                                  "models; "
                                   f"{costs}")
     soft = _soft_needs(scene, materials)
     caveat = f"; its one surface point per pixel is approximate with {' and '.join(soft)}" if soft else ""
