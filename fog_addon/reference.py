@@ -92,6 +92,31 @@ def set_world_volume(scene, density, color=(1.0, 1.0, 1.0), anisotropy=0.0):
     return vs
 
 
+def add_black_absorption(scene, density):
+    """Add a Volume Absorption of Color black and ``density`` (1/m) beside the World's reference Volume Scatter
+    (``set_world_volume``): fog of extinction beta and albedo a is the scatter at a beta plus this at (1 - a) beta
+    (Volume Absorption absorbs density x (1 - Color): with Color white it absorbs nothing)."""
+    nt = scene.world.node_tree
+    vs = nt.nodes[VOLUME_NODE_NAME]
+    out = vs.outputs["Volume"].links[0].to_node
+    ab = nt.nodes.new("ShaderNodeVolumeAbsorption")
+    ab.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+    ab.inputs["Density"].default_value = _check_density(density)
+    add = nt.nodes.new("ShaderNodeAddShader")
+    nt.links.remove(vs.outputs["Volume"].links[0])
+    nt.links.new(vs.outputs["Volume"], add.inputs[0])
+    nt.links.new(ab.outputs["Volume"], add.inputs[1])
+    nt.links.new(add.outputs["Shader"], out.inputs["Volume"])
+    return ab
+
+
+def hide_from_volume_scatter(scene):
+    """Objects (not lights, cameras, empties) hidden from volume-scatter rays: the references' convention."""
+    for ob in scene.objects:
+        if ob.type not in {"LIGHT", "CAMERA", "EMPTY"}:
+            ob.visible_volume_scatter = False
+
+
 def set_single_scattering_integrator(scene, samples=DEFAULT_SAMPLES, single_scattering=True):
     """Cycles integrator settings for an unbiased single-scattering reference."""
     scene.render.engine = 'CYCLES'

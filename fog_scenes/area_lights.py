@@ -186,22 +186,10 @@ def add_reference_fog(scene, anisotropy, density=DENSITY, albedo=ALBEDO, samples
     from fog_addon import reference
     reference.configure_reference(scene, density * albedo, anisotropy=anisotropy, samples=samples,
                                   single_scattering=True)
-    nt = scene.world.node_tree
-    vs = nt.nodes[reference.VOLUME_NODE_NAME]
-    out = vs.outputs["Volume"].links[0].to_node
-    ab = nt.nodes.new("ShaderNodeVolumeAbsorption")
-    ab.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)       # absorbs density x (1 - Color)
-    ab.inputs["Density"].default_value = density * (1.0 - albedo)
-    add = nt.nodes.new("ShaderNodeAddShader")
-    nt.links.remove(vs.outputs["Volume"].links[0])
-    nt.links.new(vs.outputs["Volume"], add.inputs[0])
-    nt.links.new(ab.outputs["Volume"], add.inputs[1])
-    nt.links.new(add.outputs["Shader"], out.inputs["Volume"])
+    reference.add_black_absorption(scene, density * (1.0 - albedo))
     reference.disable_cast_shadows(scene)
     reference.disable_interreflection(scene)
-    for ob in scene.objects:
-        if ob.type not in {'LIGHT', 'CAMERA', 'EMPTY'}:
-            ob.visible_volume_scatter = False
+    reference.hide_from_volume_scatter(scene)
     c = scene.cycles
     c.volume_bounces = 0
     c.max_bounces = c.diffuse_bounces = c.glossy_bounces = 1
