@@ -17,6 +17,8 @@ from . import progress as progress_
 from .. import view
 
 SUPPORTED_LIGHTS = ("POINT", "SPOT", "AREA")
+THIN_SHARE = 0.25   # Dense Fog is left out for a light whose multiply scattered light is at most this share of
+#                     the Quality's target at every judged view sample (``predict.multiple_share``)
 OSL_WAS = "analytic_fog_osl_was"   # scene custom property: Cycles' OSL switch before the OSL method set it
 LIGHTS_KEY = "analytic_fog_lights"  # on the Surface group: the lights, their models and the camera it was built for
 PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method it was built with (methods.get)
@@ -125,7 +127,9 @@ def choose_models(scene, spec, method, lights):
     step down beyond the target, least error first, until they fit.  Returns
     (models, choice) with choice = {"lights": {name: [step, error]}, "rims": {name: point count} of the spots
     whose glow's rim takes fewer than spot.RIM_NODES points, "error": total, "target": t, "engine": the render
-    engine chosen for, "limited": what forced steps beyond the target, or None}.
+    engine chosen for, "limited": what forced steps beyond the target, or None, and with Dense Fog "thin":
+    {name: share} of the lights whose multiply scattered light is at most THIN_SHARE of the target
+    (``predict.multiple_share``): they are left without it, at no cost}.
     """
     target = spec.target_error
     engine = scene.render.engine
@@ -143,15 +147,22 @@ def choose_models(scene, spec, method, lights):
                           if view.is_spot(o) and n != spot.RIM_NODES}
         if pred.limited or not pred.fits:
             choice["limited"] = budget.name + ("" if pred.fits else ": too many lights even with every light off")
+        if spec.multiple_scattering and target is not None:
+            share = predict.multiple_share(samples, view.light_intensities(lights), spec.beta_per_unit,
+                                           spec.anisotropy, spec.multiple_albedo)
+            choice["thin"] = {o.name: float(v) for o, v in zip(lights, share)
+                              if not view.has_shape(o) and v <= THIN_SHARE * target}
+            choice["error"] += max(choice["thin"].values(), default=0.0)
     else:
         choice["lights"] = {o.name: [0, 0.0] for o in lights}
-    return _models(spec, method, lights, steps, choice["rims"]), choice
+    return _models(spec, method, lights, steps, choice["rims"], set(choice.get("thin", ()))), choice
 
 
-def _models(spec, method, lights, steps, rims):
-    """Each light's models at its step, a spot's glow with its rim's point count (``rims``: by name)."""
+def _models(spec, method, lights, steps, rims, thin=frozenset()):
+    """Each light's models at its step, a spot's glow with its rim's point count (``rims``: by name), Dense Fog
+    left out for the lights ``thin`` names."""
     return [rungs.choose(method.preference, k, spec.anisotropy, view.is_spot(o), rims.get(o.name, spot.RIM_NODES),
-                         multiple_albedo=spec.multiple_albedo, area=view.is_area(o))
+                         multiple_albedo=None if o.name in thin else spec.multiple_albedo, area=view.is_area(o))
             for o, k in zip(lights, steps)]
 
 
@@ -210,6 +221,11 @@ def explain(choice=None):
         rim = f", {rims[name]}-point rim" if name in rims else ""
         lines.append(f"  {name}: {rungs.STEPS[step]}{rim}" + (f" (leaves out up to {err:.2%})" if step else
                                                                f" (moves up to {err:.2%})" if rim else ""))
+    thin = choice.get("thin", {})
+    if thin:
+        lines.append(f"  Dense Fog left out for {len(thin)} light(s) ({', '.join(sorted(thin)[:3])}"
+                     f"{' and more' if len(thin) > 3 else ''}): their multiply scattered light is at most "
+                     f"{max(thin.values()):.2%} of the fog")
     shafted = sorted(i.name.removeprefix(shadow_maps.IMAGE_PREFIX) for i in bpy.data.images
                      if i.name.startswith(shadow_maps.IMAGE_PREFIX))
     if shafted:
@@ -294,7 +310,7 @@ def plan(scene, spec, method, lights, reason=None, rechoose=True, this_frame=Fal
         models, choice = choose_models(scene, spec, method, lights)
     else:
         rims = {o.name: old["rims"][o.name] for o in lights if o.name in old.get("rims", {})}
-        models = _models(spec, method, lights, kept, rims)
+        models = _models(spec, method, lights, kept, rims, set(old.get("thin", ())))
         choice = dict(old, lights={o.name: old["lights"].get(o.name, [0, 0.0]) for o in lights}, rims=rims)
     choice.update(quality=quality, method=method.name, method_reason=reason)
     # lights stepped out of the groups to fit a budget (rungs.LEFT_OUT) keep their own dimming (wrap_light)

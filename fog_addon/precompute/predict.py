@@ -106,21 +106,26 @@ def _numpy_ops(g):
     return NumpyOps(bakers.numpy_tables(float(g)))
 
 
-def light_fog(samples, intensity, beta, g=0.0):
+def light_fog(samples, intensity, beta, g=0.0, multiple_albedo=None):
     """(glow, scatter), each (P, N, 3) W/(m^2 sr): every light's terms at every sample (module docstring).
 
     intensity: (N, 3) RGB radiant intensity I0, W/sr; beta: 1/m; g: Henyey-Greenstein anisotropy.
     The full rungs of the "nodes" preference (its tables; the quadrature where g is below the
     tables' range), the shaders' twin: ``shading.py``'s terms and composition, run once on broadcast
-    (P, N, 3) arrays for the point lights and once for the spots.
+    (P, N, 3) arrays for the point lights and once for the spots.  ``multiple_albedo``: with Dense Fog's
+    multiply scattered light of that grey albedo (``rungs.multiple_rungs``; point lights), else None.
     """
     m = _numpy_ops(g)
+    if multiple_albedo is not None:
+        from . import multiple
+        spec = multiple.table_spec(g, multiple_albedo)
+        m.tables[spec.name] = bakers.table_array(spec, g)
     view = _view(m, samples)
     intensity = np.asarray(intensity, float)
     glow = np.zeros(np.shape(samples.lights))
     scatter = np.zeros_like(glow)
     for k, light in _light_kinds(samples, intensity):
-        models = _models(g, light)
+        models = _models(g, light, multiple_albedo=multiple_albedo)
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
             values = shading.light_glows(m, view.camera, view.direction, view.geometry.view_distance, light,
                                          Medium(beta), models)
@@ -180,10 +185,27 @@ def _light_kinds(samples, intensity):
     return out
 
 
-def _models(g, light, rim_nodes=spot_mod.RIM_NODES):
+def _models(g, light, rim_nodes=spot_mod.RIM_NODES, multiple_albedo=None):
     """The exact models of ``light`` (a shading.Light of ``_light_kinds``) the predictor judges with."""
-    return rungs.choose(_preference(g), 0, g, light.spot is not None, rim_nodes,
+    return rungs.choose(_preference(g), 0, g, light.spot is not None, rim_nodes, multiple_albedo=multiple_albedo,
                         area=isinstance(light.spot, shading.Area))
+
+
+def multiple_share(samples, intensity, beta, g, albedo):
+    """(N,) the largest share of a judged sample's fog (single plus multiple scattering, as ``choose_steps``
+    judges) that each light's multiply scattered light makes (Dense Fog, ``multiple.py``; 0 for the lights it
+    does not model): where it is a small part of the Quality's target, Dense Fog is left out for the light and
+    costs nothing (``ops.apply.choose_models``)."""
+    glow, scatter = light_fog(samples, intensity, beta, g)
+    glow_m, scatter_m = light_fog(samples, intensity, beta, g, multiple_albedo=albedo)
+    extra = np.abs((glow_m + scatter_m) - (glow + scatter))             # (P, N, 3)
+    fog = (glow_m + scatter_m).sum(axis=1)                              # (P, 3)
+    peak = fog.max() if fog.size else 0.0
+    if not peak > 0.0:
+        return np.zeros(glow.shape[1])
+    judged = fog >= FLOOR * peak
+    inv = np.where(judged, 1.0 / np.where(judged, fog, 1.0), 0.0)
+    return (extra * inv[:, None, :]).max(axis=(0, 2))
 
 
 def _finite(v):
