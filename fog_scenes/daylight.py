@@ -368,30 +368,17 @@ def clear_name(case, samples, seeds, resolution=RESOLUTION):
 
 def _render_seeds(blend, path, samples, seeds, fog, regen=False, times=None, timeout=3600):
     """Render ``blend`` with seeds 0 .. seeds-1 (each kept as ``dense.seed_path``) and write their mean to
-    ``path``; returns ``path``."""
-    from fog_addon import imageio
+    ``path`` (``render_harness.mean_of_seeds``); returns ``path``."""
     path = pathlib.Path(path)
     if path.is_file() and not regen:
         return path
-    path.parent.mkdir(parents=True, exist_ok=True)
-    parts = []
-    for seed in range(int(seeds)):
-        kept = dense.seed_path(path, seed)
-        if not kept.is_file() or regen:
-            tmp = path.with_name(f"{path.stem}.seed{seed}.tmp.exr")
-            args = dict(blend=str(blend), out=str(tmp), samples=int(samples), seed=int(seed),
-                        resolution=list(RESOLUTION), fog=bool(fog))
-            proc = h.run(["-c", _SEED_CODE, json.dumps(args)], timeout=timeout)
-            secs = next((float(l.split()[1]) for l in proc.stdout.splitlines()
-                         if l.startswith("RENDER_SECONDS")), None)
-            if times is not None:
-                times.append(secs)
-            os.replace(tmp, kept)
-        parts.append(imageio.read(kept))
-    tmp = path.with_name(path.stem + ".tmp.exr")
-    imageio.write_exr(tmp, np.mean(parts, axis=0, dtype=np.float64).astype(np.float32))
-    os.replace(tmp, path)
-    return path
+
+    def render_seed(seed, out):
+        args = dict(blend=str(blend), out=str(out), samples=int(samples), seed=int(seed), resolution=list(RESOLUTION),
+                    fog=bool(fog))
+        return h.render_seconds(h.run(["-c", _SEED_CODE, json.dumps(args)], timeout=timeout))
+
+    return h.mean_of_seeds(path, render_seed, seeds, regen, times)
 
 
 def render_reference(case, samples=1024, seeds=2, regen=False, directory=None, times=None, timeout=3600):

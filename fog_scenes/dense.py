@@ -208,17 +208,10 @@ def render_reference_seed(blend, out, density, anisotropy, albedo, volume_bounce
     proc = h.run(["-c", _REFERENCE_CODE, json.dumps(args)], timeout=7200)
     if log is not None:
         log.append(proc.stdout + "\n" + proc.stderr)
-    secs = next((float(l.split()[1]) for l in proc.stdout.splitlines() if l.startswith("RENDER_SECONDS")), None)
-    return pathlib.Path(out), secs
+    return pathlib.Path(out), h.render_seconds(proc)
 
 
-def seed_path(path, seed):
-    """Where seed ``seed``'s render of a multi-seed reference ``path`` is kept (beside it, ``keep_seeds``): the
-    reference's name without its ``_x<seeds>`` count, so a reference of more seeds reuses the renders of one of
-    fewer."""
-    path = pathlib.Path(path)
-    stem = path.stem.rsplit("_x", 1)[0]
-    return path.with_name(f"{stem}.seed{seed}.exr")
+seed_path = h.seed_path   # (re-exported: the other scene modules and the tests name it here)
 
 
 def render_ms_reference(distance, density, anisotropy, albedo, volume_bounces=64, samples=1024, seeds=2,
@@ -234,34 +227,18 @@ def render_ms_reference(distance, density, anisotropy, albedo, volume_bounces=64
     ``regen``, by a reference of the same settings and more seeds.  ``times``: a list to which each new render's
     seconds are appended.
     """
-    from fog_addon import imageio   # (numpy + OpenImageIO, no bpy)
     directory = pathlib.Path(directory) if directory else h.REFERENCES
     path = directory / reference_name(distance, density, anisotropy, albedo, volume_bounces, samples, seeds,
                                       power, lamp_radius, resolution)
     if path.is_file() and not regen:
         return path
-    directory.mkdir(parents=True, exist_ok=True)
     blend = blend_path(distance, power, lamp_radius)
-    parts = []
-    for seed in range(int(seeds)):
-        kept = seed_path(path, seed)
-        if kept.is_file() and not regen:
-            parts.append(imageio.read(kept))
-            continue
-        tmp = path.with_name(f"{path.stem}.seed{seed}.tmp.exr")
-        _, secs = render_reference_seed(blend, tmp, density, anisotropy, albedo, volume_bounces, samples, seed,
-                                        resolution)
-        if times is not None:
-            times.append(secs)
-        parts.append(imageio.read(tmp))
-        if keep_seeds:
-            os.replace(tmp, kept)
-        else:
-            os.remove(tmp)
-    tmp = path.with_name(path.stem + ".tmp.exr")
-    imageio.write_exr(tmp, np.mean(parts, axis=0, dtype=np.float64).astype(np.float32))
-    os.replace(tmp, path)
-    return path
+
+    def render_seed(seed, out):
+        return render_reference_seed(blend, out, density, anisotropy, albedo, volume_bounces, samples, seed,
+                                     resolution)[1]
+
+    return h.mean_of_seeds(path, render_seed, seeds, regen, times, keep_seeds)
 
 
 def render_ours(distance, density, anisotropy, albedo, out, power=LAMP_POWER_W, lamp_radius=0.0,

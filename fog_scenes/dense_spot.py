@@ -227,29 +227,18 @@ def render_reference(case, volume_bounces=64, samples=2048, seeds=2, regen=False
     kept beside the mean (:func:`fog_scenes.dense.seed_path`), reused unless ``regen``.  Cached as ``directory``
     (default tests/references) / :func:`reference_name`.  ``times``: a list to which each new render's seconds
     are appended."""
-    from fog_addon import imageio
     c = CASES[case]
     directory = pathlib.Path(directory) if directory else h.REFERENCES
     path = directory / reference_name(case, volume_bounces, samples, seeds)
     if path.is_file() and not regen:
         return path
-    directory.mkdir(parents=True, exist_ok=True)
     blend = blend_path(case)
-    parts = []
-    for seed in range(int(seeds)):
-        kept = dense.seed_path(path, seed)
-        if not kept.is_file() or regen:
-            tmp = kept.with_name(kept.stem + ".tmp.exr")
-            _, secs = dense.render_reference_seed(blend, tmp, c["density"], c["anisotropy"], c["albedo"],
-                                                  volume_bounces, samples, seed, RESOLUTION)
-            if times is not None:
-                times.append(secs)
-            os.replace(tmp, kept)
-        parts.append(imageio.read(kept))
-    tmp = path.with_name(path.stem + ".tmp.exr")
-    imageio.write_exr(tmp, np.mean(parts, axis=0, dtype=np.float64).astype(np.float32))
-    os.replace(tmp, path)
-    return path
+
+    def render_seed(seed, out):
+        return dense.render_reference_seed(blend, out, c["density"], c["anisotropy"], c["albedo"], volume_bounces,
+                                           samples, seed, RESOLUTION)[1]
+
+    return h.mean_of_seeds(path, render_seed, seeds, regen, times)
 
 
 def seed_images(case, volume_bounces, samples, seeds):

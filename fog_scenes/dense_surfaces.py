@@ -140,32 +140,19 @@ def render_reference(volume_bounces, samples, seeds, density=DENSITY, anisotropy
                      regen=False, directory=None, times=None, timeout=900):
     """Path of the cached Cycles reference (see the module doc), rendering missing seeds (kept beside it as
     ``dense.seed_path``).  ``times``: a list to which each new render's seconds are appended."""
-    from fog_addon import imageio
     directory = pathlib.Path(directory) if directory else h.REFERENCES
     path = directory / reference_name(volume_bounces, samples, seeds, density, anisotropy, albedo)
     if path.is_file() and not regen:
         return path
-    directory.mkdir(parents=True, exist_ok=True)
     blend = blend_path()
-    parts = []
-    for seed in range(int(seeds)):
-        kept = dense.seed_path(path, seed)
-        if not kept.is_file() or regen:
-            tmp = path.with_name(f"{path.stem}.seed{seed}.tmp.exr")
-            args = dict(blend=str(blend), out=str(tmp), density=float(density), anisotropy=float(anisotropy),
-                        albedo=float(albedo), volume_bounces=int(volume_bounces), samples=int(samples),
-                        seed=seed, resolution=list(RESOLUTION))
-            proc = h.run(["-c", _REFERENCE_CODE, json.dumps(args)], timeout=timeout)
-            secs = next((float(l.split()[1]) for l in proc.stdout.splitlines()
-                         if l.startswith("RENDER_SECONDS")), None)
-            if times is not None:
-                times.append(secs)
-            os.replace(tmp, kept)
-        parts.append(imageio.read(kept))
-    tmp = path.with_name(path.stem + ".tmp.exr")
-    imageio.write_exr(tmp, np.mean(parts, axis=0, dtype=np.float64).astype(np.float32))
-    os.replace(tmp, path)
-    return path
+
+    def render_seed(seed, out):
+        args = dict(blend=str(blend), out=str(out), density=float(density), anisotropy=float(anisotropy),
+                    albedo=float(albedo), volume_bounces=int(volume_bounces), samples=int(samples), seed=seed,
+                    resolution=list(RESOLUTION))
+        return h.render_seconds(h.run(["-c", _REFERENCE_CODE, json.dumps(args)], timeout=timeout))
+
+    return h.mean_of_seeds(path, render_seed, seeds, regen, times)
 
 
 def reference_seeds(volume_bounces, samples, seeds, regen=False, **kw):

@@ -237,7 +237,7 @@ def render_clear(out=None, distance=DISTANCE_M, radius=RADIUS_M, strength=RADIAN
     raw = paths["image"].with_name(paths["image"].stem + ".multilayer.tmp.exr")
     args = dict(blend=str(blend), out=str(raw), samples=int(samples), resolution=list(resolution))
     proc = h.run(["-c", _CLEAR_CODE, json.dumps(args)], timeout=3600)
-    secs = next((float(l.split()[1]) for l in proc.stdout.splitlines() if l.startswith("RENDER_SECONDS")), None)
+    secs = h.render_seconds(proc)
     if times is not None:
         times.append(secs)
     layers = imageio.read_layers(raw)   # (this process has not rendered)
@@ -259,11 +259,7 @@ def reference_name(density, anisotropy, albedo, volume_bounces, samples, seeds, 
             f"_a{float(albedo):g}_vb{int(volume_bounces)}_{int(samples)}spp_x{int(seeds)}.exr")
 
 
-def seed_file(path, seed):
-    """Where seed ``seed``'s render of the multi-seed reference ``path`` is kept: its name without the
-    ``_x<seeds>`` count, ``.seed<seed>.exr``, so a reference of more seeds reuses the renders of one of fewer."""
-    path = pathlib.Path(path)
-    return path.with_name(f"{path.stem.rsplit('_x', 1)[0]}.seed{int(seed)}.exr")
+seed_file = h.seed_path
 
 
 def render_fog_reference(density, anisotropy=0.85, albedo=0.9, volume_bounces=64, samples=1024, seeds=2,
@@ -278,29 +274,18 @@ def render_fog_reference(density, anisotropy=0.85, albedo=0.9, volume_bounces=64
     :func:`reference_name`; each seed's render stays beside it (:func:`seed_file`) and is reused unless
     ``regen``.  ``times``: a list to which each new render's seconds are appended.
     """
-    from fog_addon import imageio
     directory = pathlib.Path(directory) if directory else h.REFERENCES
     path = directory / reference_name(density, anisotropy, albedo, volume_bounces, samples, seeds, distance,
                                       radius, strength, resolution)
     if path.is_file() and not regen:
         return path
-    directory.mkdir(parents=True, exist_ok=True)
     blend = blend_path(distance, radius, strength)
-    parts = []
-    for seed in range(int(seeds)):
-        kept = seed_file(path, seed)
-        if not kept.is_file() or regen:
-            tmp = kept.with_name(kept.stem + ".tmp.exr")
-            _, secs = dense.render_reference_seed(blend, tmp, density, anisotropy, albedo, volume_bounces,
-                                                  samples, seed, resolution)
-            if times is not None:
-                times.append(secs)
-            os.replace(tmp, kept)
-        parts.append(imageio.read(kept))
-    tmp = path.with_name(path.stem + ".tmp.exr")
-    imageio.write_exr(tmp, np.mean(parts, axis=0, dtype=np.float64).astype(np.float32))
-    os.replace(tmp, path)
-    return path
+
+    def render_seed(seed, out):
+        return dense.render_reference_seed(blend, out, density, anisotropy, albedo, volume_bounces, samples, seed,
+                                           resolution)[1]
+
+    return h.mean_of_seeds(path, render_seed, seeds, regen, times)
 
 
 def main(argv=None):

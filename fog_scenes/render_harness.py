@@ -232,3 +232,48 @@ def assert_close(test, ref, name, rel_rmse=0.02, p95=None, mean_ratio_tol=None, 
         raise AssertionError(f"{name}: " + "; ".join(problems) + f"\n{_compare.format_metrics(m)}\n"
                              f"diff image: {diff}")
     return m
+
+
+# -- references of several seeds --------------------------------------------------------------------------
+
+def render_seconds(proc):
+    """The seconds a reference script printed as ``RENDER_SECONDS <s>`` (its render alone), or None."""
+    return next((float(line.split()[1]) for line in proc.stdout.splitlines()
+                 if line.startswith("RENDER_SECONDS")), None)
+
+
+def seed_path(path, seed):
+    """Where seed ``seed``'s render of a multi-seed reference ``path`` is kept (beside it): the reference's name
+    without its ``_x<seeds>`` count, so a reference of more seeds reuses the renders of one of fewer."""
+    path = pathlib.Path(path)
+    stem = path.stem.rsplit("_x", 1)[0]
+    return path.with_name(f"{stem}.seed{int(seed)}.exr")
+
+
+def mean_of_seeds(path, render_seed, seeds, regen=False, times=None, keep_seeds=True):
+    """Write ``path`` (an EXR) as the mean of the renders of seeds 0 .. ``seeds``-1 and return it.  A seed's
+    render is ``render_seed(seed, out)`` (returning its seconds, appended to ``times``), kept beside the mean
+    (``seed_path``; removed with ``keep_seeds`` False) and reused from there unless ``regen``."""
+    import numpy as np
+    from fog_addon import imageio
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    parts = []
+    for seed in range(int(seeds)):
+        kept = seed_path(path, seed)
+        if kept.is_file() and not regen:
+            parts.append(imageio.read(kept))
+            continue
+        tmp = path.with_name(f"{path.stem}.seed{seed}.tmp.exr")
+        secs = render_seed(seed, tmp)
+        if times is not None:
+            times.append(secs)
+        parts.append(imageio.read(tmp))
+        if keep_seeds:
+            os.replace(tmp, kept)
+        else:
+            os.remove(tmp)
+    tmp = path.with_name(path.stem + ".tmp.exr")
+    imageio.write_exr(tmp, np.mean(parts, axis=0, dtype=np.float64).astype(np.float32))
+    os.replace(tmp, path)
+    return path
