@@ -10,9 +10,11 @@ benchmarks/out/area_cost.csv and .png.  Figures: docs/measurements/2026-11-27-ar
 import argparse
 import json
 import pathlib
-import subprocess
 import sys
 import time
+
+import csv_rows
+import worker_result
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "out"
@@ -57,7 +59,7 @@ def worker(spec):
     res["apply_s"] = time.perf_counter() - t
     res["fog_cpu_s"] = warm_render()
     res["ratio_cpu"] = res["fog_cpu_s"] / res["clear_cpu_s"]
-    print("RESULT " + json.dumps(res), flush=True)
+    worker_result.emit(res)
 
 
 def main():
@@ -70,20 +72,15 @@ def main():
     if args.worker:
         worker(json.loads(args.worker))
         return
-    import csv_rows
     rows = []
     for method in args.methods.split(","):
         for n in (int(x) for x in args.lights.split(",")):
             for kind in ("point", "area"):
-                spec = {"lights": n, "method": method, "kind": kind, "repeats": args.repeats}
-                proc = subprocess.run([sys.executable, __file__, "--worker", json.dumps(spec)], capture_output=True,
-                                      text=True, cwd=str(ROOT))
-                lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")]
-                if not lines:
-                    print(proc.stdout[-2000:], proc.stderr[-2000:])
-                    continue
-                rows.append(json.loads(lines[-1].split(" ", 1)[1]))
-                print(rows[-1], flush=True)
+                row = worker_result.run(__file__, {"lights": n, "method": method, "kind": kind,
+                                                   "repeats": args.repeats})
+                if row is not None:
+                    rows.append(row)
+                    print(row, flush=True)
     csv_rows.write(OUT / "area_cost.csv", rows, digits=4)
     import matplotlib
     matplotlib.use("Agg")

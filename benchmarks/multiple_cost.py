@@ -8,12 +8,13 @@ density 0.15/m, g 0.85, albedo 0.9, shafts off (they are measured on their own).
 benchmarks/out/multiple_cost.csv and .png.  Figures: docs/measurements/2026-11-27-multiple-scattering.md.
 """
 import argparse
-import csv
 import json
 import pathlib
-import subprocess
 import sys
 import time
+
+import csv_rows
+import worker_result
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "out"
@@ -55,7 +56,7 @@ def worker(spec):
     apply.remove(scene) if hasattr(apply, "remove") else None
     res["ratio"] = res["ms_s"] / res["ss_s"]
     res["ratio_cpu"] = res["ms_cpu_s"] / res["ss_cpu_s"]
-    print("RESULT " + json.dumps(res), flush=True)
+    worker_result.emit(res)
 
 
 def main():
@@ -72,20 +73,11 @@ def main():
     rows = []
     for method in args.methods.split(","):
         for n in (int(x) for x in args.lights.split(",")):
-            spec = {"lights": n, "method": method, "repeats": args.repeats}
-            proc = subprocess.run([sys.executable, __file__, "--worker", json.dumps(spec)], capture_output=True,
-                                  text=True, cwd=str(ROOT))
-            lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")]
-            if not lines:
-                print(proc.stdout[-2000:], proc.stderr[-2000:])
-                continue
-            row = json.loads(lines[-1].split(" ", 1)[1])
-            print(row, flush=True)
-            rows.append(row)
-    with open(OUT / "multiple_cost.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+            row = worker_result.run(__file__, {"lights": n, "method": method, "repeats": args.repeats})
+            if row is not None:
+                print(row, flush=True)
+                rows.append(row)
+    csv_rows.write(OUT / "multiple_cost.csv", rows)
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

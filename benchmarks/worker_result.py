@@ -1,0 +1,24 @@
+"""A benchmark's measurement in a fresh Blender process: the script run with ``--worker <spec as JSON>`` prints
+one line ``RESULT <json>``; ``run`` returns that dict (or None, printing the process's output tail)."""
+import json
+import pathlib
+import subprocess
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+def emit(result):
+    """Print ``result`` (a dict) as the worker's RESULT line."""
+    print("RESULT " + json.dumps(result), flush=True)
+
+
+def run(script, spec):
+    """``script --worker <spec>`` in a fresh process from the repository root: its RESULT dict, or None."""
+    proc = subprocess.run([sys.executable, str(script), "--worker", json.dumps(spec)], capture_output=True,
+                          text=True, cwd=str(ROOT))
+    lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")]
+    if not lines:
+        print(proc.stdout[-2000:], proc.stderr[-2000:])
+        return None
+    return json.loads(lines[-1].split(" ", 1)[1])
