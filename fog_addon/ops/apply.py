@@ -149,7 +149,7 @@ def choose_models(scene, spec, method, lights):
             choice["limited"] = budget.name + ("" if pred.fits else ": too many lights even with every light off")
         if spec.multiple_scattering and target is not None:
             share = predict.multiple_share(samples, view.light_intensities(lights), spec.beta_per_unit,
-                                           spec.anisotropy, spec.multiple_albedo)
+                                           spec.anisotropy, spec.multiple_albedo, pred.fog)
             choice["thin"] = {o.name: float(v) for o, v in zip(lights, share)
                               if not view.has_shape(o) and v <= THIN_SHARE * target}
             choice["error"] += max(choice["thin"].values(), default=0.0)

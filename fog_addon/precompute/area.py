@@ -44,8 +44,9 @@ ANISOTROPIC_G = 0.3     # scene at g 0.7: 5.3 % relative RMSE with 2 x 2 cells, 
 def split_for(g):
     """The emitter's cells a side for anisotropy g (SPLIT, SPLIT_ANISOTROPIC)."""
     return SPLIT_ANISOTROPIC if abs(float(g)) >= ANISOTROPIC_G else SPLIT
-NORMAL_INTENSITY_PER_WATT = 1.0 / math.pi   # I_n / P of Blender's area lights (W/sr per W): a Lambertian emitter of
-#   total flux P, radiance P / (pi A) (docs/measurements/2026-11-27-area-light-references.md); a point light's is 1/(4 pi)
+# I_n / P of Blender's area lights (W/sr per W): a Lambertian emitter of total flux P, radiance P / (pi A)
+# (docs/measurements/2026-11-27-area-light-references.md); a point light's I / P is 1 / (4 pi)
+NORMAL_INTENSITY_PER_WATT = 1.0 / math.pi
 DISK_TO_SQUARE = math.sqrt(math.pi) / 2.0   # a disk of diameter s has the area of a square of side s sqrt(pi) / 2
 
 

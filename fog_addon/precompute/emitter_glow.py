@@ -16,7 +16,8 @@ Gaussian blurs of any size (Blender's Blur node: a separable Gaussian of sigma =
 and the glow as  sum_j B_j * (a_j(T(q)) L(q)):  one blur per rung of the ladder, whatever the depths, the
 depth entering only the per-pixel weights a_j(T) (a table over ln T, ``bake_weights``).  The ladder's sizes
 double from 1 px; the fit is least squares, relative, over the kernel's core (supersampled: the kernel
-diverges as 1/gamma at a source's own pixel) and its tail to the largest size; ``fit_error`` measures it.
+diverges as 1/gamma at a source's own pixel) and its tail to the largest size (tests/test_emitter_glow.py
+measures it ring by ring).
 
 The weights depend on the camera's pixel angle (rad / px at the picture's centre; the kernel is taken as
 radial there) and on g; they are baked when the fog is applied.
@@ -152,15 +153,6 @@ def fit_weights(kern, sizes=None):
     return _nnls(basis * weight[:, None], target * weight)
 
 
-def fit_error(kern, a, sizes=None):
-    """(max relative error, relative error of the kernel's sum) of the fitted ladder ``a`` on ``kern``."""
-    sizes = SIZES if sizes is None else sizes
-    half = kern.shape[0] // 2
-    approx = sum(w * blur_kernel_2d(s, half) for w, s in zip(a, sizes))
-    rel = np.abs(approx - kern) / np.maximum(kern, 1e-300)
-    return float(rel.max()), float(abs(approx.sum() / kern.sum() - 1.0))
-
-
 def rung_angle(size, pixel_angle):
     """A rung's typical angle (rad) from its source: the mean radius of the Blur node's Gaussian (sigma = size / 3;
     a 2D Gaussian's mean radius is sigma sqrt(pi / 2))."""
@@ -204,12 +196,11 @@ def table_spec(g, pixel_angle, multiple_albedo=None):
                             T_COUNT, len(SIZES), g=float(g))
 
 
-def bake_weights(single, pixel_angle, albedo=1.0, half=None):
+def bake_weights(single, pixel_angle):
     """(len(SIZES), T_COUNT) float32: a_j(T) per unit albedo (``fit_weights`` at each ``optical_depths``)."""
-    half = half or HALF
     out = np.zeros((len(SIZES), T_COUNT))
     for k, t in enumerate(optical_depths()):
-        out[:, k] = fit_weights(kernel_grid(t, pixel_angle, single, albedo, half))
+        out[:, k] = fit_weights(kernel_grid(t, pixel_angle, single, 1.0, HALF))
     return out.astype(np.float32)
 
 

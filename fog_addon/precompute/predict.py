@@ -70,6 +70,7 @@ class Prediction(NamedTuple):
     limited: bool = False   # the budget took steps beyond the target (error may exceed it)
     fits: bool = True       # the steps fit the budget (False: even every light off does not)
     rims: Any = None        # (N,) int: the point count of each spot's rim (spot.RIM_LADDER; meaningless for points)
+    fog: Any = None         # (glow, scatter) of ``light_fog`` it judged (``multiple_share`` reuses them)
 
 
 class Budget(NamedTuple):
@@ -181,7 +182,8 @@ def _light_kinds(samples, intensity):
             rows = np.asarray(spots.rows, float)[:, k]
             out.append((k, shading.Light(lights[:, k], intensity[k],
                                          kind(tuple(rows[..., i, :] for i in range(3)),
-                                              np.asarray(spots.cos_half, float)[k], np.asarray(spots.blend, float)[k]))))
+                                              np.asarray(spots.cos_half, float)[k],
+                                              np.asarray(spots.blend, float)[k]))))
     return out
 
 
@@ -191,12 +193,13 @@ def _models(g, light, rim_nodes=spot_mod.RIM_NODES, multiple_albedo=None):
                         area=isinstance(light.spot, shading.Area))
 
 
-def multiple_share(samples, intensity, beta, g, albedo):
+def multiple_share(samples, intensity, beta, g, albedo, single=None):
     """(N,) the largest share of a judged sample's fog (single plus multiple scattering, as ``choose_steps``
     judges) that each light's multiply scattered light makes (Dense Fog, ``multiple.py``; 0 for the lights it
     does not model): where it is a small part of the Quality's target, Dense Fog is left out for the light and
-    costs nothing (``ops.apply.choose_models``)."""
-    glow, scatter = light_fog(samples, intensity, beta, g)
+    costs nothing (``ops.apply.choose_models``).  ``single``: ``light_fog``'s (glow, scatter) without it if
+    already computed (``Prediction.fog``)."""
+    glow, scatter = single if single is not None else light_fog(samples, intensity, beta, g)
     glow_m, scatter_m = light_fog(samples, intensity, beta, g, multiple_albedo=albedo)
     extra = np.abs((glow_m + scatter_m) - (glow + scatter))             # (P, N, 3)
     fog = (glow_m + scatter_m).sum(axis=1)                              # (P, 3)
@@ -314,4 +317,4 @@ def predict(samples, intensity, beta, quality, budget=None, g=0.0):
     """The choice for a view at a Quality (preset name, number or None): :class:`Prediction`."""
     glow, scatter = light_fog(samples, intensity, beta, g)
     return choose_steps(glow, scatter, target_error(quality), budget,
-                        rim_deviation(samples, intensity, beta, glow, g))
+                        rim_deviation(samples, intensity, beta, glow, g))._replace(fog=(glow, scatter))
