@@ -407,10 +407,7 @@ def main(argv=None):
     build(scene)
     if a.fog:
         add_reference_fog(scene, a.anisotropy, a.density, a.albedo)
-    out = os.path.abspath(a.out)
-    os.makedirs(os.path.dirname(out), exist_ok=True)
-    bpy.ops.wm.save_as_mainfile(filepath=out, compress=True)
-    print(f"saved {out}")
+    h.save_blend(a.out)
     return 0
 
 

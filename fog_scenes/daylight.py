@@ -61,7 +61,6 @@ import argparse
 import collections
 import json
 import math
-import os
 import pathlib
 import sys
 
@@ -515,10 +514,7 @@ def main(argv=None):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     build(scene, a.case, with_fog=a.fog, samples=a.samples)
-    out = os.path.abspath(a.out)
-    os.makedirs(os.path.dirname(out), exist_ok=True)
-    bpy.ops.wm.save_as_mainfile(filepath=out, compress=True)
-    print(f"saved {out}")
+    h.save_blend(a.out)
     return 0
 
 

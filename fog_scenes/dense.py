@@ -40,7 +40,6 @@ No bpy at import: every Blender job runs in a fresh process through ``render_har
 import argparse
 import json
 import math
-import os
 import pathlib
 import sys
 
@@ -311,10 +310,7 @@ def main(argv=None):
     scene = bpy.context.scene
     res = tuple(int(v) for v in a.resolution.lower().split("x"))
     build(scene, a.distance, a.power, a.lamp_radius, res)
-    out = os.path.abspath(a.out)
-    os.makedirs(os.path.dirname(out), exist_ok=True)
-    bpy.ops.wm.save_as_mainfile(filepath=out, compress=True)
-    print(f"saved {out}")
+    h.save_blend(a.out)
     return 0
 
 

@@ -38,7 +38,6 @@ the ring tables.  Measurements: docs/measurements/2026-11-27-dense-spot-referenc
 """
 import argparse
 import math
-import os
 import pathlib
 import sys
 
@@ -433,10 +432,7 @@ def main(argv=None):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     build(scene, a.case)
-    out = os.path.abspath(a.out)
-    os.makedirs(os.path.dirname(out), exist_ok=True)
-    bpy.ops.wm.save_as_mainfile(filepath=out, compress=True)
-    print(f"saved {out}")
+    h.save_blend(a.out)
     return 0
 
 

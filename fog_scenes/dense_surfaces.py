@@ -36,7 +36,6 @@ No bpy at import: every Blender job runs in a fresh process through ``render_har
 """
 import argparse
 import json
-import os
 import pathlib
 import sys
 
@@ -285,10 +284,7 @@ def main(argv=None):
     import bpy
     bpy.ops.wm.read_factory_settings(use_empty=True)
     build(bpy.context.scene)
-    out = os.path.abspath(a.out)
-    os.makedirs(os.path.dirname(out), exist_ok=True)
-    bpy.ops.wm.save_as_mainfile(filepath=out, compress=True)
-    print(f"saved {out}")
+    h.save_blend(a.out)
     return 0
 
 

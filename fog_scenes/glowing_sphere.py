@@ -314,10 +314,7 @@ def main(argv=None):
     scene = bpy.context.scene
     res = tuple(int(v) for v in a.resolution.lower().split("x"))
     build(scene, a.distance, a.radius, a.strength, res)
-    out = os.path.abspath(a.out)
-    os.makedirs(os.path.dirname(out), exist_ok=True)
-    bpy.ops.wm.save_as_mainfile(filepath=out, compress=True)
-    print(f"saved {out}")
+    h.save_blend(a.out)
     return 0
 
 

@@ -234,6 +234,17 @@ def assert_close(test, ref, name, rel_rmse=0.02, p95=None, mean_ratio_tol=None, 
     return m
 
 
+def save_blend(path):
+    """Save the open Blender file (compressed) as ``path``, its folder made; say so; returns the absolute path
+    (the scene modules' ``python -m fog_scenes.<scene> OUT.blend``; needs bpy)."""
+    import bpy
+    out = os.path.abspath(path)
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    bpy.ops.wm.save_as_mainfile(filepath=out, compress=True)
+    print(f"saved {out}")
+    return out
+
+
 # -- references of several seeds --------------------------------------------------------------------------
 
 def render_seconds(proc):
