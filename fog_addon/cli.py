@@ -2,6 +2,7 @@
 
     render SCENE.blend --engine cycles|eevee [--method auto|nodes|osl|compositor] [--preset NAME | --density BETA]
            [--color R,G,B] [--scene-scale S] [--anisotropy G] [--error E|draft|final|exact] [--explain]
+           [--fog-top METRES | --no-fog-top] [--height-falloff METRES] [--ground-level Z]
            [--samples N] [--resolution WxH] --out OUT.png|OUT.exr
     reference SCENE.blend [--preset NAME | --density BETA] [--anisotropy G] [--samples N]
            [--resolution WxH] --out OUT.exr
@@ -27,12 +28,22 @@ class UsageError(Exception):
 
 
 def _presets():
+    """{name: density 1/m} of every preset: the visibility classes, then the fog layers (``presets.LAYERED``)."""
     try:
-        from .precompute.presets import PRESETS
+        from .precompute.presets import LAYERED, PRESETS
     except ImportError:
-        PRESETS = {k: 3.912 / v for k, v in
-                   {"haze": 8000.0, "mist": 2000.0, "fog": 500.0, "dense_fog": 150.0}.items()}
-    return dict(PRESETS)
+        LAYERED, PRESETS = {}, {k: 3.912 / v for k, v in
+                                {"haze": 8000.0, "mist": 2000.0, "fog": 500.0, "dense_fog": 150.0}.items()}
+    return dict(PRESETS, **{k: v["density"] for k, v in LAYERED.items()})
+
+
+def _layered():
+    """The fog layer presets (``presets.LAYERED``): {name: {density, anisotropy, albedo, fog_top, ...}}."""
+    try:
+        from .precompute.presets import LAYERED
+    except ImportError:
+        return {}
+    return LAYERED
 
 
 def _finite_float(name):
@@ -43,6 +54,17 @@ def _finite_float(name):
             raise argparse.ArgumentTypeError(f"{name} must be a number, got {s!r}")
         if not math.isfinite(v):
             raise argparse.ArgumentTypeError(f"{name} must be finite, got {s!r}")
+        return v
+    return conv
+
+
+def _non_negative_float(name):
+    finite = _finite_float(name)
+
+    def conv(s):
+        v = finite(s)
+        if v < 0:
+            raise argparse.ArgumentTypeError(f"{name} must be >= 0, got {s!r}")
         return v
     return conv
 
@@ -107,8 +129,9 @@ def _positive_float(name):
 
 def _add_fog_flags(p, file_default=""):
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--preset", help="named fog: its density and (unless --anisotropy) its particles' anisotropy: "
-                   + ", ".join(sorted(_presets())) + file_default)
+    g.add_argument("--preset", help="named fog: its density and (unless --anisotropy) its particles' anisotropy; "
+                   "a fog layer (" + ", ".join(_layered()) + ") also its top, height falloff and colour unless "
+                   "their flags give them: " + ", ".join(sorted(_presets())) + file_default)
     g.add_argument("--density", type=_finite_float("density"), metavar="BETA",
                    help="extinction = scattering coefficient in 1/m (>= 0)" + file_default)
     p.add_argument("--anisotropy", type=_finite_float("anisotropy"), default=None, metavar="G",
@@ -155,6 +178,18 @@ def build_parser():
     r.add_argument("--world-light", choices=["on", "off"], default=None,
                    help="on: the World keeps lighting surfaces through the fog (an artistic ambient); off: the fog "
                         "extinguishes it, as Cycles' World volume does" + from_file)
+    top = r.add_mutually_exclusive_group()
+    top.add_argument("--fog-top", type=_non_negative_float("fog top"), metavar="METRES",
+                     help="the fog is a layer up to this height in real metres above the ground (default: the "
+                          "file's setting; a new scene's fog fills all space)")
+    top.add_argument("--no-fog-top", action="store_true",
+                     help="the fog fills all space, whatever the file's Fog Top")
+    r.add_argument("--height-falloff", type=_non_negative_float("height falloff"), metavar="METRES",
+                   help="above the fog's top its density falls by e every METRES real metres; 0 is a hard top"
+                        + from_file)
+    r.add_argument("--ground-level", type=_finite_float("ground level"), metavar="Z",
+                   help="the ground's height z in Blender units (the fog's top is measured from it)"
+                        + from_file)
     r.add_argument("--explain", action="store_true",
                    help="print the models each light got and the error predicted for them")
     r.add_argument("--pixel-centre", action="store_true",
@@ -190,13 +225,28 @@ def build_parser():
     return ap
 
 
-def _resolve_density(args, required):
+def _resolve_density(args, required, layers=False):
+    """The density (and anisotropy) of ``--preset`` into ``args``; a fog layer preset also sets the top, the
+    falloff and the colour its flags leave unset (``layers``: the command has those flags, else refused)."""
     if args.preset is not None:
         presets = _presets()
         if args.preset not in presets:
             raise UsageError(f"unknown preset {args.preset!r}; choose one of: {', '.join(sorted(presets))}")
         args.density = float(presets[args.preset])
-        if args.anisotropy is None:
+        layer = _layered().get(args.preset)
+        if layer is not None:
+            if not layers:
+                raise UsageError(f"preset {args.preset!r} is a fog layer with a top, and the reference's fog "
+                                 f"fills all space: give --density {layer['density']:.6g} instead")
+            if args.anisotropy is None:
+                args.anisotropy = layer["anisotropy"]
+            if args.fog_top is None and not args.no_fog_top:
+                args.fog_top = layer["fog_top"]
+            if args.height_falloff is None:
+                args.height_falloff = layer["height_falloff"]
+            if args.color is None:
+                args.color = tuple(layer["albedo"])
+        elif args.anisotropy is None:
             try:
                 from .precompute.presets import ANISOTROPY
                 args.anisotropy = ANISOTROPY[args.preset]
@@ -218,8 +268,8 @@ def _resolve_density(args, required):
         raise UsageError(str(exc))
 
 
-def _validate_common(args, density_required):
-    _resolve_density(args, density_required)
+def _validate_common(args, density_required, layers=False):
+    _resolve_density(args, density_required, layers)
     if args.anisotropy is not None:
         from .precompute.medium import validate_anisotropy
         try:
@@ -247,7 +297,7 @@ def _open(args):
 
 
 def cmd_render(args):
-    _validate_common(args, density_required=False)
+    _validate_common(args, density_required=False, layers=True)
     try:
         from . import render as render_mod
     except ImportError as exc:

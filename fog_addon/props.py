@@ -117,6 +117,24 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
         description="Henyey-Greenstein g of the fog's phase function: 0 isotropic, > 0 forward scattering "
                     "(droplets: haze about 0.7, fog about 0.85), so lamps glow brighter seen against their "
                     "light. Below -0.8 only the OSL method serves it")
+    use_fog_top: bpy.props.BoolProperty(
+        name="Fog Top", default=False, update=_rebuild,
+        description="The fog is a layer over the ground up to Fog Top (valley fog, sea mist, a summer's haze). "
+                    "Off: the fog fills all space")
+    fog_top: bpy.props.FloatProperty(
+        name="Fog Top", subtype="DISTANCE", unit="LENGTH", default=100.0, min=0.0, soft_max=2000.0,
+        update=_push,
+        description="Height of the fog layer's top in real metres above Ground Level; below it the density "
+                    "is Density")
+    height_falloff: bpy.props.FloatProperty(
+        name="Height Falloff", subtype="DISTANCE", unit="LENGTH", default=0.0, min=0.0, soft_max=2000.0,
+        update=_push,
+        description="Softness of the fog's top, H in real metres: above the top the density falls by e "
+                    "every H metres (e^-(height - top) / H). 0 is a hard top: no fog above it")
+    ground_level: bpy.props.FloatProperty(
+        name="Ground Level", subtype="DISTANCE", unit="LENGTH", default=0.0, update=_push,
+        description="Height z of the ground in Blender units (as the scene's Z coordinates): the fog's "
+                    "heights are measured from it")
     method: bpy.props.EnumProperty(
         name="Method", default="AUTO", update=_rebuild,
         items=[("AUTO", "Auto", "Per scene, the Node Groups or the Compositor method, whichever is predicted to "

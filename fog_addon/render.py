@@ -1,10 +1,11 @@
 """The ``render`` command: add the analytic fog to an opened scene, as the file has it, and render it.
 
 Every fog setting comes from the .blend's own ``scene.analytic_fog`` (density,
-colour, scene scale, method, anisotropy, Selected Only) and each light's
+colour, scene scale, method, anisotropy, the fog's top, Selected Only) and each light's
 ``light.analytic_fog.use``, unless a command-line flag overrides it: without
 flags the file's fog is rendered as the artist left it.
 """
+import dataclasses
 import time
 
 from . import measure, props
@@ -44,9 +45,17 @@ def fog_settings(scene, args):
                  shafts=None if _flag(args, "shafts") is None else _flag(args, "shafts") == "on",
                  multiple_scattering=(None if _flag(args, "multiple_scattering") is None
                                       else _flag(args, "multiple_scattering") == "on"),
-                 world_light=None if _flag(args, "world_light") is None else _flag(args, "world_light") == "on")
+                 world_light=None if _flag(args, "world_light") is None else _flag(args, "world_light") == "on",
+                 fog_top=_flag(args, "fog_top"), height_falloff=_flag(args, "height_falloff"),
+                 ground_level=_flag(args, "ground_level"))
     spec = FogSpec.from_settings(s).replace(**flags)
     source = {k: "flag" if v is not None else "file" for k, v in flags.items()}
+    if _flag(args, "no_fog_top"):   # (``replace`` keeps the file's value for None: the flag clears it here)
+        spec = dataclasses.replace(spec, fog_top=None).validated()
+        source["fog_top"] = "flag"
+    if spec.fog_top is None and (flags["height_falloff"] is not None or flags["ground_level"] is not None):
+        notes.append(("fog top", "the fog fills all space, so the height falloff and the ground level change "
+                                 "nothing: give --fog-top for a fog layer"))
     if spec.method in CYCLES_ONLY and args.engine_id != "CYCLES":
         if source["method"] == "flag":
             raise SystemExit(f"error: --method {spec.method} needs --engine cycles ({CYCLES_ONLY[spec.method]}); "
@@ -65,7 +74,10 @@ def fog_settings(scene, args):
              "quality": ("quality", spec.quality),
              "world light": ("world_light", "on" if spec.world_light else "off"),
              "light shafts": ("shafts", "on" if spec.shafts else "off"),
-             "multiple scattering": ("multiple_scattering", "on" if spec.multiple_scattering else "off")}
+             "multiple scattering": ("multiple_scattering", "on" if spec.multiple_scattering else "off"),
+             "fog top": ("fog_top", "unbounded" if spec.fog_top is None else spec.fog_top),
+             "height falloff": ("height_falloff", spec.height_falloff),
+             "ground level": ("ground_level", spec.ground_level)}
     return spec, objects, {k: (v, source[f]) for k, (f, v) in shown.items()}, notes
 
 

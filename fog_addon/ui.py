@@ -46,6 +46,19 @@ def _draw_models(layout, settings):
     box.label(text=f"{len(lines) - 1 - len(cheaper)} light(s) fully modelled")
 
 
+def _draw_layer(col, settings):
+    """Fog Top: the checkbox with the top's height beside it, then the falloff and the ground under it."""
+    row = col.row(heading="Fog Top")
+    row.prop(settings, "use_fog_top", text="")
+    sub = row.row()
+    sub.enabled = settings.use_fog_top
+    sub.prop(settings, "fog_top", text="")
+    sub = col.column()
+    sub.active = settings.use_fog_top
+    sub.prop(settings, "height_falloff")
+    sub.prop(settings, "ground_level")
+
+
 def draw_fog(layout, context):
     scene = context.scene
     s = scene.analytic_fog
@@ -69,6 +82,7 @@ def draw_fog(layout, context):
     col.prop(s, "density")
     col.prop(s, "color")
     col.prop(s, "scene_scale")
+    _draw_layer(col, s)
     col.prop(s, "method")
     col.label(text=ENGINE_NOTES[s.method], icon="INFO")
     if s.method == "OSL" and scene.render.engine != "CYCLES":

@@ -8,7 +8,7 @@ from . import apply, progress
 from ..precompute import presets
 
 PRESET_SUBDIR = "analytic_fog"
-PRESET_TITLES = {k: k.replace("_", " ").title() for k in presets.VISIBILITY_M}
+PRESET_TITLES = {k: k.replace("_", " ").title() for k in (*presets.VISIBILITY_M, *presets.LAYERED)}
 
 
 def _distance(m):
@@ -17,6 +17,16 @@ def _distance(m):
 
 def _preset_items(key=lambda k: k):
     return [(key(k), PRESET_TITLES[k], f"Visibility {_distance(v)}") for k, v in presets.VISIBILITY_M.items()]
+
+
+def _layer_text(key):
+    """A layered preset's visibility and top, e.g. "200 m, top 100 m"."""
+    layer = presets.LAYERED[key]
+    return f"{_distance(presets.visibility_from_density(layer['density']))}, top {_distance(layer['fog_top'])}"
+
+
+def _layered_items():
+    return [(k, PRESET_TITLES[k], f"A fog layer: visibility {_layer_text(k)}") for k in presets.LAYERED]
 
 
 def _report_skipped(op, skipped):
@@ -81,25 +91,35 @@ class FOG_OT_remove(bpy.types.Operator):
 
 
 class FOG_OT_preset_builtin(bpy.types.Operator):
-    """Set the fog's density from a visibility class of atmospheric optics, and its particles' anisotropy"""
+    """Set the fog's density from a visibility class of atmospheric optics, and its particles' anisotropy; a
+    layered preset also sets the fog's top and its falloff (the visibility classes keep the top as it is)"""
     bl_idname = "fog.preset_builtin"
     bl_label = "Fog Preset"
     bl_options = {"REGISTER", "UNDO"}
 
     name: bpy.props.EnumProperty(
         name="Preset",
-        items=_preset_items())
+        items=_preset_items() + _layered_items())
 
     def execute(self, context):
         settings = context.scene.analytic_fog
-        settings.density = presets.PRESETS[self.name]
-        settings.color = (1.0, 1.0, 1.0)
-        settings.anisotropy = presets.ANISOTROPY[self.name]
+        layer = presets.LAYERED.get(self.name)
+        if layer is None:
+            settings.density = presets.PRESETS[self.name]
+            settings.color = (1.0, 1.0, 1.0)
+            settings.anisotropy = presets.ANISOTROPY[self.name]
+            return {"FINISHED"}
+        settings.use_fog_top = True
+        settings.fog_top = layer["fog_top"]
+        settings.height_falloff = layer["height_falloff"]
+        settings.density = layer["density"]
+        settings.color = layer["albedo"]
+        settings.anisotropy = layer["anisotropy"]
         return {"FINISHED"}
 
 
 class FOG_MT_presets(bpy.types.Menu):
-    """Built-in presets (visibility classes), then the user's own (Blender's preset files)"""
+    """Built-in presets (visibility classes, then fog layers), then the user's own (Blender's preset files)"""
     bl_label = "Fog Presets"
     preset_subdir = PRESET_SUBDIR
     preset_operator = "script.execute_preset"
@@ -110,17 +130,22 @@ class FOG_MT_presets(bpy.types.Menu):
             layout.operator(FOG_OT_preset_builtin.bl_idname,
                             text=f"{PRESET_TITLES[key]} ({_distance(vis)})").name = key
         layout.separator()
+        for key in presets.LAYERED:
+            layout.operator(FOG_OT_preset_builtin.bl_idname,
+                            text=f"{PRESET_TITLES[key]} ({_layer_text(key)})").name = key
+        layout.separator()
         bpy.types.Menu.draw_preset(self, context)
 
 
 class FOG_OT_preset_add(AddPresetBase, bpy.types.Operator):
-    """Save the fog's density, colour and anisotropy as a preset (or remove the active one)"""
+    """Save the fog's density, colour, anisotropy and top as a preset (or remove the active one)"""
     bl_idname = "fog.preset_add"
     bl_label = "Add Fog Preset"
     preset_menu = "FOG_MT_presets"
     preset_subdir = PRESET_SUBDIR
     preset_defines = ["fog = bpy.context.scene.analytic_fog"]
-    preset_values = ["fog.density", "fog.color", "fog.anisotropy"]
+    preset_values = ["fog.density", "fog.color", "fog.anisotropy", "fog.use_fog_top", "fog.fog_top",
+                     "fog.height_falloff"]
 
 
 CLASSES = (FOG_OT_add, FOG_OT_remove, FOG_OT_preset_builtin, FOG_MT_presets, FOG_OT_preset_add)

@@ -10,6 +10,26 @@ Each preset also carries the Henyey-Greenstein asymmetry g of its particles at v
 particles) g = 0.6-0.75 (Hess, Koepke, Schult 1998, OPAC; d'Almeida et al. 1991), 0.7 here; mist of
 small droplets about 0.8; fog droplets (radii 2-20 um) g = 0.8-0.9 (Deirmendjian 1969's fog models;
 Hale and Querry 1973 water), 0.85 here.
+
+Layered presets (``LAYERED``) are fog with a top: the density is constant up to ``fog_top`` metres above
+the ground and falls as e^{-(h - top) / H} above it (H = ``height_falloff``; ``daylight.py``).  Depths,
+visibilities and tops below are typical values of each kind of fog, not measurements of one:
+
+* Valley Fog: radiation fog, formed under a ground inversion on clear calm nights and pooled in valleys
+  (Gultepe et al. 2007, "Fog research: a review of past achievements and future perspectives", Pure Appl.
+  Geophys. 164): typically tens of metres to about 200 m deep, visibility 100-500 m (fog is visibility below
+  1 km, WMO).  Here visibility 200 m, a top at 100 m, softened over H = 10 m (the inversion keeps the top
+  sharp), fog droplets' g = 0.85 (above), white (water droplets hardly absorb).
+* Summer Haze: aerosol mixed through the daytime convective boundary layer, typically 1-2 km deep over land
+  in summer (Stull 1988, An Introduction to Boundary Layer Meteorology, chapter 1), visibility typically
+  10-20 km.  Above it the aerosol thins with a scale height of 1.2 km (Dobashi et al. 2002 appendix A.1;
+  Bruneton & Neyret 2008 section 2.1, H_M = 1.2 km).  Here visibility 15 km, a top at 1.5 km, H = 1.2 km,
+  g = 0.7 (continental aerosol, the haze preset's), albedo 0.9 (Bruneton & Neyret 2008: aerosol extinction
+  = scattering / 0.9).
+* Sea Mist: advection fog over a cold sea, held in the marine layer under its inversion, typically
+  100-400 m deep (Koracin et al. 2014, "Marine fog: a review", Atmos. Res. 143), visibility about 1 km (the
+  fog/mist boundary).  Here visibility 1 km, a top at 300 m softened over H = 30 m, g = 0.8 (the mist
+  preset's), white.
 """
 import math
 
@@ -38,6 +58,19 @@ def visibility_from_density(beta):
 
 PRESETS = {name: density_from_visibility(v) for name, v in VISIBILITY_M.items()}
 ANISOTROPY = {"haze": 0.7, "mist": 0.8, "fog": 0.85, "dense_fog": 0.85}   # Henyey-Greenstein g (docstring)
+
+
+def _layer(visibility_m, anisotropy, albedo, fog_top_m, height_falloff_m):
+    """A layered preset: density (1/m) from its visibility, g, RGB albedo, top and falloff (m)."""
+    return dict(density=density_from_visibility(visibility_m), anisotropy=anisotropy, albedo=(albedo,) * 3,
+                fog_top=fog_top_m, height_falloff=height_falloff_m)
+
+
+LAYERED = {   # fog with a top over the ground (docstring: the kinds of fog and their sources)
+    "valley_fog": _layer(200.0, 0.85, 1.0, 100.0, 10.0),
+    "summer_haze": _layer(15000.0, 0.7, 0.9, 1500.0, 1200.0),
+    "sea_mist": _layer(1000.0, 0.8, 1.0, 300.0, 30.0),
+}
 
 
 def validate_density(beta):

@@ -1,0 +1,262 @@
+"""The fog layer's settings (issue 29): Fog Top, Height Falloff, Ground Level in the properties, the command
+line and the presets.  Nothing here renders: the parser and the presets are checked in this process, the
+properties in one Blender (bpy) process without a window (``_FLOW``)."""
+import json
+import math
+import os
+import subprocess
+
+import pytest
+
+from fog_addon import cli
+from fog_addon.precompute import presets
+from fog_addon.precompute.spec import FogSpec
+from fog_scenes import render_harness as h
+
+KOSCHMIEDER = math.log(50.0)   # ln(1 / 0.02): contrast threshold 2 %, independent of presets.KOSCHMIEDER
+
+
+def _render_args(*flags):
+    """``render`` parsed as the command line does it, with the preset resolved (``cli._resolve_density``)."""
+    args = cli.build_parser().parse_args(["render", "scene.blend", "--engine", "cycles", *flags, "--out", "o.png"])
+    cli._resolve_density(args, False, layers=True)
+    return args
+
+
+# --- presets: each layered preset inside the ranges its sources give (presets.py docstring) -------------------
+
+# (visibility m, top m, falloff m, g, albedo) ranges typed from the sources, not from presets.py:
+RANGES = {
+    # radiation fog (Gultepe et al. 2007): tens of metres to ~200 m deep, visibility 100-500 m; droplets g 0.8-0.9
+    "valley_fog": dict(visibility=(100.0, 500.0), top=(10.0, 200.0), falloff=(0.0, 50.0), g=(0.8, 0.9),
+                       albedo=(0.95, 1.0)),
+    # convective boundary layer 1-2 km (Stull 1988), visibility 10-20 km, aerosol scale height 1.2 km (Dobashi
+    # et al. 2002 A.1; Bruneton & Neyret 2008), continental aerosol g 0.6-0.76, albedo 0.9 (Bruneton & Neyret)
+    "summer_haze": dict(visibility=(10000.0, 20000.0), top=(1000.0, 2000.0), falloff=(1140.0, 1260.0),
+                        g=(0.6, 0.76), albedo=(0.85, 0.95)),
+    # marine layer 100-400 m (Koracin et al. 2014), visibility about 1 km, g about 0.8
+    "sea_mist": dict(visibility=(700.0, 1500.0), top=(100.0, 400.0), falloff=(0.0, 100.0), g=(0.75, 0.85),
+                     albedo=(0.95, 1.0)),
+}
+
+
+@pytest.mark.parametrize("name", sorted(RANGES))
+def test_layered_preset_within_its_sources(name):
+    layer = presets.LAYERED[name]
+    r = RANGES[name]
+    checks = {"visibility": KOSCHMIEDER / layer["density"], "top": layer["fog_top"],
+              "falloff": layer["height_falloff"], "g": layer["anisotropy"]}
+    checks.update({f"albedo {i}": a for i, a in enumerate(layer["albedo"])})
+    for what, value in checks.items():
+        lo, hi = r[what.split()[0]]
+        assert lo <= value <= hi, (name, what, value, (lo, hi))
+    assert len(layer["albedo"]) == 3
+    spec = FogSpec(density=layer["density"], anisotropy=layer["anisotropy"], albedo=layer["albedo"],
+                   fog_top=layer["fog_top"], height_falloff=layer["height_falloff"]).validated()
+    assert spec.layered
+
+
+def test_layered_presets_are_listed_apart_from_the_visibility_classes():
+    assert set(presets.LAYERED) == set(RANGES)
+    assert not set(presets.LAYERED) & set(presets.PRESETS)   # the Add Fog operator's density presets stay four
+    assert set(cli._presets()) == set(presets.PRESETS) | set(RANGES)
+
+
+# --- the command line: flags parsed, presets resolved, bad values refused --------------------------------------
+
+def test_flags_parse_to_the_layer():
+    args = _render_args("--fog-top", "120", "--height-falloff", "15", "--ground-level", "-2.5")
+    assert (args.fog_top, args.height_falloff, args.ground_level, args.no_fog_top) == (120.0, 15.0, -2.5, False)
+    args = _render_args("--no-fog-top")
+    assert args.no_fog_top and args.fog_top is None
+    args = _render_args()
+    assert (args.fog_top, args.height_falloff, args.ground_level) == (None, None, None)   # the file's settings
+
+
+def test_layered_preset_sets_what_its_flags_leave_out():
+    args = _render_args("--preset", "summer_haze")
+    assert args.density == pytest.approx(KOSCHMIEDER / 15000.0, rel=1e-9)
+    assert (args.fog_top, args.height_falloff, args.anisotropy, args.color) == (1500.0, 1200.0, 0.7, (0.9,) * 3)
+    args = _render_args("--preset", "valley_fog", "--fog-top", "40", "--height-falloff", "0", "--anisotropy",
+                        "0.5", "--color", "0.5,0.6,0.7")
+    assert (args.fog_top, args.height_falloff, args.anisotropy, args.color) == (40.0, 0.0, 0.5, (0.5, 0.6, 0.7))
+    args = _render_args("--preset", "sea_mist", "--no-fog-top")
+    assert args.fog_top is None and args.no_fog_top
+    args = _render_args("--preset", "fog")   # a visibility class leaves the layer to the file
+    assert (args.fog_top, args.height_falloff, args.color) == (None, None, None)
+
+
+@pytest.mark.parametrize("flags,message", [
+    (["--fog-top", "-1"], "fog top must be >= 0"),
+    (["--fog-top", "nan"], "fog top must be finite"),
+    (["--fog-top", "inf"], "fog top must be finite"),
+    (["--fog-top", "high"], "fog top must be a number"),
+    (["--height-falloff", "-3"], "height falloff must be >= 0"),
+    (["--height-falloff", "inf"], "height falloff must be finite"),
+    (["--ground-level", "nan"], "ground level must be finite"),
+    (["--fog-top", "50", "--no-fog-top"], "not allowed with argument"),
+])
+def test_bad_layer_flags_exit_2(capsys, flags, message):
+    with pytest.raises(SystemExit) as e:
+        cli.main(["render", "scene.blend", "--engine", "cycles", *flags, "--out", "o.png"])
+    assert e.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_reference_refuses_a_layered_preset(capsys, tmp_path):
+    """The path-traced reference fills all space with fog: a preset with a top would be a wrong reference."""
+    code = cli.main(["reference", str(tmp_path / "s.blend"), "--preset", "valley_fog", "--out",
+                     str(tmp_path / "o.exr")])
+    assert code == 2 and "fog layer with a top" in capsys.readouterr().err
+
+
+# --- the properties in Blender: round trip, the render command's spec, the presets' operators ------------------
+
+_FLOW = r"""
+import argparse, dataclasses, json, sys
+import bpy
+import fog_addon
+from fog_addon import cli, render
+from fog_addon.ops import FOG_OT_preset_add
+from fog_addon.precompute import presets
+from fog_addon.precompute.spec import FogSpec
+
+bpy.ops.wm.read_factory_settings(use_empty=True)
+fog_addon.register()
+scene = bpy.context.scene
+s = scene.analytic_fog
+assert not s.enabled   # no fog: setting a property schedules nothing
+R = {}
+
+rna = s.bl_rna.properties
+R["props"] = {k: dict(type=rna[k].type, default=rna[k].default, subtype=rna[k].subtype,
+                      unit=getattr(rna[k], "unit", None), min=getattr(rna[k], "hard_min", None))
+              for k in ("use_fog_top", "fog_top", "height_falloff", "ground_level")}
+
+def store(spec):
+    for key, value in spec.settings_values().items():
+        setattr(s, key, value)
+
+def fields(spec):
+    return dataclasses.asdict(spec)
+
+R["round_trip"] = []
+for fields_in in (dict(fog_top=80.0, height_falloff=5.5, ground_level=-3.5, density=0.0123),
+                  dict(fog_top=0.0, height_falloff=0.0, ground_level=12.25),
+                  dict(fog_top=None, height_falloff=7.0, ground_level=1.0)):
+    spec = FogSpec(**fields_in).validated()
+    store(spec)
+    R["round_trip"].append([fields(spec), fields(FogSpec.from_settings(s)), s.use_fog_top])
+
+def case(*flags):
+    args = cli.build_parser().parse_args(["render", "scene.blend", "--engine", "cycles", *flags, "--out", "o.png"])
+    cli._resolve_density(args, False, layers=True)
+    args.engine_id = "CYCLES"
+    spec, _, shown, notes = render.fog_settings(scene, args)
+    return dict(spec=fields(spec), shown={k: list(v) for k, v in shown.items() if k in
+                                          ("fog top", "height falloff", "ground level", "density")},
+                notes=[n for _, n in notes], line=render.describe(shown))
+
+store(FogSpec(fog_top=80.0, height_falloff=5.0, ground_level=1.5).validated())   # the file: a layer
+R["cases"] = {"file": case(), "top": case("--fog-top", "40"), "no_top": case("--no-fog-top"),
+              "falloff_ground": case("--height-falloff", "20", "--ground-level", "-3"),
+              "haze": case("--preset", "summer_haze")}
+store(FogSpec().validated())                                                      # the file: unbounded
+R["cases"]["unbounded"] = case()
+R["cases"]["unbounded_falloff"] = case("--height-falloff", "7")
+
+R["builtin"] = {}
+for name in presets.LAYERED:
+    store(FogSpec().validated())
+    assert bpy.ops.fog.preset_builtin(name=name) == {"FINISHED"}
+    R["builtin"][name] = dict(use_fog_top=s.use_fog_top, fog_top=s.fog_top, height_falloff=s.height_falloff,
+                              density=s.density, anisotropy=s.anisotropy, color=list(s.color))
+s.use_fog_top, s.fog_top, s.height_falloff = True, 77.0, 3.0
+bpy.ops.fog.preset_builtin(name="haze")
+R["after_visibility_preset"] = [s.use_fog_top, s.fog_top, s.height_falloff, s.density]
+
+R["preset_values"] = list(FOG_OT_preset_add.preset_values)
+s.use_fog_top, s.fog_top, s.height_falloff = True, 250.0, 12.0
+R["preset_add"] = sorted(bpy.ops.fog.preset_add(name="Layer Test"))
+path = bpy.utils.preset_find("Layer_Test", "analytic_fog")
+s.use_fog_top, s.fog_top, s.height_falloff = False, 9.0, 0.0
+bpy.ops.script.execute_preset(filepath=path, menu_idname="FOG_MT_presets")
+R["preset_restored"] = [s.use_fog_top, s.fog_top, s.height_falloff]
+print(json.dumps(R))
+"""
+
+
+@pytest.fixture(scope="module")
+def flow(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("layer")
+    env = dict(os.environ, BLENDER_USER_RESOURCES=str(tmp / "user"), HOME=str(tmp / "home"),
+               PYTHONPATH=str(h.ROOT))
+    r = subprocess.run([h.PYTHON, "-c", _FLOW], capture_output=True, text=True, timeout=300, cwd=tmp, env=env)
+    assert r.returncode == 0, r.stderr[-3000:]
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+@pytest.mark.render
+def test_properties_are_declared_as_documented(flow):
+    p = flow["props"]
+    assert p["use_fog_top"]["type"] == "BOOLEAN" and p["use_fog_top"]["default"] is False
+    assert p["fog_top"]["default"] == 100.0 and p["fog_top"]["min"] == 0.0
+    assert p["height_falloff"]["default"] == 0.0 and p["height_falloff"]["min"] == 0.0
+    assert p["ground_level"]["default"] == 0.0
+    for k in ("fog_top", "height_falloff", "ground_level"):
+        assert (p[k]["type"], p[k]["subtype"], p[k]["unit"]) == ("FLOAT", "DISTANCE", "LENGTH"), (k, p[k])
+
+
+@pytest.mark.render
+def test_spec_round_trips_through_the_properties(flow):
+    for stored, read, use_fog_top in flow["round_trip"]:
+        assert use_fog_top == (stored["fog_top"] is not None)
+        for key, value in stored.items():
+            if isinstance(value, float):
+                assert read[key] == pytest.approx(value, rel=1e-6), (key, stored, read)
+            else:
+                assert read[key] == value, (key, stored, read)
+
+
+@pytest.mark.render
+def test_render_flags_feed_the_spec(flow):
+    c = flow["cases"]
+    layer = {name: tuple(case["spec"][k] for k in ("fog_top", "height_falloff", "ground_level"))
+             for name, case in c.items()}
+    assert layer["file"] == (80, 5, 1.5) and c["file"]["shown"]["fog top"] == [80.0, "file"]
+    assert "fog top 80 (file), height falloff 5 (file), ground level 1.5 (file)" in c["file"]["line"]
+    assert layer["top"] == (40, 5, 1.5) and c["top"]["shown"]["fog top"] == [40.0, "flag"]   # the rest the file's
+    assert layer["falloff_ground"] == (80, 20, -3)
+    assert c["falloff_ground"]["shown"]["ground level"] == [-3.0, "flag"]
+    assert layer["haze"] == (1500, 1200, 1.5)
+    assert c["haze"]["spec"]["density"] == pytest.approx(KOSCHMIEDER / 15000.0, rel=1e-9)
+    assert layer["unbounded"][0] is None and c["unbounded"]["shown"]["fog top"] == ["unbounded", "file"]
+    assert not c["unbounded"]["notes"] and not c["file"]["notes"]
+    assert any("--fog-top" in n for n in c["unbounded_falloff"]["notes"]), c["unbounded_falloff"]
+
+
+@pytest.mark.render
+def test_no_fog_top_clears_the_files_top(flow):
+    c = flow["cases"]["no_top"]
+    assert c["spec"]["fog_top"] is None and c["shown"]["fog top"] == ["unbounded", "flag"]
+    assert c["spec"]["height_falloff"] == 5 and c["spec"]["ground_level"] == 1.5   # the rest stays the file's
+
+
+@pytest.mark.render
+def test_builtin_presets_set_the_layer_or_keep_it(flow):
+    for name, got in flow["builtin"].items():
+        layer = presets.LAYERED[name]
+        assert got["use_fog_top"] is True, name
+        for key in ("fog_top", "height_falloff", "density", "anisotropy"):
+            assert got[key] == pytest.approx(layer[key], rel=1e-6), (name, key, got)
+        assert got["color"] == pytest.approx(list(layer["albedo"]), rel=1e-6), name
+    use, top, falloff, density = flow["after_visibility_preset"]   # a visibility class keeps the top
+    assert (use, top, falloff) == (True, 77.0, 3.0)
+    assert density == pytest.approx(KOSCHMIEDER / 8000.0, rel=1e-6)
+
+
+@pytest.mark.render
+def test_user_presets_save_the_layer(flow):
+    assert {"fog.use_fog_top", "fog.fog_top", "fog.height_falloff"} <= set(flow["preset_values"])
+    assert flow["preset_add"] == ["FINISHED"]
+    assert flow["preset_restored"] == [True, 250.0, 12.0]
