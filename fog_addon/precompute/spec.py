@@ -21,11 +21,15 @@ Units, stated once:
 * ``passes``: write the Fog Light and Fog Transmittance render passes.
 * ``world_light``: the World keeps lighting surfaces through the fog (an artistic ambient).
 * ``shafts``: objects cast shadows into the fog (light shafts, ``shafts.py``), where a light needs them.
+* ``fog_top``: the height of the fog layer's top above the ground, real metres (``daylight.py``: the density is
+  ``density`` up to it); None for fog that fills all space (the night scenes' default).
+* ``height_falloff``: above the top the density falls as e^{-(h - top) / H}, H in real metres; 0 is a hard top.
+* ``ground_level``: the ground's z in Blender units (heights are measured from it).
 
-Settings of the terms still to come (shadows, multiple scattering, daylight) become fields here.
 """
 import dataclasses
 import json
+import math
 
 from . import medium, predict, presets
 
@@ -40,6 +44,35 @@ def validate_method(method):
     if m != AUTO and m not in METHODS:
         raise ValueError(f"unknown method {method!r}; use one of {', '.join((AUTO,) + METHODS)}")
     return m
+
+
+def _finite(value, what):
+    """``value`` as a finite float, or ValueError naming ``what``."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} must be a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ValueError(f"{what} must be finite, got {v}")
+    return v
+
+
+def validate_top(top):
+    """The fog layer's top in metres above the ground (>= 0), or None (fog that fills all space)."""
+    if top is None:
+        return None
+    v = _finite(top, "the fog's top (metres above the ground)")
+    if v < 0.0:
+        raise ValueError(f"the fog's top must be at or above the ground (>= 0 m), got {v}")
+    return v
+
+
+def validate_falloff(falloff):
+    """The height falloff H in metres (>= 0; 0 is a hard top)."""
+    v = _finite(falloff, "the height falloff (metres)")
+    if v < 0.0:
+        raise ValueError(f"the height falloff must be >= 0 m (0 is a hard top), got {v}")
+    return v
 
 
 def validate_quality(quality):
@@ -67,6 +100,9 @@ class FogSpec:
     world_light: bool = False
     shafts: bool = True
     multiple_scattering: bool = False
+    fog_top: object = None
+    height_falloff: float = 0.0
+    ground_level: float = 0.0
 
     @property
     def beta_per_unit(self):
@@ -84,6 +120,18 @@ class FogSpec:
         return self.grey_albedo if self.multiple_scattering else None
 
     @property
+    def layered(self):
+        """The fog has a top (a layer over the ground, ``daylight.py``) rather than filling all space."""
+        return self.fog_top is not None
+
+    def layer_per_unit(self):
+        """(top, falloff, ground) of the layer in Blender units (heights above ``ground_level``), or None for fog
+        that fills all space."""
+        if self.fog_top is None:
+            return None
+        return (self.fog_top / self.scene_scale, self.height_falloff / self.scene_scale, self.ground_level)
+
+    @property
     def target_error(self):
         """The Quality as a target relative error, None for Exact (``predict.target_error``)."""
         return predict.target_error(self.quality)
@@ -95,7 +143,9 @@ class FogSpec:
             self, density=presets.validate_density(self.density), scene_scale=float(self.scene_scale),
             albedo=tuple(float(a) for a in fog.albedo), anisotropy=fog.g, method=validate_method(self.method),
             quality=validate_quality(self.quality), passes=bool(self.passes), world_light=bool(self.world_light),
-            shafts=bool(self.shafts), multiple_scattering=bool(self.multiple_scattering))
+            shafts=bool(self.shafts), multiple_scattering=bool(self.multiple_scattering),
+            fog_top=validate_top(self.fog_top), height_falloff=validate_falloff(self.height_falloff),
+            ground_level=_finite(self.ground_level, "the ground level (z, Blender units)"))
 
     def replace(self, **changes):
         """A validated copy with ``changes`` (None values keep this spec's: the command line's unset flags)."""
@@ -118,14 +168,20 @@ class FogSpec:
                    anisotropy=settings.anisotropy, method=settings.method.lower(), quality=quality,
                    passes=settings.use_passes, world_light=settings.world_light,
                    shafts=getattr(settings, "use_shafts", True),
-                   multiple_scattering=getattr(settings, "use_multiple_scattering", False)).validated()
+                   multiple_scattering=getattr(settings, "use_multiple_scattering", False),
+                   fog_top=settings.fog_top if getattr(settings, "use_fog_top", False) else None,
+                   height_falloff=getattr(settings, "height_falloff", 0.0),
+                   ground_level=getattr(settings, "ground_level", 0.0)).validated()
 
     def settings_values(self):
         """{property: value} that store this spec in a ``scene.analytic_fog`` (the inverse of ``from_settings``)."""
         values = dict(density=self.density, scene_scale=self.scene_scale, color=self.albedo,
                       anisotropy=self.anisotropy, method=self.method.upper(), use_passes=self.passes,
                       world_light=self.world_light, use_shafts=self.shafts,
-                      use_multiple_scattering=self.multiple_scattering)
+                      use_multiple_scattering=self.multiple_scattering, use_fog_top=self.fog_top is not None,
+                      height_falloff=self.height_falloff, ground_level=self.ground_level)
+        if self.fog_top is not None:
+            values["fog_top"] = self.fog_top
         if isinstance(self.quality, str):
             values["quality"] = self.quality.upper()
         else:

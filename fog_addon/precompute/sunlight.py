@@ -1,0 +1,224 @@
+"""The sun and the sky through a fog layer (issue 29): what a pixel gets from them.
+
+The composer of ``daylight.py``'s kernels for a scene: a fog layer over the ground (``Daylight``: density beta up
+to the top, an exponential falloff above it or a hard top), one sun (a unit vector towards it and its irradiance
+on a surface facing it) and a uniform sky over the upper hemisphere (its radiance), the ground black to the fog.
+Every length is in Blender units (the spec's ``layer_per_unit``), heights are measured from the ground.
+
+A pixel gets, besides its surface's own shading:
+
+* the camera segment's transmittance through the layer (``view_transmittance``, Koschmieder's law with a
+  height-dependent medium): it replaces e^{-beta D} on surfaces, and the sky seen along a ray that meets no
+  surface is the World times ``sky_seen``;
+* the glow of the sun and of the sky along the camera segment (``ray_glow``: Dobashi et al. 2002 Eq. 11, one
+  species, and the sky as a sum of suns);
+* on a surface, the sun's and the sky's direct light dimmed by the fog above it (``direct_dimming``: the weights
+  of the two by their fog-free irradiance on the surface, so one factor serves a user's shader that sums them);
+* on a surface, the fog light the layer scatters onto it (``fog_light``): Sun et al. 2005 Sec. 4's reflected
+  airlight, here an irradiance integral of ``ray_glow`` over the surface's hemisphere.  The in-scattered radiance
+  field depends on height alone (the medium is plane-parallel), so its irradiance is baked once per scene as an
+  order-2 spherical-harmonic irradiance map per height (Ramamoorthi & Hanrahan 2001: the clamped cosine keeps
+  l <= 2 of the field, the rest is below a few per cent of the irradiance), ``bake_fog_light``, and read per
+  pixel from the normal (``sh_basis``).
+
+The sky's scattering is isotropic (``daylight.sky_source``); the sun's takes the fog's Henyey-Greenstein g.
+"""
+import math
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from . import daylight, tables
+
+
+class Daylight(NamedTuple):
+    """A fog layer, its sun and its sky (Blender units; shader backends hold sockets, numpy floats or arrays)."""
+    beta: Any            # 1/unit: the layer's extinction below its top
+    top: float           # units above the ground: the top of the layer (Python float)
+    falloff: float       # units: H of the density's fall above the top, 0 a hard top (Python float)
+    ground: Any          # the ground's z (units)
+    sun: Any             # unit vector towards the sun (world)
+    sun_irradiance: Any  # RGB, W/m^2 on a surface facing the sun (a Blender Sun light's Strength x Color)
+    sky_radiance: Any    # RGB, W/(m^2 sr): the World's radiance over the upper hemisphere
+    g: float = 0.0       # Henyey-Greenstein anisotropy of the sun's scattering (Python float)
+
+
+def _z(m, v):
+    return m.dot(v, (0.0, 0.0, 1.0))
+
+
+def _grey(m, colour):
+    return m.dot(colour, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))
+
+
+def sun_elevation(m, day):
+    """mu_s: the sine of the sun's elevation (the z-component of the unit vector towards it)."""
+    return _z(m, day.sun)
+
+
+def view_transmittance(m, day, point, incoming, length):
+    """e^{-tau} of the segment from a surface ``point`` towards the camera (unit ``incoming``, ``length`` units):
+    ``daylight.transmittance`` (the optical depth is the same read from either end)."""
+    return daylight.transmittance(m, _z(m, point) - day.ground, _z(m, incoming), length, day.beta, day.top,
+                                  day.falloff)
+
+
+def sky_seen(m, day, origin, direction):
+    """The fraction of the World seen along a ray from ``origin`` that meets no surface (unit ``direction``):
+    ``daylight.sky_transmittance`` (0 for a ray that points down: it would meet the ground)."""
+    return daylight.sky_transmittance(m, _z(m, origin) - day.ground, _z(m, direction), day.beta, day.top,
+                                      day.falloff)
+
+
+def ray_glow(m, day, origin, direction, length):
+    """The sun's and the sky's single scattering along a camera segment, per unit albedo, W/(m^2 sr) (RGB):
+    E_sun ``daylight.sun_airlight`` (phase at the angle between the ray and the sun) + L_sky
+    ``daylight.sky_airlight``; ``length`` model.FAR for a ray to the sky."""
+    pz, vz = _z(m, origin) - day.ground, _z(m, direction)
+    args = (day.beta, day.top, day.falloff)
+    sun = daylight.sun_airlight(m, pz, vz, length, sun_elevation(m, day), m.dot(direction, day.sun), *args,
+                                albedo=1.0, g=day.g)
+    sky = daylight.sky_airlight(m, pz, vz, length, *args, albedo=1.0)
+    return m.scale(day.sun_irradiance, sun) + m.scale(day.sky_radiance, sky)
+
+
+def direct_dimming(m, day, point, normal):
+    """The factor on a surface's direct light from the sun and the sky (Dobashi et al. 2002 Eq. 11's g_l): their
+    transmittances to the point, ``daylight.sun_transmittance`` and the sky's irradiance ratio
+    ``daylight.sky_irradiance`` (exact on a surface facing up), weighted by their fog-free irradiances on it,
+    E_sun max(n.s, 0) and pi L_sky (1 + n_z) / 2.  One factor for the user's shader, which sums both lights: exact
+    where one of them dominates or the two transmittances agree; a point in the sun's shadow gets the weighted
+    factor, not the sky's alone."""
+    z = _z(m, point) - day.ground
+    args = (day.beta, day.top, day.falloff)
+    w_sun = _grey(m, day.sun_irradiance) * m.maximum(m.dot(normal, day.sun), 0.0)
+    w_sky = _grey(m, day.sky_radiance) * (math.pi * 0.5) * (1.0 + _z(m, normal))
+    t_sun = daylight.sun_transmittance(m, z, sun_elevation(m, day), *args)
+    t_sky = daylight.sky_irradiance(m, z, *args)
+    return (w_sun * t_sun + w_sky * t_sky + 1e-30) / (w_sun + w_sky + 1e-30)
+
+
+# --- the fog light on surfaces: an irradiance map per height -------------------------------------------------
+
+Z_COUNT = 64            # heights of the fog light's table, from the ground to ``table_height``
+SH_COUNT = 9            # real spherical harmonics l <= 2
+TABLE_ROWS = 5          # the 2 x 9 coefficients in RGBA texels: coefficient k in row k // 4, channel k % 4
+FALLOFF_SPAN = 8.0      # the table spans the top + this many falloff lengths (the column left is e^-8 of it)
+BAKE_MU = 32            # Gauss-Legendre nodes in each hemisphere's direction cosine (``bake_fog_light``)
+BAKE_PHI = 64           # azimuths
+PEAK_TERMS = 400        # Legendre terms of ``peak_irradiance`` (g^400 < 1e-8 for g <= 0.95)
+CLAMPED_COSINE = (math.pi, 2.0 * math.pi / 3.0, math.pi / 4.0)   # A_l: the clamped cosine's SH (R & H 2001 Eq. 8)
+
+
+def sh_basis(m, n):
+    """The nine real spherical harmonics Y_lm (l <= 2) of unit vector ``n`` (Ramamoorthi & Hanrahan 2001 Eq. 3's
+    constants), in the order (0,0), (1,-1), (1,0), (1,1), (2,-2), (2,-1), (2,0), (2,1), (2,2)."""
+    x, y, z = (m.dot(n, axis) for axis in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)))
+    c1, c2, c3, c4 = 0.488603, 1.092548, 0.315392, 0.546274
+    return (0.282095 + 0.0 * x, c1 * y, c1 * z, c1 * x, c2 * (x * y), c2 * (y * z), c3 * (3.0 * (z * z) - 1.0),
+            c2 * (x * z), c4 * (x * x - y * y))
+
+
+def _sh_order(k):
+    return 0 if k == 0 else (1 if k < 4 else 2)
+
+
+def table_height(top, falloff):
+    """The highest height the fog light's table holds (units): the top, plus FALLOFF_SPAN falloff lengths.  Above a
+    hard top the field is that of the top (the layer below is all a surface there sees: plane-parallel)."""
+    return max(float(top) + FALLOFF_SPAN * float(falloff), 1e-6)
+
+
+def table_spec(beta, top, falloff, sun, g):
+    """The TableSpec of the fog light's irradiance map for a layer (1/unit, units) and sun direction (unit vector)."""
+    s = ", ".join(f"{float(c):+.4f}" for c in sun)
+    return tables.TableSpec(f"AnalyticFog Daylight Fog Light (beta {float(beta):.6g}, top {float(top):.6g}, "
+                            f"H {float(falloff):.6g}, sun {s}, g {float(g):+.3f})", Z_COUNT, TABLE_ROWS,
+                            g=float(g), channels=4)
+
+
+def peak_irradiance(g, cos_ns):
+    """C_g(c) / pi: the irradiance over pi that a surface receives from a field p(d.s) (Henyey-Greenstein of
+    anisotropy g around the direction s, unit integral) at c = n.s, by Funk-Hecke: sum_l k_l g^l P_l(c), k_l the
+    clamped cosine's Legendre coefficients (2l+1)/2 int_0^1 x P_l(x) dx (numpy, float64; l up to PEAK_TERMS)."""
+    x, w = np.polynomial.legendre.leggauss(2 * PEAK_TERMS)
+    x, w = 0.5 * (x + 1.0), 0.5 * w
+    total = np.zeros_like(np.asarray(cos_ns, float))
+    for l in range(PEAK_TERMS):
+        unit = np.zeros(l + 1)
+        unit[l] = 1.0
+        k_l = (2 * l + 1) / 2.0 * np.sum(w * x * np.polynomial.legendre.legval(x, unit))
+        total = total + k_l * g ** l * np.polynomial.legendre.legval(cos_ns, unit)
+    return total / math.pi
+
+
+def bake_fog_light(beta, top, falloff, sun, g):
+    """(TABLE_ROWS, Z_COUNT, 4) float32: the fog light's irradiance map (per unit albedo, over pi) at each height
+    z_k = k / (Z_COUNT - 1) ``table_height``.  Coefficient k = 4 row + channel:
+
+    * 0..8: the sun's field minus its peak, SH coefficients A_l L_lm / pi per unit sun irradiance;
+    * 9..17: the sky's field, the same per unit sky radiance;
+    * 18: I_s(z), the sun's integral along the sun's own direction (``sun_airlight`` at cos 1 over the phase there);
+    * 19: C_g(c) / pi at c = 2 k / (Z_COUNT - 1) - 1 (``peak_irradiance``; not a function of height).
+
+    The sun's field is I(d_z) p(d.s), I the phase-free integral along d: written I(mu_s) p(d.s) + (I(d_z) -
+    I(mu_s)) p(d.s), the first term's irradiance is I_s C_g(n.s) exactly (Funk-Hecke) and the second, which
+    vanishes at the phase's peak, is smooth enough for l <= 2 (sum_k c_k Y_k(n)).  L(d) is ``ray_glow``'s per-unit
+    sun and sky terms along d from the point, to the ground (the field's own geometry) or to the sky; numerical
+    quadrature: BAKE_MU Gauss-Legendre nodes per hemisphere x BAKE_PHI azimuths."""
+    sun = np.asarray(sun, float) / np.linalg.norm(sun)
+    m = _numpy_ops()
+    x, w = np.polynomial.legendre.leggauss(BAKE_MU)
+    mu = np.concatenate([0.5 * (x - 1.0), 0.5 * (x + 1.0)])
+    wmu = np.concatenate([0.5 * w, 0.5 * w])
+    phi = (np.arange(BAKE_PHI) + 0.5) * (2.0 * math.pi / BAKE_PHI)
+    mu_g, phi_g = np.meshgrid(mu, phi, indexing="ij")
+    s = np.sqrt(np.maximum(1.0 - mu_g * mu_g, 0.0))
+    d = np.stack([s * np.cos(phi_g), s * np.sin(phi_g), mu_g], axis=-1)
+    dw = (wmu[:, None] * (2.0 * math.pi / BAKE_PHI)) * np.ones_like(phi_g)
+    basis = np.stack(sh_basis(m, d), axis=0)                           # (9, mu, phi)
+    a_l = np.array([CLAMPED_COSINE[_sh_order(k)] for k in range(SH_COUNT)]) / math.pi
+    phase = daylight.hg_phase(m, g, d @ sun)
+    out = np.zeros((TABLE_ROWS * 4, Z_COUNT))
+    heights = np.linspace(0.0, table_height(top, falloff), Z_COUNT)
+    args = (beta, top, falloff)
+    for k, z in enumerate(heights):
+        length = np.where(mu_g < 0.0, z / np.maximum(-mu_g, 1e-12), daylight.UNBOUNDED)
+        i_d = daylight.sun_airlight(m, z, mu_g, length, sun[2], 1.0, *args, albedo=1.0, g=0.0) * (4.0 * math.pi)
+        i_s = daylight.sun_airlight(m, z, sun[2], daylight.UNBOUNDED, sun[2], 1.0, *args, albedo=1.0,
+                                    g=0.0) * (4.0 * math.pi)
+        l_sky = daylight.sky_airlight(m, z, mu_g, length, *args, albedo=1.0)
+        for j, field in enumerate(((i_d - i_s) * phase, l_sky)):
+            out[j * SH_COUNT:(j + 1) * SH_COUNT, k] = a_l * np.sum(basis * (field * dw), axis=(1, 2))
+        out[2 * SH_COUNT, k] = i_s
+    out[2 * SH_COUNT + 1] = peak_irradiance(g, np.linspace(-1.0, 1.0, Z_COUNT))
+    return out.reshape(TABLE_ROWS, 4, Z_COUNT).transpose(0, 2, 1).astype(np.float32)
+
+
+def _numpy_ops():
+    from .ops import NumpyOps
+    return NumpyOps()
+
+
+def _coefficient(m, spec, x, i):
+    return m.table(spec, x, (i // 4) / (TABLE_ROWS - 1.0), channel=i % 4)
+
+
+def fog_light(m, spec, day, point, normal):
+    """The irradiance over pi that the layer's single scattering sends onto a surface at ``point`` with unit
+    ``normal``, per unit albedo, W/(m^2 sr) (RGB), from the baked map (``bake_fog_light``, ``spec`` its TableSpec)
+    at the point's height: E_sun (I_s C_g(n.s) + the sun's residual map) + L_sky (the sky's map), each map
+    clamped at 0 (an order-2 map rings below 0 facing away from a peaked field).  Times a Lambertian albedo: the
+    radiance the surface reflects."""
+    x = m.clamp01((_z(m, point) - day.ground) * (1.0 / table_height(day.top, day.falloff)))
+    basis = sh_basis(m, normal)
+    maps = []
+    for part in range(2):
+        total = 0.0
+        for k in range(SH_COUNT):
+            total = total + _coefficient(m, spec, x, part * SH_COUNT + k) * basis[k]
+        maps.append(total)
+    peak = _coefficient(m, spec, x, 2 * SH_COUNT) * _coefficient(
+        m, spec, 0.5 * (m.dot(normal, day.sun) + 1.0), 2 * SH_COUNT + 1)
+    return (m.scale(day.sun_irradiance, m.maximum(peak + maps[0], 0.0))
+            + m.scale(day.sky_radiance, m.maximum(maps[1], 0.0)))
