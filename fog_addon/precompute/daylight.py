@@ -270,24 +270,84 @@ def sky_irradiance(m, z, beta0, h0, H):
     return 2.0 * expint3(m, column_depth(m, z, beta0, h0, H))
 
 
-def sky_airlight(m, pz, vz, length, beta0, h0, H, albedo=1.0, nodes=SKY_NODES):
-    """The uniform sky's single scattering along a camera segment per unit sky radiance (dimensionless),
-    ground black, isotropic scattering:
+# E(m) = (1 + m1 (a1 + ...)) + m1 (b1 + ...) ln(1/m1), m1 = 1 - m (Abramowitz & Stegun 17.3.36, |error| < 2e-8)
+_ELLIPTIC_A = (0.44325141463, 0.06260601220, 0.04757383546, 0.01736506451)
+_ELLIPTIC_B = (0.24998368310, 0.09200180037, 0.04069697526, 0.00526449639)
 
-        L / L_sky = int_0^D beta S(z(t)) e^{-tau_c(t)} dt = (a / 2) int_0^1 I(mu) dmu,
+
+def elliptic_e(m, m1):
+    """The complete elliptic integral of the second kind E(m) of parameter m = 1 - m1, 0 < m1 <= 1 (A&S 17.3.36)."""
+    a, b = _ELLIPTIC_A, _ELLIPTIC_B
+    pa = 1.0 + m1 * (a[0] + m1 * (a[1] + m1 * (a[2] + m1 * a[3])))
+    pb = m1 * (b[0] + m1 * (b[1] + m1 * (b[2] + m1 * b[3])))
+    return pa - pb * m.log(m1)
+
+
+def hg_ring_mean(m, g, mu, vz):
+    """The Henyey-Greenstein phase function averaged over the ring of directions of z-component mu (1/sr):
+    (1 / 2 pi) int p(v . w) dphi, v of z-component vz.  With v . w = a + b cos phi (a = mu vz,
+    b = sqrt((1 - mu^2)(1 - vz^2))), A = 1 + g^2 - 2 g a, B = 2 |g| b:
+    int_0^{2 pi} (A - B cos phi)^{-3/2} dphi = 4 E(k^2) / ((A - B) sqrt(A + B)), k^2 = 2 B / (A + B)
+    (Gradshteyn & Ryzhik 2.571), so the mean is (1 - g^2) E / (2 pi^2 (A - B) sqrt(A + B)); 1 / (4 pi) at g = 0.
+    A - B >= (1 - |g|)^2 > 0: no singularity for |g| < 1."""
+    b = m.sqrt(m.maximum((1.0 - mu * mu) * (1.0 - vz * vz), 0.0))
+    big_a = (1.0 + g * g) - (2.0 * g) * (mu * vz)
+    big_b = (2.0 * abs(g)) * b
+    diff, total = big_a - big_b, big_a + big_b
+    return ((1.0 - g * g) / (2.0 * math.pi * math.pi)) * elliptic_e(m, diff / total) / (diff * m.sqrt(total))
+
+
+WALL_NODES = 6                               # Gauss-Legendre nodes of ``sky_wall_irradiance``
+
+
+def sky_wall_irradiance(m, z, beta0, h0, H, nodes=WALL_NODES):
+    """The sky's irradiance on a vertical surface at height z over its value without fog (pi L_sky / 2): a wall
+    sees the sky's upper half through the column depth C(z) / mu, (4 / pi) int_0^1 sqrt(1 - mu^2) e^{-C / mu} dmu
+    (the clipped cosine integrated over azimuth is 2 sqrt(1 - mu^2)), by ``nodes``-point Gauss-Legendre (1e-3 at
+    C = 0, where the integrand's root at mu = 1 is steepest; 2e-3 of the ratio at C = 0.1 to 2)."""
+    c = column_depth(m, z, beta0, h0, H)
+    xs, ws = gauss_legendre01(nodes)
+    total = 0.0
+    for mu, w in zip(xs, ws):
+        total = total + (w * (4.0 / math.pi) * math.sqrt(1.0 - mu * mu)) * exp_neg(m, c * (1.0 / mu))
+    return total
+
+
+def sky_tilted_irradiance(m, z, nz, beta0, h0, H):
+    """The sky's direct irradiance through the layer on a surface of normal z-component nz at height z, per unit sky
+    radiance (W/m^2 per W/(m^2 sr)): the quadratic in nz through its exact values facing down (0), sideways
+    (pi/2 ``sky_wall_irradiance``) and up (pi ``sky_irradiance``), clamped at 0.  Within 2 % of quadrature for
+    nz >= -0.5 (the irradiance is itself a smooth function of nz: the clipped cosine's azimuthal integral); below,
+    where the sky's weight (1 + nz) / 2 is small, it errs by up to a few per cent of the fog-free value."""
+    a = (0.5 * math.pi) * sky_wall_irradiance(m, z, beta0, h0, H)
+    half_up = (0.5 * math.pi) * sky_irradiance(m, z, beta0, h0, H)
+    return m.maximum(a + nz * (half_up + nz * (half_up - a)), 0.0)
+
+
+def sky_airlight(m, pz, vz, length, beta0, h0, H, albedo=1.0, nodes=SKY_NODES, g=0.0):
+    """The uniform sky's single scattering along a camera segment per unit sky radiance (dimensionless),
+    ground black:
+
+        L / L_sky = int_0^D beta S(z(t)) e^{-tau_c(t)} dt = a int_0^1 I(mu) 2 pi pbar(mu) dmu,
 
     I(mu) the one-species integral of ``sun_airlight`` for a sun of elevation sine mu (the sky is a sum of
-    suns; each is closed form along the ray, for every vertical profile): ``nodes``-point Gauss-Legendre
-    in mu.  Its error against scipy (docs/measurements/2026-11-27-daylight-kernels.md) comes from the
-    grazing directions (mu -> 0) near the top of a hard layer."""
+    suns; each is closed form along the ray, for every vertical profile) and pbar the phase function averaged over
+    the sky's ring at mu (``hg_ring_mean``; 1 / (4 pi) for isotropic scattering, g = 0, where the factor is 1/2):
+    ``nodes``-point Gauss-Legendre in mu.  Its error against scipy (docs/measurements/2026-11-27-daylight-kernels.md)
+    comes from the grazing directions (mu -> 0) near the top of a hard layer."""
     tau_d = optical_depth(m, pz, vz, length, beta0, h0, H)
     c0 = column_depth(m, pz, beta0, h0, H)
     c1 = column_depth(m, pz + vz * length, beta0, h0, H)
     xs, ws = gauss_legendre01(nodes)
     total = 0.0
     for mu, w in zip(xs, ws):
-        total = total + w * sun_integral(m, tau_d, c0 * (1.0 / mu), c1 * (1.0 / mu) + tau_d, 1.0 - vz * (1.0 / mu))
-    return (0.5 * albedo) * total
+        term = w * sun_integral(m, tau_d, c0 * (1.0 / mu), c1 * (1.0 / mu) + tau_d, 1.0 - vz * (1.0 / mu))
+        if g:
+            term = term * ((2.0 * math.pi) * hg_ring_mean(m, g, mu, vz))
+        else:
+            term = 0.5 * term
+        total = total + term
+    return albedo * total
 
 
 def sky_transmittance(m, pz, vz, beta0, h0, H):

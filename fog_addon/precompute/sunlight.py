@@ -21,7 +21,8 @@ A pixel gets, besides its surface's own shading:
   l <= 2 of the field, the rest is below a few per cent of the irradiance), ``bake_fog_light``, and read per
   pixel from the normal (``sh_basis``).
 
-The sky's scattering is isotropic (``daylight.sky_source``); the sun's takes the fog's Henyey-Greenstein g.
+The sun's and the sky's scattering take the fog's Henyey-Greenstein g (the sky's by its ring means,
+``daylight.hg_ring_mean``).
 """
 import math
 from typing import Any, NamedTuple
@@ -78,24 +79,25 @@ def ray_glow(m, day, origin, direction, length):
     args = (day.beta, day.top, day.falloff)
     sun = daylight.sun_airlight(m, pz, vz, length, sun_elevation(m, day), m.dot(direction, day.sun), *args,
                                 albedo=1.0, g=day.g)
-    sky = daylight.sky_airlight(m, pz, vz, length, *args, albedo=1.0)
+    sky = daylight.sky_airlight(m, pz, vz, length, *args, albedo=1.0, g=day.g)
     return m.scale(day.sun_irradiance, sun) + m.scale(day.sky_radiance, sky)
 
 
 def direct_dimming(m, day, point, normal):
-    """The factor on a surface's direct light from the sun and the sky (Dobashi et al. 2002 Eq. 11's g_l): their
-    transmittances to the point, ``daylight.sun_transmittance`` and the sky's irradiance ratio
-    ``daylight.sky_irradiance`` (exact on a surface facing up), weighted by their fog-free irradiances on it,
-    E_sun max(n.s, 0) and pi L_sky (1 + n_z) / 2.  One factor for the user's shader, which sums both lights: exact
+    """The factor on a surface's direct light from the sun and the sky (Dobashi et al. 2002 Eq. 11's g_l): the sun's
+    transmittance to the point (``daylight.sun_transmittance``) and the sky's direct irradiance through the fog
+    (``daylight.sky_tilted_irradiance``), weighted by their fog-free irradiances on it, E_sun max(n.s, 0) and
+    pi L_sky (1 + n_z) / 2.  One factor for the user's shader, which sums both lights: exact
     where one of them dominates or the two transmittances agree; a point in the sun's shadow gets the weighted
     factor, not the sky's alone."""
     z = _z(m, point) - day.ground
     args = (day.beta, day.top, day.falloff)
     w_sun = _grey(m, day.sun_irradiance) * m.maximum(m.dot(normal, day.sun), 0.0)
-    w_sky = _grey(m, day.sky_radiance) * (math.pi * 0.5) * (1.0 + _z(m, normal))
+    sky = _grey(m, day.sky_radiance)
+    nz = _z(m, normal)
     t_sun = daylight.sun_transmittance(m, z, sun_elevation(m, day), *args)
-    t_sky = daylight.sky_irradiance(m, z, *args)
-    return (w_sun * t_sun + w_sky * t_sky + 1e-30) / (w_sun + w_sky + 1e-30)
+    fogged = w_sun * t_sun + sky * daylight.sky_tilted_irradiance(m, z, nz, *args)
+    return (fogged + 1e-30) / (w_sun + sky * (math.pi * 0.5) * (1.0 + nz) + 1e-30)
 
 
 # --- the fog light on surfaces: an irradiance map per height -------------------------------------------------
@@ -187,7 +189,7 @@ def bake_fog_light(beta, top, falloff, sun, g):
         i_d = daylight.sun_airlight(m, z, mu_g, length, sun[2], 1.0, *args, albedo=1.0, g=0.0) * (4.0 * math.pi)
         i_s = daylight.sun_airlight(m, z, sun[2], daylight.UNBOUNDED, sun[2], 1.0, *args, albedo=1.0,
                                     g=0.0) * (4.0 * math.pi)
-        l_sky = daylight.sky_airlight(m, z, mu_g, length, *args, albedo=1.0)
+        l_sky = daylight.sky_airlight(m, z, mu_g, length, *args, albedo=1.0, g=g)
         for j, field in enumerate(((i_d - i_s) * phase, l_sky)):
             out[j * SH_COUNT:(j + 1) * SH_COUNT, k] = a_l * np.sum(basis * (field * dw), axis=(1, 2))
         out[2 * SH_COUNT, k] = i_s
