@@ -23,13 +23,14 @@ What the scene needs comes first:
   lights down beyond the Quality's target);
 * light shafts (objects casting shadows into a light's glow, ``caveats.shadowing_lights``, with Light Shafts
   on): the compositor, which alone models them;
+* a fog layer with a sun or a sky (``sunsky.is_daylit``): the compositor, which alone gives them their glow;
 * glowing objects the camera sees (emissive materials, ``compositor.glowing_objects``): the compositor, which
   alone gives them a glow;
 * surfaces the compositor's one point per pixel would get wrong (transparent, glass or refracting
   materials on objects the camera sees, depth of field, motion blur): the node groups, unless their
   predicted cost exceeds SOFT_COST_LIMIT; then the compositor, and the choice says what it gets wrong.
 """
-from .. import caveats
+from .. import caveats, sunsky
 from ..nodes import groups
 from ..precompute import rungs
 from . import METHODS_BY_NAME
@@ -132,6 +133,9 @@ def choose(scene, spec, lights, materials):
         if shafted:
             return "compositor", (f"light shafts: objects cast shadows into the glow of {len(shafted)} light(s), "
                                   f"and only the compositor models them{caveat}; {costs}")
+    if sunsky.is_daylit(scene, spec):
+        return "compositor", (f"daylight: only the compositor gives the sun and the sky their glow and fog light in "
+                              f"the fog layer{caveat}; {costs}")
     glowing = compositor_glowing(scene)
     if glowing:
         return "compositor", (f"glowing objects ({caveats._names([o.name for o in glowing])}): only the "

@@ -10,7 +10,7 @@ import functools
 import bpy
 
 from ..nodes import comp_fog, compositor, groups
-from .. import caveats, shadow_maps, view
+from .. import caveats, shadow_maps, sunsky, view
 from ..precompute import rungs, shafts
 from .base import Method
 
@@ -50,8 +50,13 @@ class Compositor(Method):
 
     def build(self, scene, spec, plan, images):
         aovs = functools.partial(comp_fog.add_surface_aovs, engine=scene.render.engine)
+        day = sunsky.builder(scene, spec)
         groups.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs,
-                             tails=caveats.specular_paths(bpy.data.materials))
+                             tails=caveats.specular_paths(bpy.data.materials), day=day)
+        daylit = sunsky.is_daylit(scene, spec)
+        if daylit:
+            table, table_images = sunsky.fog_light_table(scene, spec)
+            images = dict(images, **table_images)
         shafted = shafted_lights(scene, spec, plan.in_groups) if spec.shafts else []
         maps, shadow_images = shadow_maps.ensure(scene, shafted)
         shadow_maps.remove_unused(set(shadow_images))
@@ -61,8 +66,9 @@ class Compositor(Method):
                                           plan.partial, (maps, shafts.samples_for(spec.quality, len(maps)),
                                                          spec.anisotropy),
                                           emitters=((spec.anisotropy, spec.multiple_albedo) if glowing_objects(scene)
-                                                    else None))
-        groups.build_world([], [], scene.camera, images, spec.passes)
+                                                    else None),
+                                          day=(day, table) if daylit else None)
+        groups.build_world([], [], scene.camera, images, spec.passes, day=day)
         return images
 
     def update(self, scene, spec, plan):

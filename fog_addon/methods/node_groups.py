@@ -9,7 +9,7 @@ target until they fit.
 import bpy
 
 from ..nodes import groups, passes
-from .. import caveats, view
+from .. import caveats, sunsky, view
 from .base import Method
 
 MANY_LIGHTS = 8   # from this many fog lights on, Cycles' node groups get a note (``many_lights_note``)
@@ -27,8 +27,10 @@ class NodeGroups(Method):
 
     def build(self, scene, spec, plan, images):
         groups.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes,
-                             tails=caveats.specular_paths(bpy.data.materials))
-        groups.build_world(plan.shader_lights, plan.shader_models, scene.camera, images, spec.passes)
+                             tails=caveats.specular_paths(bpy.data.materials),
+                             day=sunsky.builder(scene, spec))
+        groups.build_world(plan.shader_lights, plan.shader_models, scene.camera, images, spec.passes,
+                           day=sunsky.builder(scene, spec))
         return images
 
     def passes(self, scene, spec):

@@ -36,7 +36,8 @@ import math
 
 import bpy
 
-from ..precompute import emitter_glow, footprint, model, pixel, rungs, shading, shafts, spot as spot_, surface
+from ..precompute import (emitter_glow, footprint, model, pixel, rungs, shading, shafts, spot as spot_, sunlight,
+                          surface)
 from . import compositor, groups, images as images_, owned
 from .sockets import KERNEL_GROUP, NodeOps, Val
 
@@ -636,14 +637,27 @@ def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=
     return total
 
 
-def build_fog_group(scene, lights, models, images, windows=None, partial=False, shafted=None, emitters=None):
+def _daylight(m, day, table, camera, direction, position, normal, reflectance, d_vp, t_vp, cover):
+    """The sun's and the sky's light in a fog layer at a pixel, per unit albedo (``precompute/sunlight.py``): the
+    glow along the camera ray to its surface plus the fog light the surface reflects dimmed on its way (Sun et al.
+    2005 Eq. 19's L_a, the reflectance taken as Lambertian: diffuse plus specular albedo times the irradiance over
+    pi) where the pixel sees a surface, the glow to the sky where it does not."""
+    to_surface = sunlight.ray_glow(m, day, camera, direction, d_vp) + m.scale(
+        reflectance * sunlight.fog_light(m, table, day, position, normal), t_vp)
+    to_sky = sunlight.ray_glow(m, day, camera, direction, model.FAR)
+    return m.scale(to_surface, cover) + m.scale(to_sky, 1.0 - cover)
+
+
+def build_fog_group(scene, lights, models, images, windows=None, partial=False, shafted=None, emitters=None,
+                    day=None):
     """(Re)build the compositor group ``FOG_GROUP``: Image (the render) and the AOVs in; Image (the render
     plus the fog's light) and Fog Light out.  ``lights``: the fog's lights, ``models``: each light's
     rungs.LightModels; ``windows``: (the surfaces' window, [each light's glow window or None]) of
     ``footprint.py`` (``view.windows``), or None to evaluate every term over the whole picture; ``partial``:
     they do not hold the animation's range (``PARTIAL``); ``shafted``: ``build_bundle``'s; ``emitters``: (the fog's
     g, Dense Fog's albedo or None) if glowing objects get their glows (``_emitter_glow``: an Emission input), else
-    None.  Rebuilt in place, so the
+    None; ``day``: (``build_surface``'s ``day``, the fog light's TableSpec) for a fog layer with a sun or a sky
+    (``_daylight``), else None.  Rebuilt in place, so the
     scene's compositor keeps its group node.  Returns the table images it reads (``images`` and the pixel
     filter's and the emitters' weights)."""
     filt, peak = pixel_filter(scene), None
@@ -725,10 +739,16 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     if win is not None:   # the sums over the surfaces' window back in place, on the picture's domain
         sums.update({o: _accumulate(m, _zero(m, direction), _uncrop(m, sums[o], win))
                      for o in SCATTER_OUTPUTS if o in sums})
+    daylight = None if day is None else day[0](m, beta)
+    t_vp = (model.transmittance(m, beta, d_vp) if daylight is None
+            else sunlight.view_transmittance(m, daylight, pos, incoming, d_vp))
     if not sums:
         fog = m.wrap((0.0, 0.0, 0.0))
     else:   # Eq. 19 where the pixel sees its surface, Eq. 12 where it sees the sky
-        fog = albedo * shading.pixel_light(m, sums, model.transmittance(m, beta, d_vp), cover)
+        fog = albedo * shading.pixel_light(m, sums, t_vp, cover)
+    if daylight is not None:
+        fog = fog + albedo * _daylight(m, daylight, day[1], cam, direction, pos, normal, diffuse + specular, d_vp,
+                                       t_vp, cover)
     if emitters is not None:
         fog = fog + albedo * _emitter_glow(m, p, beta, d_vp, emitters[0], emitter_pixel_angle(scene), emitters[1],
                                            cover)

@@ -27,7 +27,7 @@ import re
 
 import bpy
 
-from ..precompute import area, fingerprint, predict, rungs, shading, spot, surface
+from ..precompute import area, fingerprint, predict, rungs, shading, spot, sunlight, surface
 from ..precompute.medium import Medium
 from . import owned, passes, sockets
 from .sockets import NodeOps
@@ -553,7 +553,7 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained):
     return ng
 
 
-def build_surface(lights, models, images, with_passes=False, extra=None, tails=True):
+def build_surface(lights, models, images, with_passes=False, extra=None, tails=True, day=None):
     """Scene group for materials: ``shading.shade_surface`` (Sun et al. 2005 Eq. 19) over ``lights``.
 
     ``models``: one rungs.LightModels per light.  Inputs mirror the Principled
@@ -566,7 +566,9 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     fog passes (``passes.py``), weighted by the Opacity input (white: opaque).  ``extra(group)``: adds
     nodes of its own (the Compositor method's AOVs, ``comp_fog.add_surface_aovs``).  ``tails``: the glows
     past glass and mirrors (See Through, ``_place_tails``), only where the scene has them
-    (``caveats.specular_paths``).
+    (``caveats.specular_paths``).  ``day(m, beta)``: the fog layer's ``sunlight.Daylight`` in this tree
+    (``sunsky.daylight``), or None for fog that fills all space: the camera segment's transmittance is then the
+    layer's, and the user's shader on every ray takes the sun's and the sky's dimming (``sunlight.direct_dimming``).
     The lights sit in bundle groups (``_bundles``, ``build_surface_bundle``).
 
     Why closures: Cycles' SVM emits a shader's value nodes in the order of
@@ -603,6 +605,12 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     # pane or mirror on a specular segment (Ray Length: the point is P + Incoming x Ray Length's end)
     length = m.select(segment, m.wrap(path.outputs["Ray Length"]), view)
     t_vp, transmit = shading.view_transmittance(m, m.wrap(params.outputs["Beta"]), length, fogged)
+    if day is not None:
+        daylight = day(m, m.wrap(params.outputs["Beta"]))
+        position, incoming = m.wrap(geo.outputs["Position"], vector=True), m.wrap(geo.outputs["Incoming"], vector=True)
+        t_vp = sunlight.view_transmittance(m, daylight, position, incoming, length)
+        transmit = (1.0 + fogged * (t_vp - 1.0)) * sunlight.direct_dimming(
+            m, daylight, position, m.wrap(geo.outputs["Normal"], vector=True))
     glow_length = view * (1.0 - segment)   # a specular segment's glow is the tails' (``build_tail_bundle``)
     shared = {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"], "Position": geo.outputs["Position"],
               "Incoming": geo.outputs["Incoming"], "View Distance": glow_length.sock,
@@ -921,13 +929,15 @@ def build_world_bundle(images, first, lights, models, with_passes, chained):
     return ng
 
 
-def build_world(lights, models, camera, images, with_passes=False):
+def build_world(lights, models, camera, images, with_passes=False, day=None):
     """Scene group for the World: ``shading.shade_background`` (Sun et al. 2005 Eq. 12) over ``lights``.
 
     Camera position by TRANSFORMS drivers on ``camera`` (no node gives it in a
     world shader).  The background itself is seen through infinite fog:
     Transmittance is 0 (1 on rays other than the camera's if the params
-    group's World Light is 1: they keep the world's lighting).  The lights whose glow is on sit in bundle groups
+    group's World Light is 1: they keep the world's lighting).  With a fog layer (``day``: ``build_surface``'s) the
+    World is seen through it on camera rays (``sunlight.sky_seen``) and lights surfaces on every other ray (the
+    materials dim it: ``sunlight.direct_dimming``).  The lights whose glow is on sit in bundle groups
     (``_bundles``, ``build_world_bundle``).
     """
     ng, gin, gout = _new_group(WORLD, [], [("Fog", "NodeSocketShader"), ("Emission", C), ("Transmittance", F)])
@@ -955,6 +965,10 @@ def build_world(lights, models, camera, images, with_passes=False):
     emission, transmittance = shading.shade_background(
         m, [m.wrap(node.outputs["Airlight"], vector=True) for node, _ in placed], medium, is_camera,
         m.wrap(params.outputs[WORLD_LIGHT]))
+    if day is not None:
+        seen = sunlight.sky_seen(m, day(m, m.wrap(params.outputs["Beta"])), m.wrap(cam.outputs[0], vector=True),
+                                 direction)
+        transmittance = 1.0 + is_camera * (seen - 1.0)
     m.feed(gout.inputs["Emission"], m.wrap(emission))
     _shader_tree(ng, gout.inputs["Fog"], fogs)
     m.feed(gout.inputs["Transmittance"], m.wrap(transmittance))

@@ -5,7 +5,7 @@ from typing import Any, NamedTuple
 
 import bpy
 
-from .. import caveats, methods, props, shadow_maps
+from .. import caveats, methods, props, shadow_maps, sunsky
 from ..nodes import comp_fog, compositor, dedupe, groups, images, osl, passes
 from ..nodes.light import unwrap_light, wrap_light
 from ..nodes.material import unwrap_material, wrap_material
@@ -38,6 +38,8 @@ def fog_lights(scene):
             continue
         data = obj.data
         settings = getattr(data, "analytic_fog", None)
+        if data.type == "SUN":   # the sun shines through a fog layer (``sunsky.py``), not as a fog light
+            continue
         if data.type not in SUPPORTED_LIGHTS:
             notes.append((obj.name, f"{data.type.lower()} lights are not supported yet: no fog glow"))
         elif settings is not None and not settings.use:
@@ -328,7 +330,7 @@ def _signature(scene, spec, method, plan_):
                                                     for o, mod in zip(plan_.in_groups, plan_.grouped_models)]
                      + ["camera:" + (camera.name_full if camera else ""), f"passes:{spec.passes}",
                         f"method:{method.name}", f"tails:{caveats.specular_paths(bpy.data.materials)}",
-                        method.signature(scene, spec, plan_.shader_lights)])
+                        method.signature(scene, spec, plan_.shader_lights), sunsky.key(scene, spec)])
 
 
 _rebuilt = set()   # names of scenes whose groups ``_build_scene_groups`` rebuilt since ``refresh_lights`` asked
@@ -436,7 +438,7 @@ def apply(scene, spec, objects=None, progress=progress_.silent):
         if why:
             skipped.append((scene.world.name, why))
     skipped += follow_compositor(scene, rebuild=True)   # Cycles' denoiser kept off the fog's light
-    if not lights:
+    if not lights and not sunsky.is_daylit(scene, spec):
         skipped.append((scene.name, "has no light taking part: the fog only dims"
                         + (" (and the glowing objects glow)" if getattr(method, "name", method) == "compositor"
                            and methods.compositor.glowing_objects(scene) else "")))
@@ -469,7 +471,8 @@ def not_modelled(scene, spec, lights, materials, method=None):
                                      view.has_shape,
                                      _optical_distance(scene, spec)),
              *caveats.glow_notes(methods.compositor.glowing_objects(scene), getattr(method, "name", method),
-                                 scene.render.engine)]
+                                 scene.render.engine),
+             *(f"{name}: {why}" for name, why in sunsky.notes(scene, spec, getattr(method, "name", method)))]
     return [n for n in notes if n]
 
 
@@ -516,6 +519,8 @@ def sync(scene, level="groups"):
         surface = bpy.data.node_groups.get(groups.SURFACE)
         if surface is not None and surface.library is not None:
             return None
+        if spec.layered and level == "params":   # the layer's fog light is baked for the density and the top
+            level = "groups"
         if level != "params" and surface is not None:
             lights = fog_lights(scene)[0]
             method, reason = resolve_method(scene, spec, lights)

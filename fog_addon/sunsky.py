@@ -1,0 +1,256 @@
+"""The sun and the sky of a scene, as a layered fog's daylight takes them (``precompute/sunlight.py``).
+
+A fog with a top (``FogSpec.fog_top``) lets the sun and the sky through: the sun is the scene's brightest Sun
+light (its direction and Strength x Color, W/m^2, followed by drivers), the sky the World's colour over the upper
+hemisphere (a Background node's Color x Strength, driven; any other World is rendered once, small, and taken as
+its mean over the upper hemisphere: ``probe_sky``).  ``daylight(m, ...)`` builds the ``sunlight.Daylight`` value
+in a node tree of any backend (shader groups, the compositor's group), ``fog_light_table`` the fog light's baked
+irradiance map, and ``notes`` says what the daylight leaves out.
+"""
+import hashlib
+import math
+
+import bpy
+
+from .nodes import groups
+from .precompute import sunlight
+
+SUN_KEY_DIGITS = 4   # the sun's direction enters the built groups' signature at this precision (the map is baked)
+
+
+def scene_suns(scene):
+    """The scene's Sun lights that render and shine (Fog Glow on, strength > 0), brightest first."""
+    suns = []
+    for obj in scene.objects:
+        if obj.type != "LIGHT" or obj.data.type != "SUN" or obj.hide_render:
+            continue
+        settings = getattr(obj.data, "analytic_fog", None)
+        if settings is not None and not settings.use:
+            continue
+        if obj.data.energy > 0.0 and any(c > 0.0 for c in obj.data.color):
+            suns.append(obj)
+    return sorted(suns, key=lambda o: -o.data.energy * sum(o.data.color))
+
+
+def sun_direction(obj):
+    """Unit vector towards the sun of Sun light ``obj`` (its local +Z: a Sun light shines along its -Z)."""
+    z = obj.matrix_world.to_3x3().col[2]
+    return tuple(float(c) for c in z.normalized())
+
+
+def _background(world):
+    """The World's Background node feeding its output's Surface, or None."""
+    if world is None or not world.use_nodes or world.node_tree is None:
+        return None
+    out = next((n for n in world.node_tree.nodes if n.type == "OUTPUT_WORLD" and n.is_active_output), None)
+    if out is None or not out.inputs["Surface"].is_linked:
+        return None
+    node = out.inputs["Surface"].links[0].from_node
+    return node if node.type == "BACKGROUND" else None
+
+
+def uniform_sky(world):
+    """The World's Background node if its colour and strength are plain values (the sky the kernels model),
+    else None."""
+    bg = _background(world)
+    if bg is None or bg.inputs["Color"].is_linked or bg.inputs["Strength"].is_linked:
+        return None
+    return bg
+
+
+PROBE_KEY = "analytic_fog_sky_probe"   # on a World: {"fingerprint": of its nodes, "colour": ``probe_sky``'s}
+PROBE_SIZE = (64, 32)                   # px of the equirectangular probe render
+PROBE_SAMPLES = 16
+
+
+def _tree_fingerprint(world):
+    """A string that changes when the World's nodes, links or input values change."""
+    parts = []
+    for node in sorted(world.node_tree.nodes, key=lambda n: n.name):
+        values = []
+        for sock in node.inputs:
+            v = getattr(sock, "default_value", None)
+            values.append(repr(tuple(v) if hasattr(v, "__len__") and not isinstance(v, str) else v))
+        image = getattr(node, "image", None)
+        parts.append(f"{node.bl_idname}:{node.name}:{','.join(values)}:{image.name_full if image else ''}")
+    parts += [f"{l.from_node.name}.{l.from_socket.identifier}>{l.to_node.name}.{l.to_socket.identifier}"
+              for l in world.node_tree.links]
+    return "|".join(parts)
+
+
+def probe_sky(world):
+    """The mean radiance of ``world`` over the upper hemisphere (RGB, W/(m^2 sr), solid-angle weighted), from a
+    small equirectangular Cycles render of the World alone (any World: a Sky Texture, an HDRI, node set-ups), kept on
+    the World with its nodes' fingerprint so it is rendered again only when they change; None if it can't be
+    rendered now (during a render)."""
+    fingerprint = hashlib.sha1(_tree_fingerprint(world).encode()).hexdigest()
+    kept = world.get(PROBE_KEY)
+    if kept is not None and kept.get("fingerprint") == fingerprint:
+        return tuple(float(c) for c in kept["colour"])
+    if bpy.app.is_job_running("RENDER"):
+        return None
+    import os
+    import tempfile
+
+    import numpy as np
+
+    from . import imageio
+    scene = bpy.data.scenes.new("AnalyticFog Sky Probe")
+    cam_data = bpy.data.cameras.new("AnalyticFog Sky Probe")
+    cam = bpy.data.objects.new("AnalyticFog Sky Probe", cam_data)
+    path = os.path.join(tempfile.mkdtemp(prefix="analytic_fog_sky_"), "sky.exr")
+    try:
+        cam_data.type = "PANO"
+        cam_data.panorama_type = "EQUIRECTANGULAR"
+        cam.rotation_euler = (math.pi / 2.0, 0.0, 0.0)   # looking along +Y, +Z up: rows are elevations
+        scene.collection.objects.link(cam)
+        scene.camera = cam
+        scene.world = world
+        r = scene.render
+        r.engine = "CYCLES"
+        r.resolution_x, r.resolution_y = PROBE_SIZE
+        r.resolution_percentage = 100
+        r.image_settings.file_format = "OPEN_EXR"
+        r.filepath = path
+        scene.cycles.samples = PROBE_SAMPLES
+        scene.cycles.device = "CPU"
+        bpy.ops.render.render(write_still=True, scene=scene.name)
+        pixels = imageio.read_rgb(path)[..., :3]
+    finally:
+        bpy.data.scenes.remove(scene)
+        bpy.data.objects.remove(cam)
+        bpy.data.cameras.remove(cam_data)
+        if os.path.exists(path):
+            os.remove(path)
+    h = pixels.shape[0]
+    elevation = (0.5 - (np.arange(h) + 0.5) / h) * math.pi      # row 0 at the top (+90 degrees)
+    weight = np.where(elevation > 0.0, np.cos(elevation), 0.0)[:, None]
+    mean = (pixels * weight[..., None]).sum(axis=(0, 1)) / (weight.sum() * pixels.shape[1])
+    world[PROBE_KEY] = {"fingerprint": fingerprint, "colour": [float(c) for c in mean]}
+    return tuple(float(c) for c in mean)
+
+
+def sky_colour(world):
+    """(RGB radiance over the upper hemisphere, W/(m^2 sr), exact): the Background's Color x Strength for a
+    uniform World (exact: the kernels' sky); for any other, its mean over the upper hemisphere (``probe_sky``;
+    not exact: the fog's sky glow takes it as uniform); black without a World."""
+    if world is None:
+        return (0.0, 0.0, 0.0), True
+    if not world.use_nodes or world.node_tree is None:
+        return tuple(float(c) for c in world.color), True
+    bg = uniform_sky(world)
+    if bg is None:
+        probe = probe_sky(world)
+        return (probe if probe is not None else (0.0, 0.0, 0.0)), False
+    s = float(bg.inputs["Strength"].default_value)
+    return tuple(float(c) * s for c in bg.inputs["Color"].default_value[:3]), True
+
+
+def is_daylit(scene, spec):
+    """The fog has a top and something shines through it: a sun, or a World that is not black."""
+    if not spec.layered:
+        return False
+    return bool(scene_suns(scene)) or any(c > 0.0 for c in sky_colour(scene.world)[0])
+
+
+def key(scene, spec):
+    """What the built groups depend on: the layer and the density (the fog light's map is baked for them), the
+    sun's name and direction, the sky's source."""
+    if not spec.layered:
+        return "daylight:none"
+    suns = scene_suns(scene)
+    sun = (f"{suns[0].name_full}:" + ",".join(f"{c:.{SUN_KEY_DIGITS}f}" for c in sun_direction(suns[0]))
+           if suns else "none")
+    world = scene.world
+    sky = "uniform" if uniform_sky(world) is not None else ("none" if world is None else "other")
+    top, falloff, ground = layer(spec)
+    return (f"daylight:{spec.beta_per_unit!r}:{top!r}:{falloff!r}:{ground!r}:{spec.anisotropy!r}:{sun}:{sky}:"
+            f"{world.name_full if world else ''}")
+
+
+def layer(spec):
+    """(top, falloff, ground) in Blender units."""
+    return spec.layer_per_unit()
+
+
+def fog_light_table(scene, spec):
+    """(TableSpec, {name: image}) of the fog light's irradiance map (``sunlight.bake_fog_light``) for the scene's
+    sun (straight up without one: its irradiance is 0 then) and the spec's layer."""
+    from .nodes import images as images_
+    top, falloff, _ = layer(spec)
+    suns = scene_suns(scene)
+    direction = sun_direction(suns[0]) if suns else (0.0, 0.0, 1.0)
+    direction = tuple(round(c, SUN_KEY_DIGITS) for c in direction)
+    beta = spec.beta_per_unit
+    table = sunlight.table_spec(beta, top, falloff, direction, spec.anisotropy)
+    image = images_.table_image(table, lambda: sunlight.bake_fog_light(beta, top, falloff, direction,
+                                                                       spec.anisotropy))
+    return table, {table.name: image}
+
+
+def builder(scene, spec):
+    """The groups' ``day`` argument: ``daylight`` of this scene and spec as a function of (m, beta), or None for
+    fog that fills all space."""
+    if not spec.layered:
+        return None
+    return lambda m, beta: daylight(m, scene, spec, beta)
+
+
+def daylight(m, scene, spec, beta):
+    """The scene's ``sunlight.Daylight`` in the node tree of ``m`` (NodeOps or CompOps): ``beta`` the tree's
+    density socket (driven by the params group), the layer from ``spec``, the sun's direction and irradiance and a
+    uniform sky's radiance driven by the Sun light and the World's Background (a change needs no rebuild; the sun's
+    direction re-bakes the fog light's map at the next Update Fog)."""
+    top, falloff, ground = layer(spec)
+    suns = scene_suns(scene)
+    if suns:
+        sun = suns[0]
+        direction = _vector(m, "Sun Direction", ["x"] * 3,
+                            lambda i: [("x", sun, f"matrix_world[2][{i}]")], normalise=True)
+        irradiance = _vector(m, "Sun Irradiance", ["e*c"] * 3,
+                             lambda i: [("e", sun.data, "energy"), ("c", sun.data, f"color[{i}]")])
+    else:
+        direction, irradiance = m.wrap((0.0, 0.0, 1.0)), m.wrap((0.0, 0.0, 0.0))
+    bg = uniform_sky(scene.world)
+    if bg is not None:
+        path = f'nodes["{bg.name}"].inputs'
+        sky = _vector(m, "Sky Radiance", ["c*s"] * 3,
+                      lambda i: [("c", scene.world, f'node_tree.{path}["Color"].default_value[{i}]'),
+                                 ("s", scene.world, f'node_tree.{path}["Strength"].default_value')])
+    else:
+        sky = m.wrap(sky_colour(scene.world)[0])
+    return sunlight.Daylight(beta, top, falloff, ground, direction, irradiance, sky, spec.anisotropy)
+
+
+def _vector(m, label, expressions, variables, normalise=False):
+    """A vector whose components are driven (``groups._drive_expression``), in ``m``'s tree."""
+    node = m.node("ShaderNodeCombineXYZ", 0)
+    node.label = label
+    for i, expression in enumerate(expressions):
+        groups._drive_expression(node.inputs[i], expression, variables(i))
+    v = m.wrap(node.outputs[0], vector=True)
+    return m.scale(v, 1.0 / m.length(v)) if normalise else v
+
+
+def notes(scene, spec, method_name):
+    """[(name, why)]: what the daylight leaves out in ``scene`` with ``method_name``."""
+    out = []
+    suns = scene_suns(scene)
+    if not spec.layered:
+        for sun in suns:
+            out.append((sun.name, "a fog that fills all space swallows the sun: set a Fog Top (Daylight) for its "
+                                  "light, glow and dimming through the fog"))
+        return out
+    for sun in suns[1:]:
+        out.append((sun.name, f"only the brightest sun ({suns[0].name}) shines through the fog layer: this one "
+                              "is neither dimmed nor glows"))
+    if scene.world is not None and not sky_colour(scene.world)[1]:
+        out.append((scene.world.name, "the fog layer's sky glow takes this World as uniform, of its mean colour over "
+                                      "the upper hemisphere (where seen, the World itself is dimmed exactly)"))
+    if method_name != "compositor" and is_daylit(scene, spec):
+        out.append(("Daylight", f"the sun's and the sky's glow and their fog light on surfaces need the "
+                                f"Compositor method: with {method_name} the fog layer only dims"))
+    if suns:
+        out.append((suns[0].name, "its light on surfaces and the sky's are dimmed by one factor weighted by the "
+                                  "two (lamps' light on the same surfaces is dimmed by it too)"))
+    return out
