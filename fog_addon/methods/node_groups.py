@@ -26,11 +26,14 @@ class NodeGroups(Method):
         return None
 
     def build(self, scene, spec, plan, images):
+        day, table = sunsky.builder(scene, spec), None
+        if sunsky.is_daylit(scene, spec):
+            table, table_images = sunsky.fog_light_table(scene, spec)
+            images = dict(images, **table_images)
         groups.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes,
-                             tails=caveats.specular_paths(bpy.data.materials),
-                             day=sunsky.builder(scene, spec))
-        groups.build_world(plan.shader_lights, plan.shader_models, scene.camera, images, spec.passes,
-                           day=sunsky.builder(scene, spec))
+                             tails=caveats.specular_paths(bpy.data.materials), day=day, day_table=table)
+        groups.build_world(plan.shader_lights, plan.shader_models, scene.camera, images, spec.passes, day=day,
+                           day_table=table)
         return images
 
     def passes(self, scene, spec):

@@ -638,12 +638,9 @@ def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=
 
 
 def _daylight(m, day, table, camera, direction, position, normal, reflectance, d_vp, t_vp, cover):
-    """The sun's and the sky's light in a fog layer at a pixel, per unit albedo (``precompute/sunlight.py``): the
-    glow along the camera ray to its surface plus the fog light the surface reflects dimmed on its way (Sun et al.
-    2005 Eq. 19's L_a, the reflectance taken as Lambertian: diffuse plus specular albedo times the irradiance over
-    pi) where the pixel sees a surface, the glow to the sky where it does not."""
-    to_surface = sunlight.ray_glow(m, day, camera, direction, d_vp) + m.scale(
-        reflectance * sunlight.fog_light(m, table, day, position, normal), t_vp)
+    """The sun's and the sky's light in a fog layer at a pixel, per unit albedo: ``groups.daylight_light`` where the
+    pixel sees a surface, the glow to the sky (``sunlight.ray_glow``) where it does not."""
+    to_surface = groups.daylight_light(m, day, table, camera, direction, position, normal, reflectance, d_vp, t_vp)
     to_sky = sunlight.ray_glow(m, day, camera, direction, model.FAR)
     return m.scale(to_surface, cover) + m.scale(to_sky, 1.0 - cover)
 

@@ -27,7 +27,7 @@ import re
 
 import bpy
 
-from ..precompute import area, fingerprint, predict, rungs, shading, spot, sunlight, surface
+from ..precompute import area, fingerprint, model, predict, rungs, shading, spot, sunlight, surface
 from ..precompute.medium import Medium
 from . import owned, passes, sockets
 from .sockets import NodeOps
@@ -553,7 +553,7 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained):
     return ng
 
 
-def build_surface(lights, models, images, with_passes=False, extra=None, tails=True, day=None):
+def build_surface(lights, models, images, with_passes=False, extra=None, tails=True, day=None, day_table=None):
     """Scene group for materials: ``shading.shade_surface`` (Sun et al. 2005 Eq. 19) over ``lights``.
 
     ``models``: one rungs.LightModels per light.  Inputs mirror the Principled
@@ -568,8 +568,9 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     past glass and mirrors (See Through, ``_place_tails``), only where the scene has them
     (``caveats.specular_paths``).  ``day(m, beta)``: the fog layer's ``sunlight.Daylight`` in this tree
     (``sunsky.daylight``), or None for fog that fills all space: the camera segment's transmittance is then the
-    layer's, and the user's shader on every ray takes the sun's and the sky's dimming (``sunlight.direct_dimming``).
-    The lights sit in bundle groups (``_bundles``, ``build_surface_bundle``).
+    layer's, and the user's shader on every ray takes the sun's and the sky's dimming (``sunlight.direct_dimming``);
+    with ``day_table`` (the fog light's TableSpec, its image in ``images``) camera rays also get the sun's and the
+    sky's glow and their fog light on the surface (``daylight_light``).  The lights sit in bundle groups (``_bundles``, ``build_surface_bundle``).
 
     Why closures: Cycles' SVM emits a shader's value nodes in the order of
     their ids, so one colour summed over the lights keeps every light's values
@@ -625,6 +626,15 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
             [], *(m.wrap(node.outputs[f], vector=f == "Emission") for f in ("Emission", "Weighted", "Weight"))))
     fogs = [node.outputs["Fog"] for node, mods in placed if any(_lit(mod) for mod in mods)]
     fog = shading.surface_fog(m, sums, transmit)
+    if day is not None and day_table is not None:
+        light = m.scale(m.wrap(params.outputs["Albedo"], vector=True) * daylight_light(
+            m, daylight, day_table, position + m.scale(incoming, length), m.scale(incoming, -1.0), position,
+            m.wrap(geo.outputs["Normal"], vector=True), diffuse + specular, length, t_vp), is_camera)
+        emit = ng.nodes.new("ShaderNodeEmission")
+        emit.location = (3000, -600)
+        m.feed(emit.inputs["Color"], light)
+        fogs.append(emit.outputs["Emission"])
+        fog = fog._replace(emission=fog.emission + light)
     _shader_tree(ng, gout.inputs["Fog"], fogs)
     for sock, v in (("Emission", fog.emission), ("Transmittance", fog.transmittance),
                     ("Direct Attenuation", fog.direct_attenuation), ("Cycles Mix Factor", fog.cycles_mix),
@@ -929,7 +939,16 @@ def build_world_bundle(images, first, lights, models, with_passes, chained):
     return ng
 
 
-def build_world(lights, models, camera, images, with_passes=False, day=None):
+def daylight_light(m, day, table, camera, direction, position, normal, reflectance, length, t_vp):
+    """The sun's and the sky's light in a fog layer on a camera ray that meets a surface, per unit albedo
+    (``precompute/sunlight.py``): the glow along the ray plus the fog light the surface reflects, dimmed on its way
+    (Sun et al. 2005 Eq. 19's L_a; the reflectance taken as Lambertian: the diffuse plus the specular albedo
+    times the irradiance over pi).  The Compositor's per pixel (``comp_fog._daylight``) and the Surface group's."""
+    return sunlight.ray_glow(m, day, camera, direction, length) + m.scale(
+        reflectance * sunlight.fog_light(m, table, day, position, normal), t_vp)
+
+
+def build_world(lights, models, camera, images, with_passes=False, day=None, day_table=None):
     """Scene group for the World: ``shading.shade_background`` (Sun et al. 2005 Eq. 12) over ``lights``.
 
     Camera position by TRANSFORMS drivers on ``camera`` (no node gives it in a
@@ -937,7 +956,8 @@ def build_world(lights, models, camera, images, with_passes=False, day=None):
     Transmittance is 0 (1 on rays other than the camera's if the params
     group's World Light is 1: they keep the world's lighting).  With a fog layer (``day``: ``build_surface``'s) the
     World is seen through it on camera rays (``sunlight.sky_seen``) and lights surfaces on every other ray (the
-    materials dim it: ``sunlight.direct_dimming``).  The lights whose glow is on sit in bundle groups
+    materials dim it: ``sunlight.direct_dimming``), and with ``day_table`` camera rays get the sun's and the sky's
+    glow to infinity (``sunlight.ray_glow``).  The lights whose glow is on sit in bundle groups
     (``_bundles``, ``build_world_bundle``).
     """
     ng, gin, gout = _new_group(WORLD, [], [("Fog", "NodeSocketShader"), ("Emission", C), ("Transmittance", F)])
@@ -966,9 +986,16 @@ def build_world(lights, models, camera, images, with_passes=False, day=None):
         m, [m.wrap(node.outputs["Airlight"], vector=True) for node, _ in placed], medium, is_camera,
         m.wrap(params.outputs[WORLD_LIGHT]))
     if day is not None:
-        seen = sunlight.sky_seen(m, day(m, m.wrap(params.outputs["Beta"])), m.wrap(cam.outputs[0], vector=True),
-                                 direction)
-        transmittance = 1.0 + is_camera * (seen - 1.0)
+        daylight = day(m, m.wrap(params.outputs["Beta"]))
+        camera_at = m.wrap(cam.outputs[0], vector=True)
+        transmittance = 1.0 + is_camera * (sunlight.sky_seen(m, daylight, camera_at, direction) - 1.0)
+        if day_table is not None:
+            glow = m.scale(m.wrap(params.outputs["Albedo"], vector=True) * sunlight.ray_glow(
+                m, daylight, camera_at, direction, model.FAR), is_camera)
+            emit = ng.nodes.new("ShaderNodeEmission")
+            m.feed(emit.inputs["Color"], glow)
+            fogs.append(emit.outputs["Emission"])
+            emission = m.wrap(emission, vector=True) + glow
     m.feed(gout.inputs["Emission"], m.wrap(emission))
     _shader_tree(ng, gout.inputs["Fog"], fogs)
     m.feed(gout.inputs["Transmittance"], m.wrap(transmittance))
