@@ -316,9 +316,9 @@ def sky_wall_irradiance(m, z, beta0, h0, H, nodes=WALL_NODES):
 def sky_tilted_irradiance(m, z, nz, beta0, h0, H):
     """The sky's direct irradiance through the layer on a surface of normal z-component nz at height z, per unit sky
     radiance (W/m^2 per W/(m^2 sr)): the quadratic in nz through its exact values facing down (0), sideways
-    (pi/2 ``sky_wall_irradiance``) and up (pi ``sky_irradiance``), clamped at 0.  Within 2 % of quadrature for
-    nz >= -0.5 (the irradiance is itself a smooth function of nz: the clipped cosine's azimuthal integral); below,
-    where the sky's weight (1 + nz) / 2 is small, it errs by up to a few per cent of the fog-free value."""
+    (pi/2 ``sky_wall_irradiance``) and up (pi ``sky_irradiance``), clamped at 0.  Within 2 % of the fog-free value
+    pi (1 + nz) / 2 for nz >= 0 and 3 % at nz = -0.5 (tests/test_sunlight.py); below, where the sky's weight is
+    small, more."""
     a = (0.5 * math.pi) * sky_wall_irradiance(m, z, beta0, h0, H)
     half_up = (0.5 * math.pi) * sky_irradiance(m, z, beta0, h0, H)
     return m.maximum(a + nz * (half_up + nz * (half_up - a)), 0.0)
