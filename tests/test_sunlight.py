@@ -120,9 +120,9 @@ def test_peak_irradiance_limits_and_quadrature():
         assert float(sl.peak_irradiance(g, np.array(cn))) == pytest.approx(want, rel=1e-4, abs=1e-6)
 
 
-def _sphere_irradiance(z, n, beta, top, falloff, g, nmu=300, nphi=600):
-    """(sun, sky) irradiance over pi of the layer's in-scattered field at height z on normal n: the ray kernels
-    integrated over the sphere on a fine grid (no spherical harmonics, no peak split)."""
+def _sphere_field(z, beta, top, falloff, g, nmu=300, nphi=600):
+    """(directions, sun field x solid angle, sky field x solid angle) of the layer's in-scattered light at height
+    z on a fine grid of the sphere: the ray kernels themselves (no spherical harmonics, no peak split)."""
     x, w = np.polynomial.legendre.leggauss(nmu)
     mu = np.concatenate([0.5 * (x - 1), 0.5 * (x + 1)])
     wm = np.concatenate([0.5 * w, 0.5 * w])
@@ -133,8 +133,8 @@ def _sphere_irradiance(z, n, beta, top, falloff, g, nmu=300, nphi=600):
     length = np.where(mg < 0, z / np.maximum(-mg, 1e-12), dl.UNBOUNDED)
     sun = dl.sun_airlight(m, z, mg, length, SUN[2], d @ SUN, beta, top, falloff, 1.0, g)
     sky = dl.sky_airlight(m, z, mg, length, beta, top, falloff, g=g)
-    weight = np.maximum(d @ n, 0.0) * wm[:, None] * (2 * math.pi / nphi) / math.pi
-    return float((sun * weight).sum()), float((sky * weight).sum())
+    dw = wm[:, None] * (2 * math.pi / nphi)
+    return d, sun * dw, sky * dw
 
 
 NORMALS = [(0, 0, 1), (1, 0, 0), (0, -1, 0), (0.7, 0.7, 0), (-0.6, 0.8, 0), (-0.59, 0.49, 0.64), (0.3, 0.3, -0.9)]
@@ -154,9 +154,11 @@ def test_fog_light_against_sphere_quadrature(top, falloff, g):
     worst = []
     for z in (0.0, 1.6, 30.0, 0.9 * top, top + 2.0 * falloff + 10.0):
         errors, scale = [], 0.0
+        d, sun_field, sky_field = _sphere_field(z, beta, top, falloff, g)
         for n in NORMALS:
             n = np.array(n, float) / np.linalg.norm(n)
-            sun, sky = _sphere_irradiance(z, n, beta, top, falloff, g)
+            cos = np.maximum(d @ n, 0.0) / math.pi
+            sun, sky = float((sun_field * cos).sum()), float((sky_field * cos).sum())
             got = sl.fog_light(mm, spec, day, np.array([0.0, 0.0, z]), n)
             errors.append(abs(got[0] - sun) + abs(got[1] - sky))
             scale = max(scale, sun + sky)
