@@ -275,6 +275,27 @@ MUTATIONS = [
              "            blur.inputs[\"Extend Bounds\"].default_value = True",
              "            blur.inputs[\"Extend Bounds\"].default_value = False",
              ("tests/test_emitter_glow.py::test_a_sign_cut_by_the_frame_glows_as_its_pixels_do",)),
+    Mutation("daylight_sky_isotropic", "daylight: the sky's in-scattering ignores the fog's anisotropy",
+             "fog_addon/precompute/daylight.py",
+             "        if g:\n",
+             "        if False:\n",
+             ("tests/test_sunlight.py::test_sky_airlight_anisotropic_against_quad",)),
+    Mutation("daylight_sky_tilt_flat", "daylight: every surface's sky light is dimmed as a floor's (walls see the "
+             "sky near the horizon through longer paths)",
+             "fog_addon/precompute/daylight.py",
+             "    return m.maximum(a + nz * (half_up + nz * (half_up - a)), 0.0)",
+             "    return half_up * (1.0 + nz)",
+             ("tests/test_sunlight.py::test_sky_tilted_irradiance_against_quad",)),
+    Mutation("daylight_fog_light_no_peak", "daylight: the fog light on surfaces without the sun's phase peak",
+             "fog_addon/precompute/sunlight.py",
+             "    peak = _coefficient(m, spec, x, 2 * SH_COUNT) * _coefficient(",
+             "    peak = 0.0 * _coefficient(m, spec, x, 2 * SH_COUNT) * _coefficient(",
+             ("tests/test_sunlight.py::test_fog_light_against_sphere_quadrature",)),
+    Mutation("daylight_sun_undimmed", "daylight: the sun's light on surfaces is not dimmed by the layer above them",
+             "fog_addon/precompute/sunlight.py",
+             "    t_sun = daylight.sun_transmittance(m, z, sun_elevation(m, day), *args)",
+             "    t_sun = 1.0",
+             ("tests/test_sunlight.py::test_direct_dimming_limits",)),
 ]
 
 
