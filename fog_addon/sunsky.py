@@ -232,8 +232,8 @@ def _vector(m, label, expressions, variables, normalise=False):
     return m.scale(v, 1.0 / m.length(v)) if normalise else v
 
 
-def notes(scene, spec, method_name):
-    """[(name, why)]: what the daylight leaves out in ``scene`` with ``method_name``."""
+def notes(scene, spec, method_name, lamps=()):
+    """[(name, why)]: what the daylight leaves out in ``scene`` with ``method_name``; ``lamps``: the fog's lights."""
     out = []
     suns = scene_suns(scene)
     if not spec.layered:
@@ -251,6 +251,15 @@ def notes(scene, spec, method_name):
         out.append(("Daylight", f"the sun's and the sky's glow and their fog light on surfaces need the "
                                 f"Compositor method: with {method_name} the fog layer only dims"))
     if suns:
-        out.append((suns[0].name, "its light on surfaces and the sky's are dimmed by one factor weighted by the "
-                                  "two (lamps' light on the same surfaces is dimmed by it too)"))
+        from . import caveats
+        sun = suns[0]
+        out.append((sun.name, "its light on surfaces and the sky's are dimmed by one factor weighted by the two "
+                              "(lamps' light on the same surfaces is dimmed by it too); its shadows fall on "
+                              "surfaces but cast no shafts into the fog"))
+        if caveats._animated(sun):
+            out.append((sun.name, "is animated: its fog light on surfaces is baked for the sun's direction when "
+                                  "the fog was last updated (its glow and dimming follow every frame)"))
+    if lamps:
+        out.append(("Fog Top", f"the lamps' glows ({len(lamps)}) take the layer's density everywhere, also above "
+                               "its top"))
     return out

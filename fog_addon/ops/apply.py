@@ -472,7 +472,8 @@ def not_modelled(scene, spec, lights, materials, method=None):
                                      _optical_distance(scene, spec)),
              *caveats.glow_notes(methods.compositor.glowing_objects(scene), getattr(method, "name", method),
                                  scene.render.engine),
-             *(f"{name}: {why}" for name, why in sunsky.notes(scene, spec, getattr(method, "name", method)))]
+             *(f"{name}: {why}" for name, why in sunsky.notes(scene, spec, getattr(method, "name", method),
+                                                              lights))]
     return [n for n in notes if n]
 
 
