@@ -167,7 +167,8 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
         description="Let the World light surfaces through the fog. Off (physical, as Cycles' World volume): "
                     "the fog fills all space, so no light from the infinitely far World gets through it and "
                     "the lamps light the scene alone. On: surfaces keep the World's light, an artistic "
-                    "ambient (the camera still sees the fog, not the World)")
+                    "ambient (the camera still sees the fog, not the World). With a Fog Top the World always "
+                    "lights surfaces, through the layer")
     use_shafts: bpy.props.BoolProperty(
         name="Light Shafts", default=True, update=_rebuild,
         description="Objects cast shadows into the fog: beams through windows, shafts between columns, no glow "

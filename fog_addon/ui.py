@@ -88,7 +88,9 @@ def draw_fog(layout, context):
     if s.method == "OSL" and scene.render.engine != "CYCLES":
         col.label(text=f"Switch the render engine to Cycles to see {s.method.title()} fog", icon="ERROR")
     col.prop(s, "selected_only")
-    col.prop(s, "world_light")
+    row = col.row()
+    row.active = not s.use_fog_top   # with a Fog Top the World always lights surfaces, through the layer
+    row.prop(s, "world_light")
     col.prop(s, "use_shafts")
     col.prop(s, "use_multiple_scattering")
     col.prop(s, "use_passes")
