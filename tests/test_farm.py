@@ -13,6 +13,7 @@ Process B (tests/scenes/farm_render.py) starts with a clean environment in a dir
 * compositor, anim_compositor: the static and animated scenes with the Compositor method (the fog's light
   added by the compositor's graph, every input driven).  A's expectation for frame f is the scene made static at
   frame f (animation cleared, objects posed, fog re-added);
+* daylight: the scene under a sun and a sky in a fog layer 3 m deep (Compositor method);
 * compositor_eevee: the compositor lane's scene with the Compositor method in EEVEE (32x18, 1 sample), the
   file saved with EEVEE as its engine.
 
@@ -46,7 +47,8 @@ FRAMES = (1, 5, 10)
 TABLES = ("AnalyticFog Airlight N", "AnalyticFog Surface M")
 # the dense lane's fog is anisotropic (g 0.85) and has Dense Fog's table too
 LANE_TABLES = {"dense": ("AnalyticFog Airlight N (g +0.850)", "AnalyticFog Surface M (g +0.850)",
-                         "AnalyticFog Multiple (g +0.850, W0 0.900)")}
+                         "AnalyticFog Multiple (g +0.850, W0 0.900)"),
+               "daylight": TABLES + ("AnalyticFog Daylight Fog Light",)}   # (a prefix: its name holds the layer)
 
 # B's picture against A's, as max |B - A| / max |A| over all pixels and channels.
 # Same engine, seed, samples and scene data in both processes: measured 0.0 (bit-identical) for
@@ -78,6 +80,8 @@ LANES = {
     # Dense Fog (multiple scattering; g 0.85, albedo 0.9) with the Compositor: its table packed in the file
     "dense": ("compositor_dense.blend", [{"out": "farm_compositor_dense_cycles.exr",
                                           "expect": "compositor_dense_cycles.exr"}]),
+    # a fog layer with a sun and a sky (the Compositor method): the fog light's map packed, the sun and sky driven
+    "daylight": ("daylight.blend", [{"out": "farm_daylight_cycles.exr", "expect": "daylight_cycles.exr"}]),
 }
 
 
@@ -184,9 +188,12 @@ def test_add_on_absent_in_farm_process(farm, lane):
 def test_saved_file_is_self_contained(farm, lane):
     a, b = farm[lane]["a"], farm[lane]["b"]
     tables = LANE_TABLES.get(lane, TABLES)
-    assert all(a["packed"].get(t) for t in tables), f"tables not packed before saving: {a['packed']}"
+
+    def named(images, prefix):   # the image called ``prefix``, or else the one whose name starts with it
+        return images.get(prefix, next((v for k, v in images.items() if k.startswith(prefix)), None))
+    assert all(named(a["packed"], t) for t in tables), f"tables not packed before saving: {a['packed']}"
     for t in tables:
-        img = b["images"].get(t)
+        img = named(b["images"], t)
         assert img is not None and img["packed"], f"{t} not packed in the saved file: {b['images']}"
     # every driver of every job's evaluation is valid, and none is a Python expression
     for job in b["jobs"]:

@@ -104,6 +104,32 @@ def osl(outdir, method="osl", engine="CYCLES", dense=False):
           "render_s": log})
 
 
+def daylight(outdir):
+    """The scene under a sun (40 degrees, strength 3) and a light-blue sky, in a fog layer 3 m deep with a falloff
+    of 1 m above it (the Compositor method): expectation, then daylight.blend (the fog light's map packed, the
+    sun and the sky followed by simple-expression drivers)."""
+    import math
+    from fog_addon.ops import apply
+    from fog_addon.precompute.spec import FogSpec
+    log = {}
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = build(bpy.context.scene)
+    bg = next(n for n in scene.world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
+    bg.inputs["Color"].default_value = (0.35, 0.5, 0.8, 1.0)
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
+    sun.data.energy = 3.0
+    sun.rotation_euler = (math.radians(50.0), 0.0, math.radians(-50.0))
+    scene.collection.objects.link(sun)
+    timed(log, "nofog_cycles", render_exr, scene, os.path.join(outdir, "nofog_cycles.exr"))
+    fog_addon.register()
+    skipped = apply.apply(scene, FogSpec(density=DENSITY, albedo=(0.9, 0.9, 0.9), method="compositor",
+                                         fog_top=3.0, height_falloff=1.0))
+    timed(log, "daylight_cycles", render_exr, scene, os.path.join(outdir, "daylight_cycles.exr"))
+    packed = packed_report()
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(outdir, "daylight.blend"))
+    emit({"packed": packed, "skipped": skipped, "render_s": log})
+
+
 def _key(idb, path, frames_values, index=-1):
     """Keyframe ``idb.path`` (or its component ``index``) with {frame: value} (linear interpolation)."""
     bpy.context.preferences.edit.keyframe_new_interpolation_type = "LINEAR"
@@ -161,5 +187,5 @@ if __name__ == "__main__":
     mode, outdir = sys.argv[1], sys.argv[2]
     {"nodes": nodes, "osl": osl, "anim": anim, "compositor": lambda out: osl(out, "compositor"),
      "compositor_eevee": lambda out: osl(out, "compositor", "BLENDER_EEVEE"),
-     "dense": lambda out: osl(out, "compositor", dense=True),
+     "dense": lambda out: osl(out, "compositor", dense=True), "daylight": daylight,
      "anim_compositor": lambda out: anim(out, "COMPOSITOR")}[mode](outdir)
