@@ -88,7 +88,7 @@ def test_bad_input_refused_with_a_message_and_nothing_changed(flow):
 
 def test_light_notes(flow):
     notes = flow["light_notes"]
-    assert "zero power" in notes["Dark"] and "not supported" in notes["Sunny"] and "non-uniform" in notes["Squashed"]
+    assert "zero power" in notes["Dark"] and "swallows the sun" in notes["Sunny"] and "non-uniform" in notes["Squashed"]
     assert flow["lights_taking_part"] == ["Lamp", "Squashed"]
 
 

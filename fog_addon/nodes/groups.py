@@ -992,8 +992,8 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
         if day_table is not None:
             glow = m.scale(m.wrap(params.outputs["Albedo"], vector=True) * sunlight.ray_glow(
                 m, daylight, camera_at, direction, model.FAR), is_camera)
-            emit = ng.nodes.new("ShaderNodeEmission")
-            m.feed(emit.inputs["Color"], glow)
+            emit = ng.nodes.new("ShaderNodeEmission")   # the World mixes the Fog closure by 1 - Transmittance
+            m.feed(emit.inputs["Color"], m.scale(glow, 1.0 / m.maximum(1.0 - transmittance, 1e-6)))   # (world.py)
             fogs.append(emit.outputs["Emission"])
             emission = m.wrap(emission, vector=True) + glow
     m.feed(gout.inputs["Emission"], m.wrap(emission))

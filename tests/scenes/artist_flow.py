@@ -151,7 +151,7 @@ def bad_input(scene):
 
 
 def light_notes(scene):
-    """Zero power, sun, non-uniform scale: reported by name (warnings), fog still added."""
+    """Zero power, a sun under fog without a top, non-uniform scale: reported by name (warnings), fog still added."""
     from fog_addon.ops import apply
     dark = bpy.data.objects.new("Dark", bpy.data.lights.new("Dark", "POINT"))
     dark.data.energy = 0.0
@@ -161,7 +161,9 @@ def light_notes(scene):
     for o in (dark, sun, squashed):
         scene.collection.objects.link(o)
     bpy.context.view_layer.update()
+    from fog_addon import sunsky
     lights, notes = apply.fog_lights(scene)
+    notes += sunsky.notes(scene, apply.spec_of(scene), "nodes", lights)   # a sun: the fog's top decides
     R["light_notes"] = {name: why for name, why in notes}
     R["lights_taking_part"] = sorted(o.name for o in lights)
     for o in (dark, sun, squashed):
