@@ -11,6 +11,7 @@ import hashlib
 import math
 
 import bpy
+import numpy as np
 
 from .nodes import groups
 from .precompute import sunlight
@@ -64,9 +65,10 @@ PROBE_SAMPLES = 16
 
 
 def _tree_fingerprint(world):
-    """A string that changes when the World's nodes, links or input values change."""
+    """A string that changes when the World's own nodes, links or input values change (the fog's are left out)."""
+    from .nodes import owned
     parts = []
-    for node in sorted(world.node_tree.nodes, key=lambda n: n.name):
+    for node in sorted((n for n in world.node_tree.nodes if not owned.is_ours(n)), key=lambda n: n.name):
         values = []
         for sock in node.inputs:
             v = getattr(sock, "default_value", None)
@@ -74,25 +76,49 @@ def _tree_fingerprint(world):
         image = getattr(node, "image", None)
         parts.append(f"{node.bl_idname}:{node.name}:{','.join(values)}:{image.name_full if image else ''}")
     parts += [f"{l.from_node.name}.{l.from_socket.identifier}>{l.to_node.name}.{l.to_socket.identifier}"
-              for l in world.node_tree.links]
+              for l in world.node_tree.links if not (owned.is_ours(l.from_node) or owned.is_ours(l.to_node))]
     return "|".join(parts)
 
 
 def probe_sky(world):
     """The mean radiance of ``world`` over the upper hemisphere (RGB, W/(m^2 sr), solid-angle weighted), from a
-    small equirectangular Cycles render of the World alone (any World: a Sky Texture, an HDRI, node set-ups), kept on
-    the World with its nodes' fingerprint so it is rendered again only when they change; None if it can't be
-    rendered now (during a render)."""
+    small equirectangular Cycles render of the World alone as its user made it (any World: a Sky Texture, an HDRI,
+    node set-ups; a fogged World is rendered from a copy without the fog's nodes), kept on the World with its own
+    nodes' fingerprint so it is rendered again only when they change; None if it can't be rendered now (during a
+    render)."""
+    from .nodes import owned
     fingerprint = hashlib.sha1(_tree_fingerprint(world).encode()).hexdigest()
     kept = world.get(PROBE_KEY)
     if kept is not None and kept.get("fingerprint") == fingerprint:
         return tuple(float(c) for c in kept["colour"])
     if bpy.app.is_job_running("RENDER"):
         return None
+    probe = world
+    if owned.is_fogged(world):
+        probe = world.copy()
+        for node in [n for n in probe.node_tree.nodes if owned.is_ours(n)]:
+            probe.node_tree.nodes.remove(node)
+        outputs = [n for n in probe.node_tree.nodes if n.type == "OUTPUT_WORLD"]
+        if outputs:
+            outputs[0].is_active_output = True
+    try:
+        pixels = _render_equirect(probe)
+    finally:
+        if probe is not world:
+            bpy.data.worlds.remove(probe)
+    h = pixels.shape[0]
+    elevation = (0.5 - (np.arange(h) + 0.5) / h) * math.pi      # row 0 at the top (+90 degrees)
+    weight = np.where(elevation > 0.0, np.cos(elevation), 0.0)[:, None]
+    mean = (pixels * weight[..., None]).sum(axis=(0, 1)) / (weight.sum() * pixels.shape[1])
+    world[PROBE_KEY] = {"fingerprint": fingerprint, "colour": [float(c) for c in mean]}
+    return tuple(float(c) for c in mean)
+
+
+def _render_equirect(world):
+    """(h, w, 3) linear RGB of ``world`` seen by an equirectangular camera looking along +Y, +Z up (PROBE_SIZE,
+    PROBE_SAMPLES, Cycles CPU), in a scene of its own that is removed afterwards."""
     import os
     import tempfile
-
-    import numpy as np
 
     from . import imageio
     scene = bpy.data.scenes.new("AnalyticFog Sky Probe")
@@ -102,7 +128,7 @@ def probe_sky(world):
     try:
         cam_data.type = "PANO"
         cam_data.panorama_type = "EQUIRECTANGULAR"
-        cam.rotation_euler = (math.pi / 2.0, 0.0, 0.0)   # looking along +Y, +Z up: rows are elevations
+        cam.rotation_euler = (math.pi / 2.0, 0.0, 0.0)
         scene.collection.objects.link(cam)
         scene.camera = cam
         scene.world = world
@@ -115,19 +141,13 @@ def probe_sky(world):
         scene.cycles.samples = PROBE_SAMPLES
         scene.cycles.device = "CPU"
         bpy.ops.render.render(write_still=True, scene=scene.name)
-        pixels = imageio.read_rgb(path)[..., :3]
+        return imageio.read_rgb(path)[..., :3]
     finally:
         bpy.data.scenes.remove(scene)
         bpy.data.objects.remove(cam)
         bpy.data.cameras.remove(cam_data)
         if os.path.exists(path):
             os.remove(path)
-    h = pixels.shape[0]
-    elevation = (0.5 - (np.arange(h) + 0.5) / h) * math.pi      # row 0 at the top (+90 degrees)
-    weight = np.where(elevation > 0.0, np.cos(elevation), 0.0)[:, None]
-    mean = (pixels * weight[..., None]).sum(axis=(0, 1)) / (weight.sum() * pixels.shape[1])
-    world[PROBE_KEY] = {"fingerprint": fingerprint, "colour": [float(c) for c in mean]}
-    return tuple(float(c) for c in mean)
 
 
 def sky_colour(world):

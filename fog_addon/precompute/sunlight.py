@@ -74,12 +74,15 @@ def sky_seen(m, day, origin, direction):
 def ray_glow(m, day, origin, direction, length):
     """The sun's and the sky's single scattering along a camera segment, per unit albedo, W/(m^2 sr) (RGB):
     E_sun ``daylight.sun_airlight`` (phase at the angle between the ray and the sun) + L_sky
-    ``daylight.sky_airlight``; ``length`` model.FAR for a ray to the sky."""
+    ``daylight.sky_airlight``; ``length`` model.FAR for a ray to the sky.  Each is one shared sub-program per g
+    (``m.group``: a node group built once per file, so a rebuild of the fog does not build its nodes again)."""
     pz, vz = _z(m, origin) - day.ground, _z(m, direction)
     args = (day.beta, day.top, day.falloff)
-    sun = daylight.sun_airlight(m, pz, vz, length, sun_elevation(m, day), m.dot(direction, day.sun), *args,
-                                albedo=1.0, g=day.g)
-    sky = daylight.sky_airlight(m, pz, vz, length, *args, albedo=1.0, g=day.g)
+    g = float(day.g)
+    sun = m.group(f"daylight sun g {g:+.4f}", lambda mm, *a: daylight.sun_airlight(mm, *a, albedo=1.0, g=g),
+                  pz, vz, length, sun_elevation(m, day), m.dot(direction, day.sun), *args)
+    sky = m.group(f"daylight sky g {g:+.4f}", lambda mm, *a: daylight.sky_airlight(mm, *a, albedo=1.0, g=g),
+                  pz, vz, length, *args)
     return m.scale(day.sun_irradiance, sun) + m.scale(day.sky_radiance, sky)
 
 
