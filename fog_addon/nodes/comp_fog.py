@@ -654,7 +654,8 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     they do not hold the animation's range (``PARTIAL``); ``shafted``: ``build_bundle``'s; ``emitters``: (the fog's
     g, Dense Fog's albedo or None) if glowing objects get their glows (``_emitter_glow``: an Emission input), else
     None; ``day``: (``build_surface``'s ``day``, the fog light's TableSpec) for a fog layer with a sun or a sky
-    (``_daylight``), else None.  Rebuilt in place, so the
+    (``_daylight``; the render's surfaces take the sun's and the sky's dimming here, once per pixel, and the sky seen
+    its transmittance), else None.  Rebuilt in place, so the
     scene's compositor keeps its group node.  Returns the table images it reads (``images`` and the pixel
     filter's and the emitters' weights)."""
     filt, peak = pixel_filter(scene), None
@@ -749,8 +750,12 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     if emitters is not None:
         fog = fog + albedo * _emitter_glow(m, p, beta, d_vp, emitters[0], emitter_pixel_angle(scene), emitters[1],
                                            cover)
+    image = p["Image"]
+    if daylight is not None:   # the dimming of the pixel's surface by the fog above it and of the sky seen through
+        dims = m.select(m.less(0.0, cover), sunlight.direct_dimming(m, daylight, pos, normal), 1.0)   # the layer
+        image = m.scale(image, cover * dims + (1.0 - cover) * sunlight.sky_seen(m, daylight, cam, direction))
     m.feed(gout.inputs["Fog Light"], fog)
-    m.feed(gout.inputs["Image"], fog + p["Image"])
+    m.feed(gout.inputs["Image"], fog + image)
     ng[PARTIAL] = partial
     ng[owned.BUILT] = groups.code_fingerprint()
     return images

@@ -553,7 +553,8 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained):
     return ng
 
 
-def build_surface(lights, models, images, with_passes=False, extra=None, tails=True, day=None, day_table=None):
+def build_surface(lights, models, images, with_passes=False, extra=None, tails=True, day=None, day_table=None,
+                  day_dims=True):
     """Scene group for materials: ``shading.shade_surface`` (Sun et al. 2005 Eq. 19) over ``lights``.
 
     ``models``: one rungs.LightModels per light.  Inputs mirror the Principled
@@ -570,7 +571,8 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     (``sunsky.daylight``), or None for fog that fills all space: the camera segment's transmittance is then the
     layer's, and the user's shader on every ray takes the sun's and the sky's dimming (``sunlight.direct_dimming``);
     with ``day_table`` (the fog light's TableSpec, its image in ``images``) camera rays also get the sun's and the
-    sky's glow and their fog light on the surface (``daylight_light``).  The lights sit in bundle groups (``_bundles``, ``build_surface_bundle``).
+    sky's glow and their fog light on the surface (``daylight_light``); ``day_dims`` False leaves the sun's and the
+    sky's dimming to the compositor (``comp_fog.build_fog_group``: once per pixel).  The lights sit in bundle groups (``_bundles``, ``build_surface_bundle``).
 
     Why closures: Cycles' SVM emits a shader's value nodes in the order of
     their ids, so one colour summed over the lights keeps every light's values
@@ -610,8 +612,10 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
         daylight = day(m, m.wrap(params.outputs["Beta"]))
         position, incoming = m.wrap(geo.outputs["Position"], vector=True), m.wrap(geo.outputs["Incoming"], vector=True)
         t_vp = sunlight.view_transmittance(m, daylight, position, incoming, length)
-        transmit = (1.0 + fogged * (t_vp - 1.0)) * sunlight.direct_dimming(
-            m, daylight, position, m.wrap(geo.outputs["Normal"], vector=True))
+        transmit = 1.0 + fogged * (t_vp - 1.0)
+        if day_dims:
+            transmit = transmit * sunlight.direct_dimming(m, daylight, position, m.wrap(geo.outputs["Normal"],
+                                                                                        vector=True))
     glow_length = view * (1.0 - segment)   # a specular segment's glow is the tails' (``build_tail_bundle``)
     shared = {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"], "Position": geo.outputs["Position"],
               "Incoming": geo.outputs["Incoming"], "View Distance": glow_length.sock,
@@ -948,7 +952,7 @@ def daylight_light(m, day, table, camera, direction, position, normal, reflectan
         reflectance * sunlight.fog_light(m, table, day, position, normal), t_vp)
 
 
-def build_world(lights, models, camera, images, with_passes=False, day=None, day_table=None):
+def build_world(lights, models, camera, images, with_passes=False, day=None, day_table=None, day_dims=True):
     """Scene group for the World: ``shading.shade_background`` (Sun et al. 2005 Eq. 12) over ``lights``.
 
     Camera position by TRANSFORMS drivers on ``camera`` (no node gives it in a
@@ -957,7 +961,8 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
     group's World Light is 1: they keep the world's lighting).  With a fog layer (``day``: ``build_surface``'s) the
     World is seen through it on camera rays (``sunlight.sky_seen``) and lights surfaces on every other ray (the
     materials dim it: ``sunlight.direct_dimming``), and with ``day_table`` camera rays get the sun's and the sky's
-    glow to infinity (``sunlight.ray_glow``).  The lights whose glow is on sit in bundle groups
+    glow to infinity (``sunlight.ray_glow``); ``day_dims`` False leaves the World untouched on every ray (the
+    compositor dims the sky it sees: ``comp_fog.build_fog_group``).  The lights whose glow is on sit in bundle groups
     (``_bundles``, ``build_world_bundle``).
     """
     ng, gin, gout = _new_group(WORLD, [], [("Fog", "NodeSocketShader"), ("Emission", C), ("Transmittance", F)])
@@ -988,7 +993,8 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
     if day is not None:
         daylight = day(m, m.wrap(params.outputs["Beta"]))
         camera_at = m.wrap(cam.outputs[0], vector=True)
-        transmittance = 1.0 + is_camera * (sunlight.sky_seen(m, daylight, camera_at, direction) - 1.0)
+        transmittance = (1.0 + is_camera * (sunlight.sky_seen(m, daylight, camera_at, direction) - 1.0)
+                         if day_dims else m.const(1.0))
         if day_table is not None:
             glow = m.scale(m.wrap(params.outputs["Albedo"], vector=True) * sunlight.ray_glow(
                 m, daylight, camera_at, direction, model.FAR), is_camera)
