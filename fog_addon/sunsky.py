@@ -7,6 +7,7 @@ its mean over the upper hemisphere: ``probe_sky``).  ``daylight(m, ...)`` builds
 in a node tree of any backend (shader groups, the compositor's group), ``fog_light_table`` the fog light's baked
 irradiance map, and ``notes`` says what the daylight leaves out.
 """
+import functools
 import hashlib
 import math
 
@@ -203,8 +204,8 @@ def fog_light_table(scene, spec):
     direction = tuple(round(c, SUN_KEY_DIGITS) for c in direction)
     beta = spec.beta_per_unit
     table = sunlight.table_spec(beta, top, falloff, direction, spec.anisotropy)
-    image = images_.table_image(table, lambda: sunlight.bake_fog_light(beta, top, falloff, direction,
-                                                                       spec.anisotropy))
+    image = images_.table_image(table, functools.partial(sunlight.bake_fog_light, beta, top, falloff, direction,
+                                                         spec.anisotropy))   # a precompute baker: disk-cached
     return table, {table.name: image}
 
 
@@ -268,8 +269,9 @@ def notes(scene, spec, method_name, lamps=()):
         out.append((scene.world.name, "the fog layer's sky glow takes this World as uniform, of its mean colour over "
                                       "the upper hemisphere (where seen, the World itself is dimmed exactly)"))
     if method_name != "compositor" and is_daylit(scene, spec):
-        out.append(("Daylight", f"the sun's and the sky's glow and their fog light on surfaces need the "
-                                f"Compositor method: with {method_name} the fog layer only dims"))
+        out.append(("Daylight", f"with {method_name} the sun's and the sky's glow and fog light are evaluated on "
+                                "every sample (5-8x the fog-free render in a city); the Compositor method (Auto's "
+                                "choice) does them once per pixel"))
     if suns:
         from . import caveats
         sun = suns[0]
