@@ -628,6 +628,8 @@ def remove_fog(scene, progress=progress_.silent):
     progress("world", 0, 1)
     for world in bpy.data.worlds:
         unwrap_world(world)
+        if sunsky.PROBE_KEY in world:   # the sky's mean colour, kept for the fog layer
+            del world[sunsky.PROBE_KEY]
     progress("lights", 0, 1)
     for light in bpy.data.lights:
         unwrap_light(light)

@@ -79,9 +79,10 @@ def ray_glow(m, day, origin, direction, length):
     pz, vz = _z(m, origin) - day.ground, _z(m, direction)
     args = (day.beta, day.top, day.falloff)
     g = float(day.g)
-    sun = m.group(f"daylight sun g {g:+.4f}", lambda mm, *a: daylight.sun_airlight(mm, *a, albedo=1.0, g=g),
+    tag = f"g {round(g * 10000):+d}e-4"   # no '.' in a group's name: Blender's '.001' copies are told by it
+    sun = m.group(f"daylight sun {tag}", lambda mm, *a: daylight.sun_airlight(mm, *a, albedo=1.0, g=g),
                   pz, vz, length, sun_elevation(m, day), m.dot(direction, day.sun), *args)
-    sky = m.group(f"daylight sky g {g:+.4f}", lambda mm, *a: daylight.sky_airlight(mm, *a, albedo=1.0, g=g),
+    sky = m.group(f"daylight sky {tag}", lambda mm, *a: daylight.sky_airlight(mm, *a, albedo=1.0, g=g),
                   pz, vz, length, *args)
     return m.scale(day.sun_irradiance, sun) + m.scale(day.sky_radiance, sky)
 
