@@ -140,6 +140,8 @@ def optical_depth(m, pz, vz, length, beta0, h0, H):
     z_lo the lower end of the part above the top, dx its rise in falloff lengths (the exponential integrated exactly:
     int e^{-(z - h0)/H} dt = e^{-x_lo} L phi1(dx)).  No division by vz: horizontal rays (vz = 0) and
     rays along the top are exact; H = 0 (a hard top) makes the part above 0."""
+    if isinstance(H, (int, float)) and H < MIN_FALLOFF:   # a hard top known when the kernel is built: no part
+        return _hard_depth(m, pz, vz, length, beta0, h0)      # above it (the same value, a third of the nodes)
     z1 = pz + vz * length
     z_lo, z_hi = m.minimum(pz, z1), m.maximum(pz, z1)
     span = z_hi - z_lo
@@ -152,6 +154,16 @@ def optical_depth(m, pz, vz, length, beta0, h0, H):
     tau_above = exp_neg(m, (m.maximum(z_lo, h0) - h0) / hs) * l_above * phi1(m, m.abs(vz) * l_above / hs)
     tau_above = m.select(m.less(H, MIN_FALLOFF), 0.0, tau_above)
     return beta0 * (l_below + tau_above)
+
+
+def _hard_depth(m, pz, vz, length, beta0, h0):
+    """``optical_depth`` of a hard top (H = 0): beta0 times the length below h0."""
+    z1 = pz + vz * length
+    z_lo, z_hi = m.minimum(pz, z1), m.maximum(pz, z1)
+    span = z_hi - z_lo
+    below_frac = m.select(m.less(span, MIN_SPAN), 1.0 - m.less(h0, z_lo),
+                          m.clamp01((h0 - z_lo) / m.maximum(span, MIN_SPAN)))
+    return beta0 * (length * below_frac)
 
 
 def transmittance(m, pz, vz, length, beta0, h0, H):
