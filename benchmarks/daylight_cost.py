@@ -41,15 +41,14 @@ fog warm / no-fog warm; ``ratio_first_render`` = fog first / no-fog first; ``rat
 Outputs: benchmarks/out/daylight_cost.csv and daylight_cost.png.  Figures and their reading:
 docs/measurements/2026-11-27-daylight-cost.md.
 """
-import argparse
 import csv
-import json
 import os
 import pathlib
 import sys
 import tempfile
 import time
 
+import cost_cli
 import csv_rows
 import worker_result
 
@@ -324,29 +323,14 @@ def print_table(rows):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = cost_cli.parser(__doc__, SAMPLES, RESOLUTION, EEVEE_RESOLUTION, REPEATS, CSV, PNG)
     ap.add_argument("--cases", default=",".join(CASES))
     ap.add_argument("--runs", default=",".join(RUNS), help="engine:method, comma-separated")
-    ap.add_argument("--samples", type=int, default=SAMPLES)
-    ap.add_argument("--resolution", default="{}x{}".format(*RESOLUTION))
     ap.add_argument("--eevee-samples", type=int, default=EEVEE_SAMPLES)
-    ap.add_argument("--eevee-resolution", default="{}x{}".format(*EEVEE_RESOLUTION))
-    ap.add_argument("--repeats", type=int, default=REPEATS)
-    ap.add_argument("--update", action="store_true", help="keep the CSV's rows not run now")
-    ap.add_argument("--out", type=pathlib.Path, default=CSV)
-    ap.add_argument("--chart", type=pathlib.Path, default=PNG)
-    ap.add_argument("--chart-only", action="store_true")
-    ap.add_argument("--worker", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
-    if args.worker:
-        return worker(json.loads(args.worker))
-    if args.chart_only:   # a run of one's own in benchmarks/out if there is one, else the committed run
-        rows = read_csv(args.out if args.out.exists() else KEPT)
-        chart(rows, args.chart)
-        print_table(rows)
-        return 0
-    args.resolution = [int(v) for v in args.resolution.lower().split("x")]
-    args.eevee_resolution = [int(v) for v in args.eevee_resolution.lower().split("x")]
+    code = cost_cli.dispatch(args, worker, read_csv, chart, print_table, KEPT)
+    if code is not None:
+        return code
     args.source = source_id()
     os.environ.setdefault("TMPDIR", tempfile.mkdtemp(prefix="daylight_cost_"))
     print(f"code {args.source}, load {load_avg()}, {os.cpu_count()} CPUs", flush=True)

@@ -50,7 +50,6 @@ shadow work, first render alone and warm, shafts on and off; the issue's goals: 
 workers' logs in benchmarks/out/logs/; copy the CSV and the chart to docs/measurements/data/ under dated
 names to keep them.
 """
-import argparse
 import cProfile
 import csv
 import io
@@ -66,6 +65,7 @@ import sys
 import tempfile
 import time
 
+import cost_cli
 import csv_rows
 import overhead as ov   # the timed renders (_render, _warm, BEAT), _emit, picture checks, load_avg, source_id
 
@@ -388,31 +388,16 @@ def print_table(rows):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = cost_cli.parser(__doc__, SAMPLES, RESOLUTION, EEVEE_RESOLUTION, REPEATS, CSV, PNG)
     ap.add_argument("--lights", default=",".join(map(str, LIGHTS)))
     ap.add_argument("--variants", default="shafts,noshafts")
     ap.add_argument("--engines", default="cycles")
-    ap.add_argument("--samples", type=int, default=SAMPLES)
-    ap.add_argument("--resolution", default="{}x{}".format(*RESOLUTION))
-    ap.add_argument("--eevee-resolution", default="{}x{}".format(*EEVEE_RESOLUTION))
-    ap.add_argument("--repeats", type=int, default=REPEATS)
     ap.add_argument("--budget", type=float, default=BUDGET_S, help="seconds per worker")
     ap.add_argument("--profile-from", type=int, default=64, help="profile apply() from this many lamps")
-    ap.add_argument("--update", action="store_true", help="keep the CSV's rows not run now")
-    ap.add_argument("--out", type=pathlib.Path, default=CSV)
-    ap.add_argument("--chart", type=pathlib.Path, default=PNG)
-    ap.add_argument("--chart-only", action="store_true")
-    ap.add_argument("--worker", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
-    if args.worker:
-        return worker(json.loads(args.worker))
-    if args.chart_only:   # a run of one's own in benchmarks/out if there is one, else the committed run
-        rows = read_csv(args.out if args.out.exists() else KEPT)
-        chart(rows, args.chart)
-        print_table(rows)
-        return 0
-    args.resolution = [int(v) for v in args.resolution.lower().split("x")]
-    args.eevee_resolution = [int(v) for v in args.eevee_resolution.lower().split("x")]
+    code = cost_cli.dispatch(args, worker, read_csv, chart, print_table, KEPT)
+    if code is not None:
+        return code
     args.source = ov.source_id()
     os.environ.setdefault("TMPDIR", tempfile.mkdtemp(prefix="shafts_cost_"))
     print(f"code {args.source}, {args.samples} spp, load {ov.load_avg()}, {os.cpu_count()} CPUs", flush=True)
