@@ -16,3 +16,18 @@ def write(path, rows, fields=None, digits=None):
         for r in rows:
             w.writerow({k: (f"{v:.{digits}g}" if digits and isinstance(v, float) else v)
                         for k, v in r.items() if k in fields})
+
+
+def read(path, text_fields=()):
+    """The rows of a CSV that ``write`` wrote, as dicts: every value a float where it reads as one, but the
+    columns ``text_fields``, which stay strings."""
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    for r in rows:
+        for k, v in r.items():
+            if k not in text_fields:
+                try:
+                    r[k] = float(v)
+                except (TypeError, ValueError):
+                    pass
+    return rows

@@ -41,7 +41,6 @@ fog warm / no-fog warm; ``ratio_first_render`` = fog first / no-fog first; ``rat
 Outputs: benchmarks/out/daylight_cost.csv and daylight_cost.png.  Figures and their reading:
 docs/measurements/2026-11-27-daylight-cost.md.
 """
-import csv
 import os
 import pathlib
 import sys
@@ -233,16 +232,7 @@ def measure(engine, method, case, args):
 
 
 def read_csv(path):
-    with open(path) as f:
-        rows = list(csv.DictReader(f))
-    for r in rows:
-        for k, v in r.items():
-            if k not in TEXT_FIELDS:
-                try:
-                    r[k] = float(v)
-                except (TypeError, ValueError):
-                    pass
-    return rows
+    return csv_rows.read(path, TEXT_FIELDS)
 
 
 def chart(rows, path):

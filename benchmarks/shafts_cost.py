@@ -51,7 +51,6 @@ workers' logs in benchmarks/out/logs/; copy the CSV and the chart to docs/measur
 names to keep them.
 """
 import cProfile
-import csv
 import io
 import json
 import math
@@ -304,16 +303,7 @@ def measure(engine, n, variant, args):
 
 
 def read_csv(path):
-    with open(path) as f:
-        rows = list(csv.DictReader(f))
-    for r in rows:
-        for k, v in r.items():
-            if k not in TEXT_FIELDS:
-                try:
-                    r[k] = float(v)
-                except (TypeError, ValueError):
-                    pass
-    return rows
+    return csv_rows.read(path, TEXT_FIELDS)
 
 
 def chart(rows, path):
