@@ -120,7 +120,7 @@ def worker(spec):
     sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
     import bpy
     import overhead as ov
-    from fog_addon import measure, sunsky
+    from fog_addon import sunsky
     from fog_addon.nodes import comp_fog, groups
     from fog_addon.ops import apply
     from fog_addon.precompute import sunlight
@@ -131,15 +131,7 @@ def worker(spec):
     scene = bpy.context.scene
     dl.build(scene, spec["case"], with_fog=False)
     cycles = spec["engine"] == "cycles"
-    scene.render.engine = "CYCLES" if cycles else "BLENDER_EEVEE"
-    measure.set_resolution(scene, *spec["resolution"])
-    measure.set_samples(scene, spec["samples"])
-    measure.set_cycles_cpu(scene)
-    scene.cycles.use_denoising = False
-    if not cycles:
-        scene.eevee.light_threshold = min(scene.eevee.light_threshold, 1e-4)
-    im = scene.render.image_settings   # for the picture check's save_render
-    im.media_type, im.file_format, im.color_depth, im.color_mode = "IMAGE", "OPEN_EXR", "32", "RGB"
+    ov.cost_settings(scene, cycles, spec["resolution"], spec["samples"])
     bpy.app.handlers.render_stats.append(ov.BEAT)   # the first sample's time (fog_first_setup_s)
     tmp = pathlib.Path(os.environ.get("TMPDIR") or tempfile.gettempdir())
     tag = f"daylight_{spec['engine']}_{spec['method']}_{spec['case']}_{os.getpid()}"

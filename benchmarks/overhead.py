@@ -256,6 +256,21 @@ def _warm(scene, repeats, phase):
     return min(walls), min(cpus), len(walls)
 
 
+def cost_settings(scene, cycles, resolution, samples):
+    """A cost benchmark's render settings: Cycles on the CPU (or EEVEE, its light threshold at most 1e-4),
+    ``resolution`` (w, h) and ``samples``, no denoiser, and EXR output for the picture check's save_render."""
+    from fog_addon import measure
+    scene.render.engine = "CYCLES" if cycles else "BLENDER_EEVEE"
+    measure.set_resolution(scene, *resolution)
+    measure.set_samples(scene, samples)
+    measure.set_cycles_cpu(scene)
+    scene.cycles.use_denoising = False
+    if not cycles:
+        scene.eevee.light_threshold = min(scene.eevee.light_threshold, 1e-4)
+    im = scene.render.image_settings
+    im.media_type, im.file_format, im.color_depth, im.color_mode = "IMAGE", "OPEN_EXR", "32", "RGB"
+
+
 def _save_render(scene, path):
     """The last render (Render Result) as a float EXR, off the clock; its luminance (H, W)."""
     import bpy

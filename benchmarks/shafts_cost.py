@@ -167,7 +167,7 @@ def _profile_top(prof, key, n=10):
 def worker(spec):
     """Time one (engine, lights, variant): no fog (first, warm), apply, fog (first, warm); print as it goes."""
     import bpy
-    from fog_addon import caveats, measure, shadow_maps
+    from fog_addon import caveats, shadow_maps
     from fog_addon.nodes import comp_fog
     from fog_addon.ops import apply
     from fog_addon.precompute.spec import FogSpec
@@ -175,15 +175,7 @@ def worker(spec):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = hall(bpy.context.scene, spec["lights"])
     cycles = spec["engine"] == "cycles"
-    scene.render.engine = "CYCLES" if cycles else "BLENDER_EEVEE"
-    measure.set_resolution(scene, *spec["resolution"])
-    measure.set_samples(scene, spec["samples"])
-    measure.set_cycles_cpu(scene)
-    scene.cycles.use_denoising = False
-    if not cycles:
-        scene.eevee.light_threshold = min(scene.eevee.light_threshold, 1e-4)
-    im = scene.render.image_settings   # for the picture check's save_render
-    im.media_type, im.file_format, im.color_depth, im.color_mode = "IMAGE", "OPEN_EXR", "32", "RGB"
+    ov.cost_settings(scene, cycles, spec["resolution"], spec["samples"])
     bpy.app.handlers.render_stats.append(ov.BEAT)
     tmp = pathlib.Path(os.environ.get("TMPDIR") or tempfile.gettempdir())
     tag = f"shafts_{spec['engine']}_{spec['lights']}_{spec['variant']}_{os.getpid()}"
