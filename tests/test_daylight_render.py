@@ -41,6 +41,7 @@ def _render(tmp_path, case, engine, method):
     pytest.param("hard_g0.7_inside", "cycles", "compositor", marks=pytest.mark.slow),
     pytest.param("hard_g0_inside", "cycles", "nodes", marks=pytest.mark.slow),
     pytest.param("hard_g0_inside", "eevee", "compositor", marks=pytest.mark.slow),
+    pytest.param("hard_g0_inside", "eevee", "nodes", marks=pytest.mark.slow),
 ])
 def test_daylight_against_cycles(tmp_path, case, engine, method):
     out, _ = _render(tmp_path, case, engine, method)
