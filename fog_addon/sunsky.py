@@ -283,5 +283,6 @@ def notes(scene, spec, method_name, lamps=()):
                                   "the fog was last updated (its glow and dimming follow every frame)"))
     if lamps:
         out.append(("Fog Top", f"the lamps' glows ({len(lamps)}) take the layer's density everywhere, also above "
-                               "its top"))
+                               "its top: a lamp within a few of its heights of the top glows too bright on rays "
+                               "that pass above it (tens of per cent to several times)"))
     return out
