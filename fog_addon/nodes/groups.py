@@ -22,12 +22,11 @@ Each group records the fingerprint of the code that built it
 saved file made by other code rebuilds it.
 """
 import functools
-import math
 import re
 
 import bpy
 
-from ..precompute import area, fingerprint, model, predict, rungs, shading, spot, sunlight, surface
+from ..precompute import area, fingerprint, model, predict, rungs, shading, sunlight, surface
 from ..precompute.medium import Medium
 from . import owned, passes, sockets
 from .sockets import NodeOps
