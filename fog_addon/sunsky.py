@@ -174,6 +174,13 @@ def is_daylit(scene, spec):
     return bool(scene_suns(scene)) or any(c > 0.0 for c in sky_colour(scene.world)[0])
 
 
+def dims_surfaces(scene, lamps):
+    """Whether the sun's and the sky's dimming goes on surfaces (``sunlight.direct_dimming``): with a sun, or with
+    no lamps.  The one factor takes the user's whole shading, so at night (no sun) it would dim the lamps' light
+    on surfaces by the sky's share: then the sky's light on surfaces is left undimmed (noted)."""
+    return bool(scene_suns(scene)) or not lamps
+
+
 def key(scene, spec):
     """What the built groups depend on: the layer and the density (the fog light's map is baked for them), the
     sun's name and direction, the sky's source."""
@@ -281,6 +288,9 @@ def notes(scene, spec, method_name, lamps=()):
         if caveats._animated(sun):
             out.append((sun.name, "is animated: its fog light on surfaces is baked for the sun's direction when "
                                   "the fog was last updated (its glow and dimming follow every frame)"))
+    if lamps and not suns and any(c > 0.0 for c in sky_colour(scene.world)[0]):
+        out.append(("Fog Top", "with lamps and no sun the sky's light on surfaces is not dimmed by the layer "
+                               "(one factor would dim the lamps' light too)"))
     if lamps:
         out.append(("Fog Top", f"the lamps' glows ({len(lamps)}) take the layer's density everywhere, also above "
                                "its top: a lamp within a few of its heights of the top glows too bright on rays "

@@ -51,8 +51,10 @@ class Compositor(Method):
     def build(self, scene, spec, plan, images):
         aovs = functools.partial(comp_fog.add_surface_aovs, engine=scene.render.engine)
         day, daylit = sunsky.builder(scene, spec), sunsky.is_daylit(scene, spec)
+        dims = sunsky.dims_surfaces(scene, plan.in_groups)
         groups.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs,
-                             tails=caveats.specular_paths(bpy.data.materials), day=day, day_dims=not daylit)
+                             tails=caveats.specular_paths(bpy.data.materials), day=day,
+                             day_dims=dims and not daylit)
         if daylit:
             table, table_images = sunsky.fog_light_table(scene, spec)
             images = dict(images, **table_images)
@@ -66,7 +68,7 @@ class Compositor(Method):
                                                          spec.anisotropy),
                                           emitters=((spec.anisotropy, spec.multiple_albedo) if glowing_objects(scene)
                                                     else None),
-                                          day=(day, table) if daylit else None)
+                                          day=(day, table, dims) if daylit else None)
         groups.build_world([], [], scene.camera, images, spec.passes, day=day, day_dims=not daylit)
         return images
 

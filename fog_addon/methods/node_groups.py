@@ -31,7 +31,8 @@ class NodeGroups(Method):
             table, table_images = sunsky.fog_light_table(scene, spec)
             images = dict(images, **table_images)
         groups.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes,
-                             tails=caveats.specular_paths(bpy.data.materials), day=day, day_table=table)
+                             tails=caveats.specular_paths(bpy.data.materials), day=day, day_table=table,
+                             day_dims=sunsky.dims_surfaces(scene, plan.in_groups))
         groups.build_world(plan.shader_lights, plan.shader_models, scene.camera, images, spec.passes, day=day,
                            day_table=table)
         return images

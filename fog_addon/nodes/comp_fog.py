@@ -653,7 +653,8 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     ``footprint.py`` (``view.windows``), or None to evaluate every term over the whole picture; ``partial``:
     they do not hold the animation's range (``PARTIAL``); ``shafted``: ``build_bundle``'s; ``emitters``: (the fog's
     g, Dense Fog's albedo or None) if glowing objects get their glows (``_emitter_glow``: an Emission input), else
-    None; ``day``: (``build_surface``'s ``day``, the fog light's TableSpec) for a fog layer with a sun or a sky
+    None; ``day``: (``build_surface``'s ``day``, the fog light's TableSpec, whether surfaces take the sun's and the
+    sky's dimming: ``sunsky.dims_surfaces``) for a fog layer with a sun or a sky
     (``_daylight``; the render's surfaces take the sun's and the sky's dimming here, once per pixel, and the sky seen
     its transmittance), else None.  Rebuilt in place, so the
     scene's compositor keeps its group node.  Returns the table images it reads (``images`` and the pixel
@@ -752,7 +753,8 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
                                            cover)
     image = p["Image"]
     if daylight is not None:   # the dimming of the pixel's surface by the fog above it and of the sky seen through
-        dims = m.select(m.less(0.0, cover), sunlight.direct_dimming(m, daylight, pos, normal), 1.0)   # the layer
+        dims = (m.select(m.less(0.0, cover), sunlight.direct_dimming(m, daylight, pos, normal), 1.0)   # the layer
+                if day[2] else m.const(1.0))
         image = m.scale(image, cover * dims + (1.0 - cover) * sunlight.sky_seen(m, daylight, cam, direction))
     m.feed(gout.inputs["Fog Light"], fog)
     m.feed(gout.inputs["Image"], fog + image)

@@ -995,12 +995,14 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
         transmittance = (1.0 + is_camera * (sunlight.sky_seen(m, daylight, camera_at, direction) - 1.0)
                          if day_dims else m.const(1.0))
         if day_table is not None:
-            glow = m.scale(m.wrap(params.outputs["Albedo"], vector=True) * sunlight.ray_glow(
-                m, daylight, camera_at, direction, model.FAR), is_camera)
-            emit = ng.nodes.new("ShaderNodeEmission")   # the World mixes the Fog closure by 1 - Transmittance
-            m.feed(emit.inputs["Color"], m.scale(glow, 1.0 / m.maximum(1.0 - transmittance, 1e-6)))   # (world.py)
-            fogs.append(emit.outputs["Emission"])
-            emission = m.wrap(emission, vector=True) + glow
+            emission = m.wrap(emission, vector=True) + m.scale(m.wrap(params.outputs["Albedo"], vector=True)
+                                                               * sunlight.ray_glow(m, daylight, camera_at, direction,
+                                                                                   model.FAR), is_camera)
+        # the fogged World mixes the Fog closure by 1 - Transmittance (world.py), right where the sky is not seen;
+        # through a layer it is: the whole glow (the lamps' and the daylight's) as one closure divided by it
+        emit = ng.nodes.new("ShaderNodeEmission")
+        m.feed(emit.inputs["Color"], m.scale(emission, 1.0 / m.maximum(1.0 - transmittance, 1e-6)))
+        fogs = [emit.outputs["Emission"]]
     m.feed(gout.inputs["Emission"], m.wrap(emission))
     _shader_tree(ng, gout.inputs["Fog"], fogs)
     m.feed(gout.inputs["Transmittance"], m.wrap(transmittance))
