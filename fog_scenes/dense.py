@@ -271,16 +271,18 @@ def pixel_radii(shape, centre_xy):
     return np.hypot(x + 0.5 - float(centre_xy[0]), y + 0.5 - float(centre_xy[1]))
 
 
-def ring_means(image, centre_xy, edges_px=RING_EDGES_PX, firefly=FIREFLY_FACTOR, return_counts=False):
+def ring_means(image, centre_xy, edges_px=RING_EDGES_PX, firefly=FIREFLY_FACTOR, return_counts=False, mask=None):
     """Mean luminance over each annulus edges_px[i] <= r < edges_px[i+1] (r from ``centre_xy`` to pixel
     centres, see :func:`pixel_radii`), leaving out the pixels brighter than ``firefly`` x the annulus' median
     (``firefly`` None: keep every pixel).  Returns an array of len(edges_px) - 1 (NaN for an empty annulus);
-    with ``return_counts`` also (pixels kept, pixels left out) per annulus."""
+    with ``return_counts`` also (pixels kept, pixels left out) per annulus.  ``mask``: only the pixels where it
+    is true count (the firefly rule applied among them)."""
     lum = luminance(image)
     r = pixel_radii(lum.shape, centre_xy)
+    inside = np.ones(lum.shape, bool) if mask is None else np.asarray(mask, bool)
     means, kept, dropped = [], [], []
     for lo, hi in zip(edges_px[:-1], edges_px[1:]):
-        v = lum[(r >= lo) & (r < hi)]
+        v = lum[(r >= lo) & (r < hi) & inside]
         if v.size == 0:
             means.append(np.nan), kept.append(0), dropped.append(0)
             continue

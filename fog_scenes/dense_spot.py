@@ -250,24 +250,10 @@ def seed_images(case, volume_bounces, samples, seeds):
 # -- measures (numpy) -------------------------------------------------------------------------------------------
 
 def region_ring_means(image, centre_xy, mask, edges_px=dense.RING_EDGES_PX, firefly=dense.FIREFLY_FACTOR):
-    """Mean luminance over each annulus (as :func:`fog_scenes.dense.ring_means`) of the pixels in ``mask`` only,
+    """Mean luminance over each annulus (:func:`fog_scenes.dense.ring_means`) of the pixels in ``mask`` only,
     the firefly rule (leave out pixels above ``firefly`` x the median) applied among those pixels: returns
     (means, pixels kept, pixels left out), NaN where the annulus holds none of them."""
-    lum = dense.luminance(image)
-    masked = np.where(mask, lum, np.nan)
-    r = dense.pixel_radii(lum.shape, centre_xy)
-    means, kept, dropped = [], [], []
-    for lo, hi in zip(edges_px[:-1], edges_px[1:]):
-        v = masked[(r >= lo) & (r < hi)]
-        v = v[np.isfinite(v)]
-        if v.size == 0:
-            means.append(np.nan), kept.append(0), dropped.append(0)
-            continue
-        keep = v <= firefly * np.median(v) if firefly is not None else np.ones(v.shape, bool)
-        means.append(float(v[keep].mean()) if keep.any() else np.nan)
-        kept.append(int(keep.sum()))
-        dropped.append(int((~keep).sum()))
-    return np.array(means), np.array(kept), np.array(dropped)
+    return dense.ring_means(image, centre_xy, edges_px, firefly, return_counts=True, mask=mask)
 
 
 def sector_means(image, centre_xy, mask=None, edges_px=dense.RING_EDGES_PX, sectors=8,
