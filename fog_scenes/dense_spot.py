@@ -43,7 +43,7 @@ import sys
 
 import numpy as np
 
-from fog_scenes import dense
+from fog_scenes import area_lights, dense
 from fog_scenes import render_harness as h
 
 RESOLUTION = dense.RESOLUTION
@@ -88,19 +88,9 @@ def _spot_name(case):
     return CASES[case]["spot"]
 
 
-def rotation_matrix(rotation_euler_deg):
-    """3x3 rotation of Blender's Euler XYZ (degrees): R = Rz Ry Rx."""
-    ax, ay, az = (math.radians(float(v)) for v in rotation_euler_deg)
-    cx, sx, cy, sy, cz, sz = math.cos(ax), math.sin(ax), math.cos(ay), math.sin(ay), math.cos(az), math.sin(az)
-    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
-    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
-    return rz @ ry @ rx
-
-
 def spot_axis(case):
     """Unit world direction of the spot's axis (its local -Z) for a case or spot name."""
-    r = rotation_matrix(SPOTS[_spot_name(case)]["rotation_euler_deg"])
+    r = area_lights.euler_xyz_matrix(SPOTS[_spot_name(case)]["rotation_euler_deg"])
     a = r @ np.array([0.0, 0.0, -1.0])
     return a / np.linalg.norm(a)
 
