@@ -14,7 +14,7 @@ import math
 import bpy
 import numpy as np
 
-from .nodes import groups
+from .nodes import comp_fog
 from .precompute import sunlight
 
 SUN_KEY_DIGITS = 4   # the sun's direction enters the built groups' signature at this precision (the map is baked)
@@ -191,21 +191,19 @@ def key(scene, spec):
            if suns else "none")
     world = scene.world
     sky = "uniform" if uniform_sky(world) is not None else ("none" if world is None else "other")
-    top, falloff, ground = layer(spec)
+    top, falloff, ground = spec.layer_per_unit()
     return (f"daylight:{spec.beta_per_unit!r}:{top!r}:{falloff!r}:{ground!r}:{spec.anisotropy!r}:{sun}:{sky}:"
             f"{world.name_full if world else ''}")
 
 
-def layer(spec):
-    """(top, falloff, ground) in Blender units."""
-    return spec.layer_per_unit()
-
-
 def fog_light_table(scene, spec):
     """(TableSpec, {name: image}) of the fog light's irradiance map (``sunlight.bake_fog_light``) for the scene's
-    sun (straight up without one: its irradiance is 0 then) and the spec's layer."""
+    sun (straight up without one: its irradiance is 0 then) and the spec's layer; (None, {}) where the layer has
+    no daylight (``is_daylit``)."""
     from .nodes import images as images_
-    top, falloff, _ = layer(spec)
+    if not is_daylit(scene, spec):
+        return None, {}
+    top, falloff, _ = spec.layer_per_unit()
     suns = scene_suns(scene)
     direction = sun_direction(suns[0]) if suns else (0.0, 0.0, 1.0)
     direction = tuple(round(c, SUN_KEY_DIGITS) for c in direction)
@@ -229,35 +227,25 @@ def daylight(m, scene, spec, beta):
     density socket (driven by the params group), the layer from ``spec``, the sun's direction and irradiance and a
     uniform sky's radiance driven by the Sun light and the World's Background (a change needs no rebuild; the sun's
     direction re-bakes the fog light's map at the next Update Fog)."""
-    top, falloff, ground = layer(spec)
+    top, falloff, ground = spec.layer_per_unit()
     suns = scene_suns(scene)
     if suns:
         sun = suns[0]
-        direction = _vector(m, "Sun Direction", ["x"] * 3,
-                            lambda i: [("x", sun, f"matrix_world[2][{i}]")], normalise=True)
-        irradiance = _vector(m, "Sun Irradiance", ["e*c"] * 3,
-                             lambda i: [("e", sun.data, "energy"), ("c", sun.data, f"color[{i}]")])
+        direction = comp_fog._vector(m, "Sun Direction", ["x"] * 3, lambda i: [("x", sun, f"matrix_world[2][{i}]")])
+        direction = m.scale(direction, 1.0 / m.length(direction))
+        irradiance = comp_fog._vector(m, "Sun Irradiance", ["e*c"] * 3,
+                                      lambda i: [("e", sun.data, "energy"), ("c", sun.data, f"color[{i}]")])
     else:
         direction, irradiance = m.wrap((0.0, 0.0, 1.0)), m.wrap((0.0, 0.0, 0.0))
     bg = uniform_sky(scene.world)
     if bg is not None:
         path = f'nodes["{bg.name}"].inputs'
-        sky = _vector(m, "Sky Radiance", ["c*s"] * 3,
-                      lambda i: [("c", scene.world, f'node_tree.{path}["Color"].default_value[{i}]'),
-                                 ("s", scene.world, f'node_tree.{path}["Strength"].default_value')])
+        sky = comp_fog._vector(m, "Sky Radiance", ["c*s"] * 3,
+                               lambda i: [("c", scene.world, f'node_tree.{path}["Color"].default_value[{i}]'),
+                                          ("s", scene.world, f'node_tree.{path}["Strength"].default_value')])
     else:
         sky = m.wrap(sky_colour(scene.world)[0])
     return sunlight.Daylight(beta, top, falloff, ground, direction, irradiance, sky, spec.anisotropy)
-
-
-def _vector(m, label, expressions, variables, normalise=False):
-    """A vector whose components are driven (``groups._drive_expression``), in ``m``'s tree."""
-    node = m.node("ShaderNodeCombineXYZ", 0)
-    node.label = label
-    for i, expression in enumerate(expressions):
-        groups._drive_expression(node.inputs[i], expression, variables(i))
-    v = m.wrap(node.outputs[0], vector=True)
-    return m.scale(v, 1.0 / m.length(v)) if normalise else v
 
 
 def notes(scene, spec, method_name, lamps=()):

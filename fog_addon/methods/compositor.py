@@ -50,14 +50,13 @@ class Compositor(Method):
 
     def build(self, scene, spec, plan, images):
         aovs = functools.partial(comp_fog.add_surface_aovs, engine=scene.render.engine)
-        day, daylit = sunsky.builder(scene, spec), sunsky.is_daylit(scene, spec)
-        dims = sunsky.dims_surfaces(scene, plan.in_groups)
+        day, dims = sunsky.builder(scene, spec), sunsky.dims_surfaces(scene, plan.in_groups)
+        table, table_images = sunsky.fog_light_table(scene, spec)   # (None: no daylight to glow)
+        images = dict(images, **table_images)
+        daylit = table is not None
         groups.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs,
                              tails=caveats.specular_paths(bpy.data.materials), day=day,
                              day_dims=dims and not daylit)
-        if daylit:
-            table, table_images = sunsky.fog_light_table(scene, spec)
-            images = dict(images, **table_images)
         shafted = shafted_lights(scene, spec, plan.in_groups) if spec.shafts else []
         maps, shadow_images = shadow_maps.ensure(scene, shafted)
         shadow_maps.remove_unused(set(shadow_images))

@@ -26,10 +26,9 @@ class NodeGroups(Method):
         return None
 
     def build(self, scene, spec, plan, images):
-        day, table = sunsky.builder(scene, spec), None
-        if sunsky.is_daylit(scene, spec):
-            table, table_images = sunsky.fog_light_table(scene, spec)
-            images = dict(images, **table_images)
+        day = sunsky.builder(scene, spec)
+        table, table_images = sunsky.fog_light_table(scene, spec)   # (None: no daylight to glow)
+        images = dict(images, **table_images)
         groups.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes,
                              tails=caveats.specular_paths(bpy.data.materials), day=day, day_table=table,
                              day_dims=sunsky.dims_surfaces(scene, plan.in_groups))

@@ -998,11 +998,12 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
             emission = m.wrap(emission, vector=True) + m.scale(m.wrap(params.outputs["Albedo"], vector=True)
                                                                * sunlight.ray_glow(m, daylight, camera_at, direction,
                                                                                    model.FAR), is_camera)
-        # the fogged World mixes the Fog closure by 1 - Transmittance (world.py), right where the sky is not seen;
-        # through a layer it is: the whole glow (the lamps' and the daylight's) as one closure divided by it
-        emit = ng.nodes.new("ShaderNodeEmission")
-        m.feed(emit.inputs["Color"], m.scale(emission, 1.0 / m.maximum(1.0 - transmittance, 1e-6)))
-        fogs = [emit.outputs["Emission"]]
+        if placed or day_table is not None:   # (the compositor's World: no glow, the sky dimmed per pixel)
+            # the fogged World mixes the Fog closure by 1 - Transmittance (world.py), right where the sky is not
+            # seen; through a layer it is: the whole glow (the lamps' and the daylight's) as one closure over it
+            emit = ng.nodes.new("ShaderNodeEmission")
+            m.feed(emit.inputs["Color"], m.scale(emission, 1.0 / m.maximum(1.0 - transmittance, 1e-6)))
+            fogs = [emit.outputs["Emission"]]
     m.feed(gout.inputs["Emission"], m.wrap(emission))
     _shader_tree(ng, gout.inputs["Fog"], fogs)
     m.feed(gout.inputs["Transmittance"], m.wrap(transmittance))
