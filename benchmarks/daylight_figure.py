@@ -28,12 +28,9 @@ def ours(case, work):
     """The analytic fog's render of ``case`` (rendered if missing)."""
     out = work / f"{case}.exr"
     if not out.is_file():
-        c, f = dl.as_case(case), dl.layer(case)
-        blend = dl.build_scene(work / f"{c.camera}.blend", case, with_fog=False)
-        h.render_test("daylight", f["beta0"], out, engine="cycles", method="compositor", resolution=dl.RESOLUTION,
-                      blend=str(blend), samples=64,
-                      extra=("--anisotropy", repr(c.g), "--color", ",".join([repr(f["albedo"])] * 3),
-                             "--fog-top", repr(f["h0"]), "--height-falloff", repr(f["H"])))
+        blend = dl.build_scene(work / f"{dl.as_case(case).camera}.blend", case, with_fog=False)
+        h.render_test("daylight", dl.layer(case)["beta0"], out, engine="cycles", method="compositor",
+                      resolution=dl.RESOLUTION, blend=str(blend), samples=64, extra=dl.fog_flags(case))
     return imageio.read_rgb(out)[..., :3]
 
 

@@ -148,6 +148,14 @@ def layer(case):
     return dict(beta0=LAYER["beta0"], albedo=LAYER["albedo"], g=c.g, h0=p["h0"], H=p["H"], box_top=top)
 
 
+def fog_flags(case):
+    """``python -m fog_addon render``'s flags for the add-on's fog of ``case`` (its layer, anisotropy, albedo),
+    besides ``--density`` (``layer(case)["beta0"]``)."""
+    c, f = as_case(case), layer(case)
+    return ("--anisotropy", repr(c.g), "--color", ",".join([repr(f["albedo"])] * 3), "--fog-top", repr(f["h0"]),
+            "--height-falloff", repr(f["H"]))
+
+
 def sun_direction():
     """Unit vector towards the sun (world): (cos e sin az, cos e cos az, sin e)."""
     e, az = math.radians(SUN["elevation_deg"]), math.radians(SUN["azimuth_deg"])

@@ -27,8 +27,7 @@ def _render(tmp_path, case, engine, method):
     out = h.render_test("daylight", f["beta0"], tmp_path / "ours.exr", engine=engine, method=method,
                         resolution=dl.RESOLUTION, blend=str(blend), log=log,
                         samples=SAMPLES if engine == "cycles" else None,
-                        extra=("--anisotropy", repr(case.g), "--color", ",".join([repr(f["albedo"])] * 3),
-                               "--fog-top", repr(f["h0"]), "--height-falloff", repr(f["H"])))
+                        extra=dl.fog_flags(case))
     assert not h.log_errors(log[0]), h.log_errors(log[0])
     assert "swallows the sun" not in log[0] and "not supported" not in log[0]
     return out, log[0]
