@@ -2,7 +2,7 @@
 
     render SCENE.blend --engine cycles|eevee [--method auto|nodes|osl|compositor] [--preset NAME | --density BETA]
            [--color R,G,B] [--scene-scale S] [--anisotropy G] [--error E|draft|final|exact] [--explain]
-           [--fog-top METRES | --no-fog-top] [--height-falloff METRES] [--ground-level Z]
+           [--fog-top METRES | --no-fog-top] [--height-falloff METRES] [--ground-level Z] [--air X]
            [--samples N] [--resolution WxH] --out OUT.png|OUT.exr
     reference SCENE.blend [--preset NAME | --density BETA] [--anisotropy G] [--samples N]
            [--resolution WxH] --out OUT.exr
@@ -67,6 +67,16 @@ def _non_negative_float(name):
             raise argparse.ArgumentTypeError(f"{name} must be >= 0, got {s!r}")
         return v
     return conv
+
+
+def _air(s):
+    """``--air``: the clear air's density, a multiple of sea-level air in [0, spec.MAX_AIR]."""
+    from .precompute.spec import MAX_AIR
+    v = _non_negative_float("air")(s)
+    if v > MAX_AIR:
+        raise argparse.ArgumentTypeError(f"air must be at most {MAX_AIR:g} (times sea-level clear air; 1 is the "
+                                         f"standard atmosphere), got {s!r}")
+    return v
 
 
 def _positive_int(name):
@@ -190,6 +200,10 @@ def build_parser():
     r.add_argument("--ground-level", type=_finite_float("ground level"), metavar="Z",
                    help="the ground's height z in Blender units (the fog's top is measured from it)"
                         + from_file)
+    r.add_argument("--air", type=_air, metavar="X",
+                   help="clear air's density (its Rayleigh scattering) as a multiple of sea-level air, at most 100: "
+                        "1 is the standard atmosphere, which blues and greys a daylight scene's distance; only "
+                        "with a fog top" + from_file)
     r.add_argument("--explain", action="store_true",
                    help="print the models each light got and the error predicted for them")
     r.add_argument("--pixel-centre", action="store_true",
@@ -227,7 +241,7 @@ def build_parser():
 
 def _resolve_density(args, required, layers=False):
     """The density (and anisotropy) of ``--preset`` into ``args``; a fog layer preset also sets the top, the
-    falloff and the colour its flags leave unset (``layers``: the command has those flags, else refused)."""
+    falloff, the air and the colour its flags leave unset (``layers``: the command has those flags, else refused)."""
     if args.preset is not None:
         presets = _presets()
         if args.preset not in presets:
@@ -244,6 +258,8 @@ def _resolve_density(args, required, layers=False):
                 args.fog_top = layer["fog_top"]
             if args.height_falloff is None:
                 args.height_falloff = layer["height_falloff"]
+            if args.air is None:
+                args.air = layer.get("air", 0.0)
             if args.color is None:
                 args.color = tuple(layer["albedo"])
         elif args.anisotropy is None:

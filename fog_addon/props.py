@@ -131,6 +131,11 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
         update=_push,
         description="Softness of the fog's top, H in real metres: above the top the density falls by e "
                     "every H metres (e^-(height - top) / H). 0 is a hard top: no fog above it")
+    air_density: bpy.props.FloatProperty(
+        name="Air", default=0.0, min=0.0, soft_max=4.0, max=100.0, update=_push,
+        description="Density of the clear air (its Rayleigh scattering) as a multiple of sea-level air: 1 is the "
+                    "standard atmosphere, which blues and greys the distance of a daylight scene; 0 no air. "
+                    "Only with a Fog Top")
     ground_level: bpy.props.FloatProperty(
         name="Ground Level", subtype="DISTANCE", unit="LENGTH", default=0.0, update=_push,
         description="Height z of the ground in Blender units (as the scene's Z coordinates): the fog's "

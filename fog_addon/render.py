@@ -47,15 +47,15 @@ def fog_settings(scene, args):
                                       else _flag(args, "multiple_scattering") == "on"),
                  world_light=None if _flag(args, "world_light") is None else _flag(args, "world_light") == "on",
                  fog_top=_flag(args, "fog_top"), height_falloff=_flag(args, "height_falloff"),
-                 ground_level=_flag(args, "ground_level"))
+                 ground_level=_flag(args, "ground_level"), air=_flag(args, "air"))
     spec = FogSpec.from_settings(s).replace(**flags)
     source = {k: "flag" if v is not None else "file" for k, v in flags.items()}
     if _flag(args, "no_fog_top"):   # (``replace`` keeps the file's value for None: the flag clears it here)
         spec = dataclasses.replace(spec, fog_top=None).validated()
         source["fog_top"] = "flag"
-    if spec.fog_top is None and (flags["height_falloff"] is not None or flags["ground_level"] is not None):
-        notes.append(("fog top", "the fog fills all space, so the height falloff and the ground level change "
-                                 "nothing: give --fog-top for a fog layer"))
+    if spec.fog_top is None and any(flags[k] is not None for k in ("height_falloff", "ground_level", "air")):
+        notes.append(("fog top", "the fog fills all space, so the height falloff, the ground level and the air "
+                                 "change nothing: give --fog-top for a fog layer"))
     if spec.method in CYCLES_ONLY and args.engine_id != "CYCLES":
         if source["method"] == "flag":
             raise SystemExit(f"error: --method {spec.method} needs --engine cycles ({CYCLES_ONLY[spec.method]}); "
@@ -77,7 +77,7 @@ def fog_settings(scene, args):
              "multiple scattering": ("multiple_scattering", "on" if spec.multiple_scattering else "off"),
              "fog top": ("fog_top", "unbounded" if spec.fog_top is None else spec.fog_top),
              "height falloff": ("height_falloff", spec.height_falloff),
-             "ground level": ("ground_level", spec.ground_level)}
+             "ground level": ("ground_level", spec.ground_level), "air": ("air", spec.air)}
     return spec, objects, {k: (v, source[f]) for k, (f, v) in shown.items()}, notes
 
 

@@ -47,7 +47,8 @@ def _draw_models(layout, settings):
 
 
 def _draw_layer(col, settings):
-    """Fog Top: the checkbox with the top's height beside it, then the falloff and the ground under it."""
+    """Fog Top: the checkbox with the top's height beside it, then the falloff, the ground and the clear air under
+    it (greyed out without a top: they act only in a layer)."""
     row = col.row(heading="Fog Top")
     row.prop(settings, "use_fog_top", text="")
     sub = row.row()
@@ -57,6 +58,7 @@ def _draw_layer(col, settings):
     sub.active = settings.use_fog_top
     sub.prop(settings, "height_falloff")
     sub.prop(settings, "ground_level")
+    sub.prop(settings, "air_density")
 
 
 def draw_fog(layout, context):

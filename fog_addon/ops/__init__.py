@@ -92,7 +92,7 @@ class FOG_OT_remove(bpy.types.Operator):
 
 class FOG_OT_preset_builtin(bpy.types.Operator):
     """Set the fog's density from a visibility class of atmospheric optics, and its particles' anisotropy; a
-    layered preset also sets the fog's top and its falloff (the visibility classes keep the top as it is)"""
+    layered preset also sets the fog's top, its falloff and the air (the visibility classes keep them as they are)"""
     bl_idname = "fog.preset_builtin"
     bl_label = "Fog Preset"
     bl_options = {"REGISTER", "UNDO"}
@@ -112,6 +112,7 @@ class FOG_OT_preset_builtin(bpy.types.Operator):
         settings.use_fog_top = True
         settings.fog_top = layer["fog_top"]
         settings.height_falloff = layer["height_falloff"]
+        settings.air_density = layer["air"]
         settings.density = layer["density"]
         settings.color = layer["albedo"]
         settings.anisotropy = layer["anisotropy"]
@@ -138,14 +139,14 @@ class FOG_MT_presets(bpy.types.Menu):
 
 
 class FOG_OT_preset_add(AddPresetBase, bpy.types.Operator):
-    """Save the fog's density, colour, anisotropy and top as a preset (or remove the active one)"""
+    """Save the fog's density, colour, anisotropy, top and air as a preset (or remove the active one)"""
     bl_idname = "fog.preset_add"
     bl_label = "Add Fog Preset"
     preset_menu = "FOG_MT_presets"
     preset_subdir = PRESET_SUBDIR
     preset_defines = ["fog = bpy.context.scene.analytic_fog"]
     preset_values = ["fog.density", "fog.color", "fog.anisotropy", "fog.use_fog_top", "fog.fog_top",
-                     "fog.height_falloff"]
+                     "fog.height_falloff", "fog.air_density"]
 
 
 CLASSES = (FOG_OT_add, FOG_OT_remove, FOG_OT_preset_builtin, FOG_MT_presets, FOG_OT_preset_add)

@@ -12,8 +12,9 @@ small droplets about 0.8; fog droplets (radii 2-20 um) g = 0.8-0.9 (Deirmendjian
 Hale and Querry 1973 water), 0.85 here.
 
 Layered presets (``LAYERED``) are fog with a top: the density is constant up to ``fog_top`` metres above
-the ground and falls as e^{-(h - top) / H} above it (H = ``height_falloff``; ``daylight.py``).  Depths,
-visibilities and tops below are typical values of each kind of fog, not measurements of one:
+the ground and falls as e^{-(h - top) / H} above it (H = ``height_falloff``; ``daylight.py``); ``air`` adds clear
+air's Rayleigh scattering as a multiple of sea-level air (``spec.py``; 0 in the fogs, whose droplets outshine it).
+Depths, visibilities and tops below are typical values of each kind of fog, not measurements of one:
 
 * Valley Fog: radiation fog, formed under a ground inversion on clear calm nights and pooled in valleys
   (Gultepe et al. 2007, "Fog research: a review of past achievements and future perspectives", Pure Appl.
@@ -25,11 +26,18 @@ visibilities and tops below are typical values of each kind of fog, not measurem
   10-20 km.  Above it the aerosol thins with a scale height of 1.2 km (Dobashi et al. 2002 appendix A.1;
   Bruneton & Neyret 2008 section 2.1, H_M = 1.2 km).  Here visibility 15 km, a top at 1.5 km, H = 1.2 km,
   g = 0.7 (continental aerosol, the haze preset's), albedo 0.9 (Bruneton & Neyret 2008: aerosol extinction
-  = scattering / 0.9).
+  = scattering / 0.9), and a summer day's clear air above and in the haze: air 1, the standard atmosphere
+  (Bruneton & Neyret 2008 section 2.1: beta_R = (5.8, 13.5, 33.1) x 10^-6 1/m, scale height 8 km).
 * Sea Mist: advection fog over a cold sea, held in the marine layer under its inversion, typically
   100-400 m deep (Koracin et al. 2014, "Marine fog: a review", Atmos. Res. 143), visibility about 1 km (the
   fog/mist boundary).  Here visibility 1 km, a top at 300 m softened over H = 30 m, g = 0.8 (the mist
   preset's), white.
+* Clear Day: the thin aerosol haze of a clear day, densest at the ground and thinning with the aerosol's scale
+  height 1.2 km (Bruneton & Neyret 2008 section 2.1: H_M = 1.2 km, Mie g = 0.76, albedo 0.9), under the
+  standard atmosphere's clear air (air 1, as Summer Haze).  A clear day's visibility is 20-50 km ("very
+  clear" in the international visibility code the WMO adopted; Koschmieder's law above).  Here the aerosol's
+  visibility 40 km, a top at 0 m (the haze falls off from the ground), H = 1.2 km, g = 0.76, albedo 0.9,
+  air 1 (clear air alone would limit the visibility to 3.912 / 13.5e-6 = 290 km at 550 nm; with it 35 km).
 """
 import math
 
@@ -60,16 +68,18 @@ PRESETS = {name: density_from_visibility(v) for name, v in VISIBILITY_M.items()}
 ANISOTROPY = {"haze": 0.7, "mist": 0.8, "fog": 0.85, "dense_fog": 0.85}   # Henyey-Greenstein g (docstring)
 
 
-def _layer(visibility_m, anisotropy, albedo, fog_top_m, height_falloff_m):
-    """A layered preset: density (1/m) from its visibility, g, RGB albedo, top and falloff (m)."""
+def _layer(visibility_m, anisotropy, albedo, fog_top_m, height_falloff_m, air=0.0):
+    """A layered preset: density (1/m) from its visibility, g, RGB albedo, top and falloff (m), and the clear
+    air's density (a multiple of sea-level air, ``spec.py``)."""
     return dict(density=density_from_visibility(visibility_m), anisotropy=anisotropy, albedo=(albedo,) * 3,
-                fog_top=fog_top_m, height_falloff=height_falloff_m)
+                fog_top=fog_top_m, height_falloff=height_falloff_m, air=air)
 
 
 LAYERED = {   # fog with a top over the ground (docstring: the kinds of fog and their sources)
     "valley_fog": _layer(200.0, 0.85, 1.0, 100.0, 10.0),
-    "summer_haze": _layer(15000.0, 0.7, 0.9, 1500.0, 1200.0),
+    "summer_haze": _layer(15000.0, 0.7, 0.9, 1500.0, 1200.0, air=1.0),
     "sea_mist": _layer(1000.0, 0.8, 1.0, 300.0, 30.0),
+    "clear_day": _layer(40000.0, 0.76, 0.9, 0.0, 1200.0, air=1.0),
 }
 
 

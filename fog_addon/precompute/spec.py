@@ -25,6 +25,11 @@ Units, stated once:
   ``density`` up to it); None for fog that fills all space (the night scenes' default).
 * ``height_falloff``: above the top the density falls as e^{-(h - top) / H}, H in real metres; 0 is a hard top.
 * ``ground_level``: the ground's z in Blender units (heights are measured from it).
+* ``air``: the density of clear air (molecular Rayleigh scattering) as a multiple of sea-level clear air, in
+  [0, MAX_AIR]: 1 is the standard atmosphere (Bruneton & Neyret 2008 section 2.1: beta_R = ``daylight.RAYLEIGH_RGB``
+  1/m at 680, 550, 440 nm at the ground, falling with the scale height ``daylight.RAYLEIGH_HEIGHT`` = 8 km), which
+  blues and greys the distance of a daylight scene; 0 is none.  It acts only in a layered fog (with a top):
+  ``air_per_unit`` is None without one.
 
 """
 import dataclasses
@@ -32,10 +37,12 @@ import json
 import math
 
 from . import medium, predict, presets
+from .daylight import RAYLEIGH_HEIGHT, RAYLEIGH_RGB
 
 METHODS = ("nodes", "osl", "compositor")   # the methods a user can pick besides "auto" (``fog_addon/methods``)
 AUTO = "auto"
 DEFAULT_METHOD = AUTO
+MAX_AIR = 100.0   # clear air's density as a multiple of sea level's: beyond this it is no longer air but a wall
 
 
 def validate_method(method):
@@ -75,6 +82,17 @@ def validate_falloff(falloff):
     return v
 
 
+def validate_air(air):
+    """The clear air's density as a multiple of sea-level clear air (0 <= air <= MAX_AIR; 1 the standard one)."""
+    v = _finite(air, "the clear air's density (a multiple of sea-level air)")
+    if v < 0.0:
+        raise ValueError(f"the clear air's density must be >= 0 (0 is no air, 1 is sea-level air), got {v}")
+    if v > MAX_AIR:
+        raise ValueError(f"the clear air's density must be at most {MAX_AIR:g} times sea-level air "
+                         f"(1 is the standard atmosphere), got {v:g}")
+    return v
+
+
 def validate_quality(quality):
     """The stored form of a Quality: a preset name ("draft", "final", "exact") or a float; raises ValueError."""
     if quality is None:
@@ -103,6 +121,7 @@ class FogSpec:
     fog_top: object = None
     height_falloff: float = 0.0
     ground_level: float = 0.0
+    air: float = 0.0
 
     @property
     def beta_per_unit(self):
@@ -131,6 +150,16 @@ class FogSpec:
             return None
         return (self.fog_top / self.scene_scale, self.height_falloff / self.scene_scale, self.ground_level)
 
+    def air_per_unit(self):
+        """(rgb, height) of the clear air's Rayleigh scattering, or None without air or without a top (the air acts
+        only in a layered fog): rgb the scattering coefficients at the ground, 1/(Blender unit), RAYLEIGH_RGB x air
+        x scene_scale; height its scale height RAYLEIGH_HEIGHT / scene_scale, Blender units (Bruneton & Neyret
+        2008 section 2.1)."""
+        if not self.layered or self.air <= 0.0:
+            return None
+        rgb = tuple(beta * self.air * self.scene_scale for beta in RAYLEIGH_RGB)
+        return rgb, RAYLEIGH_HEIGHT / self.scene_scale
+
     @property
     def target_error(self):
         """The Quality as a target relative error, None for Exact (``predict.target_error``)."""
@@ -145,7 +174,7 @@ class FogSpec:
             quality=validate_quality(self.quality), passes=bool(self.passes), world_light=bool(self.world_light),
             shafts=bool(self.shafts), multiple_scattering=bool(self.multiple_scattering),
             fog_top=validate_top(self.fog_top), height_falloff=validate_falloff(self.height_falloff),
-            ground_level=_finite(self.ground_level, "the ground level (z, Blender units)"))
+            ground_level=_finite(self.ground_level, "the ground level (z, Blender units)"), air=validate_air(self.air))
 
     def replace(self, **changes):
         """A validated copy with ``changes`` (None values keep this spec's: the command line's unset flags)."""
@@ -171,7 +200,8 @@ class FogSpec:
                    multiple_scattering=getattr(settings, "use_multiple_scattering", False),
                    fog_top=settings.fog_top if getattr(settings, "use_fog_top", False) else None,
                    height_falloff=getattr(settings, "height_falloff", 0.0),
-                   ground_level=getattr(settings, "ground_level", 0.0)).validated()
+                   ground_level=getattr(settings, "ground_level", 0.0),
+                   air=getattr(settings, "air_density", 0.0)).validated()
 
     def settings_values(self):
         """{property: value} that store this spec in a ``scene.analytic_fog`` (the inverse of ``from_settings``)."""
@@ -179,7 +209,7 @@ class FogSpec:
                       anisotropy=self.anisotropy, method=self.method.upper(), use_passes=self.passes,
                       world_light=self.world_light, use_shafts=self.shafts,
                       use_multiple_scattering=self.multiple_scattering, use_fog_top=self.fog_top is not None,
-                      height_falloff=self.height_falloff, ground_level=self.ground_level)
+                      height_falloff=self.height_falloff, ground_level=self.ground_level, air_density=self.air)
         if self.fog_top is not None:
             values["fog_top"] = self.fog_top
         if isinstance(self.quality, str):
