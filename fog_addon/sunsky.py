@@ -192,7 +192,8 @@ def key(scene, spec):
     world = scene.world
     sky = "uniform" if uniform_sky(world) is not None else ("none" if world is None else "other")
     top, falloff, ground = spec.layer_per_unit()
-    return (f"daylight:{spec.beta_per_unit!r}:{top!r}:{falloff!r}:{ground!r}:{spec.anisotropy!r}:{sun}:{sky}:"
+    return (f"daylight:{spec.beta_per_unit!r}:{top!r}:{falloff!r}:{ground!r}:{spec.anisotropy!r}:{spec.air!r}:{sun}:"
+            f"{sky}:"
             f"{world.name_full if world else ''}")
 
 
@@ -219,10 +220,10 @@ def builder(scene, spec):
     fog that fills all space."""
     if not spec.layered:
         return None
-    return lambda m, beta: daylight(m, scene, spec, beta)
+    return lambda m, beta, albedo=1.0: daylight(m, scene, spec, beta, albedo)
 
 
-def daylight(m, scene, spec, beta):
+def daylight(m, scene, spec, beta, albedo=1.0):
     """The scene's ``sunlight.Daylight`` in the node tree of ``m`` (NodeOps or CompOps): ``beta`` the tree's
     density socket (driven by the params group), the layer from ``spec``, the sun's direction and irradiance and a
     uniform sky's radiance driven by the Sun light and the World's Background (a change needs no rebuild; the sun's
@@ -245,7 +246,9 @@ def daylight(m, scene, spec, beta):
                                           ("s", scene.world, f'node_tree.{path}["Strength"].default_value')])
     else:
         sky = m.wrap(sky_colour(scene.world)[0])
-    return sunlight.Daylight(beta, top, falloff, ground, direction, irradiance, sky, spec.anisotropy)
+    air = spec.air_per_unit()
+    return sunlight.Daylight(beta, top, falloff, ground, direction, irradiance, sky, spec.anisotropy, albedo,
+                             None if air is None else tuple(air[0]), 0.0 if air is None else air[1])
 
 
 def notes(scene, spec, method_name, lamps=()):

@@ -638,7 +638,7 @@ def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=
 
 
 def _daylight(m, day, table, camera, direction, position, normal, reflectance, d_vp, t_vp, cover):
-    """The sun's and the sky's light in a fog layer at a pixel, per unit albedo: ``groups.daylight_light`` where the
+    """The sun's and the sky's light in a fog layer at a pixel (albedos included): ``groups.daylight_light`` where the
     pixel sees a surface, the glow to the sky (``sunlight.ray_glow``) where it does not."""
     to_surface = groups.daylight_light(m, day, table, camera, direction, position, normal, reflectance, d_vp, t_vp)
     to_sky = sunlight.ray_glow(m, day, camera, direction, model.FAR)
@@ -738,16 +738,16 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     if win is not None:   # the sums over the surfaces' window back in place, on the picture's domain
         sums.update({o: _accumulate(m, _zero(m, direction), _uncrop(m, sums[o], win))
                      for o in SCATTER_OUTPUTS if o in sums})
-    daylight = None if day is None else day[0](m, beta)
-    t_vp = (model.transmittance(m, beta, d_vp) if daylight is None
-            else sunlight.view_transmittance(m, daylight, pos, incoming, d_vp))
+    daylight = None if day is None else day[0](m, beta, albedo)
+    t_day = None if daylight is None else sunlight.view_transmittance(m, daylight, pos, incoming, d_vp)
+    t_vp = model.transmittance(m, beta, d_vp) if daylight is None else sunlight.grey(m, t_day)
     if not sums:
         fog = m.wrap((0.0, 0.0, 0.0))
     else:   # Eq. 19 where the pixel sees its surface, Eq. 12 where it sees the sky
         fog = albedo * shading.pixel_light(m, sums, t_vp, cover)
     if daylight is not None:
-        fog = fog + albedo * _daylight(m, daylight, day[1], cam, direction, pos, normal, diffuse + specular, d_vp,
-                                       t_vp, cover)
+        fog = fog + _daylight(m, daylight, day[1], cam, direction, pos, normal, diffuse + specular, d_vp, t_day,
+                              cover)
     if emitters is not None:
         fog = fog + albedo * _emitter_glow(m, p, beta, d_vp, emitters[0], emitter_pixel_angle(scene), emitters[1],
                                            cover)
@@ -755,7 +755,13 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     if daylight is not None:   # the dimming of the pixel's surface by the fog above it and of the sky seen through
         dims = (m.select(m.less(0.0, cover), sunlight.direct_dimming(m, daylight, pos, normal), 1.0)   # the layer
                 if day[2] else m.const(1.0))
-        image = m.scale(image, cover * dims + (1.0 - cover) * sunlight.sky_seen(m, daylight, cam, direction))
+        seen = sunlight.sky_seen(m, daylight, cam, direction)
+        if daylight.air is None:
+            image = m.scale(image, cover * dims + (1.0 - cover) * seen)
+        else:   # the materials dimmed their surface by the mean of the air's colour (a shader's factor is one
+            # number): the colour of the camera segment's transmittance comes here, per pixel
+            tint = m.scale(t_day, 1.0 / m.maximum(t_vp, 1e-30))
+            image = image * (m.scale(tint, cover * dims) + m.scale(m.wrap((1.0, 1.0, 1.0)), (1.0 - cover) * seen))
     m.feed(gout.inputs["Fog Light"], fog)
     m.feed(gout.inputs["Image"], fog + image)
     ng[PARTIAL] = partial

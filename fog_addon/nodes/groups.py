@@ -608,13 +608,14 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     length = m.select(segment, m.wrap(path.outputs["Ray Length"]), view)
     t_vp, transmit = shading.view_transmittance(m, m.wrap(params.outputs["Beta"]), length, fogged)
     if day is not None:
-        daylight = day(m, m.wrap(params.outputs["Beta"]))
+        daylight = day(m, m.wrap(params.outputs["Beta"]), m.wrap(params.outputs["Albedo"], vector=True))
         position, incoming = m.wrap(geo.outputs["Position"], vector=True), m.wrap(geo.outputs["Incoming"], vector=True)
-        t_vp = sunlight.view_transmittance(m, daylight, position, incoming, length)
+        # a shader's factor is one number: with air, the mean of its colour (the Compositor takes the colour)
+        t_vp = sunlight.grey(m, sunlight.view_transmittance(m, daylight, position, incoming, length))
         transmit = 1.0 + fogged * (t_vp - 1.0)
         if day_dims:
-            transmit = transmit * sunlight.direct_dimming(m, daylight, position, m.wrap(geo.outputs["Normal"],
-                                                                                        vector=True))
+            transmit = transmit * sunlight.grey(m, sunlight.direct_dimming(
+                m, daylight, position, m.wrap(geo.outputs["Normal"], vector=True)))
     glow_length = view * (1.0 - segment)   # a specular segment's glow is the tails' (``build_tail_bundle``)
     shared = {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"], "Position": geo.outputs["Position"],
               "Incoming": geo.outputs["Incoming"], "View Distance": glow_length.sock,
@@ -630,7 +631,7 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     fogs = [node.outputs["Fog"] for node, mods in placed if any(_lit(mod) for mod in mods)]
     fog = shading.surface_fog(m, sums, transmit)
     if day is not None and day_table is not None:
-        light = m.scale(m.wrap(params.outputs["Albedo"], vector=True) * daylight_light(
+        light = m.scale(daylight_light(
             m, daylight, day_table, position + m.scale(incoming, length), m.scale(incoming, -1.0), position,
             m.wrap(geo.outputs["Normal"], vector=True), diffuse + specular, length, t_vp), is_camera)
         emit = ng.nodes.new("ShaderNodeEmission")
@@ -943,12 +944,12 @@ def build_world_bundle(images, first, lights, models, with_passes, chained):
 
 
 def daylight_light(m, day, table, camera, direction, position, normal, reflectance, length, t_vp):
-    """The sun's and the sky's light in a fog layer on a camera ray that meets a surface, per unit albedo
-    (``precompute/sunlight.py``): the glow along the ray plus the fog light the surface reflects, dimmed on its way
+    """The sun's and the sky's light in a fog layer on a camera ray that meets a surface, the layer's and the air's
+    albedo included (``precompute/sunlight.py``): the glow along the ray plus the fog light the surface reflects, dimmed on its way
     (Sun et al. 2005 Eq. 19's L_a; the reflectance taken as Lambertian: the diffuse plus the specular albedo
     times the irradiance over pi).  The Compositor's per pixel (``comp_fog._daylight``) and the Surface group's."""
-    return sunlight.ray_glow(m, day, camera, direction, length) + m.scale(
-        reflectance * sunlight.fog_light(m, table, day, position, normal), t_vp)
+    return sunlight.ray_glow(m, day, camera, direction, length) + sunlight.times(
+        m, reflectance * sunlight.fog_light(m, table, day, position, normal), t_vp)
 
 
 def build_world(lights, models, camera, images, with_passes=False, day=None, day_table=None, day_dims=True):
@@ -990,14 +991,13 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
         m, [m.wrap(node.outputs["Airlight"], vector=True) for node, _ in placed], medium, is_camera,
         m.wrap(params.outputs[WORLD_LIGHT]))
     if day is not None:
-        daylight = day(m, m.wrap(params.outputs["Beta"]))
+        daylight = day(m, m.wrap(params.outputs["Beta"]), m.wrap(params.outputs["Albedo"], vector=True))
         camera_at = m.wrap(cam.outputs[0], vector=True)
-        transmittance = (1.0 + is_camera * (sunlight.sky_seen(m, daylight, camera_at, direction) - 1.0)
-                         if day_dims else m.const(1.0))
+        seen = sunlight.grey(m, sunlight.sky_seen(m, daylight, camera_at, direction))
+        transmittance = 1.0 + is_camera * (seen - 1.0) if day_dims else m.const(1.0)
         if day_table is not None:
-            emission = m.wrap(emission, vector=True) + m.scale(m.wrap(params.outputs["Albedo"], vector=True)
-                                                               * sunlight.ray_glow(m, daylight, camera_at, direction,
-                                                                                   model.FAR), is_camera)
+            emission = m.wrap(emission, vector=True) + m.scale(
+                sunlight.ray_glow(m, daylight, camera_at, direction, model.FAR), is_camera)
         if placed or day_table is not None:   # (the compositor's World: no glow, the sky dimmed per pixel)
             # the fogged World mixes the Fog closure by 1 - Transmittance (world.py), right where the sky is not
             # seen; through a layer it is: the whole glow (the lamps' and the daylight's) as one closure over it

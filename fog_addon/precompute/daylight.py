@@ -317,7 +317,11 @@ def sky_wall_irradiance(m, z, beta0, h0, H, nodes=WALL_NODES):
     sees the sky's upper half through the column depth C(z) / mu, (4 / pi) int_0^1 sqrt(1 - mu^2) e^{-C / mu} dmu
     (the clipped cosine integrated over azimuth is 2 sqrt(1 - mu^2)), by ``nodes``-point Gauss-Legendre (1e-3 at
     C = 0, where the integrand's root at mu = 1 is steepest; 2e-3 of the ratio at C = 0.1 to 2)."""
-    c = column_depth(m, z, beta0, h0, H)
+    return wall_irradiance_of_column(m, column_depth(m, z, beta0, h0, H), nodes)
+
+
+def wall_irradiance_of_column(m, c, nodes=WALL_NODES):
+    """``sky_wall_irradiance`` under a column depth c above the point (any vertical profile, any species)."""
     xs, ws = gauss_legendre01(nodes)
     total = 0.0
     for mu, w in zip(xs, ws):
@@ -331,8 +335,14 @@ def sky_tilted_irradiance(m, z, nz, beta0, h0, H):
     (pi/2 ``sky_wall_irradiance``) and up (pi ``sky_irradiance``), clamped at 0.  Within 2 % of the fog-free value
     pi (1 + nz) / 2 for nz >= 0 and 3 % at nz = -0.5 (tests/test_sunlight.py); below, where the sky's weight is
     small, more."""
-    a = (0.5 * math.pi) * sky_wall_irradiance(m, z, beta0, h0, H)
-    half_up = (0.5 * math.pi) * sky_irradiance(m, z, beta0, h0, H)
+    return tilted_irradiance_of_column(m, column_depth(m, z, beta0, h0, H), nz)
+
+
+def tilted_irradiance_of_column(m, c, nz):
+    """``sky_tilted_irradiance`` under a column depth c above the point (the direct sky light depends on the
+    column alone: any vertical profile, the layer and the air together)."""
+    a = (0.5 * math.pi) * wall_irradiance_of_column(m, c)
+    half_up = math.pi * expint3(m, c)
     return m.maximum(a + nz * (half_up + nz * (half_up - a)), 0.0)
 
 
@@ -475,3 +485,137 @@ def flat_earth_error(distance, scale_height, earth_radius=EARTH_RADIUS):
     ``distance`` m long (a fraction): the ground falls away by d^2 / (2 R), so the true density there is
     e^{-d^2 / (2 R H)} of the flat one's.  Python floats (a design limit, not a kernel)."""
     return math.expm1(distance * distance / (2.0 * earth_radius * scale_height))
+
+
+# --- the layer in clear air: aerial perspective along the camera's segments -----------------------------------
+
+AIR_PANELS = 16          # log-spaced panels of ``air_glow``, cut again where the ray crosses the layer:
+AIR_CUTS = (0.0, 0.5, 1.0, 2.0, 3.0, 5.0)   # at its top and this many falloff lengths above it (the top if hard)
+AIR_FIRST = 0.1          # the first log-spaced panel end: this many mean free paths at the camera
+
+
+def air_column_depth(m, z, beta_air, h_air):
+    """int_z^inf beta_air e^{-z'/h_air} dz' = beta_air h_air e^{-z/h_air}: the clear air's column depth above height
+    z (m above the ground, heights below it count as the ground), beta_air its Rayleigh extinction at the ground
+    (1/m, one colour channel), h_air its scale height (m; Dobashi et al. 2002 appendix A.1's rho_r)."""
+    return beta_air * h_air * exp_neg(m, m.maximum(z, 0.0) / h_air)
+
+
+def layer_air_depth(m, pz, vz, length, beta0, h0, H, beta_air, h_air):
+    """Optical depth of a camera segment through the fog layer (``optical_depth``) and the clear air
+    (``exponential_depth``), one colour channel."""
+    return optical_depth(m, pz, vz, length, beta0, h0, H) + exponential_depth(m, pz, vz, length, beta_air, 0.0,
+                                                                             h_air)
+
+
+def layer_air_transmittance(m, pz, vz, length, beta0, h0, H, beta_air, h_air):
+    """e^{-tau} of a camera segment through the layer and the air, one colour channel."""
+    return exp_neg(m, layer_air_depth(m, pz, vz, length, beta0, h0, H, beta_air, h_air))
+
+
+def expint4(m, x):
+    """E4(x) = int_0^1 mu^2 e^{-x/mu} dmu = (e^{-x} - x E3(x)) / 3 for x >= 0 (E4(0) = 1/3)."""
+    return (exp_neg(m, x) - x * expint3(m, x)) * (1.0 / 3.0)
+
+
+def rayleigh_sky_source(m, c, vz):
+    """The uniform sky's Rayleigh single-scattering source per unit sky radiance and unit scattering coefficient
+    (1, dimensionless: the radiance scattered towards -v per unit optical depth of air, over L_sky) at a point under
+    a column depth c of the layer, for a view direction of z-component vz, ground black:
+    int_upper p_R(v.w) e^{-c/mu} dw = 2 pi int_0^1 pbar_R(mu) e^{-c/mu} dmu, the Rayleigh phase averaged over the
+    ring at mu being 3 (1 + <(v.w)^2>) / (16 pi) with <(v.w)^2> = mu^2 vz^2 + (1 - mu^2)(1 - vz^2) / 2, so
+    = (3 / 8) ((1 + s / 2) E2(c) + (vz^2 - s / 2) E4(c)), s = 1 - vz^2 (``expint2``, ``expint4``)."""
+    s = 1.0 - vz * vz
+    return (3.0 / 8.0) * ((1.0 + 0.5 * s) * expint2(m, c) + (vz * vz - 0.5 * s) * expint4(m, c))
+
+
+def _insert_sorted(m, ends, x):
+    """The sorted list ``ends`` with x inserted in its place (min and max only)."""
+    out = [m.minimum(ends[0], x)]
+    out += [m.maximum(ends[i - 1], m.minimum(ends[i], x)) for i in range(1, len(ends))]
+    return out + [m.maximum(ends[-1], x)]
+
+
+def _panel(m, d_a, d_b):
+    """int over a panel of e^{-Phi} per unit of a depth in which Phi is linear: e^{-min} phi1(|Phi_b - Phi_a|)."""
+    return exp_neg(m, m.minimum(d_a, d_b)) * phi1(m, m.abs(d_b - d_a))
+
+
+def _air_point(m, pz, vz, t, inv_mu, beta0, h0, H, h_air):
+    """``air_glow``'s quantities at the panel end t: the layer's and the air's (per unit ground extinction) optical
+    depths from the camera, the sun's layer depth C_l / mu_s, the column C_l (capped at EXP_CLAMP) and the Rayleigh
+    sky source over e^{-C_l}."""
+    c = column_depth(m, pz + vz * t, beta0, h0, H)
+    c_cap = m.minimum(c, EXP_CLAMP)   # S_R = e^{-c} x a smooth factor: the factor is linear on a panel
+    return (optical_depth(m, pz, vz, t, beta0, h0, H), exponential_depth(m, pz, vz, t, 1.0, 0.0, h_air),
+            c * inv_mu, c_cap, rayleigh_sky_source(m, c, vz) * m.exp(c_cap))
+
+
+def _air_point_hard(m, pz, vz, t, inv_mu, beta0, h0, h_air):
+    return _air_point(m, pz, vz, t, inv_mu, beta0, h0, 0.0, h_air)
+
+
+def _air_panel(m, b, la, aa, ca, xa, sa, lb, ab, cb, xb, sb):
+    """One panel's share of ``air_glow``'s three integrals for one channel of air extinction b (1/m at the ground),
+    from its two ends' ``_air_point`` quantities."""
+    cam_a, cam_b = la + b * aa, lb + b * ab
+    f_sun = _panel(m, ca + cam_a, cb + cam_b)
+    d_air = b * (ab - aa)
+    return (lb - la) * f_sun, d_air * f_sun, (d_air * (0.5 * (sa + sb))) * _panel(m, xa + cam_a, xb + cam_b)
+
+
+def air_glow(m, pz, vz, length, mu_s, beta0, h0, H, air, h_air):
+    """Aerial perspective: the camera segment's integrals through the fog layer and the clear air, per colour
+    channel of ``air`` (the air's Rayleigh extinction at the ground per channel, 1/m), when the air acts along the
+    camera's segments only (the sun and the sky reach every point of the segment through the layer alone: a Sun
+    light and a World are the light as it arrives at the ground in clear air, the air's own light is in the World):
+
+        sun_l = int beta_l e^{-Psi_s},  sun_a = int beta_a e^{-Psi_s},  Psi_s(t) = C_l(z(t)) / mu_s + tau_l(t)
+                                                                               + tau_a(t),
+        sky_a = int beta_a S_R(z(t)) e^{-tau_l(t) - tau_a(t)} dt  (``rayleigh_sky_source``),
+
+    Dobashi et al. 2002 Eq. 11 with two species whose second scatters along the camera segment only.  Returns
+    [(sun_l, sun_a, sky_a, view)] per channel, ``view`` the same segment's layer-only sun integral J_l
+    (``sun_integral``: exact), so sun_l / J_l is the air's share of dimming of the layer's own glow (the caller
+    applies it to the layer's sky glow too).  Quadrature: panels whose ends are AIR_PANELS + 1 log-spaced distances
+    from AIR_FIRST mean free paths at the camera to the integrated length, with the crossings of the heights
+    AIR_CUTS falloff lengths above the layer's top inserted (the top's alone for a hard top); on each panel Psi is
+    taken linear in each species' optical depth (exact where both are uniform, and for the layer alone: Psi_s is
+    linear in tau_l without air, so sun_l = J_l at zero air), and S_R as e^{-C_l} (taken with the exponent) times a
+    smooth factor (linear).  The integrated length stops where
+    the air alone has dimmed the ray by e^{-HAZE_DEPTH}, or HAZE_HEIGHTS air scale heights above the camera (of
+    the air's mean channel).  The layer's depths and the source are computed once per panel end, the channels' a
+    few operations each.  Measured against scipy in docs/measurements/2026-11-27-air-kernels.md."""
+    inv_mu = 1.0 / m.maximum(mu_s, MIN_MU)
+    k = 1.0 - vz * inv_mu
+    air = tuple(air)
+    a0 = (air[0] + air[1] + air[2]) * (1.0 / 3.0) * exp_neg(m, m.maximum(pz, 0.0) / h_air)
+    up = m.maximum(vz, 0.0)
+    t_depth = HAZE_DEPTH / m.maximum(a0 - HAZE_DEPTH * up / h_air, 1e-30)
+    t_height = (HAZE_HEIGHTS * h_air) / m.maximum(up, 1e-30)
+    t_end = m.minimum(length, m.minimum(t_depth, t_height))
+    flat = m.less(m.abs(vz), MIN_SPAN)
+    inv_vz = 1.0 / m.select(flat, MIN_SPAN, vz)
+
+    def crossing(h):   # the distance along the ray to height h, in [0, t_end] (t_end for a level ray)
+        return m.select(flat, t_end, m.minimum(m.maximum((h - pz) * inv_vz, 0.0), t_end))
+    hard = isinstance(H, (int, float)) and H < MIN_FALLOFF
+    first = m.minimum(AIR_FIRST / m.maximum(extinction(m, pz, beta0, h0, H) + a0, 1e-30), t_end)
+    ratio = 1.0 + t_end / first
+    ends = [0.0 * t_end] + [first * (m.power(ratio, j / AIR_PANELS) - 1.0) for j in range(1, AIR_PANELS)] + [t_end]
+    for cut in AIR_CUTS[:1] if hard else AIR_CUTS:
+        ends = _insert_sorted(m, ends, crossing(h0 + cut * H))
+    hard_tag = "hard" if hard else "falloff"
+    points = [m.group(f"daylight air point {hard_tag}", _air_point_hard if hard else _air_point, pz, vz, t, inv_mu,
+                      beta0, h0, *(() if hard else (H,)), h_air) for t in ends]
+    tau_l = optical_depth(m, pz, vz, length, beta0, h0, H)
+    view = sun_integral(m, tau_l, column_depth(m, pz, beta0, h0, H) * inv_mu,
+                        column_depth(m, pz + vz * length, beta0, h0, H) * inv_mu + tau_l, k)
+    out = []
+    for b in air:
+        sun_l = sun_a = sky_a = 0.0
+        for pa, pb in zip(points[:-1], points[1:]):
+            d_l, d_a, d_s = m.group("daylight air panel", _air_panel, b, *pa, *pb)
+            sun_l, sun_a, sky_a = sun_l + d_l, sun_a + d_a, sky_a + d_s
+        out.append((m.minimum(sun_l, view), sun_a, sky_a, view))
+    return out

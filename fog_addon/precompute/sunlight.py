@@ -42,6 +42,10 @@ class Daylight(NamedTuple):
     sun_irradiance: Any  # RGB, W/m^2 on a surface facing the sun (a Blender Sun light's Strength x Color)
     sky_radiance: Any    # RGB, W/(m^2 sr): the World's radiance over the upper hemisphere
     g: float = 0.0       # Henyey-Greenstein anisotropy of the sun's scattering (Python float)
+    albedo: Any = 1.0    # RGB (or grey): the layer's single-scattering albedo (the air's is 1)
+    air: Any = None      # the clear air's Rayleigh extinction at the ground per colour channel, 1/unit (three
+                         # scalars or an RGB value), or None without air
+    air_height: float = 0.0   # units: the air's scale height (Python float)
 
 
 def _z(m, v):
@@ -57,34 +61,114 @@ def sun_elevation(m, day):
     return _z(m, day.sun)
 
 
+AXES = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+
+
+def air_channels(m, day):
+    """The air's ground extinction per colour channel (three values, 1/unit), or None without air."""
+    if day.air is None:
+        return None
+    if isinstance(day.air, (tuple, list)):
+        return tuple(day.air)
+    return tuple(m.dot(day.air, axis) for axis in AXES)
+
+
+def _layer(day):
+    return (day.beta, day.top, day.falloff)
+
+
 def view_transmittance(m, day, point, incoming, length):
     """e^{-tau} of the segment from a surface ``point`` towards the camera (unit ``incoming``, ``length`` units):
-    ``daylight.transmittance`` (the optical depth is the same read from either end)."""
-    return daylight.transmittance(m, _z(m, point) - day.ground, _z(m, incoming), length, day.beta, day.top,
-                                  day.falloff)
+    ``daylight.transmittance`` (the optical depth is the same read from either end); with air an RGB value,
+    ``daylight.layer_air_transmittance`` per channel."""
+    z, vz = _z(m, point) - day.ground, _z(m, incoming)
+    air = air_channels(m, day)
+    if air is None:
+        return daylight.transmittance(m, z, vz, length, *_layer(day))
+    tau_l = daylight.optical_depth(m, z, vz, length, *_layer(day))
+    shape = daylight.exponential_depth(m, z, vz, length, 1.0, 0.0, day.air_height)
+    return m.combine(*(daylight.exp_neg(m, tau_l + b * shape) for b in air))
+
+
+def grey(m, value):
+    """The mean of an RGB value's channels; a grey value as it is (a factor that must be one number: a Mix
+    Shader's)."""
+    return _grey(m, value) if _is_rgb(value) else value
+
+
+def _is_rgb(value):
+    return getattr(value, "vector", False) or (isinstance(value, np.ndarray) and value.shape[-1:] == (3,)
+                                               and value.ndim > 0)
 
 
 def sky_seen(m, day, origin, direction):
     """The fraction of the World seen along a ray from ``origin`` that meets no surface (unit ``direction``):
-    ``daylight.sky_transmittance`` (0 for a ray that points down: it would meet the ground)."""
-    return daylight.sky_transmittance(m, _z(m, origin) - day.ground, _z(m, direction), day.beta, day.top,
-                                      day.falloff)
+    ``daylight.sky_transmittance`` (0 for a ray that points down: it would meet the ground).  The air takes nothing
+    from the World: its light and its extinction are in the sky the World shows."""
+    return daylight.sky_transmittance(m, _z(m, origin) - day.ground, _z(m, direction), *_layer(day))
+
+
+def _tag(value):
+    """A number as a node group's name takes it (no '.': Blender's '.001' copies are told by it)."""
+    return f"{value:.6g}".replace(".", "p").replace("-", "m").replace("+", "")
+
+
+def _is_sky(length):
+    return isinstance(length, (int, float)) and length >= daylight.UNBOUNDED
 
 
 def ray_glow(m, day, origin, direction, length):
-    """The sun's and the sky's single scattering along a camera segment, per unit albedo, W/(m^2 sr) (RGB):
-    E_sun ``daylight.sun_airlight`` (phase at the angle between the ray and the sun) + L_sky
+    """The sun's and the sky's single scattering along a camera segment, W/(m^2 sr) (RGB), the layer's albedo
+    included: E_sun ``daylight.sun_airlight`` (phase at the angle between the ray and the sun) + L_sky
     ``daylight.sky_airlight``; ``length`` model.FAR for a ray to the sky.  Each is one shared sub-program per g
-    (``m.group``: a node group built once per file, so a rebuild of the fog does not build its nodes again)."""
+    (``m.group``: a node group built once per file, so a rebuild of the fog does not build its nodes again).
+
+    With air, on a segment that ends on a surface (aerial perspective, ``daylight.air_glow``): the air's Rayleigh
+    scattering of the sun and of the sky along the segment, and the layer's glow dimmed by the air in front of it
+    (the layer's sun integral with the air over the one without, applied to its sky glow too).  A ray to the sky
+    gets the layer's glow alone: the World shows the sky with its air."""
     pz, vz = _z(m, origin) - day.ground, _z(m, direction)
-    args = (day.beta, day.top, day.falloff)
+    args = _layer(day)
     g = float(day.g)
     tag = f"g {round(g * 10000):+d}e-4"   # no '.' in a group's name: Blender's '.001' copies are told by it
-    sun = m.group(f"daylight sun {tag}", lambda mm, *a: daylight.sun_airlight(mm, *a, albedo=1.0, g=g),
-                  pz, vz, length, sun_elevation(m, day), m.dot(direction, day.sun), *args)
+    mu_s, cos_theta = sun_elevation(m, day), m.dot(direction, day.sun)
     sky = m.group(f"daylight sky {tag}", lambda mm, *a: daylight.sky_airlight(mm, *a, albedo=1.0, g=g),
                   pz, vz, length, *args)
-    return m.scale(day.sun_irradiance, sun) + m.scale(day.sky_radiance, sky)
+    air = air_channels(m, day)
+    if air is None or _is_sky(length):
+        sun = m.group(f"daylight sun {tag}", lambda mm, *a: daylight.sun_airlight(mm, *a, albedo=1.0, g=g),
+                      pz, vz, length, mu_s, cos_theta, *args)
+        return _albedo(m, day, m.scale(day.sun_irradiance, sun) + m.scale(day.sky_radiance, sky))
+    up = m.less(0.0, mu_s)
+    p_l = m.select(up, daylight.hg_phase(m, g, cos_theta), 0.0)
+    p_r = m.select(up, daylight.rayleigh_phase(m, cos_theta), 0.0)
+    albedo = [m.dot(day.albedo, axis) for axis in AXES] if _is_rgb(day.albedo) else [day.albedo] * 3
+    top, falloff, h_air = float(day.top), float(day.falloff), float(day.air_height)
+    name = "daylight air " + " ".join(_tag(v) for v in (top, falloff, h_air))
+
+    def kernel(mm, pz_, vz_, length_, mu_, beta_, *b):
+        return tuple(v for channel in daylight.air_glow(mm, pz_, vz_, length_, mu_, beta_, top, falloff, b, h_air)
+                     for v in channel)
+    flat = m.group(name, kernel, pz, vz, length, mu_s, day.beta, *air)
+    suns, skies = [], []
+    for a, k in zip(albedo, range(3)):
+        sun_l, sun_a, sky_a, view = flat[4 * k:4 * k + 4]
+        dimmed = sun_l / m.maximum(view, 1e-30)   # the air's dimming of the layer's glow (1 without air)
+        suns.append((a * p_l) * sun_l + p_r * sun_a)
+        skies.append(a * (sky * dimmed) + sky_a)
+    return day.sun_irradiance * m.combine(*suns) + day.sky_radiance * m.combine(*skies)
+
+
+def times(m, rgb, factor):
+    """An RGB value times a factor that is RGB (channel by channel) or grey."""
+    if isinstance(factor, (int, float)):
+        return rgb if factor == 1.0 else m.scale(rgb, factor)
+    return rgb * factor if _is_rgb(factor) else m.scale(rgb, factor)
+
+
+def _albedo(m, day, rgb):
+    """``rgb`` times the layer's albedo (RGB or grey)."""
+    return times(m, rgb, day.albedo)
 
 
 def direct_dimming(m, day, point, normal):
@@ -93,9 +177,9 @@ def direct_dimming(m, day, point, normal):
     (``daylight.sky_tilted_irradiance``), weighted by their fog-free irradiances on it, E_sun max(n.s, 0) and
     pi L_sky (1 + n_z) / 2.  One factor for the user's shader, which sums both lights: exact
     where one of them dominates or the two transmittances agree; a point in the sun's shadow gets the weighted
-    factor, not the sky's alone."""
+    factor, not the sky's alone.  The air dims neither (the Sun light and the World are the light that arrives)."""
     z = _z(m, point) - day.ground
-    args = (day.beta, day.top, day.falloff)
+    args = _layer(day)
     w_sun = _grey(m, day.sun_irradiance) * m.maximum(m.dot(normal, day.sun), 0.0)
     sky = _grey(m, day.sky_radiance)
     nz = _z(m, normal)
@@ -212,10 +296,11 @@ def _coefficient(m, spec, x, i):
 
 def fog_light(m, spec, day, point, normal):
     """The irradiance over pi that the layer's single scattering sends onto a surface at ``point`` with unit
-    ``normal``, per unit albedo, W/(m^2 sr) (RGB), from the baked map (``bake_fog_light``, ``spec`` its TableSpec)
+    ``normal``, W/(m^2 sr) (RGB), from the baked map (``bake_fog_light``, ``spec`` its TableSpec)
     at the point's height: E_sun (I_s C_g(n.s) + the sun's residual map) + L_sky (the sky's map), each map
-    clamped at 0 (an order-2 map rings below 0 facing away from a peaked field).  Times a Lambertian albedo: the
-    radiance the surface reflects."""
+    clamped at 0 (an order-2 map rings below 0 facing away from a peaked field); times the layer's albedo.  Times a
+    Lambertian albedo: the radiance the surface reflects.  The map is the layer's alone: the air's own fog light on
+    surfaces and its dimming of the layer's are left out."""
     x = m.clamp01((_z(m, point) - day.ground) * (1.0 / table_height(day.top, day.falloff)))
     basis = sh_basis(m, normal)
     maps = []
@@ -226,5 +311,5 @@ def fog_light(m, spec, day, point, normal):
         maps.append(total)
     peak = _coefficient(m, spec, x, 2 * SH_COUNT) * _coefficient(
         m, spec, 0.5 * (m.dot(normal, day.sun) + 1.0), 2 * SH_COUNT + 1)
-    return (m.scale(day.sun_irradiance, m.maximum(peak + maps[0], 0.0))
-            + m.scale(day.sky_radiance, m.maximum(maps[1], 0.0)))
+    return _albedo(m, day, m.scale(day.sun_irradiance, m.maximum(peak + maps[0], 0.0))
+                   + m.scale(day.sky_radiance, m.maximum(maps[1], 0.0)))
