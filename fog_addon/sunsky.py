@@ -266,6 +266,10 @@ def notes(scene, spec, method_name, lamps=()):
     if scene.world is not None and not sky_colour(scene.world)[1]:
         out.append((scene.world.name, "the fog layer's sky glow takes this World as uniform, of its mean colour over "
                                       "the upper hemisphere (where seen, the World itself is dimmed exactly)"))
+    if spec.air_per_unit() is not None and method_name != "compositor" and is_daylit(scene, spec):
+        out.append(("Air", f"with {method_name} the air dims surfaces by the mean of its colour (a shader's factor "
+                           "is one number): the distance greys but does not blue; the Compositor method (Auto's "
+                           "choice) gives its colour"))
     if method_name != "compositor" and is_daylit(scene, spec):
         out.append(("Daylight", f"with {method_name} the sun's and the sky's glow and fog light are evaluated on "
                                 "every sample (5-8x the fog-free render in a city); the Compositor method (Auto's "
