@@ -13,7 +13,8 @@ here, slow) at 160x90 and 16 samples, reported with no goal.  The scene is the c
 with_fog False): the add-on's test conventions (no cast shadows, no interreflection, one diffuse bounce, volume
 bounces 0), as the render tests render it against Cycles; camera ``inside`` (1.6 m up, in the layer).  The fog is
 the case's layer (``daylight.layer``): density 0.01/m, albedo 0.9, Henyey-Greenstein g 0 or 0.7, a hard top at
-100 m (``hard``) or 60 m with a 50 m falloff above (``falloff``), added with
+100 m (``hard``) or 60 m with a 50 m falloff above (``falloff``), and in the ``_air`` cases Air 1 (the aerial
+perspective's kernels: what they cost per pixel does not depend on the distances), added with
 ``fog_addon.ops.apply.apply(scene, FogSpec(..., method=METHOD, fog_top=..., height_falloff=...))`` (what
 ``python -m fog_addon render ... --method METHOD`` calls).
 
@@ -57,7 +58,9 @@ CSV = OUT / "daylight_cost.csv"
 PNG = OUT / "daylight_cost.png"
 KEPT = ROOT / "docs" / "measurements" / "data" / "daylight_cost_2026-11-27.csv"   # the committed run, if kept
 
-CASES = ("hard_g0_inside", "hard_g0.7_inside", "falloff_g0_inside", "falloff_g0.7_inside")
+CASES = ("hard_g0_inside", "hard_g0.7_inside", "falloff_g0_inside", "falloff_g0.7_inside", "hard_g0_inside_air",
+         "falloff_g0.7_inside_air")
+AIR_SUFFIX = "_air"   # a case with Air 1 (``split_air``)
 RUNS = ("cycles:compositor", "cycles:nodes", "eevee:compositor")   # engine:method
 RESOLUTION, SAMPLES = (640, 360), 32
 EEVEE_RESOLUTION, EEVEE_SAMPLES = (160, 90), 16
@@ -115,6 +118,11 @@ def _wrap(module, name, key, wall, cpu):
     setattr(module, name, timed)
 
 
+def split_air(case):
+    """(the city's case, Air): a case name ending in ``_air`` is that case with Air 1 (sea-level clear air)."""
+    return (case[:-len(AIR_SUFFIX)], 1.0) if case.endswith(AIR_SUFFIX) else (case, 0.0)
+
+
 def worker(spec):
     """Time one (engine, method, case): no fog (first, warm), apply, fog (first, warm), the compositor muted."""
     sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
@@ -129,7 +137,8 @@ def worker(spec):
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
-    dl.build(scene, spec["case"], with_fog=False)
+    case, air = split_air(spec["case"])
+    dl.build(scene, case, with_fog=False)
     cycles = spec["engine"] == "cycles"
     ov.cost_settings(scene, cycles, spec["resolution"], spec["samples"])
     bpy.app.handlers.render_stats.append(ov.BEAT)   # the first sample's time (fog_first_setup_s)
@@ -145,9 +154,9 @@ def worker(spec):
     _wrap(sunsky, "probe_sky", "probe", wall, cpu)
     _wrap(comp_fog, "build_fog_group", "comp_group", wall, cpu)
     _wrap(groups, "build_surface", "surface_group", wall, cpu)
-    f = dl.layer(spec["case"])
+    f = dl.layer(case)
     fog = FogSpec(density=f["beta0"], albedo=(f["albedo"],) * 3, anisotropy=f["g"], method=spec["method"],
-                  fog_top=f["h0"], height_falloff=f["H"])
+                  fog_top=f["h0"], height_falloff=f["H"], air=air)
     c, t = time.process_time(), time.perf_counter()
     notes = apply.apply(scene, fog)
     res["apply_s"], res["apply_cpu_s"] = time.perf_counter() - t, time.process_time() - c
