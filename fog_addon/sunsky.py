@@ -199,8 +199,8 @@ def key(scene, spec):
 
 def fog_light_table(scene, spec):
     """(TableSpec, {name: image}) of the fog light's irradiance map (``sunlight.bake_fog_light``) for the scene's
-    sun (straight up without one: its irradiance is 0 then) and the spec's layer; (None, {}) where the layer has
-    no daylight (``is_daylit``)."""
+    sun (straight up without one: its irradiance is 0 then) and the spec's layer (with air a tuple of three, one
+    per colour channel); (None, {}) where the layer has no daylight (``is_daylit``)."""
     from .nodes import images as images_
     if not is_daylit(scene, spec):
         return None, {}
@@ -209,10 +209,15 @@ def fog_light_table(scene, spec):
     direction = sun_direction(suns[0]) if suns else (0.0, 0.0, 1.0)
     direction = tuple(round(c, SUN_KEY_DIGITS) for c in direction)
     beta = spec.beta_per_unit
-    table = sunlight.table_spec(beta, top, falloff, direction, spec.anisotropy)
-    image = images_.table_image(table, functools.partial(sunlight.bake_fog_light, beta, top, falloff, direction,
-                                                         spec.anisotropy))   # a precompute baker: disk-cached
-    return table, {table.name: image}
+    air = spec.air_per_unit()
+    channels = [None] if air is None else [(b, air[1], a) for b, a in zip(air[0], spec.albedo)]
+    tables_, images = [], {}
+    for channel in channels:   # with air one map per colour channel, both species' light, the albedos in it
+        table = sunlight.table_spec(beta, top, falloff, direction, spec.anisotropy, channel)
+        images[table.name] = images_.table_image(table, functools.partial(
+            sunlight.bake_fog_light, beta, top, falloff, direction, spec.anisotropy, channel))   # disk-cached baker
+        tables_.append(table)
+    return (tables_[0] if air is None else tuple(tables_)), images
 
 
 def builder(scene, spec):

@@ -451,11 +451,17 @@ def project(camera, points, resolution=RESOLUTION):
 
 
 def pixel_hits(camera, resolution=RESOLUTION):
-    """What each pixel centre's camera ray meets first, by ray casting the scene's data (no bpy):
+    """What each pixel centre's camera ray meets first, by ray casting the scene's data (no bpy): ``cast_boxes``
+    of the camera's pixel rays over the ground and BUILDINGS (kind i + 1: building BUILDINGS[i])."""
+    return cast_boxes(np.array(CAMERAS[camera]["location"], np.float64), pixel_rays(camera, resolution), GROUND,
+                      BUILDINGS)
+
+
+def cast_boxes(o, d, ground, boxes):
+    """What each ray from ``o`` along the unit directions ``d`` (H, W, 3) meets first among a ground plane at z = 0
+    (dict half_width_m, albedo) and axis-aligned boxes standing on it (dicts x0, x1, y0, y1, height, albedo):
     dict(origin (3,), dirs (H, W, 3), t (H, W) metres (inf: the sky), point (H, W, 3), normal (H, W, 3),
-    kind (H, W) int: -1 the sky, 0 the ground, i + 1 building BUILDINGS[i], albedo (H, W))."""
-    o = np.array(CAMERAS[camera]["location"], np.float64)
-    d = pixel_rays(camera, resolution)
+    kind (H, W) int: -1 the sky, 0 the ground, i + 1 box i, albedo (H, W))."""
     shape = d.shape[:2]
     t_best = np.full(shape, np.inf)
     kind = np.full(shape, -1, int)
@@ -464,13 +470,13 @@ def pixel_hits(camera, resolution=RESOLUTION):
     with np.errstate(divide="ignore", invalid="ignore"):
         tg = np.where(d[..., 2] < 0.0, -o[2] / d[..., 2], np.inf)
         pg = o + tg[..., None] * d
-        gw = GROUND["half_width_m"]
+        gw = ground["half_width_m"]
         ok = np.isfinite(tg) & (np.abs(pg[..., 0]) <= gw) & (np.abs(pg[..., 1]) <= gw)
         t_best = np.where(ok, tg, t_best)
         kind[ok] = 0
         normal[ok] = (0.0, 0.0, 1.0)
-        albedo[ok] = GROUND["albedo"]
-        for i, b in enumerate(BUILDINGS):
+        albedo[ok] = ground["albedo"]
+        for i, b in enumerate(boxes):
             lo = np.array([b["x0"], b["y0"], 0.0])
             hi = np.array([b["x1"], b["y1"], b["height"]])
             t1, t2 = (lo - o) / d, (hi - o) / d

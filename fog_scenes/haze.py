@@ -18,8 +18,8 @@ The scene (:func:`build`; every number in the module's data, so the same scene c
 * ``CAMERA``: (0, 0, 300) m, looking along +Y and 4 degrees down, 50 mm lens on a 36 mm sensor (39.6 x 22.9
   degrees), 160 x 90 px, clip 1 mm to 200 km.
 
-The fog (:func:`add_fog`): a mesh box ``FOG_BOX`` 80 km on each side of the origin, from z = -1 m (under the ground,
-no face coplanar with it) to 60 km, whose volume shader adds two species:
+The fog (:func:`add_fog`): a mesh box ``FOG_BOX`` 2 000 km on each side of the origin, from z = -1 m (under the
+ground, no face coplanar with it) to 60 km, whose volume shader adds two species:
 
 * the haze (``HAZE``, aerosol, Mie): extinction beta_M(z) = beta0 e^{-max(z, 0)/H_M}, beta0 = 3.912 / V for a
   visibility V = 40 km (9.78e-5 /m; Koschmieder's 2 % contrast), H_M = 1200 m, albedo 0.9: Volume Scatter (Color
@@ -33,8 +33,10 @@ no face coplanar with it) to 60 km, whose volume shader adds two species:
 
 Both densities come from Geometry Position z through Math nodes (a heterogeneous volume).  Left out above 60 km:
 beta0 H_M e^{-50} of haze and 33.1e-6 x 8000 e^{-7.5} = 1.5e-4 of blue air (the sun's transmittance at 40 degrees
-2.3e-4 too high in blue).  The box is 80 km wide on each side: a level ray at the camera's height leaves it at
-a haze optical depth of 6.
+2.3e-4 too high in blue).  The box is 2 000 km wide on each side so that it stands for the add-on's flat medium
+without sides: with 80 km sides the sky near the horizon reached the air through them (short paths), and the black
+ridge's airlight came out 2.3 / 3.5 / 3.8 % (R, G, B) above a quadrature of the unbounded medium (the references
+of that box, ``..._air1_vb0_...`` and ``..._air0_vb0_...``, are kept: docs/measurements/2026-11-27-haze-references.md).
 
 Cases (``CASES``): ``haze_air`` (both species: the one that matters) and ``haze_only`` (the haze alone).
 
@@ -111,7 +113,7 @@ VISIBILITY_M = 40000.0
 HAZE = dict(beta0=3.912 / VISIBILITY_M, H=1200.0, albedo=0.9, g=0.76)
 AIR = dict(rgb=(5.8e-6, 13.5e-6, 33.1e-6), H=8000.0)
 
-FOG_BOX = dict(half_width_m=80000.0, bottom_m=-1.0, top_m=60000.0)
+FOG_BOX = dict(half_width_m=2.0e6, bottom_m=-1.0, top_m=60000.0)
 FOG_NAME = "FogBox"
 
 # case -> the clear air's density, a multiple of AIR (the add-on's --air)
@@ -119,7 +121,7 @@ CASES = {"haze_air": 1.0, "haze_only": 0.0}
 
 # The cached references: (case, samples per render, seeds).  Render times and noise:
 # docs/measurements/2026-11-27-haze-references.md.
-REFERENCE_CASES = [("haze_air", 1024, 12)]
+REFERENCE_CASES = [("haze_air", 1024, 8)]
 EXTRA_CASES = [("haze_only", 1024, 2)]
 
 
@@ -368,7 +370,7 @@ def reference_name(case, samples, seeds, resolution=RESOLUTION):
     """File name of a cached fog reference, its parameters in it."""
     w, hh = resolution
     return (f"{NAME}_V{VISIBILITY_M / 1000:g}km_H{HAZE['H']:g}_g{HAZE['g']:g}_a{HAZE['albedo']:g}"
-            f"_air{air(case):g}_vb0_{w}x{hh}_{int(samples)}spp_x{int(seeds)}.exr")
+            f"_air{air(case):g}_box{FOG_BOX['half_width_m'] / 1000:g}km_vb0_{w}x{hh}_{int(samples)}spp_x{int(seeds)}.exr")
 
 
 def clear_name(samples, seeds, resolution=RESOLUTION):
@@ -449,41 +451,8 @@ def pixel_rays(resolution=RESOLUTION):
 
 def pixel_hits(resolution=RESOLUTION):
     """What each pixel centre's camera ray meets first, by ray casting the scene's data (no bpy):
-    dict(origin (3,), dirs (H, W, 3), t (H, W) metres (inf: the sky), point (H, W, 3), normal (H, W, 3),
-    kind (H, W) int: -1 the sky, 0 the ground, i + 1 ridge RIDGES[i], albedo (H, W))."""
-    o = np.array(CAMERA["location"], np.float64)
-    d = pixel_rays(resolution)
-    shape = d.shape[:2]
-    t_best = np.full(shape, np.inf)
-    kind = np.full(shape, -1, int)
-    normal = np.zeros(d.shape)
-    albedo = np.zeros(shape)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        tg = np.where(d[..., 2] < 0.0, -o[2] / d[..., 2], np.inf)
-        pg = o + tg[..., None] * d
-        gw = GROUND["half_width_m"]
-        ok = np.isfinite(tg) & (np.abs(pg[..., 0]) <= gw) & (np.abs(pg[..., 1]) <= gw)
-        t_best = np.where(ok, tg, t_best)
-        kind[ok] = 0
-        normal[ok] = (0.0, 0.0, 1.0)
-        albedo[ok] = GROUND["albedo"]
-        for i, r in enumerate(RIDGES):
-            lo = np.array([r["x0"], r["y0"], 0.0])
-            hi = np.array([r["x1"], r["y1"], r["height"]])
-            t1, t2 = (lo - o) / d, (hi - o) / d
-            tmin, tmax = np.minimum(t1, t2), np.maximum(t1, t2)
-            t_in = np.max(np.nan_to_num(tmin, nan=-np.inf), axis=-1)
-            t_out = np.min(np.nan_to_num(tmax, nan=np.inf), axis=-1)
-            axis = np.argmax(np.nan_to_num(tmin, nan=-np.inf), axis=-1)
-            hit = (t_in <= t_out) & (t_in > 0.0) & (t_in < t_best)
-            t_best = np.where(hit, t_in, t_best)
-            kind[hit] = i + 1
-            albedo[hit] = r["albedo"]
-            n = np.zeros(d.shape)
-            np.put_along_axis(n, axis[..., None], -np.sign(np.take_along_axis(d, axis[..., None], -1)), -1)
-            normal[hit] = n[hit]
-    point = np.where(np.isfinite(t_best)[..., None], o + np.nan_to_num(t_best, posinf=0.0)[..., None] * d, np.nan)
-    return dict(origin=o, dirs=d, t=t_best, point=point, normal=normal, kind=kind, albedo=albedo)
+    ``daylight.cast_boxes`` over the ground and RIDGES (kind i + 1: ridge RIDGES[i])."""
+    return dl.cast_boxes(np.array(CAMERA["location"], np.float64), pixel_rays(resolution), GROUND, RIDGES)
 
 
 def camera_transmittance(direction, distance, case="haze_air"):

@@ -753,7 +753,8 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
                                            cover)
     image = p["Image"]
     if daylight is not None:   # the dimming of the pixel's surface by the fog above it and of the sky seen through
-        dims = (m.select(m.less(0.0, cover), sunlight.direct_dimming(m, daylight, pos, normal), 1.0)   # the layer
+        one = 1.0 if daylight.air is None else m.wrap((1.0, 1.0, 1.0))   # (with air the dimming is RGB)
+        dims = (m.select(m.less(0.0, cover), sunlight.direct_dimming(m, daylight, pos, normal), one)   # the layer
                 if day[2] else m.const(1.0))
         seen = sunlight.sky_seen(m, daylight, cam, direction)
         if daylight.air is None:
@@ -761,7 +762,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
         else:   # the materials dimmed their surface by the mean of the air's colour (a shader's factor is one
             # number): the colour of the camera segment's transmittance comes here, per pixel
             tint = m.scale(t_day, 1.0 / m.maximum(t_vp, 1e-30))
-            image = image * (m.scale(tint, cover * dims) + m.scale(m.wrap((1.0, 1.0, 1.0)), (1.0 - cover) * seen))
+            image = image * (m.scale(sunlight.times(m, tint, dims), cover) + m.scale(seen, 1.0 - cover))
     m.feed(gout.inputs["Fog Light"], fog)
     m.feed(gout.inputs["Image"], fog + image)
     ng[PARTIAL] = partial

@@ -487,7 +487,7 @@ def flat_earth_error(distance, scale_height, earth_radius=EARTH_RADIUS):
     return math.expm1(distance * distance / (2.0 * earth_radius * scale_height))
 
 
-# --- the layer in clear air: aerial perspective along the camera's segments -----------------------------------
+# --- the layer in clear air: aerial perspective ----------------------------------------------------------------
 
 AIR_PANELS = 16          # log-spaced panels of ``air_glow``, cut again where the ray crosses the layer:
 AIR_CUTS = (0.0, 0.5, 1.0, 2.0, 3.0, 5.0)   # at its top and this many falloff lengths above it (the top if hard)
@@ -542,52 +542,95 @@ def _panel(m, d_a, d_b):
 
 
 def _air_point(m, pz, vz, t, inv_mu, beta0, h0, H, h_air):
-    """``air_glow``'s quantities at the panel end t: the layer's and the air's (per unit ground extinction) optical
-    depths from the camera, the sun's layer depth C_l / mu_s, the column C_l (capped at EXP_CLAMP) and the Rayleigh
-    sky source over e^{-C_l}."""
-    c = column_depth(m, pz + vz * t, beta0, h0, H)
-    c_cap = m.minimum(c, EXP_CLAMP)   # S_R = e^{-c} x a smooth factor: the factor is linear on a panel
-    return (optical_depth(m, pz, vz, t, beta0, h0, H), exponential_depth(m, pz, vz, t, 1.0, 0.0, h_air),
-            c * inv_mu, c_cap, rayleigh_sky_source(m, c, vz) * m.exp(c_cap))
+    """``air_glow``'s channel-free quantities at the panel end t: the layer's and the air's (per unit ground extinction)
+    optical depths from the camera and their column depths above the point (the air's per unit ground extinction)."""
+    z = pz + vz * t
+    c_l = column_depth(m, z, beta0, h0, H)
+    return (optical_depth(m, pz, vz, t, beta0, h0, H), exponential_depth(m, pz, vz, t, 1.0, 0.0, h_air), c_l,
+            air_column_depth(m, z, 1.0, h_air))
 
 
 def _air_point_hard(m, pz, vz, t, inv_mu, beta0, h0, h_air):
     return _air_point(m, pz, vz, t, inv_mu, beta0, h0, 0.0, h_air)
 
 
-def _air_panel(m, b, la, aa, ca, xa, sa, lb, ab, cb, xb, sb):
-    """One panel's share of ``air_glow``'s three integrals for one channel of air extinction b (1/m at the ground),
-    from its two ends' ``_air_point`` quantities."""
+RATIO_NODES = 6          # Gauss-Legendre sky elevations of ``air_glow``'s layer sky source
+
+
+def _scaled_source(m, c, vz, rings=None):
+    """A sky source times e^{c} (smooth: the panels take e^{-c} with the exponent): the layer's,
+    sum_k w_k e^{-c/mu_k} over ``rings`` ((mu_k, w_k): the sky's elevations and weights, the ring-averaged phase
+    in them), else the air's Rayleigh source (``rayleigh_sky_source``)."""
+    cap = m.minimum(c, EXP_CLAMP)
+    if rings is None:
+        source = rayleigh_sky_source(m, c, vz)
+    else:
+        source = 0.0
+        for mu, w in rings:
+            source = source + w * exp_neg(m, c * (1.0 / mu))
+    return source * m.exp(cap)
+
+
+def layer_sky_rings(m, vz, g, nodes=RATIO_NODES):
+    """((mu_k, w_k)): the layer's sky source per unit sky radiance is sum_k w_k e^{-C / mu_k}, w_k the
+    Gauss-Legendre weight times 2 pi times the Henyey-Greenstein phase averaged over the ring at mu_k
+    (``hg_ring_mean``; 1/2 for isotropic scattering)."""
+    xs, ws = gauss_legendre01(nodes)
+    return tuple((mu, w * ((2.0 * math.pi) * hg_ring_mean(m, g, mu, vz) if g else 0.5)) for mu, w in zip(xs, ws))
+
+
+def _air_channel_point(m, b, c_l, c_a, vz, *weights):
+    """One channel's quantities at a panel end: the total column C = C_l + b C_a (capped at EXP_CLAMP) and the two
+    sky sources over e^{-C} (the layer's, ``weights`` of ``layer_sky_rings`` at its nodes, and the air's)."""
+    c = c_l + b * c_a
+    rings = tuple(zip(gauss_legendre01(len(weights))[0], weights))
+    return m.minimum(c, EXP_CLAMP), _scaled_source(m, c, None, rings), _scaled_source(m, c, vz)
+
+
+def _air_panel(m, b, inv_mu, la, aa, ca_l, ca_a, xa, ia, ra, lb, ab, cb_l, cb_a, xb, ib, rb):
+    """One panel's share of ``air_glow``'s integrals for one channel of air extinction b (1/m at the ground), from
+    its ends' depths (layer la, air aa per unit b), columns (ca_l, ca_a), capped total columns (xa) and scaled sky
+    sources (isotropic ia, Rayleigh ra): (sun_l, sun_a, sky_a, sky_l)."""
     cam_a, cam_b = la + b * aa, lb + b * ab
-    f_sun = _panel(m, ca + cam_a, cb + cam_b)
-    d_air = b * (ab - aa)
-    return (lb - la) * f_sun, d_air * f_sun, (d_air * (0.5 * (sa + sb))) * _panel(m, xa + cam_a, xb + cam_b)
+    f_sun = _panel(m, (ca_l + b * ca_a) * inv_mu + cam_a, (cb_l + b * cb_a) * inv_mu + cam_b)
+    f_sky = _panel(m, xa + cam_a, xb + cam_b)
+    d_air, d_layer = b * (ab - aa), lb - la
+    return (d_layer * f_sun, d_air * f_sun, (d_air * (0.5 * (ra + rb))) * f_sky, (d_layer * (0.5 * (ia + ib))) * f_sky)
 
 
-def air_glow(m, pz, vz, length, mu_s, beta0, h0, H, air, h_air):
-    """Aerial perspective: the camera segment's integrals through the fog layer and the clear air, per colour
-    channel of ``air`` (the air's Rayleigh extinction at the ground per channel, 1/m), when the air acts along the
-    camera's segments only (the sun and the sky reach every point of the segment through the layer alone: a Sun
-    light and a World are the light as it arrives at the ground in clear air, the air's own light is in the World):
+def _layer_sky_panel(m, la, ca, lb, cb, *weights):
+    """One panel of the layer's sky glow without air (``air_glow``'s ratio's denominator), from its ends' layer
+    depths and columns and the sky's ring weights (``layer_sky_rings``)."""
+    rings = tuple(zip(gauss_legendre01(len(weights))[0], weights))
+    ia, ib = _scaled_source(m, ca, None, rings), _scaled_source(m, cb, None, rings)
+    return ((lb - la) * (0.5 * (ia + ib))) * _panel(m, m.minimum(ca, EXP_CLAMP) + la, m.minimum(cb, EXP_CLAMP) + lb)
 
-        sun_l = int beta_l e^{-Psi_s},  sun_a = int beta_a e^{-Psi_s},  Psi_s(t) = C_l(z(t)) / mu_s + tau_l(t)
-                                                                               + tau_a(t),
-        sky_a = int beta_a S_R(z(t)) e^{-tau_l(t) - tau_a(t)} dt  (``rayleigh_sky_source``),
 
-    Dobashi et al. 2002 Eq. 11 with two species whose second scatters along the camera segment only.  Returns
-    [(sun_l, sun_a, sky_a, view)] per channel, ``view`` the same segment's layer-only sun integral J_l
-    (``sun_integral``: exact), so sun_l / J_l is the air's share of dimming of the layer's own glow (the caller
-    applies it to the layer's sky glow too).  Quadrature: panels whose ends are AIR_PANELS + 1 log-spaced distances
-    from AIR_FIRST mean free paths at the camera to the integrated length, with the crossings of the heights
-    AIR_CUTS falloff lengths above the layer's top inserted (the top's alone for a hard top); on each panel Psi is
-    taken linear in each species' optical depth (exact where both are uniform, and for the layer alone: Psi_s is
-    linear in tau_l without air, so sun_l = J_l at zero air), and S_R as e^{-C_l} (taken with the exponent) times a
-    smooth factor (linear).  The integrated length stops where
-    the air alone has dimmed the ray by e^{-HAZE_DEPTH}, or HAZE_HEIGHTS air scale heights above the camera (of
-    the air's mean channel).  The layer's depths and the source are computed once per panel end, the channels' a
-    few operations each.  Measured against scipy in docs/measurements/2026-11-27-air-kernels.md."""
+def air_glow(m, pz, vz, length, mu_s, beta0, h0, H, air, h_air, g=0.0):
+    """Aerial perspective: a camera segment's single-scattering integrals through the fog layer and the clear air,
+    per colour channel of ``air`` (the air's Rayleigh extinction at the ground per channel, 1/m): Dobashi et al.
+    2002 Eq. 11 with two species, the sun and the sky reaching each point through both (flat Earth),
+
+        sun_l = int beta_l e^{-Psi},  sun_a = int beta_a e^{-Psi},  Psi(t) = (C_l + C_a)(z(t)) / mu_s + tau_l(t)
+                                                                           + tau_a(t),
+        sky_a = int beta_a S_R(C(z(t)), v_z) e^{-tau_l(t) - tau_a(t)} dt   (``rayleigh_sky_source``),
+
+    and ``sky_ratio``, the air's share of the layer's sky glow: the layer's sky glow with the air (its source under
+    C_l + C_a, the Henyey-Greenstein g's ring means at RATIO_NODES elevations: ``layer_sky_rings``; a forward
+    scattering haze sees the sky near the horizon, through long paths of air), dimmed along the segment by both,
+    over the same without it, both by the same panels
+    (so their errors cancel: 1 at zero air) and the latter's rest beyond them exact (``sky_airlight``); 1
+    where the segment meets no layer.  The caller applies it to the layer's exact sky glow (any g).  Returns [(sun_l, sun_a, sky_a, sky_ratio)] per
+    channel.  Quadrature: panels whose ends are AIR_PANELS + 1 log-spaced distances from AIR_FIRST mean free paths
+    at the camera to the integrated length, with the crossings of the heights AIR_CUTS falloff lengths above the
+    layer's top inserted (the top's alone for a hard top); on each panel the exponent is taken linear in each
+    species' optical depth (exact where both are uniform, and for the layer alone: Psi is linear in tau_l
+    without air) and a sky source as e^{-C} (with the exponent) times a linear factor.  The integrated length
+    stops where the air alone has dimmed the ray by e^{-HAZE_DEPTH}, or HAZE_HEIGHTS air scale heights above the
+    camera (of the air's mean channel).  Channel-free quantities are computed once per panel end (node groups:
+    ``_air_point``), the channels' per end and per panel (``_air_channel_point``, ``_air_panel``).  Measured
+    against scipy in docs/measurements/2026-11-27-air-kernels.md."""
     inv_mu = 1.0 / m.maximum(mu_s, MIN_MU)
-    k = 1.0 - vz * inv_mu
     air = tuple(air)
     a0 = (air[0] + air[1] + air[2]) * (1.0 / 3.0) * exp_neg(m, m.maximum(pz, 0.0) / h_air)
     up = m.maximum(vz, 0.0)
@@ -600,7 +643,7 @@ def air_glow(m, pz, vz, length, mu_s, beta0, h0, H, air, h_air):
     def crossing(h):   # the distance along the ray to height h, in [0, t_end] (t_end for a level ray)
         return m.select(flat, t_end, m.minimum(m.maximum((h - pz) * inv_vz, 0.0), t_end))
     hard = isinstance(H, (int, float)) and H < MIN_FALLOFF
-    first = m.minimum(AIR_FIRST / m.maximum(extinction(m, pz, beta0, h0, H) + a0, 1e-30), t_end)
+    first = m.maximum(m.minimum(AIR_FIRST / m.maximum(extinction(m, pz, beta0, h0, H) + a0, 1e-30), t_end), 1e-6)
     ratio = 1.0 + t_end / first
     ends = [0.0 * t_end] + [first * (m.power(ratio, j / AIR_PANELS) - 1.0) for j in range(1, AIR_PANELS)] + [t_end]
     for cut in AIR_CUTS[:1] if hard else AIR_CUTS:
@@ -608,14 +651,23 @@ def air_glow(m, pz, vz, length, mu_s, beta0, h0, H, air, h_air):
     hard_tag = "hard" if hard else "falloff"
     points = [m.group(f"daylight air point {hard_tag}", _air_point_hard if hard else _air_point, pz, vz, t, inv_mu,
                       beta0, h0, *(() if hard else (H,)), h_air) for t in ends]
-    tau_l = optical_depth(m, pz, vz, length, beta0, h0, H)
-    view = sun_integral(m, tau_l, column_depth(m, pz, beta0, h0, H) * inv_mu,
-                        column_depth(m, pz + vz * length, beta0, h0, H) * inv_mu + tau_l, k)
+    weights = tuple(w for _, w in layer_sky_rings(m, vz, g))
+    dry = 0.0
+    for pa, pb in zip(points[:-1], points[1:]):
+        dry = dry + m.group("daylight air layer sky panel", _layer_sky_panel, pa[0], pa[2], pb[0], pb[2], *weights)
+    # beyond the panels' end (where the air has dimmed the ray by e^{-HAZE_DEPTH}) the layer's own glow goes on
+    z_end = pz + vz * t_end
+    rest = m.maximum(m.minimum(length, UNBOUNDED) - t_end, 0.0)
+    tag = f"g {round(float(g) * 10000):+d}e-4"
+    dry = dry + exp_neg(m, points[-1][0]) * m.group(
+        f"daylight sky {tag}", lambda mm, *a: sky_airlight(mm, *a, albedo=1.0, g=g), z_end, vz, rest, beta0, h0, H)
+    has_layer = m.less(1e-30, dry)
     out = []
     for b in air:
-        sun_l = sun_a = sky_a = 0.0
-        for pa, pb in zip(points[:-1], points[1:]):
-            d_l, d_a, d_s = m.group("daylight air panel", _air_panel, b, *pa, *pb)
-            sun_l, sun_a, sky_a = sun_l + d_l, sun_a + d_a, sky_a + d_s
-        out.append((m.minimum(sun_l, view), sun_a, sky_a, view))
+        chan = [m.group("daylight air channel point", _air_channel_point, b, p[2], p[3], vz, *weights) for p in points]
+        sun_l = sun_a = sky_a = sky_l = 0.0
+        for (pa, ca), (pb, cb) in zip(zip(points[:-1], chan[:-1]), zip(points[1:], chan[1:])):
+            d = m.group("daylight air panel", _air_panel, b, inv_mu, *pa[:4], *ca, *pb[:4], *cb)
+            sun_l, sun_a, sky_a, sky_l = sun_l + d[0], sun_a + d[1], sky_a + d[2], sky_l + d[3]
+        out.append((sun_l, sun_a, sky_a, m.select(has_layer, sky_l / m.maximum(dry, 1e-30), 1.0)))
     return out

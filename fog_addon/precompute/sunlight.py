@@ -103,18 +103,16 @@ def _is_rgb(value):
 
 def sky_seen(m, day, origin, direction):
     """The fraction of the World seen along a ray from ``origin`` that meets no surface (unit ``direction``):
-    ``daylight.sky_transmittance`` (0 for a ray that points down: it would meet the ground).  The air takes nothing
-    from the World: its light and its extinction are in the sky the World shows."""
-    return daylight.sky_transmittance(m, _z(m, origin) - day.ground, _z(m, direction), *_layer(day))
+    ``daylight.sky_transmittance`` (0 for a ray that points down: it would meet the ground); with air RGB, through
+    both to infinity."""
+    if day.air is None:
+        return daylight.sky_transmittance(m, _z(m, origin) - day.ground, _z(m, direction), *_layer(day))
+    return view_transmittance(m, day, origin, direction, daylight.UNBOUNDED)
 
 
 def _tag(value):
     """A number as a node group's name takes it (no '.': Blender's '.001' copies are told by it)."""
     return f"{value:.6g}".replace(".", "p").replace("-", "m").replace("+", "")
-
-
-def _is_sky(length):
-    return isinstance(length, (int, float)) and length >= daylight.UNBOUNDED
 
 
 def ray_glow(m, day, origin, direction, length):
@@ -123,10 +121,10 @@ def ray_glow(m, day, origin, direction, length):
     ``daylight.sky_airlight``; ``length`` model.FAR for a ray to the sky.  Each is one shared sub-program per g
     (``m.group``: a node group built once per file, so a rebuild of the fog does not build its nodes again).
 
-    With air, on a segment that ends on a surface (aerial perspective, ``daylight.air_glow``): the air's Rayleigh
-    scattering of the sun and of the sky along the segment, and the layer's glow dimmed by the air in front of it
-    (the layer's sun integral with the air over the one without, applied to its sky glow too).  A ray to the sky
-    gets the layer's glow alone: the World shows the sky with its air."""
+    With air (``daylight.air_glow``, per colour channel): the sun's scattering by the layer (Henyey-Greenstein) and
+    by the air (Rayleigh), the sun reaching each point through both; the air's scattering of the sky; and the
+    layer's exact sky glow times the air's share of it (its dimming of the sky's light and of the glow on its way
+    to the camera)."""
     pz, vz = _z(m, origin) - day.ground, _z(m, direction)
     args = _layer(day)
     g = float(day.g)
@@ -135,7 +133,7 @@ def ray_glow(m, day, origin, direction, length):
     sky = m.group(f"daylight sky {tag}", lambda mm, *a: daylight.sky_airlight(mm, *a, albedo=1.0, g=g),
                   pz, vz, length, *args)
     air = air_channels(m, day)
-    if air is None or _is_sky(length):
+    if air is None:
         sun = m.group(f"daylight sun {tag}", lambda mm, *a: daylight.sun_airlight(mm, *a, albedo=1.0, g=g),
                       pz, vz, length, mu_s, cos_theta, *args)
         return _albedo(m, day, m.scale(day.sun_irradiance, sun) + m.scale(day.sky_radiance, sky))
@@ -144,18 +142,17 @@ def ray_glow(m, day, origin, direction, length):
     p_r = m.select(up, daylight.rayleigh_phase(m, cos_theta), 0.0)
     albedo = [m.dot(day.albedo, axis) for axis in AXES] if _is_rgb(day.albedo) else [day.albedo] * 3
     top, falloff, h_air = float(day.top), float(day.falloff), float(day.air_height)
-    name = "daylight air " + " ".join(_tag(v) for v in (top, falloff, h_air))
+    name = "daylight air " + " ".join(_tag(v) for v in (top, falloff, h_air, g))
 
     def kernel(mm, pz_, vz_, length_, mu_, beta_, *b):
-        return tuple(v for channel in daylight.air_glow(mm, pz_, vz_, length_, mu_, beta_, top, falloff, b, h_air)
+        return tuple(v for channel in daylight.air_glow(mm, pz_, vz_, length_, mu_, beta_, top, falloff, b, h_air, g)
                      for v in channel)
     flat = m.group(name, kernel, pz, vz, length, mu_s, day.beta, *air)
     suns, skies = [], []
     for a, k in zip(albedo, range(3)):
-        sun_l, sun_a, sky_a, view = flat[4 * k:4 * k + 4]
-        dimmed = sun_l / m.maximum(view, 1e-30)   # the air's dimming of the layer's glow (1 without air)
+        sun_l, sun_a, sky_a, sky_ratio = flat[4 * k:4 * k + 4]
         suns.append((a * p_l) * sun_l + p_r * sun_a)
-        skies.append(a * (sky * dimmed) + sky_a)
+        skies.append(a * (sky * sky_ratio) + sky_a)
     return day.sun_irradiance * m.combine(*suns) + day.sky_radiance * m.combine(*skies)
 
 
@@ -177,15 +174,28 @@ def direct_dimming(m, day, point, normal):
     (``daylight.sky_tilted_irradiance``), weighted by their fog-free irradiances on it, E_sun max(n.s, 0) and
     pi L_sky (1 + n_z) / 2.  One factor for the user's shader, which sums both lights: exact
     where one of them dominates or the two transmittances agree; a point in the sun's shadow gets the weighted
-    factor, not the sky's alone.  The air dims neither (the Sun light and the World are the light that arrives)."""
+    factor, not the sky's alone.  With air RGB: both lights through the layer's and the air's column (the direct
+    sky light depends on the column alone, ``daylight.tilted_irradiance_of_column``)."""
     z = _z(m, point) - day.ground
     args = _layer(day)
     w_sun = _grey(m, day.sun_irradiance) * m.maximum(m.dot(normal, day.sun), 0.0)
     sky = _grey(m, day.sky_radiance)
     nz = _z(m, normal)
-    t_sun = daylight.sun_transmittance(m, z, sun_elevation(m, day), *args)
-    fogged = w_sun * t_sun + sky * daylight.sky_tilted_irradiance(m, z, nz, *args)
-    return (fogged + 1e-30) / (w_sun + sky * (math.pi * 0.5) * (1.0 + nz) + 1e-30)
+    free = w_sun + sky * (math.pi * 0.5) * (1.0 + nz) + 1e-30
+    air = air_channels(m, day)
+    if air is None:
+        t_sun = daylight.sun_transmittance(m, z, sun_elevation(m, day), *args)
+        fogged = w_sun * t_sun + sky * daylight.sky_tilted_irradiance(m, z, nz, *args)
+        return (fogged + 1e-30) / free
+    mu_s = sun_elevation(m, day)
+    c_l, c_a = daylight.column_depth(m, z, *args), daylight.air_column_depth(m, z, 1.0, day.air_height)
+    up = m.less(0.0, mu_s)
+    out = []
+    for b in air:
+        c = c_l + b * c_a
+        t_sun = m.select(up, daylight.exp_neg(m, c / m.maximum(mu_s, daylight.MIN_MU)), 0.0)
+        out.append((w_sun * t_sun + sky * daylight.tilted_irradiance_of_column(m, c, nz) + 1e-30) / free)
+    return m.combine(*out)
 
 
 # --- the fog light on surfaces: an irradiance map per height -------------------------------------------------
@@ -219,11 +229,14 @@ def table_height(top, falloff):
     return max(float(top) + FALLOFF_SPAN * float(falloff), 1e-6)
 
 
-def table_spec(beta, top, falloff, sun, g):
-    """The TableSpec of the fog light's irradiance map for a layer (1/unit, units) and sun direction (unit vector)."""
+def table_spec(beta, top, falloff, sun, g, air=None):
+    """The TableSpec of the fog light's irradiance map for a layer (1/unit, units) and sun direction (unit vector);
+    ``air``: None, or (one channel's air extinction at the ground 1/unit, its scale height units, the layer's albedo
+    in that channel) for that channel's map with air (``bake_fog_light``)."""
     s = ", ".join(f"{float(c):+.4f}" for c in sun)
+    a = "" if air is None else ", air " + ", ".join(f"{float(v):.6g}" for v in air)
     return tables.TableSpec(f"AnalyticFog Daylight Fog Light (beta {float(beta):.6g}, top {float(top):.6g}, "
-                            f"H {float(falloff):.6g}, sun {s}, g {float(g):+.3f})", Z_COUNT, TABLE_ROWS,
+                            f"H {float(falloff):.6g}, sun {s}, g {float(g):+.3f}{a})", Z_COUNT, TABLE_ROWS,
                             g=float(g), channels=4)
 
 
@@ -242,7 +255,7 @@ def peak_irradiance(g, cos_ns):
     return total / math.pi
 
 
-def bake_fog_light(beta, top, falloff, sun, g):
+def bake_fog_light(beta, top, falloff, sun, g, air=None):
     """(TABLE_ROWS, Z_COUNT, 4) float32: the fog light's irradiance map (per unit albedo, over pi) at each height
     z_k = k / (Z_COUNT - 1) ``table_height``.  Coefficient k = 4 row + channel:
 
@@ -255,7 +268,15 @@ def bake_fog_light(beta, top, falloff, sun, g):
     I(mu_s)) p(d.s), the first term's irradiance is I_s C_g(n.s) exactly (Funk-Hecke) and the second, which
     vanishes at the phase's peak, is smooth enough for l <= 2 (sum_k c_k Y_k(n)).  L(d) is ``ray_glow``'s per-unit
     sun and sky terms along d from the point, to the ground (the field's own geometry) or to the sky; numerical
-    quadrature: BAKE_MU Gauss-Legendre nodes per hemisphere x BAKE_PHI azimuths."""
+    quadrature: BAKE_MU Gauss-Legendre nodes per hemisphere x BAKE_PHI azimuths.
+
+    With ``air`` (b, h_air, a: one colour channel's air extinction at the ground, its scale height, the layer's
+    albedo in that channel) the map is that channel's, both species' light, the albedos folded in: the sun's field
+    a p_HG I_l(d) + p_R I_a(d) (``daylight.air_glow``; the peak taken out of the layer's part as above, I_s the
+    layer's integral along the sun) and the sky's a L_l(d) r(d) + L_a(d) (the layer's exact sky glow times the
+    air's share of it, and the air's own)."""
+    if air is not None:
+        return _bake_fog_light_air(beta, top, falloff, sun, g, *air)
     sun = np.asarray(sun, float) / np.linalg.norm(sun)
     m = _numpy_ops()
     x, w = np.polynomial.legendre.leggauss(BAKE_MU)
@@ -285,9 +306,59 @@ def bake_fog_light(beta, top, falloff, sun, g):
     return out.reshape(TABLE_ROWS, 4, Z_COUNT).transpose(0, 2, 1).astype(np.float32)
 
 
+def _bake_grid():
+    """The bake's directions: (mu, d (mu, phi, 3), dw (mu, phi) solid-angle weights)."""
+    x, w = np.polynomial.legendre.leggauss(BAKE_MU)
+    mu = np.concatenate([0.5 * (x - 1.0), 0.5 * (x + 1.0)])
+    wmu = np.concatenate([0.5 * w, 0.5 * w])
+    phi = (np.arange(BAKE_PHI) + 0.5) * (2.0 * math.pi / BAKE_PHI)
+    mu_g, phi_g = np.meshgrid(mu, phi, indexing="ij")
+    s = np.sqrt(np.maximum(1.0 - mu_g * mu_g, 0.0))
+    d = np.stack([s * np.cos(phi_g), s * np.sin(phi_g), mu_g], axis=-1)
+    return mu_g, d, (wmu[:, None] * (2.0 * math.pi / BAKE_PHI)) * np.ones_like(phi_g)
+
+
+def _bake_fog_light_air(beta, top, falloff, sun, g, b, h_air, albedo):
+    """``bake_fog_light`` of one colour channel with air (its docstring)."""
+    sun = np.asarray(sun, float) / np.linalg.norm(sun)
+    m = _numpy_ops()
+    mu_g, d, dw = _bake_grid()
+    basis = np.stack(sh_basis(m, d), axis=0)
+    a_l = np.array([CLAMPED_COSINE[_sh_order(k)] for k in range(SH_COUNT)]) / math.pi
+    cos = d @ sun
+    p_l, p_r = albedo * daylight.hg_phase(m, g, cos), daylight.rayleigh_phase(m, cos)
+    out = np.zeros((TABLE_ROWS * 4, Z_COUNT))
+    args = (beta, top, falloff)
+    lit = 1.0 if sun[2] > 0.0 else 0.0
+    for k, z in enumerate(np.linspace(0.0, table_height(top, falloff), Z_COUNT)):
+        length = np.where(mu_g < 0.0, z / np.maximum(-mu_g, 1e-12), daylight.UNBOUNDED)
+        sun_l, sun_a, sky_a, ratio = daylight.air_glow(m, z, mu_g, length, sun[2], *args, (b, b, b), h_air, g)[0]
+        i_s = float(daylight.air_glow(m, np.float64(z), np.float64(sun[2]), daylight.UNBOUNDED, sun[2], *args,
+                                      (b, b, b), h_air, g)[0][0])
+        l_sky = daylight.sky_airlight(m, z, mu_g, length, *args, albedo=1.0, g=g)
+        fields = (lit * (p_l * (sun_l - i_s) + p_r * sun_a), albedo * l_sky * ratio + sky_a)
+        for j, field in enumerate(fields):
+            out[j * SH_COUNT:(j + 1) * SH_COUNT, k] = a_l * np.sum(basis * (field * dw), axis=(1, 2))
+        out[2 * SH_COUNT, k] = lit * albedo * i_s
+    out[2 * SH_COUNT + 1] = peak_irradiance(g, np.linspace(-1.0, 1.0, Z_COUNT))
+    return out.reshape(TABLE_ROWS, 4, Z_COUNT).transpose(0, 2, 1).astype(np.float32)
+
+
 def _numpy_ops():
     from .ops import NumpyOps
     return NumpyOps()
+
+
+def _irradiance(m, spec, x, basis, normal, day, part=0):
+    """One map's irradiance over pi at table coordinate x for a normal's SH ``basis``: the sun's (``part`` 0: its
+    peak I_s C_g(n.s) plus its residual) or the sky's (1), clamped at 0."""
+    total = 0.0
+    for k in range(SH_COUNT):
+        total = total + _coefficient(m, spec, x, part * SH_COUNT + k) * basis[k]
+    if part == 0:
+        total = total + _coefficient(m, spec, x, 2 * SH_COUNT) * _coefficient(
+            m, spec, 0.5 * (m.dot(normal, day.sun) + 1.0), 2 * SH_COUNT + 1)
+    return m.maximum(total, 0.0)
 
 
 def _coefficient(m, spec, x, i):
@@ -300,9 +371,14 @@ def fog_light(m, spec, day, point, normal):
     at the point's height: E_sun (I_s C_g(n.s) + the sun's residual map) + L_sky (the sky's map), each map
     clamped at 0 (an order-2 map rings below 0 facing away from a peaked field); times the layer's albedo.  Times a
     Lambertian albedo: the radiance the surface reflects.  The map is the layer's alone: the air's own fog light on
-    surfaces and its dimming of the layer's are left out."""
+    surfaces (its scattered sunlight and skylight) and its dimming of the layer's are left out (measured in
+    docs/measurements/2026-11-27-air.md)."""
     x = m.clamp01((_z(m, point) - day.ground) * (1.0 / table_height(day.top, day.falloff)))
     basis = sh_basis(m, normal)
+    if isinstance(spec, tuple):   # with air: one map per colour channel, the albedos in it
+        sun_e, sky_l = ([m.dot(v, axis) for axis in AXES] for v in (day.sun_irradiance, day.sky_radiance))
+        return m.combine(*(e * _irradiance(m, c, x, basis, normal, day) + l * _irradiance(m, c, x, basis, normal, day, 1)
+                           for c, e, l in zip(spec, sun_e, sky_l)))
     maps = []
     for part in range(2):
         total = 0.0
