@@ -308,6 +308,12 @@ MUTATIONS = [
              "        dimmed = sun_l / m.maximum(view, 1e-30)",
              "        dimmed, sun_l = 1.0, view",
              ("tests/test_air_kernels.py::test_ray_glow_with_air_against_quadrature",)),
+    Mutation("air_fog_light_layer_only", "air: the fog light on surfaces without the air's own scattered sunlight "
+             "and skylight",
+             "fog_addon/precompute/sunlight.py",
+             "        fields = (lit * (p_l * (sun_l - i_s) + p_r * sun_a), albedo * l_sky * ratio + sky_a)",
+             "        fields = (lit * (p_l * (sun_l - i_s)), albedo * l_sky * ratio)",
+             ("tests/test_sunlight.py::test_fog_light_with_air_against_sphere_quadrature",)),
     Mutation("daylight_sun_undimmed", "daylight: the sun's light on surfaces is not dimmed by the layer above them",
              "fog_addon/precompute/sunlight.py",
              "    t_sun = daylight.sun_transmittance(m, z, sun_elevation(m, day), *args)",
