@@ -215,3 +215,21 @@ def glass_note(materials, objects):
             "(straight through the pane) and in sharp mirrors is shaded along the path (a mirror shows lamps "
             "blurred by about 2 degrees); rough glass, Principled transmission, glass mixed with other shaders, "
             "the OSL and Compositor methods and EEVEE show only the fog in front of the first surface")
+
+
+EEVEE_CLIP_RATIO = 1e7   # EEVEE's depth loses its way beyond this clip end / clip start (blender-facts.md)
+
+
+def clip_note(scene, method_name):
+    """A note when EEVEE's camera clip range is too wide for its depth: clip end / clip start beyond
+    EEVEE_CLIP_RATIO gave a black World (any node set-up) and, with the Compositor method, NaN on far ground
+    (its Depth pass, from which the pixel's position is taken); None otherwise."""
+    cam = scene.camera
+    if scene.render.engine != "BLENDER_EEVEE" or cam is None or cam.type != "CAMERA":
+        return None
+    ratio = cam.data.clip_end / max(cam.data.clip_start, 1e-12)
+    if ratio <= EEVEE_CLIP_RATIO:
+        return None
+    where = " and the fog's light (NaN where its depth fails)" if method_name == "compositor" else ""
+    return (f"{cam.name}: its clip end is {ratio:.2g} x its clip start: EEVEE's depth fails beyond "
+            f"{EEVEE_CLIP_RATIO:.0e} (a black World{where}); raise Clip Start")

@@ -467,6 +467,7 @@ def not_modelled(scene, spec, lights, materials, method=None):
     notes = [*caveats.shadow_notes(scene, lights, spec.beta_per_unit, max(scene_size(scene), 1e-6), casting,
                                    None if spec.shafts else "Light Shafts is off"),
              caveats.glass_note(materials, scene.objects),
+             caveats.clip_note(scene, getattr(method, "name", method)),
              *caveats.multiple_notes(lights, spec.multiple_scattering, getattr(method, "name", method),
                                      view.has_shape,
                                      _optical_distance(scene, spec)),
