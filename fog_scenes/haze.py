@@ -370,7 +370,8 @@ def reference_name(case, samples, seeds, resolution=RESOLUTION):
     """File name of a cached fog reference, its parameters in it."""
     w, hh = resolution
     return (f"{NAME}_V{VISIBILITY_M / 1000:g}km_H{HAZE['H']:g}_g{HAZE['g']:g}_a{HAZE['albedo']:g}"
-            f"_air{air(case):g}_box{FOG_BOX['half_width_m'] / 1000:g}km_vb0_{w}x{hh}_{int(samples)}spp_x{int(seeds)}.exr")
+            f"_air{air(case):g}_box{FOG_BOX['half_width_m'] / 1000:g}km_vb0_{w}x{hh}_{int(samples)}spp"
+            f"_x{int(seeds)}.exr")
 
 
 def clear_name(samples, seeds, resolution=RESOLUTION):

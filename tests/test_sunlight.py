@@ -231,8 +231,11 @@ def test_fog_light_with_air_against_sphere_quadrature():
             n = np.array(n, float) / np.linalg.norm(n)
             cos = np.maximum(d @ n, 0.0) / math.pi
             sun, sky = float((fields[0] * cos).sum()), float((fields[1] * cos).sum())
-            got = [float(sl.fog_light(mm, (spec,) * 3, sl.Daylight(beta, top, falloff, 0.0, SUN, np.full(3, e), np.full(
-                3, l), g, 0.9, (b, b, b), dl.RAYLEIGH_HEIGHT), np.array([0.0, 0.0, z]), n)[2]) for e, l in ((1, 0), (0, 1))]
+            got = []
+            for e_sun, l_sky in ((1.0, 0.0), (0.0, 1.0)):
+                day = sl.Daylight(beta, top, falloff, 0.0, SUN, np.full(3, e_sun), np.full(3, l_sky), g, 0.9, (b, b, b),
+                                  dl.RAYLEIGH_HEIGHT)
+                got.append(float(sl.fog_light(mm, (spec,) * 3, day, np.array([0.0, 0.0, z]), n)[2]))
             errors.append(abs(got[0] - sun) + abs(got[1] - sky))
             scale = max(scale, sun + sky)
         worst.append(max(errors) / scale)

@@ -639,10 +639,18 @@ def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=
 
 def _daylight(m, day, table, camera, direction, position, normal, reflectance, d_vp, t_vp, cover):
     """The sun's and the sky's light in a fog layer at a pixel (albedos included): ``groups.daylight_light`` where the
-    pixel sees a surface, the glow to the sky (``sunlight.ray_glow``) where it does not."""
-    to_surface = groups.daylight_light(m, day, table, camera, direction, position, normal, reflectance, d_vp, t_vp)
-    to_sky = sunlight.ray_glow(m, day, camera, direction, model.FAR)
-    return m.scale(to_surface, cover) + m.scale(to_sky, 1.0 - cover)
+    pixel sees a surface, the glow to the sky (``sunlight.ray_glow``) where it does not.  With air the glow is
+    evaluated once, to the surface where it covers most of the pixel and to the sky elsewhere (its kernel is the
+    costliest part of the picture: a pixel on a silhouette takes one side's glow)."""
+    if day.air is None:
+        to_surface = groups.daylight_light(m, day, table, camera, direction, position, normal, reflectance, d_vp,
+                                           t_vp)
+        to_sky = sunlight.ray_glow(m, day, camera, direction, model.FAR)
+        return m.scale(to_surface, cover) + m.scale(to_sky, 1.0 - cover)
+    surface = m.less(0.5, cover)
+    glow = sunlight.ray_glow(m, day, camera, direction, m.select(surface, d_vp, model.FAR))
+    reflected = sunlight.times(m, reflectance * sunlight.fog_light(m, table, day, position, normal), t_vp)
+    return glow + m.scale(reflected, cover)
 
 
 def build_fog_group(scene, lights, models, images, windows=None, partial=False, shafted=None, emitters=None,

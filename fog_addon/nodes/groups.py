@@ -582,7 +582,8 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     layer's, and the user's shader on every ray takes the sun's and the sky's dimming (``sunlight.direct_dimming``);
     with ``day_table`` (the fog light's TableSpec, its image in ``images``) camera rays also get the sun's and the
     sky's glow and their fog light on the surface (``daylight_light``); ``day_dims`` False leaves the sun's and the
-    sky's dimming to the compositor (``comp_fog.build_fog_group``: once per pixel).  The lights sit in bundle groups (``_bundles``, ``build_surface_bundle``).
+    sky's dimming to the compositor (``comp_fog.build_fog_group``: once per pixel).  The lights sit in bundle groups
+    (``_bundles``, ``build_surface_bundle``).
 
     Why closures: Cycles' SVM emits a shader's value nodes in the order of
     their ids, so one colour summed over the lights keeps every light's values
@@ -956,9 +957,10 @@ def build_world_bundle(images, first, lights, models, with_passes, chained):
 
 def daylight_light(m, day, table, camera, direction, position, normal, reflectance, length, t_vp):
     """The sun's and the sky's light in a fog layer on a camera ray that meets a surface, the layer's and the air's
-    albedo included (``precompute/sunlight.py``): the glow along the ray plus the fog light the surface reflects, dimmed on its way
-    (Sun et al. 2005 Eq. 19's L_a; the reflectance taken as Lambertian: the diffuse plus the specular albedo
-    times the irradiance over pi).  The Compositor's per pixel (``comp_fog._daylight``) and the Surface group's."""
+    albedo included (``precompute/sunlight.py``): the glow along the ray plus the fog light the surface reflects,
+    dimmed on its way (Sun et al. 2005 Eq. 19's L_a; the reflectance taken as Lambertian: the diffuse plus the
+    specular albedo times the irradiance over pi).  The Compositor's per pixel (``comp_fog._daylight``) and the
+    Surface group's."""
     return sunlight.ray_glow(m, day, camera, direction, length) + sunlight.times(
         m, reflectance * sunlight.fog_light(m, table, day, position, normal), t_vp)
 

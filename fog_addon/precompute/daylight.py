@@ -616,20 +616,21 @@ def air_glow(m, pz, vz, length, mu_s, beta0, h0, H, air, h_air, g=0.0):
         sky_a = int beta_a S_R(C(z(t)), v_z) e^{-tau_l(t) - tau_a(t)} dt   (``rayleigh_sky_source``),
 
     and ``sky_ratio``, the air's share of the layer's sky glow: the layer's sky glow with the air (its source under
-    C_l + C_a, the Henyey-Greenstein g's ring means at RATIO_NODES elevations: ``layer_sky_rings``; a forward
+    C_l + C_a, with the Henyey-Greenstein g's ring means at RATIO_NODES elevations, ``layer_sky_rings``: a forward
     scattering haze sees the sky near the horizon, through long paths of air), dimmed along the segment by both,
-    over the same without it, both by the same panels
-    (so their errors cancel: 1 at zero air) and the latter's rest beyond them exact (``sky_airlight``); 1
-    where the segment meets no layer.  The caller applies it to the layer's exact sky glow (any g).  Returns [(sun_l, sun_a, sky_a, sky_ratio)] per
-    channel.  Quadrature: panels whose ends are AIR_PANELS + 1 log-spaced distances from AIR_FIRST mean free paths
-    at the camera to the integrated length, with the crossings of the heights AIR_CUTS falloff lengths above the
-    layer's top inserted (the top's alone for a hard top); on each panel the exponent is taken linear in each
-    species' optical depth (exact where both are uniform, and for the layer alone: Psi is linear in tau_l
-    without air) and a sky source as e^{-C} (with the exponent) times a linear factor.  The integrated length
-    stops where the air alone has dimmed the ray by e^{-HAZE_DEPTH}, or HAZE_HEIGHTS air scale heights above the
-    camera (of the air's mean channel).  Channel-free quantities are computed once per panel end (node groups:
-    ``_air_point``), the channels' per end and per panel (``_air_channel_point``, ``_air_panel``).  Measured
-    against scipy in docs/measurements/2026-11-27-air-kernels.md."""
+    over the same without it; both by the same panels (their errors cancel: 1 at zero air), the latter's rest
+    beyond them exact (``sky_airlight``); 1 where the segment meets no layer.  The caller applies it to the layer's
+    exact sky glow (any g).  Returns [(sun_l, sun_a, sky_a, sky_ratio)] per channel.
+
+    Quadrature: panels whose ends are AIR_PANELS + 1 log-spaced distances from AIR_FIRST mean free paths at the
+    camera to the integrated length, with the crossings of the heights AIR_CUTS falloff lengths above the layer's
+    top inserted (the top's alone for a hard top); on each panel the exponent is taken linear in each species'
+    optical depth (exact where both are uniform, and for the layer alone: Psi is linear in tau_l without air) and
+    a sky source as e^{-C} (with the exponent) times a linear factor.  The integrated length stops where the air
+    alone has dimmed the ray by e^{-HAZE_DEPTH}, or HAZE_HEIGHTS air scale heights above the camera (of the air's
+    mean channel).  Channel-free quantities are computed once per panel end (node groups: ``_air_point``), the
+    channels' per end and per panel (``_air_channel_point``, ``_air_panel``).  Measured against scipy in
+    docs/measurements/2026-11-27-air.md."""
     inv_mu = 1.0 / m.maximum(mu_s, MIN_MU)
     air = tuple(air)
     a0 = (air[0] + air[1] + air[2]) * (1.0 / 3.0) * exp_neg(m, m.maximum(pz, 0.0) / h_air)

@@ -377,8 +377,8 @@ def fog_light(m, spec, day, point, normal):
     basis = sh_basis(m, normal)
     if isinstance(spec, tuple):   # with air: one map per colour channel, the albedos in it
         sun_e, sky_l = ([m.dot(v, axis) for axis in AXES] for v in (day.sun_irradiance, day.sky_radiance))
-        return m.combine(*(e * _irradiance(m, c, x, basis, normal, day) + l * _irradiance(m, c, x, basis, normal, day, 1)
-                           for c, e, l in zip(spec, sun_e, sky_l)))
+        return m.combine(*(e * _irradiance(m, c, x, basis, normal, day)
+                           + l * _irradiance(m, c, x, basis, normal, day, 1) for c, e, l in zip(spec, sun_e, sky_l)))
     maps = []
     for part in range(2):
         total = 0.0
