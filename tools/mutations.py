@@ -303,10 +303,11 @@ MUTATIONS = [
              "    return (3.0 / 8.0) * ((1.0 + 0.5 * s) * expint2(m, c) + (vz * vz - 0.5 * s) * expint4(m, c))",
              "    return (1.0 / 2.0) * expint2(m, c)",
              ("tests/test_air_kernels.py::test_rayleigh_sky_source_against_quadrature",)),
-    Mutation("air_layer_glow_undimmed", "air: the fog layer's glow not dimmed by the air in front of it",
+    Mutation("air_layer_sky_undimmed", "air: the fog layer's sky glow not changed by the air (neither the sky's light "
+             "dimmed on its way to the layer nor the glow on its way to the camera)",
              "fog_addon/precompute/sunlight.py",
-             "        dimmed = sun_l / m.maximum(view, 1e-30)",
-             "        dimmed, sun_l = 1.0, view",
+             "        skies.append(a * (sky * sky_ratio) + sky_a)",
+             "        skies.append(a * sky + sky_a)",
              ("tests/test_air_kernels.py::test_ray_glow_with_air_against_quadrature",)),
     Mutation("air_fog_light_layer_only", "air: the fog light on surfaces without the air's own scattered sunlight "
              "and skylight",
