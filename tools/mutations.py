@@ -288,8 +288,8 @@ MUTATIONS = [
              ("tests/test_sunlight.py::test_sky_tilted_irradiance_against_quad",)),
     Mutation("daylight_fog_light_no_peak", "daylight: the fog light on surfaces without the sun's phase peak",
              "fog_addon/precompute/sunlight.py",
-             "    peak = _coefficient(m, spec, x, 2 * SH_COUNT) * _coefficient(",
-             "    peak = 0.0 * _coefficient(m, spec, x, 2 * SH_COUNT) * _coefficient(",
+             "        peak = _coefficient(m, spec, x, 2 * SH_COUNT) * _coefficient(",
+             "        peak = 0.0 * _coefficient(m, spec, x, 2 * SH_COUNT) * _coefficient(",
              ("tests/test_sunlight.py::test_fog_light_against_sphere_quadrature",)),
     Mutation("driver_keyframes", "drivers: the F-Curve's (0, 0), (1, 1) keyframes kept (Blender snaps a driven value "
              "within 1e-4 of them: a 40 km haze's density 9.8e-5 /m driven as 0)",
@@ -312,8 +312,9 @@ MUTATIONS = [
     Mutation("air_fog_light_layer_only", "air: the fog light on surfaces without the air's own scattered sunlight "
              "and skylight",
              "fog_addon/precompute/sunlight.py",
-             "        fields = (lit * (p_l * (sun_l - i_s) + p_r * sun_a), albedo * l_sky * ratio + sky_a)",
-             "        fields = (lit * (p_l * (sun_l - i_s)), albedo * l_sky * ratio)",
+             "        return (lit * (p_l * (sun_l - i_s) + p_r * sun_a), albedo * l_sky * ratio + sky_a, "
+             "lit * albedo * i_s)",
+             "        return (lit * (p_l * (sun_l - i_s)), albedo * l_sky * ratio, lit * albedo * i_s)",
              ("tests/test_sunlight.py::test_fog_light_with_air_against_sphere_quadrature",)),
     Mutation("daylight_sun_undimmed", "daylight: the sun's light on surfaces is not dimmed by the layer above them",
              "fog_addon/precompute/sunlight.py",

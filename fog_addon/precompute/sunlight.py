@@ -279,31 +279,17 @@ def bake_fog_light(beta, top, falloff, sun, g, air=None):
         return _bake_fog_light_air(beta, top, falloff, sun, g, *air)
     sun = np.asarray(sun, float) / np.linalg.norm(sun)
     m = _numpy_ops()
-    x, w = np.polynomial.legendre.leggauss(BAKE_MU)
-    mu = np.concatenate([0.5 * (x - 1.0), 0.5 * (x + 1.0)])
-    wmu = np.concatenate([0.5 * w, 0.5 * w])
-    phi = (np.arange(BAKE_PHI) + 0.5) * (2.0 * math.pi / BAKE_PHI)
-    mu_g, phi_g = np.meshgrid(mu, phi, indexing="ij")
-    s = np.sqrt(np.maximum(1.0 - mu_g * mu_g, 0.0))
-    d = np.stack([s * np.cos(phi_g), s * np.sin(phi_g), mu_g], axis=-1)
-    dw = (wmu[:, None] * (2.0 * math.pi / BAKE_PHI)) * np.ones_like(phi_g)
-    basis = np.stack(sh_basis(m, d), axis=0)                           # (9, mu, phi)
-    a_l = np.array([CLAMPED_COSINE[_sh_order(k)] for k in range(SH_COUNT)]) / math.pi
+    mu_g, d, dw = _bake_grid()
     phase = daylight.hg_phase(m, g, d @ sun)
-    out = np.zeros((TABLE_ROWS * 4, Z_COUNT))
-    heights = np.linspace(0.0, table_height(top, falloff), Z_COUNT)
     args = (beta, top, falloff)
-    for k, z in enumerate(heights):
-        length = np.where(mu_g < 0.0, z / np.maximum(-mu_g, 1e-12), daylight.UNBOUNDED)
+
+    def fields(z, length):
         i_d = daylight.sun_airlight(m, z, mu_g, length, sun[2], 1.0, *args, albedo=1.0, g=0.0) * (4.0 * math.pi)
         i_s = daylight.sun_airlight(m, z, sun[2], daylight.UNBOUNDED, sun[2], 1.0, *args, albedo=1.0,
                                     g=0.0) * (4.0 * math.pi)
         l_sky = daylight.sky_airlight(m, z, mu_g, length, *args, albedo=1.0, g=g)
-        for j, field in enumerate(((i_d - i_s) * phase, l_sky)):
-            out[j * SH_COUNT:(j + 1) * SH_COUNT, k] = a_l * np.sum(basis * (field * dw), axis=(1, 2))
-        out[2 * SH_COUNT, k] = i_s
-    out[2 * SH_COUNT + 1] = peak_irradiance(g, np.linspace(-1.0, 1.0, Z_COUNT))
-    return out.reshape(TABLE_ROWS, 4, Z_COUNT).transpose(0, 2, 1).astype(np.float32)
+        return (i_d - i_s) * phase, l_sky, i_s
+    return _bake_map(m, top, falloff, g, mu_g, d, dw, fields)
 
 
 def _bake_grid():
@@ -318,30 +304,40 @@ def _bake_grid():
     return mu_g, d, (wmu[:, None] * (2.0 * math.pi / BAKE_PHI)) * np.ones_like(phi_g)
 
 
+def _bake_map(m, top, falloff, g, mu_g, d, dw, fields):
+    """The (TABLE_ROWS, Z_COUNT, 4) map of ``bake_fog_light``: at each height z, ``fields(z, length)`` gives the
+    sun's residual field and the sky's field on the grid (d, dw; ``length`` to the ground or the sky) and the peak's
+    I_s; their SH irradiance coefficients, I_s and C_g go to the rows."""
+    basis = np.stack(sh_basis(m, d), axis=0)                           # (9, mu, phi)
+    a_l = np.array([CLAMPED_COSINE[_sh_order(k)] for k in range(SH_COUNT)]) / math.pi
+    out = np.zeros((TABLE_ROWS * 4, Z_COUNT))
+    for k, z in enumerate(np.linspace(0.0, table_height(top, falloff), Z_COUNT)):
+        length = np.where(mu_g < 0.0, z / np.maximum(-mu_g, 1e-12), daylight.UNBOUNDED)
+        *maps, i_s = fields(z, length)
+        for j, field in enumerate(maps):
+            out[j * SH_COUNT:(j + 1) * SH_COUNT, k] = a_l * np.sum(basis * (field * dw), axis=(1, 2))
+        out[2 * SH_COUNT, k] = i_s
+    out[2 * SH_COUNT + 1] = peak_irradiance(g, np.linspace(-1.0, 1.0, Z_COUNT))
+    return out.reshape(TABLE_ROWS, 4, Z_COUNT).transpose(0, 2, 1).astype(np.float32)
+
+
 def _bake_fog_light_air(beta, top, falloff, sun, g, b, h_air, albedo):
     """``bake_fog_light`` of one colour channel with air (its docstring)."""
     sun = np.asarray(sun, float) / np.linalg.norm(sun)
     m = _numpy_ops()
     mu_g, d, dw = _bake_grid()
-    basis = np.stack(sh_basis(m, d), axis=0)
-    a_l = np.array([CLAMPED_COSINE[_sh_order(k)] for k in range(SH_COUNT)]) / math.pi
     cos = d @ sun
     p_l, p_r = albedo * daylight.hg_phase(m, g, cos), daylight.rayleigh_phase(m, cos)
-    out = np.zeros((TABLE_ROWS * 4, Z_COUNT))
     args = (beta, top, falloff)
     lit = 1.0 if sun[2] > 0.0 else 0.0
-    for k, z in enumerate(np.linspace(0.0, table_height(top, falloff), Z_COUNT)):
-        length = np.where(mu_g < 0.0, z / np.maximum(-mu_g, 1e-12), daylight.UNBOUNDED)
+
+    def fields(z, length):
         sun_l, sun_a, sky_a, ratio = daylight.air_glow(m, z, mu_g, length, sun[2], *args, (b, b, b), h_air, g)[0]
         i_s = float(daylight.air_glow(m, np.float64(z), np.float64(sun[2]), daylight.UNBOUNDED, sun[2], *args,
                                       (b, b, b), h_air, g)[0][0])
         l_sky = daylight.sky_airlight(m, z, mu_g, length, *args, albedo=1.0, g=g)
-        fields = (lit * (p_l * (sun_l - i_s) + p_r * sun_a), albedo * l_sky * ratio + sky_a)
-        for j, field in enumerate(fields):
-            out[j * SH_COUNT:(j + 1) * SH_COUNT, k] = a_l * np.sum(basis * (field * dw), axis=(1, 2))
-        out[2 * SH_COUNT, k] = lit * albedo * i_s
-    out[2 * SH_COUNT + 1] = peak_irradiance(g, np.linspace(-1.0, 1.0, Z_COUNT))
-    return out.reshape(TABLE_ROWS, 4, Z_COUNT).transpose(0, 2, 1).astype(np.float32)
+        return (lit * (p_l * (sun_l - i_s) + p_r * sun_a), albedo * l_sky * ratio + sky_a, lit * albedo * i_s)
+    return _bake_map(m, top, falloff, g, mu_g, d, dw, fields)
 
 
 def _numpy_ops():
@@ -356,8 +352,9 @@ def _irradiance(m, spec, x, basis, normal, day, part=0):
     for k in range(SH_COUNT):
         total = total + _coefficient(m, spec, x, part * SH_COUNT + k) * basis[k]
     if part == 0:
-        total = total + _coefficient(m, spec, x, 2 * SH_COUNT) * _coefficient(
+        peak = _coefficient(m, spec, x, 2 * SH_COUNT) * _coefficient(
             m, spec, 0.5 * (m.dot(normal, day.sun) + 1.0), 2 * SH_COUNT + 1)
+        total = total + peak
     return m.maximum(total, 0.0)
 
 
@@ -370,22 +367,13 @@ def fog_light(m, spec, day, point, normal):
     ``normal``, W/(m^2 sr) (RGB), from the baked map (``bake_fog_light``, ``spec`` its TableSpec)
     at the point's height: E_sun (I_s C_g(n.s) + the sun's residual map) + L_sky (the sky's map), each map
     clamped at 0 (an order-2 map rings below 0 facing away from a peaked field); times the layer's albedo.  Times a
-    Lambertian albedo: the radiance the surface reflects.  The map is the layer's alone: the air's own fog light on
-    surfaces (its scattered sunlight and skylight) and its dimming of the layer's are left out (measured in
-    docs/measurements/2026-11-27-air.md)."""
+    Lambertian albedo: the radiance the surface reflects.  With air ``spec`` is three maps, one per colour channel,
+    both species' light and the albedos in them (``bake_fog_light``)."""
     x = m.clamp01((_z(m, point) - day.ground) * (1.0 / table_height(day.top, day.falloff)))
     basis = sh_basis(m, normal)
     if isinstance(spec, tuple):   # with air: one map per colour channel, the albedos in it
         sun_e, sky_l = ([m.dot(v, axis) for axis in AXES] for v in (day.sun_irradiance, day.sky_radiance))
         return m.combine(*(e * _irradiance(m, c, x, basis, normal, day)
                            + l * _irradiance(m, c, x, basis, normal, day, 1) for c, e, l in zip(spec, sun_e, sky_l)))
-    maps = []
-    for part in range(2):
-        total = 0.0
-        for k in range(SH_COUNT):
-            total = total + _coefficient(m, spec, x, part * SH_COUNT + k) * basis[k]
-        maps.append(total)
-    peak = _coefficient(m, spec, x, 2 * SH_COUNT) * _coefficient(
-        m, spec, 0.5 * (m.dot(normal, day.sun) + 1.0), 2 * SH_COUNT + 1)
-    return _albedo(m, day, m.scale(day.sun_irradiance, m.maximum(peak + maps[0], 0.0))
-                   + m.scale(day.sky_radiance, m.maximum(maps[1], 0.0)))
+    return _albedo(m, day, m.scale(day.sun_irradiance, _irradiance(m, spec, x, basis, normal, day))
+                   + m.scale(day.sky_radiance, _irradiance(m, spec, x, basis, normal, day, 1)))
