@@ -84,12 +84,16 @@ def ref_iso_source(c):
     return 0.5 * float(np.exp(_MOMENTS[0](math.log(max(c, 1e-8)))))
 
 
+def ref_air_depth(pz, vz, t, ba):
+    """The air's optical depth from height pz along vz for t metres (closed form of the exponential)."""
+    if vz == 0.0:
+        return ba * math.exp(-max(pz, 0.0) / HA) * t
+    return -ba * math.exp(-pz / HA) * HA * math.expm1(-vz * t / HA) / vz
+
+
 def ref_air(pz, vz, length, mu, b, h0, hh, ba):
     """(sun_l, sun_a, sky_a, sky_ratio) of ``air_glow`` by quad along the segment."""
-    def tau_a(t):
-        if vz == 0.0:
-            return ba * math.exp(-max(pz, 0.0) / HA) * t
-        return -ba * math.exp(-pz / HA) * HA * math.expm1(-vz * t / HA) / vz
+    tau_a = functools.partial(ref_air_depth, pz, vz, ba=ba)
 
     def parts(t):
         z = pz + vz * t
@@ -262,9 +266,12 @@ def test_rayleigh_sky_source_against_quadrature():
 
 def test_air_transmittance_is_both_species():
     """e^{-tau} of a level segment: the layer's beta0 D plus the air's beta_a e^{-z/H} D."""
-    t = float(dl.layer_air_transmittance(m, np.float64(500.0), np.float64(0.0), np.float64(2e4), 1e-4, 1000.0, 0.0,
-                                         33.1e-6, HA))
-    assert t == pytest.approx(math.exp(-(1e-4 + 33.1e-6 * math.exp(-500.0 / HA)) * 2e4), rel=1e-9)
+    from fog_addon.precompute import sunlight
+    day = sunlight.Daylight(1e-4, 1000.0, 0.0, 0.0, np.array([0.0, 0.0, 1.0]), np.ones(3), np.ones(3), 0.0, 1.0,
+                            (5.8e-6, 13.5e-6, 33.1e-6), HA)
+    t = sunlight.view_transmittance(m, day, np.array([0.0, 2e4, 500.0]), np.array([0.0, -1.0, 0.0]), 2e4)
+    for k, b in enumerate((5.8e-6, 13.5e-6, 33.1e-6)):
+        assert t[k] == pytest.approx(math.exp(-(1e-4 + b * math.exp(-500.0 / HA)) * 2e4), rel=1e-9)
 
 
 def _hg_sky_source(c, direction, g, n_mu=64, n_phi=256):
@@ -291,10 +298,7 @@ def ref_pixel_glow(pz, vz, length, sun, cos_theta, b, h0, hh, ba, albedo, e_sun,
     layer_source = ((lambda c: 0.5 * special.expn(2, c)) if g == 0.0 else
                     functools.lru_cache(maxsize=None)(lambda c: _hg_sky_source(c, direction, g)))
 
-    def tau_a(t):
-        if vz == 0.0:
-            return ba * math.exp(-max(pz, 0.0) / HA) * t
-        return -ba * math.exp(-pz / HA) * HA * math.expm1(-vz * t / HA) / vz
+    tau_a = functools.partial(ref_air_depth, pz, vz, ba=ba)
 
     def f(t):
         z = pz + vz * t

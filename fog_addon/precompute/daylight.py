@@ -501,18 +501,6 @@ def air_column_depth(m, z, beta_air, h_air):
     return beta_air * h_air * exp_neg(m, m.maximum(z, 0.0) / h_air)
 
 
-def layer_air_depth(m, pz, vz, length, beta0, h0, H, beta_air, h_air):
-    """Optical depth of a camera segment through the fog layer (``optical_depth``) and the clear air
-    (``exponential_depth``), one colour channel."""
-    return optical_depth(m, pz, vz, length, beta0, h0, H) + exponential_depth(m, pz, vz, length, beta_air, 0.0,
-                                                                             h_air)
-
-
-def layer_air_transmittance(m, pz, vz, length, beta0, h0, H, beta_air, h_air):
-    """e^{-tau} of a camera segment through the layer and the air, one colour channel."""
-    return exp_neg(m, layer_air_depth(m, pz, vz, length, beta0, h0, H, beta_air, h_air))
-
-
 def expint4(m, x):
     """E4(x) = int_0^1 mu^2 e^{-x/mu} dmu = (e^{-x} - x E3(x)) / 3 for x >= 0 (E4(0) = 1/3)."""
     return (exp_neg(m, x) - x * expint3(m, x)) * (1.0 / 3.0)

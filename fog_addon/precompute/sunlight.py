@@ -80,7 +80,7 @@ def _layer(day):
 def view_transmittance(m, day, point, incoming, length):
     """e^{-tau} of the segment from a surface ``point`` towards the camera (unit ``incoming``, ``length`` units):
     ``daylight.transmittance`` (the optical depth is the same read from either end); with air an RGB value,
-    ``daylight.layer_air_transmittance`` per channel."""
+    the layer's and the air's optical depths per channel."""
     z, vz = _z(m, point) - day.ground, _z(m, incoming)
     air = air_channels(m, day)
     if air is None:
