@@ -193,7 +193,7 @@ def key(scene, spec):
     sky = "uniform" if uniform_sky(world) is not None else ("none" if world is None else "other")
     top, falloff, ground = spec.layer_per_unit()
     return (f"daylight:{spec.beta_per_unit!r}:{top!r}:{falloff!r}:{ground!r}:{spec.anisotropy!r}:{spec.air!r}:{sun}:"
-            f"{sky}:"
+            f"{sky}:glow table {uses_glow_table(scene, spec)}:"
             f"{world.name_full if world else ''}")
 
 
@@ -211,13 +211,57 @@ def fog_light_table(scene, spec):
     beta = spec.beta_per_unit
     air = spec.air_per_unit()
     channels = [None] if air is None else [(b, air[1], a) for b, a in zip(air[0], spec.albedo)]
-    tables_, images = [], {}
+    tables_, images = [], dict(glow_table(scene, spec)[1])   # (the glow's table with the maps: ``daylight`` reads it)
     for channel in channels:   # with air one map per colour channel, both species' light, the albedos in it
         table = sunlight.table_spec(beta, top, falloff, direction, spec.anisotropy, channel)
         images[table.name] = images_.table_image(table, functools.partial(
             sunlight.bake_fog_light, beta, top, falloff, direction, spec.anisotropy, channel))   # disk-cached baker
         tables_.append(table)
     return (tables_[0] if air is None else tuple(tables_)), images
+
+
+def uses_glow_table(scene, spec):
+    """Whether the sun's and the sky's glow along camera rays is read from a table baked for the camera's height
+    (``sunlight.table_glow``: a few lookups a pixel instead of the kernels' thousands of nodes): in daylight, with
+    a camera and a sun that are not animated (a frame of a farm's render would read another frame's table: those
+    scenes keep the kernels, which follow every frame)."""
+    from . import caveats
+    if not is_daylit(scene, spec) or scene.camera is None or caveats._animated(scene.camera):
+        return False
+    suns = scene_suns(scene)
+    return not (suns and caveats._animated(suns[0]))
+
+
+def _glow_bake_args(scene, spec):
+    """(beta, top, falloff, mu_s, g, camera height, air, air height) of ``sunlight.bake_glow_table`` for the scene
+    now: units, the sun's elevation sine and the camera's height rounded (as in ``key``), straight up without a
+    sun."""
+    top, falloff, ground = spec.layer_per_unit()
+    suns = scene_suns(scene)
+    mu_s = round(sun_direction(suns[0])[2], SUN_KEY_DIGITS) if suns else 1.0
+    height = float(f"{scene.camera.matrix_world.translation.z - ground:.6g}")
+    air = spec.air_per_unit()
+    return (spec.beta_per_unit, top, falloff, mu_s, spec.anisotropy, height,
+            None if air is None else tuple(air[0]), 0.0 if air is None else air[1])
+
+
+def glow_table(scene, spec):
+    """(``sunlight.GlowTable``, {name: image}) of the scene's camera (``uses_glow_table``), or (None, {}): its
+    image re-baked in place when the camera's height or the layer changed (``images.keyed_image``)."""
+    from .nodes import images as images_
+    if not uses_glow_table(scene, spec):
+        return None, {}
+    args = _glow_bake_args(scene, spec)
+    table = sunlight.glow_table(args[0], args[6])
+    image = images_.keyed_image(table.spec, repr(args), functools.partial(sunlight.bake_glow_table, *args))
+    return table, {table.spec.name: image}
+
+
+def refresh_glow_table(scene, spec):
+    """Re-bake the glow table in place if the camera's height changed (the depsgraph handler's call, when nothing
+    else needs a rebuild; nothing if the groups read no table)."""
+    if bpy.data.images.get(sunlight.GLOW_NAME) is not None and uses_glow_table(scene, spec):
+        glow_table(scene, spec)
 
 
 def builder(scene, spec):
@@ -252,8 +296,10 @@ def daylight(m, scene, spec, beta, albedo=1.0):
     else:
         sky = m.wrap(sky_colour(scene.world)[0])
     air = spec.air_per_unit()
+    table = (sunlight.glow_table(spec.beta_per_unit, None if air is None else air[0])
+             if uses_glow_table(scene, spec) else None)
     return sunlight.Daylight(beta, top, falloff, ground, direction, irradiance, sky, spec.anisotropy, albedo,
-                             None if air is None else tuple(air[0]), 0.0 if air is None else air[1])
+                             None if air is None else tuple(air[0]), 0.0 if air is None else air[1], table)
 
 
 def notes(scene, spec, method_name, lamps=()):

@@ -48,7 +48,8 @@ TABLES = ("AnalyticFog Airlight N", "AnalyticFog Surface M")
 # the dense lane's fog is anisotropic (g 0.85) and has Dense Fog's table too
 LANE_TABLES = {"dense": ("AnalyticFog Airlight N (g +0.850)", "AnalyticFog Surface M (g +0.850)",
                          "AnalyticFog Multiple (g +0.850, W0 0.900)"),
-               "daylight": TABLES + ("AnalyticFog Daylight Fog Light",)}   # (a prefix: its name holds the layer)
+               # (the fog light's map: a prefix, its name holds the layer; the glow's table, baked for the camera)
+               "daylight": TABLES + ("AnalyticFog Daylight Fog Light", "AnalyticFog Daylight Glow")}
 
 # B's picture against A's, as max |B - A| / max |A| over all pixels and channels.
 # Same engine, seed, samples and scene data in both processes: measured 0.0 (bit-identical) for

@@ -316,6 +316,18 @@ MUTATIONS = [
              "lit * albedo * i_s)",
              "        return (lit * (p_l * (sun_l - i_s)), albedo * l_sky * ratio, lit * albedo * i_s)",
              ("tests/test_sunlight.py::test_fog_light_with_air_against_sphere_quadrature",)),
+    Mutation("daylight_glow_table_no_rayleigh", "daylight: the glow table's reader leaves out the air's Rayleigh "
+             "scattering of the sun",
+             "fog_addon/precompute/sunlight.py",
+             "    suns = [(a * p_l) * texel(k, 0) + p_r * texel(k, 1) for k, a in enumerate(albedo)]",
+             "    suns = [(a * p_l) * texel(k, 0) for k, a in enumerate(albedo)]",
+             ("tests/test_glow_table.py::test_table_glow_against_the_kernels",)),
+    Mutation("daylight_proxy_uncorrected", "daylight, Compositor: the materials' grey stand-in transmittance is "
+             "left on the picture (not corrected per pixel to the layer's and the air's exact colour)",
+             "fog_addon/nodes/comp_fog.py",
+             "        inv = 1.0 / m.maximum(sunlight.proxy_transmittance(m, daylight, d_vp), 1e-30)",
+             "        inv = 1.0",
+             ("tests/test_haze_render.py::test_haze_against_cycles",)),
     Mutation("daylight_sun_undimmed", "daylight: the sun's light on surfaces is not dimmed by the layer above them",
              "fog_addon/precompute/sunlight.py",
              "    t_sun = daylight.sun_transmittance(m, z, sun_elevation(m, day), *args)",

@@ -56,7 +56,7 @@ class Compositor(Method):
         daylit = table is not None
         groups.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs,
                              tails=caveats.specular_paths(bpy.data.materials), day=day,
-                             day_dims=dims and not daylit)
+                             day_dims=dims and not daylit, day_exact=not daylit)
         shafted = shafted_lights(scene, spec, plan.in_groups) if spec.shafts else []
         maps, shadow_images = shadow_maps.ensure(scene, shafted)
         shadow_maps.remove_unused(set(shadow_images))

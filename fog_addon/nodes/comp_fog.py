@@ -765,11 +765,13 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
         dims = (m.select(m.less(0.0, cover), sunlight.direct_dimming(m, daylight, pos, normal), one)   # the layer
                 if day[2] else m.const(1.0))
         seen = sunlight.sky_seen(m, daylight, cam, direction)
+        # the materials dimmed their samples by a grey stand-in (``sunlight.proxy_transmittance``): the camera
+        # segment's exact transmittance (with air its colour) comes here, per pixel
+        inv = 1.0 / m.maximum(sunlight.proxy_transmittance(m, daylight, d_vp), 1e-30)
+        tint = t_day * inv if daylight.air is None else m.scale(t_day, inv)
         if daylight.air is None:
-            image = m.scale(image, cover * dims + (1.0 - cover) * seen)
-        else:   # the materials dimmed their surface by the mean of the air's colour (a shader's factor is one
-            # number): the colour of the camera segment's transmittance comes here, per pixel
-            tint = m.scale(t_day, 1.0 / m.maximum(t_vp, 1e-30))
+            image = m.scale(image, cover * (tint * dims) + (1.0 - cover) * seen)
+        else:
             image = image * (m.scale(sunlight.times(m, tint, dims), cover) + m.scale(seen, 1.0 - cover))
     m.feed(gout.inputs["Fog Light"], fog)
     m.feed(gout.inputs["Image"], fog + image)

@@ -564,7 +564,7 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained):
 
 
 def build_surface(lights, models, images, with_passes=False, extra=None, tails=True, day=None, day_table=None,
-                  day_dims=True):
+                  day_dims=True, day_exact=True):
     """Scene group for materials: ``shading.shade_surface`` (Sun et al. 2005 Eq. 19) over ``lights``.
 
     ``models``: one rungs.LightModels per light.  Inputs mirror the Principled
@@ -582,7 +582,9 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     layer's, and the user's shader on every ray takes the sun's and the sky's dimming (``sunlight.direct_dimming``);
     with ``day_table`` (the fog light's TableSpec, its image in ``images``) camera rays also get the sun's and the
     sky's glow and their fog light on the surface (``daylight_light``); ``day_dims`` False leaves the sun's and the
-    sky's dimming to the compositor (``comp_fog.build_fog_group``: once per pixel).  The lights sit in bundle groups
+    sky's dimming to the compositor (``comp_fog.build_fog_group``: once per pixel), ``day_exact`` False dims the
+    camera segment by ``sunlight.proxy_transmittance`` (the compositor puts the exact colour on every pixel).  The
+    lights sit in bundle groups
     (``_bundles``, ``build_surface_bundle``).
 
     Why closures: Cycles' SVM emits a shader's value nodes in the order of
@@ -623,7 +625,8 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
         daylight = day(m, m.wrap(params.outputs["Beta"]), m.wrap(params.outputs["Albedo"], vector=True))
         position, incoming = m.wrap(geo.outputs["Position"], vector=True), m.wrap(geo.outputs["Incoming"], vector=True)
         # a shader's factor is one number: with air, the mean of its colour (the Compositor takes the colour)
-        t_vp = sunlight.grey(m, sunlight.view_transmittance(m, daylight, position, incoming, length))
+        t_vp = (sunlight.grey(m, sunlight.view_transmittance(m, daylight, position, incoming, length)) if day_exact
+                else sunlight.proxy_transmittance(m, daylight, length))
         transmit = 1.0 + fogged * (t_vp - 1.0)
         if day_dims:
             transmit = transmit * sunlight.grey(m, sunlight.direct_dimming(
@@ -979,7 +982,7 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
     (``_bundles``, ``build_world_bundle``).
     """
     ng, gin, gout = _new_group(WORLD, [], [("Fog", "NodeSocketShader"), ("Emission", C), ("Transmittance", F)])
-    m = NodeOps(ng, {})
+    m = NodeOps(ng, images)   # (the daylight glow's table: ``sunlight.table_glow``)
     params = ng.nodes.new("ShaderNodeGroup")
     params.node_tree = bpy.data.node_groups[PARAMS]
     geo = ng.nodes.new("ShaderNodeNewGeometry")

@@ -44,6 +44,35 @@ def table_image(spec, bake):
     return img
 
 
+BAKED_FOR_KEY = "analytic_fog_baked_for"   # on a table re-baked in place (``keyed_image``): what its texels hold
+
+
+def keyed_image(spec, key, bake):
+    """The image of ``spec``'s table holding the texels of ``key`` (a string: what they are baked for), re-baked
+    in place when they hold another's: the node trees that read it keep the same image, so a new camera height
+    needs no rebuild.  ``bake()`` returns the array (not cached: it is baked for one scene's camera)."""
+    key = f"{table_version(spec)}:{key}"
+    img = bpy.data.images.get(spec.name)
+    if img is not None and img.get(BAKED_FOR_KEY) == key and tuple(img.size) == (spec.width, spec.height):
+        return img
+    arr = np.asarray(bake(), np.float32)
+    assert arr.shape == (spec.height, spec.width, 4) and spec.channels == 4, (arr.shape, spec)
+    if img is None or tuple(img.size) != (spec.width, spec.height):
+        if img is not None:
+            bpy.data.images.remove(img)
+        img = bpy.data.images.new(spec.name, spec.width, spec.height, alpha=True, float_buffer=True, is_data=True)
+        img.colorspace_settings.name = "Non-Color"
+        img.alpha_mode = "CHANNEL_PACKED"
+        img.use_half_precision = False
+        img.use_fake_user = True
+    img.pixels.foreach_set(arr.ravel())
+    img.update()
+    img.pack()
+    img[VERSION_KEY] = table_version(spec)
+    img[BAKED_FOR_KEY] = key
+    return img
+
+
 def all_table_images(g=0.0, extra=()):
     """{TableSpec.name: image} for every table the node groups use with Henyey-Greenstein anisotropy g.  A
     missing or stale image takes its array from ``bakers.numpy_tables`` (the table cache, and the arrays this

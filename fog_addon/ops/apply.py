@@ -370,6 +370,7 @@ def _build_scene_groups(scene, spec, lights, method=None, reason=None, rechoose=
                 unwrap_light(light)
     else:
         method.update(scene, spec, plan_)
+        sunsky.refresh_glow_table(scene, spec)   # the camera moved up or down: its glow table, in place
     if surface.get(SPEC_KEY) != spec.to_json():
         surface[SPEC_KEY] = spec.to_json()
     if surface.get(CHOICE_KEY) != json.dumps(plan_.choice):
@@ -411,6 +412,7 @@ def apply(scene, spec, objects=None, progress=progress_.silent):
     method, reason = methods.resolve(scene, spec, lights, scene_materials(scene, objects))
     check_method(scene, spec, method)
     store_spec(scene, spec)
+    spec = spec_of(scene)   # as stored (float32 properties): what every later refresh builds for
     progress("appended fog", 0, 1)
     skipped = merge_appended()   # first: the tables and groups are looked up by name below
     skipped += notes

@@ -46,6 +46,7 @@ class Daylight(NamedTuple):
     air: Any = None      # the clear air's Rayleigh extinction at the ground per colour channel, 1/unit (three
                          # scalars or an RGB value), or None without air
     air_height: float = 0.0   # units: the air's scale height (Python float)
+    glow_table: Any = None    # ``GlowTable``: ``ray_glow`` reads the glow from a camera's baked table; None: the kernels
 
 
 def _z(m, v):
@@ -90,6 +91,21 @@ def view_transmittance(m, day, point, incoming, length):
     return m.combine(*(daylight.exp_neg(m, tau_l + b * shape) for b in air))
 
 
+PROXY_DEPTH = 20.0   # the materials' stand-in transmittance stops falling this many mean free paths out
+
+
+def proxy_transmittance(m, day, length):
+    """A grey stand-in for ``view_transmittance`` in the materials where the compositor corrects every pixel to
+    the exact colour (the Compositor method: ``comp_fog.build_fog_group`` multiplies by the exact over this at the
+    pixel's surface): e^{-k L}, k the layer's and the air's mean extinction at the ground, held at e^{-PROXY_DEPTH}.
+    Two nodes a sample instead of the layer's and the air's optical depths (each shader node on every sample costs
+    about 1 % of a render); within a pixel it only weighs the samples' surfaces, exactly where they lie inside a
+    layer near the ground."""
+    air = air_channels(m, day)
+    k = day.beta if air is None else day.beta + (air[0] + air[1] + air[2]) * (1.0 / 3.0)
+    return m.exp(-1.0 * m.minimum(k * length, PROXY_DEPTH))
+
+
 def grey(m, value):
     """The mean of an RGB value's channels; a grey value as it is (a factor that must be one number: a Mix
     Shader's)."""
@@ -117,7 +133,8 @@ def _tag(value):
 
 def ray_glow(m, day, origin, direction, length):
     """The sun's and the sky's single scattering along a camera segment, W/(m^2 sr) (RGB), the layer's albedo
-    included: E_sun ``daylight.sun_airlight`` (phase at the angle between the ray and the sun) + L_sky
+    included; from ``day.glow_table`` if the Daylight has one (``table_glow``: the same integrals baked for the
+    camera's height), else by the kernels: E_sun ``daylight.sun_airlight`` (phase at the angle between the ray and the sun) + L_sky
     ``daylight.sky_airlight``; ``length`` model.FAR for a ray to the sky.  Each is one shared sub-program per g
     (``m.group``: a node group built once per file, so a rebuild of the fog does not build its nodes again).
 
@@ -125,6 +142,8 @@ def ray_glow(m, day, origin, direction, length):
     by the air (Rayleigh), the sun reaching each point through both; the air's scattering of the sky; and the
     layer's exact sky glow times the air's share of it (its dimming of the sky's light and of the glow on its way
     to the camera)."""
+    if day.glow_table is not None:
+        return table_glow(m, day, direction, length)
     pz, vz = _z(m, origin) - day.ground, _z(m, direction)
     args = _layer(day)
     g = float(day.g)
@@ -153,6 +172,102 @@ def ray_glow(m, day, origin, direction, length):
         sun_l, sun_a, sky_a, sky_ratio = flat[4 * k:4 * k + 4]
         suns.append((a * p_l) * sun_l + p_r * sun_a)
         skies.append(a * (sky * sky_ratio) + sky_a)
+    return day.sun_irradiance * m.combine(*suns) + day.sky_radiance * m.combine(*skies)
+
+
+# --- the glow along camera rays: a table per camera height -----------------------------------------------
+
+GLOW_ELEVATIONS = 128   # rows: the ray's elevation, y = (1 + sign(v_z) sqrt|v_z|) / 2 (dense about the horizon)
+GLOW_DISTANCES = 256    # columns: the segment's length, x = L / (L + L0) (the sky at x = 1)
+GLOW_NAME = "AnalyticFog Daylight Glow"
+
+
+class GlowTable(NamedTuple):
+    """The glow of ``ray_glow`` along every camera ray of one camera height (``bake_glow_table``)."""
+    spec: Any             # tables.TableSpec: GLOW_DISTANCES x (GLOW_ELEVATIONS x blocks) RGBA texels
+    length_scale: float   # L0, units: the distance at x = 1/2 (``glow_length_scale``)
+    blocks: int           # 1 without air; with air 3, a colour channel each
+
+
+def glow_length_scale(beta, air=None):
+    """L0 (units): one mean free path at the ground, of the layer and the air's mean channel together; half of the
+    table's columns lie nearer than that."""
+    extinction = float(beta) + (0.0 if air is None else sum(float(b) for b in air) / 3.0)
+    return 1.0 / max(extinction, 1e-9)
+
+
+def glow_table(beta, air=None):
+    """The ``GlowTable`` of a layer of extinction ``beta`` (1/unit) and ``air`` (three channels' ground extinction,
+    1/unit, or None): one image per file, its texels re-baked in place for another camera height."""
+    blocks = 1 if air is None else 3
+    return GlowTable(tables.TableSpec(GLOW_NAME, GLOW_DISTANCES, GLOW_ELEVATIONS * blocks, channels=4),
+                     glow_length_scale(beta, air), blocks)
+
+
+def glow_coordinates(m, vz, length, length_scale):
+    """(x, y) of the glow table for a ray of elevation sine ``vz`` and a segment ``length`` (units; model.FAR or
+    more: the sky)."""
+    s = m.sqrt(m.abs(vz))
+    y = 0.5 + 0.5 * m.select(m.less(vz, 0.0), -1.0 * s, s)
+    length = m.minimum(length, daylight.UNBOUNDED)
+    return length / (length + length_scale), y
+
+
+def _glow_grid(length_scale):
+    """The table's (v_z (rows,), L (columns,)) at its texel centres (numpy)."""
+    s = np.linspace(-1.0, 1.0, GLOW_ELEVATIONS)
+    x = np.linspace(0.0, 1.0, GLOW_DISTANCES)
+    with np.errstate(divide="ignore"):
+        length = np.where(x < 1.0, length_scale * x / np.maximum(1.0 - x, 1e-300), daylight.UNBOUNDED)
+    return np.sign(s) * s * s, np.minimum(length, daylight.UNBOUNDED)
+
+
+def bake_glow_table(beta, top, falloff, mu_s, g, camera_height, air=None, air_height=0.0):
+    """(GLOW_ELEVATIONS x blocks, GLOW_DISTANCES, 4) float32: ``ray_glow``'s integrals per unit sun irradiance and
+    sky radiance along every camera ray from ``camera_height`` (units above the ground), on the grid of
+    ``glow_coordinates``, the same kernels the shaders run otherwise (numpy, float64).  The sun's phase function is
+    left out (constant along a ray: ``table_glow`` multiplies it per pixel) and its elevation sine ``mu_s`` baked in.
+
+    Without air one block, texels (I, L_sky, 0, 0): I the phase-free sun integral (``daylight.sun_airlight``
+    over its phase), L_sky the layer's sky glow (``daylight.sky_airlight``, of anisotropy g), albedo 1.  With air a
+    block per colour channel, texels (sun_l, sun_a, the layer's sky glow times the air's share, sky_a) of
+    ``daylight.air_glow``: the albedo stays out (a driven value)."""
+    m = _numpy_ops()
+    vz, length = _glow_grid(glow_length_scale(beta, air))
+    vz, length = np.meshgrid(vz, length, indexing="ij")
+    pz = np.full_like(vz, float(camera_height))
+    args = (beta, top, falloff)
+    sky = daylight.sky_airlight(m, pz, vz, length, *args, albedo=1.0, g=g)
+    if air is None:
+        sun = daylight.sun_airlight(m, pz, vz, length, mu_s, 1.0, *args, albedo=1.0, g=0.0) * (4.0 * math.pi)
+        out = np.stack([sun, sky, 0.0 * sun, 0.0 * sun], axis=-1)
+    else:
+        lit = 1.0 if mu_s > 0.0 else 0.0
+        blocks = [np.stack([lit * sun_l, lit * sun_a, sky * ratio, sky_a], axis=-1)
+                  for sun_l, sun_a, sky_a, ratio in daylight.air_glow(m, pz, vz, length, mu_s, *args, tuple(air),
+                                                                      air_height, g)]
+        out = np.concatenate(blocks, axis=0)
+    return out.astype(np.float32)
+
+
+def table_glow(m, day, direction, length):
+    """``ray_glow`` from the Daylight's ``GlowTable`` (baked for the camera's height: ``bake_glow_table``): one
+    bilinear lookup per block, the phase functions and the sun's and the sky's light per pixel."""
+    t = day.glow_table
+    x, y = glow_coordinates(m, _z(m, direction), length, t.length_scale)
+    cos_theta = m.dot(direction, day.sun)
+    rows = GLOW_ELEVATIONS
+
+    def texel(block, channel):
+        return m.table(t.spec, x, y, row0=block * rows, rows=rows, channel=channel)
+    p_l = daylight.hg_phase(m, float(day.g), cos_theta)
+    if t.blocks == 1:
+        return _albedo(m, day, m.scale(day.sun_irradiance, p_l * texel(0, 0))
+                       + m.scale(day.sky_radiance, texel(0, 1)))
+    p_r = daylight.rayleigh_phase(m, cos_theta)
+    albedo = [m.dot(day.albedo, axis) for axis in AXES] if _is_rgb(day.albedo) else [day.albedo] * 3
+    suns = [(a * p_l) * texel(k, 0) + p_r * texel(k, 1) for k, a in enumerate(albedo)]
+    skies = [a * texel(k, 2) + texel(k, 3) for k, a in enumerate(albedo)]
     return day.sun_irradiance * m.combine(*suns) + day.sky_radiance * m.combine(*skies)
 
 
