@@ -337,8 +337,12 @@ def notes(scene, spec, method_name, lamps=()):
     if lamps and not suns and any(c > 0.0 for c in sky_colour(scene.world)[0]):
         out.append(("Fog Top", "with lamps and no sun the sky's light on surfaces is not dimmed by the layer "
                                "(one factor would dim the lamps' light too)"))
-    if lamps:
-        out.append(("Fog Top", f"the lamps' glows ({len(lamps)}) take the layer's density everywhere, also above "
-                               "its top: a lamp within a few of its heights of the top glows too bright on rays "
-                               "that pass above it (tens of per cent to several times)"))
+    if lamps and method_name == "compositor":
+        out.append(("Fog Top", f"the lamps' glows ({len(lamps)}) end at the layer's top (with a falloff, one falloff "
+                               "length above it); their fog light on surfaces is that of fog everywhere"))
+    elif lamps:
+        out.append(("Fog Top", f"with {method_name} the lamps' glows ({len(lamps)}) take the layer's density "
+                               "everywhere, also above its top: a lamp within a few of its heights of the top glows "
+                               "too bright on rays that pass above it (tens of per cent to several times); the "
+                               "Compositor method (Auto's choice) ends them at the top"))
     return out

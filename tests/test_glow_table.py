@@ -112,7 +112,7 @@ scene.world = bpy.data.worlds.new("Sky")
 scene.world.use_nodes = True
 scene.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.3, 0.5, 0.9, 1.0)
 R = {}
-spec = FogSpec(density=0.02, fog_top=50.0, height_falloff=0.0, air=1.0, method="compositor").validated()
+spec = FogSpec(density=0.02, fog_top=50.0, height_falloff=0.0, method="compositor").validated()
 apply.apply(scene, spec)
 name = sunlight.GLOW_NAME
 

@@ -328,6 +328,18 @@ MUTATIONS = [
              "        inv = 1.0 / m.maximum(sunlight.proxy_transmittance(m, daylight, d_vp), 1e-30)",
              "        inv = 1.0",
              ("tests/test_haze_render.py::test_haze_against_cycles",)),
+    Mutation("lamp_glow_past_the_top", "fog layer: a lamp's glow goes on past the layer's top (the ray's span "
+             "never ends where it leaves the layer)",
+             "fog_addon/precompute/sunlight.py",
+             "    t1 = m.select(leaves, m.minimum(to_top, far), far)",
+             "    t1 = far + 0.0 * to_top",
+             ("tests/test_lamp_layer.py::test_glow_over_the_span_against_quadrature",)),
+    Mutation("lamp_sky_glow_past_the_top", "fog layer, Compositor: a pixel that sees the sky takes the lamps' glow "
+             "to infinity, not to where its ray leaves the layer",
+             "fog_addon/nodes/comp_fog.py",
+             "        bounded, meets = m.less(t1, LAYER_OPEN), m.less(t0, LAYER_OPEN)",
+             "        bounded, meets = 0.0, m.less(t0, LAYER_OPEN)",
+             ("tests/test_lamp_layer_render.py::test_lamp_glow_ends_at_the_layers_top",)),
     Mutation("daylight_sun_undimmed", "daylight: the sun's light on surfaces is not dimmed by the layer above them",
              "fog_addon/precompute/sunlight.py",
              "    t_sun = daylight.sun_transmittance(m, z, sun_elevation(m, day), *args)",

@@ -24,6 +24,7 @@ What the scene needs comes first:
 * light shafts (objects casting shadows into a light's glow, ``caveats.shadowing_lights``, with Light Shafts
   on): the compositor, which alone models them;
 * a fog layer with a sun or a sky (``sunsky.is_daylit``): the compositor, which alone gives them their glow;
+* a fog layer with lights: the compositor, which alone ends their glows at the layer's top;
 * glowing objects the camera sees (emissive materials, ``compositor.glowing_objects``): the compositor, which
   alone gives them a glow;
 * surfaces the compositor's one point per pixel would get wrong (transparent, glass or refracting
@@ -136,6 +137,8 @@ def choose(scene, spec, lights, materials):
     if sunsky.is_daylit(scene, spec):
         return "compositor", (f"daylight: only the compositor gives the sun and the sky their glow and fog light in "
                               f"the fog layer{caveat}; {costs}")
+    if spec.layered and lights:
+        return "compositor", (f"a fog layer: only the compositor ends the lights' glows at its top{caveat}; {costs}")
     glowing = compositor_glowing(scene)
     if glowing:
         return "compositor", (f"glowing objects ({caveats._names([o.name for o in glowing])}): only the "

@@ -67,7 +67,8 @@ class Compositor(Method):
                                                          spec.anisotropy),
                                           emitters=((spec.anisotropy, spec.multiple_albedo) if glowing_objects(scene)
                                                     else None),
-                                          day=(day, table, dims) if daylit else None)
+                                          day=(day, table, dims) if daylit else None,
+                                          layer=spec.layer_per_unit() if spec.layered else None)
         groups.build_world([], [], scene.camera, images, spec.passes, day=day, day_dims=not daylit)
         return images
 

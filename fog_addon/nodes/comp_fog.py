@@ -60,7 +60,7 @@ PRINCIPLED = ("Base Color", "Metallic", "Roughness", "Specular IOR Level")
 V, C, F = "NodeSocketVector", "NodeSocketColor", "NodeSocketFloat"
 # what a light's glow group reads of the pixel (the same for all lights), and what its scatter group reads
 GLOW_SHARED = (("Beta", F), ("Camera", V), ("Incoming", V), ("View Distance", F), ("Direction", V), ("Pixel", V),
-               ("Corner", V), ("Across", V), ("Up", V), ("Size", V))
+               ("Corner", V), ("Across", V), ("Up", V), ("Size", V), ("Glow Origin", V), ("Glow Length", F))
 SURFACE_SHARED = (("Beta", F), ("Camera", V), ("Position", V), ("Incoming", V), ("Normal", V), ("Diffuse", V),
                   ("Specular", V), ("Level", F))
 SURFACE_IMAGES = tuple(name for name, _ in SURFACE_SHARED[2:])   # per pixel: cropped to the surfaces' window
@@ -72,6 +72,7 @@ SHAFT_PER_PIXEL = ("Direction", "Shaft Length", "Shaft Offset")
 SHAFT_TAPS = (1, 2, 1)   # the separable filter that averages the 2 x 2 interleaved shares (``_interleave_mean``)
 SHAFT_EDGE = 0.05     # its threshold on log distance: neighbours 5 % nearer or farther are not mixed
 SKY_LENGTH = 1.0e6   # m: a ray to the sky's length for the shafts (its far nodes weigh e^{-beta t})
+LAYER_OPEN = 1.0e9   # units: a fog layer's span end beyond this is open (``sunlight.lamp_glow_span``'s UNBOUNDED)
 SHAFT_GROUP = f"{LIGHT_GROUP} Shaft"      # per shafted light: "<SHAFT_GROUP> <light name>"
 SURFACE_OFFSET = SURFACE + "Offset"   # a surface's interleaving offset (``shafts.surface_offset``)
 # the filter over the 4 x 4 interleaved surface shares (``shafts.surface_offset``): (1, 2, 2, 2, 1)
@@ -186,12 +187,14 @@ def build_glow_group(models, images, peak):
     the ray to the sky, Eq. 12), from ``shading.glow_pair``.  ``peak``: the pixel filter's table or None;
     with one, times the peak factor (``pixel.peak_factor``) where the ray passes the light, seen in the picture at
     ``pixel.picture_position`` (Corner, Across, Up: the image plane, Size: the picture's, ``camera_frame``
-    and ``_picture_scale``).  Reads GLOW_SHARED (Incoming and Pixel only with ``peak``)."""
+    and ``_picture_scale``).  The glows are the kernels' from Glow Origin over Glow Length (the camera and the
+    view distance, or in a fog layer the part of the ray in it: ``sunlight.lamp_glow_span``); the peak takes the
+    camera's.  Reads GLOW_SHARED (Incoming and Pixel only with ``peak``)."""
     name = glow_group_name(models, peak)
     if (ng := groups._up_to_date(name)) is not None:
         return ng
     ng, m, g, gout, light = _light_group(name, GLOW_SHARED, GLOW_TERMS, models, images)
-    glows = shading.light_glows(m, g["Camera"], g["Direction"], g["View Distance"], light,
+    glows = shading.light_glows(m, g["Glow Origin"], g["Direction"], g["Glow Length"], light,
                                 groups._medium(m, g["Beta"]), models)
     if peak is not None:   # the sky's rays pass every light before the end of the world: its factor is 1 + excess
         to_light = g["Light"] - g["Camera"]
@@ -454,7 +457,7 @@ def bundle_name(first, count):
     return f"{BUNDLE} {first + 1}-{first + count}"
 
 
-def build_bundle(scene, first, lights, models, images, peak, windows, shafted=None):
+def build_bundle(scene, first, lights, models, images, peak, windows, shafted=None, layered=False):
     """The compositor group of the scene's lights ``first`` + 1 .. ``first`` + len(lights) (at most
     BUNDLE_SIZE): SHARED in, each light's glow and scatter groups (``build_glow_group``,
     ``build_scatter_group``) with its position, intensity and cone driven by the light
@@ -462,14 +465,16 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
     picture, Scattered over the Surface inputs' window.  ``windows``: each light's glow window
     (``footprint.py``), or None for none (the whole picture): a light with one gets its glow group's
     inputs cropped to it (``_window``).  ``shafted``: (shadow maps by light name, K, g) of the lights whose
-    glows are shadowed (``build_shaft_group``), or None."""
+    glows are shadowed (``build_shaft_group``), or None.  ``layered``: the glows' origin is per pixel (a fog
+    layer's span, ``build_fog_group``)."""
     name = bundle_name(first, len(lights))
     maps, samples, g_ = shafted or ({}, None, 0.0)
     ng, gin, gout = groups._new_group(name, SHARED, TERMS, tree_type="CompositorNodeTree")
     m = CompOps(ng, images)
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
     # what a glow group reads per pixel: cropped to its light's window
-    per_pixel = ("Direction", "View Distance") + (("Incoming", "Pixel") if peak is not None else ())
+    per_pixel = (("Direction", "View Distance", "Glow Length") + (("Incoming", "Pixel") if peak is not None else ())
+                 + (("Glow Origin",) if layered else ()))
     # each sum starts black over its domain: the picture for the glows, the surfaces' window for the rest
     sums = {o: _zero(m, g["Direction"] if o in GLOW_OUTPUTS else g[SURFACE + "Position"])
             for o in rungs.COMPOSITOR_OUTPUTS}
@@ -654,7 +659,7 @@ def _daylight(m, day, table, camera, direction, position, normal, reflectance, d
 
 
 def build_fog_group(scene, lights, models, images, windows=None, partial=False, shafted=None, emitters=None,
-                    day=None):
+                    day=None, layer=None):
     """(Re)build the compositor group ``FOG_GROUP``: Image (the render) and the AOVs in; Image (the render
     plus the fog's light) and Fog Light out.  ``lights``: the fog's lights, ``models``: each light's
     rungs.LightModels; ``windows``: (the surfaces' window, [each light's glow window or None]) of
@@ -664,7 +669,9 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     None; ``day``: (``build_surface``'s ``day``, the fog light's TableSpec, whether surfaces take the sun's and the
     sky's dimming: ``sunsky.dims_surfaces``) for a fog layer with a sun or a sky
     (``_daylight``; the render's surfaces take the sun's and the sky's dimming here, once per pixel, and the sky seen
-    its transmittance), else None.  Rebuilt in place, so the
+    its transmittance), else None; ``layer``: a fog layer's (top, falloff, ground) in units (``FogSpec.layer_per_unit``),
+    where the lights' glows end (``sunlight.lamp_glow_span``), or None for fog that fills all space.  Rebuilt in
+    place, so the
     scene's compositor keeps its group node.  Returns the table images it reads (``images`` and the pixel
     filter's and the emitters' weights)."""
     filt, peak = pixel_filter(scene), None
@@ -720,7 +727,15 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
         m, m.scale(p["Fog Base Color"], inv), p["Fog Metallic"] * inv, p["Fog Roughness"] * inv,
         p["Fog Specular IOR Level"] * inv, m.dot(incoming, normal))
     shared = {"Beta": beta, "Camera": cam, "Incoming": incoming, "View Distance": d_vp, "Direction": direction,
-              "Pixel": pix, "Corner": corner, "Across": across, "Up": up, "Size": size}
+              "Pixel": pix, "Corner": corner, "Across": across, "Up": up, "Size": size, "Glow Origin": cam,
+              "Glow Length": d_vp}
+    if layer is not None:   # the lights' glows over the part of the ray in the layer: from where it enters, to where it
+        # leaves or meets the surface; a pixel that sees mostly sky takes the sky's (one evaluation a pixel)
+        t0, t1 = sunlight.lamp_glow_span(m, sunlight.lamp_glow_top(*layer), cam, direction)
+        bounded, meets = m.less(t1, LAYER_OPEN), m.less(t0, LAYER_OPEN)
+        shared["Glow Origin"] = cam + m.scale(direction, m.minimum(t0, LAYER_OPEN))
+        to_surface = m.maximum(m.minimum(t1, d_vp) - t0, 0.0)
+        shared["Glow Length"] = m.select(m.less(0.5, cover), to_surface, m.select(bounded, t1 - t0, model.FAR))
     surface_in = {"Position": pos, "Incoming": incoming, "Normal": normal, "Diffuse": diffuse, "Specular": specular,
                   "Level": level}
     pixel_xy = m.wrap(coords.outputs["Pixel"], vector=True)
@@ -737,7 +752,8 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
         node = m.node("CompositorNodeGroup", 5)
         node.node_tree = build_bundle(scene, first, lights[first:first + BUNDLE_SIZE],
                                       models[first:first + BUNDLE_SIZE], images, peak,
-                                      None if windows is None else windows[1][first:first + BUNDLE_SIZE], shafted)
+                                      None if windows is None else windows[1][first:first + BUNDLE_SIZE], shafted,
+                                      layered=layer is not None)
         for name, v in shared.items():
             m.feed(node.inputs[name], v)
         for o in rungs.COMPOSITOR_OUTPUTS:
@@ -746,6 +762,11 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     if win is not None:   # the sums over the surfaces' window back in place, on the picture's domain
         sums.update({o: _accumulate(m, _zero(m, direction), _uncrop(m, sums[o], win))
                      for o in SCATTER_OUTPUTS if o in sums})
+    if layer is not None and rungs.BACKGROUND_OUT in sums:   # a ray that leaves the layer: its glow ends at the top
+        sky = sums[rungs.BACKGROUND_OUT]
+        if rungs.AIRLIGHT_OUT in sums:
+            sky = m.scale(sums[rungs.AIRLIGHT_OUT], bounded) + m.scale(sky, 1.0 - bounded)
+        sums[rungs.BACKGROUND_OUT] = m.scale(sky, meets)
     daylight = None if day is None else day[0](m, beta, albedo)
     t_day = None if daylight is None else sunlight.view_transmittance(m, daylight, pos, incoming, d_vp)
     t_vp = model.transmittance(m, beta, d_vp) if daylight is None else sunlight.grey(m, t_day)

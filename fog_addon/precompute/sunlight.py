@@ -91,6 +91,39 @@ def view_transmittance(m, day, point, incoming, length):
     return m.combine(*(daylight.exp_neg(m, tau_l + b * shape) for b in air))
 
 
+LAMP_FALLOFF_CUT = 1.0   # the lamps' glows end this many falloff lengths above a layer's top (``lamp_glow_top``)
+
+
+def lamp_glow_top(top, falloff, ground):
+    """The height (z, units) where the lamps' glow kernels take a layer (its top and falloff above the ground at z
+    ``ground``, units) to end: its top, or with a falloff one falloff length above it.  A density e^{-x} above the
+    top (x in falloff lengths) is the mixture int e^{-s} 1[x < s] ds of hard tops at s; the glow is linear in the
+    density, so it is the e^{-s}-weighted mean of hard-top glows, and one Gauss-Laguerre node (s = 1, weight 1)
+    takes it as the glow of a hard top at one falloff length (the same column above the top, beta0 H / |v_z|,
+    along every slanted ray).  Against quadrature of the graded layer, lamps 1-3 m below the top: 0.2-3.2 % of
+    the glow (two nodes: 0.1-4.2 %, not better for twice the cost; docs/measurements/2026-11-27-lamp-layer.md)."""
+    return float(ground) + float(top) + LAMP_FALLOFF_CUT * float(falloff)
+
+
+def lamp_glow_span(m, top_z, origin, direction):
+    """(t0, t1): the part of a ray from ``origin`` (unit ``direction``) where the lamps' homogeneous kernels apply,
+    below ``top_z`` (``lamp_glow_top``), in units along the ray: from the origin inside the layer (t0 = 0) to where the ray
+    leaves it going up (t1 = daylight.UNBOUNDED if it never does); from an origin above it, from where the ray enters
+    it going down (t1 = UNBOUNDED); t0 = t1 = UNBOUNDED for a ray that never meets it.  A lamp's glow is the
+    kernel's from origin + t0 u over that length: nothing scatters above the top, and the clear air above it
+    dims nothing (Sun et al. 2005 Eq. 5 over the part of the ray in the medium)."""
+    z, vz = _z(m, origin), _z(m, direction)
+    gap = top_z - z                                    # > 0: the origin is inside the layer
+    to_top = m.abs(gap) / m.maximum(m.abs(vz), 1e-12)  # along the ray to the top's height
+    inside = m.less(0.0, gap)
+    far = daylight.UNBOUNDED
+    leaves = inside * m.less(0.0, vz)                  # inside, going up: the ray leaves at the top
+    enters = (1.0 - inside) * m.less(vz, 0.0)          # above, going down: it enters there
+    t1 = m.select(leaves, m.minimum(to_top, far), far)
+    t0 = m.select(inside, 0.0, m.select(enters, m.minimum(to_top, far), far))
+    return t0, t1
+
+
 PROXY_DEPTH = 20.0   # the materials' stand-in transmittance stops falling this many mean free paths out
 
 
