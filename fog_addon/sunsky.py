@@ -323,7 +323,7 @@ def notes(scene, spec, method_name, lamps=()):
                            "choice) gives its colour"))
     if method_name != "compositor" and is_daylit(scene, spec):
         out.append(("Daylight", f"with {method_name} the sun's and the sky's glow and fog light are evaluated on "
-                                "every sample (5-8x the fog-free render in a city); the Compositor method (Auto's "
+                                "every sample (3-8x the fog-free render in a city); the Compositor method (Auto's "
                                 "choice) does them once per pixel"))
     if suns:
         from . import caveats

@@ -25,6 +25,8 @@ LAMP = dict(location=(0.0, 30.0, 5.0), power_w=800.0)
 CAMERA = dict(location=(0.0, 0.0, 1.6), pitch_deg=8.0, lens_mm=50.0)
 CASES = {"hard": dict(h0=10.0, H=0.0), "falloff": dict(h0=6.0, H=4.0)}
 FALLOFF_LENGTHS = 8.0
+# (spp, seeds) of each case's reference: the graded density's is noisier (two 1024-spp seeds 5.3 % apart)
+REFERENCE_SAMPLES = {"hard": (1024, 2), "falloff": (8192, 2)}
 GROUND_ALBEDO = 0.3
 
 
@@ -109,9 +111,11 @@ def reference_name(case, samples, seeds):
             f"_{int(samples)}spp_x{int(seeds)}.exr")
 
 
-def render_reference(case, samples=1024, seeds=2, regen=False, directory=None, timeout=3600):
-    """Path of the cached single-scattering Cycles reference of ``case``, rendered if missing (``daylight``'s
-    seed renders and their mean)."""
+def render_reference(case, samples=None, seeds=None, regen=False, directory=None, timeout=3600):
+    """Path of the cached single-scattering Cycles reference of ``case`` (``REFERENCE_SAMPLES`` unless given),
+    rendered if missing (``daylight``'s seed renders and their mean)."""
+    samples = samples or REFERENCE_SAMPLES[case][0]
+    seeds = seeds or REFERENCE_SAMPLES[case][1]
     directory = pathlib.Path(directory) if directory else h.REFERENCES
     path = directory / reference_name(case, samples, seeds)
     if path.is_file() and not regen:

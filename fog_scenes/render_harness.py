@@ -96,6 +96,18 @@ def _env():
     return env
 
 
+def bpy_flow(code, workdir, timeout=600):
+    """Run Python ``code`` in a fresh Blender (bpy) process with its own user folders in ``workdir`` (no user
+    preferences, presets or add-ons of the machine's) and return the JSON its last printed line holds."""
+    import json
+    workdir = pathlib.Path(workdir)
+    env = dict(os.environ, BLENDER_USER_RESOURCES=str(workdir / "user"), HOME=str(workdir / "home"),
+               PYTHONPATH=str(ROOT))
+    r = subprocess.run([PYTHON, "-c", code], capture_output=True, text=True, timeout=timeout, cwd=workdir, env=env)
+    assert r.returncode == 0, r.stderr[-3000:]
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
 def run(args, timeout=600, check=True):
     """Run ``PYTHON *args`` in a fresh process from the repo root; return CompletedProcess."""
     cmd = [PYTHON] + [str(a) for a in args]

@@ -23,7 +23,8 @@ SAMPLES = 64   # Cycles' own noise in the lights' direct light on the ground (16
 
 
 @pytest.mark.parametrize("g,engine,method", [
-    (0.0, "cycles", "nodes"),
+    pytest.param(0.0, "cycles", "nodes", marks=pytest.mark.slow(reason="the default tier renders the area lights once, "
+                                                                      "the cheapest way (EEVEE, Compositor)")),
     (0.0, "eevee", "compositor"),
     pytest.param(0.0, "cycles", "compositor", marks=pytest.mark.slow),
     pytest.param(0.7, "cycles", "nodes", marks=pytest.mark.slow),

@@ -167,15 +167,8 @@ print(json.dumps(R))
 
 @pytest.fixture(scope="module")
 def flow(tmp_path_factory):
-    import os
-    import subprocess
-    import json
     from fog_scenes import render_harness as h
-    tmp = tmp_path_factory.mktemp("glow_table")
-    env = dict(os.environ, BLENDER_USER_RESOURCES=str(tmp / "user"), HOME=str(tmp / "home"), PYTHONPATH=str(h.ROOT))
-    r = subprocess.run([h.PYTHON, "-c", _FLOW], capture_output=True, text=True, timeout=600, cwd=tmp, env=env)
-    assert r.returncode == 0, r.stderr[-3000:]
-    return json.loads(r.stdout.strip().splitlines()[-1])
+    return h.bpy_flow(_FLOW, tmp_path_factory.mktemp("glow_table"))
 
 
 @pytest.mark.render

@@ -3,7 +3,6 @@ line and the presets.  Nothing here renders: the parser and the presets are chec
 properties in one Blender (bpy) process without a window (``_FLOW``)."""
 import json
 import math
-import os
 import subprocess
 import types
 
@@ -285,12 +284,7 @@ print(json.dumps(R))
 
 @pytest.fixture(scope="module")
 def flow(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("layer")
-    env = dict(os.environ, BLENDER_USER_RESOURCES=str(tmp / "user"), HOME=str(tmp / "home"),
-               PYTHONPATH=str(h.ROOT))
-    r = subprocess.run([h.PYTHON, "-c", _FLOW], capture_output=True, text=True, timeout=300, cwd=tmp, env=env)
-    assert r.returncode == 0, r.stderr[-3000:]
-    return json.loads(r.stdout.strip().splitlines()[-1])
+    return h.bpy_flow(_FLOW, tmp_path_factory.mktemp("layer"), timeout=300)
 
 
 @pytest.mark.render
