@@ -81,27 +81,40 @@ def _tree_fingerprint(world):
     return "|".join(parts)
 
 
+PROBE_VERSION = "probe 2|"   # in the probe's fingerprint: probes kept by an older way of probing are made again
+
+
+def sun_discs(world):
+    """The World's Sky Texture nodes that draw a sun disc."""
+    if world is None or not world.use_nodes or world.node_tree is None:
+        return []
+    return [n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeTexSky" and getattr(n, "sun_disc", False)]
+
+
 def probe_sky(world):
     """The mean radiance of ``world`` over the upper hemisphere (RGB, W/(m^2 sr), solid-angle weighted), from a
     small equirectangular Cycles render of the World alone as its user made it (any World: a Sky Texture, an HDRI,
     node set-ups; a fogged World is rendered from a copy without the fog's nodes), kept on the World with its own
     nodes' fingerprint so it is rendered again only when they change; None if it can't be rendered now (during a
-    render)."""
+    render).  A Sky Texture's sun disc is left out (a copy renders with it off): it is a sun, ten times the sky's
+    mean at 40 degrees, and the fog's sun is the scene's Sun light (docs/measurements/2026-11-27-sky-texture.md)."""
     from .nodes import owned
-    fingerprint = hashlib.sha1(_tree_fingerprint(world).encode()).hexdigest()
+    fingerprint = hashlib.sha1((PROBE_VERSION + _tree_fingerprint(world)).encode()).hexdigest()
     kept = world.get(PROBE_KEY)
     if kept is not None and kept.get("fingerprint") == fingerprint:
         return tuple(float(c) for c in kept["colour"])
     if bpy.app.is_job_running("RENDER"):
         return None
     probe = world
-    if owned.is_fogged(world):
+    if owned.is_fogged(world) or sun_discs(world):
         probe = world.copy()
         for node in [n for n in probe.node_tree.nodes if owned.is_ours(n)]:
             probe.node_tree.nodes.remove(node)
         outputs = [n for n in probe.node_tree.nodes if n.type == "OUTPUT_WORLD"]
         if outputs:
             outputs[0].is_active_output = True
+        for node in sun_discs(probe):   # a Sky Texture's sun is a sun, not sky: its disc is left out of the mean
+            node.sun_disc = False
     try:
         pixels = _render_equirect(probe)
     finally:
@@ -314,6 +327,9 @@ def notes(scene, spec, method_name, lamps=()):
     for sun in suns[1:]:
         out.append((sun.name, f"only the brightest sun ({suns[0].name}) shines through the fog layer: this one "
                               "is neither dimmed nor glows"))
+    if sun_discs(scene.world) and not suns:
+        out.append((scene.world.name, "its Sky Texture's sun disc is not a sun to the fog (no glow, no dimming of its "
+                                      "light): add a Sun light along it"))
     if scene.world is not None and not sky_colour(scene.world)[1]:
         out.append((scene.world.name, "the fog layer's sky glow takes this World as uniform, of its mean colour over "
                                       "the upper hemisphere (where seen, the World itself is dimmed exactly)"))

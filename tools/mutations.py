@@ -340,6 +340,12 @@ MUTATIONS = [
              "        bounded, meets = m.less(t1, LAYER_OPEN), m.less(t0, LAYER_OPEN)",
              "        bounded, meets = 0.0, m.less(t0, LAYER_OPEN)",
              ("tests/test_lamp_layer_render.py::test_lamp_glow_ends_at_the_layers_top",)),
+    Mutation("probe_keeps_sun_disc", "daylight: the World's mean over the sky takes a Sky Texture's sun disc in (a sun "
+             "counted as sky)",
+             "fog_addon/sunsky.py",
+             "            node.sun_disc = False",
+             "            pass",
+             ("tests/test_sky_probe.py::test_sun_disc_is_left_out_of_the_skys_mean",)),
     Mutation("daylight_sun_undimmed", "daylight: the sun's light on surfaces is not dimmed by the layer above them",
              "fog_addon/precompute/sunlight.py",
              "    t_sun = daylight.sun_transmittance(m, z, sun_elevation(m, day), *args)",
