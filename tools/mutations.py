@@ -346,6 +346,12 @@ MUTATIONS = [
              "            node.sun_disc = False",
              "            pass",
              ("tests/test_sky_probe.py::test_sun_disc_is_left_out_of_the_skys_mean",)),
+    Mutation("emitter_own_pixels_shared", "glowing objects: an emitter's own pixels take only the share of the glow "
+             "in front of a surface at its depth (half), not the whole",
+             "fog_addon/nodes/comp_fog.py",
+             "    t_surface = m.select(m.less(1e-30, grey), 1.0e6, t_surface)",
+             "    t_surface = t_surface",
+             ("tests/test_emitter_glow.py::test_glowing_sphere_against_path_traced_fog",)),
     Mutation("daylight_sun_undimmed", "daylight: the sun's light on surfaces is not dimmed by the layer above them",
              "fog_addon/precompute/sunlight.py",
              "    t_sun = daylight.sun_transmittance(m, z, sun_elevation(m, day), *args)",

@@ -616,12 +616,16 @@ def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=
     undimmed (times e^{beta D_vp}), weighted per pixel by a_j(T) and blurred by each Blur node of the ladder,
     summed (per unit albedo).  Each rung's glow stops at the surfaces in front of its sources
     (``emitter_glow.segment_share`` at the rung's angle, the sources' optical depth taken as the mean over what the
-    rung blurs in: a second blur of the weights times T); where the pixel sees the sky (``cover`` 0) it is whole."""
+    rung blurs in: a second blur of the weights times T); where the pixel sees the sky (``cover`` 0) or a glowing
+    surface it is whole."""
     spec = emitter_glow.table_spec(g, pixel_angle, multiple_albedo)
     t = beta * d_vp
     light = m.scale(p[EMITTERS], m.exp(m.minimum(t, GLOW_DEPTH_LIMIT)))
     grey = m.dot(light, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))
     t_surface = t if cover is None else m.select(m.less(1e-3, cover), t, 1.0e6)
+    # a glowing pixel's own surface is no surface in front of the glow: it takes the whole of it (the light its
+    # neighbours send through the fog towards it, single and multiply scattered, lies in front of it)
+    t_surface = m.select(m.less(1e-30, grey), 1.0e6, t_surface)
     x = emitter_glow.table_x(m, t)
     rows = len(emitter_glow.SIZES)
     total = None
