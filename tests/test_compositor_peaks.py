@@ -17,6 +17,7 @@ from fog_scenes import render_harness as h
 pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
 
 
+@pytest.mark.slow(reason="16 s; the peak factor's table is checked against scipy in the default tier (test_pixel.py)")
 def test_eevee_peak_pixels_are_the_film_filters_means(tmp_path):
     proc = h.run([h.ROOT / "tests" / "scenes" / "eevee_peaks.py", tmp_path, 4, 1.5, "compositor"], timeout=600)
     assert not h.log_errors(proc.stdout + proc.stderr)
