@@ -247,8 +247,8 @@ def uses_glow_table(scene, spec):
 
 def _glow_bake_args(scene, spec):
     """(beta, top, falloff, mu_s, g, camera height, air, air height) of ``sunlight.bake_glow_table`` for the scene
-    now: units, the sun's elevation sine and the camera's height rounded (as in ``key``), straight up without a
-    sun."""
+    now: units, the sun's elevation sine rounded as ``key`` rounds the sun's direction, straight up without a sun,
+    and the camera's height to 6 significant digits (the image is re-baked when it changes)."""
     top, falloff, ground = spec.layer_per_unit()
     suns = scene_suns(scene)
     mu_s = round(sun_direction(suns[0])[2], SUN_KEY_DIGITS) if suns else 1.0
@@ -273,7 +273,7 @@ def glow_table(scene, spec):
 def refresh_glow_table(scene, spec):
     """Re-bake the glow table in place if the camera's height changed (the depsgraph handler's call, when nothing
     else needs a rebuild; nothing if the groups read no table)."""
-    if bpy.data.images.get(sunlight.GLOW_NAME) is not None and uses_glow_table(scene, spec):
+    if bpy.data.images.get(sunlight.GLOW_NAME) is not None:
         glow_table(scene, spec)
 
 

@@ -205,10 +205,15 @@ def _math(nt, op, a, b=None):
 
 
 def fog_material(case):
-    """The fog box's material: Volume Scatter (white, a beta(z), HG g) + Volume Absorption (black,
-    (1 - a) beta(z)); beta(z) constant for a hard top, beta0 e^{-max(z - h0, 0)/H} for a falloff.  Needs bpy."""
+    """The fog box's material of ``case`` (``layer_material`` of its ``layer``).  Needs bpy."""
+    return layer_material(layer(case))
+
+
+def layer_material(f):
+    """The material of a fog box holding the layer ``f`` (dict beta0, albedo, g, h0, H as ``layer`` gives): Volume
+    Scatter (white, a beta(z), HG g) + Volume Absorption (black, (1 - a) beta(z)); beta(z) constant for a hard top,
+    beta0 e^{-max(z - h0, 0)/H} for a falloff.  Needs bpy."""
     import bpy
-    f = layer(case)
     mat = bpy.data.materials.new(FOG_NAME)
     if mat.node_tree is None:
         mat.use_nodes = True

@@ -75,7 +75,7 @@ def build(scene, case, with_fog=True, samples=1024):
     ground.visible_volume_scatter = False
     if with_fog:
         f = layer(case)
-        mat = _fog_material(f)
+        mat = daylight.layer_material(f)
         ob = add_box_between(scene, daylight.FOG_NAME, -400.0, 400.0, -400.0, 400.0, daylight.FOG_BOX_BOTTOM_M,
                              f["box_top"], mat)
         for attr in ("visible_camera", "visible_shadow", "visible_diffuse", "visible_glossy", "visible_transmission",
@@ -84,13 +84,6 @@ def build(scene, case, with_fog=True, samples=1024):
     scene.render.film_transparent = False
     bpy.context.view_layer.update()
     return scene
-
-
-def _fog_material(f):
-    """``daylight.fog_material`` for the layer dict ``f``."""
-    from unittest import mock
-    with mock.patch.object(daylight, "layer", lambda case: f):
-        return daylight.fog_material(None)
 
 
 def build_scene(path, case, with_fog=True, samples=1024):

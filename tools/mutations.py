@@ -306,8 +306,10 @@ MUTATIONS = [
     Mutation("air_layer_sky_undimmed", "air: the fog layer's sky glow not changed by the air (neither the sky's light "
              "dimmed on its way to the layer nor the glow on its way to the camera)",
              "fog_addon/precompute/sunlight.py",
-             "        skies.append(a * (sky * sky_ratio) + sky_a)",
-             "        skies.append(a * sky + sky_a)",
+             "    return _air_glow_light(m, day, p_l, p_r, [(sun_l, sun_a, sky * sky_ratio, sky_a) for sun_l, sun_a, "
+             "sky_a, sky_ratio",
+             "    return _air_glow_light(m, day, p_l, p_r, [(sun_l, sun_a, sky, sky_a) for sun_l, sun_a, "
+             "sky_a, sky_ratio",
              ("tests/test_air_kernels.py::test_ray_glow_with_air_against_quadrature",)),
     Mutation("air_fog_light_layer_only", "air: the fog light on surfaces without the air's own scattered sunlight "
              "and skylight",
@@ -319,8 +321,8 @@ MUTATIONS = [
     Mutation("daylight_glow_table_no_rayleigh", "daylight: the glow table's reader leaves out the air's Rayleigh "
              "scattering of the sun",
              "fog_addon/precompute/sunlight.py",
-             "    suns = [(a * p_l) * texel(k, 0) + p_r * texel(k, 1) for k, a in enumerate(albedo)]",
-             "    suns = [(a * p_l) * texel(k, 0) for k, a in enumerate(albedo)]",
+             "    return _air_glow_light(m, day, p_l, daylight.rayleigh_phase(m, cos_theta),",
+             "    return _air_glow_light(m, day, p_l, 0.0 * daylight.rayleigh_phase(m, cos_theta),",
              ("tests/test_glow_table.py::test_table_glow_against_the_kernels",)),
     Mutation("daylight_proxy_uncorrected", "daylight, Compositor: the materials' grey stand-in transmittance is "
              "left on the picture (not corrected per pixel to the layer's and the air's exact colour)",

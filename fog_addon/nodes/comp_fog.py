@@ -649,8 +649,8 @@ def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=
 def _daylight(m, day, table, camera, direction, position, normal, reflectance, d_vp, t_vp, cover):
     """The sun's and the sky's light in a fog layer at a pixel (albedos included): ``groups.daylight_light`` where the
     pixel sees a surface, the glow to the sky (``sunlight.ray_glow``) where it does not.  With air the glow is
-    evaluated once, to the surface where it covers most of the pixel and to the sky elsewhere (its kernel is the
-    costliest part of the picture: a pixel on a silhouette takes one side's glow)."""
+    evaluated once, to the surface where it covers most of the pixel and to the sky elsewhere (without the glow's
+    table its kernel is the costliest part of the picture: a pixel on a silhouette takes one side's glow)."""
     if day.air is None:
         to_surface = groups.daylight_light(m, day, table, camera, direction, position, normal, reflectance, d_vp,
                                            t_vp)

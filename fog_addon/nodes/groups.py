@@ -584,8 +584,7 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     sky's glow and their fog light on the surface (``daylight_light``); ``day_dims`` False leaves the sun's and the
     sky's dimming to the compositor (``comp_fog.build_fog_group``: once per pixel), ``day_exact`` False dims the
     camera segment by ``sunlight.proxy_transmittance`` (the compositor puts the exact colour on every pixel).  The
-    lights sit in bundle groups
-    (``_bundles``, ``build_surface_bundle``).
+    lights sit in bundle groups (``_bundles``, ``build_surface_bundle``).
 
     Why closures: Cycles' SVM emits a shader's value nodes in the order of
     their ids, so one colour summed over the lights keeps every light's values

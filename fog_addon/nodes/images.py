@@ -30,17 +30,27 @@ def table_image(spec, bake):
     if img is not None:
         bpy.data.images.remove(img)
     arr = np.asarray(table_cache.cached_bake(spec, bake), np.float32)   # from the table cache if there
-    shape = (spec.height, spec.width) + ((spec.channels,) if spec.channels > 1 else ())
-    assert arr.shape == shape and spec.channels in (1, 4), (arr.shape, spec)
+    return _fill(_new_image(spec), spec, arr)
+
+
+def _new_image(spec):
+    """A new float image for ``spec``'s table: non-colour data, channel-packed alpha, full precision, kept."""
     img = bpy.data.images.new(spec.name, spec.width, spec.height, alpha=True, float_buffer=True, is_data=True)
     img.colorspace_settings.name = "Non-Color"
     img.alpha_mode = "CHANNEL_PACKED"
     img.use_half_precision = False
+    img.use_fake_user = True
+    return img
+
+
+def _fill(img, spec, arr):
+    """Write ``spec``'s table ``arr`` (float32, (height, width) or (height, width, 4)) into ``img`` and pack it."""
+    shape = (spec.height, spec.width) + ((spec.channels,) if spec.channels > 1 else ())
+    assert arr.shape == shape and spec.channels in (1, 4), (arr.shape, spec)
     img.pixels.foreach_set((arr if spec.channels == 4 else np.repeat(arr[..., None], 4, axis=-1)).ravel())
     img.update()
     img.pack()
-    img.use_fake_user = True
-    img[VERSION_KEY] = version
+    img[VERSION_KEY] = table_version(spec)
     return img
 
 
@@ -53,23 +63,15 @@ def keyed_image(spec, key, bake):
     needs no rebuild.  ``bake()`` returns the array (not cached: it is baked for one scene's camera)."""
     key = f"{table_version(spec)}:{key}"
     img = bpy.data.images.get(spec.name)
-    if img is not None and img.get(BAKED_FOR_KEY) == key and tuple(img.size) == (spec.width, spec.height):
+    sized = img is not None and tuple(img.size) == (spec.width, spec.height)
+    if sized and img.get(BAKED_FOR_KEY) == key:
         return img
     arr = np.asarray(bake(), np.float32)
-    assert arr.shape == (spec.height, spec.width, 4) and spec.channels == 4, (arr.shape, spec)
-    if img is None or tuple(img.size) != (spec.width, spec.height):
+    if not sized:
         if img is not None:
             bpy.data.images.remove(img)
-        img = bpy.data.images.new(spec.name, spec.width, spec.height, alpha=True, float_buffer=True, is_data=True)
-        img.colorspace_settings.name = "Non-Color"
-        img.alpha_mode = "CHANNEL_PACKED"
-        img.use_half_precision = False
-        img.use_fake_user = True
-    img.pixels.foreach_set(arr.ravel())
-    img.update()
-    img.pack()
-    img[VERSION_KEY] = table_version(spec)
-    img[BAKED_FOR_KEY] = key
+        img = _new_image(spec)
+    _fill(img, spec, arr)[BAKED_FOR_KEY] = key
     return img
 
 

@@ -192,7 +192,6 @@ def ray_glow(m, day, origin, direction, length):
     up = m.less(0.0, mu_s)
     p_l = m.select(up, daylight.hg_phase(m, g, cos_theta), 0.0)
     p_r = m.select(up, daylight.rayleigh_phase(m, cos_theta), 0.0)
-    albedo = [m.dot(day.albedo, axis) for axis in AXES] if _is_rgb(day.albedo) else [day.albedo] * 3
     top, falloff, h_air = float(day.top), float(day.falloff), float(day.air_height)
     name = "daylight air " + " ".join(_tag(v) for v in (top, falloff, h_air, g))
 
@@ -200,11 +199,17 @@ def ray_glow(m, day, origin, direction, length):
         return tuple(v for channel in daylight.air_glow(mm, pz_, vz_, length_, mu_, beta_, top, falloff, b, h_air, g)
                      for v in channel)
     flat = m.group(name, kernel, pz, vz, length, mu_s, day.beta, *air)
-    suns, skies = [], []
-    for a, k in zip(albedo, range(3)):
-        sun_l, sun_a, sky_a, sky_ratio = flat[4 * k:4 * k + 4]
-        suns.append((a * p_l) * sun_l + p_r * sun_a)
-        skies.append(a * (sky * sky_ratio) + sky_a)
+    return _air_glow_light(m, day, p_l, p_r, [(sun_l, sun_a, sky * sky_ratio, sky_a) for sun_l, sun_a, sky_a, sky_ratio
+                                              in (flat[4 * k:4 * k + 4] for k in range(3))])
+
+
+def _air_glow_light(m, day, p_l, p_r, channels):
+    """The glow with air, W/(m^2 sr) (RGB), from each colour channel's integrals (sun_l, sun_a, sky_l, sky_a): the
+    sun's (E_sun per channel) scattered by the layer (phase p_l, the layer's albedo) and by the air (phase p_r),
+    and the sky's (L_sky) glow in the layer (its albedo) and in the air."""
+    albedo = [m.dot(day.albedo, axis) for axis in AXES] if _is_rgb(day.albedo) else [day.albedo] * 3
+    suns = [(a * p_l) * sun_l + p_r * sun_a for a, (sun_l, sun_a, _, _) in zip(albedo, channels)]
+    skies = [a * sky_l + sky_a for a, (_, _, sky_l, sky_a) in zip(albedo, channels)]
     return day.sun_irradiance * m.combine(*suns) + day.sky_radiance * m.combine(*skies)
 
 
@@ -297,11 +302,8 @@ def table_glow(m, day, direction, length):
     if t.blocks == 1:
         return _albedo(m, day, m.scale(day.sun_irradiance, p_l * texel(0, 0))
                        + m.scale(day.sky_radiance, texel(0, 1)))
-    p_r = daylight.rayleigh_phase(m, cos_theta)
-    albedo = [m.dot(day.albedo, axis) for axis in AXES] if _is_rgb(day.albedo) else [day.albedo] * 3
-    suns = [(a * p_l) * texel(k, 0) + p_r * texel(k, 1) for k, a in enumerate(albedo)]
-    skies = [a * texel(k, 2) + texel(k, 3) for k, a in enumerate(albedo)]
-    return day.sun_irradiance * m.combine(*suns) + day.sky_radiance * m.combine(*skies)
+    return _air_glow_light(m, day, p_l, daylight.rayleigh_phase(m, cos_theta),
+                           [tuple(texel(k, c) for c in range(4)) for k in range(3)])
 
 
 def times(m, rgb, factor):
