@@ -75,10 +75,11 @@ class Scene(NamedTuple):
     digest: str
 
 
-def scene_bvh(scene, depsgraph=None):
-    """The BVH of ``scene``'s shadow casters (``casters``) in world space, and their digest."""
+def scene_bvh(scene, depsgraph=None, objects=None):
+    """The BVH of ``scene``'s shadow casters (``caveats.shadow_casters``, or ``objects``) in world space, and their
+    digest."""
     depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
-    verts, tris = _triangles(depsgraph, caveats.shadow_casters(scene))
+    verts, tris = _triangles(depsgraph, caveats.shadow_casters(scene) if objects is None else objects)
     digest = hashlib.sha1(np.ascontiguousarray(verts, np.float32).tobytes()
                           + np.ascontiguousarray(tris, np.int32).tobytes()).hexdigest()
     bvh = BVHTree.FromPolygons(verts.tolist(), tris.tolist(), all_triangles=True) if len(tris) else None
@@ -105,6 +106,62 @@ def cast(bvh, origin, directions):
         if hit[0] is not None:
             out[i] = hit[3]
     return out
+
+
+def cast_parallel(bvh, origins, direction):
+    """Distance (units) from each of ``origins`` ((N, 3) array) along the one unit ``direction`` to the first
+    triangle, NO_HIT if none (a sun's map: ``shafts.SunFrame``)."""
+    out = np.full(len(origins), shafts.NO_HIT, np.float32)
+    if bvh is None:
+        return out
+    d = Vector(tuple(direction))
+    ray_cast = bvh.ray_cast
+    for i, o in enumerate(origins.tolist()):
+        hit = ray_cast(Vector(o), d)
+        if hit[0] is not None:
+            out[i] = hit[3]
+    return out
+
+
+class SunShadow(NamedTuple):
+    """A sun's baked map: ``spec`` (its image's name and grid) and ``frame`` (``shafts.SunFrame``: where it lies)."""
+    spec: TableSpec
+    frame: shafts.SunFrame
+
+
+SUN_IMAGE = f"{owned.PREFIX} Sun Shadow"   # the sun's map (one sun shines through a fog layer)
+SUN_FRAME = "analytic_fog_sun_frame"       # on its image: the SunFrame it was baked in (a farm's render reads it)
+
+
+def sun_shadow(scene, sun, region):
+    """The ``SunShadow`` of Sun light ``sun`` over ``region`` (world corners of the fog the camera sees, (N, 3)),
+    baked unless its image holds this sun, region and geometry; None if no caster's shadow can fall there.  The
+    casters that stand no higher than the region's bottom (the ground: a ground plane) are left out: they shadow no
+    fog above them, and in the map a low sun would see fog just above them as behind them (a cell's depth on the
+    ground changes by a cell over the sun's elevation tangent, several cells at a low sun)."""
+    casters = caveats.shadow_casters(scene)
+    if not casters:
+        return None
+    corners = np.array([np.asarray([tuple(o.matrix_world @ Vector(c)) for c in o.bound_box]) for o in casters])
+    ground = float(np.min(np.asarray(region)[:, 2]))
+    keep = corners[:, :, 2].max(axis=1) > ground + 1e-6
+    if not keep.any():
+        return None
+    direction = tuple(float(c) for c in sun.matrix_world.to_3x3().col[2].normalized())
+    placed = shafts.sun_frame(direction, region, corners[keep].reshape(-1, 3))
+    if placed is None:
+        return None
+    frame, (width, height) = placed
+    geometry = scene_bvh(scene, objects=[o for o, k in zip(casters, keep) if k])
+    version = hashlib.sha1(repr((frame, width, height, geometry.digest)).encode()).hexdigest()
+    spec = TableSpec(SUN_IMAGE, width, height)
+    img = bpy.data.images.get(SUN_IMAGE)
+    if img is None or img.get(KEY) != version or img.packed_file is None:
+        origins = shafts.sun_map_origins(frame, width, height).reshape(-1, 3)
+        depth = cast_parallel(geometry.bvh, origins, frame.forward).reshape(height, width)
+        img = _store(spec, depth, version)
+        img[SUN_FRAME] = repr(tuple(frame))
+    return SunShadow(spec, frame)
 
 
 def _is_spot(light):
@@ -185,7 +242,8 @@ def describe(light, img):
 
 
 def remove_unused(keep=()):
-    """Remove the shadow maps of lights no longer shafted (names not in ``keep``)."""
+    """Remove the shadow maps of lights no longer shafted (names not in ``keep``; the sun's SUN_IMAGE too unless
+    kept)."""
     for img in list(bpy.data.images):
-        if img.name.startswith(IMAGE_PREFIX) and img.name not in keep:
+        if (img.name.startswith(IMAGE_PREFIX) or img.name == SUN_IMAGE) and img.name not in keep:
             bpy.data.images.remove(img)

@@ -277,6 +277,73 @@ def refresh_glow_table(scene, spec):
         glow_table(scene, spec)
 
 
+def sun_casts_shafts(scene, spec):
+    """The Sun light whose shadows fall in the fog layer as shafts (``shafts.sun_lit_share``), or None: the daylight's
+    sun, with Light Shafts on and the sun casting shadows."""
+    if not spec.shafts or not is_daylit(scene, spec) or scene.camera is None:
+        return None
+    suns = scene_suns(scene)
+    if not suns or not getattr(suns[0].data, "use_shadow", True):
+        return None
+    return suns[0]
+
+
+def shaft_region(scene, spec):
+    """(8, 3) world corners of the box of fog layer the camera sees, where the sun's shafts are mapped: over the
+    ground, up to the lamps' glow top (``sunlight.lamp_glow_top``), and across the part of the view frustum's corner
+    and centre rays in the layer (``sunlight.lamp_glow_span``), each at most SUN_REACH mean free paths long."""
+    from .precompute import daylight as daylight_, shafts
+    from .precompute.ops import NumpyOps
+    top, falloff, ground = spec.layer_per_unit()
+    top_z = sunlight.lamp_glow_top(top, falloff, ground)
+    cam = scene.camera
+    eye = np.asarray(cam.matrix_world.translation, float)
+    frame = [np.asarray(cam.matrix_world.to_3x3() @ v, float) for v in cam.data.view_frame(scene=scene)]
+    rays = [v / np.linalg.norm(v) for v in frame + [sum(frame)]]
+    reach = shafts.SUN_REACH / max(spec.beta_per_unit, 1e-9)
+    m = NumpyOps()
+    points = [eye]
+    for d in rays:
+        t0, t1 = (float(t) for t in sunlight.lamp_glow_span(m, top_z, eye, d))
+        if t0 >= daylight_.UNBOUNDED:
+            continue
+        points += [eye + d * t0, eye + d * min(t1, t0 + reach)]
+    xy = np.array(points)[:, :2]
+    lo, hi = np.maximum(xy.min(axis=0), eye[:2] - reach), np.minimum(xy.max(axis=0), eye[:2] + reach)
+    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (ground, top_z)])
+
+
+def sun_shadow(scene, spec):
+    """(``shadow_maps.SunShadow`` or None, {name: image}): the sun's map over ``shaft_region`` when
+    ``sun_casts_shafts``, baked unless its image holds it already."""
+    from . import shadow_maps
+    sun = sun_casts_shafts(scene, spec)
+    if sun is None:
+        return None, {}
+    shadow = shadow_maps.sun_shadow(scene, sun, shaft_region(scene, spec))
+    if shadow is None:
+        return None, {}
+    return shadow, {shadow.spec.name: bpy.data.images[shadow.spec.name]}
+
+
+def _shaft_note(scene, spec, method_name):
+    """What the sun's shadows do in the fog with ``method_name``."""
+    if sun_casts_shafts(scene, spec) is None:
+        why = "Light Shafts are off" if not spec.shafts else "it casts no shadows"
+        return f"{why}: its shadows cast no shafts into the fog"
+    if method_name != "compositor":
+        return (f"with {method_name} its shadows fall on surfaces but cast no shafts into the fog: the Compositor "
+                "method (Auto's choice in daylight) casts them")
+    from . import caveats
+    moving = [o.name for o in [scene.camera, *caveats.shadow_casters(scene)] if caveats._animated(o)]
+    said = ("its shafts in the fog come from a map of the scene's shadows baked at Update Fog around the camera's "
+            "view; the air's glow and the sky's light cast none, and the fog light on surfaces is not shadowed")
+    if moving:
+        said += (f"; {', '.join(moving[:3])}{' and more' if len(moving) > 3 else ''} move: the map stays as baked "
+                 "(update the fog on the frame to render)")
+    return said
+
+
 def builder(scene, spec):
     """The groups' ``day`` argument: ``daylight`` of this scene and spec as a function of (m, beta), or None for
     fog that fills all space."""
@@ -345,8 +412,8 @@ def notes(scene, spec, method_name, lamps=()):
         from . import caveats
         sun = suns[0]
         out.append((sun.name, "its light on surfaces and the sky's are dimmed by one factor weighted by the two "
-                              "(lamps' light on the same surfaces is dimmed by it too); its shadows fall on "
-                              "surfaces but cast no shafts into the fog"))
+                              "(lamps' light on the same surfaces is dimmed by it too)"))
+        out.append((sun.name, _shaft_note(scene, spec, method_name)))
         if caveats._animated(sun):
             out.append((sun.name, "is animated: its fog light on surfaces is baked for the sun's direction when "
                                   "the fog was last updated (its glow and dimming follow every frame)"))

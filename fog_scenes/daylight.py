@@ -77,6 +77,11 @@ CLIP_END_M = 20000.0
 
 GROUND = dict(half_width_m=10000.0, albedo=0.3)
 SUN = dict(elevation_deg=40.0, azimuth_deg=-50.0, strength_w_m2=3.0, angle_deg=0.5)
+# The suns of the cases: ``morning`` (SUN, the test conventions: nothing casts a shadow) and ``low`` (12 degrees up,
+# ahead and 40 degrees to the right, just out of the inside camera's view, 10 W/m^2, every surface casting shadows:
+# the buildings' shadows cross the street in the fog as shafts, issue 29's "shafts between buildings")
+SUNS = dict(morning=dict(SUN, shadows=False),
+            low=dict(SUN, elevation_deg=12.0, azimuth_deg=40.0, strength_w_m2=10.0, shadows=True))
 WORLD_COLOUR = (0.35, 0.5, 0.8)   # W/(m^2 sr) over the upper hemisphere (Background strength 1)
 WORLD_STRENGTH = 1.0
 WORLD_BELOW_HORIZON = 0.0         # the World's radiance below the horizon, over WORLD_COLOUR
@@ -110,7 +115,7 @@ CAMERAS = dict(
     above=dict(location=(0.0, -300.0, 250.0), pitch_deg=-25.0, lens_mm=30.0),
 )
 
-Case = collections.namedtuple("Case", "profile g camera")
+Case = collections.namedtuple("Case", "profile g camera sun", defaults=("morning",))
 
 # The cached references: (case, samples per render, seeds).  Render times and noise:
 # docs/measurements/2026-11-27-daylight-references.md.
@@ -124,20 +129,21 @@ EXTRA_CASES = [(Case("falloff", 0.7, "above"), 1024, 2)]
 
 
 def as_case(case):
-    """A :class:`Case` from a Case, a (profile, g, camera) tuple or a name such as 'hard_g0.7_inside'."""
+    """A :class:`Case` from a Case, a (profile, g, camera[, sun]) tuple or a name such as 'hard_g0.7_inside' or
+    'hard_g0.7_inside_low'."""
     if isinstance(case, str):
-        profile, g, camera = case.split("_")
-        case = Case(profile, float(g.lstrip("g")), camera)
-    case = Case(str(case[0]), float(case[1]), str(case[2]))
-    if case.profile not in LAYER["profiles"] or case.camera not in CAMERAS:
+        profile, g, camera, *sun = case.split("_")
+        case = Case(profile, float(g.lstrip("g")), camera, *sun)
+    case = Case(str(case[0]), float(case[1]), str(case[2]), str(case[3]) if len(case) > 3 else "morning")
+    if case.profile not in LAYER["profiles"] or case.camera not in CAMERAS or case.sun not in SUNS:
         raise ValueError(f"unknown case {case}: profiles {sorted(LAYER['profiles'])}, cameras {sorted(CAMERAS)}")
     return case
 
 
 def case_name(case):
-    """'hard_g0_inside' etc."""
+    """'hard_g0_inside', 'hard_g0.7_inside_low' etc."""
     c = as_case(case)
-    return f"{c.profile}_g{c.g:g}_{c.camera}"
+    return f"{c.profile}_g{c.g:g}_{c.camera}" + ("" if c.sun == "morning" else f"_{c.sun}")
 
 
 def layer(case):
@@ -156,9 +162,9 @@ def fog_flags(case):
             "--height-falloff", repr(f["H"]))
 
 
-def sun_direction():
-    """Unit vector towards the sun (world): (cos e sin az, cos e cos az, sin e)."""
-    e, az = math.radians(SUN["elevation_deg"]), math.radians(SUN["azimuth_deg"])
+def sun_direction(sun="morning"):
+    """Unit vector towards the sun ``sun`` of SUNS (world): (cos e sin az, cos e cos az, sin e)."""
+    e, az = math.radians(SUNS[sun]["elevation_deg"]), math.radians(SUNS[sun]["azimuth_deg"])
     return np.array([math.cos(e) * math.sin(az), math.cos(e) * math.cos(az), math.sin(e)])
 
 
@@ -281,13 +287,14 @@ def build(scene, case, with_fog=True, samples=1024, resolution=RESOLUTION, cast_
         solids.append(add_box_between(scene, b["name"], b["x0"], b["x1"], b["y0"], b["y1"], 0.0, b["height"],
                                       mats[a]))
     ld = bpy.data.lights.new("Sun", 'SUN')
-    ld.energy = SUN["strength_w_m2"]
+    ld.energy = SUNS[c.sun]["strength_w_m2"]
     ld.angle = math.radians(SUN["angle_deg"])
     ld.use_shadow = True
     ld.color = (1.0, 1.0, 1.0)
     sun = bpy.data.objects.new("Sun", ld)
-    sun.rotation_euler = Vector(-sun_direction()).to_track_quat('-Z', 'Y').to_euler()   # shines along local -Z
+    sun.rotation_euler = Vector(-sun_direction(c.sun)).to_track_quat('-Z', 'Y').to_euler()   # shines along -Z
     scene.collection.objects.link(sun)
+    cast_shadows = cast_shadows or SUNS[c.sun]["shadows"]
     cam_spec = CAMERAS[c.camera]
     loc = Vector(cam_spec["location"])
     p = math.radians(cam_spec["pitch_deg"])
@@ -308,7 +315,7 @@ def build(scene, case, with_fog=True, samples=1024, resolution=RESOLUTION, cast_
     scene.render.film_transparent = False
     bpy.context.view_layer.update()
     s = sun.matrix_world.to_3x3().col[2]    # local +Z: towards the sun
-    assert max(abs(a - b) for a, b in zip(s.normalized(), sun_direction())) < 1e-6, s
+    assert max(abs(a - b) for a, b in zip(s.normalized(), sun_direction(c.sun))) < 1e-6, s
     return scene
 
 
@@ -335,7 +342,7 @@ def blend_path(case, with_fog=True, workdir=None):
     harness's scratch folder), built if missing."""
     c = as_case(case)
     workdir = pathlib.Path(workdir) if workdir else _workdir()
-    tag = case_name(c) if with_fog else f"clear_{c.camera}"
+    tag = case_name(c) if with_fog else f"clear_{c.camera}" + ("" if c.sun == "morning" else f"_{c.sun}")
     blend = workdir / f"{NAME}_{tag}.blend"
     if not blend.is_file():
         build_scene(blend, c, with_fog=with_fog)
@@ -369,13 +376,14 @@ def reference_name(case, samples, seeds, resolution=RESOLUTION):
     f, c = layer(case), as_case(case)
     w, hh = resolution
     return (f"{NAME}_{c.profile}_beta{f['beta0']:g}_h{f['h0']:g}_H{f['H']:g}_g{c.g:g}_a{f['albedo']:g}"
-            f"_{c.camera}_vb0_{w}x{hh}_{int(samples)}spp_x{int(seeds)}.exr")
+            f"_{c.camera}{'' if c.sun == 'morning' else '_' + c.sun}_vb0_{w}x{hh}_{int(samples)}spp_x{int(seeds)}.exr")
 
 
 def clear_name(case, samples, seeds, resolution=RESOLUTION):
     """File name of the cached fog-free render of ``case``'s camera."""
     w, hh = resolution
-    return f"{NAME}_clear_{as_case(case).camera}_{w}x{hh}_{int(samples)}spp_x{int(seeds)}.exr"
+    c = as_case(case)
+    return f"{NAME}_clear_{c.camera}{'' if c.sun == 'morning' else '_' + c.sun}_{w}x{hh}_{int(samples)}spp_x{int(seeds)}.exr"
 
 
 def _render_seeds(blend, path, samples, seeds, fog, regen=False, times=None, timeout=3600):

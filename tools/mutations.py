@@ -359,6 +359,34 @@ MUTATIONS = [
              "    t_sun = daylight.sun_transmittance(m, z, sun_elevation(m, day), *args)",
              "    t_sun = 1.0",
              ("tests/test_sunlight.py::test_direct_dimming_limits",)),
+    Mutation("sun_shafts_ignore_the_map", "sun shafts: the fog is lit wherever the sun's map says it is in a shadow",
+             "fog_addon/precompute/shafts.py",
+             "    return m.select(inside, m.less(beyond, depth - frame.bias), 1.0)",
+             "    return 1.0 + 0.0 * m.select(inside, m.less(beyond, depth - frame.bias), 1.0)",
+             ("tests/test_sun_shafts.py::test_sun_share_matches_quadrature",)),
+    Mutation("sun_nodes_not_importance_placed", "sun shafts: the lit share's nodes are spread evenly along the ray, "
+             "not in the quantiles of the sun's single scattering (the share then weighs the far fog as the near)",
+             "fog_addon/precompute/shafts.py",
+             "    return m.select(flat, u, placed)",
+             "    return u + 0.0 * placed",
+             ("tests/test_sun_shafts.py::test_node_places_are_the_quantiles",)),
+    Mutation("sun_surface_share_unweighted", "sun shafts: the fog light's share weighs every hemisphere direction "
+             "alike, not by the sun's single scattering along it (its phase function and its span in the layer)",
+             "fog_addon/precompute/shafts.py",
+             "        weight = integral * (_hg(mm, g, mm.dot(u, s)) if g else 1.0)",
+             "        weight = 1.0 + 0.0 * integral",
+             ("tests/test_sun_shafts.py::test_sun_surface_share_matches_quadrature",)),
+    Mutation("sun_shadow_dims_as_lit", "sun shafts: a surface in the sun's shadow takes the sun's and the sky's "
+             "weighted dimming, as if the sun reached it",
+             "fog_addon/nodes/comp_fog.py",
+             "        sun_visible = (None if sun_share is None else",
+             "        sun_visible = (None if True else",
+             ("tests/test_sun_shafts_render.py::test_sun_shafts_against_cycles",)),
+    Mutation("sun_shafts_unwired", "sun shafts, Compositor: the glow and the fog light on surfaces take no shares",
+             "fog_addon/nodes/comp_fog.py",
+             "                              cover, sun_share, surface_share)",
+             "                              cover, None, None)",
+             ("tests/test_sun_shafts_render.py::test_sun_shafts_against_cycles",)),
 ]
 
 

@@ -59,15 +59,17 @@ class Compositor(Method):
                              day_dims=dims and not daylit, day_exact=not daylit)
         shafted = shafted_lights(scene, spec, plan.in_groups) if spec.shafts else []
         maps, shadow_images = shadow_maps.ensure(scene, shafted)
-        shadow_maps.remove_unused(set(shadow_images))
-        images = dict(images, **shadow_images)
+        sun_shadow, sun_images = sunsky.sun_shadow(scene, spec) if daylit else (None, {})
+        shadow_maps.remove_unused(set(shadow_images) | set(sun_images))
+        images = dict(images, **shadow_images, **sun_images)
         images = comp_fog.build_fog_group(scene, plan.in_groups, plan.grouped_models, images,
                                           view.full_windows(plan.in_groups) if plan.partial else plan.windows,
                                           plan.partial, (maps, shafts.samples_for(spec.quality, len(maps)),
                                                          spec.anisotropy),
                                           emitters=((spec.anisotropy, spec.multiple_albedo) if glowing_objects(scene)
                                                     else None),
-                                          day=(day, table, dims) if daylit else None,
+                                          day=((day, table, dims, sun_shadow, shafts.samples_for(spec.quality).view_nodes)
+                                               if daylit else None),
                                           layer=spec.layer_per_unit() if spec.layered else None)
         groups.build_world([], [], scene.camera, images, spec.passes, day=day, day_dims=not daylit)
         return images

@@ -646,20 +646,64 @@ def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=
     return total
 
 
-def _daylight(m, day, table, camera, direction, position, normal, reflectance, d_vp, t_vp, cover):
+def _daylight(m, day, table, camera, direction, position, normal, reflectance, d_vp, t_vp, cover, sun_share=None,
+              surface_share=None):
     """The sun's and the sky's light in a fog layer at a pixel (albedos included): ``groups.daylight_light`` where the
     pixel sees a surface, the glow to the sky (``sunlight.ray_glow``) where it does not.  With air the glow is
     evaluated once, to the surface where it covers most of the pixel and to the sky elsewhere (without the glow's
-    table its kernel is the costliest part of the picture: a pixel on a silhouette takes one side's glow)."""
+    table its kernel is the costliest part of the picture: a pixel on a silhouette takes one side's glow).
+    ``sun_share``, ``surface_share``: the lit shares of the layer's sun glow and of the sun's part of the fog light on
+    the pixel's surface (``_sun_shares``), or None."""
     if day.air is None:
         to_surface = groups.daylight_light(m, day, table, camera, direction, position, normal, reflectance, d_vp,
-                                           t_vp)
-        to_sky = sunlight.ray_glow(m, day, camera, direction, model.FAR)
+                                           t_vp, sun_share, surface_share)
+        to_sky = sunlight.ray_glow(m, day, camera, direction, model.FAR, sun_share)
         return m.scale(to_surface, cover) + m.scale(to_sky, 1.0 - cover)
     surface = m.less(0.5, cover)
-    glow = sunlight.ray_glow(m, day, camera, direction, m.select(surface, d_vp, model.FAR))
-    reflected = sunlight.times(m, reflectance * sunlight.fog_light(m, table, day, position, normal), t_vp)
+    glow = sunlight.ray_glow(m, day, camera, direction, m.select(surface, d_vp, model.FAR), sun_share)
+    reflected = sunlight.times(m, reflectance * sunlight.fog_light(m, table, day, position, normal, surface_share),
+                               t_vp)
     return glow + m.scale(reflected, cover)
+
+
+SUN_SHAFT_NODE = f"{SHAFT_GROUP} Sun Node"   # one group per quadrature node of the sun's lit share
+
+
+def _sun_shares(m, sun_shadow, nodes, day, camera, direction, layer, length, beta, point, normal, pixel_xy,
+                shaft_length):
+    """(the lit share of the layer's sun glow at a pixel, the lit share of the sun's part of the fog light on its
+    surface) from the sun's map ``sun_shadow`` (``shadow_maps.SunShadow``).  The glow's (``shafts.sun_lit_share``)
+    over the part of the pixel's ray in the layer (``sunlight.lamp_glow_span`` below its lamps' glow top), to the
+    pixel's surface or, past ``length``, the sky, at most SUN_REACH mean free paths, ``nodes`` a pixel interleaved
+    over 2 x 2 pixels; the surface's (``shafts.sun_surface_share``) interleaved over 4 x 4.  Each is averaged over its
+    pattern depth-aware (``_interleave_mean``, by ``shaft_length``)."""
+    spec, frame = sun_shadow
+    top_z = sunlight.lamp_glow_top(*layer)
+    t0, t1 = sunlight.lamp_glow_span(m, top_z, camera, direction)
+    meets = m.less(t0, LAYER_OPEN)
+    start = m.minimum(t0, LAYER_OPEN)
+    span = m.maximum(m.minimum(m.minimum(t1, length) - start, shafts.SUN_REACH / m.maximum(beta, 1e-9)), 0.0)
+    rate = shafts.sun_attenuation_rate(m, beta, m.dot(direction, (0.0, 0.0, 1.0)), sunlight.sun_elevation(m, day))
+    origin = camera + m.scale(direction, start)
+    tag = hashlib.sha1(repr((spec, tuple(frame))).encode()).hexdigest()[:12]
+
+    def node(mm, ox, oy, oz, dx, dy, dz, span_, a_l, u):
+        t = span_ * shafts.sun_node_place(mm, u, a_l)
+        return shafts.sun_lit(mm, spec, frame, mm.combine(ox, oy, oz) + mm.scale(mm.combine(dx, dy, dz), t))
+    xyz = [m.dot(v, axis) for v in (origin, direction) for axis in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))]
+    px, py = m.dot(pixel_xy, (1.0, 0.0, 0.0)), m.dot(pixel_xy, (0.0, 1.0, 0.0))
+    offset = shafts.offset(m, px, py)
+    lit_sum = 0.0
+    for k in range(nodes):
+        u = (offset + float(k)) * (1.0 / nodes)
+        lit_sum = lit_sum + m.group(f"{SUN_SHAFT_NODE} {tag}", node, *xyz, span, rate * span, u)
+    share = _interleave_mean_group(m, m.select(meets, lit_sum * (1.0 / nodes), 1.0), shaft_length, SHAFT_TAPS,
+                                   SHAFT_EDGE)
+    lit, total = shafts.sun_surface_share(m, spec, frame, point, normal, camera, beta, day.sun, float(day.g), top_z,
+                                          float(layer[2]), shafts.surface_offset(m, px, py),
+                                          name=f"{SUN_SHAFT_NODE} {tag}")
+    parts = _interleave_mean_group(m, m.combine(lit, total, 1.0), shaft_length, SURFACE_TAPS, SURFACE_EDGE)
+    return share, shafts.share_of(m.dot(parts, (1.0, 0.0, 0.0)), m.dot(parts, (0.0, 1.0, 0.0)))
 
 
 def build_fog_group(scene, lights, models, images, windows=None, partial=False, shafted=None, emitters=None,
@@ -671,7 +715,8 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     they do not hold the animation's range (``PARTIAL``); ``shafted``: ``build_bundle``'s; ``emitters``: (the fog's
     g, Dense Fog's albedo or None) if glowing objects get their glows (``_emitter_glow``: an Emission input), else
     None; ``day``: (``build_surface``'s ``day``, the fog light's TableSpec, whether surfaces take the sun's and the
-    sky's dimming: ``sunsky.dims_surfaces``) for a fog layer with a sun or a sky
+    sky's dimming: ``sunsky.dims_surfaces``, the sun's map (``shadow_maps.SunShadow``) or None, its nodes a pixel)
+    for a fog layer with a sun or a sky
     (``_daylight``; the render's surfaces take the sun's and the sky's dimming here, once per pixel, and the sky seen
     its transmittance), else None; ``layer``: a fog layer's (top, falloff, ground) in units (``FogSpec.layer_per_unit``),
     where the lights' glows end (``sunlight.lamp_glow_span``), or None for fog that fills all space.  Rebuilt in
@@ -779,16 +824,23 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     else:   # Eq. 19 where the pixel sees its surface, Eq. 12 where it sees the sky
         fog = albedo * shading.pixel_light(m, sums, t_vp, cover)
     if daylight is not None:
+        sun_share = surface_share = None
+        if day[3] is not None and layer is not None:   # the sun's shafts
+            sun_share, surface_share = _sun_shares(m, day[3], day[4], daylight, cam, direction, layer,
+                                                   m.select(m.less(0.5, cover), d_vp, model.FAR), beta, pos, normal,
+                                                   pixel_xy, shared["Shaft Length"])
         fog = fog + _daylight(m, daylight, day[1], cam, direction, pos, normal, diffuse + specular, d_vp, t_day,
-                              cover)
+                              cover, sun_share, surface_share)
     if emitters is not None:
         fog = fog + albedo * _emitter_glow(m, p, beta, d_vp, emitters[0], emitter_pixel_angle(scene), emitters[1],
                                            cover)
     image = p["Image"]
     if daylight is not None:   # the dimming of the pixel's surface by the fog above it and of the sky seen through
         one = 1.0 if daylight.air is None else m.wrap((1.0, 1.0, 1.0))   # (with air the dimming is RGB)
-        dims = (m.select(m.less(0.0, cover), sunlight.direct_dimming(m, daylight, pos, normal), one)   # the layer
-                if day[2] else m.const(1.0))
+        sun_visible = (None if sun_share is None else   # the sun's map: a surface in its shadow takes the sky's factor
+                       shafts.sun_surface_lit(m, day[3].spec, day[3].frame, pos, normal))
+        dims = (m.select(m.less(0.0, cover), sunlight.direct_dimming(m, daylight, pos, normal, sun_visible), one)
+                if day[2] else m.const(1.0))   # the layer's
         seen = sunlight.sky_seen(m, daylight, cam, direction)
         # the materials dimmed their samples by a grey stand-in (``sunlight.proxy_transmittance``): the camera
         # segment's exact transmittance (with air its colour) comes here, per pixel

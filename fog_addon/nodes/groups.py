@@ -957,14 +957,15 @@ def build_world_bundle(images, first, lights, models, with_passes, chained):
     return ng
 
 
-def daylight_light(m, day, table, camera, direction, position, normal, reflectance, length, t_vp):
+def daylight_light(m, day, table, camera, direction, position, normal, reflectance, length, t_vp, sun_share=None,
+                   surface_share=None):
     """The sun's and the sky's light in a fog layer on a camera ray that meets a surface, the layer's and the air's
     albedo included (``precompute/sunlight.py``): the glow along the ray plus the fog light the surface reflects,
     dimmed on its way (Sun et al. 2005 Eq. 19's L_a; the reflectance taken as Lambertian: the diffuse plus the
     specular albedo times the irradiance over pi).  The Compositor's per pixel (``comp_fog._daylight``) and the
-    Surface group's."""
-    return sunlight.ray_glow(m, day, camera, direction, length) + sunlight.times(
-        m, reflectance * sunlight.fog_light(m, table, day, position, normal), t_vp)
+    Surface group's.  ``sun_share``: ``sunlight.ray_glow``'s, ``surface_share``: ``sunlight.fog_light``'s."""
+    return sunlight.ray_glow(m, day, camera, direction, length, sun_share) + sunlight.times(
+        m, reflectance * sunlight.fog_light(m, table, day, position, normal, surface_share), t_vp)
 
 
 def build_world(lights, models, camera, images, with_passes=False, day=None, day_table=None, day_dims=True):

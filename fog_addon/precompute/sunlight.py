@@ -164,7 +164,7 @@ def _tag(value):
     return f"{value:.6g}".replace(".", "p").replace("-", "m").replace("+", "")
 
 
-def ray_glow(m, day, origin, direction, length):
+def ray_glow(m, day, origin, direction, length, sun_share=None):
     """The sun's and the sky's single scattering along a camera segment, W/(m^2 sr) (RGB), the layer's albedo
     included; from ``day.glow_table`` if the Daylight has one (``table_glow``: the same integrals baked for the
     camera's height), else by the kernels: E_sun ``daylight.sun_airlight`` (phase at the angle between the ray and the sun) + L_sky
@@ -174,9 +174,12 @@ def ray_glow(m, day, origin, direction, length):
     With air (``daylight.air_glow``, per colour channel): the sun's scattering by the layer (Henyey-Greenstein) and
     by the air (Rayleigh), the sun reaching each point through both; the air's scattering of the sky; and the
     layer's exact sky glow times the air's share of it (its dimming of the sky's light and of the glow on its way
-    to the camera)."""
+    to the camera).
+
+    ``sun_share``: the share of the layer's sun glow that the sun reaches past shadow casters (``shafts.sun_lit_share``),
+    or None for all of it; the sky's glow and the air's are left whole (light shafts of the layer only)."""
     if day.glow_table is not None:
-        return table_glow(m, day, direction, length)
+        return table_glow(m, day, direction, length, sun_share)
     pz, vz = _z(m, origin) - day.ground, _z(m, direction)
     args = _layer(day)
     g = float(day.g)
@@ -188,7 +191,7 @@ def ray_glow(m, day, origin, direction, length):
     if air is None:
         sun = m.group(f"daylight sun {tag}", lambda mm, *a: daylight.sun_airlight(mm, *a, albedo=1.0, g=g),
                       pz, vz, length, mu_s, cos_theta, *args)
-        return _albedo(m, day, m.scale(day.sun_irradiance, sun) + m.scale(day.sky_radiance, sky))
+        return _albedo(m, day, m.scale(day.sun_irradiance, _shared(sun, sun_share)) + m.scale(day.sky_radiance, sky))
     up = m.less(0.0, mu_s)
     p_l = m.select(up, daylight.hg_phase(m, g, cos_theta), 0.0)
     p_r = m.select(up, daylight.rayleigh_phase(m, cos_theta), 0.0)
@@ -200,13 +203,19 @@ def ray_glow(m, day, origin, direction, length):
                      for v in channel)
     flat = m.group(name, kernel, pz, vz, length, mu_s, day.beta, *air)
     return _air_glow_light(m, day, p_l, p_r, [(sun_l, sun_a, sky * sky_ratio, sky_a) for sun_l, sun_a, sky_a, sky_ratio
-                                              in (flat[4 * k:4 * k + 4] for k in range(3))])
+                                              in (flat[4 * k:4 * k + 4] for k in range(3))], sun_share)
 
 
-def _air_glow_light(m, day, p_l, p_r, channels):
+def _shared(value, share):
+    """``value`` times a share, or itself for None."""
+    return value if share is None else value * share
+
+
+def _air_glow_light(m, day, p_l, p_r, channels, sun_share=None):
     """The glow with air, W/(m^2 sr) (RGB), from each colour channel's integrals (sun_l, sun_a, sky_l, sky_a): the
-    sun's (E_sun per channel) scattered by the layer (phase p_l, the layer's albedo) and by the air (phase p_r),
-    and the sky's (L_sky) glow in the layer (its albedo) and in the air."""
+    sun's (E_sun per channel) scattered by the layer (phase p_l, the layer's albedo; times ``sun_share`` if given)
+    and by the air (phase p_r), and the sky's (L_sky) glow in the layer (its albedo) and in the air."""
+    p_l = _shared(p_l, sun_share)
     albedo = [m.dot(day.albedo, axis) for axis in AXES] if _is_rgb(day.albedo) else [day.albedo] * 3
     suns = [(a * p_l) * sun_l + p_r * sun_a for a, (sun_l, sun_a, _, _) in zip(albedo, channels)]
     skies = [a * sky_l + sky_a for a, (_, _, sky_l, sky_a) in zip(albedo, channels)]
@@ -288,7 +297,7 @@ def bake_glow_table(beta, top, falloff, mu_s, g, camera_height, air=None, air_he
     return out.astype(np.float32)
 
 
-def table_glow(m, day, direction, length):
+def table_glow(m, day, direction, length, sun_share=None):
     """``ray_glow`` from the Daylight's ``GlowTable`` (baked for the camera's height: ``bake_glow_table``): one
     bilinear lookup per block, the phase functions and the sun's and the sky's light per pixel."""
     t = day.glow_table
@@ -298,7 +307,7 @@ def table_glow(m, day, direction, length):
 
     def texel(block, channel):
         return m.table(t.spec, x, y, row0=block * rows, rows=rows, channel=channel)
-    p_l = daylight.hg_phase(m, float(day.g), cos_theta)
+    p_l = _shared(daylight.hg_phase(m, float(day.g), cos_theta), sun_share)
     if t.blocks == 1:
         return _albedo(m, day, m.scale(day.sun_irradiance, p_l * texel(0, 0))
                        + m.scale(day.sky_radiance, texel(0, 1)))
@@ -318,17 +327,20 @@ def _albedo(m, day, rgb):
     return times(m, rgb, day.albedo)
 
 
-def direct_dimming(m, day, point, normal):
+def direct_dimming(m, day, point, normal, sun_visible=None):
     """The factor on a surface's direct light from the sun and the sky (Dobashi et al. 2002 Eq. 11's g_l): the sun's
     transmittance to the point (``daylight.sun_transmittance``) and the sky's direct irradiance through the fog
     (``daylight.sky_tilted_irradiance``), weighted by their fog-free irradiances on it, E_sun max(n.s, 0) and
     pi L_sky (1 + n_z) / 2.  One factor for the user's shader, which sums both lights: exact
-    where one of them dominates or the two transmittances agree; a point in the sun's shadow gets the weighted
-    factor, not the sky's alone.  With air RGB: both lights through the layer's and the air's column (the direct
+    where one of them dominates or the two transmittances agree.  ``sun_visible``: 1 where the sun reaches the point,
+    0 in a shadow (``shafts.sun_surface_lit``; the sun's weight is 0 there and the factor is the sky's alone), None:
+    the weighted factor everywhere.  With air RGB: both lights through the layer's and the air's column (the direct
     sky light depends on the column alone, ``daylight.tilted_irradiance_of_column``)."""
     z = _z(m, point) - day.ground
     args = _layer(day)
     w_sun = _grey(m, day.sun_irradiance) * m.maximum(m.dot(normal, day.sun), 0.0)
+    if sun_visible is not None:
+        w_sun = w_sun * sun_visible
     sky = _grey(m, day.sky_radiance)
     nz = _z(m, normal)
     free = w_sun + sky * (math.pi * 0.5) * (1.0 + nz) + 1e-30
@@ -512,18 +524,19 @@ def _coefficient(m, spec, x, i):
     return m.table(spec, x, (i // 4) / (TABLE_ROWS - 1.0), channel=i % 4)
 
 
-def fog_light(m, spec, day, point, normal):
+def fog_light(m, spec, day, point, normal, sun_share=None):
     """The irradiance over pi that the layer's single scattering sends onto a surface at ``point`` with unit
     ``normal``, W/(m^2 sr) (RGB), from the baked map (``bake_fog_light``, ``spec`` its TableSpec)
     at the point's height: E_sun (I_s C_g(n.s) + the sun's residual map) + L_sky (the sky's map), each map
     clamped at 0 (an order-2 map rings below 0 facing away from a peaked field); times the layer's albedo.  Times a
     Lambertian albedo: the radiance the surface reflects.  With air ``spec`` is three maps, one per colour channel,
-    both species' light and the albedos in them (``bake_fog_light``)."""
+    both species' light and the albedos in them (``bake_fog_light``).  ``sun_share``: the share of the sun's part that
+    the sun's shadows in the fog leave (``shafts.sun_surface_share``), or None for all of it."""
     x = m.clamp01((_z(m, point) - day.ground) * (1.0 / table_height(day.top, day.falloff)))
     basis = sh_basis(m, normal)
     if isinstance(spec, tuple):   # with air: one map per colour channel, the albedos in it
         sun_e, sky_l = ([m.dot(v, axis) for axis in AXES] for v in (day.sun_irradiance, day.sky_radiance))
-        return m.combine(*(e * _irradiance(m, c, x, basis, normal, day)
+        return m.combine(*(_shared(e, sun_share) * _irradiance(m, c, x, basis, normal, day)
                            + l * _irradiance(m, c, x, basis, normal, day, 1) for c, e, l in zip(spec, sun_e, sky_l)))
-    return _albedo(m, day, m.scale(day.sun_irradiance, _irradiance(m, spec, x, basis, normal, day))
+    return _albedo(m, day, m.scale(day.sun_irradiance, _shared(_irradiance(m, spec, x, basis, normal, day), sun_share))
                    + m.scale(day.sky_radiance, _irradiance(m, spec, x, basis, normal, day, 1)))
