@@ -337,7 +337,7 @@ def _shaft_note(scene, spec, method_name):
     from . import caveats
     moving = [o.name for o in [scene.camera, *caveats.shadow_casters(scene)] if caveats._animated(o)]
     said = ("its shafts in the fog come from a map of the scene's shadows baked at Update Fog around the camera's "
-            "view; the air's glow and the sky's light cast none, and the fog light on surfaces is not shadowed")
+            "view; the sky's light in the fog and on surfaces is not shadowed by the buildings, nor the air's glow")
     if moving:
         said += (f"; {', '.join(moving[:3])}{' and more' if len(moving) > 3 else ''} move: the map stays as baked "
                  "(update the fog on the frame to render)")

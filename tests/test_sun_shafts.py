@@ -181,3 +181,23 @@ def test_sun_surface_share_matches_quadrature(sun_map, surface):
     print(surface, want, got)
     assert want < 0.97, "a surface whose share does not test the shadows"
     assert abs(got - want) < 0.03, (want, got)
+
+
+def test_degenerate_rays_give_finite_shares(sun_map):
+    """Straight up and down, level, a sun on the horizon, no length, a vanishing or a huge density: S in [0, 1]."""
+    spec, frame, depth = sun_map
+    m = NumpyOps({"sun": depth})
+    for direction in ((0.0, 0.0, 1.0), (0.0, 0.0, -1.0), (0.0, 1.0, 0.0), _dir((5.0, 50.0, 3.0))):
+        for mu_s in (1e-6, 0.02, 1.0):
+            for beta in (1e-12, BETA, 1e3):
+                for length in (0.0, 1e-9, 40.0, 1e30):
+                    rate = shafts.sun_attenuation_rate(m, beta, direction[2], mu_s)
+                    s = shafts.sun_lit_share(m, spec, frame, CAMERA, np.asarray(direction), min(length, 6.0 / beta),
+                                             rate, 24, 0.5)
+                    assert np.isfinite(s) and 0.0 <= s <= 1.0, (direction, mu_s, beta, length, s)
+
+
+def test_sun_straight_up_has_a_frame():
+    frame, size = shafts.sun_frame((0.0, 0.0, 1.0), REGION)
+    assert np.allclose(frame.forward, (0.0, 0.0, -1.0)) and np.isclose(np.dot(frame.right, frame.up), 0.0)
+    assert shafts.sun_frame(SUN, REGION, np.array([[1000.0, 1000.0, 0.0], [1001.0, 1001.0, 1.0]])) is None

@@ -381,12 +381,12 @@ MUTATIONS = [
              "fog_addon/nodes/comp_fog.py",
              "        sun_visible = (None if sun_share is None else",
              "        sun_visible = (None if True else",
-             ("tests/test_sun_shafts_render.py::test_sun_shafts_against_cycles",)),
+             ("tests/test_sun_shafts_render.py::test_sun_shafts_against_cycles[hard_g0.7_inside_low]",)),
     Mutation("sun_shafts_unwired", "sun shafts, Compositor: the glow and the fog light on surfaces take no shares",
              "fog_addon/nodes/comp_fog.py",
              "                              cover, sun_share, surface_share)",
              "                              cover, None, None)",
-             ("tests/test_sun_shafts_render.py::test_sun_shafts_against_cycles",)),
+             ("tests/test_sun_shafts_render.py::test_sun_shafts_against_cycles[hard_g0.7_inside_low]",)),
 ]
 
 

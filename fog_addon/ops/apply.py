@@ -237,6 +237,11 @@ def explain(choice=None):
         lines.append(f"  Light shafts of {len(shafted)} light(s): {used.view_nodes} nodes a ray, "
                      f"{used.surface_directions} directions x {used.surface_nodes} nodes over surfaces{fewer}; their "
                      f"error is not in the prediction ({SHAFT_ERROR_NOTE})")
+    sun_map = bpy.data.images.get(shadow_maps.SUN_IMAGE)
+    if sun_map is not None:
+        lines.append(f"  The sun's shafts: a {sun_map.size[0]} x {sun_map.size[1]} map, "
+                     f"{shafts.samples_for(choice.get('quality')).view_nodes} nodes a ray, "
+                     f"{shafts.SUN_SURFACE_SAMPLES[0]} directions x {shafts.SUN_SURFACE_SAMPLES[1]} nodes over surfaces")
     return lines
 
 

@@ -449,6 +449,7 @@ def sun_lit(m, spec, frame, point):
     return m.select(inside, m.less(beyond, depth - frame.bias), 1.0)
 
 
+SUN_SURFACE_SAMPLES = (8, 4)   # directions over a surface's hemisphere x nodes along each (``sun_surface_share``)
 SUN_SURFACE_SLOPE = 10.0   # the steepest slope (tan) of a surface within a map cell that ``sun_surface_lit`` allows for
 
 
@@ -514,7 +515,7 @@ def sun_ray_span(m, point, direction, top_z, ground, reach):
 
 
 def sun_surface_share(m, spec, frame, point, normal, viewer, beta, sun, g, top_z, ground, shift=0.5,
-                      directions=8, nodes=4, name=None):
+                      directions=SUN_SURFACE_SAMPLES[0], nodes=SUN_SURFACE_SAMPLES[1], name=None):
     """(lit, total): the sun's part of the fog light a diffuse surface ``point`` receives (Sun et al. 2005 Eq. 17's
     G_0 over its hemisphere, weighted cos / pi) with and without the sun's shadows in the fog, whose ratio is the
     share its shadows leave (``surface_share``'s for a lamp).  Along each of ``directions`` cosine-weighted
