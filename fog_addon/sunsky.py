@@ -61,7 +61,7 @@ def uniform_sky(world):
 
 
 PROBE_KEY = "analytic_fog_sky_probe"   # on a World: {"fingerprint": of its nodes, "colour": ``probe_sky``'s}
-PROBE_SIZE = (64, 32)                   # px of the equirectangular probe render
+PROBE_SIZE = (sunlight.SKY_COLUMNS, 256)   # px of the equirectangular probe render (0.7 degrees a row)
 PROBE_SAMPLES = 16
 
 
@@ -81,7 +81,7 @@ def _tree_fingerprint(world):
     return "|".join(parts)
 
 
-PROBE_VERSION = "probe 2|"   # in the probe's fingerprint: probes kept by an older way of probing are made again
+PROBE_VERSION = "probe 3|"   # in the probe's fingerprint: probes kept by an older way of probing are made again
 
 
 def sun_discs(world):
@@ -98,13 +98,34 @@ def probe_sky(world):
     nodes' fingerprint so it is rendered again only when they change; None if it can't be rendered now (during a
     render).  A Sky Texture's sun disc is left out (a copy renders with it off): it is a sun, ten times the sky's
     mean at 40 degrees, and the fog's sun is the scene's Sun light (docs/measurements/2026-11-27-sky-texture.md)."""
-    from .nodes import owned
-    fingerprint = hashlib.sha1((PROBE_VERSION + _tree_fingerprint(world)).encode()).hexdigest()
+    fingerprint = _probe_fingerprint(world)
     kept = world.get(PROBE_KEY)
     if kept is not None and kept.get("fingerprint") == fingerprint:
         return tuple(float(c) for c in kept["colour"])
     if bpy.app.is_job_running("RENDER"):
         return None
+    pixels = _probe_pixels(world, fingerprint)
+    h = pixels.shape[0]
+    elevation = (0.5 - (np.arange(h) + 0.5) / h) * math.pi      # row 0 at the top (+90 degrees)
+    weight = np.where(elevation > 0.0, np.cos(elevation), 0.0)[:, None]
+    mean = (pixels * weight[..., None]).sum(axis=(0, 1)) / (weight.sum() * pixels.shape[1])
+    world[PROBE_KEY] = {"fingerprint": fingerprint, "colour": [float(c) for c in mean]}
+    return tuple(float(c) for c in mean)
+
+
+def _probe_fingerprint(world):
+    return hashlib.sha1((PROBE_VERSION + _tree_fingerprint(world)).encode()).hexdigest()
+
+
+_PROBED = {}   # fingerprint -> the probe's pixels, this process (the mean and the World's table share one render)
+
+
+def _probe_pixels(world, fingerprint):
+    """The World's equirectangular probe (``_render_equirect``), its Sky Textures' sun discs off and the fog's own
+    nodes left out (a copy)."""
+    from .nodes import owned
+    if fingerprint in _PROBED:
+        return _PROBED[fingerprint]
     probe = world
     if owned.is_fogged(world) or sun_discs(world):
         probe = world.copy()
@@ -120,12 +141,42 @@ def probe_sky(world):
     finally:
         if probe is not world:
             bpy.data.worlds.remove(probe)
-    h = pixels.shape[0]
-    elevation = (0.5 - (np.arange(h) + 0.5) / h) * math.pi      # row 0 at the top (+90 degrees)
-    weight = np.where(elevation > 0.0, np.cos(elevation), 0.0)[:, None]
-    mean = (pixels * weight[..., None]).sum(axis=(0, 1)) / (weight.sum() * pixels.shape[1])
-    world[PROBE_KEY] = {"fingerprint": fingerprint, "colour": [float(c) for c in mean]}
-    return tuple(float(c) for c in mean)
+    _PROBED.clear()
+    _PROBED[fingerprint] = pixels
+    return pixels
+
+
+def holds_air(world):
+    """Whether the World is a sky seen through its own air: a Sky Texture (of any sky type) that feeds something."""
+    if world is None or not world.use_nodes or world.node_tree is None:
+        return False
+    from .nodes import owned
+    return any(n.bl_idname == "ShaderNodeTexSky" and not owned.is_ours(n) and any(o.is_linked for o in n.outputs)
+               for n in world.node_tree.nodes)
+
+
+def world_sky_spec():
+    """The TableSpec of the World's radiance table (``world_sky_table``)."""
+    from .precompute import tables
+    return tables.TableSpec(sunlight.SKY_TABLE, sunlight.SKY_COLUMNS, sunlight.SKY_ROWS, channels=4)
+
+
+def world_sky_table(scene, spec):
+    """(TableSpec, {name: image}) of the World's radiance over the upper hemisphere (``sunlight.world_radiance``:
+    SKY_ROWS elevations x SKY_COLUMNS azimuths from the probe, sun discs off) where the fog has Air and the World
+    holds its own (``holds_air``), re-baked in place when the World's nodes change; else (None, {})."""
+    from .nodes import images as images_
+    world = scene.world
+    if spec.air_per_unit() is None or not is_daylit(scene, spec) or not holds_air(world):
+        return None, {}
+    table = world_sky_spec()
+    fingerprint = _probe_fingerprint(world)
+
+    def bake():
+        return sunlight.sky_table_from_probe(_probe_pixels(world, fingerprint))
+    if bpy.app.is_job_running("RENDER") and bpy.data.images.get(table.name) is None:
+        return None, {}
+    return table, {table.name: images_.keyed_image(table, fingerprint, bake)}
 
 
 def _render_equirect(world):
@@ -225,6 +276,7 @@ def fog_light_table(scene, spec):
     air = spec.air_per_unit()
     channels = [None] if air is None else [(b, air[1], a) for b, a in zip(air[0], spec.albedo)]
     tables_, images = [], dict(glow_table(scene, spec)[1])   # (the glow's table with the maps: ``daylight`` reads it)
+    images.update(world_sky_table(scene, spec)[1])            # (and the World's own sky, where it holds its air)
     for channel in channels:   # with air one map per colour channel, both species' light, the albedos in it
         table = sunlight.table_spec(beta, top, falloff, direction, spec.anisotropy, channel)
         images[table.name] = images_.table_image(table, functools.partial(
@@ -328,13 +380,14 @@ def sun_shadow(scene, spec):
 
 def _shaft_note(scene, spec, method_name):
     """What the sun's shadows do in the fog with ``method_name``."""
-    if sun_casts_shafts(scene, spec) is None:
-        why = "Light Shafts are off" if not spec.shafts else "it casts no shadows"
-        return f"{why}: its shadows cast no shafts into the fog"
+    from . import caveats
+    if sun_casts_shafts(scene, spec) is None or not caveats.shadow_casters(scene):
+        why = ("Light Shafts are off" if not spec.shafts else "nothing casts a shadow" if
+               sun_casts_shafts(scene, spec) is not None else "it casts no shadows")
+        return f"{why}: no shafts in the fog"
     if method_name != "compositor":
         return (f"with {method_name} its shadows fall on surfaces but cast no shafts into the fog: the Compositor "
                 "method (Auto's choice in daylight) casts them")
-    from . import caveats
     moving = [o.name for o in [scene.camera, *caveats.shadow_casters(scene)] if caveats._animated(o)]
     said = ("its shafts in the fog come from a map of the scene's shadows baked at Update Fog around the camera's "
             "view; the sky's light in the fog and on surfaces is not shadowed by the buildings, nor the air's glow")
@@ -378,8 +431,11 @@ def daylight(m, scene, spec, beta, albedo=1.0):
     air = spec.air_per_unit()
     table = (sunlight.glow_table(spec.beta_per_unit, None if air is None else air[0])
              if uses_glow_table(scene, spec) else None)
+    world_sky = None
+    if air is not None and holds_air(scene.world) and bpy.data.images.get(sunlight.SKY_TABLE) is not None:
+        world_sky = world_sky_spec()   # (baked by ``fog_light_table`` with the groups' other tables)
     return sunlight.Daylight(beta, top, falloff, ground, direction, irradiance, sky, spec.anisotropy, albedo,
-                             None if air is None else tuple(air[0]), 0.0 if air is None else air[1], table)
+                             None if air is None else tuple(air[0]), 0.0 if air is None else air[1], table, world_sky)
 
 
 def notes(scene, spec, method_name, lamps=()):
@@ -400,6 +456,11 @@ def notes(scene, spec, method_name, lamps=()):
     if scene.world is not None and not sky_colour(scene.world)[1]:
         out.append((scene.world.name, "the fog layer's sky glow takes this World as uniform, of its mean colour over "
                                       "the upper hemisphere (where seen, the World itself is dimmed exactly)"))
+    if spec.air_per_unit() is not None and is_daylit(scene, spec) and holds_air(scene.world):
+        out.append(("Air", f"the World {scene.world.name!r} is a Sky Texture, a sky seen through its own air: the air's "
+                           "glow fades to it (a pixel of sky shows it as it is, dimmed only by the fog layer), and the "
+                           "Sun light is taken as the sun at the ground, already through the air; a haze layer adds its "
+                           "own glow on top (a Sky Texture's aerosol density is haze of its own)"))
     if spec.air_per_unit() is not None and method_name != "compositor" and is_daylit(scene, spec):
         out.append(("Air", f"with {method_name} the air dims surfaces by the mean of its colour (a shader's factor "
                            "is one number): the distance greys but does not blue; the Compositor method (Auto's "

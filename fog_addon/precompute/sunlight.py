@@ -47,6 +47,9 @@ class Daylight(NamedTuple):
                          # scalars or an RGB value), or None without air
     air_height: float = 0.0   # units: the air's scale height (Python float)
     glow_table: Any = None    # ``GlowTable``: ``ray_glow`` reads the glow from a camera's baked table; None: the kernels
+    world_sky: Any = None     # ``tables.TableSpec`` of the World's radiance over the upper hemisphere when the World is
+                              # a sky seen through its own air (a Sky Texture): ``world_radiance``; None: the World is
+                              # the light above the air
 
 
 def _z(m, v):
@@ -72,6 +75,74 @@ def air_channels(m, day):
     if isinstance(day.air, (tuple, list)):
         return tuple(day.air)
     return tuple(m.dot(day.air, axis) for axis in AXES)
+
+
+# --- a World that is a sky seen through its own air (a Sky Texture) -------------------------------------------
+#
+# Such a World already holds the air: its radiance in a direction is the sky through the whole atmosphere, its sun
+# disc is dimmed by the air, and the user's Sun light matched to it is the sun at the ground.  So with Air on, the
+# air's own terms are taken from the World instead of the kernels: along a ray of length L the air's glow is
+# L_World(d) (1 - T_air(L)) (its limit far away is the World itself, so a sky pixel, L_World T_air + that, is the
+# World exactly, and distant terrain fades to the sky right above it); the Sun light is the sun below the air, so
+# the layer's sun glow and fog light take it divided by the air's transmittance to the ground
+# (``sun_above_air``), and the air dims a surface's sun light only by the column it has above the ground's.
+# docs/measurements/2026-11-27-sky-texture.md measured what counting the air twice did.
+
+SKY_ROWS = 32            # elevations 0..90 degrees of the World's radiance table (``world_radiance``), row j at
+                         # 90 ((j + 1/2) / SKY_ROWS)^2 degrees: dense at the horizon, where a sky changes fastest
+SKY_COLUMNS = 128        # azimuths, from -180 degrees (-Y through -X) to +180, 0 along +Y
+SKY_TABLE = "AnalyticFog World Sky"
+
+
+def world_radiance(m, day, direction):
+    """The World's radiance in ``direction`` (RGB, W/(m^2 sr)) from its table ``day.world_sky`` (rows: the elevation
+    from the horizon up at ``sky_row_elevations``; columns: the azimuth from +Y towards +X at the centres of
+    ``sunsky.probe_sky``'s equirectangular probe's columns); a direction below the horizon reads the horizon."""
+    spec = day.world_sky
+    dx, dy = m.dot(direction, (1.0, 0.0, 0.0)), m.dot(direction, (0.0, 1.0, 0.0))
+    horizontal = m.sqrt(dx * dx + dy * dy)
+    x = m.atan2(dx, dy) * (0.5 / math.pi) + 0.5
+    elevation = m.atan2(m.maximum(_z(m, direction), 0.0), horizontal) * (2.0 / math.pi)
+    gx = (x * spec.width - 0.5) * (1.0 / (spec.width - 1.0))
+    gy = (m.sqrt(elevation) * spec.height - 0.5) * (1.0 / (spec.height - 1.0))
+    return m.combine(*(m.table(spec, gx, gy, channel=c) for c in range(3)))
+
+
+def sky_row_elevations(rows=SKY_ROWS):
+    """(rows,) radians: the elevations of the World's radiance table's rows (``world_radiance``)."""
+    return 0.5 * math.pi * ((np.arange(rows) + 0.5) / rows) ** 2
+
+
+def sky_table_from_probe(pixels, rows=SKY_ROWS):
+    """(rows, columns, 4) float32: the World's radiance table from an equirectangular probe ((h, columns, 3), row 0
+    at +90 degrees, rows of equal elevation), each row linearly between the probe's rows at its elevation."""
+    h = pixels.shape[0]
+    centres = (0.5 - (np.arange(h) + 0.5) / h) * math.pi        # the probe's rows' elevations, falling
+    el = sky_row_elevations(rows)
+    at = np.interp(el, centres[::-1], np.arange(h)[::-1].astype(float))   # fractional probe row of each elevation
+    lo = np.floor(at).astype(int)
+    hi = np.minimum(lo + 1, h - 1)
+    t = (at - lo)[:, None, None]
+    rgb = pixels[lo] * (1.0 - t) + pixels[hi] * t
+    return np.concatenate([rgb, np.ones(rgb.shape[:2] + (1,))], axis=-1).astype(np.float32)
+
+
+def air_transmittance(m, day, origin, direction, length):
+    """The air's transmittance per colour channel (a list of three) along the segment of ``length`` units from
+    ``origin`` (unit ``direction``)."""
+    shape = daylight.exponential_depth(m, _z(m, origin) - day.ground, _z(m, direction), length, 1.0, 0.0,
+                                       day.air_height)
+    return [daylight.exp_neg(m, b * shape) for b in air_channels(m, day)]
+
+
+def sun_above_air(m, day):
+    """Per colour channel (a list of three) the factor that takes the Sun light's irradiance at the ground to the
+    sun above the air, e^{+b C_air(0) / mu_s} (``world_sky`` set; 1 otherwise)."""
+    if day.world_sky is None or day.air is None:
+        return [1.0, 1.0, 1.0]
+    column = daylight.air_column_depth(m, 0.0, 1.0, day.air_height)
+    mu = m.maximum(sun_elevation(m, day), 0.05)
+    return [m.exp(m.minimum(b * column / mu, 20.0)) for b in air_channels(m, day)]
 
 
 def _layer(day):
@@ -165,6 +236,16 @@ def _tag(value):
 
 
 def ray_glow(m, day, origin, direction, length, sun_share=None):
+    """The glow along a camera segment (``_ray_glow``); where the World holds its own air (``day.world_sky``) the air's
+    part is the World's radiance times the air's opacity along the segment (the section above)."""
+    glow = _ray_glow(m, day, origin, direction, length, sun_share)
+    if day.world_sky is None or day.air is None:
+        return glow
+    opacity = m.combine(*(1.0 - t for t in air_transmittance(m, day, origin, direction, length)))
+    return glow + world_radiance(m, day, direction) * opacity
+
+
+def _ray_glow(m, day, origin, direction, length, sun_share=None):
     """The sun's and the sky's single scattering along a camera segment, W/(m^2 sr) (RGB), the layer's albedo
     included; from ``day.glow_table`` if the Daylight has one (``table_glow``: the same integrals baked for the
     camera's height), else by the kernels: E_sun ``daylight.sun_airlight`` (phase at the angle between the ray and the sun) + L_sky
@@ -214,11 +295,15 @@ def _shared(value, share):
 def _air_glow_light(m, day, p_l, p_r, channels, sun_share=None):
     """The glow with air, W/(m^2 sr) (RGB), from each colour channel's integrals (sun_l, sun_a, sky_l, sky_a): the
     sun's (E_sun per channel) scattered by the layer (phase p_l, the layer's albedo; times ``sun_share`` if given)
-    and by the air (phase p_r), and the sky's (L_sky) glow in the layer (its albedo) and in the air."""
+    and by the air (phase p_r), and the sky's (L_sky) glow in the layer (its albedo) and in the air.  Where the World
+    holds its air (``day.world_sky``) the air's two terms are left out (``ray_glow`` takes them from the World) and
+    the sun is the Sun light above the air (``sun_above_air``)."""
     p_l = _shared(p_l, sun_share)
     albedo = [m.dot(day.albedo, axis) for axis in AXES] if _is_rgb(day.albedo) else [day.albedo] * 3
-    suns = [(a * p_l) * sun_l + p_r * sun_a for a, (sun_l, sun_a, _, _) in zip(albedo, channels)]
-    skies = [a * sky_l + sky_a for a, (_, _, sky_l, sky_a) in zip(albedo, channels)]
+    own_air = 0.0 if day.world_sky is not None else 1.0
+    suns = [(a * p_l) * sun_l * k + (p_r * own_air) * sun_a
+            for a, k, (sun_l, sun_a, _, _) in zip(albedo, sun_above_air(m, day), channels)]
+    skies = [a * sky_l + own_air * sky_a for a, (_, _, sky_l, sky_a) in zip(albedo, channels)]
     return day.sun_irradiance * m.combine(*suns) + day.sky_radiance * m.combine(*skies)
 
 
@@ -351,12 +436,15 @@ def direct_dimming(m, day, point, normal, sun_visible=None):
         return (fogged + 1e-30) / free
     mu_s = sun_elevation(m, day)
     c_l, c_a = daylight.column_depth(m, z, *args), daylight.air_column_depth(m, z, 1.0, day.air_height)
+    if day.world_sky is not None:   # the Sun light and the World are their light at the ground, through the air: a
+        c_a = c_a - daylight.air_column_depth(m, 0.0, 1.0, day.air_height)   # point above it has the air below back
     up = m.less(0.0, mu_s)
     out = []
     for b in air:
         c = c_l + b * c_a
         t_sun = m.select(up, daylight.exp_neg(m, c / m.maximum(mu_s, daylight.MIN_MU)), 0.0)
-        out.append((w_sun * t_sun + sky * daylight.tilted_irradiance_of_column(m, c, nz) + 1e-30) / free)
+        out.append((w_sun * t_sun + sky * daylight.tilted_irradiance_of_column(m, m.maximum(c, 0.0), nz) + 1e-30)
+                   / free)
     return m.combine(*out)
 
 
@@ -536,6 +624,7 @@ def fog_light(m, spec, day, point, normal, sun_share=None):
     basis = sh_basis(m, normal)
     if isinstance(spec, tuple):   # with air: one map per colour channel, the albedos in it
         sun_e, sky_l = ([m.dot(v, axis) for axis in AXES] for v in (day.sun_irradiance, day.sky_radiance))
+        sun_e = [e * k for e, k in zip(sun_e, sun_above_air(m, day))]
         return m.combine(*(_shared(e, sun_share) * _irradiance(m, c, x, basis, normal, day)
                            + l * _irradiance(m, c, x, basis, normal, day, 1) for c, e, l in zip(spec, sun_e, sky_l)))
     return _albedo(m, day, m.scale(day.sun_irradiance, _shared(_irradiance(m, spec, x, basis, normal, day), sun_share))
