@@ -435,7 +435,8 @@ def daylight(m, scene, spec, beta, albedo=1.0):
     if air is not None and holds_air(scene.world) and bpy.data.images.get(sunlight.SKY_TABLE) is not None:
         world_sky = world_sky_spec()   # (baked by ``fog_light_table`` with the groups' other tables)
     return sunlight.Daylight(beta, top, falloff, ground, direction, irradiance, sky, spec.anisotropy, albedo,
-                             None if air is None else tuple(air[0]), 0.0 if air is None else air[1], table, world_sky)
+                             None if air is None else tuple(air[0]), 0.0 if air is None else air[1], table, world_sky,
+                             grey_air=not isinstance(m, comp_fog.CompOps))
 
 
 def notes(scene, spec, method_name, lamps=()):

@@ -91,3 +91,16 @@ def test_a_world_of_light_above_the_air_is_unchanged():
     d_ = day(irradiance=(3.0, 3.0, 3.0))._replace(world_sky=None, sky_radiance=np.zeros(3))
     factor = sl.direct_dimming(m, d_, np.array([0.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0]))
     assert np.allclose(factor, np.exp(-np.array(AIR) * H / SUN[2]), rtol=1e-4)
+
+
+@pytest.mark.parametrize("cell", CELLS)
+def test_a_pixel_of_sky_is_the_world_with_a_grey_factor_too(cell):
+    """The node groups dim the sky by one grey factor: the World term's opacity is grey too."""
+    table, cells = sky_table()
+    m = NumpyOps({SPEC.name: table})
+    el, az = cells[0][cell[0]], cells[1][cell[1]]
+    d, camera = direction(el, az), np.array([0.0, 0.0, 1.6])
+    world = world_at(el, az, cells)
+    d_ = day()._replace(grey_air=True)
+    pixel = world * sl.grey(m, sl.sky_seen(m, d_, camera, d)) + sl.ray_glow(m, d_, camera, d, dl.UNBOUNDED)
+    assert np.allclose(pixel, world, rtol=2e-3), (pixel, world)

@@ -368,8 +368,8 @@ MUTATIONS = [
     Mutation("world_sky_no_limit", "a Sky Texture World with Air: the air's glow is not the World's radiance times the "
              "air's opacity (distant terrain does not fade to the sky above it)",
              "fog_addon/precompute/sunlight.py",
-             "    return glow + world_radiance(m, day, direction) * opacity",
-             "    return glow + 0.0 * world_radiance(m, day, direction) * opacity",
+             "    return glow + world_radiance(m, day, direction) * m.combine(*(1.0 - c for c in t))",
+             "    return glow + 0.0 * world_radiance(m, day, direction) * m.combine(*(1.0 - c for c in t))",
              ("tests/test_world_sky.py::test_far_terrain_fades_to_the_world_above_it",)),
     Mutation("world_sky_sun_above_the_air", "a Sky Texture World with Air: the Sun light is dimmed by the whole air "
              "column again, though it is the sun at the ground",

@@ -50,6 +50,8 @@ class Daylight(NamedTuple):
     world_sky: Any = None     # ``tables.TableSpec`` of the World's radiance over the upper hemisphere when the World is
                               # a sky seen through its own air (a Sky Texture): ``world_radiance``; None: the World is
                               # the light above the air
+    grey_air: bool = False    # the tree dims by one grey factor (a shader's mix; the node groups): the air's opacity
+                              # in ``ray_glow``'s World term is grey too, so a sky pixel stays the World
 
 
 def _z(m, v):
@@ -241,8 +243,10 @@ def ray_glow(m, day, origin, direction, length, sun_share=None):
     glow = _ray_glow(m, day, origin, direction, length, sun_share)
     if day.world_sky is None or day.air is None:
         return glow
-    opacity = m.combine(*(1.0 - t for t in air_transmittance(m, day, origin, direction, length)))
-    return glow + world_radiance(m, day, direction) * opacity
+    t = air_transmittance(m, day, origin, direction, length)
+    if day.grey_air:
+        return glow + m.scale(world_radiance(m, day, direction), 1.0 - (t[0] + t[1] + t[2]) * (1.0 / 3.0))
+    return glow + world_radiance(m, day, direction) * m.combine(*(1.0 - c for c in t))
 
 
 def _ray_glow(m, day, origin, direction, length, sun_share=None):
