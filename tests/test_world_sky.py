@@ -51,15 +51,19 @@ def direction(el, az):
 CELLS = [(3, 17), (0, 64), (10, 100), (25, 5)]
 
 
+@pytest.mark.parametrize("grey", [False, True])
 @pytest.mark.parametrize("cell", CELLS)
-def test_a_pixel_of_sky_is_the_world_itself(cell):
+def test_a_pixel_of_sky_is_the_world_itself(cell, grey):
+    """In colour (the Compositor) and with the node groups' one grey factor on the sky (the World term's opacity is
+    grey too)."""
     table, cells = sky_table()
     m = NumpyOps({SPEC.name: table})
     el, az = cells[0][cell[0]], cells[1][cell[1]]
     d, camera = direction(el, az), np.array([0.0, 0.0, 1.6])
     world = world_at(el, az, cells)
-    d_ = day()
-    pixel = world * sl.sky_seen(m, d_, camera, d) + sl.ray_glow(m, d_, camera, d, dl.UNBOUNDED)
+    d_ = day()._replace(grey_air=grey)
+    seen = sl.sky_seen(m, d_, camera, d)
+    pixel = world * (sl.grey(m, seen) if grey else seen) + sl.ray_glow(m, d_, camera, d, dl.UNBOUNDED)
     assert np.allclose(pixel, world, rtol=2e-3), (pixel, world)
 
 
@@ -92,15 +96,3 @@ def test_a_world_of_light_above_the_air_is_unchanged():
     factor = sl.direct_dimming(m, d_, np.array([0.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0]))
     assert np.allclose(factor, np.exp(-np.array(AIR) * H / SUN[2]), rtol=1e-4)
 
-
-@pytest.mark.parametrize("cell", CELLS)
-def test_a_pixel_of_sky_is_the_world_with_a_grey_factor_too(cell):
-    """The node groups dim the sky by one grey factor: the World term's opacity is grey too."""
-    table, cells = sky_table()
-    m = NumpyOps({SPEC.name: table})
-    el, az = cells[0][cell[0]], cells[1][cell[1]]
-    d, camera = direction(el, az), np.array([0.0, 0.0, 1.6])
-    world = world_at(el, az, cells)
-    d_ = day()._replace(grey_air=True)
-    pixel = world * sl.grey(m, sl.sky_seen(m, d_, camera, d)) + sl.ray_glow(m, d_, camera, d, dl.UNBOUNDED)
-    assert np.allclose(pixel, world, rtol=2e-3), (pixel, world)

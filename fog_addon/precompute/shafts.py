@@ -210,14 +210,23 @@ def surface_share(m, point, normal, viewer, light, beta, shadow, shift=0.5, g=0.
         u = hemisphere_direction(mm, mm.combine(nx, ny, nz), r2, phi)
         return ray_integrals(mm, mm.combine(px, py, pz), u, mm.combine(lx, ly, lz), beta_, shadow, nodes, shift_, g,
                              falloff, name)
+    lit_sum, total = hemisphere_sums(m, ray, (point, normal, light), beta, directions, shift,
+                                     name and f"{name} Hemisphere Ray {nodes}")
+    return (lit_sum, total) if parts else share_of(lit_sum, total)
+
+
+def hemisphere_sums(m, ray, vectors, beta, directions, shift, name=None):
+    """(sum of lit, sum of total) of ``ray(m, *xyz, beta, r2, phi, shift)`` over ``directions`` cosine-weighted
+    directions of ``hemisphere_angles`` turned by ``shift``; xyz: the components of the three ``vectors`` (a point,
+    its normal, a third), each direction one node group ``name`` (or inline with None)."""
     axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
-    xyz = [m.dot(v, a) for v in (point, normal, light) for a in axes]
+    xyz = [m.dot(v, a) for v in vectors for a in axes]
     lit_sum, total = 0.0, 0.0
     for r2, phi in hemisphere_angles(m, directions, shift):
         args = (*xyz, beta, r2, phi, shift)
-        lit_j, total_j = m.group(f"{name} Hemisphere Ray {nodes}", ray, *args) if name else ray(m, *args)
+        lit_j, total_j = m.group(name, ray, *args) if name else ray(m, *args)
         lit_sum, total = lit_sum + lit_j, total + total_j
-    return (lit_sum, total) if parts else share_of(lit_sum, total)
+    return lit_sum, total
 
 
 def share_of(lit_sum, total):
@@ -438,14 +447,21 @@ def sun_map_origins(frame, width, height):
             + frame.w0 * np.asarray(frame.forward))
 
 
-def sun_lit(m, spec, frame, point):
-    """1 where the sun reaches the fog at the world ``point``: nearer the sun than the first surface of its map's
-    nearest grid point (less ``frame.bias``); 1 outside the map (nothing there was mapped as casting a shadow)."""
+def sun_map_read(m, spec, frame, point):
+    """(depth, beyond, inside) of the world ``point`` in a sun's map: the map's distance at its nearest grid point
+    (``nearest``), the point's own distance from the map's plane along the sunlight, and 1 where it lies over the
+    map (0 outside it)."""
     x = (m.dot(point, frame.right) - frame.a[0]) * (1.0 / (frame.a[1] - frame.a[0]))
     y = (m.dot(point, frame.up) - frame.b[0]) * (1.0 / (frame.b[1] - frame.b[0]))
     depth = m.table(spec, nearest(m, x, spec.width), nearest(m, y, spec.height))
-    beyond = m.dot(point, frame.forward) - frame.w0
     inside = m.less(-1e-6, x) * m.less(x, 1.0 + 1e-6) * m.less(-1e-6, y) * m.less(y, 1.0 + 1e-6)
+    return depth, m.dot(point, frame.forward) - frame.w0, inside
+
+
+def sun_lit(m, spec, frame, point):
+    """1 where the sun reaches the fog at the world ``point``: nearer the sun than the first surface of its map's
+    nearest grid point (less ``frame.bias``); 1 outside the map (nothing there was mapped as casting a shadow)."""
+    depth, beyond, inside = sun_map_read(m, spec, frame, point)
     return m.select(inside, m.less(beyond, depth - frame.bias), 1.0)
 
 
@@ -459,13 +475,9 @@ def sun_surface_lit(m, spec, frame, point, normal):
     most SUN_SURFACE_SLOPE) of the map's (a surface's depth changes by that across a cell); 1 outside the map.
     What a surface's direct light takes of the sun (``sunlight.direct_dimming``): Cycles and EEVEE shadow the
     sun's light themselves, the factor then weighs the sky's alone."""
-    x = (m.dot(point, frame.right) - frame.a[0]) * (1.0 / (frame.a[1] - frame.a[0]))
-    y = (m.dot(point, frame.up) - frame.b[0]) * (1.0 / (frame.b[1] - frame.b[0]))
-    depth = m.table(spec, nearest(m, x, spec.width), nearest(m, y, spec.height))
-    beyond = m.dot(point, frame.forward) - frame.w0
+    depth, beyond, inside = sun_map_read(m, spec, frame, point)
     c = m.maximum(m.abs(m.dot(normal, frame.forward)), 1.0 / SUN_SURFACE_SLOPE)
     tolerance = (frame.bias / SUN_BIAS_CELLS) * (1.0 + m.sqrt(1.0 - c * c) / c)
-    inside = m.less(-1e-6, x) * m.less(x, 1.0 + 1e-6) * m.less(-1e-6, y) * m.less(y, 1.0 + 1e-6)
     return m.select(inside, m.less(beyond, depth + tolerance), 1.0)
 
 
@@ -529,7 +541,6 @@ def sun_surface_share(m, spec, frame, point, normal, viewer, beta, sun, g, top_z
     facing = m.select(m.less(m.dot(normal, viewer - point), 0.0), -1.0, 1.0)
     normal = m.scale(normal, facing)
     lift = 2.0 * frame.bias / SUN_BIAS_CELLS
-    axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
     def ray(mm, px, py, pz, nx, ny, nz, sx, sy, sz, beta_, r2, phi, shift_):
         n, s = mm.combine(nx, ny, nz), mm.combine(sx, sy, sz)
@@ -543,10 +554,5 @@ def sun_surface_share(m, spec, frame, point, normal, viewer, beta, sun, g, top_z
         weight = integral * (_hg(mm, g, mm.dot(u, s)) if g else 1.0)
         lit = sun_lit_share(mm, spec, frame, origin, u, length, rate, nodes, shift_)
         return weight * lit, weight
-    xyz = [m.dot(v, a) for v in (point, normal, sun) for a in axes]
-    lit_sum, total = 0.0, 0.0
-    for r2, phi in hemisphere_angles(m, directions, shift):
-        args = (*xyz, beta, r2, phi, shift)
-        lit_j, total_j = m.group(f"{name} Sun Hemisphere Ray {directions}x{nodes}", ray, *args) if name else ray(m, *args)
-        lit_sum, total = lit_sum + lit_j, total + total_j
-    return lit_sum, total
+    return hemisphere_sums(m, ray, (point, normal, sun), beta, directions, shift,
+                           name and f"{name} Sun Hemisphere Ray {directions}x{nodes}")
