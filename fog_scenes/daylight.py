@@ -79,9 +79,12 @@ GROUND = dict(half_width_m=10000.0, albedo=0.3)
 SUN = dict(elevation_deg=40.0, azimuth_deg=-50.0, strength_w_m2=3.0, angle_deg=0.5)
 # The suns of the cases: ``morning`` (SUN, the test conventions: nothing casts a shadow) and ``low`` (12 degrees up,
 # ahead and 40 degrees to the right, just out of the inside camera's view, 10 W/m^2, every surface casting shadows:
-# the buildings' shadows cross the street in the fog as shafts, issue 29's "shafts between buildings")
+# the buildings' shadows cross the street in the fog as shafts, issue 29's "shafts between buildings"; the ground
+# 1 km across: with a ground kilometres wide casting shadows EEVEE 5.0 loses the sun's light on it and half the sky's,
+# docs/measurements/2026-11-27-sun-shafts.md; beyond 500 m the layer hides the ground, e^-5)
 SUNS = dict(morning=dict(SUN, shadows=False),
-            low=dict(SUN, elevation_deg=12.0, azimuth_deg=40.0, strength_w_m2=10.0, shadows=True))
+            low=dict(SUN, elevation_deg=12.0, azimuth_deg=40.0, strength_w_m2=10.0, shadows=True,
+                     ground_half_width_m=500.0))
 WORLD_COLOUR = (0.35, 0.5, 0.8)   # W/(m^2 sr) over the upper hemisphere (Background strength 1)
 WORLD_STRENGTH = 1.0
 WORLD_BELOW_HORIZON = 0.0         # the World's radiance below the horizon, over WORLD_COLOUR
@@ -275,7 +278,7 @@ def build(scene, case, with_fog=True, samples=1024, resolution=RESOLUTION, cast_
     c = as_case(case)
     render_settings(scene, resolution=resolution)
     _set_world(scene)
-    g = GROUND["half_width_m"]
+    g = SUNS[c.sun].get("ground_half_width_m", GROUND["half_width_m"])
     ground = add_plane(scene, "Ground", -g, g, -g, g, 0.0,
                        material("Ground", (GROUND["albedo"],) * 3, roughness=1.0, specular_ior_level=0.0))
     solids = [ground]

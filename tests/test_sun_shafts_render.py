@@ -3,7 +3,7 @@ machinery"): the city of ``fog_scenes/daylight.py`` under a low sun (12 degrees,
 every surface casting shadows: case ``hard_g0.7_inside_low``), rendered with the analytic fog layer and its shafts
 against Cycles' path-traced single scattering in a mesh box of fog (volume bounces 0), shadows in it.
 
-Goal (the issue's daylight accuracy): <= 3 % relative RMSE in Cycles (EEVEE: see its test).  Without the shafts the same
+Goal (the issue's daylight accuracy): <= 3 % relative RMSE in Cycles, <= 6 % in EEVEE.  Without the shafts the same
 render is further off (``test_without_shafts_the_street_is_too_bright``: the test can fail).  Figures:
 docs/measurements/2026-11-27-sun-shafts.md.
 """
@@ -37,7 +37,7 @@ def _render(tmp_path, engine, shafts="on", case=CASE):
     return out, log[0]
 
 
-# The falloff case's bound is over the goal: 3.27 % measured, of which 1.7 % is the reference's noise and most of
+# The falloff case's bound is over the goal: 3.18 % measured, of which 1.7 % is the reference's noise and most of
 # the rest the sky's occlusion by the buildings, which the fog does not model (the measurement page).
 CASES = {CASE: 0.03, "falloff_g0.7_inside_low": 0.035, "hard_g0.7_above_low": 0.03}
 
@@ -55,10 +55,9 @@ def test_sun_shafts_against_cycles(tmp_path, case):
 
 
 @pytest.mark.slow
-def test_sun_shafts_in_eevee_move_towards_the_reference(tmp_path):
-    """EEVEE: the shafts take its picture closer to the reference.  Its own fog-free render of this street is far
-    from Cycles' (the shadowed ground at 0.43 of Cycles' brightness: the engines' sky light under cast shadows, not
-    the fog), so the issue's 6 % is not reachable on this scene by the fog (the measurement page)."""
+def test_sun_shafts_in_eevee(tmp_path):
+    """EEVEE with the Compositor: within its goal, and the shafts take its picture closer to the reference than the
+    same render without them."""
     ref = imageio.read_rgb(dl.render_reference(CASE, samples=REFERENCE_SAMPLES, seeds=2))
     errors = {}
     for shafts in ("on", "off"):
@@ -67,7 +66,7 @@ def test_sun_shafts_in_eevee_move_towards_the_reference(tmp_path):
         assert np.isfinite(ours).all()
         errors[shafts] = metrics(ours, ref)["rel_rmse"]
     print(f"\n{CASE} eevee: relative RMSE shafts on {errors['on']:.4f}, off {errors['off']:.4f}")
-    assert errors["on"] < errors["off"], errors
+    assert errors["on"] <= BOUND["eevee"] and errors["on"] < errors["off"], errors
 
 
 @pytest.mark.slow
