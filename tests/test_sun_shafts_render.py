@@ -37,9 +37,9 @@ def _render(tmp_path, engine, shafts="on", case=CASE):
     return out, log[0]
 
 
-# The falloff case's bound is over the goal: 3.18 % measured, of which 1.7 % is the reference's noise and most of
-# the rest the sky's occlusion by the buildings, which the fog does not model (the measurement page).
-CASES = {CASE: 0.03, "falloff_g0.7_inside_low": 0.035, "hard_g0.7_above_low": 0.03}
+# {case: reference seeds}: the falloff's reference takes 4 (its noise 1.2 %; with 2 it was 1.7 % and the case read
+# 3.18 %, most of the rest the sky's occlusion by the buildings, which the fog does not model: the measurement page)
+CASES = {CASE: 2, "falloff_g0.7_inside_low": 4, "hard_g0.7_above_low": 2}
 
 
 @pytest.mark.parametrize("case", [CASE, pytest.param("falloff_g0.7_inside_low", marks=pytest.mark.slow),
@@ -49,8 +49,8 @@ def test_sun_shafts_against_cycles(tmp_path, case):
     assert "its shafts in the fog come from a map" in log, log
     ours = imageio.read_rgb(out)
     assert np.isfinite(ours).all()
-    ref = dl.render_reference(case, samples=REFERENCE_SAMPLES, seeds=2)
-    m = h.assert_close(out, ref, name=f"sun_shafts_{case}", rel_rmse=CASES[case])
+    ref = dl.render_reference(case, samples=REFERENCE_SAMPLES, seeds=CASES[case])
+    m = h.assert_close(out, ref, name=f"sun_shafts_{case}", rel_rmse=BOUND["cycles"])
     print(f"\n{case} cycles: relative RMSE {m['rel_rmse']:.4f}")
 
 
