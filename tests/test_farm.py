@@ -13,7 +13,8 @@ Process B (tests/scenes/farm_render.py) starts with a clean environment in a dir
 * compositor, anim_compositor: the static and animated scenes with the Compositor method (the fog's light
   added by the compositor's graph, every input driven).  A's expectation for frame f is the scene made static at
   frame f (animation cleared, objects posed, fog re-added);
-* daylight: the scene under a sun and a sky in a fog layer 3 m deep (Compositor method);
+* daylight: the scene under a sun and a sky in a fog layer 3 m deep (Compositor method; the sphere casts the sun's
+  shafts, from a packed map);
 * compositor_eevee: the compositor lane's scene with the Compositor method in EEVEE (32x18, 1 sample), the
   file saved with EEVEE as its engine.
 
@@ -48,8 +49,10 @@ TABLES = ("AnalyticFog Airlight N", "AnalyticFog Surface M")
 # the dense lane's fog is anisotropic (g 0.85) and has Dense Fog's table too
 LANE_TABLES = {"dense": ("AnalyticFog Airlight N (g +0.850)", "AnalyticFog Surface M (g +0.850)",
                          "AnalyticFog Multiple (g +0.850, W0 0.900)"),
-               # (the fog light's map: a prefix, its name holds the layer; the glow's table, baked for the camera)
-               "daylight": TABLES + ("AnalyticFog Daylight Fog Light", "AnalyticFog Daylight Glow")}
+               # (the fog light's map: a prefix, its name holds the layer; the glow's table, baked for the camera;
+               # the sun's shadow map: the sphere casts the sun's shafts into the layer)
+               "daylight": TABLES + ("AnalyticFog Daylight Fog Light", "AnalyticFog Daylight Glow",
+                                     "AnalyticFog Sun Shadow")}
 
 # B's picture against A's, as max |B - A| / max |A| over all pixels and channels.
 # Same engine, seed, samples and scene data in both processes: measured 0.0 (bit-identical) for
