@@ -25,7 +25,7 @@ from mathutils.bvhtree import BVHTree
 
 from . import caveats
 from .nodes import owned
-from .precompute import shafts
+from .precompute import footprint, shafts
 from .precompute.tables import TableSpec
 
 IMAGE_PREFIX = f"{owned.PREFIX} Shadow "   # a light's map: "<IMAGE_PREFIX><light name>"
@@ -95,29 +95,27 @@ def _point_vectors():
 def cast(bvh, origin, directions):
     """Distance (m) from ``origin`` along each unit direction (N, 3 array, or a list of Vectors) to the first
     triangle, NO_HIT if none."""
-    out = np.full(len(directions), shafts.NO_HIT, np.float32)
-    if bvh is None:
-        return out
     o = Vector(tuple(origin))
-    ray_cast = bvh.ray_cast
     vectors = directions if isinstance(directions, list) else [Vector(d) for d in directions.tolist()]
-    for i, d in enumerate(vectors):
-        hit = ray_cast(o, d)
-        if hit[0] is not None:
-            out[i] = hit[3]
-    return out
+    return _first_hits(bvh, ((o, d) for d in vectors), len(vectors))
 
 
 def cast_parallel(bvh, origins, direction):
     """Distance (units) from each of ``origins`` ((N, 3) array) along the one unit ``direction`` to the first
     triangle, NO_HIT if none (a sun's map: ``shafts.SunFrame``)."""
-    out = np.full(len(origins), shafts.NO_HIT, np.float32)
+    d = Vector(tuple(direction))
+    return _first_hits(bvh, ((Vector(o), d) for o in origins.tolist()), len(origins))
+
+
+def _first_hits(bvh, rays, count):
+    """(count,) float32: the distance along each (origin, unit direction) pair of ``rays`` (mathutils Vectors) to
+    the first triangle of ``bvh``, NO_HIT where none (or no BVH)."""
+    out = np.full(count, shafts.NO_HIT, np.float32)
     if bvh is None:
         return out
-    d = Vector(tuple(direction))
     ray_cast = bvh.ray_cast
-    for i, o in enumerate(origins.tolist()):
-        hit = ray_cast(Vector(o), d)
+    for i, (o, d) in enumerate(rays):
+        hit = ray_cast(o, d)
         if hit[0] is not None:
             out[i] = hit[3]
     return out
@@ -130,7 +128,6 @@ class SunShadow(NamedTuple):
 
 
 SUN_IMAGE = f"{owned.PREFIX} Sun Shadow"   # the sun's map (one sun shines through a fog layer)
-SUN_FRAME = "analytic_fog_sun_frame"       # on its image: the SunFrame it was baked in (a farm's render reads it)
 
 
 def sun_shadow(scene, sun, region):
@@ -142,7 +139,7 @@ def sun_shadow(scene, sun, region):
     casters = caveats.shadow_casters(scene)
     if not casters:
         return None
-    corners = np.array([np.asarray([tuple(o.matrix_world @ Vector(c)) for c in o.bound_box]) for o in casters])
+    corners = np.array([footprint.box_points(o.bound_box, o.matrix_world) for o in casters])
     ground = float(np.min(np.asarray(region)[:, 2]))
     keep = corners[:, :, 2].max(axis=1) > ground + 1e-6
     if not keep.any():
@@ -159,8 +156,7 @@ def sun_shadow(scene, sun, region):
     if img is None or img.get(KEY) != version or img.packed_file is None:
         origins = shafts.sun_map_origins(frame, width, height).reshape(-1, 3)
         depth = cast_parallel(geometry.bvh, origins, frame.forward).reshape(height, width)
-        img = _store(spec, depth, version)
-        img[SUN_FRAME] = repr(tuple(frame))
+        _store(spec, depth, version)
     return SunShadow(spec, frame)
 
 

@@ -84,11 +84,17 @@ def _tree_fingerprint(world):
 PROBE_VERSION = "probe 3|"   # in the probe's fingerprint: probes kept by an older way of probing are made again
 
 
-def sun_discs(world):
-    """The World's Sky Texture nodes that draw a sun disc."""
+def _sky_textures(world):
+    """The World's own Sky Texture nodes (not the fog's)."""
     if world is None or not world.use_nodes or world.node_tree is None:
         return []
-    return [n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeTexSky" and getattr(n, "sun_disc", False)]
+    from .nodes import owned
+    return [n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeTexSky" and not owned.is_ours(n)]
+
+
+def sun_discs(world):
+    """The World's Sky Texture nodes that draw a sun disc."""
+    return [n for n in _sky_textures(world) if getattr(n, "sun_disc", False)]
 
 
 def probe_sky(world):
@@ -148,11 +154,7 @@ def _probe_pixels(world, fingerprint):
 
 def holds_air(world):
     """Whether the World is a sky seen through its own air: a Sky Texture (of any sky type) that feeds something."""
-    if world is None or not world.use_nodes or world.node_tree is None:
-        return False
-    from .nodes import owned
-    return any(n.bl_idname == "ShaderNodeTexSky" and not owned.is_ours(n) and any(o.is_linked for o in n.outputs)
-               for n in world.node_tree.nodes)
+    return any(any(o.is_linked for o in n.outputs) for n in _sky_textures(world))
 
 
 def world_sky_spec():
@@ -381,14 +383,17 @@ def sun_shadow(scene, spec):
 def _shaft_note(scene, spec, method_name):
     """What the sun's shadows do in the fog with ``method_name``."""
     from . import caveats
-    if sun_casts_shafts(scene, spec) is None or not caveats.shadow_casters(scene):
-        why = ("Light Shafts are off" if not spec.shafts else "nothing casts a shadow" if
-               sun_casts_shafts(scene, spec) is not None else "it casts no shadows")
-        return f"{why}: no shafts in the fog"
+    casters = caveats.shadow_casters(scene)
+    if not spec.shafts:
+        return "Light Shafts are off: no shafts in the fog"
+    if sun_casts_shafts(scene, spec) is None:
+        return "it casts no shadows: no shafts in the fog"
+    if not casters:
+        return "nothing casts a shadow: no shafts in the fog"
     if method_name != "compositor":
         return (f"with {method_name} its shadows fall on surfaces but cast no shafts into the fog: the Compositor "
                 "method (Auto's choice in daylight) casts them")
-    moving = [o.name for o in [scene.camera, *caveats.shadow_casters(scene)] if caveats._animated(o)]
+    moving = [o.name for o in [scene.camera, *casters] if caveats._animated(o)]
     said = ("its shafts in the fog come from a map of the scene's shadows baked at Update Fog around the camera's "
             "view; the sky's light in the fog and on surfaces is not shadowed by the buildings, nor the air's glow")
     if moving:

@@ -68,7 +68,8 @@ class Compositor(Method):
                                                          spec.anisotropy),
                                           emitters=((spec.anisotropy, spec.multiple_albedo) if glowing_objects(scene)
                                                     else None),
-                                          day=((day, table, dims, sun_shadow, shafts.samples_for(spec.quality).view_nodes)
+                                          day=(comp_fog.Day(day, table, dims, sun_shadow,
+                                                            shafts.samples_for(spec.quality).view_nodes)
                                                if daylit else None),
                                           layer=spec.layer_per_unit() if spec.layered else None)
         groups.build_world([], [], scene.camera, images, spec.passes, day=day, day_dims=not daylit)

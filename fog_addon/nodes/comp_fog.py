@@ -33,6 +33,7 @@ cameras; no fog passes (the fog's light is the compositor's).
 import functools
 import hashlib
 import math
+from typing import Any, NamedTuple
 
 import bpy
 
@@ -666,17 +667,27 @@ def _daylight(m, day, table, camera, direction, position, normal, reflectance, d
     return glow + m.scale(reflected, cover)
 
 
+class Day(NamedTuple):
+    """``build_fog_group``'s ``day``: what the compositor takes of a fog layer's daylight."""
+    build: Any             # ``build_surface``'s ``day``: (m, beta, albedo) -> ``sunlight.Daylight`` in the tree
+    table: Any             # the fog light's TableSpec (``sunsky.fog_light_table``)
+    dims: bool             # whether surfaces take the sun's and the sky's dimming (``sunsky.dims_surfaces``)
+    sun_shadow: Any = None   # the sun's map (``shadow_maps.SunShadow``), or None: no shafts from the sun
+    sun_nodes: int = 0       # the sun's lit share's nodes a pixel (``shafts.Samples.view_nodes``)
+
+
 SUN_SHAFT_NODE = f"{SHAFT_GROUP} Sun Node"   # one group per quadrature node of the sun's lit share
 
 
-def _sun_shares(m, sun_shadow, nodes, day, camera, direction, layer, length, beta, point, normal, pixel_xy,
+def _sun_shares(m, sun_shadow, nodes, day, camera, direction, layer, length, beta, point, normal, offsets,
                 shaft_length):
     """(the lit share of the layer's sun glow at a pixel, the lit share of the sun's part of the fog light on its
     surface) from the sun's map ``sun_shadow`` (``shadow_maps.SunShadow``).  The glow's (``shafts.sun_lit_share``)
     over the part of the pixel's ray in the layer (``sunlight.lamp_glow_span`` below its lamps' glow top), to the
     pixel's surface or, past ``length``, the sky, at most SUN_REACH mean free paths, ``nodes`` a pixel interleaved
-    over 2 x 2 pixels; the surface's (``shafts.sun_surface_share``) interleaved over 4 x 4.  Each is averaged over its
-    pattern depth-aware (``_interleave_mean``, by ``shaft_length``)."""
+    over 2 x 2 pixels; the surface's (``shafts.sun_surface_share``) interleaved over 4 x 4 (``offsets``: the pixel's
+    ``shafts.offset`` and ``surface_offset``).  Each is averaged over its pattern depth-aware (``_interleave_mean``,
+    by ``shaft_length``)."""
     spec, frame = sun_shadow
     top_z = sunlight.lamp_glow_top(*layer)
     t0, t1 = sunlight.lamp_glow_span(m, top_z, camera, direction)
@@ -684,24 +695,12 @@ def _sun_shares(m, sun_shadow, nodes, day, camera, direction, layer, length, bet
     start = m.minimum(t0, LAYER_OPEN)
     span = m.maximum(m.minimum(m.minimum(t1, length) - start, shafts.SUN_REACH / m.maximum(beta, 1e-9)), 0.0)
     rate = shafts.sun_attenuation_rate(m, beta, m.dot(direction, (0.0, 0.0, 1.0)), sunlight.sun_elevation(m, day))
-    origin = camera + m.scale(direction, start)
-    tag = hashlib.sha1(repr((spec, tuple(frame))).encode()).hexdigest()[:12]
-
-    def node(mm, ox, oy, oz, dx, dy, dz, span_, a_l, u):
-        t = span_ * shafts.sun_node_place(mm, u, a_l)
-        return shafts.sun_lit(mm, spec, frame, mm.combine(ox, oy, oz) + mm.scale(mm.combine(dx, dy, dz), t))
-    xyz = [m.dot(v, axis) for v in (origin, direction) for axis in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))]
-    px, py = m.dot(pixel_xy, (1.0, 0.0, 0.0)), m.dot(pixel_xy, (0.0, 1.0, 0.0))
-    offset = shafts.offset(m, px, py)
-    lit_sum = 0.0
-    for k in range(nodes):
-        u = (offset + float(k)) * (1.0 / nodes)
-        lit_sum = lit_sum + m.group(f"{SUN_SHAFT_NODE} {tag}", node, *xyz, span, rate * span, u)
-    share = _interleave_mean_group(m, m.select(meets, lit_sum * (1.0 / nodes), 1.0), shaft_length, SHAFT_TAPS,
-                                   SHAFT_EDGE)
+    name = f"{SUN_SHAFT_NODE} {hashlib.sha1(repr((spec, tuple(frame))).encode()).hexdigest()[:12]}"
+    lit = shafts.sun_lit_share(m, spec, frame, camera + m.scale(direction, start), direction, span, rate, nodes,
+                               offsets[0], name=name)
+    share = _interleave_mean_group(m, m.select(meets, lit, 1.0), shaft_length, SHAFT_TAPS, SHAFT_EDGE)
     lit, total = shafts.sun_surface_share(m, spec, frame, point, normal, camera, beta, day.sun, float(day.g), top_z,
-                                          float(layer[2]), shafts.surface_offset(m, px, py),
-                                          name=f"{SUN_SHAFT_NODE} {tag}")
+                                          float(layer[2]), offsets[1], name=name)
     parts = _interleave_mean_group(m, m.combine(lit, total, 1.0), shaft_length, SURFACE_TAPS, SURFACE_EDGE)
     return share, shafts.share_of(m.dot(parts, (1.0, 0.0, 0.0)), m.dot(parts, (0.0, 1.0, 0.0)))
 
@@ -714,9 +713,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     ``footprint.py`` (``view.windows``), or None to evaluate every term over the whole picture; ``partial``:
     they do not hold the animation's range (``PARTIAL``); ``shafted``: ``build_bundle``'s; ``emitters``: (the fog's
     g, Dense Fog's albedo or None) if glowing objects get their glows (``_emitter_glow``: an Emission input), else
-    None; ``day``: (``build_surface``'s ``day``, the fog light's TableSpec, whether surfaces take the sun's and the
-    sky's dimming: ``sunsky.dims_surfaces``, the sun's map (``shadow_maps.SunShadow``) or None, its nodes a pixel)
-    for a fog layer with a sun or a sky
+    None; ``day``: a ``Day`` for a fog layer with a sun or a sky
     (``_daylight``; the render's surfaces take the sun's and the sky's dimming here, once per pixel, and the sky seen
     its transmittance), else None; ``layer``: a fog layer's (top, falloff, ground) in units (``FogSpec.layer_per_unit``),
     where the lights' glows end (``sunlight.lamp_glow_span``), or None for fog that fills all space.  Rebuilt in
@@ -789,7 +786,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
                   "Level": level}
     pixel_xy = m.wrap(coords.outputs["Pixel"], vector=True)
     px, py = m.dot(pixel_xy, (1.0, 0.0, 0.0)), m.dot(pixel_xy, (0.0, 1.0, 0.0))
-    surface_in["Offset"] = shafts.surface_offset(m, px, py)
+    surface_offset = surface_in["Offset"] = shafts.surface_offset(m, px, py)
     win = None if windows is None else _window(m, scene, "Surface", windows[0])
     if win is not None:   # the fog light on surfaces: only where the picture has surfaces
         surface_in = {k: _crop(m, v, win) for k, v in surface_in.items()}
@@ -816,7 +813,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
         if rungs.AIRLIGHT_OUT in sums:
             sky = m.scale(sums[rungs.AIRLIGHT_OUT], bounded) + m.scale(sky, 1.0 - bounded)
         sums[rungs.BACKGROUND_OUT] = m.scale(sky, meets)
-    daylight = None if day is None else day[0](m, beta, albedo)
+    daylight = None if day is None else day.build(m, beta, albedo)
     t_day = None if daylight is None else sunlight.view_transmittance(m, daylight, pos, incoming, d_vp)
     t_vp = model.transmittance(m, beta, d_vp) if daylight is None else sunlight.grey(m, t_day)
     if not sums:
@@ -825,11 +822,11 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
         fog = albedo * shading.pixel_light(m, sums, t_vp, cover)
     if daylight is not None:
         sun_share = surface_share = None
-        if day[3] is not None and layer is not None:   # the sun's shafts
-            sun_share, surface_share = _sun_shares(m, day[3], day[4], daylight, cam, direction, layer,
+        if day.sun_shadow is not None and layer is not None:   # the sun's shafts
+            sun_share, surface_share = _sun_shares(m, day.sun_shadow, day.sun_nodes, daylight, cam, direction, layer,
                                                    m.select(m.less(0.5, cover), d_vp, model.FAR), beta, pos, normal,
-                                                   pixel_xy, shared["Shaft Length"])
-        fog = fog + _daylight(m, daylight, day[1], cam, direction, pos, normal, diffuse + specular, d_vp, t_day,
+                                                   (shared["Shaft Offset"], surface_offset), shared["Shaft Length"])
+        fog = fog + _daylight(m, daylight, day.table, cam, direction, pos, normal, diffuse + specular, d_vp, t_day,
                               cover, sun_share, surface_share)
     if emitters is not None:
         fog = fog + albedo * _emitter_glow(m, p, beta, d_vp, emitters[0], emitter_pixel_angle(scene), emitters[1],
@@ -838,9 +835,9 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     if daylight is not None:   # the dimming of the pixel's surface by the fog above it and of the sky seen through
         one = 1.0 if daylight.air is None else m.wrap((1.0, 1.0, 1.0))   # (with air the dimming is RGB)
         sun_visible = (None if sun_share is None else   # the sun's map: a surface in its shadow takes the sky's factor
-                       shafts.sun_surface_lit(m, day[3].spec, day[3].frame, pos, normal))
+                       shafts.sun_surface_lit(m, day.sun_shadow.spec, day.sun_shadow.frame, pos, normal))
         dims = (m.select(m.less(0.0, cover), sunlight.direct_dimming(m, daylight, pos, normal, sun_visible), one)
-                if day[2] else m.const(1.0))   # the layer's
+                if day.dims else m.const(1.0))   # the layer's
         seen = sunlight.sky_seen(m, daylight, cam, direction)
         # the materials dimmed their samples by a grey stand-in (``sunlight.proxy_transmittance``): the camera
         # segment's exact transmittance (with air its colour) comes here, per pixel

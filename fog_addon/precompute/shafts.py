@@ -492,28 +492,41 @@ def sun_attenuation_rate(m, beta, vz, mu_s):
 SUN_RATE_CLAMP = 40.0   # |a L| beyond this samples as this (its nodes then crowd at one end either way)
 
 
+def _rate_length(m, rate_length):
+    """(A, flat): A = a L clamped to +-SUN_RATE_CLAMP and 1 in place of |A| < 1e-3, where ``flat`` is 1 (the
+    e^{-a t} density is flat there: its formulas' A -> 0 limits apply, no 0/0)."""
+    big = m.minimum(m.maximum(rate_length, -SUN_RATE_CLAMP), SUN_RATE_CLAMP)
+    flat = m.less(m.abs(big), 1e-3)
+    return m.select(flat, 1.0, big), flat
+
+
 def sun_node_place(m, u, rate_length):
     """t / L of the node at ``u`` in (0, 1) of the density e^{-a t} on [0, L] (A = a L, ``rate_length``): the
     inverse of its distribution, -ln(1 - u (1 - e^{-A})) / A, u itself as A -> 0 (no 0/0)."""
-    big = m.minimum(m.maximum(rate_length, -SUN_RATE_CLAMP), SUN_RATE_CLAMP)
-    flat = m.less(m.abs(big), 1e-3)
-    safe = m.select(flat, 1.0, big)
+    safe, flat = _rate_length(m, rate_length)
     placed = -1.0 * m.log(1.0 - u * (1.0 - m.exp(-1.0 * safe))) / safe
     return m.select(flat, u, placed)
 
 
-def sun_lit_share(m, spec, frame, origin, direction, length, rate, nodes, shift=0.5):
+def sun_lit_share(m, spec, frame, origin, direction, length, rate, nodes, shift=0.5, name=None):
     """S in [0, 1], the share of the sun's single scattering along the segment [0, ``length``] (units) of the ray
     from ``origin`` (unit ``direction``) that reaches it past the shadow casters (Dobashi et al. 2002 Eq. 2's H
     against the sun's map, ``sun_lit``): its e^{-a t} weight (``sun_attenuation_rate``) sampled exactly by
     ``nodes`` nodes placed in its quantiles (``sun_node_place``), so every node weighs alike and
     S = (1 / K) sum_k H(t_k), 1 to the bit where nothing casts a shadow.  ``shift`` in [0, 1): where the nodes sit
     in their quantile strata (``offset`` interleaves them over 2 x 2 pixels).  The layer's falloff above its top
-    and the air are left out of the weights: S is exact where H is constant along the ray, whatever the weights."""
+    and the air are left out of the weights: S is exact where H is constant along the ray, whatever the weights.
+    ``name``: one node group for every node (it must say all of what a node builds: the map and its frame), or None
+    (inline)."""
+    def node(mm, ox, oy, oz, dx, dy, dz, length_, a_l, u):
+        t = length_ * sun_node_place(mm, u, a_l)
+        return sun_lit(mm, spec, frame, mm.combine(ox, oy, oz) + mm.scale(mm.combine(dx, dy, dz), t))
+    xyz = [m.dot(v, axis) for v in (origin, direction) for axis in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))]
+    a_l = rate * length
     lit_sum = 0.0
     for k in range(nodes):
-        t = length * sun_node_place(m, (shift + k) * (1.0 / nodes), rate * length)
-        lit_sum = lit_sum + sun_lit(m, spec, frame, origin + m.scale(direction, t))
+        args = (*xyz, length, a_l, (shift + float(k)) * (1.0 / nodes))
+        lit_sum = lit_sum + (m.group(name, node, *args) if name else node(m, *args))
     return lit_sum * (1.0 / nodes)
 
 
@@ -548,9 +561,8 @@ def sun_surface_share(m, spec, frame, point, normal, viewer, beta, sun, g, top_z
         origin = mm.combine(px, py, pz) + mm.scale(n, lift)
         length = sun_ray_span(mm, origin, u, top_z, ground, SUN_REACH / mm.maximum(beta_, 1e-9))
         rate = sun_attenuation_rate(mm, beta_, mm.dot(u, (0.0, 0.0, 1.0)), mm.dot(s, (0.0, 0.0, 1.0)))
-        a_l = mm.minimum(mm.maximum(rate * length, -SUN_RATE_CLAMP), SUN_RATE_CLAMP)
-        flat = mm.less(mm.abs(a_l), 1e-3)
-        integral = mm.select(flat, length, length * (1.0 - mm.exp(-1.0 * a_l)) / mm.select(flat, 1.0, a_l))
+        a_l, flat = _rate_length(mm, rate * length)
+        integral = mm.select(flat, length, length * (1.0 - mm.exp(-1.0 * a_l)) / a_l)
         weight = integral * (_hg(mm, g, mm.dot(u, s)) if g else 1.0)
         lit = sun_lit_share(mm, spec, frame, origin, u, length, rate, nodes, shift_)
         return weight * lit, weight

@@ -304,10 +304,12 @@ def _air_glow_light(m, day, p_l, p_r, channels, sun_share=None):
     the sun is the Sun light above the air (``sun_above_air``)."""
     p_l = _shared(p_l, sun_share)
     albedo = [m.dot(day.albedo, axis) for axis in AXES] if _is_rgb(day.albedo) else [day.albedo] * 3
-    own_air = 0.0 if day.world_sky is not None else 1.0
-    suns = [(a * p_l) * sun_l * k + (p_r * own_air) * sun_a
-            for a, k, (sun_l, sun_a, _, _) in zip(albedo, sun_above_air(m, day), channels)]
-    skies = [a * sky_l + own_air * sky_a for a, (_, _, sky_l, sky_a) in zip(albedo, channels)]
+    if day.world_sky is not None:   # the air's own scattering is in the World
+        suns = [(a * p_l) * sun_l * k for a, k, (sun_l, _, _, _) in zip(albedo, sun_above_air(m, day), channels)]
+        skies = [a * sky_l for a, (_, _, sky_l, _) in zip(albedo, channels)]
+    else:
+        suns = [(a * p_l) * sun_l + p_r * sun_a for a, (sun_l, sun_a, _, _) in zip(albedo, channels)]
+        skies = [a * sky_l + sky_a for a, (_, _, sky_l, sky_a) in zip(albedo, channels)]
     return day.sun_irradiance * m.combine(*suns) + day.sky_radiance * m.combine(*skies)
 
 
