@@ -15,6 +15,7 @@ other surface is opaque (glass included, as Cycles' shadow rays treat it).
 """
 import functools
 import hashlib
+import itertools
 import math
 from typing import NamedTuple
 
@@ -95,30 +96,25 @@ def _point_vectors():
 def cast(bvh, origin, directions):
     """Distance (m) from ``origin`` along each unit direction (N, 3 array, or a list of Vectors) to the first
     triangle, NO_HIT if none."""
-    o = Vector(tuple(origin))
     vectors = directions if isinstance(directions, list) else [Vector(d) for d in directions.tolist()]
-    return _first_hits(bvh, ((o, d) for d in vectors), len(vectors))
+    return _first_hits(bvh, itertools.repeat(Vector(tuple(origin)), len(vectors)), vectors, len(vectors))
 
 
 def cast_parallel(bvh, origins, direction):
     """Distance (units) from each of ``origins`` ((N, 3) array) along the one unit ``direction`` to the first
     triangle, NO_HIT if none (a sun's map: ``shafts.SunFrame``)."""
-    d = Vector(tuple(direction))
-    return _first_hits(bvh, ((Vector(o), d) for o in origins.tolist()), len(origins))
+    return _first_hits(bvh, [Vector(o) for o in origins.tolist()], itertools.repeat(Vector(tuple(direction)),
+                                                                                  len(origins)), len(origins))
 
 
-def _first_hits(bvh, rays, count):
-    """(count,) float32: the distance along each (origin, unit direction) pair of ``rays`` (mathutils Vectors) to
-    the first triangle of ``bvh``, NO_HIT where none (or no BVH)."""
-    out = np.full(count, shafts.NO_HIT, np.float32)
+def _first_hits(bvh, origins, directions, count):
+    """(count,) float32: the distance along each ray (``origins`` and unit ``directions``: iterables of mathutils
+    Vectors) to the first triangle of ``bvh``, NO_HIT where none (or no BVH).  The rays go through ``map``, not a
+    Python loop: most of a map's time is the interpreter's, not the BVH's."""
     if bvh is None:
-        return out
-    ray_cast = bvh.ray_cast
-    for i, (o, d) in enumerate(rays):
-        hit = ray_cast(o, d)
-        if hit[0] is not None:
-            out[i] = hit[3]
-    return out
+        return np.full(count, shafts.NO_HIT, np.float32)
+    hits = map(bvh.ray_cast, origins, directions)
+    return np.fromiter((shafts.NO_HIT if hit[0] is None else hit[3] for hit in hits), np.float32, count)
 
 
 class SunShadow(NamedTuple):

@@ -394,6 +394,19 @@ MUTATIONS = [
              "        weight = integral * (_hg(mm, g, mm.dot(u, s)) if g else 1.0)",
              "        weight = 1.0 + 0.0 * integral",
              ("tests/test_sun_shafts.py::test_sun_surface_share_matches_quadrature",)),
+    Mutation("half_share_offsets_alike", "light shafts, surface share at half resolution: its samples take the "
+             "interleaving offsets of the picture's pixels, not their own (the samples of a 2 x 2 block's corner "
+             "share a quarter of the pattern)",
+             "fog_addon/nodes/comp_fog.py",
+             "    whole = shafts.surface_offset(m, m.floor(pixel_x * factor), m.floor(pixel_y * factor))",
+             "    whole = shafts.surface_offset(m, pixel_x, pixel_y)",
+             ("tests/test_shaft_scenes.py::test_surface_share_at_half_resolution_against_path_tracing[window_room]",)),
+    Mutation("half_share_upsampled_blind", "light shafts, surface share at half resolution: a pixel takes its sample's "
+             "share whatever surface that sample lies on (no depth test)",
+             "fog_addon/nodes/comp_fog.py",
+             "    own = m.less(m.abs(log_sample - log), UPSAMPLE_EDGE)",
+             "    own = 1.0",
+             ("tests/test_half_share.py::test_upsampling_keeps_each_surface_its_own_share",)),
     Mutation("sun_shadow_dims_as_lit", "sun shafts: a surface in the sun's shadow takes the sun's and the sky's "
              "weighted dimming, as if the sun reached it",
              "fog_addon/nodes/comp_fog.py",

@@ -30,6 +30,7 @@ Limits (README "The Compositor method"): one surface point per pixel, so a pixel
 gets the fog light of one point (Cycles: their mean position; EEVEE: the one its centre sees); perspective
 cameras; no fog passes (the fog's light is the compositor's).
 """
+import dataclasses
 import functools
 import hashlib
 import math
@@ -74,13 +75,20 @@ SHAFT_TAPS = (1, 2, 1)   # the separable filter that averages the 2 x 2 interlea
 SHAFT_EDGE = 0.05     # its threshold on log distance: neighbours 5 % nearer or farther are not mixed
 SKY_LENGTH = 1.0e6   # m: a ray to the sky's length for the shafts (its far nodes weigh e^{-beta t})
 LAYER_OPEN = 1.0e9   # units: a fog layer's span end beyond this is open (``sunlight.lamp_glow_span``'s UNBOUNDED)
-SHAFT_GROUP = f"{LIGHT_GROUP} Shaft"      # per shafted light: "<SHAFT_GROUP> <light name>"
+SHAFT_GROUP = f"{LIGHT_GROUP} Shaft"      # a spot's "<SHAFT_GROUP> <light name>", point lights' shared
+SHAFT_MAP = "Map"   # a shaft group's input: the light's shadow map (``build_shaft_group``)
 SURFACE_OFFSET = SURFACE + "Offset"   # a surface's interleaving offset (``shafts.surface_offset``)
 # the filter over the 4 x 4 interleaved surface shares (``shafts.surface_offset``): (1, 2, 2, 2, 1)
 SURFACE_TAPS = (1,) + (2,) * (2 ** shafts.SURFACE_PATTERN_LEVELS - 1) + (1,)
 SURFACE_EDGE = 0.3    # its threshold on log distance (a floor seen at a grazing angle changes faster than 5 % a row)
+HALF = "Half "   # a bundle's inputs for the surface share at a coarser resolution (``_halved``)
+HALF_SHARED = ((HALF + "Position", V), (HALF + "Normal", V), (HALF + "Offset", F), (HALF + "Length", F),
+               (HALF + "Step", F))
+HALF_FROM = 144   # px: a picture whose shorter side has this many pixels or more takes the surface share at half
+#                   its resolution (``_halved``: twice the render tests' 72, whose pattern it then matches in the scene)
+UPSAMPLE_EDGE = 0.1   # ``_upsampled``'s threshold on log distance: a coarse sample of another surface is not taken
 SHARED = (GLOW_SHARED + tuple((SURFACE + name, kind) for name, kind in SURFACE_SHARED[2:])
-          + ((SURFACE_OFFSET, F),) + SHAFT_SHARED[3:])   # a bundle's inputs
+          + ((SURFACE_OFFSET, F),) + SHAFT_SHARED[3:] + HALF_SHARED)   # a bundle's inputs
 # the quantities the compositor sums per pixel (``rungs.COMPOSITOR_OUTPUTS``, by their compositor sockets): a light's
 # glows (rungs.GLOW) in its glow group, over the picture or the light's window; the light its surface reflects
 # (the rest) in its scatter group, over the surfaces' window
@@ -133,11 +141,15 @@ class CompOps(NodeOps):
         u = self.clamp(x) * ((spec.width - 1.0) / spec.width) + 0.5 / spec.width
         v = self.clamp(y) * ((rows - 1.0) / spec.height) + (row0 + 0.5) / spec.height
         uv = self.combine(u, v, 1.0)   # Map UV takes the third component as the UV's alpha: 0 gives black
-        im = self.node("CompositorNodeImage", uv.col + 1)
-        im.image = self.images[spec.name]
         mu = self.node("CompositorNodeMapUV", uv.col + 1)
         mu.inputs["Interpolation"].default_value = "Bilinear"
-        self.tree.links.new(im.outputs["Image"], mu.inputs["Image"])
+        source = self.images[spec.name]   # an image of the file, or a group's image input (``_socket_images``)
+        if isinstance(source, Val):
+            self.tree.links.new(source.sock, mu.inputs["Image"])
+        else:
+            im = self.node("CompositorNodeImage", uv.col + 1)
+            im.image = source
+            self.tree.links.new(im.outputs["Image"], mu.inputs["Image"])
         self.tree.links.new(uv.sock, mu.inputs["UV"])
         return mu, uv.col + 1
 
@@ -228,19 +240,29 @@ def build_scatter_group(models, images):
     return groups._install(ng, name)
 
 
+def shaft_group_name(light, shadow, samples, g):
+    """The shaft group of ``light``: one for every point light of the same map size, samples and g (their maps
+    differ only in what the group's Map input reads), one per spot (its frame and cone are built in)."""
+    if shadow.spot is not None:
+        return f"{SHAFT_GROUP} {light.name}"
+    return (f"{SHAFT_GROUP} Point {shadow.spec.width}x{shadow.spec.height} g {g:.6g} "
+            f"K {samples.view_nodes} {samples.surface_directions}x{samples.surface_nodes}")
+
+
 def build_shaft_group(light, shadow, images, samples, g):
     """``light``'s lit share of its glow along the pixel's ray (compositor group: Share, ``shafts.lit_share``)
     from its shadow map ``shadow`` (``shadow_maps.ShadowMap``), and the share of the fog light the pixel's
     surface reflects that the shadows leave (Visible, ``shafts.surface_share``).
     ``samples``: ``shafts.Samples`` (the Quality's); ``g``: the Henyey-Greenstein anisotropy.  The spot's frame
-    and cone are the map's (baked at its pose)."""
-    name = f"{SHAFT_GROUP} {light.name}"
+    and cone are the map's (baked at its pose).  The map is the group's Map input (its Image node is the
+    bundle's), so point lights share one group (``shaft_group_name``), built once."""
+    name = shaft_group_name(light, shadow, samples, g)
+    if shadow.spot is None and (ng := groups._up_to_date(name)) is not None:
+        return ng
     ng, gin, gout = groups._new_group(name, [*SHAFT_SHARED, ("Light", V), ("Surface Position", V),
-                                             ("Surface Normal", V), ("Surface Offset", F)],
+                                             ("Surface Normal", V), ("Surface Offset", F), (SHAFT_MAP, C)],
                                       [("Share", F), ("Share Far", F), ("Visible", V)],
                                       tree_type="CompositorNodeTree")
-    m = CompOps(ng, images)
-    g_ = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
     falloff, kind = None, f"point {shadow.spec.width}x{shadow.spec.height}"
     if shadow.spot is not None:
         frame, half = shadow.spot
@@ -249,15 +271,19 @@ def build_shaft_group(light, shadow, images, samples, g):
         blend = float(light.data.spot_blend)
         falloff = lambda m, u, d: spot_.spot_falloff(m, m.dot(u, forward) / d, cos_half, blend)
         kind = "spot " + hashlib.sha1(repr((shadow.spec.width, frame, half, cos_half, blend)).encode()).hexdigest()[:12]
-    node = f"Shaft Node {shadow.spec.name} {kind} g {g:.6g}"   # one group for every quadrature node
+    spec = dataclasses.replace(shadow.spec, name=f"{SHAFT_MAP} {kind}")   # read from the Map input
+    m = CompOps(ng, dict(images))
+    m.images[spec.name] = m.wrap(gin.outputs[SHAFT_MAP], vector=True)
+    g_ = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
+    node = f"Shaft Node {kind} g {g:.6g}"   # one group for every quadrature node
     share, far = shafts.lit_share(m, g_["Camera"], g_["Direction"], g_["Shaft Length"], g_["Light"], g_["Beta"],
-                                  (shadow.spec, shadow.spot), samples.view_nodes, shift=g_["Shaft Offset"], g=g,
+                                  (spec, shadow.spot), samples.view_nodes, shift=g_["Shaft Offset"], g=g,
                                   falloff=falloff, name=node,
                                   tail_nodes=max(samples.view_nodes // shafts.TAIL_SHARE, 2), far=SKY_LENGTH)
     m.feed(gout.inputs["Share"], share)
     m.feed(gout.inputs["Share Far"], far)
     lit_sum, total = shafts.surface_share(m, g_["Surface Position"], g_["Surface Normal"], g_["Camera"],
-                                          g_["Light"], g_["Beta"], (shadow.spec, shadow.spot),
+                                          g_["Light"], g_["Beta"], (spec, shadow.spot),
                                           shift=g_["Surface Offset"], g=g, falloff=falloff, name=node, parts=True,
                                           directions=samples.surface_directions, nodes=samples.surface_nodes)
     m.feed(gout.inputs["Visible"], m.combine(lit_sum, total, 1.0))   # their ratio after the mean (``build_bundle``)
@@ -310,14 +336,88 @@ def _interleave_mean(m, value, length, taps, edge):
     return m.dot(packed, (1.0, 0.0, 0.0)) / m.maximum(m.dot(packed, (0.0, 0.0, 1.0)), 1e-6)
 
 
+def _scaled(m, value, factor):
+    """``value`` (an image) at ``factor`` (a number or a Val) times its resolution (Scale, relative, nearest): the
+    compositor evaluates what reads it over that many pixels.  A scalar comes back in every channel of an image."""
+    node = m.node("CompositorNodeScale", value.col + 1)
+    node.inputs["Type"].default_value = "Relative"
+    node.inputs["Interpolation"].default_value = "Nearest"
+    m.feed(node.inputs["Image"], value if value.vector else m.combine(value, value, value))
+    for axis in ("X", "Y"):
+        m.feed(node.inputs[axis], m.wrap(factor))
+    return m.wrap(node.outputs[0], vector=True)
+
+
+def _halved(m, scene, position, normal, pixel_x, pixel_y, camera):
+    """The bundle's HALF_SHARED inputs for the share of the fog light a surface gets that the shadows leave
+    (``shafts.surface_share``): the surfaces' ``position`` and ``normal`` (images over the surfaces' window, whose
+    pixels are ``pixel_x``, ``pixel_y``) at half the picture's resolution where its shorter side has HALF_FROM
+    pixels or more (a sample every 2 x 2 pixels; a driver reads the render's size, so the choice follows it), the
+    interleaving offsets of those samples (``shafts.surface_offset``: its 4 x 4 pattern over 8 x 8 pixels), the
+    distance from the camera of the sample each pixel of the picture takes, and the Step between samples (px:
+    ``_upsampled``).
+
+    Why: a surface's share varies slowly over the picture, and its map reads are most of a shafted light's cost;
+    at half the resolution a quarter of the pixels take them.  A picture twice the size of another, sampled so,
+    has its surface shares from as many samples over the same patch of the scene as the smaller one at its full
+    resolution (docs/measurements: no worse than the render tests' 128 x 72 against path tracing)."""
+    size = "min(rx,ry)*p/100"
+    variables = [("rx", scene, "render.resolution_x"), ("ry", scene, "render.resolution_y"),
+                 ("p", scene, "render.resolution_percentage")]
+    factor = _value(m, "Surface Share Scale", f"1-0.5*min(floor({size}/{HALF_FROM}),1)", variables)
+    pos = _scaled(m, position, factor)
+    whole = shafts.surface_offset(m, m.floor(pixel_x * factor), m.floor(pixel_y * factor))   # a sample's, in each
+    step = 1.0 / factor
+    return {HALF + "Position": pos, HALF + "Normal": _scaled(m, normal, factor),
+            HALF + "Offset": m.dot(_scaled(m, whole, factor), (1.0, 0.0, 0.0)),
+            HALF + "Length": m.dot(_scaled(m, m.length(pos - camera), step), (1.0, 0.0, 0.0)), HALF + "Step": step}
+
+
+def _upsampled_group(m, value, sample_length, length, step):
+    """``_upsampled`` as one compositor group shared by every light."""
+    name = f"{LIGHT_GROUP} Upsample {UPSAMPLE_EDGE:g}"
+    if (ng := groups._up_to_date(name)) is None:
+        ng, gin, gout = groups._new_group(name, [("Value", V), ("Sample Length", F), ("Length", F), ("Step", F)],
+                                          [("Value", V)], tree_type="CompositorNodeTree")
+        sub = CompOps(ng, {})
+        g_ = {s.name: sub.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
+        sub.feed(gout.inputs["Value"], _upsampled(sub, *(g_[k] for k in ("Value", "Sample Length", "Length", "Step"))))
+        ng[owned.BUILT] = groups.code_fingerprint()
+        ng = groups._install(ng, name)
+    node = m.node("CompositorNodeGroup", max(value.col, length.col) + 1)
+    node.node_tree = ng
+    for socket, v in (("Value", value), ("Sample Length", sample_length), ("Length", length), ("Step", step)):
+        m.feed(node.inputs[socket], m.wrap(v))
+    return m.wrap(node.outputs["Value"], vector=True)
+
+
+def _upsampled(m, value, sample_length, length, step):
+    """``value`` (the sums (lit, total, weight) of a coarse image, ``_halved``) at the picture's resolution,
+    ``step`` (px) times its own, depth-aware: a pixel takes its own sample where that sample's distance from the
+    camera (``sample_length``) is within UPSAMPLE_EDGE in log of the pixel's own ``length``, else the sum of the
+    four next to it (``step`` pixels away) that are.  Its own sample always counts a little (a thousandth), so a
+    pixel no sample matches (an object thinner than a sample) takes the nearest one's share.  With ``step`` 1 it is
+    ``value``."""
+    up = _scaled(m, value, step)
+    log = m.math("LOGARITHM", m.maximum(length, 1e-3), math.e)
+    log_sample = m.math("LOGARITHM", m.maximum(sample_length, 1e-3), math.e)
+    own = m.less(m.abs(log_sample - log), UPSAMPLE_EDGE)
+    others = m.wrap((0.0, 0.0, 0.0))
+    for dx, dy in ((1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)):
+        near_log = m.dot(_translated(m, log_sample, step * dx, step * dy), (1.0, 0.0, 0.0))
+        same = m.less(m.abs(near_log - log), UPSAMPLE_EDGE)
+        others = _accumulate(m, others, m.scale(_translated(m, up, step * dx, step * dy), same))
+    return m.scale(up, own + 1e-3) + m.scale(others, 1.0 - own)
+
+
 def _translated(m, value, dx, dy):
-    """``value`` (an image) moved by (dx, dy) whole pixels (Translate, nearest); a scalar comes back in every
+    """``value`` (an image) moved by (dx, dy) whole pixels (numbers or Vals) (Translate, nearest); a scalar comes back in every
     channel of an image."""
     node = m.node("CompositorNodeTranslate", value.col + 1)
     node.inputs["Interpolation"].default_value = "Nearest"
     m.feed(node.inputs["Image"], value if value.vector else m.combine(value, value, value))
-    node.inputs["X"].default_value = float(dx)
-    node.inputs["Y"].default_value = float(dy)
+    m.feed(node.inputs["X"], m.wrap(dx))
+    m.feed(node.inputs["Y"], m.wrap(dy))
     return m.wrap(node.outputs[0], vector=True)
 
 
@@ -497,9 +597,11 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
             shaft.label = f"Light {k} Shaft: {light.name}"
             for socket, _ in SHAFT_SHARED:
                 m.feed(shaft.inputs[socket], crop(socket) if socket in SHAFT_PER_PIXEL else g[socket])
-            m.feed(shaft.inputs["Surface Position"], g[SURFACE + "Position"])
-            m.feed(shaft.inputs["Surface Normal"], g[SURFACE + "Normal"])
-            m.feed(shaft.inputs["Surface Offset"], g[SURFACE_OFFSET])
+            source = m.node("CompositorNodeImage", 5)
+            source.image = images[maps[light.name].spec.name]
+            ng.links.new(source.outputs["Image"], shaft.inputs[SHAFT_MAP])
+            for socket in ("Position", "Normal", "Offset"):   # the surface share at half resolution
+                m.feed(shaft.inputs["Surface " + socket], g[HALF + socket])
             m.feed(shaft.inputs["Light"], position)
             share = {o: _interleave_mean_group(m, m.wrap(shaft.outputs["Share" if o.at == rungs.SURFACE_POINT
                                                                   else "Share Far"]),
@@ -518,7 +620,10 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
         if any(o.computed(mod) for o in SCATTER_OUTPUTS):
             if shaft is not None:   # its directions interleave as the glow's nodes do (``shafts.surface_share``)
                 parts = _interleave_mean_group(m, m.wrap(shaft.outputs["Visible"], vector=True),
-                                         m.length(g[SURFACE + "Position"] - g["Camera"]), SURFACE_TAPS, SURFACE_EDGE)
+                                               m.length(g[HALF + "Position"] - g["Camera"]), SURFACE_TAPS,
+                                               SURFACE_EDGE)
+                parts = _upsampled_group(m, parts, g[HALF + "Length"], m.length(g[SURFACE + "Position"] - g["Camera"]),
+                                         g[HALF + "Step"])
                 visible = shafts.share_of(m.dot(parts, (1.0, 0.0, 0.0)), m.dot(parts, (0.0, 1.0, 0.0)))
             scatter = m.node("CompositorNodeGroup", 6)
             scatter.node_tree = build_scatter_group(mod, images)
@@ -791,6 +896,10 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     if win is not None:   # the fog light on surfaces: only where the picture has surfaces
         surface_in = {k: _crop(m, v, win) for k, v in surface_in.items()}
     shared.update({SURFACE + k: v for k, v in surface_in.items()})
+    if shafted:   # the surface share at a coarser resolution
+        xy = (px, py) if win is None else (m.dot(_crop(m, pixel_xy, win), axis) for axis in ((1.0, 0.0, 0.0),
+                                                                                              (0.0, 1.0, 0.0)))
+        shared.update(_halved(m, scene, shared[SURFACE + "Position"], shared[SURFACE + "Normal"], *xy, cam))
     shared["Shaft Length"] = m.select(m.less(1e-3, cover), d_vp, SKY_LENGTH)
     shared["Shaft Offset"] = shafts.offset(m, px, py)
     sums = {}   # Output -> the sum over the bundles

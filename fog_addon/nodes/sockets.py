@@ -356,8 +356,9 @@ class NodeOps:
         say everything that changes what ``fn`` builds), a group node here.  Why: Blender's
         ``nodes.new`` costs time growing with the nodes already in the tree (500 nodes 0.9 s, 2 000 16 s),
         and Cycles and EEVEE inline groups, so what they compile is the same."""
-        tree = self._kernel_group(f"{self.KERNEL_PREFIX} {name}", fn, len(args))
-        vals = [self.wrap(a) for a in args]
+        passed = self._socket_images()
+        tree = self._kernel_group(f"{self.KERNEL_PREFIX} {name}", fn, len(args), [k for k, _ in passed])
+        vals = [self.wrap(a) for a in args] + [v for _, v in passed]
         col = 1 + max(v.col for v in vals)
         n = self.node(self.GROUP_NODE, col)
         n.node_tree = tree
@@ -366,7 +367,13 @@ class NodeOps:
         outs = [Val(self, sock=o, col=col) for o in n.outputs]
         return outs[0] if len(outs) == 1 else tuple(outs)
 
-    def _kernel_group(self, name, fn, count):
+    def _socket_images(self):
+        """[(table name, Val)] of the tables this tree reads from an image socket, not an image of the file (a
+        group shared by lights whose maps differ: ``comp_fog.build_shaft_group``): a kernel group built here
+        takes each as a colour input of its own."""
+        return [(k, v) for k, v in self.images.items() if isinstance(v, Val)]
+
+    def _kernel_group(self, name, fn, count, image_names=()):
         built = fingerprint.package_fingerprint(name)
         ng = bpy.data.node_groups.get(name)
         if ng is not None and ng.get(owned.BUILT) == built:
@@ -377,9 +384,12 @@ class NodeOps:
         ng.interface.clear()
         for k in range(count):
             ng.interface.new_socket(f"In {k}", in_out="INPUT", socket_type="NodeSocketFloat")
+        for k in image_names:
+            ng.interface.new_socket(f"Image {k}", in_out="INPUT", socket_type="NodeSocketColor")
         gin = ng.nodes.new("NodeGroupInput")
         gout = ng.nodes.new("NodeGroupOutput")
-        sub = type(self)(ng, self.images)
+        sub = type(self)(ng, dict(self.images))
+        sub.images.update((k, sub.wrap(gin.outputs[count + i], vector=True)) for i, k in enumerate(image_names))
         result = fn(sub, *(sub.wrap(o) for o in gin.outputs[:count]))
         result = result if isinstance(result, tuple) else (result,)
         for k, v in enumerate(result):

@@ -1,0 +1,104 @@
+"""The surface share's depth-aware upsampling (``comp_fog._upsampled``), run by Blender's compositor on synthetic
+images against the rule written out here in numpy.
+
+Two surfaces meet at an odd column, so the coarse sample of the 2 x 2 block that straddles them lies on the near
+one: the far surface's pixel in that block must take its far neighbour's sample, not its own.  With a step of
+1 px (a picture too small to halve, ``comp_fog.HALF_FROM``) every pixel keeps its own value.
+"""
+import json
+
+import numpy as np
+import pytest
+
+from fog_scenes import render_harness as h
+
+pytestmark = pytest.mark.render   # Blender's compositor, in a subprocess
+
+W, H = 32, 16       # px: the picture
+NEAR, FAR = 2.0, 20.0
+EDGE_COLUMN = 13    # the first column of the far surface (odd: its block's sample lies on the near one)
+
+_CODE = r"""
+import json, sys
+import bpy
+import numpy as np
+from fog_addon.nodes import comp_fog
+W, H, step = int(sys.argv[1]), int(sys.argv[2]), float(sys.argv[3])
+data = json.loads(open(sys.argv[4]).read())
+bpy.ops.wm.read_factory_settings(use_empty=True)
+scene = bpy.context.scene
+scene.render.engine = "CYCLES"
+scene.cycles.samples = 1
+scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = W, H, 100
+scene.render.image_settings.file_format = "OPEN_EXR"
+scene.render.image_settings.color_depth = "32"
+scene.view_settings.view_transform = "Standard"
+
+
+def image(name, rows):
+    a = np.asarray(rows, np.float32)
+    img = bpy.data.images.new(name, a.shape[1], a.shape[0], alpha=True, float_buffer=True, is_data=True)
+    img.colorspace_settings.name = "Non-Color"
+    px = np.ones(a.shape[:2] + (4,), np.float32)
+    px[..., :a.shape[2] if a.ndim == 3 else 3] = a if a.ndim == 3 else a[..., None]
+    img.pixels.foreach_set(px.ravel())   # row 0 at the bottom, as the arrays are
+    return img
+
+
+tree = bpy.data.node_groups.new("Test", "CompositorNodeTree")
+tree.interface.new_socket("Image", in_out="OUTPUT", socket_type="NodeSocketColor")
+m = comp_fog.CompOps(tree, {})
+reads = {}
+for key in ("value", "sample_length", "length"):
+    node = tree.nodes.new("CompositorNodeImage")
+    node.image = image(key, data[key])
+    reads[key] = m.wrap(node.outputs["Image"], vector=True)
+scalar = lambda v: m.dot(v, (1.0, 0.0, 0.0))
+out = comp_fog._upsampled_group(m, reads["value"], scalar(reads["sample_length"]), scalar(reads["length"]), step)
+rgba = tree.nodes.new("CompositorNodeSetAlpha")
+m.feed(rgba.inputs["Image"], out)
+tree.links.new(rgba.outputs[0], tree.nodes.new("NodeGroupOutput").inputs[0])
+scene.compositing_node_group = tree
+scene.render.filepath = sys.argv[5]
+bpy.ops.render.render(write_still=True)
+"""
+
+
+def _upsampled(value, sample_length, length, step, edge):
+    """The rule: a pixel's own sample where its distance matches in log within ``edge``, else the sum of its four
+    neighbours' (``step`` px away) that match; its own always at a thousandth."""
+    s = int(step)
+    own_value = value[np.arange(H)[:, None] // s, np.arange(W)[None, :] // s]
+    log, log_s = np.log(length), np.log(sample_length)
+    own = np.abs(log_s - log) < edge
+    others = np.zeros_like(own_value)
+    for dx, dy in ((s, 0), (-s, 0), (0, s), (0, -s)):
+        ys, xs = np.arange(H)[:, None] - dy, np.arange(W)[None, :] - dx
+        inside = (ys >= 0) & (ys < H) & (xs >= 0) & (xs < W)
+        yc, xc = np.clip(ys, 0, H - 1), np.clip(xs, 0, W - 1)
+        match = inside & (np.abs(log_s[yc, xc] - log) < edge)
+        others += np.where(match[..., None], own_value[yc, xc], 0.0)
+    return own_value * (own + 1e-3)[..., None] + others * (1.0 - own)[..., None]
+
+
+@pytest.mark.parametrize("step", [2, 1])
+def test_upsampling_keeps_each_surface_its_own_share(tmp_path, step):
+    from fog_addon import imageio
+    from fog_addon.nodes import comp_fog
+    rng = np.random.default_rng(7)
+    cols = np.arange(W)
+    length = np.broadcast_to(np.where(cols < EDGE_COLUMN, NEAR, FAR), (H, W)).astype(float)
+    coarse = rng.uniform(0.2, 1.0, (H // step, W // step, 3))
+    coarse_length = length[::step, ::step]   # a block's sample: its first pixel
+    sample_length = coarse_length[np.arange(H)[:, None] // step, cols[None, :] // step]
+    data = tmp_path / "data.json"
+    data.write_text(json.dumps({"value": coarse.tolist(), "sample_length": sample_length.tolist(),
+                                "length": length.tolist()}))
+    out = tmp_path / "out.exr"
+    h.run_bpy_code(_CODE, W, H, step, data, out, timeout=300)
+    got = imageio.read_rgb(out)[::-1]   # the file's first row is the top
+    want = _upsampled(coarse, sample_length, length, step, comp_fog.UPSAMPLE_EDGE)
+    if step == 2:   # the far surface's pixels in the straddling block take their far neighbour's sample
+        assert np.allclose(want[:, EDGE_COLUMN], coarse[np.arange(H) // 2, (EDGE_COLUMN + 1) // 2]
+                           + 1e-3 * coarse[np.arange(H) // 2, EDGE_COLUMN // 2])
+    np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)
