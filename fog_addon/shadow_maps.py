@@ -14,6 +14,7 @@ Objects that Cycles lets shadow rays through (hidden from shadow rays, not rende
 other surface is opaque (glass included, as Cycles' shadow rays treat it).
 """
 import functools
+import gc
 import hashlib
 import itertools
 import math
@@ -90,21 +91,33 @@ def scene_bvh(scene, depsgraph=None, objects=None):
 @functools.lru_cache(maxsize=1)
 def _point_vectors():
     """A point light's map directions as mathutils Vectors (every point light's map shares them)."""
-    return [Vector(d) for d in shafts.point_map_directions().reshape(-1, 3).tolist()]
+    return _vectors(shafts.point_map_directions().reshape(-1, 3))
+
+
+def _vectors(rows):
+    """mathutils Vectors of the rows of an (N, 3) array, made with Python's cyclic garbage collector paused: each
+    new object counts towards its next pass, which walks every tracked object, so half a million new Vectors
+    cost twice their own time in passes (none of them can be garbage)."""
+    paused = gc.isenabled()
+    gc.disable()
+    try:
+        return [Vector(d) for d in rows.tolist()]
+    finally:
+        if paused:
+            gc.enable()
 
 
 def cast(bvh, origin, directions):
     """Distance (m) from ``origin`` along each unit direction (N, 3 array, or a list of Vectors) to the first
     triangle, NO_HIT if none."""
-    vectors = directions if isinstance(directions, list) else [Vector(d) for d in directions.tolist()]
+    vectors = directions if isinstance(directions, list) else _vectors(directions)
     return _first_hits(bvh, itertools.repeat(Vector(tuple(origin)), len(vectors)), vectors, len(vectors))
 
 
 def cast_parallel(bvh, origins, direction):
     """Distance (units) from each of ``origins`` ((N, 3) array) along the one unit ``direction`` to the first
     triangle, NO_HIT if none (a sun's map: ``shafts.SunFrame``)."""
-    return _first_hits(bvh, [Vector(o) for o in origins.tolist()], itertools.repeat(Vector(tuple(direction)),
-                                                                                  len(origins)), len(origins))
+    return _first_hits(bvh, _vectors(origins), itertools.repeat(Vector(tuple(direction)), len(origins)), len(origins))
 
 
 def _first_hits(bvh, origins, directions, count):
