@@ -65,7 +65,8 @@ def smooth_pixels(image, tol=SMOOTH):
     return dev <= tol * y + 1e-4
 
 
-@pytest.mark.parametrize("scene,density,anisotropy", HALF_CASES, ids=[c[0] for c in fs.SHAFT_CASES if c[0] in HALF_BOUND])
+@pytest.mark.parametrize("scene,density,anisotropy", HALF_CASES,
+                         ids=[c[0] for c in fs.SHAFT_CASES if c[0] in HALF_BOUND])
 def test_surface_share_at_half_resolution_against_path_tracing(tmp_path, regen, scene, density, anisotropy):
     from fog_addon.nodes import comp_fog
     assert min(HALF_RESOLUTION) >= comp_fog.HALF_FROM > min(fs.SHAFT_RESOLUTION)   # this render halves, the others not

@@ -411,8 +411,8 @@ def _upsampled(m, value, sample_length, length, step):
 
 
 def _translated(m, value, dx, dy):
-    """``value`` (an image) moved by (dx, dy) whole pixels (numbers or Vals) (Translate, nearest); a scalar comes back in every
-    channel of an image."""
+    """``value`` (an image) moved by (dx, dy) whole pixels, numbers or Vals (Translate, nearest); a scalar comes
+    back in every channel of an image."""
     node = m.node("CompositorNodeTranslate", value.col + 1)
     node.inputs["Interpolation"].default_value = "Nearest"
     m.feed(node.inputs["Image"], value if value.vector else m.combine(value, value, value))
