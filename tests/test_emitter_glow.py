@@ -71,6 +71,39 @@ def test_weights_table_is_finite_and_non_negative():
     assert np.isfinite(table).all() and (table >= 0.0).all() and table.max() > 0.0
 
 
+def test_facing_mean_against_quadrature():
+    """E(c), the mean |n . omega| of a flat emitter's glow, against scipy's double quadrature over theta and the
+    azimuth phi (the HG-weighted definition, written out here), and at g = 0 against its closed form
+    (4 / pi^2) E_ell(1 - c^2) (2 / pi face-on, 4 / pi^2 edge-on)."""
+    from scipy import integrate, special
+    c = np.array([0.0, 0.1, 0.4, 0.8, 1.0])
+    np.testing.assert_allclose(eg.facing_mean(c, 0.0), 4.0 / np.pi ** 2 * special.ellipe(1.0 - c * c), rtol=1e-5)
+    for g, cc in ((0.85, 0.05), (0.5, 0.5), (-0.3, 1.0)):
+        hg = lambda th: (1 - g * g) / (1 + g * g + 2 * g * np.sin(th)) ** 1.5
+        s = math.sqrt(1.0 - cc * cc)
+        num = integrate.dblquad(lambda ph, th: hg(th) * abs(cc * np.sin(th) + s * np.cos(th) * np.cos(ph)),
+                                -np.pi / 2, np.pi / 2, 0.0, 2 * np.pi, epsabs=1e-9, epsrel=1e-6)[0]
+        den = 2 * np.pi * integrate.quad(hg, -np.pi / 2, np.pi / 2, epsabs=1e-12)[0]
+        assert eg.facing_mean(cc, g) == pytest.approx(num / den, rel=2e-4), (g, cc)
+
+
+@pytest.mark.parametrize("g", [0.0, 0.7])
+def test_a_spheres_pixels_keep_its_glow(g):
+    """The pixels of a sphere's disc (c = sqrt(1 - r^2), uniform over the disc) weighted by the facing factor sum to
+    the isotropic sources' (the visible hemisphere, two-sided, has the sphere's intensity in every direction): within
+    1 % (the limb's c < MIN_FACING is held; without that clamp within 0.1 %); a face-on flat emitter's factor is
+    E(1) < 1."""
+    from fog_addon.precompute.ops import NumpyOps
+    m = NumpyOps()
+    c = (np.arange(4000) + 0.5) / 4000   # over the disc dA = 2 pi c dc (r^2 = 1 - c^2): the mean is 2 int f c dc
+    mean = eg.facing_mean(c, g)
+    assert 2.0 * float(np.mean(eg.facing_factor(m, c, mean) * c)) == pytest.approx(1.0, abs=0.01)
+    assert 2.0 * float(np.mean(mean)) == pytest.approx(1.0, abs=1e-3)
+    assert float(eg.facing_factor(m, 1.0, eg.facing_mean(1.0, g))) < 1.0
+    table = eg.bake_facing(g)
+    assert table.shape == (1, eg.FACING_COUNT) and np.isfinite(table).all() and (table > 0).all()
+
+
 @pytest.mark.render
 @pytest.mark.parametrize("engine,beta,dense", [
     ("cycles", 0.1, False),
@@ -79,7 +112,9 @@ def test_weights_table_is_finite_and_non_negative():
     pytest.param("cycles", 0.3, True, marks=pytest.mark.slow),
 ])
 def test_glowing_sphere_against_path_traced_fog(tmp_path, engine, beta, dense):
-    """Single scattering against 0 volume bounces; with Dense Fog (the multiply scattered field in the kernel)
+    """Single scattering against 0 volume bounces (measured 1.005, 1.006, 1.029, 0.996, 0.999 by annulus, with the
+    pixels' facing factor; 1.004, 1.002, 0.984, 0.954, 0.958 as isotropic sources); with Dense Fog (the multiply
+    scattered field in the kernel, the pixels isotropic sources)
     against 64 bounces at T 1.5 and 4.5, measured 1.006, 1.003, 0.987, 0.941, 0.991 and 1.017, 1.033, 1.058,
     1.009, 1.018."""
     from fog_scenes import dense as dn
@@ -165,9 +200,10 @@ def test_a_glowing_objects_light_on_the_ground_is_dimmed(sign_renders):
 def test_a_sign_cut_by_the_frame_glows_as_its_pixels_do(sign_renders):
     """The compositor's glow beside a sign cut by the frame's top edge against the single scattering of the sign
     (both faces, ``area.airlight_background``, itself against quadrature over the emitter in test_area.py), over
-    the rows beside it: each pixel taken as an isotropic source of the light it shows the camera (Narasimhan's
-    7.2), a flat emitter seen face-on glows about 1.6x too bright there (measured 1.64); the Blur nodes' edges
-    kept black (Extend Bounds: without it Blender extends the edge pixels outwards and the glow was 5.5x)."""
+    the rows beside it: each pixel taken as the two-sided Lambertian source its surface is
+    (``emitter_glow.facing_factor``; as isotropic sources of the light they show the camera, Narasimhan's 7.2, the
+    sign glowed 1.64x too bright there), measured 1.047; the Blur nodes' edges kept black (Extend Bounds: without it
+    Blender extends the edge pixels outwards and the glow was 5.5x)."""
     from fog_addon.precompute import area, model
     from fog_addon.precompute.ops import NumpyOps
     out, _ = sign_renders
@@ -186,4 +222,4 @@ def test_a_sign_cut_by_the_frame_glows_as_its_pixels_do(sign_renders):
     beside[30:] = False
     ratio = float(out["compositor"][..., 0][beside].mean() / exact[beside].mean())
     print(f"sign: compositor / exact single scattering beside it {ratio:.3f}")
-    assert 1.3 <= ratio <= 1.9, ratio
+    assert 0.93 <= ratio <= 1.10, ratio

@@ -407,6 +407,19 @@ MUTATIONS = [
              "    own = m.less(m.abs(log_sample - log), UPSAMPLE_EDGE)",
              "    own = 1.0",
              ("tests/test_half_share.py::test_upsampling_keeps_each_surface_its_own_share",)),
+    Mutation("emitter_facing_isotropic", "glowing objects: each pixel an isotropic source of what it shows the camera "
+             "(a flat sign sends as much light sideways as towards the camera), not the two-sided Lambertian source "
+             "its surface is",
+             "fog_addon/nodes/comp_fog.py",
+             "        light = m.scale(light, emitter_glow.facing_factor(m, facing, mean))",
+             "        light = light",
+             ("tests/test_emitter_glow.py::test_a_sign_cut_by_the_frame_glows_as_its_pixels_do",)),
+    Mutation("emitter_facing_no_phase", "glowing objects: the facing mean weighs the fog's directions alike, not by "
+             "the phase function of their scattering towards the camera (forward fog sees a sign's face)",
+             "fog_addon/precompute/emitter_glow.py",
+             "    weight = (1.0 - g * g) / (1.0 + g * g - 2.0 * g * mu) ** 1.5\n",
+             "    weight = 1.0 + 0.0 * mu\n",
+             ("tests/test_emitter_glow.py::test_facing_mean_against_quadrature",)),
     Mutation("sun_shadow_dims_as_lit", "sun shafts: a surface in the sun's shadow takes the sun's and the sky's "
              "weighted dimming, as if the sun reached it",
              "fog_addon/nodes/comp_fog.py",

@@ -712,21 +712,27 @@ def emitter_pixel_angle(scene):
 def emitter_table(g, pixel_angle, multiple_albedo=None):
     """{name: image} of the emitters' glow weights for anisotropy ``g``, ``pixel_angle`` and Dense Fog's albedo
     (baked once, cached)."""
-    spec = emitter_glow.table_spec(g, pixel_angle, multiple_albedo)
+    spec, facing = emitter_glow.table_spec(g, pixel_angle, multiple_albedo), emitter_glow.facing_spec(g)
     return {spec.name: images_.table_image(spec, functools.partial(emitter_glow.bake_table, g, pixel_angle,
-                                                                   multiple_albedo))}
+                                                                   multiple_albedo)),
+            facing.name: images_.table_image(facing, functools.partial(emitter_glow.bake_facing, g))}
 
 
-def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=None):
+def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=None, facing=None):
     """The glows of the glowing objects the camera sees (``precompute/emitter_glow.py``): the Emission pass made
-    undimmed (times e^{beta D_vp}), weighted per pixel by a_j(T) and blurred by each Blur node of the ladder,
-    summed (per unit albedo).  Each rung's glow stops at the surfaces in front of its sources
+    undimmed (times e^{beta D_vp}) and, with ``facing`` (the |cos| of each pixel's surface to the camera), taken
+    as the two-sided Lambertian source its surface is (``emitter_glow.facing_factor``: a flat sign sends less
+    light sideways than towards the camera), weighted per pixel by a_j(T) and blurred by each Blur node of the
+    ladder, summed (per unit albedo).  Each rung's glow stops at the surfaces in front of its sources
     (``emitter_glow.segment_share`` at the rung's angle, the sources' optical depth taken as the mean over what the
     rung blurs in: a second blur of the weights times T); where the pixel sees the sky (``cover`` 0) or a glowing
     surface it is whole."""
     spec = emitter_glow.table_spec(g, pixel_angle, multiple_albedo)
     t = beta * d_vp
     light = m.scale(p[EMITTERS], m.exp(m.minimum(t, GLOW_DEPTH_LIMIT)))
+    if facing is not None and multiple_albedo is None:   # (Dense Fog's kernel keeps the isotropic sources)
+        mean = m.table(emitter_glow.facing_spec(g), m.clamp(facing), 0.0)
+        light = m.scale(light, emitter_glow.facing_factor(m, facing, mean))
     grey = m.dot(light, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))
     t_surface = t if cover is None else m.select(m.less(1e-3, cover), t, 1.0e6)
     # a glowing pixel's own surface is no surface in front of the glow: it takes the whole of it (the light its
@@ -939,7 +945,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
                               cover, sun_share, surface_share)
     if emitters is not None:
         fog = fog + albedo * _emitter_glow(m, p, beta, d_vp, emitters[0], emitter_pixel_angle(scene), emitters[1],
-                                           cover)
+                                           cover, m.abs(m.dot(normal, incoming)))
     image = p["Image"]
     if daylight is not None:   # the dimming of the pixel's surface by the fog above it and of the sky seen through
         one = 1.0 if daylight.air is None else m.wrap((1.0, 1.0, 1.0))   # (with air the dimming is RGB)

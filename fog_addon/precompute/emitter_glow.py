@@ -208,3 +208,65 @@ def bake_table(g, pixel_angle, multiple_albedo=None):
     """The weights' table (``table_spec``) of anisotropy g at ``pixel_angle``: ``bake_weights`` of its field
     (``glow_field``)."""
     return bake_weights(glow_field(g, multiple_albedo), pixel_angle)
+
+
+# --- a flat emitter's light towards the fog: the facing factor --------------------------------------------------
+#
+# Each pixel q of a glowing object is a source of intensity L_q Omega_px z_q^2 (Narasimhan's 7.2: isotropic), which
+# holds for a sphere but sends a flat emitter's light sideways as strongly as towards the camera.  A patch of area
+# A_q = Omega_px z_q^2 / c_q (c_q = |cos| between its normal and the camera) that emits L_q from both faces (an
+# Emission shader) has the intensity L_q A_q |n . omega| towards omega.  Its glow weighs the directions omega from
+# it to the fog its glow rays pass by the single scattering along them; with their mean E(c) of |n . omega|, the
+# source's intensity is L_q Omega_px z_q^2 E(c_q) / c_q.  For any centrally symmetric convex object (a sphere, a
+# box, a cylinder) the surface the camera sees, taken two-sided, has the whole object's intensity in every
+# direction (a line meets that half of the surface once on average), so its pixels' factors average to 1: only
+# flat and open emitters change.
+
+FACING_COUNT = 64    # the facing table's samples over c = |cos| in [0, 1]
+MIN_FACING = 0.02    # c below this counts as this (a sphere's limb, a sign seen edge-on: at most 20x the isotropic)
+FACING_NODES = 512   # midpoint nodes over theta of ``facing_mean``
+
+
+def facing_mean(c, g=0.0, nodes=FACING_NODES):
+    """E(c): the mean of |n . omega| over the directions omega from a flat emitter to the fog its glow's rays pass,
+    c the |cos| of its normal to the camera.  A ray passing the emitter meets the fog at the angle theta about it
+    (Sun et al. 2005 Eq. 6: the airlight's 1/d^2 integrand is flat in theta, uniform over (-pi/2, pi/2) for a
+    source far from the camera), omega = sin(theta) v + cos(theta) p, v the view direction and p the unit
+    perpendicular from the emitter to the ray, at every azimuth phi about v; each theta weighs by the phase
+    function of its scattering towards the camera, p_HG(-sin theta).  With n . v = c and n . p = s cos(phi)
+    (s = sqrt(1 - c^2)), the azimuths' mean of |A + B cos(phi)| (A = c sin(theta), B = s cos(theta)) is closed
+    (``_azimuth_mean``).  g = 0: (4 / pi^2) E_ell(1 - c^2), 2 / pi face-on.  The azimuths' mean is even in theta,
+    so the phase function's spread matters, not its direction."""
+    c = np.clip(np.asarray(c, float), 0.0, 1.0)
+    theta = (np.arange(nodes) + 0.5) / nodes * np.pi - 0.5 * np.pi
+    mu = -np.sin(theta)
+    weight = (1.0 - g * g) / (1.0 + g * g - 2.0 * g * mu) ** 1.5
+    a = c[..., None] * np.sin(theta)
+    b = np.sqrt(1.0 - c * c)[..., None] * np.cos(theta)
+    return (_azimuth_mean(a, b) * weight).sum(axis=-1) / weight.sum()
+
+
+def _azimuth_mean(a, b):
+    """(1 / 2 pi) int_0^{2 pi} |a + b cos(phi)| d phi for b >= 0: |a| where b <= |a|, else
+    (2 / pi) (a asin(a / b) + sqrt(b^2 - a^2))."""
+    b = np.maximum(b, 0.0)
+    crossing = b > np.abs(a)
+    ratio = np.where(crossing, a / np.where(crossing, b, 1.0), 0.0)
+    inner = (2.0 / np.pi) * (a * np.arcsin(np.clip(ratio, -1.0, 1.0)) + np.sqrt(np.maximum(b * b - a * a, 0.0)))
+    return np.where(crossing, inner, np.abs(a))
+
+
+def facing_factor(m, c, mean):
+    """A glowing pixel's intensity over the isotropic source's (the section above): ``mean`` (E(c), ``facing_mean``:
+    read from the table of ``facing_spec``) / max(c, MIN_FACING)."""
+    return mean / m.maximum(c, MIN_FACING)
+
+
+def facing_spec(g):
+    """The TableSpec of ``facing_mean`` for anisotropy ``g``: FACING_COUNT samples over c in [0, 1], one row."""
+    return tables.TableSpec(f"AnalyticFog Emitter Facing (g {float(g):+.3f})", FACING_COUNT, 1, g=float(g))
+
+
+def bake_facing(g):
+    """(1, FACING_COUNT) float32: ``facing_mean`` at c = 0 .. 1 (smooth: 4 / pi^2 to 2 / pi at g = 0)."""
+    return facing_mean(np.linspace(0.0, 1.0, FACING_COUNT), g)[None, :].astype(np.float32)
