@@ -383,11 +383,11 @@ def sun_shadow(scene, spec):
 def _shaft_note(scene, spec, method_name):
     """What the sun's shadows do in the fog with ``method_name``."""
     from . import caveats
-    casters = caveats.shadow_casters(scene)
     if not spec.shafts:
         return "Light Shafts are off: no shafts in the fog"
     if sun_casts_shafts(scene, spec) is None:
         return "it casts no shadows: no shafts in the fog"
+    casters = caveats.shadow_casters(scene)
     if not casters:
         return "nothing casts a shadow: no shafts in the fog"
     if method_name != "compositor":

@@ -291,23 +291,34 @@ def build_shaft_group(light, shadow, images, samples, g):
     return groups._install(ng, name)
 
 
-def _interleave_mean_group(m, value, length, taps, edge):
-    """``_interleave_mean`` as one compositor group shared by every light (its nodes built once: a tree's node
-    creation slows as it grows)."""
-    name = f"{LIGHT_GROUP} Interleave Mean {'-'.join(map(str, taps))} {edge:g}" + (" Vector" if value.vector else "")
+def _shared_group(m, name, inputs, output, build):
+    """A group node in ``m``'s tree of the compositor group ``name``, built once for every light and bundle (a
+    tree's node creation slows as it grows): ``inputs`` its ((name, socket type, value) ...), fed here;
+    ``output`` (name, socket type) of its one output, ``build(sub, ins)`` its value from its inputs' Vals by
+    name.  Returns the output's Val."""
     if (ng := groups._up_to_date(name)) is None:
-        ng, gin, gout = groups._new_group(name, [("Value", V if value.vector else F), ("Length", F)],
-                                          [("Mean", V if value.vector else F)], tree_type="CompositorNodeTree")
+        ng, gin, gout = groups._new_group(name, [(n, t) for n, t, _ in inputs], [output],
+                                          tree_type="CompositorNodeTree")
         sub = CompOps(ng, {})
-        g_ = {s.name: sub.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
-        sub.feed(gout.inputs["Mean"], _interleave_mean(sub, g_["Value"], g_["Length"], taps, edge))
+        ins = {s.name: sub.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
+        sub.feed(gout.inputs[output[0]], sub.wrap(build(sub, ins)))
         ng[owned.BUILT] = groups.code_fingerprint()
         ng = groups._install(ng, name)
-    node = m.node("CompositorNodeGroup", max(value.col, length.col) + 1)
+    vals = [m.wrap(v) for _, _, v in inputs]
+    node = m.node("CompositorNodeGroup", max(v.col for v in vals) + 1)
     node.node_tree = ng
-    m.feed(node.inputs["Value"], value)
-    m.feed(node.inputs["Length"], m.dot(length, (1.0, 0.0, 0.0)) if length.vector else length)
-    return m.wrap(node.outputs["Mean"], vector=value.vector)
+    for (socket, _, _), v in zip(inputs, vals):
+        m.feed(node.inputs[socket], v)
+    return m.wrap(node.outputs[output[0]], vector=output[1] == V)
+
+
+def _interleave_mean_group(m, value, length, taps, edge):
+    """``_interleave_mean`` as one compositor group shared by every light (``_shared_group``)."""
+    kind = V if value.vector else F
+    name = f"{LIGHT_GROUP} Interleave Mean {'-'.join(map(str, taps))} {edge:g}" + (" Vector" if value.vector else "")
+    return _shared_group(m, name, [("Value", kind, value),
+                                   ("Length", F, m.dot(length, (1.0, 0.0, 0.0)) if length.vector else length)],
+                         ("Mean", kind), lambda sub, g_: _interleave_mean(sub, g_["Value"], g_["Length"], taps, edge))
 
 
 def _interleave_mean(m, value, length, taps, edge):
@@ -374,21 +385,10 @@ def _halved(m, scene, position, normal, pixel_x, pixel_y, camera):
 
 
 def _upsampled_group(m, value, sample_length, length, step):
-    """``_upsampled`` as one compositor group shared by every light."""
-    name = f"{LIGHT_GROUP} Upsample {UPSAMPLE_EDGE:g}"
-    if (ng := groups._up_to_date(name)) is None:
-        ng, gin, gout = groups._new_group(name, [("Value", V), ("Sample Length", F), ("Length", F), ("Step", F)],
-                                          [("Value", V)], tree_type="CompositorNodeTree")
-        sub = CompOps(ng, {})
-        g_ = {s.name: sub.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
-        sub.feed(gout.inputs["Value"], _upsampled(sub, *(g_[k] for k in ("Value", "Sample Length", "Length", "Step"))))
-        ng[owned.BUILT] = groups.code_fingerprint()
-        ng = groups._install(ng, name)
-    node = m.node("CompositorNodeGroup", max(value.col, length.col) + 1)
-    node.node_tree = ng
-    for socket, v in (("Value", value), ("Sample Length", sample_length), ("Length", length), ("Step", step)):
-        m.feed(node.inputs[socket], m.wrap(v))
-    return m.wrap(node.outputs["Value"], vector=True)
+    """``_upsampled`` as one compositor group shared by every light (``_shared_group``)."""
+    inputs = [("Value", V, value), ("Sample Length", F, sample_length), ("Length", F, length), ("Step", F, step)]
+    return _shared_group(m, f"{LIGHT_GROUP} Upsample {UPSAMPLE_EDGE:g}", inputs, ("Value", V),
+                         lambda sub, g_: _upsampled(sub, *(g_[k] for k, _, _ in inputs)))
 
 
 def _upsampled(m, value, sample_length, length, step):
