@@ -2,8 +2,8 @@
 
 For each such light (``caveats.shadowing_lights``: an object casting shadows within its glow's reach) the
 distance from the light to the first surface is ray cast in every direction of its map
-(``precompute/shafts.py``: a longitude-latitude grid for a point light, a square grid over the cone for a
-spot) against one BVH of the scene's shadow casters (``mathutils.bvhtree``, evaluated meshes in world
+(``precompute/shafts.py``: a longitude-latitude grid for a point light, its rows thinned towards the poles to
+the equator's spacing, ``point_map_casts``; a square grid over the cone for a spot) against one BVH of the scene's shadow casters (``mathutils.bvhtree``, evaluated meshes in world
 space: modifiers, instances and curves included), and stored as a packed float image, so the saved file
 renders without the add-on (the compositor reads it with Map UV).  The map holds the light's pose and the
 geometry of the frame it was baked at (``ShadowMap.key``): when either changes, the map is baked again
@@ -89,9 +89,11 @@ def scene_bvh(scene, depsgraph=None, objects=None):
 
 
 @functools.lru_cache(maxsize=1)
-def _point_vectors():
-    """A point light's map directions as mathutils Vectors (every point light's map shares them)."""
-    return _vectors(shafts.point_map_directions().reshape(-1, 3))
+def _point_casts():
+    """(the rays of a point light's map as mathutils Vectors, the ray each grid point takes): ``shafts.point_map_casts``
+    (every point light's map shares them)."""
+    directions, fill = shafts.point_map_casts()
+    return _vectors(directions), fill
 
 
 def _vectors(rows):
@@ -181,7 +183,8 @@ def bake(light, geometry):
         dirs = shafts.spot_map_directions(*spot)
         depth = cast(geometry.bvh, origin, dirs.reshape(-1, 3)).reshape(dirs.shape[:2])
     else:
-        depth = cast(geometry.bvh, origin, _point_vectors()).reshape(shafts.POINT_MAP[1], shafts.POINT_MAP[0])
+        vectors, fill = _point_casts()
+        depth = cast(geometry.bvh, origin, vectors)[fill]
     spec = TableSpec(IMAGE_PREFIX + light.name, depth.shape[1], depth.shape[0])
     return ShadowMap(spec, spot), depth
 

@@ -128,6 +128,27 @@ def test_point_map_round_trip():
     assert ok.all() and np.allclose(y, j.ravel() / 8)
 
 
+@pytest.mark.parametrize("size", [shafts.POINT_MAP, (64, 33)])
+def test_point_map_casts_resolve_the_equator_spacing_everywhere(size):
+    """The thinned rays of a point light's map (``point_map_casts``): each grid point takes a ray within half the
+    equator's grid spacing of its own direction (``point_map_directions``, the grid the compositor reads), and no
+    two neighbouring rays of a row lie farther apart than that spacing, so a thin occluder the equator resolves is
+    resolved at every latitude; about 2 / pi of the grid's rays are cast."""
+    width, height = size
+    directions, fill = shafts.point_map_casts(width, height)
+    grid = shafts.point_map_directions(width, height)
+    spacing = 2.0 * math.pi / (width - 1)   # rad between the equator's grid points
+    assert fill.shape == (height, width)
+    assert np.allclose(np.linalg.norm(directions, axis=-1), 1.0)
+    taken = np.arccos(np.clip(np.sum(directions[fill] * grid, axis=-1), -1.0, 1.0))
+    assert taken.max() <= 0.5 * spacing * (1.0 + 1e-6)
+    for j in range(height):
+        row = directions[np.unique(fill[j])]
+        apart = np.arccos(np.clip(np.sum(row[1:] * row[:-1], axis=-1), -1.0, 1.0))
+        assert apart.max(initial=0.0) <= spacing * (1.0 + 1e-6)
+    assert len(directions) < (2.0 / math.pi + 4.0 / width) * width * height
+
+
 @pytest.mark.parametrize("length", [5.0, 1e6])
 def test_ray_through_the_light_is_finite(length):
     """A pixel whose ray passes through the lamp, to a surface or to the sky, in float32 as the compositor

@@ -176,12 +176,12 @@ MUTATIONS = [
              ("tests/test_shafts.py::test_sphere_shadow_matches_quadrature",)),
     Mutation("shaft_extinction", "light shafts: the nodes' weights lose the extinction from the light, e^{-beta d}",
              "fog_addon/precompute/shafts.py",
-             "    weight = m.exp(-1.0 * beta * (t + d))\n",
-             "    weight = m.exp(-1.0 * beta * t)\n",
+             "    weight = m.exp((t + d) * minus_beta)\n",
+             "    weight = m.exp(t * minus_beta)\n",
              ("tests/test_shafts.py::test_sphere_shadow_matches_quadrature",)),
     Mutation("shaft_phase", "light shafts: the nodes' Henyey-Greenstein weight turned backwards",
              "fog_addon/precompute/shafts.py",
-             "        weight = weight * _hg(m, g, -1.0 * sin)\n",
+             "        weight = weight * _hg_of_sine(m, g, sin)\n",
              "        weight = weight * _hg(m, g, sin)\n",
              ("tests/test_shafts.py::test_sphere_shadow_matches_quadrature",)),
     Mutation("surface_share_hemisphere", "light shafts: a surface's fog light sees the fog within 30 degrees of its "
@@ -394,6 +394,24 @@ MUTATIONS = [
              "        weight = integral * (_hg(mm, g, mm.dot(u, s)) if g else 1.0)",
              "        weight = 1.0 + 0.0 * integral",
              ("tests/test_sun_shafts.py::test_sun_surface_share_matches_quadrature",)),
+    Mutation("quiet_default_dropped", "node building: a constant fed to a node whose inputs are all numbers is read "
+             "and written back unchanged (the quiet write loses the value)",
+             "fog_addon/nodes/sockets.py",
+             "        values[list(inputs).index(sock)] = float(value)\n",
+             "        values[list(inputs).index(sock)] += 0.0 * float(value)\n",
+             ("tests/test_node_building.py::test_constants_and_places_are_set_without_updates",)),
+    Mutation("nodes_left_unplaced", "node building: the nodes of a tree stay where Blender made them (place does "
+             "nothing)",
+             "fog_addon/nodes/sockets.py",
+             "        if not self._places or self.tree is None:\n",
+             "        if True:\n",
+             ("tests/test_node_building.py::test_constants_and_places_are_set_without_updates",)),
+    Mutation("point_casts_too_few", "light shafts, a point light's map: its rows cast half the rays their latitude "
+             "needs (neighbouring rays twice the equator's spacing apart)",
+             "fog_addon/precompute/shafts.py",
+             "    counts = np.ceil(np.cos(lat).clip(0.0, 1.0) * (width - 1) - 1e-9)",
+             "    counts = np.ceil(np.cos(lat).clip(0.0, 1.0) * (width - 1) / 2.0 - 1e-9)",
+             ("tests/test_shafts.py::test_point_map_casts_resolve_the_equator_spacing_everywhere",)),
     Mutation("half_share_offsets_alike", "light shafts, surface share at half resolution: its samples take the "
              "interleaving offsets of the picture's pixels, not their own (the samples of a 2 x 2 block's corner "
              "share a quarter of the pattern)",

@@ -220,6 +220,7 @@ def build_glow_group(models, images, peak):
     for o in GLOW_OUTPUTS:
         m.feed(gout.inputs[o.compositor], glows[o])
     ng[owned.BUILT] = groups.code_fingerprint()
+    m.place()
     return groups._install(ng, name)
 
 
@@ -237,6 +238,7 @@ def build_scatter_group(models, images):
     for o in SCATTER_OUTPUTS:
         m.feed(gout.inputs[o.compositor], m.wrap(getattr(terms, o.field)))
     ng[owned.BUILT] = groups.code_fingerprint()
+    m.place()
     return groups._install(ng, name)
 
 
@@ -288,6 +290,7 @@ def build_shaft_group(light, shadow, images, samples, g):
                                           directions=samples.surface_directions, nodes=samples.surface_nodes)
     m.feed(gout.inputs["Visible"], m.combine(lit_sum, total, 1.0))   # their ratio after the mean (``build_bundle``)
     ng[owned.BUILT] = groups.code_fingerprint()
+    m.place()
     return groups._install(ng, name)
 
 
@@ -303,6 +306,7 @@ def _shared_group(m, name, inputs, output, build):
         ins = {s.name: sub.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
         sub.feed(gout.inputs[output[0]], sub.wrap(build(sub, ins)))
         ng[owned.BUILT] = groups.code_fingerprint()
+        sub.place()
         ng = groups._install(ng, name)
     vals = [m.wrap(v) for _, _, v in inputs]
     node = m.node("CompositorNodeGroup", max(v.col for v in vals) + 1)
@@ -485,6 +489,7 @@ def add_surface_aovs(surface_group, engine="CYCLES"):
         node = owned.add(surface_group, "ShaderNodeOutputAOV", f"{AOV_ROLE} {name}", (4000, -300 - 150 * k))
         node.aov_name = name
         m.feed(node.inputs["Color" if kind == "COLOR" else "Value"], values[name])
+    m.place()
 
 
 def _value(m, label, expression, variables):
@@ -646,6 +651,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
                     ng.links.new(built[0].inputs[socket].links[0].from_socket, node.inputs[socket])
     for o, v in sums.items():
         m.feed(gout.inputs[o.compositor], v)
+    m.place()
     return groups._install(ng, name)
 
 
@@ -963,6 +969,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
         else:
             image = image * (m.scale(sunlight.times(m, tint, dims), cover) + m.scale(seen, 1.0 - cover))
     m.feed(gout.inputs["Fog Light"], fog)
+    m.place()
     m.feed(gout.inputs["Image"], fog + image)
     ng[PARTIAL] = partial
     ng[owned.BUILT] = groups.code_fingerprint()

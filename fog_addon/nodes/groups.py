@@ -325,6 +325,7 @@ def build_light(models, images):
         if o.present(models):
             m.feed(gout.inputs[o.name], m.wrap(getattr(terms, o.field)))
     ng[owned.BUILT] = code_fingerprint()
+    m.place()
     return _install(ng, name)
 
 
@@ -344,6 +345,7 @@ def build_background_light(models, images):
         if o.present(models):
             m.feed(gout.inputs[o.name], m.wrap(getattr(terms, o.field)))
     ng[owned.BUILT] = code_fingerprint()
+    m.place()
     return _install(ng, name)
 
 
@@ -560,6 +562,7 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained):
     if with_passes:
         start = m.wrap(g[RUNNING], vector=True) if chained else None
         m.feed(gout.inputs[RUNNING], _chained_closure_sum(m, gout.inputs["Fog"], start))
+    m.place()
     return ng
 
 
@@ -669,6 +672,7 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
                           "Position": geo.outputs["Position"]}, len(placed)) if tails else []
     if extra is not None:   # before it replaces the group the materials use: adding a node there costs more
         extra(ng)
+    m.place()
     ng = _install(ng, SURFACE)
     _name_bundles(bundles + tails)
     return ng
@@ -776,6 +780,7 @@ def build_tail_bundle(images, first, lights, models):
                                                                                           vector=True))
         colours.append(tail * scale)
     _closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", colours)
+    m.place()
     return ng
 
 
@@ -954,6 +959,7 @@ def build_world_bundle(images, first, lights, models, with_passes, chained):
     if with_passes:
         start = m.wrap(g[RUNNING], vector=True) if chained else None
         m.feed(gout.inputs[RUNNING], _world_pass_instances(m, ng, nodes, m.wrap(g["Pass Direction"]), start))
+    m.place()
     return ng
 
 
@@ -1027,6 +1033,7 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
         light, _ = shading.shade_background(m, [] if running is None else [m.wrap(running, vector=True)], medium,
                                             is_camera)
         passes.write_group(m, ng, m.wrap(light, vector=True), m.wrap(transmittance))
+    m.place()
     ng = _install(ng, WORLD)
     _name_bundles(bundles)
     return ng

@@ -53,6 +53,25 @@ _FOLD1 = {
 }
 
 
+def quiet_default(sock, value):
+    """Set input ``sock``'s default value (a number, or a sequence for a vector or colour socket) without the tree
+    update a property set through RNA makes: ``foreach_set`` writes the value and tags nothing (an array value by
+    its own ``foreach_set``; a number through its node's inputs when they all hold one number, else by RNA).  For
+    the nodes of a tree being built, whose links update the tree afterwards."""
+    current = sock.default_value
+    if hasattr(current, "foreach_set"):
+        current.foreach_set(tuple(float(c) for c in value))
+        return
+    inputs = sock.node.inputs
+    if all(s.type == "VALUE" and hasattr(s, "default_value") for s in inputs):
+        values = [0.0] * len(inputs)
+        inputs.foreach_get("default_value", values)
+        values[list(inputs).index(sock)] = float(value)
+        inputs.foreach_set("default_value", values)
+        return
+    sock.default_value = value
+
+
 class NodeOps:
     """Builds ``model.py`` formulas into ``tree``; ``images`` maps TableSpec.name -> bpy image.
 
@@ -70,6 +89,24 @@ class NodeOps:
         self.x0, self.y0 = x0, y0
         self._rows = {}
         self._built = {}
+        self._places = []   # (node name, x, y) of the nodes built, until ``place`` moves them there
+
+    def place(self):
+        """Move the nodes built since the last call to their columns and rows, all in one ``foreach_set``: a
+        location set node by node is a tree update each (``feed``).  The builders call it once a tree is built;
+        a node not yet placed only sits at the origin of the node editor."""
+        if not self._places or self.tree is None:
+            return
+        nodes = self.tree.nodes
+        index = {name: i for i, name in enumerate(nodes.keys())}
+        flat = [0.0] * (2 * len(nodes))
+        nodes.foreach_get("location", flat)
+        for name, x, y in self._places:
+            i = index.get(name)
+            if i is not None:
+                flat[2 * i], flat[2 * i + 1] = x, y
+        nodes.foreach_set("location", flat)
+        self._places.clear()
 
     # -- each node once ----------------------------------------------------------
     # An operation on the same inputs returns the node already built (hash-consing): the formulas repeat
@@ -141,26 +178,33 @@ class NodeOps:
         return Val(self, const=float(x))
 
     def node(self, bl_idname, col, **props):
+        """A new node in column ``col`` (the next row down, moved there by ``place``), hidden, with ``props``
+        (those that differ from the new node's: each property set is a tree update, see ``feed``)."""
         n = self.tree.nodes.new(bl_idname)
         row = self._rows.get(col, 0)
         self._rows[col] = row + 1
-        n.location = (self.x0 + col * COLUMN, self.y0 - row * ROW)
+        self._places.append((n.name, self.x0 + col * COLUMN, self.y0 - row * ROW))
         n.hide = True
         for k, v in props.items():
-            setattr(n, k, v)
+            if getattr(n, k) != v:
+                setattr(n, k, v)
         return n
 
     def feed(self, sock, v):
-        """Connect Val ``v`` to input ``sock`` (or set its default value to the constant)."""
+        """Connect Val ``v`` to input ``sock`` (or set its default value to the constant).
+
+        A constant is written without a tree update (``quiet_default``): setting a property through RNA
+        updates the whole tree (a fraction of a millisecond in a new tree, growing with its nodes, and as much
+        again on Blender's other threads), and a tree being built needs none until its links are made."""
         if v.sock is not None:
             self.tree.links.new(v.sock, sock)
             return
         if isinstance(v.const, tuple):   # a constant colour / vector (a colour socket gets alpha 1)
-            sock.default_value = (v.const + (1.0,))[:len(sock.default_value)]
+            quiet_default(sock, (v.const + (1.0,))[:len(sock.default_value)])
         elif sock.type == "VECTOR":
-            sock.default_value = (v.const, v.const, v.const)
+            quiet_default(sock, (v.const, v.const, v.const))
         else:
-            sock.default_value = v.const
+            quiet_default(sock, v.const)
 
     @staticmethod
     def inline(node):
@@ -320,7 +364,8 @@ class NodeOps:
             return Val(self, const=min(max(x.const, lo), hi))
         n = self.node("ShaderNodeClamp", x.col + 1)
         self.feed(n.inputs["Value"], x)
-        n.inputs["Min"].default_value, n.inputs["Max"].default_value = lo, hi
+        quiet_default(n.inputs["Min"], lo)
+        quiet_default(n.inputs["Max"], hi)
         self.inline(n)
         return Val(self, sock=n.outputs[0], col=x.col + 1)
 
@@ -396,6 +441,7 @@ class NodeOps:
             ng.interface.new_socket(f"Out {k}", in_out="OUTPUT", socket_type="NodeSocketFloat")
             sub.feed(gout.inputs[k], sub.wrap(v))
         gout.location = (COLUMN * (1 + max(sub.wrap(v).col for v in result)), 0)
+        sub.place()
         ng[owned.TAG] = True
         ng[owned.BUILT] = built
         return ng

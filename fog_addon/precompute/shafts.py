@@ -99,13 +99,38 @@ def point_map_directions(width=POINT_MAP[0], height=POINT_MAP[1]):
     return np.stack([np.cos(la) * np.cos(lo), np.cos(la) * np.sin(lo), np.sin(la)], axis=-1)
 
 
+def point_map_casts(width=POINT_MAP[0], height=POINT_MAP[1]):
+    """(directions (N, 3), fill (height, width) int): the rays that bake a point light's map and, for each grid
+    point, the ray whose distance it takes.
+
+    A row at latitude phi is a circle cos(phi) times the equator's, so its ``width`` grid points lie cos(phi) times
+    as close as the equator's: it casts ceil(cos(phi) (width - 1)) + 1 rays, evenly in longitude, and each grid
+    point takes the nearest of them.  No two neighbouring rays of a row are farther apart than the equator's grid
+    points (0.35 degrees), so whatever the map resolves at the equator it resolves at every latitude (the thin
+    occluders of ``benchmarks/shafts_stability.py``); the rays are 2/pi of the grid's (334 000 for 524 288)."""
+    lat = -0.5 * math.pi + math.pi * np.arange(height) / (height - 1)
+    counts = np.ceil(np.cos(lat).clip(0.0, 1.0) * (width - 1) - 1e-9).astype(np.int64).clip(1, width - 1) + 1
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    row = np.repeat(np.arange(height), counts)
+    k = np.arange(int(counts.sum())) - starts[row]
+    lon = -math.pi + 2.0 * math.pi * k / (counts[row] - 1)
+    la = lat[row]
+    directions = np.stack([np.cos(la) * np.cos(lon), np.cos(la) * np.sin(lon), np.sin(la)], axis=-1)
+    nearest_ray = np.floor(np.arange(width)[None, :] * ((counts[:, None] - 1) / (width - 1)) + 0.5).astype(np.int64)
+    return directions, starts[:, None] + nearest_ray
+
+
 def point_map_xy(m, u):
     """(x, y) in [0, 1] of the world direction ``u`` (any length) in a point light's map."""
-    ux, uy = m.dot(u, (1.0, 0.0, 0.0)), m.dot(u, (0.0, 1.0, 0.0))
-    horizontal = m.sqrt(ux * ux + uy * uy)
-    x = m.atan2(uy, ux) * (0.5 / math.pi) + 0.5
-    y = m.atan2(m.dot(u, (0.0, 0.0, 1.0)), horizontal) * (1.0 / math.pi) + 0.5
-    return x, y
+    return point_map_xy_of(m, *(m.dot(u, a) for a in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))))
+
+
+def point_map_xy_of(m, ux, uy, uz):
+    """``point_map_xy`` of the direction with world components (ux, uy, uz): longitude and latitude over their
+    ranges (the quadrature's nodes give the components, so no vector is built)."""
+    horizontal = m.sqrt(m.mul_add(ux, ux, uy * uy))
+    return (m.mul_add(m.atan2(uy, ux), 0.5 / math.pi, 0.5),
+            m.mul_add(m.atan2(uz, horizontal), 1.0 / math.pi, 0.5))
 
 
 def spot_half_width(cos_half):
@@ -146,13 +171,13 @@ def spot_map_xy(m, u, frame, half_width):
 def nearest(m, x, n):
     """x in [0, 1] moved to the nearest of n grid points (i / (n - 1)): the map's depths are read, not blended
     across an occluder's silhouette (a blend of a near and a far distance is the distance of nothing)."""
-    return m.floor(x * (n - 1.0) + 0.5) * (1.0 / (n - 1.0))
+    return m.floor(m.mul_add(x, n - 1.0, 0.5)) * (1.0 / (n - 1.0))
 
 
 def lit(m, d, depth):
     """1 where a fog point d m from the light is in front of the first surface, depth m away in its
     direction (less a bias of FOG_BIAS: a lamp 2 cm under a hood lights no fog above it)."""
-    return m.less(d, depth * (1.0 - FOG_BIAS[0]) - FOG_BIAS[1])
+    return m.less(d, m.mul_add(depth, 1.0 - FOG_BIAS[0], -FOG_BIAS[1]))
 
 
 SURFACE_PATTERN_LEVELS = 2   # a surface's directions interleave over 2^2 x 2^2 pixels (``surface_offset``)
@@ -322,19 +347,20 @@ def ray_integrals(m, origin, direction, light, beta, shadow, nodes, shift=0.5, g
 def _ray_frame(m, origin, direction, light, beta):
     """The light seen from a ray, v = light - origin: t_c (the foot of the perpendicular along the ray), h
     (the ray's distance to the light, at least MIN_OFFSET |v|), and the scalar arguments of ``node_terms``'s
-    group (``_quadrature``)."""
+    group (``_quadrature``): t_c, h, the components of -v and of the direction, -beta."""
     v = light - origin
     t_c = m.dot(v, direction)
     h = m.maximum(m.sqrt(m.dot(v, v) - t_c * t_c), MIN_OFFSET * m.length(v) + 1e-6)
     axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
-    return t_c, h, (t_c, h, *(m.dot(v, a) for a in axes), *(m.dot(direction, a) for a in axes), beta)
+    minus = ((-1.0, 0.0, 0.0), (0.0, -1.0, 0.0), (0.0, 0.0, -1.0))
+    return t_c, h, (t_c, h, *(m.dot(v, a) for a in minus), *(m.dot(direction, a) for a in axes), beta * -1.0)
 
 
 def _quadrature(m, start, width, count, shift, shadow, g, falloff, name, args):
     """(sum of H e_k, sum of e_k) over ``count`` nodes at start + width (k + shift) (``node_terms``), each one
     node group ``name`` (or inline with None)."""
-    def terms(mm, theta, t_c, h, vx, vy, vz, dx, dy, dz, beta):
-        return node_terms(mm, theta, t_c, h, mm.combine(vx, vy, vz), mm.combine(dx, dy, dz), beta, shadow, g, falloff)
+    def terms(mm, theta, t_c, h, ox, oy, oz, dx, dy, dz, minus_beta):
+        return node_terms(mm, theta, t_c, h, (ox, oy, oz), (dx, dy, dz), minus_beta, shadow, g, falloff)
 
     def nodes(mm, start_, width_, shift_, *args_):
         lit_sum, total = 0.0, 0.0
@@ -349,26 +375,41 @@ def _quadrature(m, start, width, count, shift, shadow, g, falloff, name, args):
                                                                                             *args)
 
 
-def node_terms(m, theta, t_c, h, v, direction, beta, shadow, g, falloff):
+def node_terms(m, theta, t_c, h, offset, direction, minus_beta, shadow, g, falloff):
     """(H weight, weight) of the quadrature node at the angle ``theta`` around the light (``lit_share``): its
     weight e^{-beta (t + d)} w f (the Henyey-Greenstein weight w, the spot's factor f), and that times H,
-    1 if the node is lit (``lit``, the map's distance at its grid point, ``map_depth``)."""
+    1 if the node is lit (``lit``, the map's distance at its grid point, ``map_depth``).
+
+    ``offset`` and ``direction`` are the world components of origin - light and of the ray's direction, and
+    ``minus_beta`` is -beta: the compositor evaluates this for every node of every pixel, so it works on
+    components (u, from the light to the ray point, is three Multiply Add nodes) and folds what it can into them."""
     spec, spot = shadow
     sin, cos = m.sin(theta), m.cos(theta)
-    t = t_c + h * sin / cos
     d = h / cos
-    u = m.scale(direction, t) - v                 # from the light to the ray point
-    weight = m.exp(-1.0 * beta * (t + d))
+    t = m.mul_add(sin, d, t_c)                    # t_c + h tan(theta)
+    u = [m.mul_add(c, t, o) for c, o in zip(direction, offset)]   # from the light to the ray point
+    weight = m.exp((t + d) * minus_beta)
     if g:   # the scattering angle towards the camera has cosine -sin(theta)
-        weight = weight * _hg(m, g, -1.0 * sin)
-    if falloff is not None:
-        weight = weight * falloff(m, u, d)
-    return weight * lit(m, d, map_depth(m, spec, spot, u)), weight
+        weight = weight * _hg_of_sine(m, g, sin)
+    if spot is None and falloff is None:
+        depth = m.table(spec, *(nearest(m, c, n) for c, n in zip(point_map_xy_of(m, *u), (spec.width, spec.height))))
+    else:
+        u = m.combine(*u)
+        depth = map_depth(m, spec, spot, u)
+        if falloff is not None:
+            weight = weight * falloff(m, u, d)
+    return weight * lit(m, d, depth), weight
 
 
 def _hg(m, g, mu):
     """4 pi p_HG(mu) = (1 - g^2) / (1 + g^2 - 2 g mu)^{3/2} (Henyey and Greenstein 1941)."""
     base = (1.0 + g * g) - (2.0 * g) * mu
+    return (1.0 - g * g) / (base * m.sqrt(base))
+
+
+def _hg_of_sine(m, g, sin):
+    """``_hg`` at mu = -sin: a quadrature node's scattering angle towards the camera (base in one Multiply Add)."""
+    base = m.mul_add(sin, 2.0 * g, 1.0 + g * g)
     return (1.0 - g * g) / (base * m.sqrt(base))
 
 
