@@ -49,12 +49,17 @@ tree = bpy.data.node_groups.new("Test", "CompositorNodeTree")
 tree.interface.new_socket("Image", in_out="OUTPUT", socket_type="NodeSocketColor")
 m = comp_fog.CompOps(tree, {})
 reads = {}
-for key in ("value", "sample_length", "length"):
+for key in data:
     node = tree.nodes.new("CompositorNodeImage")
     node.image = image(key, data[key])
     reads[key] = m.wrap(node.outputs["Image"], vector=True)
 scalar = lambda v: m.dot(v, (1.0, 0.0, 0.0))
-out = comp_fog._upsampled_group(m, reads["value"], scalar(reads["sample_length"]), scalar(reads["length"]), step)
+if "share" in data:   # the glows' lit shares at half resolution back at the picture's (_full_view)
+    near, far = comp_fog._full_view(m, [scalar(reads["share"]), scalar(reads["share_far"])],
+                                    scalar(reads["half_length"]), scalar(reads["length"]), step)
+    out = m.combine(near, far, 0.0)
+else:
+    out = comp_fog._upsampled_group(m, reads["value"], scalar(reads["sample_length"]), scalar(reads["length"]), step)
 rgba = tree.nodes.new("CompositorNodeSetAlpha")
 m.feed(rgba.inputs["Image"], out)
 tree.links.new(rgba.outputs[0], tree.nodes.new("NodeGroupOutput").inputs[0])
@@ -101,4 +106,32 @@ def test_upsampling_keeps_each_surface_its_own_share(tmp_path, step):
     if step == 2:   # the far surface's pixels in the straddling block take their far neighbour's sample
         assert np.allclose(want[:, EDGE_COLUMN], coarse[np.arange(H) // 2, (EDGE_COLUMN + 1) // 2]
                            + 1e-3 * coarse[np.arange(H) // 2, EDGE_COLUMN // 2])
+    np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)
+
+
+@pytest.mark.parametrize("step", [2, 1])
+def test_glow_shares_come_back_each_surface_its_own(tmp_path, step):
+    """``comp_fog._full_view``: the lit shares (S, S_far) of two surfaces, each constant over its surface at half
+    resolution, come back at full resolution as the upsampling's rule divided by its weights (the interleaving's
+    mean of a constant is that constant): their own surface's share, but for the straddling column's far pixels,
+    whose own sample (on the near surface) counts a thousandth."""
+    from fog_addon import imageio
+    from fog_addon.nodes import comp_fog
+    cols = np.arange(W)
+    length = np.broadcast_to(np.where(cols < EDGE_COLUMN, NEAR, FAR), (H, W)).astype(float)
+    near_side = length == NEAR
+    own = np.stack([np.where(near_side, 0.3, 0.8), np.where(near_side, 0.35, 0.85)], axis=-1)
+    half_length = length[::step, ::step]   # a block's sample: its first pixel
+    coarse = own[::step, ::step]
+    sample_length = half_length[np.arange(H)[:, None] // step, cols[None, :] // step]
+    packed = _upsampled(np.concatenate([coarse, np.ones(coarse.shape[:2] + (1,))], axis=-1), sample_length, length,
+                        step, comp_fog.UPSAMPLE_EDGE)
+    want = packed[..., :2] / packed[..., 2:]
+    assert np.abs(want - own).max() < 1e-3 * 0.5 + 1e-9   # (0.001 x 0.3 + 0.8) / 1.001 at the straddling column
+    data = tmp_path / "data.json"
+    data.write_text(json.dumps({"share": coarse[..., 0].tolist(), "share_far": coarse[..., 1].tolist(),
+                                "half_length": half_length.tolist(), "length": length.tolist()}))
+    out = tmp_path / "out.exr"
+    h.run_bpy_code(_CODE, W, H, step, data, out, timeout=300)
+    got = imageio.read_rgb(out)[::-1][..., :2]   # the file's first row is the top
     np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)

@@ -418,7 +418,20 @@ MUTATIONS = [
              "fog_addon/nodes/comp_fog.py",
              "    whole = shafts.surface_offset(m, m.floor(pixel_x * factor), m.floor(pixel_y * factor))",
              "    whole = shafts.surface_offset(m, pixel_x, pixel_y)",
-             ("tests/test_shaft_scenes.py::test_surface_share_at_half_resolution_against_path_tracing[window_room]",)),
+             ("tests/test_shaft_scenes.py::test_shares_at_half_resolution_against_path_tracing[window_room]",)),
+    Mutation("half_view_unweighted", "light shafts, the glows' lit share at half resolution: the upsampled sums are "
+             "not divided by their weights",
+             "fog_addon/nodes/comp_fog.py",
+             "    weight = m.maximum(m.dot(packed, (0.0, 0.0, 1.0)), 1e-6)",
+             "    weight = 1.0 + 0.0 * m.dot(packed, (0.0, 0.0, 1.0))",
+             ("tests/test_half_share.py::test_glow_shares_come_back_each_surface_its_own",)),
+    Mutation("half_view_offsets_alike", "light shafts, the glows' lit share at half resolution: its samples take the "
+             "interleaving offsets of the picture's pixels, not their own (every sample the same rank)",
+             "fog_addon/nodes/comp_fog.py",
+             '            HALF + "Shaft Offset": shafts.offset(m, m.floor(px * factor), m.floor(py * factor))}',
+             '            HALF + "Shaft Offset": shafts.offset(m, px, py)}',
+             ("tests/test_shaft_scenes.py::test_shares_at_half_resolution_against_path_tracing[window_room]",
+              "tests/test_shaft_scenes.py::test_shares_at_half_resolution_against_path_tracing[colonnade]")),
     Mutation("half_share_upsampled_blind", "light shafts, surface share at half resolution: a pixel takes its sample's "
              "share whatever surface that sample lies on (no depth test)",
              "fog_addon/nodes/comp_fog.py",

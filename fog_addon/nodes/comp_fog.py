@@ -83,8 +83,10 @@ SURFACE_TAPS = (1,) + (2,) * (2 ** shafts.SURFACE_PATTERN_LEVELS - 1) + (1,)
 SURFACE_EDGE = 0.3    # its threshold on log distance (a floor seen at a grazing angle changes faster than 5 % a row)
 HALF = "Half "   # a bundle's inputs for the surface share at a coarser resolution (``_halved``)
 HALF_SHARED = ((HALF + "Position", V), (HALF + "Normal", V), (HALF + "Offset", F), (HALF + "Length", F),
-               (HALF + "Step", F))
-HALF_FROM = 144   # px: a picture whose shorter side has this many pixels or more takes the surface share at half
+               (HALF + "Step", F), (HALF + "Shaft Offset", F))
+HALF_SHAFT = {"Direction": "Direction", "Shaft Length": "Shaft Length", "Shaft Offset": HALF + "Shaft Offset"}
+#             a shaft group's per-pixel inputs at half resolution: from these bundle inputs (``_half_view``)
+HALF_FROM = 144   # px: a picture whose shorter side has this many pixels or more takes the shafts' shares at half
 #                   its resolution (``_halved``: twice the render tests' 72, whose pattern it then matches in the scene)
 UPSAMPLE_EDGE = 0.1   # ``_upsampled``'s threshold on log distance: a coarse sample of another surface is not taken
 SHARED = (GLOW_SHARED + tuple((SURFACE + name, kind) for name, kind in SURFACE_SHARED[2:])
@@ -363,19 +365,22 @@ def _scaled(m, value, factor):
     return m.wrap(node.outputs[0], vector=True)
 
 
-def _halved(m, scene, position, normal, pixel_x, pixel_y, camera):
-    """The bundle's HALF_SHARED inputs for the share of the fog light a surface gets that the shadows leave
+def _halved(m, scene, position, normal, pixel_x, pixel_y, camera, picture_xy):
+    """The bundle's HALF_SHARED inputs for the shafts' shares at half the picture's resolution where its shorter
+    side has HALF_FROM pixels or more (a sample every 2 x 2 pixels; a driver reads the render's size, so the
+    choice follows it).  For the share of the fog light a surface gets that the shadows leave
     (``shafts.surface_share``): the surfaces' ``position`` and ``normal`` (images over the surfaces' window, whose
-    pixels are ``pixel_x``, ``pixel_y``) at half the picture's resolution where its shorter side has HALF_FROM
-    pixels or more (a sample every 2 x 2 pixels; a driver reads the render's size, so the choice follows it), the
-    interleaving offsets of those samples (``shafts.surface_offset``: its 4 x 4 pattern over 8 x 8 pixels), the
-    distance from the camera of the sample each pixel of the picture takes, and the Step between samples (px:
-    ``_upsampled``).
+    pixels are ``pixel_x``, ``pixel_y``) at that resolution, the interleaving offsets of those samples
+    (``shafts.surface_offset``: its 4 x 4 pattern over 8 x 8 pixels), the distance from the camera of the sample
+    each pixel of the picture takes, and the Step between samples (px: ``_upsampled``).  For the lit share of the
+    glows (``shafts.lit_share``, ``_half_view``): the interleaving offsets (``shafts.offset``) of the samples of the
+    picture's pixels ``picture_xy``.
 
-    Why: a surface's share varies slowly over the picture, and its map reads are most of a shafted light's cost;
-    at half the resolution a quarter of the pixels take them.  A picture twice the size of another, sampled so,
-    has its surface shares from as many samples over the same patch of the scene as the smaller one at its full
-    resolution (docs/measurements: no worse than the render tests' 128 x 72 against path tracing)."""
+    Why: the shares vary slowly over the picture (a shaft's edge is blurred by the interleaving's mean either way),
+    and their map reads are most of a shafted light's cost; at half the resolution a quarter of the pixels take
+    them.  A picture twice the size of another, sampled so, has its shares from as many samples over the same
+    patch of the scene as the smaller one at its full resolution (docs/measurements: no worse than the render
+    tests' 128 x 72 against path tracing)."""
     size = "min(rx,ry)*p/100"
     variables = [("rx", scene, "render.resolution_x"), ("ry", scene, "render.resolution_y"),
                  ("p", scene, "render.resolution_percentage")]
@@ -383,9 +388,30 @@ def _halved(m, scene, position, normal, pixel_x, pixel_y, camera):
     pos = _scaled(m, position, factor)
     whole = shafts.surface_offset(m, m.floor(pixel_x * factor), m.floor(pixel_y * factor))   # a sample's, in each
     step = 1.0 / factor
+    px, py = picture_xy
     return {HALF + "Position": pos, HALF + "Normal": _scaled(m, normal, factor),
             HALF + "Offset": m.dot(_scaled(m, whole, factor), (1.0, 0.0, 0.0)),
-            HALF + "Length": m.dot(_scaled(m, m.length(pos - camera), step), (1.0, 0.0, 0.0)), HALF + "Step": step}
+            HALF + "Length": m.dot(_scaled(m, m.length(pos - camera), step), (1.0, 0.0, 0.0)), HALF + "Step": step,
+            HALF + "Shaft Offset": shafts.offset(m, m.floor(px * factor), m.floor(py * factor))}
+
+
+def _half_view(m, per_pixel, step):
+    """A shaft group's per-pixel inputs (Direction, Shaft Length, Shaft Offset: images, ``per_pixel``'s of
+    HALF_SHAFT) at 1 / ``step`` of their resolution (``_halved``), and the half-resolution ray lengths."""
+    half = {k: _scaled(m, per_pixel[k], 1.0 / step) for k in HALF_SHAFT}
+    length = m.dot(half["Shaft Length"], (1.0, 0.0, 0.0))
+    return {"Direction": half["Direction"], "Shaft Length": length,
+            "Shaft Offset": m.dot(half["Shaft Offset"], (1.0, 0.0, 0.0))}, length
+
+
+def _full_view(m, shares, half_length, length, step):
+    """The lit shares (S, S_far) of a shaft group at half resolution (``_half_view``), each its interleaving's mean
+    there, back at the picture's resolution by the depth-aware upsampling (``_upsampled``) and its weights."""
+    means = [_interleave_mean_group(m, v, half_length, SHAFT_TAPS, SHAFT_EDGE) for v in shares]
+    packed = _upsampled_group(m, m.combine(means[0], means[1], 1.0),
+                              m.dot(_scaled(m, half_length, step), (1.0, 0.0, 0.0)), length, step)
+    weight = m.maximum(m.dot(packed, (0.0, 0.0, 1.0)), 1e-6)
+    return [m.dot(packed, axis) / weight for axis in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0))]
 
 
 def _upsampled_group(m, value, sample_length, length, step):
@@ -600,17 +626,19 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
             shaft = m.node("CompositorNodeGroup", 6)
             shaft.node_tree = build_shaft_group(light, maps[light.name], images, samples, g_)
             shaft.label = f"Light {k} Shaft: {light.name}"
+            half, half_length = _half_view(m, {k: crop(v) for k, v in HALF_SHAFT.items()}, g[HALF + "Step"])
             for socket, _ in SHAFT_SHARED:
-                m.feed(shaft.inputs[socket], crop(socket) if socket in SHAFT_PER_PIXEL else g[socket])
+                m.feed(shaft.inputs[socket], half[socket] if socket in SHAFT_PER_PIXEL else g[socket])
             source = m.node("CompositorNodeImage", 5)
             source.image = images[maps[light.name].spec.name]
             ng.links.new(source.outputs["Image"], shaft.inputs[SHAFT_MAP])
             for socket in ("Position", "Normal", "Offset"):   # the surface share at half resolution
                 m.feed(shaft.inputs["Surface " + socket], g[HALF + socket])
             m.feed(shaft.inputs["Light"], position)
-            share = {o: _interleave_mean_group(m, m.wrap(shaft.outputs["Share" if o.at == rungs.SURFACE_POINT
-                                                                  else "Share Far"]),
-                                         crop("Shaft Length"), SHAFT_TAPS, SHAFT_EDGE) for o in GLOW_OUTPUTS}
+            length = crop("Shaft Length")
+            near, far = _full_view(m, [m.wrap(shaft.outputs[k]) for k in ("Share", "Share Far")], half_length,
+                                   m.dot(length, (1.0, 0.0, 0.0)) if length.vector else length, g[HALF + "Step"])
+            share = {o: near if o.at == rungs.SURFACE_POINT else far for o in GLOW_OUTPUTS}
         if any(o.computed(mod) for o in GLOW_OUTPUTS):
             glow = m.node("CompositorNodeGroup", 6)
             glow.node_tree, glow.label = build_glow_group(mod, images, peak), f"Light {k}: {light.name}"
@@ -911,7 +939,8 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     if shafted:   # the surface share at a coarser resolution
         xy = (px, py) if win is None else (m.dot(_crop(m, pixel_xy, win), axis) for axis in ((1.0, 0.0, 0.0),
                                                                                               (0.0, 1.0, 0.0)))
-        shared.update(_halved(m, scene, shared[SURFACE + "Position"], shared[SURFACE + "Normal"], *xy, cam))
+        shared.update(_halved(m, scene, shared[SURFACE + "Position"], shared[SURFACE + "Normal"], *xy, cam,
+                              (px, py)))
     shared["Shaft Length"] = m.select(m.less(1e-3, cover), d_vp, SKY_LENGTH)
     shared["Shaft Offset"] = shafts.offset(m, px, py)
     sums = {}   # Output -> the sum over the bundles
