@@ -3,7 +3,8 @@ images against the rule written out here in numpy.
 
 Two surfaces meet at an odd column, so the coarse sample of the 2 x 2 block that straddles them lies on the near
 one: the far surface's pixel in that block must take its far neighbour's sample, not its own.  With a step of
-1 px (a picture too small to halve, ``comp_fog.HALF_FROM``) every pixel keeps its own value.
+1 px (a picture too small to halve, ``comp_fog.HALF_FROM``) every pixel keeps its own value; a step of 4 is a
+picture of ``comp_fog.QUARTER_FROM`` pixels or more.
 """
 import json
 
@@ -86,7 +87,7 @@ def _upsampled(value, sample_length, length, step, edge):
     return own_value * (own + 1e-3)[..., None] + others * (1.0 - own)[..., None]
 
 
-@pytest.mark.parametrize("step", [2, 1])
+@pytest.mark.parametrize("step", [2, 4, 1])
 def test_upsampling_keeps_each_surface_its_own_share(tmp_path, step):
     from fog_addon import imageio
     from fog_addon.nodes import comp_fog
@@ -109,7 +110,7 @@ def test_upsampling_keeps_each_surface_its_own_share(tmp_path, step):
     np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)
 
 
-@pytest.mark.parametrize("step", [2, 1])
+@pytest.mark.parametrize("step", [2, 4, 1])
 def test_glow_shares_come_back_each_surface_its_own(tmp_path, step):
     """``comp_fog._full_view``: the lit shares (S, S_far) of two surfaces, each constant over its surface at half
     resolution, come back at full resolution as the upsampling's rule divided by its weights (the interleaving's
@@ -135,3 +136,39 @@ def test_glow_shares_come_back_each_surface_its_own(tmp_path, step):
     h.run_bpy_code(_CODE, W, H, step, data, out, timeout=300)
     got = imageio.read_rgb(out)[::-1][..., :2]   # the file's first row is the top
     np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)
+
+
+_SCALE_CODE = r"""
+import json
+import bpy
+from fog_addon.nodes import comp_fog
+bpy.ops.wm.read_factory_settings(use_empty=True)
+scene = bpy.context.scene
+tree = bpy.data.node_groups.new("Test", "CompositorNodeTree")
+m = comp_fog.CompOps(tree, {})
+coords = tree.nodes.new("CompositorNodeImageCoordinates")
+pixel = m.wrap(coords.outputs["Pixel"], vector=True)
+x, y = m.dot(pixel, (1.0, 0.0, 0.0)), m.dot(pixel, (0.0, 1.0, 0.0))
+comp_fog._halved(m, scene, pixel, pixel, x, y, m.wrap((0.0, 0.0, 0.0)), (x, y))
+node = next(n for n in tree.nodes if n.label == "Surface Share Scale")
+scene.compositing_node_group = tree   # in the depsgraph: its drivers are evaluated
+out = []
+for rx, ry, p in ((128, 72, 100), (256, 143, 100), (256, 144, 100), (640, 287, 100), (640, 360, 100),
+                  (1920, 1080, 100), (1280, 720, 20), (1280, 720, 40)):
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = rx, ry, p
+    scene.frame_set(1)
+    out.append([rx, ry, p, node.outputs[0].default_value])
+print("RESULT " + json.dumps(out))
+"""
+
+
+def test_share_scale_follows_the_render_size():
+    """The shares' scale (``comp_fog._halved``'s driver): 1 below HALF_FROM pixels on the picture's shorter side
+    (its resolution times its percentage), 1/2 from there, 1/4 from QUARTER_FROM, exactly (the Scale nodes' sizes)."""
+    from fog_addon.nodes import comp_fog
+    log = h.run_bpy_code(_SCALE_CODE, timeout=300).stdout
+    rows = json.loads(next(ln for ln in log.splitlines() if ln.startswith("RESULT "))[7:])
+    for rx, ry, p, factor in rows:
+        side = min(rx, ry) * p // 100
+        want = 0.25 if side >= comp_fog.QUARTER_FROM else 0.5 if side >= comp_fog.HALF_FROM else 1.0
+        assert abs(factor - want) < 1e-6, (rx, ry, p, factor)

@@ -418,7 +418,7 @@ MUTATIONS = [
              "fog_addon/nodes/comp_fog.py",
              "    whole = shafts.surface_offset(m, m.floor(pixel_x * factor), m.floor(pixel_y * factor))",
              "    whole = shafts.surface_offset(m, pixel_x, pixel_y)",
-             ("tests/test_shaft_scenes.py::test_shares_at_half_resolution_against_path_tracing[window_room]",)),
+             ("tests/test_shaft_scenes.py::test_shares_at_half_resolution_against_path_tracing[window_room-2]",)),
     Mutation("half_view_unweighted", "light shafts, the glows' lit share at half resolution: the upsampled sums are "
              "not divided by their weights",
              "fog_addon/nodes/comp_fog.py",
@@ -430,8 +430,14 @@ MUTATIONS = [
              "fog_addon/nodes/comp_fog.py",
              '            HALF + "Shaft Offset": shafts.offset(m, m.floor(px * factor), m.floor(py * factor))}',
              '            HALF + "Shaft Offset": shafts.offset(m, px, py)}',
-             ("tests/test_shaft_scenes.py::test_shares_at_half_resolution_against_path_tracing[window_room]",
-              "tests/test_shaft_scenes.py::test_shares_at_half_resolution_against_path_tracing[colonnade]")),
+             ("tests/test_shaft_scenes.py::test_shares_at_half_resolution_against_path_tracing[window_room-2]",
+              "tests/test_shaft_scenes.py::test_shares_at_half_resolution_against_path_tracing[colonnade-2]")),
+    Mutation("quarter_share_dropped", "light shafts: a picture of 288 px or more keeps its shares at half resolution "
+             "(the driver's quarter term dropped)",
+             "fog_addon/nodes/comp_fog.py",
+             '{HALF_FROM}),1)-0.25*min(floor({size}/"',
+             '{HALF_FROM}),1)-0.0*min(floor({size}/"',
+             ("tests/test_half_share.py::test_share_scale_follows_the_render_size",)),
     Mutation("half_share_upsampled_blind", "light shafts, surface share at half resolution: a pixel takes its sample's "
              "share whatever surface that sample lies on (no depth test)",
              "fog_addon/nodes/comp_fog.py",

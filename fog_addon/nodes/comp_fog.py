@@ -88,6 +88,7 @@ HALF_SHAFT = {"Direction": "Direction", "Shaft Length": "Shaft Length", "Shaft O
 #             a shaft group's per-pixel inputs at half resolution: from these bundle inputs (``_half_view``)
 HALF_FROM = 144   # px: a picture whose shorter side has this many pixels or more takes the shafts' shares at half
 #                   its resolution (``_halved``: twice the render tests' 72, whose pattern it then matches in the scene)
+QUARTER_FROM = 2 * HALF_FROM   # px: from this many, at a quarter (never coarser: 72 samples or more a side)
 UPSAMPLE_EDGE = 0.1   # ``_upsampled``'s threshold on log distance: a coarse sample of another surface is not taken
 SHARED = (GLOW_SHARED + tuple((SURFACE + name, kind) for name, kind in SURFACE_SHARED[2:])
           + ((SURFACE_OFFSET, F),) + SHAFT_SHARED[3:] + HALF_SHARED)   # a bundle's inputs
@@ -367,8 +368,8 @@ def _scaled(m, value, factor):
 
 def _halved(m, scene, position, normal, pixel_x, pixel_y, camera, picture_xy):
     """The bundle's HALF_SHARED inputs for the shafts' shares at half the picture's resolution where its shorter
-    side has HALF_FROM pixels or more (a sample every 2 x 2 pixels; a driver reads the render's size, so the
-    choice follows it).  For the share of the fog light a surface gets that the shadows leave
+    side has HALF_FROM pixels or more (a sample every 2 x 2 pixels), at a quarter from QUARTER_FROM (4 x 4; a
+    driver reads the render's size, so the choice follows it): never fewer than 72 samples a side.  For the share of the fog light a surface gets that the shadows leave
     (``shafts.surface_share``): the surfaces' ``position`` and ``normal`` (images over the surfaces' window, whose
     pixels are ``pixel_x``, ``pixel_y``) at that resolution, the interleaving offsets of those samples
     (``shafts.surface_offset``: its 4 x 4 pattern over 8 x 8 pixels), the distance from the camera of the sample
@@ -378,13 +379,14 @@ def _halved(m, scene, position, normal, pixel_x, pixel_y, camera, picture_xy):
 
     Why: the shares vary slowly over the picture (a shaft's edge is blurred by the interleaving's mean either way),
     and their map reads are most of a shafted light's cost; at half the resolution a quarter of the pixels take
-    them.  A picture twice the size of another, sampled so, has its shares from as many samples over the same
-    patch of the scene as the smaller one at its full resolution (docs/measurements: no worse than the render
-    tests' 128 x 72 against path tracing)."""
+    them.  A picture two or four times the size of another, sampled so, has its shares from as many samples over
+    the same patch of the scene as the smaller one at its full resolution (docs/measurements: no worse than the
+    render tests' 128 x 72 against path tracing)."""
     size = "min(rx,ry)*p/100"
     variables = [("rx", scene, "render.resolution_x"), ("ry", scene, "render.resolution_y"),
                  ("p", scene, "render.resolution_percentage")]
-    factor = _value(m, "Surface Share Scale", f"1-0.5*min(floor({size}/{HALF_FROM}),1)", variables)
+    factor = _value(m, "Surface Share Scale", f"1-0.5*min(floor({size}/{HALF_FROM}),1)-0.25*min(floor({size}/"
+                                              f"{QUARTER_FROM}),1)", variables)   # 1, 1/2, 1/4 exactly
     pos = _scaled(m, position, factor)
     whole = shafts.surface_offset(m, m.floor(pixel_x * factor), m.floor(pixel_y * factor))   # a sample's, in each
     step = 1.0 / factor
