@@ -50,14 +50,15 @@ tree = bpy.data.node_groups.new("Test", "CompositorNodeTree")
 tree.interface.new_socket("Image", in_out="OUTPUT", socket_type="NodeSocketColor")
 m = comp_fog.CompOps(tree, {})
 reads = {}
-for key in data:
+for key in (k for k in data if k != "scaled"):
     node = tree.nodes.new("CompositorNodeImage")
     node.image = image(key, data[key])
     reads[key] = m.wrap(node.outputs["Image"], vector=True)
 scalar = lambda v: m.dot(v, (1.0, 0.0, 0.0))
 if "share" in data:   # the glows' lit shares at half resolution back at the picture's (_full_view)
-    near, far = comp_fog._full_view(m, [scalar(reads["share"]), scalar(reads["share_far"])],
-                                    scalar(reads["half_length"]), scalar(reads["length"]), step)
+    coarse = (lambda v: scalar(v)) if "scaled" not in data else (lambda v: scalar(comp_fog._scaled(m, v, 1.0 / step)))
+    near, far = comp_fog._full_view(m, [coarse(reads["share"]), coarse(reads["share_far"])],
+                                    coarse(reads["half_length"]), scalar(reads["length"]), step)
     out = m.combine(near, far, 0.0)
 else:
     out = comp_fog._upsampled_group(m, reads["value"], scalar(reads["sample_length"]), scalar(reads["length"]), step)
@@ -172,3 +173,23 @@ def test_share_scale_follows_the_render_size():
         side = min(rx, ry) * p // 100
         want = 0.25 if side >= comp_fog.QUARTER_FROM else 0.5 if side >= comp_fog.HALF_FROM else 1.0
         assert abs(factor - want) < 1e-6, (rx, ry, p, factor)
+
+
+@pytest.mark.parametrize("width,height,step", [(30, 18, 4), (34, 17, 2), (31, 19, 4)])
+def test_a_size_not_a_multiple_of_the_step_keeps_every_pixel(tmp_path, width, height, step):
+    """Full-resolution shares scaled down (``comp_fog._scaled``, as ``_half_view`` does) and back (``_full_view``)
+    at a size the step does not divide: every pixel takes the share of a pixel at most ``step`` away in each
+    direction (S holds each pixel's column, S_far its row); none is left at zero at the picture's edges."""
+    from fog_addon import imageio
+    rows, cols = np.mgrid[0:height, 0:width].astype(float)
+    length = np.full((height, width), 5.0)
+    data = tmp_path / "data.json"
+    data.write_text(json.dumps({"share": (1.0 + cols).tolist(), "share_far": (1.0 + rows).tolist(),
+                                "half_length": length.tolist(), "length": length.tolist(), "scaled": 1}))
+    out = tmp_path / "out.exr"
+    h.run_bpy_code(_CODE, width, height, step, data, out, timeout=300)
+    got = imageio.read_rgb(out)[::-1]   # the file's first row is the top
+    assert got.shape[:2] == (height, width)
+    taken_col, taken_row = got[..., 0] - 1.0, got[..., 1] - 1.0
+    assert got[..., :2].min() >= 1.0 - 1e-5   # no pixel without a share
+    assert np.abs(taken_col - cols).max() <= step and np.abs(taken_row - rows).max() <= step

@@ -438,6 +438,12 @@ MUTATIONS = [
              '{HALF_FROM}),1)-0.25*min(floor({size}/"',
              '{HALF_FROM}),1)-0.0*min(floor({size}/"',
              ("tests/test_half_share.py::test_share_scale_follows_the_render_size",)),
+    Mutation("scaled_edges_clipped", "light shafts, shares at half or quarter resolution: a picture whose size the "
+             "step does not divide loses its edge pixels' shares (the Scale nodes clip)",
+             "fog_addon/nodes/comp_fog.py",
+             '        node.inputs[f"Extension {axis}"].default_value = "Extend"',
+             '        node.inputs[f"Extension {axis}"].default_value = "Clip"',
+             ("tests/test_half_share.py::test_a_size_not_a_multiple_of_the_step_keeps_every_pixel",)),
     Mutation("half_share_upsampled_blind", "light shafts, surface share at half resolution: a pixel takes its sample's "
              "share whatever surface that sample lies on (no depth test)",
              "fog_addon/nodes/comp_fog.py",

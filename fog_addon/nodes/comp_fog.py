@@ -360,6 +360,8 @@ def _scaled(m, value, factor):
     node = m.node("CompositorNodeScale", value.col + 1)
     node.inputs["Type"].default_value = "Relative"
     node.inputs["Interpolation"].default_value = "Nearest"
+    for axis in ("X", "Y"):   # a size not a multiple of the factor: the edge pixels take the nearest, not zero
+        node.inputs[f"Extension {axis}"].default_value = "Extend"
     m.feed(node.inputs["Image"], value if value.vector else m.combine(value, value, value))
     for axis in ("X", "Y"):
         m.feed(node.inputs[axis], m.wrap(factor))
