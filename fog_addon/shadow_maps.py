@@ -3,12 +3,12 @@
 For each such light (``caveats.shadowing_lights``: an object casting shadows within its glow's reach) the
 distance from the light to the first surface is ray cast in every direction of its map
 (``precompute/shafts.py``: a longitude-latitude grid for a point light, its rows thinned towards the poles to
-the equator's spacing, ``point_map_casts``; a square grid over the cone for a spot) against one BVH of the scene's shadow casters (``mathutils.bvhtree``, evaluated meshes in world
-space: modifiers, instances and curves included), and stored as a packed float image, so the saved file
-renders without the add-on (the compositor reads it with Map UV).  The map holds the light's pose and the
-geometry of the frame it was baked at (``ShadowMap.key``): when either changes, the map is baked again
-(the frame handler, ``render``); a farm rendering an animation whose lights or occluders move needs the
-add-on (``animated_note``).
+the equator's spacing, ``point_map_casts``; a square grid over the cone for a spot) against one BVH of the
+scene's shadow casters (``mathutils.bvhtree``, evaluated meshes in world space: modifiers, instances and curves
+included), and stored as a packed float image, so the saved file renders without the add-on (the compositor
+reads it with Map UV).  The map holds the light's pose and the geometry of the frame it was baked at
+(``ShadowMap.key``): when either changes, the map is baked again (the frame handler, ``render``); a farm
+rendering an animation whose lights or occluders move needs the add-on (``animated_note``).
 
 Objects that Cycles lets shadow rays through (hidden from shadow rays, not rendered) cast none here; every
 other surface is opaque (glass included, as Cycles' shadow rays treat it).

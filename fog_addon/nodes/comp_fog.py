@@ -323,9 +323,14 @@ def _interleave_mean_group(m, value, length, taps, edge):
     """``_interleave_mean`` as one compositor group shared by every light (``_shared_group``)."""
     kind = V if value.vector else F
     name = f"{LIGHT_GROUP} Interleave Mean {'-'.join(map(str, taps))} {edge:g}" + (" Vector" if value.vector else "")
-    return _shared_group(m, name, [("Value", kind, value),
-                                   ("Length", F, m.dot(length, (1.0, 0.0, 0.0)) if length.vector else length)],
+    return _shared_group(m, name, [("Value", kind, value), ("Length", F, _first(m, length))],
                          ("Mean", kind), lambda sub, g_: _interleave_mean(sub, g_["Value"], g_["Length"], taps, edge))
+
+
+def _first(m, value):
+    """A scalar image: ``value`` itself, or an image's first channel (a cropped or scaled scalar comes back an
+    image)."""
+    return m.dot(value, (1.0, 0.0, 0.0)) if value.vector else value
 
 
 def _interleave_mean(m, value, length, taps, edge):
@@ -371,13 +376,13 @@ def _scaled(m, value, factor):
 def _halved(m, scene, position, normal, pixel_x, pixel_y, camera, picture_xy):
     """The bundle's HALF_SHARED inputs for the shafts' shares at half the picture's resolution where its shorter
     side has HALF_FROM pixels or more (a sample every 2 x 2 pixels), at a quarter from QUARTER_FROM (4 x 4; a
-    driver reads the render's size, so the choice follows it): never fewer than 72 samples a side.  For the share of the fog light a surface gets that the shadows leave
-    (``shafts.surface_share``): the surfaces' ``position`` and ``normal`` (images over the surfaces' window, whose
-    pixels are ``pixel_x``, ``pixel_y``) at that resolution, the interleaving offsets of those samples
-    (``shafts.surface_offset``: its 4 x 4 pattern over 8 x 8 pixels), the distance from the camera of the sample
-    each pixel of the picture takes, and the Step between samples (px: ``_upsampled``).  For the lit share of the
-    glows (``shafts.lit_share``, ``_half_view``): the interleaving offsets (``shafts.offset``) of the samples of the
-    picture's pixels ``picture_xy``.
+    driver reads the render's size, so the choice follows it): never fewer than 72 samples a side.  For the share
+    of the fog light a surface gets that the shadows leave (``shafts.surface_share``): the surfaces' ``position``
+    and ``normal`` (images over the surfaces' window, whose pixels are ``pixel_x``, ``pixel_y``) at that
+    resolution, the interleaving offsets of those samples (``shafts.surface_offset``: its 4 x 4 pattern over 8 x 8
+    pixels), the distance from the camera of the sample each pixel of the picture takes, and the Step between
+    samples (px: ``_upsampled``).  For the lit share of the glows (``shafts.lit_share``, ``_half_view``): the
+    interleaving offsets (``shafts.offset``) of the samples of the picture's pixels ``picture_xy``.
 
     Why: the shares vary slowly over the picture (a shaft's edge is blurred by the interleaving's mean either way),
     and their map reads are most of a shafted light's cost; at half the resolution a quarter of the pixels take
@@ -403,17 +408,16 @@ def _half_view(m, per_pixel, step):
     """A shaft group's per-pixel inputs (Direction, Shaft Length, Shaft Offset: images, ``per_pixel``'s of
     HALF_SHAFT) at 1 / ``step`` of their resolution (``_halved``), and the half-resolution ray lengths."""
     half = {k: _scaled(m, per_pixel[k], 1.0 / step) for k in HALF_SHAFT}
-    length = m.dot(half["Shaft Length"], (1.0, 0.0, 0.0))
-    return {"Direction": half["Direction"], "Shaft Length": length,
-            "Shaft Offset": m.dot(half["Shaft Offset"], (1.0, 0.0, 0.0))}, length
+    half["Shaft Length"], half["Shaft Offset"] = (_first(m, half[k]) for k in ("Shaft Length", "Shaft Offset"))
+    return half, half["Shaft Length"]
 
 
 def _full_view(m, shares, half_length, length, step):
     """The lit shares (S, S_far) of a shaft group at half resolution (``_half_view``), each its interleaving's mean
     there, back at the picture's resolution by the depth-aware upsampling (``_upsampled``) and its weights."""
     means = [_interleave_mean_group(m, v, half_length, SHAFT_TAPS, SHAFT_EDGE) for v in shares]
-    packed = _upsampled_group(m, m.combine(means[0], means[1], 1.0),
-                              m.dot(_scaled(m, half_length, step), (1.0, 0.0, 0.0)), length, step)
+    packed = _upsampled_group(m, m.combine(means[0], means[1], 1.0), _first(m, _scaled(m, half_length, step)),
+                              length, step)
     weight = m.maximum(m.dot(packed, (0.0, 0.0, 1.0)), 1e-6)
     return [m.dot(packed, axis) / weight for axis in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0))]
 
@@ -630,7 +634,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
             shaft = m.node("CompositorNodeGroup", 6)
             shaft.node_tree = build_shaft_group(light, maps[light.name], images, samples, g_)
             shaft.label = f"Light {k} Shaft: {light.name}"
-            half, half_length = _half_view(m, {k: crop(v) for k, v in HALF_SHAFT.items()}, g[HALF + "Step"])
+            half, half_length = _half_view(m, {s: crop(v) for s, v in HALF_SHAFT.items()}, g[HALF + "Step"])
             for socket, _ in SHAFT_SHARED:
                 m.feed(shaft.inputs[socket], half[socket] if socket in SHAFT_PER_PIXEL else g[socket])
             source = m.node("CompositorNodeImage", 5)
@@ -639,9 +643,8 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
             for socket in ("Position", "Normal", "Offset"):   # the surface share at half resolution
                 m.feed(shaft.inputs["Surface " + socket], g[HALF + socket])
             m.feed(shaft.inputs["Light"], position)
-            length = crop("Shaft Length")
-            near, far = _full_view(m, [m.wrap(shaft.outputs[k]) for k in ("Share", "Share Far")], half_length,
-                                   m.dot(length, (1.0, 0.0, 0.0)) if length.vector else length, g[HALF + "Step"])
+            near, far = _full_view(m, [m.wrap(shaft.outputs[s]) for s in ("Share", "Share Far")], half_length,
+                                   _first(m, crop("Shaft Length")), g[HALF + "Step"])
             share = {o: near if o.at == rungs.SURFACE_POINT else far for o in GLOW_OUTPUTS}
         if any(o.computed(mod) for o in GLOW_OUTPUTS):
             glow = m.node("CompositorNodeGroup", 6)

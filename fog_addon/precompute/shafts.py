@@ -94,9 +94,18 @@ def point_map_directions(width=POINT_MAP[0], height=POINT_MAP[1]):
     -pi + 2 pi i / (width - 1), latitude -pi/2 + pi j / (height - 1) (the first and last columns meet at
     the seam, so bilinear lookups need no wrap)."""
     lon = -math.pi + 2.0 * math.pi * np.arange(width) / (width - 1)
-    lat = -0.5 * math.pi + math.pi * np.arange(height) / (height - 1)
-    lo, la = np.meshgrid(lon, lat)
-    return np.stack([np.cos(la) * np.cos(lo), np.cos(la) * np.sin(lo), np.sin(la)], axis=-1)
+    lo, la = np.meshgrid(lon, _point_map_latitudes(height))
+    return _unit_directions(la, lo)
+
+
+def _point_map_latitudes(height):
+    """The latitudes (rad) of a point light's map's rows, -pi/2 to pi/2."""
+    return -0.5 * math.pi + math.pi * np.arange(height) / (height - 1)
+
+
+def _unit_directions(lat, lon):
+    """(..., 3) unit world vectors at latitudes ``lat`` and longitudes ``lon`` (rad, arrays of one shape)."""
+    return np.stack([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)], axis=-1)
 
 
 def point_map_casts(width=POINT_MAP[0], height=POINT_MAP[1]):
@@ -108,14 +117,12 @@ def point_map_casts(width=POINT_MAP[0], height=POINT_MAP[1]):
     point takes the nearest of them.  No two neighbouring rays of a row are farther apart than the equator's grid
     points (0.35 degrees), so whatever the map resolves at the equator it resolves at every latitude (the thin
     occluders of ``benchmarks/shafts_stability.py``); the rays are 2/pi of the grid's (334 000 for 524 288)."""
-    lat = -0.5 * math.pi + math.pi * np.arange(height) / (height - 1)
+    lat = _point_map_latitudes(height)
     counts = np.ceil(np.cos(lat).clip(0.0, 1.0) * (width - 1) - 1e-9).astype(np.int64).clip(1, width - 1) + 1
     starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
     row = np.repeat(np.arange(height), counts)
     k = np.arange(int(counts.sum())) - starts[row]
-    lon = -math.pi + 2.0 * math.pi * k / (counts[row] - 1)
-    la = lat[row]
-    directions = np.stack([np.cos(la) * np.cos(lon), np.cos(la) * np.sin(lon), np.sin(la)], axis=-1)
+    directions = _unit_directions(lat[row], -math.pi + 2.0 * math.pi * k / (counts[row] - 1))
     nearest_ray = np.floor(np.arange(width)[None, :] * ((counts[:, None] - 1) / (width - 1)) + 0.5).astype(np.int64)
     return directions, starts[:, None] + nearest_ray
 
@@ -392,7 +399,7 @@ def node_terms(m, theta, t_c, h, offset, direction, minus_beta, shadow, g, fallo
     if g:   # the scattering angle towards the camera has cosine -sin(theta)
         weight = weight * _hg_of_sine(m, g, sin)
     if spot is None and falloff is None:
-        depth = m.table(spec, *(nearest(m, c, n) for c, n in zip(point_map_xy_of(m, *u), (spec.width, spec.height))))
+        depth = nearest_depth(m, spec, *point_map_xy_of(m, *u))
     else:
         u = m.combine(*u)
         depth = map_depth(m, spec, spot, u)
@@ -417,7 +424,11 @@ def map_depth(m, spec, spot, u):
     """The map's distance (m) from the light to its first surface in the world direction ``u``: the grid
     point nearest to u in the map ``spec`` (``nearest``); ``spot``: (frame, half_width) of a spot's map, None
     for a point light's."""
-    x, y = point_map_xy(m, u) if spot is None else spot_map_xy(m, u, *spot)
+    return nearest_depth(m, spec, *(point_map_xy(m, u) if spot is None else spot_map_xy(m, u, *spot)))
+
+
+def nearest_depth(m, spec, x, y):
+    """The map ``spec``'s distance at its grid point nearest to (x, y) in [0, 1] (``nearest``)."""
     return m.table(spec, nearest(m, x, spec.width), nearest(m, y, spec.height))
 
 
@@ -494,7 +505,7 @@ def sun_map_read(m, spec, frame, point):
     map (0 outside it)."""
     x = (m.dot(point, frame.right) - frame.a[0]) * (1.0 / (frame.a[1] - frame.a[0]))
     y = (m.dot(point, frame.up) - frame.b[0]) * (1.0 / (frame.b[1] - frame.b[0]))
-    depth = m.table(spec, nearest(m, x, spec.width), nearest(m, y, spec.height))
+    depth = nearest_depth(m, spec, x, y)
     inside = m.less(-1e-6, x) * m.less(x, 1.0 + 1e-6) * m.less(-1e-6, y) * m.less(y, 1.0 + 1e-6)
     return depth, m.dot(point, frame.forward) - frame.w0, inside
 
