@@ -150,10 +150,12 @@ DENSE_T = 1.0   # optical distance camera to light from which the multiply scatt
 #                (docs/measurements/2026-11-27-apsf.md: it outweighs the single a few degrees out from T ~ 2)
 
 
-def multiple_notes(lights, multiple, method_name, is_spot, optical_distance=None):
-    """Notes on the multiply scattered light (Dense Fog): what it leaves out with it on (spot lights, the OSL
-    method); with it off, the lights seen through dense fog (``optical_distance(light)``: beta times the
-    camera's distance to it, at least DENSE_T), whose wide halo is then missing."""
+def multiple_notes(lights, multiple, method_name, is_spot, optical_distance=None, is_area=None):
+    """Notes on the multiply scattered light (Dense Fog): what it leaves out with it on (area lights; spot
+    lights with a method other than the compositor; the OSL method); with it off, the lights seen through dense
+    fog (``optical_distance(light)``: beta times the camera's distance to it, at least DENSE_T), whose wide halo
+    is then missing.  ``is_spot``: spot or area light; ``is_area``: area light (None: none is)."""
+    is_area = is_area or (lambda o: False)
     if not multiple:
         dense = [o.name for o in lights if optical_distance is not None and optical_distance(o) >= DENSE_T]
         if not dense:
@@ -161,15 +163,21 @@ def multiple_notes(lights, multiple, method_name, is_spot, optical_distance=None
         return [f"the fog is dense around {len(dense)} light(s) ({_names(dense)}; optical distance up to "
                 f"{max(optical_distance(o) for o in lights):.1f} from the camera) and multiple scattering is "
                 "off: their glow lacks its wide halo; turn on Dense Fog"
-                + (" (it models point lights)" if any(is_spot(o) for o in lights if o.name in dense) else "")]
+                + (" (it models point and spot lights)" if any(is_area(o) for o in lights if o.name in dense)
+                   else "")]
     if method_name == "osl":
         return ["multiple scattering is not modelled by Method OSL (its glow is quadrature, the dense fog's a "
                 "table): use Node Groups, Compositor or Auto"]
-    spots = [o.name for o in lights if is_spot(o)]
+    areas = [o.name for o in lights if is_area(o)]
+    spots = [o.name for o in lights if is_spot(o) and not is_area(o)] if method_name != "compositor" else []
+    notes = []
     if spots:
-        return [f"multiple scattering is modelled for point lights and glowing objects only: the glow of "
-                f"{len(spots)} spot or area light(s) ({_names(spots)}) is single scattering"]
-    return []
+        notes.append(f"the multiply scattered glow of {len(spots)} spot light(s) ({_names(spots)}) is modelled by "
+                     "Method Compositor (or Auto): with this method their glow is single scattering")
+    if areas:
+        notes.append(f"multiple scattering is not modelled for area lights: the glow of {len(areas)} area "
+                     f"light(s) ({_names(areas)}) is single scattering")
+    return notes
 
 
 def glow_notes(glowing, method_name, engine="CYCLES"):

@@ -281,8 +281,7 @@ def view_samples(scene, lights, frames=None, grid=None):
     n_lights = len(lights)
     areas = np.array([is_area(o) for o in lights], bool)
     spot = np.array([is_spot(o) for o in lights], bool) | areas
-    shapes = [area_half_sizes(o) if is_area(o) else (math.cos(o.data.spot_size / 2), o.data.spot_blend) if is_spot(o)
-              else (1.0, 0.0) for o in lights]
+    shapes = [area_half_sizes(o) if is_area(o) else spot_cone(o) if is_spot(o) else (1.0, 0.0) for o in lights]
     spots = predict.SpotSamples(spot, np.array(invs).reshape(-1, n_lights, 3, 3),
                                 np.array([s[0] for s in shapes], float), np.array([s[1] for s in shapes], float),
                                 areas if areas.any() else None)
@@ -295,6 +294,11 @@ def view_samples(scene, lights, frames=None, grid=None):
 def is_spot(light):
     """True for a spot light object (its fog follows the cone: ``rungs.choose(..., spot=True)``)."""
     return light.data.type == "SPOT"
+
+
+def spot_cone(light):
+    """(cos(spot size / 2), blend) of a spot light object: its cone as the kernels take it."""
+    return math.cos(light.data.spot_size / 2), light.data.spot_blend
 
 
 def has_shape(light):
@@ -479,11 +483,15 @@ def full_windows(lights):
     return footprint.FULL, [footprint.FULL if is_spot(o) else None for o in lights]
 
 
-def windows(scene, lights, frames=None):
+def windows(scene, lights, frames=None, halos=False):
     """The windows of the Compositor method (``precompute/footprint.py``): (the surfaces' window, [each
     light's glow window: a spot's, None for a point light]) holding ``frames`` (default: every frame of an
     animated scene's range, else the current one).  Full windows where they can't be bounded: border
-    renders, animations over MAX_WINDOW_FRAMES frames or with motion blur."""
+    renders, animations over MAX_WINDOW_FRAMES frames or with motion blur.  ``halos``: the spots' glows have
+    a multiply scattered halo (Dense Fog), which fills the picture as a point light's does: no window."""
+    if halos:
+        surfaces, glows = windows(scene, lights, frames)
+        return surfaces, [None if is_spot(o) else g for o, g in zip(lights, glows)]
     if scene.render.use_border or scene.camera is None or scene.camera.data.type != "PERSP":
         return full_windows(lights)
     if frames is None and animated(scene):

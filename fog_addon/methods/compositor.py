@@ -43,7 +43,7 @@ class Compositor(Method):
                 + ",".join(o.name_full for o in shader_lights))
 
     def windows(self, scene, lights, partial):
-        return view.windows(scene, lights, [scene.frame_current] if partial else None)
+        return view.windows(scene, lights, [scene.frame_current] if partial else None, _halos(scene))
 
     def is_built(self):
         return bpy.data.node_groups.get(comp_fog.FOG_GROUP) is not None
@@ -91,7 +91,8 @@ class Compositor(Method):
 
     def frame_change(self, scene, lights):
         if comp_fog.FOG_GROUP in bpy.data.node_groups:
-            comp_fog.set_windows(lights, view.windows(scene, lights, [scene.frame_current]), grow=True)
+            comp_fog.set_windows(lights, view.windows(scene, lights, [scene.frame_current], _halos(scene)),
+                                 grow=True)
             follow_shadows(scene, lights)
 
     def follow(self, scene, rebuild):
@@ -172,3 +173,9 @@ def follow_shadows(scene, lights):
         if shadow.spot is not None and images[shadow.spec.name].get(shadow_maps.KEY) != before[light.name]:
             comp_fog.build_shaft_group(light, shadow, images, shafts.samples_for(spec.quality, len(shafted)),
                                        spec.anisotropy)
+
+
+def _halos(scene):
+    """True if the spots' glows have their multiply scattered halo (the scene's Dense Fog is on)."""
+    settings = getattr(scene, "analytic_fog", None)
+    return bool(settings is not None and settings.use_multiple_scattering)

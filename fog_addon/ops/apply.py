@@ -11,7 +11,7 @@ from ..nodes.light import unwrap_light, wrap_light
 from ..nodes.material import unwrap_material, wrap_material
 from ..nodes.owned import is_fogged
 from ..nodes.world import unwrap_world, wrap_world
-from ..precompute import multiple, predict, presets, rungs, shafts, spot
+from ..precompute import bakers, multiple, predict, presets, rungs, shafts, spot
 from ..precompute.spec import FogSpec, validate_quality
 from . import progress as progress_
 from .. import view
@@ -164,15 +164,18 @@ def _models(spec, method, lights, steps, rims, thin=frozenset()):
     """Each light's models at its step, a spot's glow with its rim's point count (``rims``: by name), Dense Fog
     left out for the lights ``thin`` names."""
     return [rungs.choose(method.preference, k, spec.anisotropy, view.is_spot(o), rims.get(o.name, spot.RIM_NODES),
-                         multiple_albedo=None if o.name in thin else spec.multiple_albedo, area=view.is_area(o))
+                         multiple_albedo=None if o.name in thin else spec.multiple_albedo, area=view.is_area(o),
+                         cone=view.spot_cone(o) if view.is_spot(o) else None)
             for o, k in zip(lights, steps)]
 
 
-def _extra_tables(spec):
-    """The tables beyond ``bakers.bakers``' that ``spec``'s models read: the multiply scattered field's."""
+def _extra_tables(spec, models=()):
+    """The tables beyond ``bakers.bakers``' that ``spec``'s models read: the multiply scattered field's, and
+    each spot's (``spot_multiple``) that ``models`` read."""
     if spec.multiple_albedo is None:
         return ()
-    return (multiple.table_spec(spec.anisotropy, spec.multiple_albedo),)
+    spots = [t for t in rungs.tables_of([r for light in models for r in light]) if bakers.is_spot_multiple(t)]
+    return (multiple.table_spec(spec.anisotropy, spec.multiple_albedo), *spots)
 
 
 def stored_choice():
@@ -356,7 +359,7 @@ def _build_scene_groups(scene, spec, lights, method=None, reason=None, rechoose=
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if (surface is None or bpy.data.node_groups.get(groups.WORLD) is None
             or surface.get(LIGHTS_KEY) != signature or not method.is_built()):
-        imgs = method.build(scene, spec, plan_, images.all_table_images(spec.anisotropy, _extra_tables(spec)))
+        imgs = method.build(scene, spec, plan_, images.all_table_images(spec.anisotropy, _extra_tables(spec, plan_.models)))
         _rebuilt.add(scene.name)   # the compositor's chain must take the new groups (``refresh_lights``)
         surface = bpy.data.node_groups[groups.SURFACE]
         surface[LIGHTS_KEY] = signature
@@ -476,8 +479,7 @@ def not_modelled(scene, spec, lights, materials, method=None):
              caveats.glass_note(materials, scene.objects),
              caveats.clip_note(scene, getattr(method, "name", method)),
              *caveats.multiple_notes(lights, spec.multiple_scattering, getattr(method, "name", method),
-                                     view.has_shape,
-                                     _optical_distance(scene, spec)),
+                                     view.has_shape, _optical_distance(scene, spec), view.is_area),
              *caveats.glow_notes(methods.compositor.glowing_objects(scene), getattr(method, "name", method),
                                  scene.render.engine),
              *(f"{name}: {why}" for name, why in sunsky.notes(scene, spec, getattr(method, "name", method),

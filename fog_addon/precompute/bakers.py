@@ -5,7 +5,7 @@ takes seconds in every process that needs them.
 """
 import functools
 
-from . import airlight, multiple, spot, surface, tables
+from . import airlight, multiple, spot, spot_multiple, surface, tables
 from .table_cache import cached_bake
 
 
@@ -35,11 +35,19 @@ def numpy_tables(g=0.0):
 
 
 def extra_baker(spec):
-    """The baker of a table that depends on more than g (``multiple.table_spec``: g and the albedo), for
+    """The baker of a table that depends on more than g (``multiple.table_spec``: g and the albedo;
+    ``spot_multiple.table_spec``: and a spot's cone), for
     ``table_cache.cached_bake``."""
     if spec.name.startswith("AnalyticFog Multiple ("):
         return functools.partial(multiple.bake_table, spec)
+    if is_spot_multiple(spec):
+        return functools.partial(spot_multiple.bake_table, spec)
     raise KeyError(f"no baker for table {spec.name!r}")
+
+
+def is_spot_multiple(spec):
+    """True for a spot's multiply scattered table (``spot_multiple.table_spec``)."""
+    return spec.name.startswith("AnalyticFog Spot Multiple (")
 
 
 def table_array(spec, g=0.0):

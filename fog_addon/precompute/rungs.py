@@ -36,7 +36,7 @@ from dataclasses import dataclass, replace
 import functools
 from typing import Callable, NamedTuple
 
-from . import area, model, multiple, spot, surface, tables
+from . import area, model, multiple, spot, spot_multiple, surface, tables
 
 TERMS = ("airlight", "background", "scatter", "direct")
 BACKENDS = ("numpy", "nodes", "osl")
@@ -352,8 +352,47 @@ def multiple_rungs(air, background, scatter, g, albedo):
     return tuple(out)
 
 
+SPOT_MULTIPLE_ERROR = 0.13   # a spot's glow (single + multiple) against Cycles with 64 bounces: 12.7 % at worst
+
+
+def _spot_air_multiple(air, spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend):
+    """A spot's single-scattering airlight (``air``) plus its multiply scattered glow (``spot_multiple``)."""
+    return air(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend) + spot_multiple.airlight(
+        m, spec, beta, d_vp, px, py, pz, dx, dy, dz)
+
+
+def _spot_background_multiple(background, spec, m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, cos_half, blend):
+    """A spot's single-scattering glow of a ray to the sky plus its multiply scattered glow."""
+    return background(m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, cos_half, blend) + spot_multiple.airlight(
+        m, spec, beta, model.FAR, px, py, pz, dx, dy, dz)
+
+
+def _spot_pair_multiple(pair, spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend):
+    """``pair``'s (to the surface, to the sky) with the multiply scattered glow added to each."""
+    surface, sky = pair(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend)
+    ray = (px, py, pz, dx, dy, dz)
+    return (surface + spot_multiple.airlight(m, spec, beta, d_vp, *ray),
+            sky + spot_multiple.airlight(m, spec, beta, model.FAR, *ray))
+
+
+def spot_multiple_rungs(air, background, g, albedo, cone):
+    """(airlight, background) rungs of a spot light with its multiply scattered glow (``spot_multiple``: the
+    table of anisotropy ``g``, grey albedo ``albedo`` and ``cone`` = (cos_half, blend)) added to the spot rungs
+    ``air`` and ``background``.  The compositor and numpy run them: a ray's quadrature in every material would
+    cost the node groups far more."""
+    spec = spot_multiple.table_spec(g, albedo, *cone)
+    tag = spec.name.split("(", 1)[1].rstrip(")")
+    common = dict(backends=air.backends & {"numpy", "nodes"}, max_error=max(air.max_error, SPOT_MULTIPLE_ERROR),
+                  evidence="tests/test_spot_multiple.py; docs/measurements/2026-11-28-spot-multiple.md")
+    return (replace(air, name=f"{air.name} + multiple {tag}", tables=air.tables + (spec,),
+                    kernel=functools.partial(_spot_air_multiple, air.kernel, spec),
+                    pair=functools.partial(_spot_pair_multiple, air.pair, spec), **common),
+            replace(background, name=f"{background.name} + multiple {tag}", tables=background.tables + (spec,),
+                    kernel=functools.partial(_spot_background_multiple, background.kernel, spec), **common))
+
+
 def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NODES, multiple_albedo=None,
-           area=False):
+           area=False, cone=None):
     """The models for one light's terms, honouring the user's ``preference`` (PREFERENCES), ``step``
     (index into STEPS) rungs down the ladder, for Henyey-Greenstein anisotropy ``g``; ``spot``: for a
     spot light (``spot_rungs``, DIRECT_SPOT) whose glow's rim takes ``rim_nodes`` points (spot.RIM_LADDER);
@@ -365,7 +404,8 @@ def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NOD
     (``nodes/comp_fog.py``).  ``predict.choose_steps`` picks each light's step from the
     error it would make in the camera's view.  Raises ValueError for what no rung
     serves (tables below MIN_TABLE_ANISOTROPY).  ``multiple_albedo``: a grey albedo to add a point light's
-    multiply scattered glow with (``multiple_rungs``; the node groups' tables, not OSL's quadrature), or None.
+    multiply scattered glow with (``multiple_rungs``; the node groups' tables, not OSL's quadrature), or None;
+    a spot light's with the compositor when its ``cone`` = (cos_half, blend) is given (``spot_multiple_rungs``).
     """
     if preference not in PREFERENCES:
         raise ValueError(f"unknown method {preference!r}; use one of {', '.join(PREFERENCES)}")
@@ -384,6 +424,10 @@ def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NOD
     elif spot:
         models = models._replace(direct=DIRECT_SPOT, scatter=spot_scatter_rung(models.scatter, g))._replace(
             **dict(zip(("airlight", "background"), spot_rungs(models.airlight, models.background, g, rim_nodes))))
+    if (multiple_albedo is not None and spot and not area and cone is not None and preference == "compositor"
+            and step < 2):
+        models = models._replace(**dict(zip(("airlight", "background"), spot_multiple_rungs(
+            models.airlight, models.background, g, multiple_albedo, cone))))
     if multiple_albedo is not None and not spot and not area and preference != "osl" and step < 2:
         models = models._replace(**dict(zip(("airlight", "background", "scatter"), multiple_rungs(
             models.airlight, models.background, models.scatter, g, multiple_albedo))))
