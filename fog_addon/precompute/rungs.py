@@ -358,21 +358,21 @@ SPOT_MULTIPLE_ERROR = 0.13   # a spot's glow (single + multiple) against Cycles 
 def _spot_air_multiple(air, spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend):
     """A spot's single-scattering airlight (``air``) plus its multiply scattered glow (``spot_multiple``)."""
     return air(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend) + spot_multiple.airlight(
-        m, spec, beta, d_vp, px, py, pz, dx, dy, dz)
+        m, spec, beta, d_vp, px, py, pz, dx, dy, dz, cos_half)
 
 
 def _spot_background_multiple(background, spec, m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, cos_half, blend):
     """A spot's single-scattering glow of a ray to the sky plus its multiply scattered glow."""
     return background(m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, cos_half, blend) + spot_multiple.airlight(
-        m, spec, beta, model.FAR, px, py, pz, dx, dy, dz)
+        m, spec, beta, model.FAR, px, py, pz, dx, dy, dz, cos_half)
 
 
 def _spot_pair_multiple(pair, spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend):
     """``pair``'s (to the surface, to the sky) with the multiply scattered glow added to each."""
     surface, sky = pair(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend)
     ray = (px, py, pz, dx, dy, dz)
-    return (surface + spot_multiple.airlight(m, spec, beta, d_vp, *ray),
-            sky + spot_multiple.airlight(m, spec, beta, model.FAR, *ray))
+    return (surface + spot_multiple.airlight(m, spec, beta, d_vp, *ray, cos_half),
+            sky + spot_multiple.airlight(m, spec, beta, model.FAR, *ray, cos_half))
 
 
 def spot_multiple_rungs(air, background, g, albedo, cone):

@@ -26,7 +26,8 @@ only.  Here the spot's own transport is tabulated, and a camera ray gathers it b
 * **The quadrature** (``airlight``).  Along the ray, t = a + h sinh v (a: the distance to the ray's closest
   approach to the lamp, h: its distance there), so r = h cosh v and dt = r dv: the integrand
   beta^2 e^{-beta t} (J T) is bounded however close the ray passes to the lamp, and Gauss-Legendre in v
-  (NODES points) spends them evenly in log-distance from it.  The ray ends at the surface, so a segment
+  spends its points evenly in log-distance from it, on each of the ray's pieces before, inside and after
+  the cone (NODES), whose edge is sharp near the lamp.  The ray ends at the surface, so a segment
   needs no difference of fields (unlike ``multiple.multiple_airlight``).
 
 The single scattering stays the exact spot kernels' (``spot.py``); J starts from order 1 radiance, so the
@@ -39,7 +40,7 @@ import math
 
 import numpy as np
 
-from . import point_source_mc, tables
+from . import point_source_mc, spot, tables
 
 T_MIN = 0.005          # the first row's optical distance from the lamp (below: J T held, J ~ 1/T)
 T_MAX = 40.0           # the last row's (beyond: held; e^-40 of the light)
@@ -54,7 +55,7 @@ R_MAX = T_MAX + 20.0   # photons farther than this are dropped
 ROULETTE = 1e-3
 MIN_COUNT = 40         # a cell with fewer collisions takes its neighbours' too (``_fill``)
 FLOOR = 1e-30
-NODES = 12             # quadrature points along a camera ray
+NODES = (6, 6, 6)      # quadrature points along a camera ray: before, inside and after the cone
 REACH = 30.0           # optical depth past the closest approach where a ray to the sky stops counting
 
 
@@ -287,32 +288,51 @@ def _asinh(m, x):
     return m.select(m.less(x, 0.0), -1.0 * value, value)
 
 
-def airlight(m, spec, beta, d_vp, px, py, pz, dx, dy, dz, nodes=NODES):
-    """The multiply scattered glow of a spot along a camera ray's first ``d_vp`` m (model.FAR: to the sky),
-    per unit on-axis intensity and albedo, 1/m^2: beta^3 int e^{-beta t} J dt by NODES-point Gauss-Legendre
-    in v, t = a + h sinh v (module docstring).  (px, py, pz, dx, dy, dz): the ray in the light's space
-    (``spot.light_space_ray``; any uniform scale), the cone's axis its -Z."""
-    inv = 1.0 / m.maximum(m.sqrt(dx * dx + dy * dy + dz * dz), 1e-30)
-    ox, oy, oz, ex, ey, ez = px * inv, py * inv, pz * inv, dx * inv, dy * inv, dz * inv
-    along = -1.0 * (ox * ex + oy * ey + oz * ez)                 # to the closest approach, m
-    h = m.maximum(m.sqrt(ox * ox + oy * oy + oz * oz - along * along), 1e-6)
-    t_end = m.minimum(d_vp, m.maximum(along, 0.0) + REACH / m.maximum(beta, 1e-12))
-    v0 = _asinh(m, -1.0 * along / h)
-    v1 = _asinh(m, (t_end - along) / h)
+def _piece(m, spec, beta, ray, along, h, t0, t1, nodes):
+    """beta^2 int_{t0}^{t1} e^{-beta t} J T dv, t = a + h sinh v (``airlight``), by ``nodes``-point Gauss-Legendre."""
+    ox, oy, oz, ex, ey, ez, side = ray
+    v0 = _asinh(m, (t0 - along) / h)
+    v1 = _asinh(m, (t1 - along) / h)
     half = 0.5 * (v1 - v0)
     mid = 0.5 * (v1 + v0)
-    side = ex * oy - ey * ox      # omega . (e_r x axis) r: the same along the ray
     x_nodes, w_nodes = _gauss_legendre(nodes)
     total = 0.0
     for xi, wi in zip(x_nodes, w_nodes):
         up = m.exp(mid + float(xi) * half)
         down = 1.0 / up
-        cosh = 0.5 * (up + down)
         t = along + h * (0.5 * (up - down))
-        r = h * cosh
+        r = h * (0.5 * (up + down))
         cos_psi = -1.0 * (oz + t * ez) / r
         cos_theta = (along - t) / r                               # omega = -e against e_r = q / r
         phi = m.atan2(m.abs(side), cos_theta * cos_psi * r - ez * r)
         jt = source_times_t(m, spec, beta * r, cos_psi, cos_theta, phi)
         total = total + float(wi) * m.exp(-1.0 * beta * t) * jt
     return beta * beta * half * total
+
+
+def airlight(m, spec, beta, d_vp, px, py, pz, dx, dy, dz, cos_half, nodes=NODES):
+    """The multiply scattered glow of a spot along a camera ray's first ``d_vp`` m (model.FAR: to the sky),
+    per unit on-axis intensity and albedo, 1/m^2: beta^3 int e^{-beta t} J dt in v, t = a + h sinh v
+    (module docstring).  (px, py, pz, dx, dy, dz): the ray in the light's space (``spot.light_space_ray``;
+    any uniform scale), the cone's axis its -Z; ``cos_half`` = cos(spot size / 2).  Near the lamp J drops
+    by decades across the cone's edge, so the ray is cut where it crosses the edge (``spot.cone_interval``;
+    for a cone wider than a hemisphere, the complement's; a ray that misses it at four closest-approach
+    distances h about it) and each piece takes its share of ``nodes`` Gauss-Legendre points (NODES: before,
+    inside, after)."""
+    inv = 1.0 / m.maximum(m.sqrt(dx * dx + dy * dy + dz * dz), 1e-30)
+    ox, oy, oz, ex, ey, ez = px * inv, py * inv, pz * inv, dx * inv, dy * inv, dz * inv
+    along = -1.0 * (ox * ex + oy * ey + oz * ez)                 # to the closest approach, m
+    h = m.maximum(m.sqrt(ox * ox + oy * oy + oz * oz - along * along), 1e-6)
+    t_end = m.minimum(d_vp, m.maximum(along, 0.0) + REACH / m.maximum(beta, 1e-12))
+    wide = m.less(cos_half, 0.0)
+    flip = 1.0 - 2.0 * wide
+    lo, hi = spot.cone_interval(m, (ox, oy, flip * oz), (ex, ey, flip * ez), m.abs(cos_half), t_end)
+    # a ray that misses the cone: its middle piece the stretch about the closest approach instead
+    miss = 1.0 - m.less(lo, hi)
+    lo = m.select(miss, m.maximum(along - 2.0 * h, 0.0), lo)
+    hi = m.select(miss, m.maximum(along + 2.0 * h, 0.0), hi)
+    lo, hi = m.minimum(lo, t_end), m.minimum(hi, t_end)
+    ray = (ox, oy, oz, ex, ey, ez, ex * oy - ey * ox)   # the last: omega . (e_r x axis) r, the same along the ray
+    before, inside, after = nodes
+    return (_piece(m, spec, beta, ray, along, h, 0.0, lo, before) + _piece(m, spec, beta, ray, along, h, lo, hi, inside)
+            + _piece(m, spec, beta, ray, along, h, hi, t_end, after))
