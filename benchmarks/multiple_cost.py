@@ -2,10 +2,12 @@
 off (single scattering), same scene, same method, same process, warm renders (the table baked and cached).
 
     .venv/bin/python benchmarks/multiple_cost.py [--lights 4,16] [--methods compositor,nodes] [--repeats 2]
+                                                 [--spots]
 
 The scene is shafts_cost.py's hall of columns (N point lamps on a grid), Cycles CPU, 640x360, 32 spp, fog of
-density 0.15/m, g 0.85, albedo 0.9, shafts off (they are measured on their own).  Writes
-benchmarks/out/multiple_cost.csv and .png.  Figures: docs/measurements/2026-11-27-multiple-scattering.md.
+density 0.15/m, g 0.85, albedo 0.9, shafts off (they are measured on their own); ``--spots``: the lamps are
+spot lights pointing down (60 degrees, blend 0.15: the compositor gives them their multiply scattered glow).
+Writes benchmarks/out/multiple_cost.csv and .png (multiple_cost_spots.* with ``--spots``).  Figures: docs/measurements/2026-11-27-multiple-scattering.md.
 """
 import argparse
 import json
@@ -30,6 +32,12 @@ def worker(spec):
     from fog_addon.precompute.spec import FogSpec
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = hall(bpy.context.scene, spec["lights"])
+    if spec.get("spots"):
+        import math
+        for o in scene.objects:
+            if o.type == "LIGHT":
+                o.data.type = "SPOT"
+                o.data.spot_size, o.data.spot_blend = math.radians(60.0), 0.15
     scene.render.engine = "CYCLES"
     measure.set_resolution(scene, 640, 360)
     measure.set_samples(scene, 32)
@@ -41,7 +49,7 @@ def worker(spec):
         bpy.ops.render.render()
         return time.perf_counter() - t, time.process_time() - c
 
-    res = {"lights": spec["lights"], "method": spec["method"]}
+    res = {"lights": spec["lights"], "method": spec["method"], "spots": bool(spec.get("spots"))}
     for ms in (False, True):
         fog = FogSpec(density=DENSITY, anisotropy=G, albedo=(ALBEDO,) * 3, method=spec["method"], shafts=False,
                       multiple_scattering=ms)
@@ -64,6 +72,7 @@ def main():
     ap.add_argument("--lights", default="4,16")
     ap.add_argument("--methods", default="compositor,nodes")
     ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--spots", action="store_true")
     ap.add_argument("--worker")
     args = ap.parse_args()
     if args.worker:
@@ -73,11 +82,13 @@ def main():
     rows = []
     for method in args.methods.split(","):
         for n in (int(x) for x in args.lights.split(",")):
-            row = worker_result.run(__file__, {"lights": n, "method": method, "repeats": args.repeats})
+            row = worker_result.run(__file__, {"lights": n, "method": method, "repeats": args.repeats,
+                                               "spots": args.spots})
             if row is not None:
                 print(row, flush=True)
                 rows.append(row)
-    csv_rows.write(OUT / "multiple_cost.csv", rows)
+    stem = "multiple_cost_spots" if args.spots else "multiple_cost"
+    csv_rows.write(OUT / f"{stem}.csv", rows)
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -87,11 +98,11 @@ def main():
         ax.plot(*zip(*pts), "o-", label=method)
     ax.axhline(1.3, color="grey", ls="--", label="goal 1.3x")
     ax.set_xscale("log")
-    ax.set_xlabel("point lamps")
+    ax.set_xlabel("spot lights" if args.spots else "point lamps")
     ax.set_ylabel("render with Dense Fog / without (CPU)")
     ax.legend()
     fig.tight_layout()
-    fig.savefig(OUT / "multiple_cost.png", dpi=90)
+    fig.savefig(OUT / f"{stem}.png", dpi=90)
 
 
 if __name__ == "__main__":

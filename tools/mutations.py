@@ -222,6 +222,18 @@ MUTATIONS = [
              "    weight = (cp * sp * (0.5 * math.pi / n_polar)",
              "    weight = (sp * (0.5 * math.pi / n_polar)",
              ("tests/test_multiple.py::test_irradiance_of_the_single_scattering_field_is_sun_g0",)),
+    Mutation("spot_multiple_azimuth", "spot multiple scattering: the source function read at one azimuth about "
+             "the lamp's direction (a beam's scattered light does not depend on which side of it the camera is)",
+             "fog_addon/precompute/spot_multiple.py",
+             "    slot = phi * ((PHI_NODES - 1.0) / math.pi)\n",
+             "    slot = 0.0 * phi\n",
+             ("tests/test_spot_multiple.py::test_glow_against_64_bounces",)),
+    Mutation("spot_multiple_first_collision", "spot multiple scattering: the first collision drawn log-uniformly "
+             "without its weight e^-s s ln(hi/lo) (the photons' first scattering as if it were exponential)",
+             "fog_addon/precompute/spot_multiple.py",
+             "                w = w * np.exp(-s) * s * math.log(hi / lo)\n",
+             "                w = w\n",
+             ("tests/test_spot_multiple.py::test_a_cone_as_wide_as_the_sphere_is_the_point_light",)),
     Mutation("weather_source_intensity", "weather: a pixel's intensity without its depth squared (L Omega z^2 is "
              "the intensity of a patch filling a pixel at depth z)",
              "fog_addon/weather.py",
