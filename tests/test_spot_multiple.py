@@ -113,6 +113,27 @@ def test_a_cone_as_wide_as_the_sphere_is_the_point_light():
     assert np.all(np.abs(ratio - 1.0) < 0.3), (ratio.min(), ratio.max())
 
 
+def test_a_cone_as_wide_as_the_sphere_lights_surfaces_as_the_point_light():
+    """The multiply scattered light on surfaces of a 360-degree spot's table against the point light's
+    irradiance table (baked from sphere crossings, ``multiple.irradiance_of_field``), at random points
+    (optical distance 0.3-6) and normals: the median within 6 %, 90 % of them within 45 % (the 40 000-photon
+    bake's noise)."""
+    m, spec = _ops(-1.0, 0.0, photons=40_000)
+    point = multiple.table_spec(G, ALBEDO)
+    m.tables[point.name] = bakers.table_array(point, G)
+    rng = np.random.default_rng(1)
+    n, beta = 400, 0.25
+    d = np.exp(rng.uniform(math.log(0.3), math.log(6.0), n)) / beta
+    normal, axis = (v / np.linalg.norm(v, axis=1)[:, None] for v in rng.normal(size=(2, n, 3)))
+    cos_n, c_axis, cos_n_axis = -normal[:, 2], axis[:, 2], np.einsum("ij,ij->i", normal, axis)   # e_r = +z
+    ours = sm.scatter(m, spec, beta, d, cos_n, c_axis, cos_n_axis)
+    theirs = multiple.multiple_scatter(m, point, beta, d, cos_n, 0.0)
+    lit = theirs > np.percentile(theirs, 5)   # (surfaces turned away from nearly all of the field)
+    ratio = ours[lit] / theirs[lit]
+    assert abs(np.median(ratio) - 1.0) < 0.06, np.median(ratio)
+    assert np.all(np.abs(np.percentile(ratio, [5, 95]) - 1.0) < 0.45), np.percentile(ratio, [5, 95])
+
+
 def test_segments():
     """A ray's glow grows with its length from 0 (nothing) to the sky's."""
     m, spec = _ops()
@@ -148,6 +169,7 @@ def test_compositor_spots_take_it():
     cone = (COS_HALF, 0.15)
     comp = rungs.choose("compositor", 0, G, spot=True, multiple_albedo=ALBEDO, cone=cone)
     assert any(bakers.is_spot_multiple(t) for t in rungs.tables_of(comp))
+    assert any(bakers.is_spot_multiple(t) for t in comp.scatter.tables)
     for models in (rungs.choose("nodes", 0, G, spot=True, multiple_albedo=ALBEDO, cone=cone),
                    rungs.choose("compositor", 0, G, spot=True, multiple_albedo=None, cone=cone),
                    rungs.choose("compositor", 0, G, spot=True, multiple_albedo=ALBEDO, cone=cone, area=True),

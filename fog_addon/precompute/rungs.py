@@ -375,11 +375,21 @@ def _spot_pair_multiple(pair, spec, m, beta, d_sv, along, h, d_vp, px, py, pz, d
             sky + spot_multiple.airlight(m, spec, beta, model.FAR, *ray, cos_half))
 
 
-def spot_multiple_rungs(air, background, g, albedo, cone):
-    """(airlight, background) rungs of a spot light with its multiply scattered glow (``spot_multiple``: the
-    table of anisotropy ``g``, grey albedo ``albedo`` and ``cone`` = (cos_half, blend)) added to the spot rungs
-    ``air`` and ``background``.  The compositor and numpy run them: a ray's quadrature in every material would
-    cost the node groups far more."""
+def _spot_scatter_multiple(scatter, spec, m, beta, d_sp, cos_n, cos_r, level, c_axis, cos_half, blend, cos_n_axis,
+                           cos_r_axis):
+    """A spot's (diffuse, glossy) fog light on a surface (``scatter``) plus the multiply scattered light: the
+    irradiance over pi of a surface facing the normal, and for the glossy lobe facing the mirrored view vector
+    (the field is broad: its radiance from a direction is about the irradiance facing it over pi)."""
+    diffuse, glossy = scatter(m, beta, d_sp, cos_n, cos_r, level, c_axis, cos_half, blend, cos_n_axis, cos_r_axis)
+    return (diffuse + spot_multiple.scatter(m, spec, beta, d_sp, cos_n, c_axis, cos_n_axis),
+            glossy + spot_multiple.scatter(m, spec, beta, d_sp, cos_r, c_axis, cos_r_axis))
+
+
+def spot_multiple_rungs(air, background, scatter, g, albedo, cone):
+    """(airlight, background, scatter) rungs of a spot light with its multiply scattered light
+    (``spot_multiple``: the table of anisotropy ``g``, grey albedo ``albedo`` and ``cone`` = (cos_half, blend))
+    added to the spot rungs ``air``, ``background`` and ``scatter``.  The compositor and numpy run them: a
+    ray's quadrature in every material would cost the node groups far more."""
     spec = spot_multiple.table_spec(g, albedo, *cone)
     tag = spec.name.split("(", 1)[1].rstrip(")")
     common = dict(backends=air.backends & {"numpy", "nodes"}, max_error=max(air.max_error, SPOT_MULTIPLE_ERROR),
@@ -388,7 +398,12 @@ def spot_multiple_rungs(air, background, g, albedo, cone):
                     kernel=functools.partial(_spot_air_multiple, air.kernel, spec),
                     pair=functools.partial(_spot_pair_multiple, air.pair, spec), **common),
             replace(background, name=f"{background.name} + multiple {tag}", tables=background.tables + (spec,),
-                    kernel=functools.partial(_spot_background_multiple, background.kernel, spec), **common))
+                    kernel=functools.partial(_spot_background_multiple, background.kernel, spec), **common),
+            replace(scatter, name=f"{scatter.name} + multiple {tag}", tables=scatter.tables + (spec,),
+                    kernel=functools.partial(_spot_scatter_multiple, scatter.kernel, spec),
+                    backends=scatter.backends & {"numpy", "nodes"},
+                    max_error=max(scatter.max_error, SPOT_MULTIPLE_ERROR),
+                    evidence="tests/test_spot_multiple.py (a 360-degree cone against the point light's irradiance)"))
 
 
 def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NODES, multiple_albedo=None,
@@ -426,8 +441,8 @@ def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NOD
             **dict(zip(("airlight", "background"), spot_rungs(models.airlight, models.background, g, rim_nodes))))
     if (multiple_albedo is not None and spot and not area and cone is not None and preference == "compositor"
             and step < 2):
-        models = models._replace(**dict(zip(("airlight", "background"), spot_multiple_rungs(
-            models.airlight, models.background, g, multiple_albedo, cone))))
+        models = models._replace(**dict(zip(("airlight", "background", "scatter"), spot_multiple_rungs(
+            models.airlight, models.background, models.scatter, g, multiple_albedo, cone))))
     if multiple_albedo is not None and not spot and not area and preference != "osl" and step < 2:
         models = models._replace(**dict(zip(("airlight", "background", "scatter"), multiple_rungs(
             models.airlight, models.background, models.scatter, g, multiple_albedo))))

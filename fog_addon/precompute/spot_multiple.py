@@ -91,7 +91,7 @@ def table_spec(g, albedo, cos_half, blend):
     half, hundredths = cone_key(cos_half, blend)
     return tables.TableSpec(f"AnalyticFog Spot Multiple (g {float(g):+.3f}, W0 {round(float(albedo), 3):.3f}, "
                             f"cone {half} deg, blend {hundredths / 100:.2f})",
-                            THETA_NODES, ROWS * PSI_NODES, float(g), channels=PHI_NODES)
+                            THETA_NODES, 2 * ROWS * PSI_NODES, float(g), channels=PHI_NODES)
 
 
 def spec_parameters(spec):
@@ -151,14 +151,16 @@ def _out_directions():
 
 
 def collide(g, albedo, cos_half, blend, photons=PHOTONS, seed=SEED, batch=10_000):
-    """(J per cell, collisions per cell): J (ROWS, PSI_NODES, THETA_NODES, PHI_NODES) per unit on-axis
-    intensity at extinction 1, the axis +z (module docstring)."""
+    """(J, collisions, E) per cell: J (ROWS, PSI_NODES, THETA_NODES, PHI_NODES) per unit on-axis intensity at
+    extinction 1, the axis +z (module docstring); E the same shape: the irradiance from orders >= 2 of a surface
+    facing each tabulated direction, per unit albedo (the shading multiplies by it)."""
     t_edges, p_edges = _edges(row_distances(), True), _edges(psi_angles(), False)
     p_edges[0], p_edges[-1] = 0.0, math.pi
     n_cells = ROWS * PSI_NODES
     out = _out_directions()
     mirror = out * np.array([1.0, 1.0, -1.0])
     tally = np.zeros((n_cells, len(out)))
+    flux = np.zeros((n_cells, len(out)))      # the irradiance of surfaces facing each direction, orders >= 2
     count = np.zeros(n_cells)
     rng = np.random.default_rng(seed)
     lo, hi = FIRST_RANGE
@@ -197,6 +199,9 @@ def collide(g, albedo, cos_half, blend, photons=PHOTONS, seed=SEED, batch=10_000
                 order_ = np.argsort(cell, kind="stable")
                 cells, starts = np.unique(cell[order_], return_index=True)
                 tally[cells] += np.add.reduceat(value[order_], starts, axis=0)
+                if order >= 2:   # a surface facing n takes max(0, -w_in . n) of the radiance (per unit albedo)
+                    facing = 0.5 * (np.maximum(-(local @ out.T), 0.0) + np.maximum(-(local @ mirror.T), 0.0))
+                    flux[cells] += np.add.reduceat((facing * (w[sel] / albedo)[:, None])[order_], starts, axis=0)
                 count += np.bincount(cell, minlength=n_cells)
             w = w * albedo
             order += 1
@@ -210,8 +215,10 @@ def collide(g, albedo, cos_half, blend, photons=PHOTONS, seed=SEED, batch=10_000
             p, d, w = p[keep], d[keep], w[keep]
     volume = ((t_edges[1:, None] ** 3 - t_edges[:-1, None] ** 3) / 3.0 * 2.0 * math.pi
               * (np.cos(p_edges[None, :-1]) - np.cos(p_edges[None, 1:])))
-    j = tally.reshape(ROWS, PSI_NODES, -1) * (cone_power(cos_half, blend) / photons) / volume[..., None]
-    return j.reshape(ROWS, PSI_NODES, THETA_NODES, PHI_NODES), count.reshape(ROWS, PSI_NODES)
+    shape = (ROWS, PSI_NODES, THETA_NODES, PHI_NODES)
+    scale = (cone_power(cos_half, blend) / photons) / volume[..., None]
+    return (tally.reshape(ROWS, PSI_NODES, -1) * scale).reshape(shape), count.reshape(ROWS, PSI_NODES), (
+        flux.reshape(ROWS, PSI_NODES, -1) * scale).reshape(shape)
 
 
 def _fill(j, count):
@@ -237,14 +244,15 @@ def _smooth_rows(jt):
 
 
 def bake_table(spec, photons=PHOTONS, seed=SEED):
-    """The float32 image of ``spec`` (``table_spec``): ln(J T), (ROWS * PSI_NODES, THETA_NODES, PHI_NODES),
-    band k (rows k ROWS .. (k + 1) ROWS - 1) the k-th psi."""
+    """The float32 image of ``spec`` (``table_spec``), (2 PSI_NODES ROWS, THETA_NODES, PHI_NODES): band k (rows
+    k ROWS .. (k + 1) ROWS - 1) holds ln(J T) at the k-th psi, band PSI_NODES + k ln E there (``collide``)."""
     g, albedo, cos_half, blend = spec_parameters(spec)
-    j, count = collide(g, albedo, cos_half, blend, photons=photons, seed=seed)
-    jt = _smooth_rows(_fill(j, count))
-    log = np.log(np.maximum(jt, FLOOR))               # (ROWS, PSI, THETA, PHI)
-    return np.ascontiguousarray(log.transpose(1, 0, 2, 3).reshape(PSI_NODES * ROWS, THETA_NODES,
-                                                                  PHI_NODES)).astype(np.float32)
+    j, count, e = collide(g, albedo, cos_half, blend, photons=photons, seed=seed)
+    t = row_distances()[:, None, None, None]
+    blocks = (_smooth_rows(_fill(j, count)), _smooth_rows(_fill(e, count)) / t)   # (ROWS, PSI, THETA, PHI)
+    log = [np.log(np.maximum(b, FLOOR)).transpose(1, 0, 2, 3).reshape(PSI_NODES * ROWS, THETA_NODES, PHI_NODES)
+           for b in blocks]
+    return np.ascontiguousarray(np.concatenate(log)).astype(np.float32)
 
 
 def _row_y(m, optical_distance):
@@ -252,16 +260,16 @@ def _row_y(m, optical_distance):
     return m.clamp01(m.log(m.maximum(optical_distance, T_MIN) * (1.0 / T_MIN)) * (1.0 / math.log(T_MAX / T_MIN)))
 
 
-def source_times_t(m, spec, optical_distance, cos_psi, cos_theta, phi):
-    """J T at optical distance T from the lamp, cos psi from the axis, for the outgoing direction at cos theta
-    from e_r and azimuth phi in [0, pi] (``spec``'s table; linear in psi and phi, bilinear in theta and T
-    within a band, in the logarithm)."""
+def _read(m, spec, block, optical_distance, cos_psi, cos_theta, phi):
+    """exp of ``spec``'s ``block`` (0: ln(J T), 1: ln E) at optical distance T from the lamp, cos psi from the
+    axis, for the direction at cos theta from e_r and azimuth phi in [0, pi] (linear in psi and phi, bilinear
+    in theta and T within a band, in the logarithm)."""
     x = m.sqrt(_acos(m, cos_theta) * (1.0 / math.pi))
     band = _acos(m, cos_psi) * ((PSI_NODES - 1.0) / math.pi)
     b0 = m.minimum(m.floor(band), PSI_NODES - 2.0)
     frac = band - b0
-    height = ROWS * PSI_NODES - 1.0
-    y0 = (b0 * ROWS + _row_y(m, optical_distance) * (ROWS - 1.0)) * (1.0 / height)
+    height = 2.0 * ROWS * PSI_NODES - 1.0
+    y0 = ((b0 + block * PSI_NODES) * ROWS + _row_y(m, optical_distance) * (ROWS - 1.0)) * (1.0 / height)
     y1 = y0 + ROWS / height
     slot = phi * ((PHI_NODES - 1.0) / math.pi)
     value = 0.0
@@ -270,6 +278,26 @@ def source_times_t(m, spec, optical_distance, cos_psi, cos_theta, phi):
         a = m.table(spec, x, y0, channel=k)
         value = value + weight * (a + frac * (m.table(spec, x, y1, channel=k) - a))
     return m.exp(value)
+
+
+def source_times_t(m, spec, optical_distance, cos_psi, cos_theta, phi):
+    """J T at optical distance T from the lamp, cos psi from the axis, for the outgoing direction at cos theta
+    from e_r and azimuth phi in [0, pi] (``spec``'s table)."""
+    return _read(m, spec, 0, optical_distance, cos_psi, cos_theta, phi)
+
+
+def scatter(m, spec, beta, d_sp, cos_n, c_axis, cos_n_axis):
+    """The multiply scattered light a diffuse surface reflects, per unit on-axis intensity and albedo, 1/m^2
+    (the scatter term's convention): beta^2 E / pi, E the irradiance from orders >= 2 of a surface at
+    ``d_sp`` m from the lamp, its point at cos psi = ``c_axis`` from the axis, its normal at ``cos_n`` from
+    the direction to the lamp and ``cos_n_axis`` from the axis (``spot.scatter``'s arguments).  In the frame
+    (e_r, e_psi, e_phi) of the point, n . e_r = -cos_n and n . e_psi sin psi = -(cos_n c_axis + cos_n_axis)."""
+    along_psi = -1.0 * (cos_n * c_axis + cos_n_axis)
+    sin2 = 1.0 - c_axis * c_axis
+    across = m.sqrt(sin2 * (1.0 - cos_n * cos_n) - along_psi * along_psi)
+    phi = m.atan2(across, along_psi)
+    e = _read(m, spec, 1, beta * d_sp, c_axis, -1.0 * cos_n, phi)
+    return beta * beta * (1.0 / math.pi) * e
 
 
 def _gauss_legendre(n):

@@ -60,6 +60,9 @@ def main():
     scene.camera.data.type = "PERSP"
     scene.cycles.samples = 1
     RES["cycles_1_one_sample"] = choice(scene, shafts=False)
+    bpy.data.objects["L000"].data.type = "SPOT"
+    RES["cycles_1_one_sample_dense_spot"] = choice(scene, shafts=False, multiple_scattering=True)
+    bpy.data.objects["L000"].data.type = "POINT"
     scene.cycles.samples = 16
     glass(scene)
     RES["cycles_1_glass"] = choice(scene, shafts=False)
