@@ -2,12 +2,13 @@
 off (single scattering), same scene, same method, same process, warm renders (the table baked and cached).
 
     .venv/bin/python benchmarks/multiple_cost.py [--lights 4,16] [--methods compositor,nodes] [--repeats 2]
-                                                 [--spots]
+                                                 [--kind point|spot|area]
 
 The scene is shafts_cost.py's hall of columns (N point lamps on a grid), Cycles CPU, 640x360, 32 spp, fog of
-density 0.15/m, g 0.85, albedo 0.9, shafts off (they are measured on their own); ``--spots``: the lamps are
-spot lights pointing down (60 degrees, blend 0.15: the compositor gives them their multiply scattered glow).
-Writes benchmarks/out/multiple_cost.csv and .png (multiple_cost_spots.* with ``--spots``).  Figures: docs/measurements/2026-11-27-multiple-scattering.md.
+density 0.15/m, g 0.85, albedo 0.9, shafts off (they are measured on their own); ``--kind spot``: the lamps are
+spot lights pointing down (60 degrees, blend 0.15), ``area``: 0.5 m square area lights facing down (the
+compositor gives both their multiply scattered light).  Writes benchmarks/out/multiple_cost.csv and .png
+(multiple_cost_<kind>.* for the other kinds).  Figures: docs/measurements/2026-11-27-multiple-scattering.md.
 """
 import argparse
 import json
@@ -32,12 +33,16 @@ def worker(spec):
     from fog_addon.precompute.spec import FogSpec
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = hall(bpy.context.scene, spec["lights"])
-    if spec.get("spots"):
+    kind = spec.get("kind", "point")
+    if kind != "point":
         import math
         for o in scene.objects:
             if o.type == "LIGHT":
-                o.data.type = "SPOT"
-                o.data.spot_size, o.data.spot_blend = math.radians(60.0), 0.15
+                o.data.type = kind.upper()
+                if kind == "spot":
+                    o.data.spot_size, o.data.spot_blend = math.radians(60.0), 0.15
+                else:
+                    o.data.shape, o.data.size = "SQUARE", 0.5
     scene.render.engine = "CYCLES"
     measure.set_resolution(scene, 640, 360)
     measure.set_samples(scene, 32)
@@ -49,7 +54,7 @@ def worker(spec):
         bpy.ops.render.render()
         return time.perf_counter() - t, time.process_time() - c
 
-    res = {"lights": spec["lights"], "method": spec["method"], "spots": bool(spec.get("spots"))}
+    res = {"lights": spec["lights"], "method": spec["method"], "kind": kind}
     for ms in (False, True):
         fog = FogSpec(density=DENSITY, anisotropy=G, albedo=(ALBEDO,) * 3, method=spec["method"], shafts=False,
                       multiple_scattering=ms)
@@ -72,7 +77,7 @@ def main():
     ap.add_argument("--lights", default="4,16")
     ap.add_argument("--methods", default="compositor,nodes")
     ap.add_argument("--repeats", type=int, default=2)
-    ap.add_argument("--spots", action="store_true")
+    ap.add_argument("--kind", default="point", choices=("point", "spot", "area"))
     ap.add_argument("--worker")
     args = ap.parse_args()
     if args.worker:
@@ -83,11 +88,11 @@ def main():
     for method in args.methods.split(","):
         for n in (int(x) for x in args.lights.split(",")):
             row = worker_result.run(__file__, {"lights": n, "method": method, "repeats": args.repeats,
-                                               "spots": args.spots})
+                                               "kind": args.kind})
             if row is not None:
                 print(row, flush=True)
                 rows.append(row)
-    stem = "multiple_cost_spots" if args.spots else "multiple_cost"
+    stem = "multiple_cost" if args.kind == "point" else f"multiple_cost_{args.kind}"
     csv_rows.write(OUT / f"{stem}.csv", rows)
     import matplotlib
     matplotlib.use("Agg")
@@ -98,7 +103,7 @@ def main():
         ax.plot(*zip(*pts), "o-", label=method)
     ax.axhline(1.3, color="grey", ls="--", label="goal 1.3x")
     ax.set_xscale("log")
-    ax.set_xlabel("spot lights" if args.spots else "point lamps")
+    ax.set_xlabel(f"{args.kind} lights")
     ax.set_ylabel("render with Dense Fog / without (CPU)")
     ax.legend()
     fig.tight_layout()

@@ -150,34 +150,26 @@ DENSE_T = 1.0   # optical distance camera to light from which the multiply scatt
 #                (docs/measurements/2026-11-27-apsf.md: it outweighs the single a few degrees out from T ~ 2)
 
 
-def multiple_notes(lights, multiple, method_name, is_spot, optical_distance=None, is_area=None):
-    """Notes on the multiply scattered light (Dense Fog): what it leaves out with it on (area lights; spot
-    lights with a method other than the compositor; the OSL method); with it off, the lights seen through dense
-    fog (``optical_distance(light)``: beta times the camera's distance to it, at least DENSE_T), whose wide halo
-    is then missing.  ``is_spot``: spot or area light; ``is_area``: area light (None: none is)."""
-    is_area = is_area or (lambda o: False)
+def multiple_notes(lights, multiple, method_name, is_spot, optical_distance=None):
+    """Notes on the multiply scattered light (Dense Fog): what it leaves out with it on (spot and area lights
+    with a method other than the compositor; the OSL method); with it off, the lights seen through dense fog
+    (``optical_distance(light)``: beta times the camera's distance to it, at least DENSE_T), whose wide halo is
+    then missing.  ``is_spot``: a spot or an area light."""
     if not multiple:
         dense = [o.name for o in lights if optical_distance is not None and optical_distance(o) >= DENSE_T]
         if not dense:
             return []
         return [f"the fog is dense around {len(dense)} light(s) ({_names(dense)}; optical distance up to "
                 f"{max(optical_distance(o) for o in lights):.1f} from the camera) and multiple scattering is "
-                "off: their glow lacks its wide halo; turn on Dense Fog"
-                + (" (it models point and spot lights)" if any(is_area(o) for o in lights if o.name in dense)
-                   else "")]
+                "off: their glow lacks its wide halo; turn on Dense Fog"]
     if method_name == "osl":
         return ["multiple scattering is not modelled by Method OSL (its glow is quadrature, the dense fog's a "
                 "table): use Node Groups, Compositor or Auto"]
-    areas = [o.name for o in lights if is_area(o)]
-    spots = [o.name for o in lights if is_spot(o) and not is_area(o)] if method_name != "compositor" else []
-    notes = []
-    if spots:
-        notes.append(f"the multiply scattered glow of {len(spots)} spot light(s) ({_names(spots)}) is modelled by "
-                     "Method Compositor (or Auto): with this method their glow is single scattering")
-    if areas:
-        notes.append(f"multiple scattering is not modelled for area lights: the glow of {len(areas)} area "
-                     f"light(s) ({_names(areas)}) is single scattering")
-    return notes
+    shaped = [o.name for o in lights if is_spot(o)] if method_name != "compositor" else []
+    if shaped:
+        return [f"the multiply scattered light of {len(shaped)} spot or area light(s) ({_names(shaped)}) is "
+                "modelled by Method Compositor (or Auto): with this method it is single scattering"]
+    return []
 
 
 def glow_notes(glowing, method_name, engine="CYCLES"):

@@ -31,8 +31,17 @@ part of each that the reference's own noise accounts for, and the mean ratio our
 and the wall regions (each a band of whole pixel rows, MARGIN_PX rows away from the ground-wall edge, lamp
 pixels left out; fireflies clipped as above).
 
+The spot variant (``spot=True`` on :func:`build`, :func:`blend_path`, :func:`reference_name`,
+:func:`render_reference`, :func:`reference_seeds`, :func:`render_ours`, :func:`geometry`; ``--spot`` on the
+command line): the same scene with the lamp a SPOT of the same power at the same place, pointing straight down
+(rotation 0: Blender's spot axis is its local -Z), cone SPOT_SIZE_DEG = 90 degrees (full angle) and blend
+SPOT_BLEND = 0.15, radius 0.  Within the cone's core it shines as the point lamp does; the camera, 86 degrees
+off the axis, does not see the lamp itself.  Its files carry SPOT_TAG after NAME; the point lamp's names are
+unchanged.  :func:`compare` needs no flag: the camera and so :func:`geometry` are the same.
+Measurements: docs/measurements/2026-11-28-dense-spot-surface-references.md.
+
 No bpy at import: every Blender job runs in a fresh process through ``render_harness``.  As a script
-(``python -m fog_scenes.dense_surfaces OUT.blend``) it builds the scene's .blend.
+(``python -m fog_scenes.dense_surfaces OUT.blend [--spot]``) it builds the scene's .blend.
 """
 import argparse
 import json
@@ -61,15 +70,23 @@ LAMP_HALF_PX = 1.5             # pixels of the lamp's image left out: centres wi
 BLOCK_PX = 4                   # block means for a whole-picture RMSE that survives the references' noise
 MARGIN_PX = 1                  # rows next to the ground-wall edge left out of both regions
 NAME = "dense_surfaces"
+SPOT_SIZE_DEG = 90.0           # the spot variant: full cone angle (Blender's spot_size), axis straight down
+SPOT_BLEND = 0.15
+SPOT_TAG = "_spot90"           # in the spot variant's file names, after NAME
 
-# The cached references (tests/references): (volume bounces, samples per render, seeds).
+# The cached references (tests/references): (volume bounces, samples per render, seeds); the same for the
+# spot variant (spot=True).
 REFERENCE_CASES = [(64, 2048, 4), (0, 2048, 2)]
+
+
+def _tag(spot):
+    return SPOT_TAG if spot else ""
 
 
 # -- the scene (bpy, in a Blender process) ----------------------------------------------------------------------
 
-def build(scene, resolution=RESOLUTION, power=LAMP_POWER_W):
-    """Fill ``scene`` (see the module doc); needs bpy."""
+def build(scene, resolution=RESOLUTION, power=LAMP_POWER_W, spot=False):
+    """Fill ``scene`` (see the module doc); ``spot``: the lamp is the spot variant's.  Needs bpy."""
     from demo_scenes import add_box_between, add_camera, add_plane, add_point_light, material, render_settings, \
         set_world
     render_settings(scene, resolution=resolution)
@@ -80,6 +97,22 @@ def build(scene, resolution=RESOLUTION, power=LAMP_POWER_W):
     add_box_between(scene, "Wall", -40.0, 40.0, WALL_Y, WALL_Y + 0.2, -0.5, WALL_HEIGHT, grey)
     lamp = add_point_light(scene, "Lamp", (0.0, 0.0, LAMP_HEIGHT), float(power))
     lamp.data.shadow_soft_size = 0.0
+    if spot:
+        import math
+        import bpy
+        old = lamp.data
+        light = bpy.data.lights.new("Lamp", 'SPOT')
+        light.energy = old.energy
+        light.shadow_soft_size = 0.0
+        light.use_shadow = True
+        light.color = old.color
+        light.spot_size = math.radians(SPOT_SIZE_DEG)
+        light.spot_blend = SPOT_BLEND
+        lamp.data = light
+        bpy.data.lights.remove(old)
+        light.name = "Lamp"
+        lamp.rotation_mode = 'XYZ'
+        lamp.rotation_euler = (0.0, 0.0, 0.0)      # axis = local -Z = straight down
     cam = add_camera(scene, (0.0, -CAMERA_DISTANCE, CAMERA_HEIGHT), (0.0, 0.0, LAMP_HEIGHT), lens=LENS_MM)
     cam.data.sensor_width = 36.0
     cam.data.clip_start = 0.001
@@ -88,13 +121,14 @@ def build(scene, resolution=RESOLUTION, power=LAMP_POWER_W):
     return scene
 
 
-def blend_path(workdir=None):
-    """Path of the scene's .blend in ``workdir`` (default: the harness's scratch folder), built if missing."""
+def blend_path(workdir=None, spot=False):
+    """Path of the scene's .blend in ``workdir`` (default: the harness's scratch folder), built if missing;
+    ``spot``: the spot variant's."""
     workdir = pathlib.Path(workdir) if workdir else pathlib.Path(h._env()["TMPDIR"]) / "fog_dense_surfaces"
     workdir.mkdir(parents=True, exist_ok=True)
-    blend = workdir / f"{NAME}_{RESOLUTION[0]}x{RESOLUTION[1]}.blend"
+    blend = workdir / f"{NAME}{_tag(spot)}_{RESOLUTION[0]}x{RESOLUTION[1]}.blend"
     if not blend.is_file():
-        h.run(["-m", "fog_scenes.dense_surfaces", blend])
+        h.run(["-m", "fog_scenes.dense_surfaces", blend] + (["--spot"] if spot else []))
     return blend
 
 
@@ -128,28 +162,32 @@ print("RENDER_SECONDS %.2f" % (time.perf_counter() - t0))
 
 
 def reference_name(volume_bounces, samples, seeds, density=DENSITY, anisotropy=ANISOTROPY, albedo=ALBEDO,
-                   resolution=RESOLUTION):
-    """File name of a cached reference, its parameters in it."""
+                   resolution=RESOLUTION, spot=False):
+    """File name of a cached reference, its parameters in it (``spot``: SPOT_TAG after NAME)."""
     w, hh = resolution
-    return (f"{NAME}_beta{float(density):g}_g{float(anisotropy):g}_a{float(albedo):g}_vb{int(volume_bounces)}"
-            f"_{w}x{hh}_{int(samples)}spp_x{int(seeds)}.exr")
+    return (f"{NAME}{_tag(spot)}_beta{float(density):g}_g{float(anisotropy):g}_a{float(albedo):g}"
+            f"_vb{int(volume_bounces)}_{w}x{hh}_{int(samples)}spp_x{int(seeds)}.exr")
 
 
 def render_reference(volume_bounces, samples, seeds, density=DENSITY, anisotropy=ANISOTROPY, albedo=ALBEDO,
-                     regen=False, directory=None, times=None, timeout=900):
+                     regen=False, directory=None, times=None, timeout=900, spot=False, log=None):
     """Path of the cached Cycles reference (see the module doc), rendering missing seeds (kept beside it as
-    ``dense.seed_path``).  ``times``: a list to which each new render's seconds are appended."""
+    ``dense.seed_path``).  ``times``: a list to which each new render's seconds are appended; ``log``: one to
+    which each new render's stdout + stderr is appended.  ``spot``: the spot variant's."""
     directory = pathlib.Path(directory) if directory else h.REFERENCES
-    path = directory / reference_name(volume_bounces, samples, seeds, density, anisotropy, albedo)
+    path = directory / reference_name(volume_bounces, samples, seeds, density, anisotropy, albedo, spot=spot)
     if path.is_file() and not regen:
         return path
-    blend = blend_path()
+    blend = blend_path(spot=spot)
 
     def render_seed(seed, out):
         args = dict(blend=str(blend), out=str(out), density=float(density), anisotropy=float(anisotropy),
                     albedo=float(albedo), volume_bounces=int(volume_bounces), samples=int(samples), seed=seed,
                     resolution=list(RESOLUTION))
-        return h.render_seconds(h.run(["-c", _REFERENCE_CODE, json.dumps(args)], timeout=timeout))
+        proc = h.run(["-c", _REFERENCE_CODE, json.dumps(args)], timeout=timeout)
+        if log is not None:
+            log.append(proc.stdout + "\n" + proc.stderr)
+        return h.render_seconds(proc)
 
     return h.mean_of_seeds(path, render_seed, seeds, regen, times)
 
@@ -162,21 +200,22 @@ def reference_seeds(volume_bounces, samples, seeds, regen=False, **kw):
 
 
 def render_ours(out, multiple_scattering="on", method="compositor", density=DENSITY, anisotropy=ANISOTROPY,
-                albedo=ALBEDO, log=None):
+                albedo=ALBEDO, log=None, spot=False):
     """Our render of the scene (``python -m fog_addon render``, Cycles, pixel centres, no cast shadows, no
-    interreflection, no light shafts: the references' conventions); returns the path of ``out``."""
+    interreflection, no light shafts: the references' conventions); returns the path of ``out``.  ``spot``: the
+    spot variant's scene."""
     args = ("--anisotropy", repr(float(anisotropy)), "--color", ",".join([repr(float(albedo))] * 3),
             "--multiple-scattering", multiple_scattering, "--shafts", "off")
     return h.render_test(NAME, density, out, engine="cycles", method=method, resolution=RESOLUTION,
-                         blend=blend_path(), extra=args, log=log)
+                         blend=blend_path(spot=spot), extra=args, log=log)
 
 
 # -- regions and metrics (numpy) ------------------------------------------------------------------------------
 
-def geometry(blend=None):
+def geometry(blend=None, spot=False):
     """{'lamp': (x, y) px of the lamp's image, 'edge_y': y px (from the top) of the ground-wall edge} by Blender's
-    projection of the scene's camera."""
-    blend = blend or blend_path()
+    projection of the scene's camera (the same in the spot variant)."""
+    blend = blend or blend_path(spot=spot)
     pts = [(0.0, 0.0, LAMP_HEIGHT), (-1.0, WALL_Y, 0.0), (1.0, WALL_Y, 0.0)]
     (lx, ly), (_, e0), (_, e1) = dense.project_from_blend(blend, pts, RESOLUTION)
     return {"lamp": (lx, ly), "edge_y": 0.5 * (e0 + e1)}
@@ -280,10 +319,11 @@ def reference_noise(seed_images, geom, clip=True, blocks=False):
 def main(argv=None):
     p = argparse.ArgumentParser(description="build the surfaces-in-dense-fog scene's .blend")
     p.add_argument("out")
+    p.add_argument("--spot", action="store_true", help="the spot variant (a 90-degree spot pointing down)")
     a = p.parse_args(argv)
     import bpy
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    build(bpy.context.scene)
+    build(bpy.context.scene, spot=a.spot)
     h.save_blend(a.out)
     return 0
 

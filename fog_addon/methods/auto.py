@@ -27,7 +27,7 @@ What the scene needs comes first:
 * a fog layer with lights: the compositor, which alone ends their glows at the layer's top;
 * glowing objects the camera sees (emissive materials, ``compositor.glowing_objects``): the compositor, which
   alone gives them a glow;
-* spot lights with Dense Fog: the compositor, which alone gives them their multiply scattered glow
+* spot or area lights with Dense Fog: the compositor, which alone gives them their multiply scattered light
   (``rungs.spot_multiple_rungs``);
 * surfaces the compositor's one point per pixel would get wrong (transparent, glass or refracting
   materials on objects the camera sees, depth of field, motion blur): the node groups, unless their
@@ -145,10 +145,10 @@ def choose(scene, spec, lights, materials):
     if glowing:
         return "compositor", (f"glowing objects ({caveats._names([o.name for o in glowing])}): only the "
                               f"compositor gives them a glow{caveat}; {costs}")
-    spots = [o.name for o in lights if o.data.type == "SPOT"] if spec.multiple_scattering else []
-    if spots:
-        return "compositor", (f"Dense Fog with spot lights ({caveats._names(spots)}): only the compositor gives them "
-                              f"their multiply scattered glow{caveat}; {costs}")
+    shaped = [o.name for o in lights if o.data.type in ("SPOT", "AREA")] if spec.multiple_scattering else []
+    if shaped:
+        return "compositor", (f"Dense Fog with spot or area lights ({caveats._names(shaped)}): only the compositor "
+                              f"gives them their multiply scattered light{caveat}; {costs}")
     if soft and cost["nodes"] <= SOFT_COST_LIMIT:
         return "nodes", f"{' and '.join(soft)}: the compositor sees one surface point per pixel; {costs}"
     if cost["compositor"] < cost["nodes"]:

@@ -90,8 +90,9 @@ HALF_FROM = 144   # px: a picture whose shorter side has this many pixels or mor
 #                   its resolution (``_halved``: twice the render tests' 72, whose pattern it then matches in the scene)
 QUARTER_FROM = 2 * HALF_FROM   # px: from this many, at a quarter (never coarser: 72 samples or more a side)
 UPSAMPLE_EDGE = 0.1   # ``_upsampled``'s threshold on log distance: a coarse sample of another surface is not taken
+HALO_STEP = "Halo Step"   # px between the samples of the multiply scattered halos (``build_bundle``): 1, 2 or 4
 SHARED = (GLOW_SHARED + tuple((SURFACE + name, kind) for name, kind in SURFACE_SHARED[2:])
-          + ((SURFACE_OFFSET, F),) + SHAFT_SHARED[3:] + HALF_SHARED)   # a bundle's inputs
+          + ((SURFACE_OFFSET, F),) + SHAFT_SHARED[3:] + HALF_SHARED + ((HALO_STEP, F),))   # a bundle's inputs
 # the quantities the compositor sums per pixel (``rungs.COMPOSITOR_OUTPUTS``, by their compositor sockets): a light's
 # glows (rungs.GLOW) in its glow group, over the picture or the light's window; the light its surface reflects
 # (the rest) in its scatter group, over the surfaces' window
@@ -404,6 +405,16 @@ def _halved(m, scene, position, normal, pixel_x, pixel_y, camera, picture_xy):
             HALF + "Shaft Offset": shafts.offset(m, m.floor(px * factor), m.floor(py * factor))}
 
 
+def _coarse_step(m, scene):
+    """The step (px) between coarse samples: 1 below HALF_FROM pixels on the picture's shorter side, 2 from it, 4
+    from QUARTER_FROM (a driver on the render's size, so a resolution changed later is followed)."""
+    size = "min(rx,ry)*p/100"
+    variables = [("rx", scene, "render.resolution_x"), ("ry", scene, "render.resolution_y"),
+                 ("p", scene, "render.resolution_percentage")]
+    return _value(m, "Halo Step", f"1+min(floor({size}/{HALF_FROM}),1)+2*min(floor({size}/{QUARTER_FROM}),1)",
+                  variables)
+
+
 def _half_view(m, per_pixel, step):
     """A shaft group's per-pixel inputs (Direction, Shaft Length, Shaft Offset: images, ``per_pixel``'s of
     HALF_SHAFT) at 1 / ``step`` of their resolution (``_halved``), and the half-resolution ray lengths."""
@@ -446,6 +457,33 @@ def _upsampled(m, value, sample_length, length, step):
         same = m.less(m.abs(near_log - log), UPSAMPLE_EDGE)
         others = _accumulate(m, others, m.scale(_translated(m, up, step * dx, step * dy), same))
     return m.scale(up, own + 1e-3) + m.scale(others, 1.0 - own)
+
+
+def _halo(m, g, models, images, crop, per_pixel, label, position):
+    """(group node, {rungs.SURFACE_POINT: glow to the surface, rungs.SKY: to the sky}) of a light's multiply
+    scattered halo (``rungs.split_halo``'s second models) per unit intensity: its glow group fed the picture's
+    rays at 1 / HALO_STEP of the resolution, brought back by the depth-aware upsampling (``_upsampled``).  The
+    halo varies over many pixels (it is the field of light scattered more than once), so its coarse samples
+    hold it; its quadrature along each ray costs the compositor a sixteenth at a quarter of the resolution."""
+    step = g[HALO_STEP]
+    node = m.node("CompositorNodeGroup", 6)
+    node.node_tree, node.label = build_glow_group(models, images, None), label
+    coarse = {}
+    for socket, kind in GLOW_SHARED:
+        if socket in per_pixel:
+            value = _scaled(m, crop(socket), 1.0 / step)
+            coarse[socket] = value if kind == V else _first(m, value)
+            m.feed(node.inputs[socket], coarse[socket])
+        else:
+            m.feed(node.inputs[socket], g[socket])
+    m.feed(node.inputs["Light"], position)
+    m.feed(node.inputs["Intensity"], m.wrap((1.0, 1.0, 1.0)))
+    outputs = {o.at: m.dot(m.wrap(node.outputs[o.compositor], vector=True), (1.0, 0.0, 0.0)) for o in GLOW_OUTPUTS}
+    packed = m.combine(outputs[rungs.SURFACE_POINT], outputs[rungs.SKY], 1.0)
+    length = _first(m, crop("View Distance"))
+    up = _upsampled_group(m, packed, _first(m, _scaled(m, coarse["View Distance"], step)), length, step)
+    weight = m.maximum(m.dot(up, (0.0, 0.0, 1.0)), 1e-6)
+    return node, {rungs.SURFACE_POINT: m.dot(up, (1.0, 0.0, 0.0)) / weight, rungs.SKY: m.dot(up, (0.0, 1.0, 0.0)) / weight}
 
 
 def _translated(m, value, dx, dy):
@@ -646,15 +684,22 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
             near, far = _full_view(m, [m.wrap(shaft.outputs[s]) for s in ("Share", "Share Far")], half_length,
                                    _first(m, crop("Shaft Length")), g[HALF + "Step"])
             share = {o: near if o.at == rungs.SURFACE_POINT else far for o in GLOW_OUTPUTS}
+        split = rungs.split_halo(mod)
+        halo = None
+        if split is not None:   # the multiply scattered halo at a coarser resolution, added after the shafts' share
+            halo = _halo(m, g, split[1], images, crop, per_pixel, f"Light {k} Halo: {light.name}", position)
         if any(o.computed(mod) for o in GLOW_OUTPUTS):
             glow = m.node("CompositorNodeGroup", 6)
-            glow.node_tree, glow.label = build_glow_group(mod, images, peak), f"Light {k}: {light.name}"
+            glow.node_tree = build_glow_group(mod if split is None else split[0], images, peak)
+            glow.label = f"Light {k}: {light.name}"
             for socket, _ in GLOW_SHARED:
                 m.feed(glow.inputs[socket], crop(socket) if socket in per_pixel else g[socket])
             for o in GLOW_OUTPUTS:
                 v = m.wrap(glow.outputs[o.compositor], vector=True)
                 if shaft is not None:
                     v = m.scale(v, share[o])
+                if halo is not None:
+                    v = v + m.scale(m.wrap(intensity.outputs[0], vector=True), halo[1][o.at])
                 sums[o] = _accumulate(m, sums[o], v if win is None else _uncrop(m, v, win))
             built.append(glow)
         if any(o.computed(mod) for o in SCATTER_OUTPUTS):
@@ -681,7 +726,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
             ng.links.new(intensity.outputs[0], node.inputs["Intensity"])
         if built and groups.SPOT_ROWS[0] in built[0].inputs:   # the cone's drivers once, for both groups
             groups._drive_spot(ng, k, light, built[0])
-            for node in built[1:]:
+            for node in built[1:] + ([halo[0]] if halo is not None else []):
                 for socket, _ in groups._spot_inputs(mod):
                     ng.links.new(built[0].inputs[socket].links[0].from_socket, node.inputs[socket])
     for o, v in sums.items():
@@ -948,6 +993,8 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
                                                                                               (0.0, 1.0, 0.0)))
         shared.update(_halved(m, scene, shared[SURFACE + "Position"], shared[SURFACE + "Normal"], *xy, cam,
                               (px, py)))
+    shared[HALO_STEP] = (_coarse_step(m, scene) if any(rungs.split_halo(mod) is not None for mod in models)
+                         else m.wrap(1.0))
     shared["Shaft Length"] = m.select(m.less(1e-3, cover), d_vp, SKY_LENGTH)
     shared["Shaft Offset"] = shafts.offset(m, px, py)
     sums = {}   # Output -> the sum over the bundles

@@ -479,7 +479,7 @@ def not_modelled(scene, spec, lights, materials, method=None):
              caveats.glass_note(materials, scene.objects),
              caveats.clip_note(scene, getattr(method, "name", method)),
              *caveats.multiple_notes(lights, spec.multiple_scattering, getattr(method, "name", method),
-                                     view.has_shape, _optical_distance(scene, spec), view.is_area),
+                                     view.has_shape, _optical_distance(scene, spec)),
              *caveats.glow_notes(methods.compositor.glowing_objects(scene), getattr(method, "name", method),
                                  scene.render.engine),
              *(f"{name}: {why}" for name, why in sunsky.notes(scene, spec, getattr(method, "name", method),

@@ -58,6 +58,9 @@ class Rung:
     area: bool = False        # an area light's rung (``area_rungs``, DIRECT_AREA; with the spot kernels' signature)
     pair: Callable = None     # an airlight rung's (airlight, background) of one ray at once, sharing their work
     #                           (``spot.airlight_pair``), for a backend that needs both per pixel (the compositor)
+    halo: "Rung" = None       # a glow rung's multiply scattered part alone (``spot_multiple_rungs``), which the
+    #                           compositor evaluates at a coarser resolution: then ``single`` is the rest
+    single: "Rung" = None
 
     def predicted_error(self, *situation):
         """Bound on the relative error this rung makes in any pixel of a situation (camera, light, medium).
@@ -355,50 +358,85 @@ def multiple_rungs(air, background, scatter, g, albedo):
 SPOT_MULTIPLE_ERROR = 0.13   # a spot's glow (single + multiple) against Cycles with 64 bounces: 12.7 % at worst
 
 
-def _spot_air_multiple(air, spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend):
-    """A spot's single-scattering airlight (``air``) plus its multiply scattered glow (``spot_multiple``)."""
-    return air(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend) + spot_multiple.airlight(
-        m, spec, beta, d_vp, px, py, pz, dx, dy, dz, cos_half)
+# The spot kernels' two shape arguments are (cos_half, blend) for a spot and the emitter's half sizes (a, b) for
+# an area light; ``edge`` is the cosine where the ray is cut for the multiply scattered glow (None: a spot's
+# cos_half; an area light's emitting half-space: 0).
+
+def _edge(edge, shape0):
+    return shape0 if edge is None else edge
 
 
-def _spot_background_multiple(background, spec, m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, cos_half, blend):
-    """A spot's single-scattering glow of a ray to the sky plus its multiply scattered glow."""
-    return background(m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, cos_half, blend) + spot_multiple.airlight(
-        m, spec, beta, model.FAR, px, py, pz, dx, dy, dz, cos_half)
+def _spot_air_multiple(air, spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, s0, s1, *, edge=None):
+    """A spot's (or an area light's) single-scattering airlight (``air``) plus its multiply scattered glow
+    (``spot_multiple``)."""
+    return air(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, s0, s1) + spot_multiple.airlight(
+        m, spec, beta, d_vp, px, py, pz, dx, dy, dz, _edge(edge, s0))
 
 
-def _spot_pair_multiple(pair, spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend):
+def _spot_background_multiple(background, spec, m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, s0, s1, *,
+                              edge=None):
+    """A spot's (or an area light's) single-scattering glow of a ray to the sky plus its multiply scattered glow."""
+    return background(m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, s0, s1) + spot_multiple.airlight(
+        m, spec, beta, model.FAR, px, py, pz, dx, dy, dz, _edge(edge, s0))
+
+
+def _spot_pair_multiple(pair, spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, s0, s1, *, edge=None):
     """``pair``'s (to the surface, to the sky) with the multiply scattered glow added to each."""
-    surface, sky = pair(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, cos_half, blend)
+    surface, sky = pair(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, s0, s1)
     ray = (px, py, pz, dx, dy, dz)
-    return (surface + spot_multiple.airlight(m, spec, beta, d_vp, *ray, cos_half),
-            sky + spot_multiple.airlight(m, spec, beta, model.FAR, *ray, cos_half))
+    return (surface + spot_multiple.airlight(m, spec, beta, d_vp, *ray, _edge(edge, s0)),
+            sky + spot_multiple.airlight(m, spec, beta, model.FAR, *ray, _edge(edge, s0)))
 
 
-def _spot_scatter_multiple(scatter, spec, m, beta, d_sp, cos_n, cos_r, level, c_axis, cos_half, blend, cos_n_axis,
+def _halo_air(spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, s0, s1, *, edge=None):
+    """The multiply scattered glow alone of a spot (or an area light) along a ray to a surface."""
+    return spot_multiple.airlight(m, spec, beta, d_vp, px, py, pz, dx, dy, dz, _edge(edge, s0))
+
+
+def _halo_background(spec, m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, s0, s1, *, edge=None):
+    """The multiply scattered glow alone of a spot (or an area light) along a ray to the sky."""
+    return spot_multiple.airlight(m, spec, beta, model.FAR, px, py, pz, dx, dy, dz, _edge(edge, s0))
+
+
+def _halo_pair(spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, s0, s1, *, edge=None):
+    ray = (px, py, pz, dx, dy, dz)
+    return (spot_multiple.airlight(m, spec, beta, d_vp, *ray, _edge(edge, s0)),
+            spot_multiple.airlight(m, spec, beta, model.FAR, *ray, _edge(edge, s0)))
+
+
+def _spot_scatter_multiple(scatter, spec, m, beta, d_sp, cos_n, cos_r, level, c_axis, s0, s1, cos_n_axis,
                            cos_r_axis):
     """A spot's (diffuse, glossy) fog light on a surface (``scatter``) plus the multiply scattered light: the
     irradiance over pi of a surface facing the normal, and for the glossy lobe facing the mirrored view vector
     (the field is broad: its radiance from a direction is about the irradiance facing it over pi)."""
-    diffuse, glossy = scatter(m, beta, d_sp, cos_n, cos_r, level, c_axis, cos_half, blend, cos_n_axis, cos_r_axis)
+    diffuse, glossy = scatter(m, beta, d_sp, cos_n, cos_r, level, c_axis, s0, s1, cos_n_axis, cos_r_axis)
     return (diffuse + spot_multiple.scatter(m, spec, beta, d_sp, cos_n, c_axis, cos_n_axis),
             glossy + spot_multiple.scatter(m, spec, beta, d_sp, cos_r, c_axis, cos_r_axis))
 
 
 def spot_multiple_rungs(air, background, scatter, g, albedo, cone):
     """(airlight, background, scatter) rungs of a spot light with its multiply scattered light
-    (``spot_multiple``: the table of anisotropy ``g``, grey albedo ``albedo`` and ``cone`` = (cos_half, blend))
-    added to the spot rungs ``air``, ``background`` and ``scatter``.  The compositor and numpy run them: a
-    ray's quadrature in every material would cost the node groups far more."""
-    spec = spot_multiple.table_spec(g, albedo, *cone)
+    (``spot_multiple``: the table of anisotropy ``g``, grey albedo ``albedo`` and ``cone`` = (cos_half, blend);
+    ``cone`` None: an area light's, Lambert's cosine about its normal) added to the rungs ``air``,
+    ``background`` and ``scatter``.  The compositor and numpy run them: a ray's quadrature in every material
+    would cost the node groups far more."""
+    spec = (spot_multiple.table_spec(g, albedo, *cone) if cone is not None
+            else spot_multiple.lambert_table_spec(g, albedo))
+    edge = {} if cone is not None else {"edge": 0.0}
     tag = spec.name.split("(", 1)[1].rstrip(")")
     common = dict(backends=air.backends & {"numpy", "nodes"}, max_error=max(air.max_error, SPOT_MULTIPLE_ERROR),
                   evidence="tests/test_spot_multiple.py; docs/measurements/2026-11-28-spot-multiple.md")
+    halo_air = replace(air, name=f"halo {tag}", tables=(spec,), kernel=functools.partial(_halo_air, spec, **edge),
+                       pair=functools.partial(_halo_pair, spec, **edge), **common)
+    halo_background = replace(background, name=f"halo background {tag}", tables=(spec,),
+                              kernel=functools.partial(_halo_background, spec, **edge), **common)
     return (replace(air, name=f"{air.name} + multiple {tag}", tables=air.tables + (spec,),
-                    kernel=functools.partial(_spot_air_multiple, air.kernel, spec),
-                    pair=functools.partial(_spot_pair_multiple, air.pair, spec), **common),
+                    kernel=functools.partial(_spot_air_multiple, air.kernel, spec, **edge),
+                    pair=functools.partial(_spot_pair_multiple, air.pair, spec, **edge), halo=halo_air, single=air,
+                    **common),
             replace(background, name=f"{background.name} + multiple {tag}", tables=background.tables + (spec,),
-                    kernel=functools.partial(_spot_background_multiple, background.kernel, spec), **common),
+                    kernel=functools.partial(_spot_background_multiple, background.kernel, spec, **edge),
+                    halo=halo_background, single=background, **common),
             replace(scatter, name=f"{scatter.name} + multiple {tag}", tables=scatter.tables + (spec,),
                     kernel=functools.partial(_spot_scatter_multiple, scatter.kernel, spec),
                     backends=scatter.backends & {"numpy", "nodes"},
@@ -420,7 +458,8 @@ def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NOD
     error it would make in the camera's view.  Raises ValueError for what no rung
     serves (tables below MIN_TABLE_ANISOTROPY).  ``multiple_albedo``: a grey albedo to add a point light's
     multiply scattered glow with (``multiple_rungs``; the node groups' tables, not OSL's quadrature), or None;
-    a spot light's with the compositor when its ``cone`` = (cos_half, blend) is given (``spot_multiple_rungs``).
+    a spot light's with the compositor when its ``cone`` = (cos_half, blend) is given, an area light's with the
+    compositor (``spot_multiple_rungs``).
     """
     if preference not in PREFERENCES:
         raise ValueError(f"unknown method {preference!r}; use one of {', '.join(PREFERENCES)}")
@@ -439,10 +478,10 @@ def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NOD
     elif spot:
         models = models._replace(direct=DIRECT_SPOT, scatter=spot_scatter_rung(models.scatter, g))._replace(
             **dict(zip(("airlight", "background"), spot_rungs(models.airlight, models.background, g, rim_nodes))))
-    if (multiple_albedo is not None and spot and not area and cone is not None and preference == "compositor"
+    if (multiple_albedo is not None and (area or (spot and cone is not None)) and preference == "compositor"
             and step < 2):
         models = models._replace(**dict(zip(("airlight", "background", "scatter"), spot_multiple_rungs(
-            models.airlight, models.background, models.scatter, g, multiple_albedo, cone))))
+            models.airlight, models.background, models.scatter, g, multiple_albedo, None if area else cone))))
     if multiple_albedo is not None and not spot and not area and preference != "osl" and step < 2:
         models = models._replace(**dict(zip(("airlight", "background", "scatter"), multiple_rungs(
             models.airlight, models.background, models.scatter, g, multiple_albedo))))
@@ -451,6 +490,16 @@ def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NOD
     if step >= 2:
         models = models._replace(airlight=AIRLIGHT_OFF, background=BACKGROUND_OFF)
     return models   # LEFT_OUT: the models of "off"; the builders leave the light out
+
+
+def split_halo(models):
+    """(models with their glows' single scattering alone, models with the multiply scattered glows alone) of a
+    light whose glow rungs carry a halo (``spot_multiple_rungs``), else None.  The compositor evaluates the
+    halo, which varies slowly over the picture, at a coarser resolution (``comp_fog.build_bundle``)."""
+    if models.airlight.halo is None or models.background.halo is None:
+        return None
+    return (models._replace(airlight=models.airlight.single, background=models.background.single),
+            models._replace(airlight=models.airlight.halo, background=models.background.halo))
 
 
 def is_spot(models):

@@ -87,23 +87,39 @@ def cone_key(cos_half, blend):
 
 def table_spec(g, albedo, cos_half, blend):
     """The table of a spot of cone ``cos_half`` = cos(spot size / 2) and ``blend`` in fog of anisotropy g and
-    grey albedo W0: PSI_NODES bands of ROWS rows (T) by THETA_NODES columns, PHI_NODES channels."""
+    grey albedo W0: 2 PSI_NODES bands of ROWS rows (T) by THETA_NODES columns, PHI_NODES channels."""
     half, hundredths = cone_key(cos_half, blend)
+    return _spec(g, albedo, f"cone {half} deg, blend {hundredths / 100:.2f}")
+
+
+def lambert_table_spec(g, albedo):
+    """The table of a one-sided Lambertian emitter about the axis, f(c) = max(0, c) (an area light far from
+    it, per unit normal intensity I_n): as ``table_spec``'s."""
+    return _spec(g, albedo, "lambert")
+
+
+def _spec(g, albedo, profile):
     return tables.TableSpec(f"AnalyticFog Spot Multiple (g {float(g):+.3f}, W0 {round(float(albedo), 3):.3f}, "
-                            f"cone {half} deg, blend {hundredths / 100:.2f})",
-                            THETA_NODES, 2 * ROWS * PSI_NODES, float(g), channels=PHI_NODES)
+                            f"{profile})", THETA_NODES, 2 * ROWS * PSI_NODES, float(g), channels=PHI_NODES)
 
 
 def spec_parameters(spec):
-    """(g, albedo, cos_half, blend) a ``table_spec`` was named for."""
+    """(g, albedo, cos_half, blend) a ``table_spec`` was named for; a ``lambert_table_spec``'s: (g, albedo,
+    0, None)."""
     inside = spec.name.split("(", 1)[1].rstrip(")")
-    fields = dict(part.strip().split(" ", 1) for part in inside.split(","))
+    fields = dict(part.strip().split(" ", 1) if " " in part.strip() else (part.strip(), "")
+                  for part in inside.split(","))
+    if "lambert" in fields:
+        return float(fields["g"]), float(fields["W0"]), 0.0, None
     return (float(fields["g"]), float(fields["W0"]), math.cos(math.radians(float(fields["cone"].split()[0]))),
             float(fields["blend"]))
 
 
 def _falloff(c, cos_half, blend):
-    """Blender's spot factor at cosine c to the axis (``spot.spot_falloff`` on numpy arrays)."""
+    """Blender's spot factor at cosine c to the axis (``spot.spot_falloff`` on numpy arrays); ``blend`` None:
+    Lambert's max(0, c)."""
+    if blend is None:
+        return np.maximum(c, 0.0)
     if blend <= 0.0:
         return (c > cos_half).astype(np.float64)
     x = np.clip((c - cos_half) / ((1.0 - cos_half) * blend), 0.0, 1.0)
@@ -112,12 +128,19 @@ def _falloff(c, cos_half, blend):
 
 def cone_power(cos_half, blend):
     """int f dOmega over the sphere (sr) of Blender's spot factor: 2 pi (1 - cos_half)(1 - blend / 2), the
-    smoothstep's mean over its ramp being 1/2."""
+    smoothstep's mean over its ramp being 1/2; ``blend`` None: Lambert's, pi."""
+    if blend is None:
+        return math.pi
     return 2.0 * math.pi * (1.0 - cos_half) * (1.0 - 0.5 * blend)
 
 
 def _emit(rng, n, cos_half, blend):
     """n unit directions about +z distributed as the spot factor (rejection in the cosine)."""
+    if blend is None:   # Lambert: c = sqrt(u) has density 2c on [0, 1]
+        c = np.sqrt(rng.random(n))
+        phi = rng.uniform(0.0, 2.0 * math.pi, n)
+        s = np.sqrt(np.maximum(1.0 - c * c, 0.0))
+        return np.stack([s * np.cos(phi), s * np.sin(phi), c], axis=1)
     out, have = [], 0
     while have < n:
         c = rng.uniform(cos_half, 1.0, 2 * n)
