@@ -234,6 +234,19 @@ MUTATIONS = [
              "                w = w * np.exp(-s) * s * math.log(hi / lo)\n",
              "                w = w\n",
              ("tests/test_spot_multiple.py::test_a_cone_as_wide_as_the_sphere_is_the_point_light",)),
+    Mutation("spot_multiple_surface_cosine", "spot multiple scattering: a surface takes |w . n| of the radiance, "
+             "light from behind it too (the irradiance's clamped cosine, Narasimhan §7.4)",
+             "fog_addon/precompute/spot_multiple.py",
+             "                    facing = 0.5 * (np.maximum(-(local @ out.T), 0.0) + np.maximum(-(local @ mirror.T), "
+             "0.0))\n",
+             "                    facing = 0.5 * (np.abs(local @ out.T) + np.abs(local @ mirror.T))\n",
+             ("tests/test_spot_multiple.py::test_a_cone_as_wide_as_the_sphere_lights_surfaces_as_the_point_light",)),
+    Mutation("area_multiple_profile", "area multiple scattering: the emitter's photons leave isotropically, not by "
+             "Lambert's cosine about its normal",
+             "fog_addon/precompute/spot_multiple.py",
+             "        c = np.sqrt(rng.random(n))\n",
+             "        c = 2.0 * rng.random(n) - 1.0\n",
+             ("tests/test_spot_multiple.py::test_area_light_glow_against_64_bounces",)),
     Mutation("weather_source_intensity", "weather: a pixel's intensity without its depth squared (L Omega z^2 is "
              "the intensity of a patch filling a pixel at depth z)",
              "fog_addon/weather.py",

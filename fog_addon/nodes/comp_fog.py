@@ -459,31 +459,42 @@ def _upsampled(m, value, sample_length, length, step):
     return m.scale(up, own + 1e-3) + m.scale(others, 1.0 - own)
 
 
-def _halo(m, g, models, images, crop, per_pixel, label, position):
+def _halo(m, coarse, g, models, images, label, position):
     """(group node, {rungs.SURFACE_POINT: glow to the surface, rungs.SKY: to the sky}) of a light's multiply
-    scattered halo (``rungs.split_halo``'s second models) per unit intensity: its glow group fed the picture's
-    rays at 1 / HALO_STEP of the resolution, brought back by the depth-aware upsampling (``_upsampled``).  The
-    halo varies over many pixels (it is the field of light scattered more than once), so its coarse samples
-    hold it; its quadrature along each ray costs the compositor a sixteenth at a quarter of the resolution."""
-    step = g[HALO_STEP]
+    scattered halo (``rungs.split_halo``'s second models) per unit intensity, at the coarse resolution of
+    ``coarse`` (``_coarse_inputs``): the halo varies over many pixels (it is the field of light scattered more
+    than once), so coarse samples hold it, and its quadrature along each ray costs the compositor a sixteenth at
+    a quarter of the resolution.  ``_fine`` brings the bundle's sum back."""
     node = m.node("CompositorNodeGroup", 6)
     node.node_tree, node.label = build_glow_group(models, images, None), label
-    coarse = {}
-    for socket, kind in GLOW_SHARED:
-        if socket in per_pixel:
-            value = _scaled(m, crop(socket), 1.0 / step)
-            coarse[socket] = value if kind == V else _first(m, value)
-            m.feed(node.inputs[socket], coarse[socket])
-        else:
-            m.feed(node.inputs[socket], g[socket])
+    for socket, _ in GLOW_SHARED:
+        m.feed(node.inputs[socket], coarse.get(socket, g[socket]))
     m.feed(node.inputs["Light"], position)
     m.feed(node.inputs["Intensity"], m.wrap((1.0, 1.0, 1.0)))
-    outputs = {o.at: m.dot(m.wrap(node.outputs[o.compositor], vector=True), (1.0, 0.0, 0.0)) for o in GLOW_OUTPUTS}
-    packed = m.combine(outputs[rungs.SURFACE_POINT], outputs[rungs.SKY], 1.0)
-    length = _first(m, crop("View Distance"))
-    up = _upsampled_group(m, packed, _first(m, _scaled(m, coarse["View Distance"], step)), length, step)
-    weight = m.maximum(m.dot(up, (0.0, 0.0, 1.0)), 1e-6)
-    return node, {rungs.SURFACE_POINT: m.dot(up, (1.0, 0.0, 0.0)) / weight, rungs.SKY: m.dot(up, (0.0, 1.0, 0.0)) / weight}
+    return node, {o.at: m.dot(m.wrap(node.outputs[o.compositor], vector=True), (1.0, 0.0, 0.0))
+                  for o in GLOW_OUTPUTS}
+
+
+def _coarse_inputs(m, g, per_pixel):
+    """A glow group's per-pixel inputs (``per_pixel``, over the whole picture) at 1 / HALO_STEP of the
+    resolution, shared by the bundle's halos."""
+    kinds = dict(GLOW_SHARED)
+    out = {}
+    for socket in per_pixel:
+        value = _scaled(m, g[socket], 1.0 / g[HALO_STEP])
+        out[socket] = value if kinds[socket] == V else _first(m, value)
+    return out
+
+
+def _fine(m, g, coarse, sums):
+    """The bundle's coarse halo sums (RGB images, by rungs.SURFACE_POINT / rungs.SKY) at the picture's
+    resolution: the depth-aware upsampling (``_upsampled``) of each, divided by its weights."""
+    step = g[HALO_STEP]
+    args = (_first(m, _scaled(m, coarse["View Distance"], step)), g["View Distance"], step)
+    ones = m.less(-1.0, coarse["View Distance"])   # 1 at every coarse sample (an image, not a folded constant)
+    weight = _first(m, _upsampled_group(m, m.combine(ones, ones, ones), *args))
+    inverse = 1.0 / m.maximum(weight, 1e-6)
+    return {at: m.scale(_upsampled_group(m, v, *args), inverse) for at, v in sums.items()}
 
 
 def _translated(m, value, dx, dy):
@@ -656,6 +667,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
     # each sum starts black over its domain: the picture for the glows, the surfaces' window for the rest
     sums = {o: _zero(m, g["Direction"] if o in GLOW_OUTPUTS else g[SURFACE + "Position"])
             for o in rungs.COMPOSITOR_OUTPUTS}
+    coarse, halos = None, {}   # the halos' coarse inputs and sums (``_halo``)
     for k, (light, mod) in enumerate(zip(lights, models), start=first):
         position = _location(m, f"Light {k} Location", light, col=4)
         intensity = m.node("ShaderNodeCombineXYZ", 4)
@@ -686,8 +698,12 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
             share = {o: near if o.at == rungs.SURFACE_POINT else far for o in GLOW_OUTPUTS}
         split = rungs.split_halo(mod)
         halo = None
-        if split is not None:   # the multiply scattered halo at a coarser resolution, added after the shafts' share
-            halo = _halo(m, g, split[1], images, crop, per_pixel, f"Light {k} Halo: {light.name}", position)
+        if split is not None:   # the multiply scattered halo at a coarser resolution (not shadowed by the shafts)
+            coarse = coarse or _coarse_inputs(m, g, per_pixel)
+            halo = _halo(m, coarse, g, split[1], images, f"Light {k} Halo: {light.name}", position)
+            for at, v in halo[1].items():
+                lit = m.scale(m.wrap(intensity.outputs[0], vector=True), v)
+                halos[at] = lit if halos.get(at) is None else _accumulate(m, halos[at], lit)
         if any(o.computed(mod) for o in GLOW_OUTPUTS):
             glow = m.node("CompositorNodeGroup", 6)
             glow.node_tree = build_glow_group(mod if split is None else split[0], images, peak)
@@ -698,8 +714,6 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
                 v = m.wrap(glow.outputs[o.compositor], vector=True)
                 if shaft is not None:
                     v = m.scale(v, share[o])
-                if halo is not None:
-                    v = v + m.scale(m.wrap(intensity.outputs[0], vector=True), halo[1][o.at])
                 sums[o] = _accumulate(m, sums[o], v if win is None else _uncrop(m, v, win))
             built.append(glow)
         if any(o.computed(mod) for o in SCATTER_OUTPUTS):
@@ -729,6 +743,10 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
             for node in built[1:] + ([halo[0]] if halo is not None else []):
                 for socket, _ in groups._spot_inputs(mod):
                     ng.links.new(built[0].inputs[socket].links[0].from_socket, node.inputs[socket])
+    if halos:
+        fine = _fine(m, g, coarse, halos)
+        for o in GLOW_OUTPUTS:
+            sums[o] = _accumulate(m, sums[o], fine[o.at])
     for o, v in sums.items():
         m.feed(gout.inputs[o.compositor], v)
     m.place()

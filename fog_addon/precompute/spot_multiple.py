@@ -36,6 +36,7 @@ table's glow is orders >= 2 only and nothing is counted twice.
 Units: beta in 1/m, distances in m, results per unit on-axis radiant intensity and per unit albedo in 1/m^2
 (as the single-scattering kernels'); the table dimensionless (J T per I0 at extinction 1).
 """
+import functools
 import math
 
 import numpy as np
@@ -116,10 +117,7 @@ def spec_parameters(spec):
 
 
 def _falloff(c, cos_half, blend):
-    """Blender's spot factor at cosine c to the axis (``spot.spot_falloff`` on numpy arrays); ``blend`` None:
-    Lambert's max(0, c)."""
-    if blend is None:
-        return np.maximum(c, 0.0)
+    """Blender's spot factor at cosine c to the axis (``spot.spot_falloff`` on numpy arrays)."""
     if blend <= 0.0:
         return (c > cos_half).astype(np.float64)
     x = np.clip((c - cos_half) / ((1.0 - cos_half) * blend), 0.0, 1.0)
@@ -339,26 +337,34 @@ def _asinh(m, x):
     return m.select(m.less(x, 0.0), -1.0 * value, value)
 
 
+def _point(spec, m, beta, along, h, v, oz, ez, side):
+    """beta^2 e^{-beta t} (J T) at the ray's point t = a + h sinh v (``airlight``)."""
+    up = m.exp(v)
+    down = 1.0 / up
+    t = along + h * (0.5 * (up - down))
+    r = h * (0.5 * (up + down))
+    cos_psi = -1.0 * (oz + t * ez) / r
+    cos_theta = (along - t) / r                               # omega = -e against e_r = q / r
+    phi = m.atan2(m.abs(side), cos_theta * cos_psi * r - ez * r)
+    return beta * beta * m.exp(-1.0 * beta * t) * source_times_t(m, spec, beta * r, cos_psi, cos_theta, phi)
+
+
 def _piece(m, spec, beta, ray, along, h, t0, t1, nodes):
-    """beta^2 int_{t0}^{t1} e^{-beta t} J T dv, t = a + h sinh v (``airlight``), by ``nodes``-point Gauss-Legendre."""
-    ox, oy, oz, ex, ey, ez, side = ray
+    """int_{t0}^{t1} beta^2 e^{-beta t} J T dv, t = a + h sinh v (``airlight``), by ``nodes``-point Gauss-Legendre;
+    each point one shared sub-program (a node group: the compositor builds its nodes once)."""
+    oz, ez, side = ray
     v0 = _asinh(m, (t0 - along) / h)
     v1 = _asinh(m, (t1 - along) / h)
     half = 0.5 * (v1 - v0)
     mid = 0.5 * (v1 + v0)
     x_nodes, w_nodes = _gauss_legendre(nodes)
+    point = functools.partial(_point, spec)
     total = 0.0
     for xi, wi in zip(x_nodes, w_nodes):
-        up = m.exp(mid + float(xi) * half)
-        down = 1.0 / up
-        t = along + h * (0.5 * (up - down))
-        r = h * (0.5 * (up + down))
-        cos_psi = -1.0 * (oz + t * ez) / r
-        cos_theta = (along - t) / r                               # omega = -e against e_r = q / r
-        phi = m.atan2(m.abs(side), cos_theta * cos_psi * r - ez * r)
-        jt = source_times_t(m, spec, beta * r, cos_psi, cos_theta, phi)
-        total = total + float(wi) * m.exp(-1.0 * beta * t) * jt
-    return beta * beta * half * total
+        value = m.group(f"Spot Multiple Point [{spec.name}]", point, beta, along, h, mid + float(xi) * half, oz, ez,
+                        side)
+        total = total + float(wi) * value
+    return half * total
 
 
 def airlight(m, spec, beta, d_vp, px, py, pz, dx, dy, dz, cos_half, nodes=NODES):
@@ -383,7 +389,7 @@ def airlight(m, spec, beta, d_vp, px, py, pz, dx, dy, dz, cos_half, nodes=NODES)
     lo = m.select(miss, m.maximum(along - 2.0 * h, 0.0), lo)
     hi = m.select(miss, m.maximum(along + 2.0 * h, 0.0), hi)
     lo, hi = m.minimum(lo, t_end), m.minimum(hi, t_end)
-    ray = (ox, oy, oz, ex, ey, ez, ex * oy - ey * ox)   # the last: omega . (e_r x axis) r, the same along the ray
+    ray = (oz, ez, ex * oy - ey * ox)   # the last: omega . (e_r x axis) r, the same along the ray
     before, inside, after = nodes
     return (_piece(m, spec, beta, ray, along, h, 0.0, lo, before) + _piece(m, spec, beta, ray, along, h, lo, hi, inside)
             + _piece(m, spec, beta, ray, along, h, hi, t_end, after))
