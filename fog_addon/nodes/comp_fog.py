@@ -815,35 +815,28 @@ def emitter_pixel_angle(scene):
 
 def emitter_table(g, pixel_angle, multiple_albedo=None):
     """{name: image} of the emitters' glow weights for anisotropy ``g``, ``pixel_angle`` and Dense Fog's albedo
-    (baked once, cached): the single scattering's, with Dense Fog the multiply scattered field's alone too, and
-    the facing table."""
-    facing = emitter_glow.facing_spec(g)
-    out = {facing.name: images_.table_image(facing, functools.partial(emitter_glow.bake_facing, g))}
-    for albedo, only in ((None, False),) + (((multiple_albedo, True),) if multiple_albedo is not None else ()):
-        spec = emitter_glow.table_spec(g, pixel_angle, albedo, only)
-        out[spec.name] = images_.table_image(spec, functools.partial(emitter_glow.bake_table, g, pixel_angle, albedo,
-                                                                     only))
-    return out
+    (baked once, cached)."""
+    spec, facing = emitter_glow.table_spec(g, pixel_angle, multiple_albedo), emitter_glow.facing_spec(g)
+    return {spec.name: images_.table_image(spec, functools.partial(emitter_glow.bake_table, g, pixel_angle,
+                                                                   multiple_albedo)),
+            facing.name: images_.table_image(facing, functools.partial(emitter_glow.bake_facing, g))}
 
 
 def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=None, facing=None):
     """The glows of the glowing objects the camera sees (``precompute/emitter_glow.py``): the Emission pass made
-    undimmed (times e^{beta D_vp}), weighted per pixel by a_j(T) and blurred by each Blur node of the ladder,
-    summed (per unit albedo).  With ``facing`` (the |cos| of each pixel's surface to the camera) the single
-    scattering's weights take the two-sided Lambertian source the surface is (``emitter_glow.facing_factor``: a
-    flat sign sends less light sideways than towards the camera); Dense Fog's multiply scattered field's weights
-    (a table of their own) keep the isotropic source, whose directions that field forgets.  Each rung's glow stops at the surfaces in front of its sources
+    undimmed (times e^{beta D_vp}) and, with ``facing`` (the |cos| of each pixel's surface to the camera), taken
+    as the two-sided Lambertian source its surface is (``emitter_glow.facing_factor``: a flat sign sends less
+    light sideways than towards the camera), weighted per pixel by a_j(T) and blurred by each Blur node of the
+    ladder, summed (per unit albedo).  Each rung's glow stops at the surfaces in front of its sources
     (``emitter_glow.segment_share`` at the rung's angle, the sources' optical depth taken as the mean over what the
     rung blurs in: a second blur of the weights times T); where the pixel sees the sky (``cover`` 0) or a glowing
     surface it is whole."""
-    single = emitter_glow.table_spec(g, pixel_angle)
-    multiple = None if multiple_albedo is None else emitter_glow.table_spec(g, pixel_angle, multiple_albedo, True)
+    spec = emitter_glow.table_spec(g, pixel_angle, multiple_albedo)
     t = beta * d_vp
     light = m.scale(p[EMITTERS], m.exp(m.minimum(t, GLOW_DEPTH_LIMIT)))
-    factor = 1.0
-    if facing is not None:   # the single scattering's sources face the way their surface does; the multiply
-        mean = m.table(emitter_glow.facing_spec(g), m.clamp(facing), 0.0)   # scattered field forgets it
-        factor = emitter_glow.facing_factor(m, facing, mean)
+    if facing is not None and multiple_albedo is None:   # (Dense Fog's kernel keeps the isotropic sources)
+        mean = m.table(emitter_glow.facing_spec(g), m.clamp(facing), 0.0)
+        light = m.scale(light, emitter_glow.facing_factor(m, facing, mean))
     grey = m.dot(light, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))
     t_surface = t if cover is None else m.select(m.less(1e-3, cover), t, 1.0e6)
     # a glowing pixel's own surface is no surface in front of the glow: it takes the whole of it (the light its
@@ -853,9 +846,7 @@ def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=
     rows = len(emitter_glow.SIZES)
     total = None
     for j, size in enumerate(emitter_glow.SIZES):
-        a = m.table(single, x, j / (rows - 1.0)) * factor
-        if multiple is not None:
-            a = a + m.table(multiple, x, j / (rows - 1.0))
+        a = m.table(spec, x, j / (rows - 1.0))
         blurred = []
         for source in (m.scale(light, a), m.combine(grey * a * t, grey * a, 0.0)):
             blur = m.node("CompositorNodeBlur", 5)

@@ -35,10 +35,10 @@ CORE = 2              # px: the core's half-width
 HALF = 400            # px: the fit's grid about a source (the largest blur reaches 512)
 
 
-def glow_field(g, multiple_albedo=None, multiple_only=False):
+def glow_field(g, multiple_albedo=None):
     """The field a glowing pixel's kernel is made of, per unit intensity and unit albedo at extinction 1: I_1
     (``single_field``), plus I_{>=2} / W0 (``multiple.field``, Narasimhan et al.'s multiply scattered field:
-    Dense Fog) when ``multiple_albedo`` W0 is given; ``multiple_only``: I_{>=2} / W0 alone."""
+    Dense Fog) when ``multiple_albedo`` W0 is given."""
     single = single_field(g)
     if multiple_albedo is None:
         return single
@@ -46,8 +46,6 @@ def glow_field(g, multiple_albedo=None, multiple_only=False):
     from .ops import NumpyOps
     spec = multiple.table_spec(g, multiple_albedo)
     m = NumpyOps({spec.name: bakers.table_array(spec, g)})
-    if multiple_only:
-        return lambda t, c: multiple.field(m, spec, t, c)
     return lambda t, c: single(t, c) + multiple.field(m, spec, t, c)
 
 
@@ -190,11 +188,10 @@ def table_x(m, t):
     return m.clamp01((m.log(m.maximum(t, T_MIN)) - lo) * (1.0 / (hi - lo)))
 
 
-def table_spec(g, pixel_angle, multiple_albedo=None, multiple_only=False):
+def table_spec(g, pixel_angle, multiple_albedo=None):
     """The TableSpec of the weights for anisotropy ``g``, ``pixel_angle`` (rad/px) and, with Dense Fog, the
-    multiply scattered field's albedo (``multiple_only``: that field's weights alone): one row per size."""
-    part = "multiple only" if multiple_only else "multiple"
-    dense = "" if multiple_albedo is None else f", {part} W0 {float(multiple_albedo):.3f}"
+    multiply scattered field's albedo: one row per size."""
+    dense = "" if multiple_albedo is None else f", multiple W0 {float(multiple_albedo):.3f}"
     return tables.TableSpec(f"AnalyticFog Emitter Glow (g {float(g):+.3f}, {float(pixel_angle):.6g} rad/px{dense})",
                             T_COUNT, len(SIZES), g=float(g))
 
@@ -207,10 +204,10 @@ def bake_weights(single, pixel_angle):
     return out.astype(np.float32)
 
 
-def bake_table(g, pixel_angle, multiple_albedo=None, multiple_only=False):
+def bake_table(g, pixel_angle, multiple_albedo=None):
     """The weights' table (``table_spec``) of anisotropy g at ``pixel_angle``: ``bake_weights`` of its field
     (``glow_field``)."""
-    return bake_weights(glow_field(g, multiple_albedo, multiple_only), pixel_angle)
+    return bake_weights(glow_field(g, multiple_albedo), pixel_angle)
 
 
 # --- a flat emitter's light towards the fog: the facing factor --------------------------------------------------
