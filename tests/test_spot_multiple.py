@@ -284,3 +284,24 @@ def test_area_light_render_against_64_bounces(tmp_path):
     assert np.all(np.abs(front[1:] - 1.0) <= AREA_BOUND), front
     assert np.all(np.abs(behind - 1.0) <= AREA_BOUND), behind
 
+
+@pytest.mark.render
+@pytest.mark.slow
+def test_coarse_halo_at_a_quarter_of_the_resolution(tmp_path):
+    """At 480 x 480 the compositor samples the halo every 4 x 4 pixels (``comp_fog.HALO_STEP``) and upsamples it:
+    the side-on spot's rings (the same angles, 4x the pixels) within BOUND of 64 bounces, as at 120 x 120."""
+    case = "side"
+    c = ds.CASES[case]
+    log = []
+    out = h.render_test("dense", c["density"], tmp_path / "ours.exr", engine="cycles", method="compositor",
+                        resolution=(480, 480), blend=ds.blend_path(case), log=log,
+                        extra=("--anisotropy", repr(c["anisotropy"]), "--color", ",".join([repr(c["albedo"])] * 3),
+                               "--multiple-scattering", "on"))
+    assert not h.log_errors(log[0]), h.log_errors(log[0])
+    big = imageio.read_rgb(out)
+    edges = [4.0 * e for e in dn.RING_EDGES_PX]
+    ours = np.asarray(dn.ring_means(big, (240.0, 240.0), edges))
+    ref = np.asarray(dn.ring_means(_references(case)[0], dn.lamp_image_centre()))
+    print("480 x 480 / 64 bounces", np.round(ours / ref, 3))
+    assert np.all(np.abs(ours / ref - 1.0) <= BOUND), ours / ref
+

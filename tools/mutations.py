@@ -247,6 +247,12 @@ MUTATIONS = [
              "        c = np.sqrt(rng.random(n))\n",
              "        c = 2.0 * rng.random(n) - 1.0\n",
              ("tests/test_spot_multiple.py::test_area_light_glow_against_64_bounces",)),
+    Mutation("halo_not_upsampled", "Dense Fog halos: the coarse halo sum brought back without its upsampling (the "
+             "samples every Halo Step pixels taken as the picture's)",
+             "fog_addon/nodes/comp_fog.py",
+             "    step = g[HALO_STEP]\n    args = ",
+             "    step = 1.0\n    args = ",
+             ("tests/test_spot_multiple.py::test_coarse_halo_at_a_quarter_of_the_resolution",)),
     Mutation("weather_source_intensity", "weather: a pixel's intensity without its depth squared (L Omega z^2 is "
              "the intensity of a patch filling a pixel at depth z)",
              "fog_addon/weather.py",
