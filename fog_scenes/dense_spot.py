@@ -169,21 +169,28 @@ def build(scene, case, resolution=RESOLUTION):
     import bpy
     spot = SPOTS[_spot_name(case)]
     dense.build(scene, DISTANCE_M, POWER_W, LAMP_RADIUS_M, resolution)
-    ob = bpy.data.objects[LAMP_NAME]
+    as_spot(bpy.data.objects[LAMP_NAME], SPOT_SIZE_DEG, SPOT_BLEND, spot["rotation_euler_deg"], LAMP_NAME + "Spot")
+    scene.camera.data.clip_end = CLIP_END_M
+    return scene
+
+
+def as_spot(ob, spot_size_deg, blend, rotation_euler_deg, name):
+    """Make the point light object ``ob`` a spot light of the same power, colour and radius (its light data a new
+    one named ``name``, shadows on), of cone ``spot_size_deg`` (full angle) and ``blend``, turned to
+    ``rotation_euler_deg`` (Euler XYZ; the axis is the local -Z).  Needs bpy."""
+    import bpy
     old = ob.data
-    light = bpy.data.lights.new(LAMP_NAME + "Spot", 'SPOT')
+    light = bpy.data.lights.new(name, 'SPOT')
     light.energy = old.energy
     light.shadow_soft_size = old.shadow_soft_size
     light.use_shadow = True
     light.color = old.color
-    light.spot_size = math.radians(SPOT_SIZE_DEG)
-    light.spot_blend = SPOT_BLEND
+    light.spot_size = math.radians(spot_size_deg)
+    light.spot_blend = blend
     ob.data = light
     bpy.data.lights.remove(old)
     ob.rotation_mode = 'XYZ'
-    ob.rotation_euler = tuple(math.radians(v) for v in spot["rotation_euler_deg"])
-    scene.camera.data.clip_end = CLIP_END_M
-    return scene
+    ob.rotation_euler = tuple(math.radians(v) for v in rotation_euler_deg)
 
 
 def blend_path(case, workdir=None):

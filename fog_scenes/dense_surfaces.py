@@ -97,22 +97,11 @@ def build(scene, resolution=RESOLUTION, power=LAMP_POWER_W, spot=False):
     add_box_between(scene, "Wall", -40.0, 40.0, WALL_Y, WALL_Y + 0.2, -0.5, WALL_HEIGHT, grey)
     lamp = add_point_light(scene, "Lamp", (0.0, 0.0, LAMP_HEIGHT), float(power))
     lamp.data.shadow_soft_size = 0.0
-    if spot:
-        import math
-        import bpy
-        old = lamp.data
-        light = bpy.data.lights.new("Lamp", 'SPOT')
-        light.energy = old.energy
-        light.shadow_soft_size = 0.0
-        light.use_shadow = True
-        light.color = old.color
-        light.spot_size = math.radians(SPOT_SIZE_DEG)
-        light.spot_blend = SPOT_BLEND
-        lamp.data = light
-        bpy.data.lights.remove(old)
-        light.name = "Lamp"
-        lamp.rotation_mode = 'XYZ'
-        lamp.rotation_euler = (0.0, 0.0, 0.0)      # axis = local -Z = straight down
+    if spot:   # (the point lamp's radius is 0, so is the spot's; rotation 0: the axis, local -Z, straight down)
+        from fog_scenes import dense_spot
+        old_name = lamp.data.name
+        dense_spot.as_spot(lamp, SPOT_SIZE_DEG, SPOT_BLEND, (0.0, 0.0, 0.0), old_name + " Spot")
+        lamp.data.name = old_name
     cam = add_camera(scene, (0.0, -CAMERA_DISTANCE, CAMERA_HEIGHT), (0.0, 0.0, LAMP_HEIGHT), lens=LENS_MM)
     cam.data.sensor_width = 36.0
     cam.data.clip_start = 0.001
