@@ -359,7 +359,8 @@ def _build_scene_groups(scene, spec, lights, method=None, reason=None, rechoose=
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if (surface is None or bpy.data.node_groups.get(groups.WORLD) is None
             or surface.get(LIGHTS_KEY) != signature or not method.is_built()):
-        imgs = method.build(scene, spec, plan_, images.all_table_images(spec.anisotropy, _extra_tables(spec, plan_.models)))
+        imgs = method.build(scene, spec, plan_,
+                            images.all_table_images(spec.anisotropy, _extra_tables(spec, plan_.models)))
         _rebuilt.add(scene.name)   # the compositor's chain must take the new groups (``refresh_lights``)
         surface = bpy.data.node_groups[groups.SURFACE]
         surface[LIGHTS_KEY] = signature

@@ -366,28 +366,6 @@ def _edge(edge, shape0):
     return shape0 if edge is None else edge
 
 
-def _spot_air_multiple(air, spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, s0, s1, *, edge=None):
-    """A spot's (or an area light's) single-scattering airlight (``air``) plus its multiply scattered glow
-    (``spot_multiple``)."""
-    return air(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, s0, s1) + spot_multiple.airlight(
-        m, spec, beta, d_vp, px, py, pz, dx, dy, dz, _edge(edge, s0))
-
-
-def _spot_background_multiple(background, spec, m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, s0, s1, *,
-                              edge=None):
-    """A spot's (or an area light's) single-scattering glow of a ray to the sky plus its multiply scattered glow."""
-    return background(m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, s0, s1) + spot_multiple.airlight(
-        m, spec, beta, model.FAR, px, py, pz, dx, dy, dz, _edge(edge, s0))
-
-
-def _spot_pair_multiple(pair, spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, s0, s1, *, edge=None):
-    """``pair``'s (to the surface, to the sky) with the multiply scattered glow added to each."""
-    surface, sky = pair(m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, s0, s1)
-    ray = (px, py, pz, dx, dy, dz)
-    return (surface + spot_multiple.airlight(m, spec, beta, d_vp, *ray, _edge(edge, s0)),
-            sky + spot_multiple.airlight(m, spec, beta, model.FAR, *ray, _edge(edge, s0)))
-
-
 def _halo_air(spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, s0, s1, *, edge=None):
     """The multiply scattered glow alone of a spot (or an area light) along a ray to a surface."""
     return spot_multiple.airlight(m, spec, beta, d_vp, px, py, pz, dx, dy, dz, _edge(edge, s0))
@@ -402,6 +380,16 @@ def _halo_pair(spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, s0, 
     ray = (px, py, pz, dx, dy, dz)
     return (spot_multiple.airlight(m, spec, beta, d_vp, *ray, _edge(edge, s0)),
             spot_multiple.airlight(m, spec, beta, model.FAR, *ray, _edge(edge, s0)))
+
+
+def _plus(single, halo, m, *args):
+    """A glow kernel's value: its single scattering (``single``) plus its halo (``halo``), same arguments."""
+    return single(m, *args) + halo(m, *args)
+
+
+def _plus_pair(single, halo, m, *args):
+    """A ``pair``'s (to the surface, to the sky): ``single``'s plus ``halo``'s, each."""
+    return tuple(a + b for a, b in zip(single(m, *args), halo(m, *args)))
 
 
 def _spot_scatter_multiple(scatter, spec, m, beta, d_sp, cos_n, cos_r, level, c_axis, s0, s1, cos_n_axis,
@@ -431,11 +419,10 @@ def spot_multiple_rungs(air, background, scatter, g, albedo, cone):
     halo_background = replace(background, name=f"halo background {tag}", tables=(spec,),
                               kernel=functools.partial(_halo_background, spec, **edge), **common)
     return (replace(air, name=f"{air.name} + multiple {tag}", tables=air.tables + (spec,),
-                    kernel=functools.partial(_spot_air_multiple, air.kernel, spec, **edge),
-                    pair=functools.partial(_spot_pair_multiple, air.pair, spec, **edge), halo=halo_air, single=air,
-                    **common),
+                    kernel=functools.partial(_plus, air.kernel, halo_air.kernel),
+                    pair=functools.partial(_plus_pair, air.pair, halo_air.pair), halo=halo_air, single=air, **common),
             replace(background, name=f"{background.name} + multiple {tag}", tables=background.tables + (spec,),
-                    kernel=functools.partial(_spot_background_multiple, background.kernel, spec, **edge),
+                    kernel=functools.partial(_plus, background.kernel, halo_background.kernel),
                     halo=halo_background, single=background, **common),
             replace(scatter, name=f"{scatter.name} + multiple {tag}", tables=scatter.tables + (spec,),
                     kernel=functools.partial(_spot_scatter_multiple, scatter.kernel, spec),
