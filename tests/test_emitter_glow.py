@@ -6,7 +6,7 @@ beta 0.1, g 0.85, albedo 0.9, T 1.5) with the path-traced single scattering by a
 test_weather.py does.  Both render pixel centres: 112 pixel centres fall on the sphere's disc of 103.1 px, so
 the Emission pass holds 8.6 % more light than the sphere sends into the fog; the glow (ours less the
 fog-free render dimmed) is scaled to the disc's area before comparing (unscaled it is about 5 % too bright).
-Measured, ours / reference by annulus 1.5-50 px: 1.004, 1.002, 0.984, 0.954, 0.958.
+Measured, ours / reference by annulus 1.5-50 px: 1.007, 1.008, 1.055, 1.021, 1.024.
 """
 import math
 
@@ -67,8 +67,54 @@ def test_ladder_holds_the_kernel_ring_by_ring(single, t):
 
 def test_weights_table_is_finite_and_non_negative():
     table = eg.bake_table(G, PIXEL_ANGLE)
-    assert table.shape == (len(eg.SIZES), eg.T_COUNT)
-    assert np.isfinite(table).all() and (table >= 0.0).all() and table.max() > 0.0
+    assert table.shape == (len(eg.SIZES) + 1, eg.T_COUNT)
+    shares = table[:-1]
+    assert np.isfinite(table).all() and (shares >= 0.0).all()
+    np.testing.assert_allclose(shares.sum(axis=0), 1.0, rtol=1e-5)
+
+
+def test_table_columns_are_the_optical_depths_of_its_coordinate():
+    """The columns' T, inverted by Newton's method, map back to evenly spaced table X (``table_x``), from T_MIN to
+    T_MAX."""
+    from fog_addon.precompute.ops import NumpyOps
+    t = eg.optical_depths(eg.T_COUNT)
+    assert t[0] == pytest.approx(eg.T_MIN, rel=1e-9) and t[-1] == pytest.approx(eg.T_MAX, rel=1e-9)
+    np.testing.assert_allclose(eg.table_x(NumpyOps(), t), np.linspace(0.0, 1.0, eg.T_COUNT), atol=1e-9)
+
+
+@pytest.mark.parametrize("dense", [False, True])
+def test_the_table_read_between_its_columns_holds_the_kernel(dense):
+    """The glow's weights read from the table halfway between two columns (as the compositor reads them:
+    ``source_weight`` x ``rung_share``) against the ladder fitted at that very T, ring sums 1.5-160 px: within
+    1 % for single scattering, 4 % with Dense Fog's field (whose halo widens between columns).  A linear read of
+    the weights themselves over ln T (24 columns) was 13 % bright at T 4.5 and 3 % dark at T 1.6: a glowing
+    object's single scattering read 1.12-1.15 of Cycles' at T 4.5."""
+    from fog_addon.precompute.ops import NumpyOps
+    field = eg.glow_field(G, 0.9 if dense else None)
+    spec = eg.table_spec(G, PIXEL_ANGLE, 0.9 if dense else None)
+    m = NumpyOps({spec.name: eg.bake_weights(field, PIXEL_ANGLE, spec.width)})
+    columns = eg.optical_depths(spec.width)
+    half = 160
+    d = np.arange(-half, half + 1)
+    r = np.hypot(*np.meshgrid(d, d))
+    rings = [(r >= lo) & (r < hi) for lo, hi in ((1.5, 3.5), (3.5, 7.5), (7.5, 15), (15, 30), (30, 50), (50, 160))]
+    basis = [eg.blur_kernel_2d(s, half) for s in eg.SIZES]
+
+    def ring_sums(weights):
+        k = sum(w * b for w, b in zip(weights, basis))
+        return np.array([k[ring].sum() for ring in rings])
+
+    bound = 0.04 if dense else 0.01
+    for k in range(1, len(columns)):
+        x = (k - 0.5) / (len(columns) - 1)
+        t = float(eg.optical_depths(2 * len(columns) - 1)[2 * k - 1])   # the T of table X x
+        if t > 12.0:
+            break
+        assert float(eg.table_x(m, t)) == pytest.approx(x, abs=1e-9)
+        read = [float(eg.source_weight(m, spec, t) * eg.rung_share(m, spec, x, j)) * math.exp(-t)
+                for j in range(len(eg.SIZES))]
+        fitted = eg.fit_weights(eg.kernel_grid(t, PIXEL_ANGLE, field, 1.0, eg.HALF))
+        np.testing.assert_allclose(ring_sums(read) / ring_sums(fitted), 1.0, atol=bound, err_msg=f"T {t:.3f}")
 
 
 def test_facing_mean_against_quadrature():
@@ -112,11 +158,10 @@ def test_a_spheres_pixels_keep_its_glow(g):
     pytest.param("cycles", 0.3, True, marks=pytest.mark.slow),
 ])
 def test_glowing_sphere_against_path_traced_fog(tmp_path, engine, beta, dense):
-    """Single scattering against 0 volume bounces (measured 1.005, 1.006, 1.029, 0.996, 0.999 by annulus, with the
-    pixels' facing factor; 1.004, 1.002, 0.984, 0.954, 0.958 as isotropic sources); with Dense Fog (the multiply
-    scattered field in the kernel, the pixels isotropic sources)
-    against 64 bounces at T 1.5 and 4.5, measured 1.006, 1.003, 0.987, 0.941, 0.991 and 1.017, 1.033, 1.058,
-    1.009, 1.018."""
+    """Single scattering against 0 volume bounces (measured 1.007, 1.008, 1.055, 1.021, 1.024 by annulus, with the
+    pixels' facing factor: the third annulus, just beyond the sphere's limb, is its near field); with Dense Fog (the
+    multiply scattered field in the kernel, the pixels isotropic sources) against 64 bounces at T 1.5 and 4.5,
+    measured 1.008, 1.006, 1.018, 0.964, 1.009 and 0.994, 1.007, 1.011, 0.980, 1.007."""
     from fog_scenes import dense as dn
     from fog_scenes import glowing_sphere as gs
     from fog_scenes import render_harness as h
@@ -143,15 +188,13 @@ def test_glowing_sphere_against_path_traced_fog(tmp_path, engine, beta, dense):
 @pytest.mark.render
 @pytest.mark.slow
 @pytest.mark.parametrize("beta,dense", [
-    (0.1, True), (0.3, True), (0.1, False),
-    pytest.param(0.3, False, marks=pytest.mark.xfail(strict=True, reason=(
-        "the facing factor leaves an obliquely seen flat emitter 12-15 % bright beside it at T 4.5 "
-        "(docs/measurements/2026-11-28-spot-multiple.md, flat emitters)"))),
+    (0.1, True), (0.3, True), (0.1, False), (0.3, False),
 ])
 def test_flat_glowing_square_against_path_traced_fog(tmp_path, beta, dense):
     """A 0.3 m glowing square turned 60 degrees from the camera (``glowing_sphere.py`` shape "flat", a helper's
-    references), the rings beside it (its own pixels left out) within 7 % of 64 bounces with Dense Fog (measured
-    0.958-1.062) and of 0 bounces without (0.957-0.996 at T 1.5; 1.146 at T 4.5: a known failure)."""
+    references), the rings beside it (its own pixels left out) within 5 % of 64 bounces with Dense Fog (measured
+    0.983-1.037 at T 1.5, 0.985-1.037 at T 4.5) and of 0 bounces without (0.983-1.016 at T 1.5, 0.986-1.013 at
+    T 4.5; 1.116-1.146 there while the weights' table was read linearly over ln T)."""
     from fog_scenes import glowing_sphere as gs
     from fog_scenes import render_harness as h
     vb, spp = (64, 1024) if dense else (0, 4096)
@@ -162,7 +205,7 @@ def test_flat_glowing_square_against_path_traced_fog(tmp_path, beta, dense):
     assert not h.log_errors(log[0]), h.log_errors(log[0])
     ratio = np.asarray(gs.compare_rings(out, ref, beta, shape="flat", leave_out_emitter=True))[1:]
     print(f"flat beta {beta} dense {dense}: ours / path traced by annulus {np.round(ratio, 3)}")
-    assert np.all(np.abs(ratio - 1.0) <= 0.07), ratio
+    assert np.all(np.abs(ratio - 1.0) <= 0.05), ratio
 
 
 # --- a neon sign cut by the frame's edge, over a street (tests/scenes/neon_sign.py) ----------------------------
@@ -227,7 +270,7 @@ def test_a_sign_cut_by_the_frame_glows_as_its_pixels_do(sign_renders):
     (both faces, ``area.airlight_background``, itself against quadrature over the emitter in test_area.py), over
     the rows beside it: each pixel taken as the two-sided Lambertian source its surface is
     (``emitter_glow.facing_factor``; as isotropic sources of the light they show the camera, Narasimhan's 7.2, the
-    sign glowed 1.64x too bright there), measured 1.047; the Blur nodes' edges kept black (Extend Bounds: without it
+    sign glowed 1.64x too bright there), measured 1.066; the Blur nodes' edges kept black (Extend Bounds: without it
     Blender extends the edge pixels outwards and the glow was 5.5x)."""
     from fog_addon.precompute import area, model
     from fog_addon.precompute.ops import NumpyOps

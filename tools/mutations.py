@@ -285,9 +285,15 @@ MUTATIONS = [
     Mutation("emitter_glow_undimmed", "glowing objects: the Emission pass taken as the emitters' light (it is dimmed "
              "by the fog in front of them: their light is the pass times e^{beta D_vp})",
              "fog_addon/nodes/comp_fog.py",
-             "    light = m.scale(p[EMITTERS], m.exp(m.minimum(t, GLOW_DEPTH_LIMIT)))\n",
-             "    light = p[EMITTERS]\n",
+             "    light = m.scale(p[EMITTERS], emitter_glow.source_weight(m, spec, t))\n",
+             "    light = m.scale(p[EMITTERS], emitter_glow.source_weight(m, spec, t) * m.exp(-t))\n",
              ("tests/test_emitter_glow.py::test_glowing_sphere_against_path_traced_fog[cycles-0.1-False]",)),
+    Mutation("emitter_glow_table_normalisation", "glowing objects: the weights' total read from its table without the "
+             "T of its normalisation N e^T / T",
+             "fog_addon/precompute/emitter_glow.py",
+             "    return m.exp(m.table(spec, table_x(m, t), 1.0)) * t\n",
+             "    return m.exp(m.table(spec, table_x(m, t), 1.0))\n",
+             ("tests/test_emitter_glow.py::test_the_table_read_between_its_columns_holds_the_kernel",)),
     Mutation("emitter_glow_depth_squared", "glowing objects: a pixel's intensity without its depth squared (L "
              "Omega z^2 is the intensity of a patch filling a pixel at depth z)",
              "fog_addon/precompute/emitter_glow.py",

@@ -803,7 +803,6 @@ def _params(m):
 
 
 EMITTERS = "Emission"   # the fog group's input of the emitters' light: the Render Layers' Emission pass
-GLOW_DEPTH_LIMIT = 14.0  # the emitters' light is the Emission pass times e^{T} (the pass is dimmed), T <= this
 
 
 def emitter_pixel_angle(scene):
@@ -824,16 +823,18 @@ def emitter_table(g, pixel_angle, multiple_albedo=None):
 
 def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=None, facing=None):
     """The glows of the glowing objects the camera sees (``precompute/emitter_glow.py``): the Emission pass made
-    undimmed (times e^{beta D_vp}) and, with ``facing`` (the |cos| of each pixel's surface to the camera), taken
-    as the two-sided Lambertian source its surface is (``emitter_glow.facing_factor``: a flat sign sends less
-    light sideways than towards the camera), weighted per pixel by a_j(T) and blurred by each Blur node of the
-    ladder, summed (per unit albedo).  Each rung's glow stops at the surfaces in front of its sources
+    undimmed (times e^{beta D_vp}) and weighted by its glow's total weight N(T) (``emitter_glow.source_weight``)
+    and, with ``facing`` (the |cos| of each pixel's surface to the camera), taken as the two-sided Lambertian
+    source its surface is (``emitter_glow.facing_factor``: a flat sign sends less light sideways than towards the
+    camera); then weighted per pixel by each rung's share a_j(T) / N(T), blurred by each Blur node of the ladder
+    and summed (per unit albedo).  Each rung's glow stops at the surfaces in front of its sources
     (``emitter_glow.segment_share`` at the rung's angle, the sources' optical depth taken as the mean over what the
     rung blurs in: a second blur of the weights times T); where the pixel sees the sky (``cover`` 0) or a glowing
     surface it is whole."""
     spec = emitter_glow.table_spec(g, pixel_angle, multiple_albedo)
     t = beta * d_vp
-    light = m.scale(p[EMITTERS], m.exp(m.minimum(t, GLOW_DEPTH_LIMIT)))
+    x = emitter_glow.table_x(m, t)
+    light = m.scale(p[EMITTERS], emitter_glow.source_weight(m, spec, t))
     if facing is not None and multiple_albedo is None:   # (Dense Fog's kernel keeps the isotropic sources)
         mean = m.table(emitter_glow.facing_spec(g), m.clamp(facing), 0.0)
         light = m.scale(light, emitter_glow.facing_factor(m, facing, mean))
@@ -841,12 +842,11 @@ def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=
     t_surface = t if cover is None else m.select(m.less(1e-3, cover), t, 1.0e6)
     # a glowing pixel's own surface is no surface in front of the glow: it takes the whole of it (the light its
     # neighbours send through the fog towards it, single and multiply scattered, lies in front of it)
-    t_surface = m.select(m.less(1e-30, grey), 1.0e6, t_surface)
-    x = emitter_glow.table_x(m, t)
-    rows = len(emitter_glow.SIZES)
+    glowing = m.less(1e-30, m.dot(p[EMITTERS], (1.0, 1.0, 1.0)))
+    t_surface = m.select(glowing, 1.0e6, t_surface)
     total = None
     for j, size in enumerate(emitter_glow.SIZES):
-        a = m.table(spec, x, j / (rows - 1.0))
+        a = emitter_glow.rung_share(m, spec, x, j)
         blurred = []
         for source in (m.scale(light, a), m.combine(grey * a * t, grey * a, 0.0)):
             blur = m.node("CompositorNodeBlur", 5)
