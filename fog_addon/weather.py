@@ -12,10 +12,10 @@ Omega_px the pixel's solid angle (sr), I_1 the single-scattering field of an end
 the airlight table at extinction 1) and I_{>=2} the multiply scattered field (``precompute/multiple.py``), both per
 unit intensity: a patch of radiance L filling a pixel at depth z has intensity L Omega_px z^2, and the field at
 extinction beta scales as beta^2.  The sum is the depth-dependent convolution of §7.3: the picture is split into
-layers of T (each pixel shared between its two nearest layers, linearly in ln T), and each layer convolved with its
-kernel by FFT.  Pixels at infinite depth (the sky: depth above SKY_DEPTH) send no glow and take the horizon's
-light A.  The image's own noise-free light sources (lamps, windows, neon) are what glows; a lit surface glows too,
-as it does in fog, by the same kernel.
+layers of T (each pixel shared between its two nearest layers, linearly in ``layer_coordinate``), and each layer
+convolved with its kernel by FFT.  Pixels at infinite depth (the sky: depth above SKY_DEPTH) send no glow and take
+the horizon's light A.  The image's own noise-free light sources (lamps, windows, neon) are what glows; a lit
+surface glows too, as it does in fog, by the same kernel.
 
 Units: radiance as in the image (linear), depth in metres (or Blender units with ``scale``), angles in radians.
 """
@@ -25,7 +25,8 @@ import sys
 import numpy as np
 
 SKY_DEPTH = 1.0e6   # m: a depth beyond this is the sky (Blender writes 1e10 for the background)
-LAYERS = 16         # layers of T between the nearest and farthest ground pixel
+LAYERS = 16         # layers of T between the nearest and farthest ground pixel (at least)
+MAX_LAYER_STEP = 0.3   # the largest step between layers in ``layer_coordinate`` (more layers for a deeper picture)
 SUBSAMPLES = 8      # the kernel's core (|offset| <= CORE px) is averaged over SUBSAMPLES^2 points of each pixel
 CORE = 2
 
@@ -65,6 +66,24 @@ def glow_kernel(shape, pixel_angle, optical_distance, single, multiple_, albedo)
     return kern * (pixel_angle ** 2) * t * t
 
 
+def layer_coordinate(t):
+    """The layers' coordinate of optical depth T: ln T + T / 2.  The layers are even in it, geometric where T << 1
+    (the kernel's shape changes with ln T) and at most 2 MAX_LAYER_STEP apart in T where T >> 1 (the multiply
+    scattered halo widens with T itself)."""
+    t = np.asarray(t, float)
+    return np.log(t) + 0.5 * t
+
+
+def layer_depths(lo, hi, count):
+    """``count`` optical depths from ``lo`` to ``hi``, even in ``layer_coordinate`` (inverted by Newton's method)."""
+    s = np.linspace(float(layer_coordinate(lo)), float(layer_coordinate(hi)), count)
+    t = np.exp(np.minimum(s, math.log(hi)))
+    for _ in range(60):
+        t = np.clip(t - (np.log(t) + 0.5 * t - s) / (1.0 / t + 0.5), lo * 0.5, hi * 2.0)
+    t[0], t[-1] = lo, hi
+    return t
+
+
 def add_weather(image, depth, visibility_m, anisotropy=0.85, sky=(1.0, 1.0, 1.0), fov_deg=39.6, albedo=0.9,
                 scale=1.0, layers=LAYERS, progress=None):
     """``image`` (H, W, 3) linear radiance with fog added (module docstring).  ``depth`` (H, W) distance from the
@@ -99,8 +118,10 @@ def add_weather(image, depth, visibility_m, anisotropy=0.85, sky=(1.0, 1.0, 1.0)
     pixel_angle = math.radians(fov_deg) / w
     single, multiple_ = _fields(float(anisotropy), float(albedo))
     lo, hi = float(t[ground].min()), float(t[ground].max())
-    ts = np.geomspace(max(lo, 1e-3), max(hi, lo * 1.0001, 1.1e-3), layers)
-    pos = np.interp(np.log(np.maximum(t, 1e-3)), np.log(ts), np.arange(layers))
+    lo, hi = max(lo, 1e-3), max(hi, lo * 1.0001, 1.1e-3)
+    layers = max(int(layers), int(math.ceil((layer_coordinate(hi) - layer_coordinate(lo)) / MAX_LAYER_STEP)) + 1)
+    ts = layer_depths(lo, hi, layers)
+    pos = np.interp(layer_coordinate(np.maximum(t, 1e-3)), layer_coordinate(ts), np.arange(layers))
     shape = (2 * h, 2 * w)
     glow = np.zeros((h, w, 3))
     for k, tk in enumerate(ts):

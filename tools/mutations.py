@@ -253,6 +253,12 @@ MUTATIONS = [
              "    step = g[HALO_STEP]\n    args = ",
              "    step = 1.0\n    args = ",
              ("tests/test_spot_multiple.py::test_coarse_halo_at_a_quarter_of_the_resolution",)),
+    Mutation("weather_layers_in_ln_t", "weather: the layers even in ln T (far apart in T where T >> 1, where the "
+             "multiply scattered halo widens with T)",
+             "fog_addon/weather.py",
+             "    return np.log(t) + 0.5 * t\n",
+             "    return np.log(t)\n",
+             ("tests/test_weather.py::test_a_pixel_between_layers_glows_with_its_own_kernel",)),
     Mutation("weather_source_intensity", "weather: a pixel's intensity without its depth squared (L Omega z^2 is "
              "the intensity of a patch filling a pixel at depth z)",
              "fog_addon/weather.py",
