@@ -183,6 +183,10 @@ c.diffuse_bounces = c.glossy_bounces = c.transmission_bounces = 0
 c.seed = a["seed"]
 c.use_animated_seed = False
 assert abs(scene.camera.data.clip_start - 0.001) < 1e-9
+if a.get("border"):                # (x0, x1, y0, y1) fractions, y from the bottom: render that crop only
+    r = scene.render
+    r.use_border = r.use_crop_to_border = True
+    r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = a["border"]
 t0 = time.perf_counter()
 measure.render_to_file(scene, a["out"])
 print("RENDER_SECONDS %.2f" % (time.perf_counter() - t0))
@@ -199,11 +203,12 @@ def reference_name(distance, density, anisotropy, albedo, volume_bounces, sample
 
 
 def render_reference_seed(blend, out, density, anisotropy, albedo, volume_bounces, samples, seed,
-                          resolution=RESOLUTION, log=None):
-    """One Cycles render of the reference (see the module doc) with ``seed``; returns (path, seconds)."""
+                          resolution=RESOLUTION, log=None, border=None):
+    """One Cycles render of the reference (see the module doc) with ``seed``; returns (path, seconds).
+    ``border``: (x0, x1, y0, y1), fractions of the frame (y from the bottom), to render that crop only."""
     args = dict(blend=str(blend), out=str(out), density=float(density), anisotropy=float(anisotropy),
                 albedo=float(albedo), volume_bounces=int(volume_bounces), samples=int(samples), seed=int(seed),
-                resolution=list(resolution))
+                resolution=list(resolution), border=list(border) if border else None)
     proc = h.run(["-c", _REFERENCE_CODE, json.dumps(args)], timeout=7200)
     if log is not None:
         log.append(proc.stdout + "\n" + proc.stderr)
