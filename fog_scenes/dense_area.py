@@ -227,6 +227,23 @@ def render_reference(case, volume_bounces=64, samples=2048, seeds=2, regen=False
     return h.mean_of_seeds(path, render_seed, seeds, regen, times)
 
 
+CENTRE_RUNS = [("side", 64, 65536, 4)]   # centre crops (``dense_spot.render_crop``): the inner rings, 64x the samples
+
+
+def centre_reference_name(case, volume_bounces, samples, seeds):
+    """File name of a cached centre crop (``dense_spot.crop_name``)."""
+    return dense_spot.crop_name(reference_name(case, volume_bounces, samples, seeds))
+
+
+def render_centre_reference(case, volume_bounces=64, samples=65536, seeds=4, regen=False, directory=None,
+                            times=None):
+    """Path of the cached Cycles reference of the centre crop about the emitter's image
+    (``dense_spot.render_crop``), rendered if missing."""
+    directory = pathlib.Path(directory) if directory else h.REFERENCES
+    return dense_spot.render_crop(directory / centre_reference_name(case, volume_bounces, samples, seeds),
+                                  blend_path(case), CASES[case], volume_bounces, samples, seeds, regen, times)
+
+
 def seed_images(case, volume_bounces, samples, seeds):
     """The kept per-seed renders of a cached reference, as (H, W, 3) arrays."""
     from fog_addon import imageio
@@ -457,6 +474,10 @@ def main(argv=None):
                 continue
             print(ref.name, "render seconds", times, flush=True)
             done.append(run)
+        for run in CENTRE_RUNS:
+            if not missing and (not only or run[0] in only):
+                times = []
+                print(render_centre_reference(*run, times=times).name, "render seconds", times, flush=True)
         if missing:
             print("MISSING", missing, flush=True)
         if not a.no_summary:

@@ -243,7 +243,12 @@ CENTRE_RUNS = [("side", 64, 65536, 4)]   # (case, volume bounces, samples, seeds
 
 def centre_reference_name(case, volume_bounces, samples, seeds):
     """File name of a cached centre crop: :func:`reference_name` with ``_centre<CENTRE_PX>``."""
-    return reference_name(case, volume_bounces, samples, seeds).replace(".exr", f"_centre{CENTRE_PX}.exr")
+    return crop_name(reference_name(case, volume_bounces, samples, seeds))
+
+
+def crop_name(frame_name):
+    """A centre crop's file name from its frame reference's."""
+    return frame_name.replace(".exr", f"_centre{CENTRE_PX}.exr")
 
 
 def centre_slice():
@@ -258,19 +263,24 @@ def render_centre_reference(case, volume_bounces=64, samples=65536, seeds=4, reg
     rendered as :func:`render_reference` renders the frame but with Cycles' border cropped to it: the inner rings
     beside a beam hold 24 and 116 pixels whose path-traced means stay noisy at 2048 spp x 4 (the innermost read
     0.92 of this crop's 65536 x 4)."""
-    c = CASES[case]
     directory = pathlib.Path(directory) if directory else h.REFERENCES
-    path = directory / centre_reference_name(case, volume_bounces, samples, seeds)
+    return render_crop(directory / centre_reference_name(case, volume_bounces, samples, seeds), blend_path(case),
+                       CASES[case], volume_bounces, samples, seeds, regen, times)
+
+
+def render_crop(path, blend, case, volume_bounces, samples, seeds, regen=False, times=None):
+    """Render (if missing or ``regen``) the centre crop ``path`` of ``blend`` in the fog of ``case`` (a CASES
+    entry: density, anisotropy, albedo) with ``volume_bounces``, ``samples`` spp, ``seeds`` seeds averaged."""
+    path = pathlib.Path(path)
     if path.is_file() and not regen:
         return path
-    blend = blend_path(case)
     rows, cols = centre_slice()
     w, hh = RESOLUTION
     border = (cols.start / w, cols.stop / w, 1.0 - rows.stop / hh, 1.0 - rows.start / hh)
 
     def render_seed(seed, out):
-        return dense.render_reference_seed(blend, out, c["density"], c["anisotropy"], c["albedo"], volume_bounces,
-                                           samples, seed, RESOLUTION, border=border)[1]
+        return dense.render_reference_seed(blend, out, case["density"], case["anisotropy"], case["albedo"],
+                                           volume_bounces, samples, seed, RESOLUTION, border=border)[1]
 
     return h.mean_of_seeds(path, render_seed, seeds, regen, times)
 

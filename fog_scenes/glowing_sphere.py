@@ -443,28 +443,33 @@ def render_ours(density, out, multiple_scattering="off", anisotropy=0.85, albedo
                          blend=blend, extra=tuple(args) + tuple(extra), log=log)
 
 
+def area_scaled(ours, density, clear=None, shape="sphere", turn_deg=FLAT_TURN_DEG, resolution=RESOLUTION):
+    """Ours (an image) with its glow scaled to the emitter's image area.  Both renders sample pixel centres, so the
+    Emission pass holds (pixel centres on the emitter) / (its image's area) times the light it sends into the fog:
+    the glow (ours less the fog-free render dimmed by e^(-density x each pixel's camera distance); ``clear``: a
+    :func:`render_clear` dict of paths, default that of ``shape``) is scaled by :func:`emitter_image_area_px` /
+    the pixel count of :func:`emitter_mask` (the sphere's test does this with a uniform 15 m)."""
+    from fog_addon import imageio
+    paths = clear or render_clear(resolution=resolution, shape=shape, turn_deg=turn_deg)
+    clear_img = imageio.read_rgb(paths["image"])
+    dist = imageio.read(paths["distance"])[..., 0]
+    direct = clear_img[..., :3] * np.exp(-float(density) * np.minimum(dist, 1e6))[..., None]
+    scale = emitter_image_area_px(resolution=resolution, shape=shape, turn_deg=turn_deg) / np.count_nonzero(
+        emitter_mask(resolution=resolution, shape=shape, turn_deg=turn_deg))
+    return direct + (np.asarray(ours)[..., :3] - direct) * scale
+
+
 def compare_rings(ours, reference, density, clear=None, shape="sphere", turn_deg=FLAT_TURN_DEG,
-                  area_scaled=True, leave_out_emitter=False, edges_px=dense.RING_EDGES_PX):
-    """Ours / the path-traced ``reference`` ring by ring (:func:`ring_means`; images or EXR paths).  Both render
-    pixel centres, so the Emission pass holds (pixel centres on the emitter) / (its image's area) times the
-    light it sends into the fog: with ``area_scaled`` ours' glow (ours less the fog-free render dimmed by
-    e^(-density x each pixel's camera distance); ``clear``: a :func:`render_clear` dict of paths, default that of
-    ``shape``) is scaled by :func:`emitter_image_area_px` / the pixel count of :func:`emitter_mask` before
-    comparing (the sphere's test does this with a uniform 15 m)."""
+                  area_scaled_glow=True, leave_out_emitter=False, edges_px=dense.RING_EDGES_PX, mask=None):
+    """Ours / the path-traced ``reference`` ring by ring (:func:`ring_means`; images or EXR paths), ours' glow
+    scaled to the emitter's area with ``area_scaled_glow`` (:func:`area_scaled`).  ``mask``: only these pixels
+    (:func:`ring_means`)."""
     from fog_addon import imageio
     read = lambda a: imageio.read_rgb(a) if isinstance(a, (str, os.PathLike)) else np.asarray(a, np.float64)
     ours_img, ref_img = read(ours), read(reference)
-    if area_scaled:
-        paths = clear or render_clear(resolution=(ref_img.shape[1], ref_img.shape[0]), shape=shape,
-                                      turn_deg=turn_deg)
-        clear_img = imageio.read_rgb(paths["image"])
-        dist = imageio.read(paths["distance"])[..., 0]
-        res = (ref_img.shape[1], ref_img.shape[0])
-        direct = clear_img[..., :3] * np.exp(-float(density) * np.minimum(dist, 1e6))[..., None]
-        scale = emitter_image_area_px(resolution=res, shape=shape, turn_deg=turn_deg) / np.count_nonzero(
-            emitter_mask(resolution=res, shape=shape, turn_deg=turn_deg))
-        ours_img = direct + (ours_img[..., :3] - direct) * scale
-    kw = dict(edges_px=edges_px, leave_out_emitter=leave_out_emitter, shape=shape, turn_deg=turn_deg)
+    if area_scaled_glow:
+        ours_img = area_scaled(ours_img, density, clear, shape, turn_deg, (ref_img.shape[1], ref_img.shape[0]))
+    kw = dict(edges_px=edges_px, leave_out_emitter=leave_out_emitter, shape=shape, turn_deg=turn_deg, mask=mask)
     return ring_means(ours_img, **kw) / ring_means(ref_img, **kw)
 
 

@@ -300,6 +300,12 @@ MUTATIONS = [
              "    return m.exp(m.table(spec, table_x(m, t), 1.0)) * t\n",
              "    return m.exp(m.table(spec, table_x(m, t), 1.0))\n",
              ("tests/test_emitter_glow.py::test_the_table_read_between_its_columns_holds_the_kernel",)),
+    Mutation("emitter_glow_dipole_sign", "glowing objects: a flat emitter glows more on the side its normal leans "
+             "away from (the dipole's sign)",
+             "fog_addon/nodes/comp_fog.py",
+             "            lean_grey = (dx + dy) * (-0.5 * emitter_glow.dipole_scale(size))\n",
+             "            lean_grey = (dx + dy) * (0.5 * emitter_glow.dipole_scale(size))\n",
+             ("tests/test_emitter_glow.py::test_flat_glowing_square_against_path_traced_fog[0.3-False]",)),
     Mutation("emitter_glow_depth_squared", "glowing objects: a pixel's intensity without its depth squared (L "
              "Omega z^2 is the intensity of a patch filling a pixel at depth z)",
              "fog_addon/precompute/emitter_glow.py",

@@ -821,7 +821,7 @@ def emitter_table(g, pixel_angle, multiple_albedo=None):
             facing.name: images_.table_image(facing, functools.partial(emitter_glow.bake_facing, g))}
 
 
-def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=None, facing=None):
+def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=None, facing=None, lean=None):
     """The glows of the glowing objects the camera sees (``precompute/emitter_glow.py``): the Emission pass made
     undimmed (times e^{beta D_vp}) and weighted by its glow's total weight N(T) (``emitter_glow.source_weight``)
     and, with ``facing`` (the |cos| of each pixel's surface to the camera), taken as the two-sided Lambertian
@@ -830,14 +830,21 @@ def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=
     and summed (per unit albedo).  Each rung's glow stops at the surfaces in front of its sources
     (``emitter_glow.segment_share`` at the rung's angle, the sources' optical depth taken as the mean over what the
     rung blurs in: a second blur of the weights times T); where the pixel sees the sky (``cover`` 0) or a glowing
-    surface it is whole."""
+    surface it is whole.  With ``lean`` (the picture's unit direction (x, y, 0) of each pixel's normal, taken facing
+    the camera) a flat emitter glows more on the side its normal leans to: each rung from DIPOLE_MIN_SIZE up adds
+    the cos(phi) term of ``emitter_glow.facing_dipole``, -(sigma^2 / rho) div(B * (D / c) L u) (``dipole_scale``;
+    the gradient by +-1 px differences; grey, in the glow's colour where it lands)."""
     spec = emitter_glow.table_spec(g, pixel_angle, multiple_albedo)
     t = beta * d_vp
     x = emitter_glow.table_x(m, t)
     light = m.scale(p[EMITTERS], emitter_glow.source_weight(m, spec, t))
+    leaning = None
     if facing is not None and multiple_albedo is None:   # (Dense Fog's kernel keeps the isotropic sources)
-        mean = m.table(emitter_glow.facing_spec(g), m.clamp(facing), 0.0)
-        light = m.scale(light, emitter_glow.facing_factor(m, facing, mean))
+        c = m.clamp(facing)
+        if lean is not None:
+            dipole = emitter_glow.dipole_factor(m, facing, m.table(emitter_glow.facing_spec(g), c, 1.0))
+            leaning = m.scale(lean, m.dot(light, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0)) * dipole)
+        light = m.scale(light, emitter_glow.facing_factor(m, facing, m.table(emitter_glow.facing_spec(g), c, 0.0)))
     grey = m.dot(light, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))
     t_surface = t if cover is None else m.select(m.less(1e-3, cover), t, 1.0e6)
     # a glowing pixel's own surface is no surface in front of the glow: it takes the whole of it (the light its
@@ -847,14 +854,24 @@ def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=
     total = None
     for j, size in enumerate(emitter_glow.SIZES):
         a = emitter_glow.rung_share(m, spec, x, j)
+        sources = [m.scale(light, a), m.combine(grey * a * t, grey * a, 0.0)]
+        dipole = leaning is not None and size >= emitter_glow.DIPOLE_MIN_SIZE
+        if dipole:
+            sources.append(m.scale(leaning, a))
         blurred = []
-        for source in (m.scale(light, a), m.combine(grey * a * t, grey * a, 0.0)):
+        for source in sources:
             blur = m.node("CompositorNodeBlur", 5)
             blur.inputs["Size"].default_value = (float(size), float(size))
             blur.inputs["Extend Bounds"].default_value = True   # off, Blender extends the picture's edge pixels
             m.feed(blur.inputs["Image"], source)                # outwards: a sign cut by the frame glows on
             blurred.append(m.wrap(blur.outputs["Image"], vector=True))
-        glow, moments = blurred
+        glow, moments = blurred[:2]
+        if dipole:   # -(sigma^2 / rho) (d/dx of the x channel + d/dy of the y channel), in the glow's colour
+            dx = m.dot(_translated(m, blurred[2], -1.0, 0.0) - _translated(m, blurred[2], 1.0, 0.0), (1.0, 0.0, 0.0))
+            dy = m.dot(_translated(m, blurred[2], 0.0, -1.0) - _translated(m, blurred[2], 0.0, 1.0), (0.0, 1.0, 0.0))
+            lean_grey = (dx + dy) * (-0.5 * emitter_glow.dipole_scale(size))
+            glow_grey = m.dot(glow, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))
+            glow = glow + m.scale(glow, lean_grey / m.maximum(glow_grey, 1e-30))
         t_source = m.dot(moments, (1.0, 0.0, 0.0)) / m.maximum(m.dot(moments, (0.0, 1.0, 0.0)), 1e-30)
         share = emitter_glow.segment_share(m, t_surface, t_source, emitter_glow.rung_angle(size, pixel_angle))
         v = m.scale(glow, share)
@@ -1051,8 +1068,12 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
         fog = fog + _daylight(m, daylight, day.table, cam, direction, pos, normal, diffuse + specular, d_vp, t_day,
                               cover, sun_share, surface_share)
     if emitters is not None:
+        facing_normal = m.scale(normal, m.select(m.less(m.dot(normal, incoming), 0.0), -1.0, 1.0))
+        image_x, image_y = (m.scale(v, 1.0 / m.length(v)) for v in (across, up))
+        lean = m.combine(m.dot(facing_normal, image_x), m.dot(facing_normal, image_y), 0.0)
+        lean = m.scale(lean, 1.0 / m.maximum(m.length(lean), 1e-6))
         fog = fog + albedo * _emitter_glow(m, p, beta, d_vp, emitters[0], emitter_pixel_angle(scene), emitters[1],
-                                           cover, m.abs(m.dot(normal, incoming)))
+                                           cover, m.abs(m.dot(normal, incoming)), lean)
     image = p["Image"]
     if daylight is not None:   # the dimming of the pixel's surface by the fog above it and of the sky seen through
         one = 1.0 if daylight.air is None else m.wrap((1.0, 1.0, 1.0))   # (with air the dimming is RGB)

@@ -296,17 +296,52 @@ def _azimuth_mean(a, b):
     return np.where(crossing, inner, np.abs(a))
 
 
+def facing_dipole(c, g=0.0, nodes=FACING_NODES, azimuths=FACING_NODES // 2):
+    """D(c): the first Fourier coefficient, over the azimuth phi about the source in the image, of the same mean
+    of |n . omega| (``facing_mean`` is its zeroth): a flat emitter glows more on the side its normal leans to
+    (phi measured from the normal's projection on the picture, the normal taken facing the camera), as
+    E(c) + D(c) cos phi.  With n . v = -c (v the view direction) and n . p = s cos phi, the mean over theta of
+    |-c sin(theta) + s cos(phi) cos(theta)| (weighted by p_HG(-sin theta), as ``facing_mean``) is F(phi), and
+    D = (1 / pi) int F(phi) cos(phi) d phi, by the midpoint rule in theta and phi.  0 face-on and edge-on."""
+    c = np.clip(np.asarray(c, float), 0.0, 1.0)[..., None, None]
+    theta = ((np.arange(nodes) + 0.5) / nodes * np.pi - 0.5 * np.pi)[None, :]
+    phi = ((np.arange(azimuths) + 0.5) / azimuths * 2.0 * np.pi)[:, None]
+    weight = (1.0 - g * g) / (1.0 + g * g + 2.0 * g * np.sin(theta)) ** 1.5
+    s = np.sqrt(1.0 - c * c)
+    f = (np.abs(-c * np.sin(theta) + s * np.cos(phi) * np.cos(theta)) * weight).sum(axis=-1) / weight.sum()
+    return 2.0 * np.mean(f * np.cos(phi)[..., 0], axis=-1)
+
+
 def facing_factor(m, c, mean):
     """A glowing pixel's intensity over the isotropic source's (the section above): ``mean`` (E(c), ``facing_mean``:
     read from the table of ``facing_spec``) / max(c, MIN_FACING)."""
     return mean / m.maximum(c, MIN_FACING)
 
 
+def dipole_factor(m, c, dipole):
+    """A glowing pixel's glow towards its normal's side over the isotropic source's (the cos phi term):
+    ``dipole`` (D(c), ``facing_dipole``: the second row of ``facing_spec``'s table) / max(c, MIN_FACING)."""
+    return dipole / m.maximum(c, MIN_FACING)
+
+
+def dipole_scale(size):
+    """The dipole's rung factor sigma^2 / rho (px) of the Blur node of ``size``: a kernel's cos(phi) B(r) is
+    written as (r . u) B(r) / rho = -(sigma^2 / rho) u . grad B(r), rho = sigma sqrt(pi / 2) the Gaussian's mean
+    radius (which keeps the cos phi moment of the kernel: int (cos phi)^2 B = 1/2)."""
+    sigma = float(size) / 3.0
+    return sigma / math.sqrt(0.5 * math.pi)
+
+
+DIPOLE_MIN_SIZE = 4   # px: rungs of this size and up carry the dipole (their gradient by +-1 px differences)
+
+
 def facing_spec(g):
-    """The TableSpec of ``facing_mean`` for anisotropy ``g``: FACING_COUNT samples over c in [0, 1], one row."""
-    return tables.TableSpec(f"AnalyticFog Emitter Facing (g {float(g):+.3f})", FACING_COUNT, 1, g=float(g))
+    """The TableSpec of the facing table for anisotropy ``g``: FACING_COUNT samples over c in [0, 1]; row 0
+    ``facing_mean``, row 1 ``facing_dipole``."""
+    return tables.TableSpec(f"AnalyticFog Emitter Facing (g {float(g):+.3f})", FACING_COUNT, 2, g=float(g))
 
 
 def bake_facing(g):
-    """(1, FACING_COUNT) float32: ``facing_mean`` at c = 0 .. 1 (smooth: 4 / pi^2 to 2 / pi at g = 0)."""
-    return facing_mean(np.linspace(0.0, 1.0, FACING_COUNT), g)[None, :].astype(np.float32)
+    """(2, FACING_COUNT) float32: ``facing_mean`` and ``facing_dipole`` at c = 0 .. 1."""
+    c = np.linspace(0.0, 1.0, FACING_COUNT)
+    return np.stack([facing_mean(c, g), facing_dipole(c, g)]).astype(np.float32)
