@@ -14,7 +14,6 @@ import argparse
 import json
 import pathlib
 import sys
-import time
 
 import csv_rows
 import worker_result
@@ -27,8 +26,8 @@ DENSITY, G, ALBEDO = 0.15, 0.85, 0.9
 def worker(spec):
     sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks"), str(ROOT / "tests")]
     import bpy
+    from cycles_timing import cycles_cpu, timed_apply, warm
     from shafts_cost import hall
-    from fog_addon import measure
     from fog_addon.ops import apply
     from fog_addon.precompute.spec import FogSpec
     bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -43,29 +42,15 @@ def worker(spec):
                     o.data.spot_size, o.data.spot_blend = math.radians(60.0), 0.15
                 else:
                     o.data.shape, o.data.size = "SQUARE", 0.5
-    scene.render.engine = "CYCLES"
-    measure.set_resolution(scene, 640, 360)
-    measure.set_samples(scene, 32)
-    measure.set_cycles_cpu(scene)
-    scene.cycles.use_denoising = False
-
-    def timed_render():
-        c, t = time.process_time(), time.perf_counter()
-        bpy.ops.render.render()
-        return time.perf_counter() - t, time.process_time() - c
+    cycles_cpu(scene, 640, 360, 32)
 
     res = {"lights": spec["lights"], "method": spec["method"], "kind": kind}
     for ms in (False, True):
         fog = FogSpec(density=DENSITY, anisotropy=G, albedo=(ALBEDO,) * 3, method=spec["method"], shafts=False,
                       multiple_scattering=ms)
-        t = time.perf_counter()
-        apply.apply(scene, fog)
-        res[f"apply_{'ms' if ms else 'ss'}_s"] = time.perf_counter() - t
-        timed_render()   # first: shader compilation, compositor set-up
-        runs = [timed_render() for _ in range(spec["repeats"])]
+        res[f"apply_{'ms' if ms else 'ss'}_s"] = timed_apply(scene, fog)
         key = "ms" if ms else "ss"
-        res[f"{key}_s"] = min(r[0] for r in runs)
-        res[f"{key}_cpu_s"] = min(r[1] for r in runs)
+        res[f"{key}_s"], res[f"{key}_cpu_s"] = warm(spec["repeats"])
     apply.remove(scene) if hasattr(apply, "remove") else None
     res["ratio"] = res["ms_s"] / res["ss_s"]
     res["ratio_cpu"] = res["ms_cpu_s"] / res["ss_cpu_s"]
