@@ -148,6 +148,19 @@ def test_facing_dipole_against_quadrature():
     assert abs(float(eg.facing_dipole(1.0, 0.85))) < 1e-9 and abs(float(eg.facing_dipole(0.0, 0.85))) < 1e-9
 
 
+def test_glowing_objects_notes():
+    """What the fog cannot do with glowing objects is said: no glow but with the compositor, no fog light on other
+    surfaces, no dimming of their light in EEVEE."""
+    from types import SimpleNamespace
+    from fog_addon import caveats
+    sign = [SimpleNamespace(name="Neon")]
+    assert caveats.glow_notes([], "nodes") == []
+    cycles = caveats.glow_notes(sign, "compositor")
+    assert len(cycles) == 1 and "does not light other surfaces" in cycles[0]
+    eevee = caveats.glow_notes(sign, "nodes", "BLENDER_EEVEE_NEXT")
+    assert "no glow" in eevee[0] and "not dimmed" in eevee[-1] and len(eevee) == 3
+
+
 @pytest.mark.parametrize("g", [0.0, 0.7])
 def test_a_spheres_pixels_keep_its_glow(g):
     """The pixels of a sphere's disc (c = sqrt(1 - r^2), uniform over the disc) weighted by the facing factor sum to
