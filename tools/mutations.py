@@ -400,7 +400,7 @@ MUTATIONS = [
     Mutation("emitter_own_pixels_shared", "glowing objects: an emitter's own pixels take only the share of the glow "
              "in front of a surface at its depth (half), not the whole",
              "fog_addon/nodes/comp_fog.py",
-             "    t_surface = m.select(m.less(1e-30, grey), 1.0e6, t_surface)",
+             "    t_surface = m.select(glowing, 1.0e6, t_surface)",
              "    t_surface = t_surface",
              ("tests/test_emitter_glow.py::test_glowing_sphere_against_path_traced_fog",)),
     Mutation("daylight_sun_undimmed", "daylight: the sun's light on surfaces is not dimmed by the layer above them",
@@ -503,7 +503,8 @@ MUTATIONS = [
              "(a flat sign sends as much light sideways as towards the camera), not the two-sided Lambertian source "
              "its surface is",
              "fog_addon/nodes/comp_fog.py",
-             "        light = m.scale(light, emitter_glow.facing_factor(m, facing, mean))",
+             "        light = m.scale(light, emitter_glow.facing_factor(m, facing, m.table(emitter_glow.facing_spec(g), c, "
+             "0.0)))",
              "        light = light",
              ("tests/test_emitter_glow.py::test_a_sign_cut_by_the_frame_glows_as_its_pixels_do",)),
     Mutation("emitter_facing_no_phase", "glowing objects: the facing mean weighs the fog's directions alike, not by "
