@@ -82,7 +82,7 @@ def test_table_columns_are_the_optical_depths_of_its_coordinate():
     np.testing.assert_allclose(eg.table_x(NumpyOps(), t), np.linspace(0.0, 1.0, eg.T_COUNT), atol=1e-9)
 
 
-@pytest.mark.parametrize("dense", [False, True])
+@pytest.mark.parametrize("dense", [False, pytest.param(True, marks=pytest.mark.slow)])   # (Dense Fog's: 16-30 s)
 def test_the_table_read_between_its_columns_holds_the_kernel(dense):
     """The glow's weights read from the table halfway between two columns (as the compositor reads them:
     ``source_weight`` x ``rung_share``) against the ladder fitted at that very T, ring sums 1.5-160 px: within
