@@ -4,7 +4,7 @@ dipole left out, same scene, same process, warm renders.
 
     .venv/bin/python benchmarks/emitter_cost.py [--signs 4,32] [--repeats 2]
 
-The scene is shafts_cost.py's hall of columns with 2 point lamps and N glowing signs (1 x 0.4 m emissive planes,
+The scene is shafts_cost.py's hall of columns with 4 point lamps and N glowing signs (1 x 0.4 m emissive planes,
 strength 20, turned 30-70 degrees from the camera), Cycles CPU, 640x360, 32 spp, fog of density 0.15/m, g 0.85,
 albedo 0.9, shafts off.  Writes benchmarks/out/emitter_cost.csv and .png.  Figures:
 docs/measurements/2026-11-28-emitter-table.md.
@@ -49,10 +49,11 @@ def worker(spec):
     import bpy
     from cycles_timing import cycles_cpu, timed_apply, warm
     from shafts_cost import hall
+    from fog_addon.ops import apply
     from fog_addon.precompute import emitter_glow
     from fog_addon.precompute.spec import FogSpec
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = hall(bpy.context.scene, 2)
+    scene = hall(bpy.context.scene, 4)
     add_signs(scene, spec["signs"])
     cycles_cpu(scene, 640, 360, 32)
 
@@ -60,7 +61,9 @@ def worker(spec):
     res["nofog_s"], res["nofog_cpu_s"] = warm(spec["repeats"])
     fog = FogSpec(density=DENSITY, anisotropy=G, albedo=(ALBEDO,) * 3, method="compositor", shafts=False)
     for key, min_size in (("fog", emitter_glow.DIPOLE_MIN_SIZE), ("fog_no_dipole", 10 ** 6)):
-        emitter_glow.DIPOLE_MIN_SIZE = min_size   # (read when the compositor's tree is built)
+        emitter_glow.DIPOLE_MIN_SIZE = min_size   # (read when the compositor's tree is built: built anew)
+        if key != "fog":
+            apply.remove_fog(scene)
         res[f"apply_{key}_s"] = timed_apply(scene, fog)
         res[f"{key}_s"], res[f"{key}_cpu_s"] = warm(spec["repeats"])
     res["ratio_cpu"] = res["fog_cpu_s"] / res["nofog_cpu_s"]
