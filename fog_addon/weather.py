@@ -27,6 +27,7 @@ import numpy as np
 SKY_DEPTH = 1.0e6   # m: a depth beyond this is the sky (Blender writes 1e10 for the background)
 LAYERS = 16         # layers of T between the nearest and farthest ground pixel (at least)
 MAX_LAYER_STEP = 0.3   # the largest step between layers in ``layer_coordinate`` (more layers for a deeper picture)
+LAYER_SLOPE = 0.5      # ``layer_coordinate``'s slope: ln T + LAYER_SLOPE T
 SUBSAMPLES = 8      # the kernel's core (|offset| <= CORE px) is averaged over SUBSAMPLES^2 points of each pixel
 CORE = 2
 
@@ -67,21 +68,17 @@ def glow_kernel(shape, pixel_angle, optical_distance, single, multiple_, albedo)
 
 
 def layer_coordinate(t):
-    """The layers' coordinate of optical depth T: ln T + T / 2.  The layers are even in it, geometric where T << 1
-    (the kernel's shape changes with ln T) and at most 2 MAX_LAYER_STEP apart in T where T >> 1 (the multiply
-    scattered halo widens with T itself)."""
-    t = np.asarray(t, float)
-    return np.log(t) + 0.5 * t
+    """The layers' coordinate of optical depth T: ln T + LAYER_SLOPE T (``emitter_glow.log_linear``).  The layers
+    are even in it, geometric where T << 1 (the kernel's shape changes with ln T) and at most
+    MAX_LAYER_STEP / LAYER_SLOPE apart in T where T >> 1 (the multiply scattered halo widens with T itself)."""
+    from .precompute import emitter_glow
+    return emitter_glow.log_linear(t, LAYER_SLOPE)
 
 
 def layer_depths(lo, hi, count):
-    """``count`` optical depths from ``lo`` to ``hi``, even in ``layer_coordinate`` (inverted by Newton's method)."""
-    s = np.linspace(float(layer_coordinate(lo)), float(layer_coordinate(hi)), count)
-    t = np.exp(np.minimum(s, math.log(hi)))
-    for _ in range(60):
-        t = np.clip(t - (np.log(t) + 0.5 * t - s) / (1.0 / t + 0.5), lo * 0.5, hi * 2.0)
-    t[0], t[-1] = lo, hi
-    return t
+    """``count`` optical depths from ``lo`` to ``hi``, even in ``layer_coordinate``."""
+    from .precompute import emitter_glow
+    return emitter_glow.log_linear_depths(lo, hi, count, LAYER_SLOPE)
 
 
 def add_weather(image, depth, visibility_m, anisotropy=0.85, sky=(1.0, 1.0, 1.0), fov_deg=39.6, albedo=0.9,

@@ -256,8 +256,8 @@ MUTATIONS = [
     Mutation("weather_layers_in_ln_t", "weather: the layers even in ln T (far apart in T where T >> 1, where the "
              "multiply scattered halo widens with T)",
              "fog_addon/weather.py",
-             "    return np.log(t) + 0.5 * t\n",
-             "    return np.log(t)\n",
+             "LAYER_SLOPE = 0.5 ",
+             "LAYER_SLOPE = 0.0 ",
              ("tests/test_weather.py::test_a_pixel_between_layers_glows_with_its_own_kernel",)),
     Mutation("weather_source_intensity", "weather: a pixel's intensity without its depth squared (L Omega z^2 is "
              "the intensity of a patch filling a pixel at depth z)",

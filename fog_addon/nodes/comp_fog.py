@@ -842,7 +842,7 @@ def _emitter_glow(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=
     if facing is not None and multiple_albedo is None:   # (Dense Fog's kernel keeps the isotropic sources)
         c = m.clamp(facing)
         if lean is not None:
-            dipole = emitter_glow.dipole_factor(m, facing, m.table(emitter_glow.facing_spec(g), c, 1.0))
+            dipole = emitter_glow.facing_factor(m, facing, m.table(emitter_glow.facing_spec(g), c, 1.0))
             leaning = m.scale(lean, m.dot(light, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0)) * dipole)
         light = m.scale(light, emitter_glow.facing_factor(m, facing, m.table(emitter_glow.facing_spec(g), c, 0.0)))
     grey = m.dot(light, (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0))

@@ -178,26 +178,33 @@ def segment_share(m, t_surface, t_source, gamma):
     return (m.atan2(x, 1.0) + (0.5 * math.pi - gamma)) * (1.0 / (math.pi - gamma))
 
 
-def _table_s(t):
-    """The table's coordinate of optical depth t: s = ln T + T (``table_x``)."""
-    return math.log(t) + t
+def log_linear(t, slope):
+    """ln T + slope T (numpy or a float): a coordinate in which points spread geometrically where T << 1 / slope
+    and evenly where T >> 1 / slope (the weights' table's columns, ``weather``'s layers)."""
+    return np.log(t) + slope * np.asarray(t, float)
+
+
+def log_linear_depths(lo, hi, count, slope):
+    """``count`` optical depths from ``lo`` to ``hi``, even in ``log_linear`` (inverted by Newton's method from
+    T = e^s, held within [lo / 2, 2 hi]; the ends exact)."""
+    s = np.linspace(float(log_linear(lo, slope)), float(log_linear(hi, slope)), count)
+    t = np.exp(np.minimum(s, math.log(hi)))
+    for _ in range(60):
+        t = np.clip(t - (np.log(t) + slope * t - s) / (1.0 / t + slope), 0.5 * lo, 2.0 * hi)
+    t[0], t[-1] = lo, hi
+    return t
 
 
 def optical_depths(count=T_COUNT):
-    """The T of the weights' table columns: uniform in s = ln T + T from T_MIN to T_MAX (``table_x``; s inverted
-    by Newton's method, which converges from T = max(s, e^s) in a dozen steps)."""
-    s = np.linspace(_table_s(T_MIN), _table_s(T_MAX), count)
-    t = np.maximum(np.where(s < 0.0, np.exp(np.minimum(s, 0.0)), s), T_MIN * 0.5)
-    for _ in range(60):
-        t = np.maximum(t - (np.log(t) + t - s) / (1.0 / t + 1.0), 1e-12)
-    return t
+    """The T of the weights' table columns: even in s = ln T + T from T_MIN to T_MAX (``table_x``)."""
+    return log_linear_depths(T_MIN, T_MAX, count, 1.0)
 
 
 def table_x(m, t):
     """The weights' table X of optical depth ``t``: s = ln T + T over [s(T_MIN), s(T_MAX)], clamped (a source
     nearer than T_MIN glows with T_MIN's shares and normalisation, ``source_weight``).  The columns are
     geometric in T where T << 1 and uniform where T >> 1, where the shares change with T, not ln T."""
-    lo, hi = _table_s(T_MIN), _table_s(T_MAX)
+    lo, hi = float(log_linear(T_MIN, 1.0)), float(log_linear(T_MAX, 1.0))
     tt = m.maximum(t, T_MIN)
     return m.clamp01((m.log(tt) + tt - lo) * (1.0 / (hi - lo)))
 
@@ -217,8 +224,8 @@ def bake_weights(single, pixel_angle, count=T_COUNT):
     (``fit_weights``) as shares a_j / N of their sum N(T), and in the last row ln(N e^T / T).
 
     The table is read between its columns linearly (``source_weight``): a_j(T) itself falls as T e^{-T} (single
-    scattering), which a linear read between columns 0.45 apart in ln T overestimates by 13 % at T 4.5 (the
-    curvature of ln T - T); N e^T / T is nearly flat for single scattering, and the shares change slowly."""
+    scattering), which a linear read between columns overestimates where T >> 1 (the curvature of ln T - T);
+    N e^T / T is nearly flat for single scattering, and the shares change slowly."""
     out = np.zeros((len(SIZES) + 1, count))
     for k, t in enumerate(optical_depths(count)):
         a = fit_weights(kernel_grid(t, pixel_angle, single, 1.0, HALF))
@@ -314,14 +321,9 @@ def facing_dipole(c, g=0.0, nodes=FACING_NODES, azimuths=FACING_NODES // 2):
 
 def facing_factor(m, c, mean):
     """A glowing pixel's intensity over the isotropic source's (the section above): ``mean`` (E(c), ``facing_mean``:
-    read from the table of ``facing_spec``) / max(c, MIN_FACING)."""
+    read from the table of ``facing_spec``) / max(c, MIN_FACING); given D(c) (``facing_dipole``, the table's
+    second row), its cos(phi) term's."""
     return mean / m.maximum(c, MIN_FACING)
-
-
-def dipole_factor(m, c, dipole):
-    """A glowing pixel's glow towards its normal's side over the isotropic source's (the cos phi term):
-    ``dipole`` (D(c), ``facing_dipole``: the second row of ``facing_spec``'s table) / max(c, MIN_FACING)."""
-    return dipole / m.maximum(c, MIN_FACING)
 
 
 def dipole_scale(size):
