@@ -211,20 +211,17 @@ def render_reference(case, volume_bounces=64, samples=2048, seeds=2, regen=False
     (default tests/references) / :func:`reference_name`.  ``times``: a list to which each new render's seconds
     are appended.  ``deadline`` (time.time() seconds): raise :class:`BudgetExhausted` instead of starting a
     seed's render after it (the seeds already rendered stay)."""
-    c = CASES[case]
     directory = pathlib.Path(directory) if directory else h.REFERENCES
     path = directory / reference_name(case, volume_bounces, samples, seeds)
     if path.is_file() and not regen:
         return path
-    blend = blend_path(case)
 
-    def render_seed(seed, out):
+    def before_seed(seed):
         if deadline is not None and time.time() > deadline:
             raise BudgetExhausted(f"{path.name}: seed {seed} not started (budget spent)")
-        return dense.render_reference_seed(blend, out, c["density"], c["anisotropy"], c["albedo"], volume_bounces,
-                                           samples, seed, RESOLUTION)[1]
 
-    return h.mean_of_seeds(path, render_seed, seeds, regen, times)
+    return dense_spot.render_case(path, blend_path(case), CASES[case], volume_bounces, samples, seeds, regen, times,
+                                  before_seed=before_seed)
 
 
 CENTRE_RUNS = [("side", 64, 65536, 4)]   # centre crops (``dense_spot.render_crop``): the inner rings, 64x the samples

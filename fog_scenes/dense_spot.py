@@ -223,18 +223,11 @@ def render_reference(case, volume_bounces=64, samples=2048, seeds=2, regen=False
     kept beside the mean (:func:`fog_scenes.dense.seed_path`), reused unless ``regen``.  Cached as ``directory``
     (default tests/references) / :func:`reference_name`.  ``times``: a list to which each new render's seconds
     are appended."""
-    c = CASES[case]
     directory = pathlib.Path(directory) if directory else h.REFERENCES
     path = directory / reference_name(case, volume_bounces, samples, seeds)
     if path.is_file() and not regen:
         return path
-    blend = blend_path(case)
-
-    def render_seed(seed, out):
-        return dense.render_reference_seed(blend, out, c["density"], c["anisotropy"], c["albedo"], volume_bounces,
-                                           samples, seed, RESOLUTION)[1]
-
-    return h.mean_of_seeds(path, render_seed, seeds, regen, times)
+    return render_case(path, blend_path(case), CASES[case], volume_bounces, samples, seeds, regen, times)
 
 
 CENTRE_PX = 12   # the centre crop's side (px) about the lamp's image: rings 1.5-6 px (``render_centre_reference``)
@@ -269,16 +262,27 @@ def render_centre_reference(case, volume_bounces=64, samples=65536, seeds=4, reg
 
 
 def render_crop(path, blend, case, volume_bounces, samples, seeds, regen=False, times=None):
-    """Render (if missing or ``regen``) the centre crop ``path`` of ``blend`` in the fog of ``case`` (a CASES
-    entry: density, anisotropy, albedo) with ``volume_bounces``, ``samples`` spp, ``seeds`` seeds averaged."""
+    """Render (if missing or ``regen``) the centre crop ``path`` (:func:`centre_slice`) of ``blend`` as
+    :func:`render_case` renders the frame."""
     path = pathlib.Path(path)
     if path.is_file() and not regen:
         return path
     rows, cols = centre_slice()
     w, hh = RESOLUTION
     border = (cols.start / w, cols.stop / w, 1.0 - rows.stop / hh, 1.0 - rows.start / hh)
+    return render_case(path, blend, case, volume_bounces, samples, seeds, regen, times, border=border)
+
+
+def render_case(path, blend, case, volume_bounces, samples, seeds, regen=False, times=None, border=None,
+                before_seed=None):
+    """Render ``path``: ``blend`` in the fog of ``case`` (a CASES entry: density, anisotropy, albedo) with
+    ``volume_bounces``, ``samples`` spp and ``seeds`` seeds averaged (:func:`fog_scenes.dense.render_reference_seed`,
+    each seed kept beside the mean and reused unless ``regen``); ``border``: that crop only; ``before_seed(seed)``:
+    called before a seed's render (it may raise to stop)."""
 
     def render_seed(seed, out):
+        if before_seed is not None:
+            before_seed(seed)
         return dense.render_reference_seed(blend, out, case["density"], case["anisotropy"], case["albedo"],
                                            volume_bounces, samples, seed, RESOLUTION, border=border)[1]
 
