@@ -39,7 +39,8 @@ def test_spliced_into_a_users_compositor_and_taken_out(res):
     assert s["rl_feeds"] == ["AnalyticFog Compositor 0 Fog"]
     assert s["aovs_fed"] == sorted(FOG_AOVS + ["Image"])
     assert s["denoising"] is True, "the render holds no fog light: Cycles' denoiser stays on"
-    assert s["state"] == {"tree": "My Compositor", "fog": True, "engine": "CYCLES"}
+    assert s["state"] == {"tree": "My Compositor", "fog": True, "engine": "CYCLES",
+                          "links": '[["Render Layers", "Glare", "Image"], ["Render Layers", "Viewer", "Image"]]'}
     assert s["restored"] == {"links": True, "nodes": True, "fog": True, "aovs": True}, s["after"]
 
 

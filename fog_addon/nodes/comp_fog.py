@@ -965,8 +965,10 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     if ng is None:
         ng = bpy.data.node_groups.new(FOG_GROUP, "CompositorNodeTree")
         ng[groups.FOG_PROP] = True
-    if [(i.name, i.in_out) for i in ng.interface.items_tree] != [(n, "INPUT") for n, _ in inputs] + [
-            ("Image", "OUTPUT"), ("Fog Light", "OUTPUT")]:   # new, or another engine's: the chain links it anew
+    have = [(i.name, i.in_out) for i in ng.interface.items_tree if i.item_type == "SOCKET"]
+    if ([s for s in have if s[1] == "INPUT"] != [(n, "INPUT") for n, _ in inputs]   # (Blender lists outputs first)
+            or [s for s in have if s[1] == "OUTPUT"] != [("Image", "OUTPUT"), ("Fog Light", "OUTPUT")]):
+        # new, or another engine's: its group nodes lose their links, and the chain links them anew
         ng.interface.clear()
         for name, kind in inputs:
             ng.interface.new_socket(name, in_out="INPUT", socket_type=C if kind == "COLOR" else F)

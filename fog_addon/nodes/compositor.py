@@ -47,6 +47,8 @@ The settings changed (the scene's denoiser and Compositing flags, each view
 layer's Emission, Environment, Denoising Data and Depth passes) are recorded by ``overrides.py`` and restored
 exactly by ``teardown``; the scene's ``STATE`` names the tree the fog edited.
 """
+import json
+
 import bpy
 
 from . import overrides, owned
@@ -55,6 +57,8 @@ EMISSION, ENVIRONMENT = "Emission", "Environment"   # the Render Layers outputs 
 DEPTH = "Depth"   # the Render Layers output of the Z pass (``use_pass_z``), which the fog group reads in EEVEE
 STATE = "analytic_fog_compositor"   # on the scene: {"tree": the compositor tree the fog edited or made,
 #                                      "fog": True for the Compositor method's chain, else the denoiser's}
+LINKS = "links"   # in STATE: JSON [[Render Layers node, node, input identifier], ...], the user's links from each
+#                   spliced Render Layers' Image, which ``teardown`` gives back whatever became of the chain
 GROUP = "AnalyticFog Compositor"
 _PREFILTER = {"NONE": "None", "FAST": "Fast", "ACCURATE": "Accurate"}
 _QUALITY = {"HIGH": "High", "BALANCED": "Balanced", "FAST": "Fast"}
@@ -248,14 +252,19 @@ def setup(scene, fog=None):
             return [(scene.name, f"{why}: the compositor is left as it is and Cycles' denoiser on, which "
                                  "smears the fog's glows (turn it off, or see README 'Fog passes')")]
         _store_passes(scene, {_layer(scene, n) for n in nodes}, fog)
+        spliced = []
         for k, rl in enumerate(nodes):
             users = [link.to_socket for link in rl.outputs["Image"].links]
+            spliced += [[rl.name, sock.node.name, sock.identifier] for sock in users]
             last = chain(tree, rl, k)
             for sock in users:
                 tree.links.new(last, sock)
+        scene[STATE] = {"tree": tree.name, "fog": fog is not None, "engine": scene.render.engine,
+                        LINKS: json.dumps(spliced)}
     if fog is None:
         overrides.override(scene, "cycles.use_denoising", False)
-    scene[STATE] = {"tree": tree.name, "fog": fog is not None, "engine": scene.render.engine}
+    if scene.get(STATE) is None:
+        scene[STATE] = {"tree": tree.name, "fog": fog is not None, "engine": scene.render.engine}
     return []
 
 
@@ -278,18 +287,21 @@ def teardown(scene):
                 scene.compositing_node_group = None
             if tree.users == 0:
                 bpy.data.node_groups.remove(tree)
-        elif any(owned.is_ours(n) for n in tree.nodes):
-            _unsplice(tree)
+        elif any(owned.is_ours(n) for n in tree.nodes) or state.get(LINKS):
+            _unsplice(tree, json.loads(state.get(LINKS) or "[]"))
     del scene[STATE]
     overrides.restore(scene)
     for vl in scene.view_layers:
         overrides.restore(vl)
 
 
-def _unsplice(tree):
+def _unsplice(tree, spliced=()):
     """Delete the fog's nodes from the user's ``tree``, linking each Render Layers Image back to where
-    the chain fed."""
-    back = []
+    the chain fed: the links ``spliced`` recorded ([Render Layers node, node, input identifier], ``setup``),
+    so that a chain cut since (a group node whose links Blender dropped, a node deleted) still gives the
+    user's links back, and those the chain's nodes still show (set-ups recorded before ``LINKS``).  An input
+    the user has linked to something else of theirs since is left as it is."""
+    back = [tuple(entry[:1]) + ("Image",) + tuple(entry[1:]) for entry in spliced]
     for link in tree.links:
         if owned.is_ours(link.from_node) and not owned.is_ours(link.to_node):
             role = owned.role_of(link.from_node).rsplit(" ", 1)[0]   # "Compositor k"
@@ -299,5 +311,12 @@ def _unsplice(tree):
             if src is not None:
                 back.append((src.node.name, src.identifier, link.to_node.name, link.to_socket.identifier))
     owned.remove_ours(tree)
-    for from_node, from_id, to_node, to_id in back:
-        tree.links.new(_sock(tree.nodes[from_node].outputs, from_id), _sock(tree.nodes[to_node].inputs, to_id))
+    for from_node, from_id, to_node, to_id in dict.fromkeys(back):
+        src, dst = tree.nodes.get(from_node), tree.nodes.get(to_node)
+        if src is None or dst is None or owned.is_ours(src) or owned.is_ours(dst):
+            continue
+        to_sock = next((s for s in dst.inputs if s.identifier == to_id), None)
+        from_sock = next((s for s in src.outputs if s.identifier == from_id), None)
+        if to_sock is None or from_sock is None or (to_sock.is_linked and not to_sock.is_multi_input):
+            continue
+        tree.links.new(from_sock, to_sock)
