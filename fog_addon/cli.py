@@ -215,9 +215,19 @@ def build_parser():
     f.add_argument("--seed", type=int, default=0, help="Cycles sampling seed (noise estimates)")
 
     w = sub.add_parser("weather", help="add fog (attenuation, airlight, glows) to a linear HDR image with a depth map")
-    w.add_argument("image", metavar="IMAGE.exr")
+    w.add_argument("image", metavar="IMAGE.exr",
+                   help="the fog-free picture, linear light: an EXR's R, G, B, or a multilayer EXR's Combined pass "
+                        "(Composite.Combined if Blender's compositor wrote one); an 8- or 16-bit PNG or JPEG is "
+                        "converted from sRGB to linear, with a note")
+    w.add_argument("--image-pass", metavar="NAME",
+                   help="the multilayer EXR pass to read R, G, B from when there are several (e.g. ViewLayer.Combined)")
     w.add_argument("--depth", required=True, metavar="DEPTH.exr",
-                   help="distance from the camera per pixel: an EXR Z pass or an image in metres (1e6 and beyond: sky)")
+                   help="metres from the camera per pixel (1e6 and beyond: sky), one float channel: a single-channel "
+                        "EXR, an EXR's Z channel, or a multilayer EXR's Depth pass (<layer>.Depth.Z, Blender's Z: "
+                        "along the view axis); may be the same file as IMAGE.  Integer images (PNG, JPEG) are refused")
+    w.add_argument("--depth-pass", metavar="NAME",
+                   help="the channel or pass to read the depth from when the names do not settle it "
+                        "(e.g. Second.Depth or Second.Depth.Z)")
     w.add_argument("--visibility", required=True, type=_finite_float("visibility"), metavar="METRES",
                    help="meteorological visibility; the density is 3.912 / visibility (Koschmieder)")
     w.add_argument("--anisotropy", type=_finite_float("anisotropy"), default=0.85, metavar="G",
@@ -388,7 +398,7 @@ def cmd_weather(args):
         raise UsageError(f"--albedo must be in [0, 1], got {args.albedo}")
     try:
         weather.run(args.image, args.depth, args.out, args.visibility, args.anisotropy, sky, args.fov, args.albedo,
-                    args.scale)
+                    args.scale, image_pass=args.image_pass, depth_pass=args.depth_pass)
     except weather.WeatherError as exc:
         raise UsageError(str(exc))
     except (OSError, FileNotFoundError) as exc:

@@ -10,12 +10,18 @@ Conventions:
   picture (OpenImageIO's order; Blender's ``Image.pixels`` is bottom-up);
 * EXR holds linear scene values as written by the renderer;
 * PNG is display-referred 8-bit (or 16-bit) ``[0, 1]``; reading returns the
-  values divided by the type's maximum, with no colour-space conversion.
+  values divided by the type's maximum, with no colour-space conversion
+  (``srgb_to_linear`` decodes them when linear light is wanted);
+* a multilayer EXR names each channel ``<layer>.<pass>.<channel>`` (Blender 5.0:
+  "ViewLayer.Combined.R", "ViewLayer.Depth.Z") and Blender 5.0 writes it as a
+  multi-part file, one part (OIIO subimage) per pass; ``channels`` lists every
+  channel of every part and ``read_channels`` reads chosen ones by name.
 """
 import importlib.util
 import os
 import pathlib
 import sys
+from typing import NamedTuple
 
 import numpy as np
 
@@ -102,6 +108,93 @@ def read_layers(path):
     return out
 
 
+class Channel(NamedTuple):
+    """One channel of an image file: its full ``name`` ("R", "Z", "ViewLayer.Depth.Z"), the ``subimage`` (EXR
+    part) and ``index`` within it that hold it, its stored ``format`` ("uint8", "half", "float", ...), whether
+    that is a floating-point type (``is_float``: integer types hold display-referred levels, not scene values),
+    and the colour space OIIO reports for its part ("sRGB" for a PNG or JPEG; "" when the file says none)."""
+    name: str
+    subimage: int
+    index: int
+    format: str
+    is_float: bool
+    colorspace: str
+
+    @property
+    def pass_name(self):
+        """The name without its last component: "ViewLayer.Depth" for "ViewLayer.Depth.Z", "" for "R"."""
+        return self.name.rpartition(".")[0]
+
+    @property
+    def suffix(self):
+        """The last component of the name: "Z" for "ViewLayer.Depth.Z"."""
+        return self.name.rpartition(".")[2]
+
+
+def channels(path):
+    """Every channel of every part (subimage) of ``path``, in file order, as ``Channel``s; nothing is read but
+    the headers."""
+    o = oiio()
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise FileNotFoundError(f"no such image: {path}")
+    inp = o.ImageInput.open(path)
+    if inp is None:
+        raise IOError(f"cannot open image {path}: {o.geterror()}")
+    out, k = [], 0
+    floats = (o.HALF, o.FLOAT, o.DOUBLE)
+    try:
+        while inp.seek_subimage(k, 0):
+            spec = inp.spec()
+            cs = spec.getattribute("oiio:ColorSpace") or ""
+            for i in range(spec.nchannels):
+                fmt = spec.channelformat(i)
+                name = spec.channelnames[i] if i < len(spec.channelnames) else f"channel{i}"
+                out.append(Channel(name, k, i, str(fmt), fmt.basetype in floats, str(cs)))
+            k += 1
+    finally:
+        inp.close()
+    return out
+
+
+def read_channels(path, chans):
+    """The ``Channel``s ``chans`` of ``path`` (from ``channels``) as float32 ``(H, W, len(chans))`` in that order,
+    top row first; integer types are divided by their maximum (as ``read``).  Each part is read once, only the
+    range of channels asked of it."""
+    o = oiio()
+    path = os.fspath(path)
+    inp = o.ImageInput.open(path)
+    if inp is None:
+        raise IOError(f"cannot open image {path}: {o.geterror()}")
+    planes = {}
+    try:
+        for sub in sorted({c.subimage for c in chans}):
+            if not inp.seek_subimage(sub, 0):
+                raise IOError(f"{path}: no subimage {sub}")
+            spec = inp.spec()
+            idx = [c.index for c in chans if c.subimage == sub]
+            lo, hi = min(idx), max(idx) + 1
+            data = inp.read_image(sub, 0, lo, hi, "float")
+            if data is None:
+                raise IOError(f"cannot read {path}: {inp.geterror()}")
+            arr = np.asarray(data, np.float32).reshape(spec.height, spec.width, hi - lo)
+            for i in idx:
+                planes[(sub, i)] = arr[..., i - lo]
+    finally:
+        inp.close()
+    shapes = {planes[(c.subimage, c.index)].shape for c in chans}
+    if len(shapes) != 1:
+        raise IOError(f"{path}: the channels {', '.join(c.name for c in chans)} differ in size ({sorted(shapes)})")
+    return np.ascontiguousarray(np.stack([planes[(c.subimage, c.index)] for c in chans], axis=-1))
+
+
+def srgb_to_linear(v):
+    """Linear light from sRGB-encoded values in [0, 1] (IEC 61966-2-1: v / 12.92 up to 0.04045, else
+    ((v + 0.055) / 1.055)^2.4): what an 8-bit PNG or JPEG stores is this curve of the light, not the light."""
+    v = np.asarray(v, np.float32)
+    return np.where(v <= 0.04045, v / 12.92, ((np.maximum(v, 0.04045) + 0.055) / 1.055) ** 2.4).astype(np.float32)
+
+
 def read_rgb(path):
     """Read the first three channels (grey images are broadcast to RGB)."""
     arr = read(path)
@@ -148,6 +241,39 @@ def write_exr(path, arr, half=False, compression="zip"):
     if names:
         spec.channelnames = tuple(names)
     _write(path, spec, a)
+
+
+def write_layers(path, layers, half=False):
+    """A multi-part EXR as Blender 5.0 writes a multilayer one: ``layers`` is ``{part name: (array (H, W[, C]),
+    channel suffixes)}``, e.g. ``{"ViewLayer.Combined": (rgba, "RGBA"), "ViewLayer.Depth": (z, "Z")}``; each part
+    is named as given and its channels "<part>.<suffix>" ("ViewLayer.Depth.Z").  The inverse of ``read_layers``."""
+    o = oiio()
+    path = os.fspath(path)
+    specs, datas = [], []
+    for name, (arr, suffixes) in layers.items():
+        a = _as_hwc(arr)
+        h, w, c = a.shape
+        if len(suffixes) != c:
+            raise ValueError(f"part {name!r} has {c} channels but {len(suffixes)} names")
+        spec = o.ImageSpec(w, h, c, "half" if half else "float")
+        spec.channelnames = tuple(f"{name}.{x}" for x in suffixes)
+        spec.attribute("name", name)
+        spec.attribute("compression", "zip")
+        specs.append(spec)
+        datas.append(a)
+    out = o.ImageOutput.create(path)
+    if out is None:
+        raise IOError(f"cannot create {path}: {o.geterror()}")
+    try:
+        if not out.open(path, specs):
+            raise IOError(f"cannot open {path} for writing: {out.geterror()}")
+        for k, (spec, a) in enumerate(zip(specs, datas)):
+            if k and not out.open(path, spec, "AppendSubimage"):
+                raise IOError(f"cannot add part {k} to {path}: {out.geterror()}")
+            if not out.write_image(a):
+                raise IOError(f"cannot write {path}: {out.geterror()}")
+    finally:
+        out.close()
 
 
 def write_png(path, arr, bits=8):

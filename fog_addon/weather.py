@@ -33,7 +33,8 @@ CORE = 2
 
 
 class WeatherError(ValueError):
-    """Bad input to ``add_weather``: a message a user understands."""
+    """Bad input to ``add_weather`` or a file ``read_image`` / ``read_depth`` cannot read as asked: a message a
+    user understands."""
 
 
 def _fields(g, albedo):
@@ -134,22 +135,200 @@ def add_weather(image, depth, visibility_m, anisotropy=0.85, sky=(1.0, 1.0, 1.0)
     return (out + np.maximum(glow, 0.0)).astype(np.float32)
 
 
-def read_depth(path):
-    """The depth map of ``path``: a single-channel EXR (or image), or the Z / depth channel of a multi-channel one
-    (else its first channel)."""
+# -- reading the picture and its depth ------------------------------------------------------------------------
+#
+# The physics needs linear radiance and metres; a file says what it holds only through its channels' names and
+# types.  A multilayer EXR (Blender: one part per pass, channels "<layer>.<pass>.<channel>") holds many passes,
+# so the picture and the depth are chosen by name, never by position, and anything a name does not settle is
+# refused with the channels found.  An integer image is display-referred: its levels are sRGB-encoded light
+# (decoded with a note) and never metres (refused as depth).
+
+COMPOSITE_LAYER = "Composite"   # Blender's compositor output, written beside the view layers' passes
+
+
+def describe_channels(chans):
+    """The channels as a user reads them, grouped by pass: "ViewLayer.Combined (R, G, B, A); ViewLayer.Depth (Z)"
+    ("R, G, B" for a file without layers)."""
+    groups = {}
+    for c in chans:
+        groups.setdefault(c.pass_name, []).append(c.suffix)
+    return "; ".join(f"{p} ({', '.join(x)})" if p else ", ".join(x) for p, x in groups.items())
+
+
+def _passes(chans):
+    """{pass name: [Channel]} in file order ("" holds the channels without layers: R, G, B, A, Z, Y)."""
+    out = {}
+    for c in chans:
+        out.setdefault(c.pass_name, []).append(c)
+    return out
+
+
+def _rgb(pass_chans):
+    """The R, G, B channels of one pass (in that order), or None."""
+    by = {c.suffix.upper(): c for c in pass_chans}
+    return [by[x] for x in "RGB"] if all(x in by for x in "RGB") else None
+
+
+def _grey(pass_chans):
+    """The one grey channel of a pass without R, G, B (Y, or a lone channel beside an alpha), or None."""
+    rest = [c for c in pass_chans if c.suffix.upper() != "A"]
+    if len(rest) == 1 and (rest[0].suffix.upper() == "Y" or len(pass_chans) <= 2):
+        return rest[0]
+    return None
+
+
+def image_channels(chans, path, image_pass=None):
+    """(channels, what): the R, G, B ``Channel``s of IMAGE (one grey channel for a grey image) and a phrase
+    naming them.  With ``image_pass`` that pass; else the file's plain R, G, B, or in a multilayer EXR its
+    Combined pass: the one there is, or among several Blender's composite ("Composite.Combined", the picture
+    the compositor made of the view layers).  Anything else is a WeatherError naming the channels found."""
+    passes = _passes(chans)
+    found = describe_channels(chans)
+    if image_pass is not None:
+        if image_pass not in passes:
+            raise WeatherError(f"{path}: no pass {image_pass!r} (--image-pass); its channels: {found}")
+        rgb = _rgb(passes[image_pass])
+        if rgb is None:
+            raise WeatherError(f"{path}: the pass {image_pass!r} has no R, G, B channels; its channels: {found}")
+        return rgb, f"{image_pass} (R, G, B)"
+    cands = [p for p in passes if (p == "" or p.rpartition(".")[2].lower() == "combined") and _rgb(passes[p])]
+    why = ""
+    if len(cands) > 1:
+        composite = [p for p in cands if p.split(".")[0] == COMPOSITE_LAYER]
+        if len(composite) == 1:
+            other = next(p for p in cands if p != composite[0]) or "''"
+            cands = composite
+            why = f" (the compositor's picture; --image-pass {other} for the render's own)"
+        else:
+            raise WeatherError(f"{path}: several pictures ({', '.join(p or 'R, G, B' for p in cands)}); choose one "
+                               f"with --image-pass (channels: {found})")
+    if cands:
+        return _rgb(passes[cands[0]]), (f"{cands[0]} (R, G, B)" if cands[0] else "R, G, B") + why
+    if len(passes) == 1:
+        grey = _grey(next(iter(passes.values())))
+        if grey is not None:
+            return [grey], f"{grey.name} (grey, as R = G = B)"
+    raise WeatherError(f"{path}: no picture to fog: no R, G, B channels without a layer, and no Combined pass "
+                       f"(a multilayer EXR's <layer>.Combined.R, G, B); its channels: {found}")
+
+
+def _is_depth_name(name):
+    """Whether a channel's name says it holds depth: "Z" or "depth" alone, a pass named Depth or Z
+    ("ViewLayer.Depth.Z", "depth.Z"), or a last component "depth".  Blender's Mist ("ViewLayer.Mist.Z", 0-1) and
+    the Z of Position, Normal and Vector are not depth."""
+    parts = name.split(".")
+    last = parts[-1].lower()
+    if last == "depth":
+        return True
+    return last == "z" and (len(parts) == 1 or parts[-2].lower() in ("depth", "z"))
+
+
+def _bits(channel):
+    """"8-bit" for uint8 (and int8), "16-bit" for uint16 (and int16), else the type's name."""
+    return {"uint8": "8-bit", "int8": "8-bit", "uint16": "16-bit", "int16": "16-bit"}.get(channel.format,
+                                                                                          channel.format)
+
+
+def _integer_depth_message(path, chans):
+    """Why an integer DEPTH is refused, and what to give instead."""
+    return (f"{path} is an integer image ({_bits(chans[0])}; {describe_channels(chans)}): it holds grey levels "
+            "of a picture, not metres, so it cannot be a depth map.  Give a float EXR of the distance in metres: "
+            "Blender's Depth pass (a multilayer EXR with the Z pass on, or the Depth pass saved alone as OpenEXR), "
+            "or your depth map converted to metres and saved as a float EXR (--scale converts other units)")
+
+
+def depth_channel(chans, path, depth_pass=None):
+    """The ``Channel`` of DEPTH that holds the distance: with ``depth_pass``, that channel (a full name,
+    "ViewLayer.Depth.Z") or the one channel (or Z) of that pass ("ViewLayer.Depth"); else a file's only
+    channel (unless it is Blender's Mist, 0-1), or its one channel named as depth (``_is_depth_name``:
+    Blender's "ViewLayer.Depth.Z", a plain EXR's "Z").  Several, or none in a file of several channels, is a
+    WeatherError naming them.  An integer channel (PNG, JPEG) holds no metres and is refused."""
+    found = describe_channels(chans)
+    if depth_pass is not None:
+        exact = [c for c in chans if c.name == depth_pass]
+        of_pass = [c for c in chans if c.pass_name == depth_pass]
+        zs = [c for c in of_pass if c.suffix.upper() == "Z"]
+        pick = exact or (of_pass if len(of_pass) == 1 else zs)
+        if len(pick) != 1:
+            raise WeatherError(f"{path}: --depth-pass {depth_pass!r} names no single channel; its channels: {found}")
+        chosen = pick[0]
+    elif len(chans) == 1:
+        chosen = chans[0]
+        if chosen.pass_name.rpartition(".")[2].lower() == "mist":
+            raise WeatherError(f"{path}: its one channel, {chosen.name}, is Blender's Mist pass (0 to 1 between the "
+                               "mist's start and depth), not metres.  Give the Depth (Z) pass, or name this channel "
+                               "with --depth-pass to use it anyway")
+    else:
+        if not any(c.is_float for c in chans):
+            raise WeatherError(_integer_depth_message(path, chans))
+        cands = [c for c in chans if _is_depth_name(c.name)]
+        if len(cands) > 1:
+            raise WeatherError(f"{path}: several depth channels ({', '.join(c.name for c in cands)}); choose one "
+                               f"with --depth-pass (channels: {found})")
+        if not cands:
+            raise WeatherError(f"{path}: no depth channel (Z, or a multilayer EXR's <layer>.Depth.Z) among its "
+                               f"channels: {found}.  Give a single-channel EXR of the distance in metres, an EXR "
+                               f"with a Z channel, or name the channel with --depth-pass")
+        chosen = cands[0]
+    if not chosen.is_float:
+        raise WeatherError(_integer_depth_message(path, [chosen]))
+    return chosen
+
+
+def _linear_light(arr, chans, path, note):
+    """``arr`` as linear light: float channels as they are (scene-referred, as EXR holds them); integer ones
+    decoded from sRGB unless the file says it is linear, with a note either way."""
+    if all(c.is_float for c in chans):
+        return arr
+    c0 = chans[0]
+    if "lin" in c0.colorspace.lower():
+        note(f"{path} is an integer image ({_bits(c0)}) that says it is linear ({c0.colorspace}): read as linear "
+             "light")
+        return arr
+    note(f"{path} is a display-referred integer image ({_bits(c0)}): converted from sRGB to linear light.  Its "
+         "highlights are clipped at 1, so lamps and windows glow less than they would in an HDR EXR of the scene")
     from . import imageio
-    arr = imageio.read(path)
-    if arr.ndim == 3 and arr.shape[2] > 1:
-        arr = arr[..., 0]
-    return np.asarray(arr, np.float64).reshape(arr.shape[:2])
+    return imageio.srgb_to_linear(arr)
+
+
+def read_image(path, image_pass=None, note=None):
+    """IMAGE as linear radiance (H, W, 3) float32: the channels ``image_channels`` chooses, grey broadcast to
+    R = G = B, an integer image decoded from sRGB (``_linear_light``).  ``note(text)`` is told what was read."""
+    from . import imageio
+    note = note or (lambda text: None)
+    chans = imageio.channels(path)
+    picked, what = image_channels(chans, path, image_pass)
+    arr = _linear_light(imageio.read_channels(path, picked), picked, path, note)
+    if arr.shape[2] == 1:
+        arr = np.repeat(arr, 3, axis=2)
+    note(f"image: {what} of {path}")
+    return np.ascontiguousarray(arr, np.float32)
+
+
+def read_depth(path, depth_pass=None, note=None):
+    """DEPTH as (H, W) float64, the value of one channel (``depth_channel``): a single-channel float EXR (or
+    float image), else the channel named as depth, e.g. the Z of a plain EXR's R, G, B, A, Z or Blender's
+    multilayer "<layer>.Depth.Z"; ``depth_pass`` names it when the names do not settle it.  The values are taken
+    as metres (times ``--scale``) from the camera; Blender's Depth pass is the distance along the view axis,
+    the same as along the pixel's ray only at the centre of the picture.  ``note(text)`` is told what was read."""
+    from . import imageio
+    note = note or (lambda text: None)
+    chans = imageio.channels(path)
+    chosen = depth_channel(chans, path, depth_pass)
+    note(f"depth: {chosen.name} of {path}")
+    return np.asarray(imageio.read_channels(path, [chosen])[..., 0], np.float64)
 
 
 def run(image_path, depth_path, out_path, visibility_m, anisotropy=0.85, sky=(1.0, 1.0, 1.0), fov_deg=39.6,
-        albedo=0.9, scale=1.0, stream=sys.stderr):
-    """The command line's ``weather``: read, add the weather with progress on ``stream``, write an EXR."""
+        albedo=0.9, scale=1.0, stream=sys.stderr, image_pass=None, depth_pass=None):
+    """The command line's ``weather``: read (``read_image``, ``read_depth``: what was read is said on ``stream``),
+    add the weather with progress on ``stream``, write an EXR."""
     from . import imageio
-    image = imageio.read_rgb(image_path)
-    depth = read_depth(depth_path)
+
+    def note(text):
+        print(f"weather: {text}", file=stream, flush=True)
+    image = read_image(image_path, image_pass, note)
+    depth = read_depth(depth_path, depth_pass, note)
 
     def progress(k, n, t):
         print(f"weather: layer {k}/{n} (optical depth {t:.3g})", file=stream, flush=True)
