@@ -502,12 +502,16 @@ def peak_irradiance(g, cos_ns):
     clamped cosine's Legendre coefficients (2l+1)/2 int_0^1 x P_l(x) dx (numpy, float64; l up to PEAK_TERMS)."""
     x, w = np.polynomial.legendre.leggauss(2 * PEAK_TERMS)
     x, w = 0.5 * (x + 1.0), 0.5 * w
-    total = np.zeros_like(np.asarray(cos_ns, float))
+    c = np.asarray(cos_ns, float)
+    total = np.zeros_like(c)
+    # P_l at the nodes and at c by Bonnet's recurrence, (l + 1) P_{l+1} = (2l + 1) x P_l - l P_{l-1}
+    p_x, p_x_prev = np.ones_like(x), np.zeros_like(x)
+    p_c, p_c_prev = np.ones_like(c), np.zeros_like(c)
     for l in range(PEAK_TERMS):
-        unit = np.zeros(l + 1)
-        unit[l] = 1.0
-        k_l = (2 * l + 1) / 2.0 * np.sum(w * x * np.polynomial.legendre.legval(x, unit))
-        total = total + k_l * g ** l * np.polynomial.legendre.legval(cos_ns, unit)
+        k_l = (2 * l + 1) / 2.0 * np.sum(w * x * p_x)
+        total = total + k_l * g ** l * p_c
+        p_x, p_x_prev = ((2 * l + 1) * x * p_x - l * p_x_prev) / (l + 1), p_x
+        p_c, p_c_prev = ((2 * l + 1) * c * p_c - l * p_c_prev) / (l + 1), p_c
     return total / math.pi
 
 
