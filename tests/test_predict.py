@@ -195,3 +195,13 @@ def test_budgets_charge_spots_their_own_cost():
     assert mixed.fits([0] * 8) and not groups.eevee_budget(0.85, [True] * 4 + [False] * 4).fits([0] * 8)
     osl = groups.osl_budget([True] * 110)
     assert not osl.fits([0] * 110) and groups.osl_budget([False] * 110).fits([0] * 110)
+
+
+def test_opaque_fog_predicts_no_nan():
+    """An opaque fog's far samples carry fog light that underflows (e^{-beta d} ~ 1e-310): they are not judged,
+    so the predicted errors stay finite (they were NaN, with overflow warnings, at density 100 1/m)."""
+    glow = np.array([[[1e-310] * 3, [3e-311] * 3], [[2e-310] * 3, [1e-320] * 3]])
+    scatter = np.zeros_like(glow)
+    with np.errstate(all="raise"):
+        pred = predict.choose_steps(glow, scatter, 0.01)
+    assert np.isfinite(pred.error) and np.isfinite(pred.light_error).all()

@@ -138,6 +138,11 @@ def test_background_against_quadrature(m):
     for world_light, want in ((0.0, 0.0), (1.0, 1.0)):
         emission, transmittance = shading.shade_background(m, [np.ones(3)], Medium(0.1), np.asarray(0.0), world_light)
         assert transmittance == want and not emission.any()
+    # a fog of no density is no fog: the World is seen and lights surfaces (the limit e^{-beta t}, beta -> 0)
+    for is_camera in (0.0, 1.0):
+        for world_light in (0.0, 1.0):
+            _, transmittance = shading.shade_background(m, [], Medium(0.0), np.asarray(is_camera), world_light)
+            assert transmittance == 1.0
 
 
 # --- models as data ----------------------------------------------------------------

@@ -68,6 +68,11 @@ MUTATIONS = [
              "airlight=m.scale(light.intensity, air),",
              "airlight=m.scale(light.intensity, 0.0 * air),",
              (f"{SHADE_TEST}::test_shade_point_against_quadrature",)),
+    Mutation("density_zero_hides_the_world", "a fog of no density still hides the World (transmittance 0 at "
+             "beta = 0: the limit e^{-beta t} -> 1 is not taken)", SHADING,
+             "    transmittance = kept + m.less(medium.beta, MIN_BETA) * (1.0 - kept)",
+             "    transmittance = kept + 0.0 * m.less(medium.beta, MIN_BETA) * (1.0 - kept)",
+             (f"{SHADE_TEST}::test_background_against_quadrature",)),
     Mutation("view_attenuation", "the user's shader not dimmed by e^{−β D_vp} on camera rays", SHADING,
              "transmit = 1.0 + is_camera * (t_vp - 1.0)",
              "transmit = 1.0 + is_camera * (0.0 * t_vp)",

@@ -33,6 +33,7 @@ from .medium import Medium
 from .ops import NumpyOps
 
 FLOOR = 1e-3          # samples below this fraction of the peak fog are not judged (issue 8 §2)
+MIN_FOG = 1e-30       # fog light (W/m^2/sr) below which a sample is not judged: an opaque fog's far samples
 RIM_SAFETY = 2.0      # a cheaper rim's deviation at the samples counts twice: between them it can peak higher
 QUALITY = {"draft": 0.05, "final": 0.01, "exact": None}   # Quality presets: target relative error (None: no step)
 DEFAULT_QUALITY = "final"
@@ -204,9 +205,9 @@ def multiple_share(samples, intensity, beta, g, albedo, single=None):
     extra = np.abs((glow_m + scatter_m) - (glow + scatter))             # (P, N, 3)
     fog = (glow_m + scatter_m).sum(axis=1)                              # (P, 3)
     peak = fog.max() if fog.size else 0.0
-    if not peak > 0.0:
+    if not peak > MIN_FOG:
         return np.zeros(glow.shape[1])
-    judged = fog >= FLOOR * peak
+    judged = (fog >= FLOOR * peak) & (fog > MIN_FOG)
     inv = np.where(judged, 1.0 / np.where(judged, fog, 1.0), 0.0)
     return (extra * inv[:, None, :]).max(axis=(0, 2))
 
@@ -271,7 +272,9 @@ def choose_steps(glow, scatter, target, budget=None, rim_dev=None):
     n = glow.shape[1]
     fog = (glow + scatter).sum(axis=1)                 # (P, 3)
     peak = fog.max() if fog.size else 0.0
-    judged = fog >= FLOOR * peak if peak > 0.0 else np.zeros(fog.shape, bool)
+    # a pixel whose fog light is below MIN_FOG (an opaque fog's far pixels: e^{-beta d} underflows) is not judged:
+    # its inverse would overflow and its shares turn NaN
+    judged = (fog >= FLOOR * peak) & (fog > MIN_FOG) if peak > MIN_FOG else np.zeros(fog.shape, bool)
     inv = np.where(judged, 1.0 / np.where(judged, fog, 1.0), 0.0)
     steps = np.zeros(n, int)
     dropped = np.zeros_like(fog)
@@ -283,7 +286,7 @@ def choose_steps(glow, scatter, target, budget=None, rim_dev=None):
     def drop(i, step):   # what light i's step leaves out, (P, 3)
         return scatter[:, i] if step == 1 else glow[:, i] if step == 2 else np.zeros_like(fog)
 
-    if target is not None and peak > 0.0:
+    if target is not None and peak > MIN_FOG:
         for _, i, step in candidates:
             if steps[i] != step - 1 or step == rungs.LEFT_OUT:
                 continue
@@ -298,7 +301,7 @@ def choose_steps(glow, scatter, target, budget=None, rim_dev=None):
             dropped, steps[i], limited = dropped + drop(i, step), step, True
     light_drop = np.where(steps[None, :, None] >= 1, scatter, 0.0) + np.where(steps[None, :, None] >= 2, glow, 0.0)
     rims = np.full(n, spot_mod.RIM_NODES)
-    if rim_dev is not None and target is not None and peak > 0.0:
+    if rim_dev is not None and target is not None and peak > MIN_FOG:
         rim_dev = RIM_SAFETY * np.asarray(rim_dev, float)
         for i in np.argsort((rim_dev[0] * inv[:, None, :]).max(axis=(0, 2)), kind="stable"):
             for r in reversed(range(len(rim_dev))) if steps[i] < 2 else ():   # the fewest points first

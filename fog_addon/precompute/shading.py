@@ -47,6 +47,8 @@ from typing import Any, NamedTuple
 
 from . import area, model, rungs, spot, tables
 
+MIN_BETA = 1e-12   # 1/unit: a fog thinner than this is no fog (``shade_background``: the World seen and lighting)
+
 
 class Geometry(NamedTuple):
     """A camera ray's surface hit: all vectors in world space."""
@@ -385,8 +387,10 @@ def shade_background(m, airlights, medium, is_camera, world_light=0.0):
     rays, and the factor on the user's World.  The fog fills all space, so nothing from infinitely far
     away comes through it: the transmittance is 0 on every ray (the World neither seen nor lighting
     surfaces, as with Cycles' World volume), unless ``world_light`` is 1 (the artist keeps the World's
-    light on surfaces: then 1 on rays other than the camera's)."""
-    transmittance = world_light * (1.0 - is_camera)
+    light on surfaces: then 1 on rays other than the camera's).  A fog of no density (beta 0) is no fog: the
+    transmittance is 1 on every ray (e^{-beta t} at t = infinity is the limit of 0 only for beta > 0)."""
+    kept = world_light * (1.0 - is_camera)
+    transmittance = kept + m.less(medium.beta, MIN_BETA) * (1.0 - kept)
     if not airlights:
         return m.combine(0.0, 0.0, 0.0), transmittance
     return m.scale(medium.albedo * total(airlights), is_camera), transmittance
