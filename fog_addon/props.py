@@ -4,6 +4,11 @@ These properties are the one store of the fog's settings: ``apply.spec_of`` read
 ``precompute.spec.FogSpec``, and everything that decides reads that.  Changing a setting while the fog is on
 schedules a sync (``schedule_sync``): the shared node groups follow (the viewport too); materials are never
 rebuilt for it.  A sync that fails keeps the fog as it was, and the panel says why.
+
+The properties have soft limits only (the sliders' range): a value typed beyond them reaches the spec's
+validation (``FogSpec.validated``), which refuses it with the message the operator gives for the same value,
+shown in the panel (``apply.sync_error``, and ``settings_error`` before the fog is added).  Hard limits would
+clamp it in silence.
 """
 import contextlib
 
@@ -87,7 +92,9 @@ def _get_visibility(self):
 
 
 def _set_visibility(self, value):
-    self.density = presets.density_from_visibility(max(value, presets.MIN_VISIBILITY_M))
+    """Visibility -> density by Koschmieder's law; a visibility of 0 or less becomes a density the fog's
+    validation refuses with its message (as the operator does), never a silent clamp."""
+    self.density = presets.density_from_visibility(value) if value > 0.0 else (-1.0 if value < 0.0 else 3.4e38)
 
 
 class AnalyticFogSettings(bpy.types.PropertyGroup):
@@ -95,24 +102,24 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
         name="Fog", default=False, options=set(),
         description="The fog is on in this scene (set by Add Fog / Remove Fog)")
     density: bpy.props.FloatProperty(
-        name="Density", default=presets.PRESETS["fog"], min=0.0, soft_max=1.0, max=presets.MAX_DENSITY,
+        name="Density", default=presets.PRESETS["fog"], soft_min=0.0, soft_max=1.0,
         precision=5, step=0.1, update=_push,
         description="Extinction coefficient beta in 1/m (equal to the scattering coefficient: no absorption). "
                     "Visibility V = 3.912 / beta (Koschmieder)")
     visibility: bpy.props.FloatProperty(
-        name="Visibility", subtype="DISTANCE", unit="LENGTH", min=presets.MIN_VISIBILITY_M, max=1e9,
+        name="Visibility", subtype="DISTANCE", unit="LENGTH",
         soft_min=1.0, soft_max=50000.0, get=_get_visibility, set=_set_visibility, options=set(),
         description="Meteorological visibility in real metres: the distance at which a black object's contrast "
                     "falls to 2 %. Sets the density by Koschmieder's law, beta = 3.912 / V")
     scene_scale: bpy.props.FloatProperty(
-        name="Scene Scale", default=1.0, min=1e-6, max=1e6, soft_min=0.001, soft_max=1000.0, update=_push,
+        name="Scene Scale", default=1.0, soft_min=0.001, soft_max=1000.0, update=_push,
         description="Real metres per Blender unit. A 1:100 model of a street (1 unit = 100 m) needs 100 "
                     "to show a real fog's density; the fog's density per unit is Density x Scene Scale")
     color: bpy.props.FloatVectorProperty(
-        name="Color", subtype="COLOR", size=3, default=(1.0, 1.0, 1.0), min=0.0, max=1.0, update=_push,
+        name="Color", subtype="COLOR", size=3, default=(1.0, 1.0, 1.0), soft_min=0.0, soft_max=1.0, update=_push,
         description="Single-scattering albedo of the fog: the fraction of extinguished light it scatters")
     anisotropy: bpy.props.FloatProperty(
-        name="Anisotropy", default=0.0, min=-tables.MAX_ANISOTROPY, max=tables.MAX_ANISOTROPY,
+        name="Anisotropy", default=0.0, soft_min=-tables.MAX_ANISOTROPY, soft_max=tables.MAX_ANISOTROPY,
         update=_rebuild,
         description="Henyey-Greenstein g of the fog's phase function: 0 isotropic, > 0 forward scattering "
                     "(droplets: haze about 0.7, fog about 0.85), so lamps glow brighter seen against their "
@@ -122,17 +129,17 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
         description="The fog is a layer over the ground up to Fog Top (valley fog, sea mist, a summer's haze). "
                     "Off: the fog fills all space")
     fog_top: bpy.props.FloatProperty(
-        name="Fog Top", subtype="DISTANCE", unit="LENGTH", default=100.0, min=0.0, soft_max=2000.0,
+        name="Fog Top", subtype="DISTANCE", unit="LENGTH", default=100.0, soft_min=0.0, soft_max=2000.0,
         update=_push,
         description="Height of the fog layer's top in real metres above Ground Level; below it the density "
                     "is Density")
     height_falloff: bpy.props.FloatProperty(
-        name="Height Falloff", subtype="DISTANCE", unit="LENGTH", default=0.0, min=0.0, soft_max=2000.0,
+        name="Height Falloff", subtype="DISTANCE", unit="LENGTH", default=0.0, soft_min=0.0, soft_max=2000.0,
         update=_push,
         description="Softness of the fog's top, H in real metres: above the top the density falls by e "
                     "every H metres (e^-(height - top) / H). 0 is a hard top: no fog above it")
     air_density: bpy.props.FloatProperty(
-        name="Air", default=0.0, min=0.0, soft_max=4.0, max=100.0, update=_push,
+        name="Air", default=0.0, soft_min=0.0, soft_max=4.0, update=_push,
         description="Density of the clear air (its Rayleigh scattering) as a multiple of sea-level air: 1 is the "
                     "standard atmosphere, which blues and greys the distance of a daylight scene; 0 no air. "
                     "Only with a Fog Top")
@@ -164,7 +171,7 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
                     "error it makes stays under the target (predicted from the camera's view; see the list "
                     "of lights below)")
     target_error: bpy.props.FloatProperty(
-        name="Target Error", default=0.01, min=1e-4, max=0.5, subtype="FACTOR", precision=4,
+        name="Target Error", default=0.01, soft_min=1e-4, soft_max=0.5, subtype="FACTOR", precision=4,
         update=_quality_changed,
         description="Largest relative change of any pixel's fog light the Custom quality allows")
     world_light: bpy.props.BoolProperty(

@@ -3,7 +3,7 @@ import bpy
 
 from .methods.node_groups import MANY_LIGHTS
 from .ops import FOG_MT_presets, apply
-from .precompute import presets, rungs
+from .precompute import rungs
 
 ENGINE_NOTES = {
     "AUTO": "Auto: Node Groups or Compositor, per scene",
@@ -68,6 +68,10 @@ def draw_fog(layout, context):
         box = layout.box()
         box.label(text="The fog keeps what it was built with:", icon="ERROR")
         box.label(text=why, icon="BLANK1")
+    elif not s.enabled and (why := apply.settings_error(scene)) is not None:
+        box = layout.box()
+        box.label(text="Add Fog will refuse these settings:", icon="ERROR")
+        box.label(text=why, icon="BLANK1")
     row = layout.row(align=True)
     if s.enabled:
         row.operator("fog.add", text="Update Fog", icon="FILE_REFRESH")
@@ -97,8 +101,11 @@ def draw_fog(layout, context):
     col.prop(s, "use_multiple_scattering")
     col.prop(s, "use_passes")
     _draw_models(layout, s)
-    note = presets.invisible_fog_note(s.density * s.scene_scale, apply.scene_size(scene))
-    if note:
+    try:
+        notes = apply.scene_notes(scene, apply.spec_of(scene))
+    except ValueError:   # (said above)
+        notes = []
+    for note in notes:
         box = layout.box()
         for i, line in enumerate(note.replace(": ", ". ").split(". ")):
             box.label(text=line, icon="ERROR" if i == 0 else "BLANK1")

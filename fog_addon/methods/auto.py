@@ -91,6 +91,19 @@ def pixels_of(scene):
     return int(r.resolution_x * r.resolution_y * (r.resolution_percentage / 100.0) ** 2)
 
 
+def unfogged_layers(scene):
+    """The view layers that render but that the compositor's fog would not reach: with no compositor of the
+    user's, the fog's own (``nodes/compositor.py``) makes the composite of the first layer that renders, as Blender
+    does without one; the others' own passes (a multilayer EXR's, the Image Editor's) then hold no fog light.  A
+    user's compositor gets the fog after each of its Render Layers nodes.  [] otherwise."""
+    from ..nodes import compositor, owned
+    tree = scene.compositing_node_group
+    if tree is not None and tree.get(owned.TAG) is None and tree.name != compositor.GROUP:
+        return []
+    used = [vl.name for vl in scene.view_layers if vl.use]
+    return used[1:]
+
+
 def _soft_needs(scene, materials):
     """What the compositor's one surface point per pixel would get wrong in ``scene``, as phrases."""
     needs = []
@@ -99,6 +112,9 @@ def _soft_needs(scene, materials):
         needs.append("depth of field")
     if scene.render.use_motion_blur:
         needs.append("motion blur")
+    layers = unfogged_layers(scene)
+    if layers:
+        needs.append(f"view layers the composite does not show ({caveats._names(layers)})")
     see = caveats.see_through(materials, scene.objects)
     if see:
         shown = ", ".join(see[:3]) + (f" and {len(see) - 3} more" if len(see) > 3 else "")
@@ -129,7 +145,7 @@ def choose(scene, spec, lights, materials):
                                   "models; "
                                   f"{costs}")
     soft = _soft_needs(scene, materials)
-    caveat = f"; its one surface point per pixel is approximate with {' and '.join(soft)}" if soft else ""
+    caveat = f"; it is approximate with {' and '.join(soft)}" if soft else ""
     if spec.shafts and lights:
         from ..ops.apply import scene_size
         shafted = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(scene_size(scene), 1e-6))
@@ -150,10 +166,9 @@ def choose(scene, spec, lights, materials):
         return "compositor", (f"Dense Fog with spot or area lights ({caveats._names(shaped)}): only the compositor "
                               f"gives them their multiply scattered light{caveat}; {costs}")
     if soft and cost["nodes"] <= SOFT_COST_LIMIT:
-        return "nodes", f"{' and '.join(soft)}: the compositor sees one surface point per pixel; {costs}"
+        return "nodes", f"the compositor would get these wrong: {' and '.join(soft)}; {costs}"
     if cost["compositor"] < cost["nodes"]:
         if soft:
-            return "compositor", (f"{costs}; the compositor's one surface point per pixel is approximate with "
-                                  f"{' and '.join(soft)}")
+            return "compositor", (f"{costs}; the compositor is approximate with {' and '.join(soft)}")
         return "compositor", costs
     return "nodes", costs

@@ -83,11 +83,19 @@ class Compositor(Method):
         return comp_fog.aovs(scene.render.engine)
 
     def notes(self, scene, spec, plan):
+        from .auto import unfogged_layers
+        layers = unfogged_layers(scene)
+        layer_note = [(scene.name, f"{len(layers) + 1} view layers render, and without a compositor of yours the "
+                                   f"Compositor method's fog is in the composite (the first layer) only: "
+                                   f"the own passes of {caveats._names(layers)} hold no fog light (use the Node "
+                                   "Groups method, or a compositor of yours with a Render Layers node per layer)")
+                      ] if layers else []
         n, kept = len(plan.in_groups), len(plan.shader_lights)
         if scene.render.engine == groups.EEVEE_ENGINE and kept < n:
-            return [(scene.render.engine, f"{n - kept} of {n} lights are not in the materials' shared dimming of "
-                     "direct light (EEVEE's uniform block): their direct light is dimmed as the nearer lights' is")]
-        return []
+            return layer_note + [(scene.render.engine, f"{n - kept} of {n} lights are not in the materials' shared "
+                                  "dimming of direct light (EEVEE's uniform block): their direct light is dimmed as "
+                                  "the nearer lights' is")]
+        return layer_note
 
     def frame_change(self, scene, lights):
         if comp_fog.FOG_GROUP in bpy.data.node_groups:

@@ -30,9 +30,14 @@ CHOICE_KEY = "analytic_fog_choice"   # on the Surface group: the Quality, {light
 AOV_KINDS = dict(passes.AOVS + comp_fog.AOVS + comp_fog.EEVEE_AOVS)   # every AOV the fog adds to view layers
 
 
+AT_CAMERA = 1e-3   # a lamp nearer the camera than this share of the scene's depth is "at the camera" (a note)
+
+
 def fog_lights(scene):
     """(lights taking part, [(name, reason)] for lights left out or worth a note)."""
     lights, notes = [], []
+    eye = scene.camera.matrix_world.translation if scene.camera is not None else None
+    near = AT_CAMERA * scene_size(scene) if eye is not None else 0.0
     for obj in scene.objects:
         if obj.type != "LIGHT":
             continue
@@ -50,6 +55,10 @@ def fog_lights(scene):
             notes.append((obj.name, "has zero power: it lights no fog"))
         else:
             lights.append(obj)
+            if eye is not None and (obj.matrix_world.translation - eye).length <= near:
+                notes.append((obj.name, f"is {(obj.matrix_world.translation - eye).length:.2g} units from the camera: "
+                                        "the fog's light from a lamp grows without bound as it nears the camera, so "
+                                        "the picture blows out; move the lamp away from the camera"))
             s = obj.matrix_world.to_scale()
             if view.is_spot(obj) and obj.matrix_world.to_3x3().determinant() < 0.0:
                 notes.append((obj.name, "is mirrored (negative scale): its cone in the fog points the other way"))
@@ -452,14 +461,65 @@ def apply(scene, spec, objects=None, progress=progress_.silent):
     if not lights and not sunsky.is_daylit(scene, spec):
         skipped.append((scene.name, "has no light taking part: the fog only dims"
                         + (" (and the glowing objects glow)" if getattr(method, "name", method) == "compositor"
-                           and methods.compositor.glowing_objects(scene) else "")))
-    note = presets.invisible_fog_note(spec.beta_per_unit, scene_size(scene))
-    if note:
-        skipped.append((scene.name, note))
+                           and methods.compositor.glowing_objects(scene) else "")
+                        + ("" if spec.layered or spec.world_light or spec.density <= 0.0 else
+                           ", and the World is hidden behind it (the fog fills all space), so the picture is dark: "
+                           "add a light, turn on World Light, or give the fog a top (Fog Top)")))
+    skipped += [(scene.name, note) for note in scene_notes(scene, spec)]
     notes = not_modelled(scene, spec, lights, mats, method)
     surface = bpy.data.node_groups[groups.SURFACE]
     surface[CAVEATS_KEY] = json.dumps(notes)
     return skipped + [(scene.name, n) for n in notes]
+
+
+def nearest_distance(scene):
+    """The distance (units) from the camera to the nearest point of any rendered object's bounding box (mesh,
+    curve, text, surface, metaball, volume), or 0 without a camera or objects; 0 from inside one."""
+    cam = scene.camera
+    if cam is None:
+        return 0.0
+    eye = cam.matrix_world.translation
+    best = math.inf
+    for obj in scene.objects:
+        if obj.type in ("CAMERA", "LIGHT", "EMPTY", "LIGHT_PROBE", "SPEAKER", "ARMATURE", "LATTICE") or obj.hide_render:
+            continue
+        box = [tuple(c) for c in obj.bound_box]
+        lo = [min(c[k] for c in box) for k in range(3)]
+        hi = [max(c[k] for c in box) for k in range(3)]
+        try:
+            local = obj.matrix_world.inverted() @ eye
+        except ValueError:   # a singular (zero-scaled) object
+            continue
+        nearest = obj.matrix_world @ type(local)([min(max(local[k], lo[k]), hi[k]) for k in range(3)])
+        best = min(best, (nearest - eye).length)
+    return 0.0 if best == math.inf else best
+
+
+def lowest_top(scene):
+    """The highest z (units) of any rendered object's bounding box, or None without objects."""
+    tops = [max((obj.matrix_world @ type(obj.matrix_world.translation)(c)).z for c in obj.bound_box)
+            for obj in scene.objects if obj.type in ("MESH", "CURVE", "SURFACE", "META", "FONT", "VOLUME")
+            and not obj.hide_render]
+    return max(tops) if tops else None
+
+
+def scene_notes(scene, spec):
+    """Notes on settings that make the picture useless in ``scene`` (the operator, the panel and ``render`` say
+    them): a fog invisible at the scene's size, a fog opaque before the nearest object, a fog layer whose ground
+    is above everything."""
+    notes = []
+    note = presets.invisible_fog_note(spec.beta_per_unit, scene_size(scene))
+    if note:
+        notes.append(note)
+    note = presets.opaque_fog_note(spec.density, nearest_distance(scene) * spec.scene_scale)
+    if note:
+        notes.append(note)
+    top = lowest_top(scene) if spec.layered else None
+    if top is not None and spec.ground_level > top:
+        notes.append(f"Ground Level (z {spec.ground_level:.3g}) is above every object (the highest reaches z "
+                     f"{top:.3g}): the whole scene lies under the fog layer's ground, where the layer's model does "
+                     "not hold; set Ground Level to the ground's height")
+    return notes
 
 
 def _optical_distance(scene, spec):
@@ -553,6 +613,16 @@ def sync(scene, level="groups"):
 def sync_error(scene):
     """Why the fog could not follow the scene's last settings change, or None."""
     return _sync_errors.get(scene.name)
+
+
+def settings_error(scene):
+    """Why the scene's fog settings can't be used (``spec_of``'s message: the operator's for the same values), or
+    None.  The panel shows it before the fog is added (after, ``sync_error`` says it)."""
+    try:
+        spec_of(scene)
+    except ValueError as e:
+        return str(e)
+    return None
 
 
 def update_params(scene):

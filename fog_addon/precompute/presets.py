@@ -89,14 +89,32 @@ def validate_density(beta):
         beta = float(beta)
     except (TypeError, ValueError):
         raise ValueError(f"fog density must be a number in 1/m, got {beta!r}") from None
-    if math.isnan(beta) or math.isinf(beta):
+    if math.isnan(beta):
         raise ValueError(f"fog density must be finite, got {beta}")
     if beta < 0:
-        raise ValueError(f"fog density must be >= 0 (1/m), got {beta}")
+        raise ValueError(f"fog density must be >= 0 (1/m; a visibility above 0 m), got {beta:g}")
+    if math.isinf(beta) or beta >= 1e38:
+        raise ValueError(f"fog density must be finite (a visibility above 0 m); the largest supported density is "
+                         f"{MAX_DENSITY:g} 1/m, a visibility of {MIN_VISIBILITY_M * 100:.2g} cm")
     if beta > MAX_DENSITY:
-        raise ValueError(f"fog density {beta} 1/m means a visibility of {KOSCHMIEDER / beta * 100:.2g} cm; "
-                         f"the largest supported density is {MAX_DENSITY:g} 1/m")
+        raise ValueError(f"fog density {beta:g} 1/m means a visibility of {KOSCHMIEDER / beta * 100:.2g} cm; "
+                         f"the largest supported density is {MAX_DENSITY:g} 1/m (a visibility of "
+                         f"{MIN_VISIBILITY_M * 100:.2g} cm)")
     return beta
+
+
+OPAQUE_DEPTH = 10.0   # optical depth beyond which a surface is hidden (e^-10: 4.5e-5 of its light comes through)
+
+
+def opaque_fog_note(beta, nearest_m):
+    """A message if fog of ``beta`` (1/m) hides every object, the nearest ``nearest_m`` metres from the camera
+    (more than OPAQUE_DEPTH optical depths away), else None."""
+    depth = beta * nearest_m
+    if not nearest_m > 0.0 or depth <= OPAQUE_DEPTH:
+        return None
+    return (f"The fog is opaque here: the nearest object is {nearest_m:.3g} m from the camera, {depth:.3g} optical "
+            f"depths (visibility {visibility_from_density(beta):.3g} m), so the camera sees only the fog's own light. "
+            "Lower the density, or set Scene Scale to the real metres per Blender unit")
 
 
 def invisible_fog_note(beta, size_m):

@@ -1,0 +1,38 @@
+"""A property test of the panel (tests/scenes/panel_property.py): random sequences of 200 settings changes on
+a scene with the user's own compositor, World volume and two view layers.  After each change the user's nodes
+and links are intact, the fog is where its method needs it, and every 25 changes the render is finite and not
+flat; after Remove the user's data is what it was before Add Fog.  The default tier runs one fixed seed with
+point lamps; the slow tier more seeds, with spots and Dense Fog at two anisotropies.  On the code before the fix
+of 2026-11-29 the default seed fails at its second change (the user's Render Layers -> Glare link cut)."""
+import json
+
+import pytest
+
+from fog_scenes import render_harness as h
+
+pytestmark = pytest.mark.render
+
+SCENE = h.ROOT / "tests" / "scenes" / "panel_property.py"
+
+
+def run_sequence(seed, *flags, steps=200):
+    proc = h.run([SCENE, "--seed", seed, "--steps", steps, "--render-every", 25, *flags], timeout=1800)
+    line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT "))
+    return json.loads(line.split(" ", 1)[1])
+
+
+def check(res, steps=200):
+    assert res["failure"] is None, res["failure"]
+    assert res["steps"] == steps
+    assert res["renders"] == steps // 25
+    assert set(res["methods"]) == {"compositor", "nodes"}, "the sequence visits both methods"
+
+
+def test_panel_sequence_keeps_the_users_compositor():
+    check(run_sequence(1, "--no-spots", "--no-dense"))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [2, 3, 4])
+def test_panel_sequences_with_spots_and_dense_fog(seed):
+    check(run_sequence(seed))
