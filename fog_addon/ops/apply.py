@@ -1,6 +1,7 @@
 """Adding, updating and removing the fog on a scene (what the operators, handlers and command line call)."""
 import json
 import math
+import traceback
 from typing import Any, NamedTuple
 
 import bpy
@@ -606,6 +607,15 @@ def sync(scene, level="groups"):
         _sync_errors[scene.name] = str(e)
         print(f"Analytic Fog: the fog keeps what it was built with: {e}")
         return str(e)
+    except Exception as e:   # noqa: BLE001 - a fault of the add-on's: said, and the user's compositor spliced again
+        why = f"the fog could not follow this change ({type(e).__name__}: {e}); Update Fog rebuilds it"
+        _sync_errors[scene.name] = why
+        traceback.print_exc()
+        try:
+            follow_compositor(scene, rebuild=True)
+        except Exception:   # noqa: BLE001
+            traceback.print_exc()
+        return why
     _sync_errors.pop(scene.name, None)
     return None
 
