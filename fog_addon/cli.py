@@ -224,7 +224,12 @@ def build_parser():
     w.add_argument("--depth", required=True, metavar="DEPTH.exr",
                    help="metres from the camera per pixel (1e6 and beyond: sky), one float channel: a single-channel "
                         "EXR, an EXR's Z channel, or a multilayer EXR's Depth pass (<layer>.Depth.Z, Blender's Z: "
-                        "along the view axis); may be the same file as IMAGE.  Integer images (PNG, JPEG) are refused")
+                        "along the view axis, see --depth-kind); may be the same file as IMAGE.  Integer images "
+                        "(PNG, JPEG) are refused")
+    w.add_argument("--depth-kind", choices=("auto", "distance", "z"), default="auto",
+                   help="what the depth measures: distance along each pixel's ray, or z along the view axis "
+                        "(turned into distance with --fov); auto (the default): Blender's Depth pass is z, "
+                        "anything else distance")
     w.add_argument("--depth-pass", metavar="NAME",
                    help="the channel or pass to read the depth from when the names do not settle it "
                         "(e.g. Second.Depth or Second.Depth.Z)")
@@ -398,7 +403,7 @@ def cmd_weather(args):
         raise UsageError(f"--albedo must be in [0, 1], got {args.albedo}")
     try:
         weather.run(args.image, args.depth, args.out, args.visibility, args.anisotropy, sky, args.fov, args.albedo,
-                    args.scale, image_pass=args.image_pass, depth_pass=args.depth_pass)
+                    args.scale, image_pass=args.image_pass, depth_pass=args.depth_pass, depth_kind=args.depth_kind)
     except weather.WeatherError as exc:
         raise UsageError(str(exc))
     except (OSError, FileNotFoundError) as exc:

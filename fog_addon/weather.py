@@ -311,24 +311,53 @@ def read_depth(path, depth_pass=None, note=None):
     multilayer "<layer>.Depth.Z"; ``depth_pass`` names it when the names do not settle it.  The values are taken
     as metres (times ``--scale``) from the camera; Blender's Depth pass is the distance along the view axis,
     the same as along the pixel's ray only at the centre of the picture.  ``note(text)`` is told what was read."""
+    return read_depth_channel(path, depth_pass, note)[0]
+
+
+def read_depth_channel(path, depth_pass=None, note=None):
+    """(``read_depth``'s array, the ``Channel`` it was read from)."""
     from . import imageio
     note = note or (lambda text: None)
     chans = imageio.channels(path)
     chosen = depth_channel(chans, path, depth_pass)
     note(f"depth: {chosen.name} of {path}")
-    return np.asarray(imageio.read_channels(path, [chosen])[..., 0], np.float64)
+    return np.asarray(imageio.read_channels(path, [chosen])[..., 0], np.float64), chosen
+
+
+def is_view_depth(channel):
+    """Whether ``channel`` is Blender's Depth pass ("<layer>.Depth.Z"): depth along the view axis, not along the
+    pixel's ray."""
+    return channel.pass_name.rpartition(".")[2].lower() == "depth"
+
+
+def ray_distance(z, fov_deg):
+    """(H, W) distance along each pixel centre's ray from depth along the view axis ``z`` (a pinhole camera whose
+    horizontal field of view ``fov_deg`` spans the width, square pixels): z / cos(angle to the axis), the sky
+    (>= SKY_DEPTH) kept as it is."""
+    z = np.asarray(z, np.float64)
+    h, w = z.shape
+    t = math.tan(math.radians(fov_deg) / 2.0) / (w / 2.0)   # tan per pixel at unit depth
+    y, x = np.mgrid[0:h, 0:w]
+    tan2 = (t * (x + 0.5 - w / 2.0)) ** 2 + (t * (y + 0.5 - h / 2.0)) ** 2
+    return np.where(z >= SKY_DEPTH, z, z * np.sqrt(1.0 + tan2))
 
 
 def run(image_path, depth_path, out_path, visibility_m, anisotropy=0.85, sky=(1.0, 1.0, 1.0), fov_deg=39.6,
-        albedo=0.9, scale=1.0, stream=sys.stderr, image_pass=None, depth_pass=None):
+        albedo=0.9, scale=1.0, stream=sys.stderr, image_pass=None, depth_pass=None, depth_kind="auto"):
     """The command line's ``weather``: read (``read_image``, ``read_depth``: what was read is said on ``stream``),
-    add the weather with progress on ``stream``, write an EXR."""
+    add the weather with progress on ``stream``, write an EXR.  ``depth_kind``: "distance" (along each pixel's
+    ray, what ``add_weather`` takes), "z" (along the view axis: turned into distance, ``ray_distance``) or "auto"
+    (Blender's Depth pass is z, anything else distance)."""
     from . import imageio
 
     def note(text):
         print(f"weather: {text}", file=stream, flush=True)
     image = read_image(image_path, image_pass, note)
-    depth = read_depth(depth_path, depth_pass, note)
+    depth, channel = read_depth_channel(depth_path, depth_pass, note)
+    if depth_kind == "z" or (depth_kind == "auto" and is_view_depth(channel)):
+        depth = ray_distance(depth, fov_deg)
+        note(f"depth: {channel.name} taken as depth along the view axis and turned into distance along each "
+             f"pixel's ray (horizontal field of view {fov_deg:g} degrees)")
 
     def progress(k, n, t):
         print(f"weather: layer {k}/{n} (optical depth {t:.3g})", file=stream, flush=True)

@@ -11,6 +11,7 @@ file Blender 5.0 renders (same parts, channel names and order), and on which it 
 """
 import io
 import json
+import math
 import subprocess
 import sys
 
@@ -72,7 +73,7 @@ def test_multilayer_depth_gives_the_single_channel_picture(tmp_path):
     rgba, z = scene()
     rgb_path, z_path = write_single(tmp_path, rgba, z)
     imageio.write_layers(tmp_path / "ml.exr", {**decoys(z), **blender_layers(rgba, z)})
-    want, _ = fog(rgb_path, z_path)
+    want, _ = fog(rgb_path, z_path, depth_kind="z")   # (a lone channel is taken as distance unless told)
     got, said = fog(tmp_path / "ml.exr", tmp_path / "ml.exr")
     assert max_rel(got, want) < 0.01
     assert "image: ViewLayer.Combined (R, G, B)" in said and "depth: ViewLayer.Depth.Z" in said
@@ -241,7 +242,7 @@ def test_blenders_own_multilayer_exr(tmp_path):
     imageio.write_layers(tmp_path / "ours.exr", blender_layers(rgba, z))
     assert structure(raw) == structure(tmp_path / "ours.exr")
     rgb_path, z_path = write_single(tmp_path, rgba, z)
-    want, _ = fog(rgb_path, z_path)
+    want, _ = fog(rgb_path, z_path, depth_kind="z")
     got, said = fog(raw, raw)
     assert max_rel(got, want) < 0.01, said
     sphere = z < 1e6
@@ -251,3 +252,23 @@ def test_blenders_own_multilayer_exr(tmp_path):
     print(json.dumps({"multilayer vs single-channel, max rel": max_rel(got, want),
                       "channel-0 depth, sphere's light off by": round(float(off), 3)}))
     assert off > 0.3
+
+
+def test_blenders_depth_pass_is_turned_into_ray_distance(tmp_path):
+    """Blender's Depth pass is depth along the view axis; the fog needs distance along each pixel's ray.  Against
+    an independent geometry (a plane facing the camera at z 10 m: distance = z / cos of the ray's angle to the
+    axis, the angle from the pixel's offset and the field of view), and the run says it converted."""
+    h, w, fov = 18, 32, 50.0
+    z = np.full((h, w), 10.0)
+    half = math.tan(math.radians(fov) / 2.0)
+    x = (np.arange(w) + 0.5) / w * 2.0 - 1.0
+    y = ((np.arange(h) + 0.5) - h / 2.0) / (w / 2.0)
+    cos = 1.0 / np.sqrt(1.0 + (half * x[None, :]) ** 2 + (half * y[:, None]) ** 2)
+    np.testing.assert_allclose(weather.ray_distance(z, fov), 10.0 / cos, rtol=1e-12)
+    assert weather.ray_distance(np.full((2, 2), 1e10), fov).max() == 1e10, "the sky stays the sky"
+    rgba = np.ones((h, w, 4), np.float32)
+    imageio.write_layers(tmp_path / "ml.exr", blender_layers(rgba, z.astype(np.float32)))
+    _, said = fog(tmp_path / "ml.exr", tmp_path / "ml.exr", fov_deg=fov)
+    assert "turned into distance" in said
+    _, said = fog(tmp_path / "ml.exr", tmp_path / "ml.exr", fov_deg=fov, depth_kind="distance")
+    assert "turned into distance" not in said
