@@ -325,10 +325,13 @@ def glow_table(scene, spec):
 
 
 def refresh_glow_table(scene, spec):
-    """Re-bake the glow table in place if the camera's height changed (the depsgraph handler's call, when nothing
-    else needs a rebuild; nothing if the groups read no table)."""
+    """Re-bake the glow table in place if the camera's height changed, and set the World group's copy of a uniform
+    sky's radiance again (``refresh_world_sky``): the depsgraph handler's call, when nothing else needs a rebuild
+    (nothing if the groups read no table)."""
     if bpy.data.images.get(sunlight.GLOW_NAME) is not None:
         glow_table(scene, spec)
+    if spec.layered:
+        refresh_world_sky(scene)
 
 
 def sun_casts_shafts(scene, spec):
@@ -403,18 +406,92 @@ def _shaft_note(scene, spec, method_name):
 
 
 def builder(scene, spec):
-    """The groups' ``day`` argument: ``daylight`` of this scene and spec as a function of (m, beta), or None for
-    fog that fills all space."""
+    """The groups' ``day`` argument: ``daylight`` of this scene and spec as a function of (m, beta, albedo,
+    in_world), or None for fog that fills all space (``in_world``: the tree is the World's group)."""
     if not spec.layered:
         return None
-    return lambda m, beta, albedo=1.0: daylight(m, scene, spec, beta, albedo)
+    return lambda m, beta, albedo=1.0, in_world=False: daylight(m, scene, spec, beta, albedo, in_world)
 
 
-def daylight(m, scene, spec, beta, albedo=1.0):
+WORLD_SKY_LABEL = "Sky Radiance (World)"   # the World group's copy of a uniform sky's radiance (``_sky``)
+
+
+def _uniform_radiance(bg):
+    """A uniform sky's radiance: its Background's Color x Strength (RGB)."""
+    s = float(bg.inputs["Strength"].default_value)
+    return tuple(float(c) * s for c in bg.inputs["Color"].default_value[:3])
+
+
+def _sky(m, scene, in_world):
+    """The sky's radiance in the tree of ``m``: a uniform sky's driven by its World's Background (Color x
+    Strength), except in the World's own group (``in_world``), which holds it as a value set from the Background
+    (``refresh_world_sky``); any other World's mean (``sky_colour``), a value.
+
+    Why not driven in the World's group: a driver reads a node's socket through its tree's output (Blender's
+    depsgraph keys every socket of a tree to that tree's one NTREE_OUTPUT), and the World's tree's output waits
+    for the fog's World group it holds: a driver there reading the World's Background closes a dependency cycle
+    (Blender printed "Detected 6 dependency cycles" on every evaluation, and a driver in a cycle may read a value
+    of the frame before).  So does every other way found for it to reach that group: a driver on the World's own
+    tree, one reading through the World or the scene's world as a Context Property (tests/scenes/
+    dependency_cycles.py measures them, ``probe``)."""
+    world = scene.world
+    bg = uniform_sky(world)
+    if bg is None:
+        return m.wrap(sky_colour(world)[0])
+    if in_world:
+        node = m.node("ShaderNodeCombineXYZ", 0)
+        node.label = WORLD_SKY_LABEL
+        for i, c in enumerate(_uniform_radiance(bg)):
+            node.inputs[i].default_value = c
+        return m.wrap(node.outputs[0], vector=True)
+    path = f'nodes["{bg.name}"].inputs'
+    return comp_fog._vector(m, "Sky Radiance", ["c*s"] * 3,
+                            lambda i: [("c", world, f'node_tree.{path}["Color"].default_value[{i}]'),
+                                       ("s", world, f'node_tree.{path}["Strength"].default_value')])
+
+
+def background_animated(world):
+    """Whether a uniform World's Background Color or Strength is animated or driven (the World group's copy of it,
+    ``_sky``, is not: it is set when the fog is updated)."""
+    bg = uniform_sky(world)
+    ad = world.node_tree.animation_data if bg is not None else None
+    if ad is None:
+        return False
+    from bpy_extras import anim_utils
+    curves = list(ad.drivers)
+    if ad.action is not None:
+        bag = anim_utils.action_get_channelbag_for_slot(ad.action, ad.action_slot)
+        curves += list(bag.fcurves) if bag is not None else []
+    prefix = f'nodes["{bg.name}"].inputs'
+    return any(fc.data_path.startswith(prefix) for fc in curves)
+
+
+def refresh_world_sky(scene):
+    """Set the World group's copy of a uniform sky's radiance (``_sky``) from the World's Background again, where it
+    changed (nothing else: a value set is a tree update).  Returns True if a value changed."""
+    from .nodes import groups
+    ng = bpy.data.node_groups.get(groups.WORLD)
+    bg = uniform_sky(scene.world)
+    if ng is None or bg is None or ng.library is not None:
+        return False
+    radiance = [float(np.float32(c)) for c in _uniform_radiance(bg)]   # (as a socket stores it)
+    changed = False
+    for node in ng.nodes:
+        if node.bl_idname == "ShaderNodeCombineXYZ" and node.label == WORLD_SKY_LABEL:
+            for sock, c in zip(node.inputs, radiance):
+                if sock.default_value != c:
+                    sock.default_value = c
+                    changed = True
+    return changed
+
+
+def daylight(m, scene, spec, beta, albedo=1.0, in_world=False):
     """The scene's ``sunlight.Daylight`` in the node tree of ``m`` (NodeOps or CompOps): ``beta`` the tree's
     density socket (driven by the params group), the layer from ``spec``, the sun's direction and irradiance and a
     uniform sky's radiance driven by the Sun light and the World's Background (a change needs no rebuild; the sun's
-    direction re-bakes the fog light's map at the next Update Fog)."""
+    direction re-bakes the fog light's map at the next Update Fog).  ``in_world``: the tree is the World's group,
+    whose sky is a value kept up to date by the add-on instead (``_sky``: a driver there would be a dependency
+    cycle)."""
     top, falloff, ground = spec.layer_per_unit()
     suns = scene_suns(scene)
     if suns:
@@ -425,14 +502,7 @@ def daylight(m, scene, spec, beta, albedo=1.0):
                                       lambda i: [("e", sun.data, "energy"), ("c", sun.data, f"color[{i}]")])
     else:
         direction, irradiance = m.wrap((0.0, 0.0, 1.0)), m.wrap((0.0, 0.0, 0.0))
-    bg = uniform_sky(scene.world)
-    if bg is not None:
-        path = f'nodes["{bg.name}"].inputs'
-        sky = comp_fog._vector(m, "Sky Radiance", ["c*s"] * 3,
-                               lambda i: [("c", scene.world, f'node_tree.{path}["Color"].default_value[{i}]'),
-                                          ("s", scene.world, f'node_tree.{path}["Strength"].default_value')])
-    else:
-        sky = m.wrap(sky_colour(scene.world)[0])
+    sky = _sky(m, scene, in_world)
     air = spec.air_per_unit()
     table = (sunlight.glow_table(spec.beta_per_unit, None if air is None else air[0])
              if uses_glow_table(scene, spec) else None)
@@ -475,6 +545,10 @@ def notes(scene, spec, method_name, lamps=()):
         out.append(("Daylight", f"with {method_name} the sun's and the sky's glow and fog light are evaluated on "
                                 "every sample (3-8x the fog-free render in a city); the Compositor method (Auto's "
                                 "choice) does them once per pixel"))
+    if method_name != "compositor" and uses_glow_table(scene, spec) and background_animated(scene.world):
+        out.append((scene.world.name, "its Background is animated: the sky's glow where the sky is seen keeps its "
+                                      "colour of the last fog update on every frame (on surfaces it follows); the "
+                                      "Compositor method (Auto's choice) follows it everywhere"))
     if suns:
         from . import caveats
         sun = suns[0]

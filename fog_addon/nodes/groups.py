@@ -1012,8 +1012,9 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
     emission, transmittance = shading.shade_background(
         m, [m.wrap(node.outputs["Airlight"], vector=True) for node, _ in placed], medium, is_camera,
         m.wrap(params.outputs[WORLD_LIGHT]))
-    if day is not None:
-        daylight = day(m, m.wrap(params.outputs["Beta"]), m.wrap(params.outputs["Albedo"], vector=True))
+    if day is not None:   # (``in_world``: no driver reads the World from its own group: a dependency cycle)
+        daylight = day(m, m.wrap(params.outputs["Beta"]), m.wrap(params.outputs["Albedo"], vector=True),
+                       in_world=True)
         camera_at = m.wrap(cam.outputs[0], vector=True)
         seen = sunlight.grey(m, sunlight.sky_seen(m, daylight, camera_at, direction))
         transmittance = 1.0 + is_camera * (seen - 1.0) if day_dims else m.const(1.0)
