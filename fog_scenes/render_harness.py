@@ -69,7 +69,7 @@ REFERENCE_CASES = [
 # Log lines that mean a render is wrong whatever its picture looks like: a shader too big
 # (Cycles: "ERROR Shader graph: out of SVM stack space, shader "x" too big."; EEVEE:
 # "Error: Uniform block node_tree too big (76960/65536)"), GPU shader errors (compile, link),
-# shader compile errors (GLSL, OSL).  EGL_BAD_MATCH and "Not freed memory blocks", printed
+# shader compile errors (GLSL, OSL), dependency cycles.  EGL_BAD_MATCH and "Not freed memory blocks", printed
 # by every EEVEE run here, are harmless and do not match; nor does the fog's own note that EEVEE's
 # uniform block limited its choice of models (it chose to fit the block).
 LOG_ERRORS = [re.compile(p) for p in (
@@ -80,6 +80,7 @@ LOG_ERRORS = [re.compile(p) for p in (
     r"(?i)shader graph.*error|error.*shader graph",
     r"(?i)\bcompil\w*\b.*\b(error|failed)\b|\berror\b.*\bcompil",
     r"(?i)\bosl\b.*\berror\b",
+    r"(?i)dependency cycle",   # drivers in a cycle read stale values (tests/test_dependency_cycles.py)
 )]
 
 

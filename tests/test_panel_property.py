@@ -17,6 +17,7 @@ SCENE = h.ROOT / "tests" / "scenes" / "panel_property.py"
 
 def run_sequence(seed, *flags, steps=200):
     proc = h.run([SCENE, "--seed", seed, "--steps", steps, "--render-every", 25, *flags], timeout=1800)
+    assert not h.log_errors(proc.stdout + proc.stderr), "Blender's log (a shader too big, a dependency cycle)"
     line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT "))
     return json.loads(line.split(" ", 1)[1])
 
