@@ -12,7 +12,7 @@
 """
 import numpy as np
 
-from .precompute import footprint
+from .precompute import footprint, shafts as shafts_
 
 GLOW_OPTICAL_DEPTH = 3.0   # beta x distance within which a light's glow is worth a shadow (e^-3 = 5 %)
 _SEE_THROUGH = ("ShaderNodeBsdfTransparent", "ShaderNodeBsdfGlass", "ShaderNodeBsdfRefraction",
@@ -118,8 +118,9 @@ def _names(names):
 
 def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None):
     """Notes on the shadows of ``lights`` in the fog: with ``shafts`` (the Compositor method casts them from
-    shadow maps), what the maps don't do (soft shadows, moving lights or objects on a farm); without, that
-    the objects near the lights cast no shadow into the fog (``why_off``: why, else the method has none)."""
+    shadow maps), what the maps don't do (soft shadows; moving lights or objects over more frames than an atlas
+    holds, ``shadow_maps.ensure``); without, that the objects near the lights cast no shadow into the fog
+    (``why_off``: why, else the method has none)."""
     found = shadowing_lights(scene, lights, beta, reach_m)
     if not found:
         return []
@@ -139,10 +140,11 @@ def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None):
         notes.append(f"light shafts are sharp: the Radius of {_names(soft)} softens their shadows on surfaces "
                      "(Cycles) but not in the fog")
     moving = [o.name for o in [*shafted, *shadow_casters(scene)] if _animated(o)]
-    if moving:
-        notes.append(f"{_names(moving)} move: the shadow maps of the shafts are baked for each frame as it "
-                     "renders, so a farm needs the add-on installed for this animation (a still frame renders "
-                     "without it)")
+    first, stride, count = shafts_.atlas_frames(scene.frame_start, scene.frame_end, scene.frame_step)
+    if moving and stride > max(scene.frame_step, 1):   # (every rendered frame's map is baked and packed up to the cap)
+        notes.append(f"{_names(moving)} move over more than {shafts_.ATLAS_MAX_FRAMES} rendered frames: the shafts' "
+                     f"shadow maps are baked for every {stride}th frame from {first} ({count} maps a light, packed in "
+                     "the file), and the frames between take the latest of them")
     return notes
 
 

@@ -85,11 +85,16 @@ def on_frame_change(scene, *_):
 @persistent
 def on_save_pre(*_):
     """A saved file renders on a farm without the add-on: its windows hold every frame of the range (computed
-    again if they were grown by single frames since: stepping through the frames costs seconds in a big scene)."""
+    again if they were grown by single frames since: stepping through the frames costs seconds in a big scene),
+    and the atlases of the shafts' maps of an animation hold every frame's (baked again if a frame change found one
+    out of date, or the range changed: ``methods.compositor.complete_shadows``)."""
     scene = bpy.context.scene
     settings = getattr(scene, "analytic_fog", None)
     if settings is not None and settings.enabled and comp_fog.windows_partial():
         apply.refresh_lights(scene)
+    if settings is not None and settings.enabled:
+        from .methods import compositor as compositor_method
+        compositor_method.complete_shadows(scene)
 
 
 def register():

@@ -5,10 +5,20 @@ distance from the light to the first surface is ray cast in every direction of i
 (``precompute/shafts.py``: a longitude-latitude grid for a point light, its rows thinned towards the poles to
 the equator's spacing, ``point_map_casts``; a square grid over the cone for a spot) against one BVH of the
 scene's shadow casters (``mathutils.bvhtree``, evaluated meshes in world space: modifiers, instances and curves
-included), and stored as a packed float image, so the saved file renders without the add-on (the compositor
-reads it with Map UV).  The map holds the light's pose and the geometry of the frame it was baked at
-(``ShadowMap.key``): when either changes, the map is baked again (the frame handler, ``render``); a farm
-rendering an animation whose lights or occluders move needs the add-on (``animated_note``).
+included), and stored as a packed float image (a ZIP-compressed OpenEXR, ``_pack``), so the saved file renders
+without the add-on (the compositor reads it with Map UV).  A map holds the light's pose and the geometry of the
+frame it was baked at (``ShadowMap.key``).
+
+**Animations.**  Where a shafted light or a shadow caster is animated (``moving_lights``), the light's image is an
+atlas of its maps at every frame an animation renders (``shafts.atlas_frames``: frame_start..frame_end by
+frame_step, every k-th of those beyond ``shafts.ATLAS_MAX_FRAMES``), four frames a texel in R, G, B and A, at
+``shafts.ANIMATED_POINT_MAP`` (``ANIMATED_SPOT_MAP``) grid points a frame (``Atlas``).  The compositor picks the
+frame's map with a simple-expression driver on the frame (``shafts.ATLAS_TILE``: no Python at render time, so a
+farm without the add-on renders every frame's shafts; ``comp_fog._atlas_tile``).  A moving spot's maps all lie in
+one frame that holds the cones of all its poses (``shafts.spot_union``; else a point light's map of the whole
+sphere), and its shafts take its cone from the drivers of its glow.  In the add-on the frame handler bakes the
+frame's map again where the light or the casters changed since (``follow_frame``) and the file's save bakes and
+packs the atlas's whole range again after such a change (``complete``).
 
 Objects that Cycles lets shadow rays through (hidden from shadow rays, not rendered) cast none here; every
 other surface is opaque (glass included, as Cycles' shadow rays treat it).
@@ -17,7 +27,10 @@ import functools
 import gc
 import hashlib
 import itertools
+import json
 import math
+import os
+import tempfile
 from typing import NamedTuple
 
 import bpy
@@ -32,13 +45,37 @@ from .precompute.tables import TableSpec
 
 IMAGE_PREFIX = f"{owned.PREFIX} Shadow "   # a light's map: "<IMAGE_PREFIX><light name>"
 KEY = "analytic_fog_shadow_key"            # on the image: what the map was baked from (``ShadowMap.key``)
+# on an animation's atlas (``Atlas``): its layout [first frame, stride, tiles, columns, rows, width, height] (the
+# compositor's drivers read it), what it was laid out for (``_layout``), each baked frame's key, and whether a frame's
+# map changed since it was packed (``follow_frame``; ``complete`` bakes the range again)
+ATLAS = "analytic_fog_shadow_atlas"
+LAYOUT = "analytic_fog_shadow_layout"
+TILE_KEYS = "analytic_fog_shadow_tiles"
+STALE = "analytic_fog_shadow_stale"
+
+
+class Atlas(NamedTuple):
+    """Where an animation's maps lie in a light's atlas image: tile t (``shafts.ATLAS_TILE``) is the map of frame
+    first + t stride, in slot t // 4 (column, row: ``shafts.atlas_place``), channel t % 4, each map width x height
+    grid points.  ``tiles`` is 1 where every frame's map was the same (a light the moving casters do not shadow)."""
+    first: int
+    stride: int
+    tiles: int
+    columns: int
+    rows: int
+    width: int
+    height: int
 
 
 class ShadowMap(NamedTuple):
-    """A light's baked map: ``spec`` (its image's name and grid), ``spot``: (frame, half_width) of a spot's
-    map (``spot_map``) or None for a point light's."""
+    """A light's baked map: ``spec`` (its image's name and the grid of one map), ``spot``: (frame, half_width) of a
+    spot's map (``spot_map``) or None for a point light's (or a moving spot's whole-sphere map), ``atlas``: the
+    ``Atlas`` of an animation's maps or None, ``cone``: True if the spot's cone is read from its drivers (a moving
+    spot, whose map's frame is not its pose's)."""
     spec: TableSpec
     spot: tuple
+    atlas: Atlas = None
+    cone: bool = False
 
 
 def _triangles(depsgraph, objects):
@@ -88,11 +125,11 @@ def scene_bvh(scene, depsgraph=None, objects=None):
     return Scene(bvh, digest)
 
 
-@functools.lru_cache(maxsize=1)
-def _point_casts():
+@functools.lru_cache(maxsize=2)
+def _point_casts(width=shafts.POINT_MAP[0], height=shafts.POINT_MAP[1]):
     """(the rays of a point light's map as mathutils Vectors, the ray each grid point takes): ``shafts.point_map_casts``
-    (every point light's map shares them)."""
-    directions, fill = shafts.point_map_casts()
+    (every point light's map of this grid shares them)."""
+    directions, fill = shafts.point_map_casts(width, height)
     return _vectors(directions), fill
 
 
@@ -206,42 +243,295 @@ def key(light, geometry):
     return hashlib.sha1(repr((m, cone, geometry.digest)).encode()).hexdigest()
 
 
-def _store(spec, depth, version):
-    img = bpy.data.images.get(spec.name)
-    if img is not None and tuple(img.size) != (spec.width, spec.height):
+def _new_image(name, width, height):
+    """A new float image ``name`` for a map: non-colour data, channel-packed alpha, full precision, kept."""
+    img = bpy.data.images.new(name, width, height, alpha=True, float_buffer=True, is_data=True)
+    img.colorspace_settings.name = "Non-Color"
+    img.alpha_mode = "CHANNEL_PACKED"
+    img.use_half_precision = False
+    img.use_fake_user = True
+    return img
+
+
+def _image(name, width, height, atlas):
+    """The image ``name`` of width x height to hold a map (``atlas`` False) or an atlas (True), new unless it is one
+    of that size and kind already."""
+    img = bpy.data.images.get(name)
+    if img is not None and (tuple(img.size) != (width, height) or (ATLAS in img) != atlas):
         bpy.data.images.remove(img)
         img = None
-    if img is None:
-        img = bpy.data.images.new(spec.name, spec.width, spec.height, alpha=True, float_buffer=True, is_data=True)
-        img.colorspace_settings.name = "Non-Color"
-        img.alpha_mode = "CHANNEL_PACKED"
-        img.use_half_precision = False
-    img.pixels.foreach_set(np.repeat(np.asarray(depth, np.float32)[..., None], 4, axis=-1).ravel())
+    return _new_image(name, width, height) if img is None else img
+
+
+def _pack(img, rgba):
+    """Write ``rgba`` ((height, width, 4) float32, the bottom row first) into ``img`` and pack it into the file as a
+    ZIP-compressed OpenEXR (lossless; Blender's own packing of a float image is uncompressed: 16 bytes a texel; a
+    map's depths take 2-6x less, docs/measurements/2026-11-29-animated-shadow-maps.md).  The image then reads from
+    its packed file (source FILE), as after the file is opened again; without OpenImageIO, Blender's packing."""
+    rgba = np.ascontiguousarray(rgba, np.float32)
+    img.pixels.foreach_set(rgba.ravel())
     img.update()
-    img.pack()
-    img.use_fake_user = True
+    try:
+        from . import imageio
+        with tempfile.TemporaryDirectory() as folder:
+            path = os.path.join(folder, "map.exr")
+            imageio.write_exr(path, rgba[::-1], compression="zip")
+            with open(path, "rb") as f:
+                data = f.read()
+    except (ImportError, OSError):
+        img.pack()
+        return img
+    img.pack(data=data, data_len=len(data))
+    if img.source != "FILE":
+        img.source = "FILE"
+    img.filepath_raw = f"//{bpy.path.clean_name(img.name)}.exr"   # (never read: its packed file is)
+    img.file_format = "OPEN_EXR"
+    return img
+
+
+def _store(spec, depth, version):
+    img = _image(spec.name, spec.width, spec.height, atlas=False)
+    _pack(img, np.repeat(np.asarray(depth, np.float32)[..., None], 4, axis=-1))
     img[KEY] = version
     return img
 
 
-def ensure(scene, lights, geometry=None):
-    """{light name: ShadowMap} of ``lights``, each baked unless its image holds this pose and geometry;
-    returns (maps, images by spec name)."""
+def moving_lights(scene, lights):
+    """The ``lights`` whose maps change over the animation: all of them where a shadow caster is animated
+    (``caveats._animated``: an action, drivers or constraints on it or on what it hangs from), else those animated
+    themselves."""
+    if any(caveats._animated(o) for o in caveats.shadow_casters(scene)):
+        return list(lights)
+    return [o for o in lights if caveats._animated(o)]
+
+
+def frames_of(scene):
+    """(first, stride, count) of the frames an animation's maps are baked for (``shafts.atlas_frames``)."""
+    return shafts.atlas_frames(scene.frame_start, scene.frame_end, scene.frame_step)
+
+
+def ensure(scene, lights, geometry=None, lazy=False):
+    """{light name: ShadowMap} of ``lights``, each baked unless its image holds this pose and geometry (the lights
+    whose maps move over an animation of more than one frame: their atlases, ``ensure_atlases``, ``lazy`` as
+    there); returns (maps, images by spec name)."""
     if not lights:
         return {}, {}
-    geometry = geometry or scene_bvh(scene)
-    maps, images = {}, {}
+    moving = {o.name for o in moving_lights(scene, lights)} if frames_of(scene)[2] > 1 else set()
+    maps, images = ensure_atlases(scene, [o for o in lights if o.name in moving], lazy=lazy)
     for light in lights:
+        if light.name in moving:
+            continue
+        geometry = geometry or scene_bvh(scene)
         version = key(light, geometry)
         name = IMAGE_PREFIX + light.name
         img = bpy.data.images.get(name)
-        if img is not None and img.get(KEY) == version and img.packed_file is not None:
+        if img is not None and img.get(KEY) == version and img.packed_file is not None and ATLAS not in img:
             shadow = describe(light, img)
         else:
             shadow, depth = bake(light, geometry)
             img = _store(shadow.spec, depth, version)
         maps[light.name], images[shadow.spec.name] = shadow, img
     return maps, images
+
+
+def _layout(light, frames, union):
+    """(what an atlas of ``light`` is laid out for: its frames, kind, grid and a spot's map frame, as JSON; the grid
+    (width, height); the map frame (``spot_map``'s, or None for the whole sphere))."""
+    if union is not None:
+        size = (shafts.ANIMATED_SPOT_MAP, shafts.ANIMATED_SPOT_MAP)
+    else:
+        size = shafts.ANIMATED_POINT_MAP
+    return json.dumps([list(frames), list(size), union]), size, union
+
+
+def ensure_atlases(scene, lights, only_stale=False, lazy=False):
+    """{light name: ShadowMap} of the moving ``lights`` and their atlas images: each light's map at every frame of
+    ``frames_of(scene)`` (the scene stepped through them, its frame restored), baked where its key (``key``: the
+    light's pose and the casters' geometry) differs from the one the atlas holds for that frame, and packed.  A
+    spot's maps all lie in ``shafts.spot_union``'s frame of its poses (the whole sphere where they turn too far).
+    ``only_stale``: only the lights whose atlas is missing, STALE or laid out for other frames.  ``lazy`` (a
+    rebuild from the depsgraph handler, which must not step through frames): an atlas laid out for this range is
+    taken as it is; a new one gets the map of the current frame only (a spot's over the whole sphere), STALE: the
+    frame handler bakes each frame's as it is shown (``follow_frame``), the file's save all of them (``complete``)."""
+    from . import view
+    frames = frames_of(scene)
+    if only_stale:
+        lights = [o for o in lights if _needs_baking(o, frames)]
+    if not lights:
+        return {}, {}
+    first, stride, count = frames
+    frame_list = [first + stride * t for t in range(count)]
+    unions = {}
+    spots = [o for o in lights if _is_spot(o)]
+    if lazy:   # the spots' maps where they lie now (their poses are not stepped through)
+        for o in spots:
+            img = bpy.data.images.get(IMAGE_PREFIX + o.name)
+            layout = json.loads(img[LAYOUT]) if img is not None and LAYOUT in img else None
+            if layout is not None and layout[0] == list(frames) and layout[2] is not None:
+                unions[o.name] = (tuple(tuple(v) for v in layout[2][0]), layout[2][1])
+    elif spots:   # first the spots' poses: where their maps lie
+        poses = {o.name: [] for o in spots}
+        for _ in view._at_frames(scene, frame_list):
+            for o in spots:
+                poses[o.name].append(shafts.spot_frame(np.asarray(o.matrix_world)[:3, :3]))
+        unions = {o.name: shafts.spot_union(poses[o.name], math.cos(0.5 * o.data.spot_size)) for o in spots}
+    plans = []
+    for light in lights:
+        layout, size, union = _layout(light, frames, unions.get(light.name))
+        img = bpy.data.images.get(IMAGE_PREFIX + light.name)
+        same = img is not None and img.get(LAYOUT) == layout and img.packed_file is not None
+        keys = list(img[TILE_KEYS]) if same else [""] * count
+        plans.append({"light": light, "layout": layout, "size": size, "union": union, "keys": keys,
+                      "tiles": _tiles(img) if same else [None] * count, "changed": not same})
+    if lazy:
+        geometry = None
+        for plan in plans:
+            if plan["changed"]:   # this frame's map (the one the driver picks here), the others to come
+                geometry = geometry or scene_bvh(scene)
+                tile, off = divmod(scene.frame_current - first, stride)
+                t = min(max(tile, 0), count - 1)
+                plan["tiles"][t] = _bake_tile(plan["light"], geometry, plan["union"], plan["size"])
+                if not off and tile == t:
+                    plan["keys"][t] = key(plan["light"], geometry)
+                plan["stale"] = True
+            else:
+                plan["stale"] = bool(bpy.data.images[IMAGE_PREFIX + plan["light"].name].get(STALE))
+        return _store_atlases(plans, frames, dedupe=False)
+    for t, (_, depsgraph) in enumerate(view._at_frames(scene, frame_list)):
+        geometry = scene_bvh(scene, depsgraph)
+        for plan in plans:
+            version = key(plan["light"], geometry)
+            if plan["keys"][t] != version or plan["tiles"][t] is None:
+                plan["tiles"][t] = _bake_tile(plan["light"], geometry, plan["union"], plan["size"])
+                plan["keys"][t] = version
+                plan["changed"] = True
+    return _store_atlases(plans, frames)
+
+
+def _store_atlases(plans, frames, dedupe=True):
+    """({light name: ShadowMap}, images) of ``ensure_atlases``'s ``plans``: each atlas laid out and packed where
+    it changed or was STALE (a plan's "stale": it is STALE still, its maps not all baked); ``dedupe``: an atlas
+    whose maps are all the same holds one."""
+    first, stride, count = frames
+    maps, images = {}, {}
+    for plan in plans:
+        light, (width, height) = plan["light"], plan["size"]
+        name = IMAGE_PREFIX + light.name
+        tiles = plan["tiles"]
+        if dedupe and all(tiles[0] is not None and np.array_equal(tiles[0], tile) for tile in tiles[1:]):
+            tiles = tiles[:1]   # the same map at every frame: one tile
+        columns, rows = shafts.atlas_layout(len(tiles), width, height)
+        atlas = Atlas(first, stride, len(tiles), columns, rows, width, height)
+        img = bpy.data.images.get(name)
+        if not plan["changed"] and img is not None and (plan.get("stale") or not img.get(STALE)):
+            atlas = Atlas(*(int(v) for v in img[ATLAS]))   # as it is (``lazy``: still STALE, or all verified)
+        else:
+            img = _image(name, columns * width, rows * height, atlas=True)
+            img[ATLAS] = list(atlas)
+            _pack(img, _assemble(tiles, columns, rows, width, height))
+            img[LAYOUT], img[TILE_KEYS], img[STALE] = plan["layout"], plan["keys"], bool(plan.get("stale"))
+            if KEY in img:
+                del img[KEY]
+        spot = None if plan["union"] is None else tuple(plan["union"])
+        spot = None if spot is None else (tuple(tuple(v) for v in spot[0]), spot[1])
+        maps[light.name] = ShadowMap(TableSpec(name, width, height), spot, atlas, cone=_is_spot(light))
+        images[name] = img
+    return maps, images
+
+
+def _needs_baking(light, frames):
+    """True if ``light``'s atlas is missing, STALE or laid out for other ``frames``."""
+    img = bpy.data.images.get(IMAGE_PREFIX + light.name)
+    if img is None or ATLAS not in img or img.get(STALE) or img.packed_file is None:
+        return True
+    return json.loads(img[LAYOUT])[0] != list(frames)
+
+
+def _bake_tile(light, geometry, union, size):
+    """(height, width) float32: ``light``'s map at its pose against ``geometry``: over a spot's ``union`` frame
+    ((frame, half_width)), or the whole sphere (None)."""
+    origin = tuple(light.matrix_world.translation)
+    if union is not None:
+        dirs = shafts.spot_map_directions(*union, size=size[0])
+        return cast(geometry.bvh, origin, dirs.reshape(-1, 3)).reshape(dirs.shape[:2])
+    vectors, fill = _point_casts(*size)
+    return cast(geometry.bvh, origin, vectors)[fill]
+
+
+def _assemble(tiles, columns, rows, width, height):
+    """(rows height, columns width, 4) float32: the atlas of ``tiles`` ((height, width) each, or None) in their
+    places (``shafts.atlas_place``); unused channels and missing maps NO_HIT."""
+    rgba = np.full((rows * height, columns * width, 4), shafts.NO_HIT, np.float32)
+    for t, tile in enumerate(tiles):
+        if tile is None:   # (not baked yet: ``ensure_atlases``'s lazy)
+            continue
+        column, row, channel = shafts.atlas_place(t, columns)
+        rgba[row * height:(row + 1) * height, column * width:(column + 1) * width, channel] = tile
+    return rgba
+
+
+def _tiles(img):
+    """The maps an atlas image holds, one per frame of its TILE_KEYS (a one-tile atlas's map for each)."""
+    first, stride, tiles, columns, rows, width, height = (int(v) for v in img[ATLAS])
+    rgba = np.empty(img.size[0] * img.size[1] * 4, np.float32)
+    img.pixels.foreach_get(rgba)
+    rgba = rgba.reshape(img.size[1], img.size[0], 4)
+    out = []
+    for t in range(tiles):
+        column, row, channel = shafts.atlas_place(t, columns)
+        out.append(rgba[row * height:(row + 1) * height, column * width:(column + 1) * width, channel].copy())
+    count = len(img[TILE_KEYS])
+    return out if tiles == count else [out[0]] * count
+
+
+def follow_frame(scene, lights):
+    """The frame changed (the add-on's frame handler): in each of ``lights``' atlases, this frame's map is baked
+    again if the light or the casters changed since (its key), so the add-on renders what the scene holds now; the
+    atlas is then STALE (its packed copy is old, and the other frames may have changed as well: ``complete`` bakes
+    the range again when the file is saved).  A frame no map is baked for (between strides, outside the range)
+    keeps the one the compositor's driver picks.  Returns the names of the lights whose map changed."""
+    frame = scene.frame_current
+    geometry, changed = None, []
+    for light in lights:
+        img = bpy.data.images.get(IMAGE_PREFIX + light.name)
+        if img is None or ATLAS not in img:
+            continue
+        first, stride, tiles, columns, rows, width, height = (int(v) for v in img[ATLAS])
+        keys = list(img[TILE_KEYS])
+        t, off = divmod(frame - first, stride)
+        if json.loads(img[LAYOUT])[0] != list(frames_of(scene)):
+            img[STALE] = True   # the range changed: ``complete`` lays the atlas out again
+        if off or not 0 <= t < len(keys):
+            continue
+        geometry = geometry or scene_bvh(scene)
+        version = key(light, geometry)
+        if keys[t] == version:
+            continue
+        _, size, union = json.loads(img[LAYOUT])
+        union = None if union is None else (tuple(tuple(v) for v in union[0]), union[1])
+        depth = _bake_tile(light, geometry, union, size)
+        tile = t if tiles > 1 else 0
+        if tiles == 1:   # the one map every frame shared: now this frame's, the others to be baked again
+            keys = [""] * len(keys)
+        rgba = np.empty(img.size[0] * img.size[1] * 4, np.float32)
+        img.pixels.foreach_get(rgba)
+        rgba = rgba.reshape(img.size[1], img.size[0], 4)
+        column, row, channel = shafts.atlas_place(tile, columns)
+        rgba[row * height:(row + 1) * height, column * width:(column + 1) * width, channel] = depth
+        img.pixels.foreach_set(rgba.ravel())
+        img.update()
+        keys[t] = version
+        img[TILE_KEYS], img[STALE] = keys, True
+        changed.append(light.name)
+    return changed
+
+
+def complete(scene, lights):
+    """Before the file is saved: the atlases of ``lights`` that are STALE or laid out for another range are baked
+    over the scene's range again and packed (``ensure_atlases``), so a farm renders every frame as the add-on does.
+    Returns their {light name: ShadowMap} and images."""
+    return ensure_atlases(scene, [o for o in lights if ATLAS in (bpy.data.images.get(IMAGE_PREFIX + o.name) or {})],
+                          only_stale=True)
 
 
 def describe(light, img):

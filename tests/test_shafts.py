@@ -294,3 +294,64 @@ def test_many_shafted_lights_keep_the_per_pixel_budget(quality):
         assert shafts.nodes_per_pixel(s) <= shafts.nodes_per_pixel(last), (n, s, last)
         last = s
     assert quality == "exact" or shafts.samples_for(quality, 79) == shafts.SAMPLES["draft"]
+
+
+# --- an animation's maps (the atlas of shadow_maps.ensure_atlases) -----------------------------------------
+
+def _tile(frame, first, stride, tiles):
+    """``shafts.ATLAS_TILE`` evaluated as Blender's simple expressions do (min, max, floor of floats)."""
+    return eval(shafts.ATLAS_TILE, {"min": min, "max": max, "floor": math.floor},
+                {"frame": float(frame), "s": float(first), "k": float(stride), "n": float(tiles)})
+
+
+@pytest.mark.parametrize("start,end,step,want", [(1, 10, 1, (1, 1, 10)), (1, 10, 2, (1, 2, 5)), (5, 5, 1, (5, 1, 1)),
+                                                 (0, 250, 1, (0, 2, 126)), (1, 300, 1, (1, 3, 100)),
+                                                 (1, 1000, 4, (1, 8, 125))])
+def test_atlas_frames_hold_every_rendered_frame_up_to_the_cap(start, end, step, want):
+    assert shafts.atlas_frames(start, end, step) == want
+    first, stride, count = want
+    assert count <= shafts.ATLAS_MAX_FRAMES and stride % step == 0
+    for frame in range(start - 3, end + 4):   # each frame takes the latest map baked at or before it, clamped
+        t = _tile(frame, first, stride, count)
+        assert t == min(max((frame - first) // stride, 0), count - 1), frame
+
+
+@pytest.mark.parametrize("count,size", [(1, (512, 256)), (10, (512, 256)), (100, (512, 256)), (128, (512, 256)),
+                                        (37, (256, 256))])
+def test_atlas_places_each_map_once_in_a_bounded_image(count, size):
+    columns, rows = shafts.atlas_layout(count, *size)
+    places = {shafts.atlas_place(t, columns) for t in range(count)}
+    assert len(places) == count
+    assert all(0 <= c < columns and 0 <= r < rows and 0 <= ch < shafts.ATLAS_CHANNELS for c, r, ch in places)
+    assert columns * rows * shafts.ATLAS_CHANNELS - count < columns * shafts.ATLAS_CHANNELS   # no empty row
+    assert max(columns * size[0], rows * size[1]) <= shafts.ATLAS_MAX_SIDE
+    assert 0.5 <= columns * size[0] / (rows * size[1]) <= 4.0 or count <= shafts.ATLAS_CHANNELS
+
+
+def _spot_frames(turn_deg, poses=6, tilt_deg=-60.0):
+    """(right, up, forward) of a spot tilted down by ``tilt_deg`` and turned about z by 0..``turn_deg``."""
+    out = []
+    for a in np.radians(np.linspace(0.0, turn_deg, poses)):
+        rz = np.array([[math.cos(a), -math.sin(a), 0], [math.sin(a), math.cos(a), 0], [0, 0, 1]])
+        t = math.radians(tilt_deg)
+        rx = np.array([[1, 0, 0], [0, math.cos(t), -math.sin(t)], [0, math.sin(t), math.cos(t)]])
+        out.append(shafts.spot_frame(rz @ rx))
+    return out
+
+
+def test_spot_union_holds_every_pose_cone():
+    cos_half = math.cos(math.radians(25.0))
+    still = _spot_frames(0.0, poses=1)
+    frame, half = shafts.spot_union(still, cos_half)
+    assert np.allclose(frame, still[0], atol=1e-9) and half == pytest.approx(shafts.spot_half_width(cos_half) * 1.01)
+    frames = _spot_frames(40.0)
+    frame, half = shafts.spot_union(frames, cos_half)
+    forward = np.asarray(frame[2])
+    m = NumpyOps()
+    phi = np.linspace(0.0, 2.0 * math.pi, 97)
+    for pose in frames:   # every pose's cone (97 directions on its edge, the union took 64) lies inside it
+        r, u, f = (np.asarray(v) for v in pose)
+        edge = f + math.tan(math.radians(25.0)) * (np.cos(phi)[:, None] * r + np.sin(phi)[:, None] * u)
+        x, y = shafts.spot_map_xy(m, edge, frame, half)
+        assert (edge @ forward > 0).all() and x.min() > 0 and x.max() < 1 and y.min() > 0 and y.max() < 1
+    assert shafts.spot_union(_spot_frames(170.0), cos_half) is None   # too wide: the whole sphere's map

@@ -39,8 +39,8 @@ class Compositor(Method):
     def signature(self, scene, spec, shader_lights):
         c = scene.cycles
         return (f"compositor:{scene.render.engine}:{c.pixel_filter_type}:{comp_fog.horizontal_fit(scene)}:"
-                f"{scene.camera.data.sensor_fit}|shafts:{spec.shafts}|glow:{bool(glowing_objects(scene))}|dimming:"
-                + ",".join(o.name_full for o in shader_lights))
+                f"{scene.camera.data.sensor_fit}|shafts:{spec.shafts}{_moving(scene) if spec.shafts else ''}"
+                f"|glow:{bool(glowing_objects(scene))}|dimming:" + ",".join(o.name_full for o in shader_lights))
 
     def windows(self, scene, lights, partial):
         return view.windows(scene, lights, [scene.frame_current] if partial else None, _halos(scene))
@@ -58,7 +58,8 @@ class Compositor(Method):
                              tails=caveats.specular_paths(bpy.data.materials), day=day,
                              day_dims=dims and not daylit, day_exact=not daylit)
         shafted = shafted_lights(scene, spec, plan.in_groups) if spec.shafts else []
-        maps, shadow_images = shadow_maps.ensure(scene, shafted)
+        from .. import handlers   # (a rebuild from the depsgraph handler does not step through the frames)
+        maps, shadow_images = shadow_maps.ensure(scene, shafted, lazy=plan.partial or bool(handlers._refreshing))
         sun_shadow, sun_images = sunsky.sun_shadow(scene, spec) if daylit else (None, {})
         shadow_maps.remove_unused(set(shadow_images) | set(sun_images))
         images = dict(images, **shadow_images, **sun_images)
@@ -164,22 +165,61 @@ def shafted_lights(scene, spec, lights):
     return [light for light in lights if light.name in found and light.data.type != "AREA"]
 
 
+def _moving(scene):
+    """What of the shafts' maps moves over the animation (the lights animated, the casters), as the signature says it:
+    a light that starts or stops moving takes an atlas of its maps or a still map (``shadow_maps.ensure``), other
+    nodes (``comp_fog._atlas_tile``)."""
+    if shadow_maps.frames_of(scene)[2] < 2:
+        return ""
+    casters = any(caveats._animated(o) for o in caveats.shadow_casters(scene))
+    lights = sorted(o.name for o in scene.objects if o.type == "LIGHT" and caveats._animated(o))
+    return f":moving {int(casters)} " + ",".join(lights) if casters or lights else ""
+
+
 def follow_shadows(scene, lights):
-    """The frame changed: the shadow maps of the shafted lights follow the lights and objects that move
-    (baked again where a light's pose or the casters' geometry changed, ``shadow_maps.ensure``), and a spot
-    whose map turned gets its shaft group again (its frame is built in)."""
+    """The frame changed: the shadow maps of the shafted lights follow the lights and objects that move.  A still
+    map is baked again where a light's pose or the casters' geometry changed (``shadow_maps.ensure``; a spot whose
+    map turned gets its shaft group again, its frame is built in); an animation's atlas has this frame's map baked
+    again where it changed since (``shadow_maps.follow_frame``: the animation was edited)."""
     maps_now = [bpy.data.images.get(shadow_maps.IMAGE_PREFIX + o.name) for o in lights]
     shafted = [o for o, img in zip(lights, maps_now) if img is not None]
     if not shafted or not any(caveats._animated(o) for o in [*shafted, *caveats.shadow_casters(scene)]):
         return
+    atlases = [o for o in shafted if shadow_maps.ATLAS in bpy.data.images[shadow_maps.IMAGE_PREFIX + o.name]]
+    shadow_maps.follow_frame(scene, atlases)
+    still = [o for o in shafted if o not in atlases]
+    if not still:
+        return
     from ..ops.apply import spec_of
     spec = spec_of(scene)
-    before = {o.name: bpy.data.images[shadow_maps.IMAGE_PREFIX + o.name].get(shadow_maps.KEY) for o in shafted}
-    maps, images = shadow_maps.ensure(scene, shafted)
-    for light in shafted:
+    before = {o.name: bpy.data.images[shadow_maps.IMAGE_PREFIX + o.name].get(shadow_maps.KEY) for o in still}
+    maps, images = shadow_maps.ensure(scene, still)
+    for light in still:
         shadow = maps[light.name]
         if shadow.spot is not None and images[shadow.spec.name].get(shadow_maps.KEY) != before[light.name]:
             comp_fog.build_shaft_group(light, shadow, images, shafts.samples_for(spec.quality, len(shafted)),
+                                       spec.anisotropy)
+
+
+def complete_shadows(scene):
+    """Before the file is saved (``handlers.on_save_pre``): the atlases of the shafted lights' maps that a frame
+    change found out of date, or that were laid out for another frame range, are baked over the scene's range again
+    and packed (``shadow_maps.complete``), so a farm without the add-on renders each frame's shafts; a moving spot
+    whose maps' frame changed gets its shaft group again."""
+    if bpy.data.node_groups.get(comp_fog.FOG_GROUP) is None:
+        return
+    lights = [o for o in scene.objects if o.type == "LIGHT"
+              and bpy.data.images.get(shadow_maps.IMAGE_PREFIX + o.name) is not None]
+    spots = {o.name: bpy.data.images[shadow_maps.IMAGE_PREFIX + o.name].get(shadow_maps.LAYOUT) for o in lights}
+    maps, images = shadow_maps.complete(scene, lights)
+    if not maps:
+        return
+    from ..ops.apply import spec_of
+    spec = spec_of(scene)
+    for light in lights:
+        shadow = maps.get(light.name)
+        if shadow is not None and shadow.cone and images[shadow.spec.name].get(shadow_maps.LAYOUT) != spots[light.name]:
+            comp_fog.build_shaft_group(light, shadow, images, shafts.samples_for(spec.quality, len(lights)),
                                        spec.anisotropy)
 
 

@@ -248,8 +248,9 @@ def build_scatter_group(models, images):
 
 def shaft_group_name(light, shadow, samples, g):
     """The shaft group of ``light``: one for every point light of the same map size, samples and g (their maps
-    differ only in what the group's Map input reads), one per spot (its frame and cone are built in)."""
-    if shadow.spot is not None:
+    differ only in what the group's Map input reads), one per spot (its frame and cone are built in; a moving
+    spot's map frame, its cone being inputs)."""
+    if shadow.spot is not None or shadow.cone:
         return f"{SHAFT_GROUP} {light.name}"
     return (f"{SHAFT_GROUP} Point {shadow.spec.width}x{shadow.spec.height} g {g:.6g} "
             f"K {samples.view_nodes} {samples.surface_directions}x{samples.surface_nodes}")
@@ -260,17 +261,23 @@ def build_shaft_group(light, shadow, images, samples, g):
     from its shadow map ``shadow`` (``shadow_maps.ShadowMap``), and the share of the fog light the pixel's
     surface reflects that the shadows leave (Visible, ``shafts.surface_share``).
     ``samples``: ``shafts.Samples`` (the Quality's); ``g``: the Henyey-Greenstein anisotropy.  The spot's frame
-    and cone are the map's (baked at its pose).  The map is the group's Map input (its Image node is the
-    bundle's), so point lights share one group (``shaft_group_name``), built once."""
+    and cone are the map's (baked at its pose); a moving spot's (``shadow.cone``) cone is the group's spot inputs
+    (``groups._spot_inputs``, fed by its glow's drivers in the bundle) and its map's frame the one of all its
+    poses.  The map is the group's Map input (its Image node is the bundle's, an animation's map cut from its atlas
+    there: ``_atlas_tile``), so point lights share one group (``shaft_group_name``), built once."""
     name = shaft_group_name(light, shadow, samples, g)
-    if shadow.spot is None and (ng := groups._up_to_date(name)) is not None:
+    if shadow.spot is None and not shadow.cone and (ng := groups._up_to_date(name)) is not None:
         return ng
+    cone = [(n, V) for n in groups.SPOT_ROWS] + [(groups.SPOT_COS, F), (groups.SPOT_BLEND, F)] if shadow.cone else []
     ng, gin, gout = groups._new_group(name, [*SHAFT_SHARED, ("Light", V), ("Surface Position", V),
-                                             ("Surface Normal", V), ("Surface Offset", F), (SHAFT_MAP, C)],
+                                             ("Surface Normal", V), ("Surface Offset", F), (SHAFT_MAP, C), *cone],
                                       [("Share", F), ("Share Far", F), ("Visible", V)],
                                       tree_type="CompositorNodeTree")
     falloff, kind = None, f"point {shadow.spec.width}x{shadow.spec.height}"
-    if shadow.spot is not None:
+    if shadow.cone:   # the cone of the light's pose at the frame (in its space: ``spot_.light_space``)
+        kind = f"moving {shadow.spec.width}x{shadow.spec.height} " + hashlib.sha1(
+            repr(shadow.spot).encode()).hexdigest()[:12]
+    elif shadow.spot is not None:
         frame, half = shadow.spot
         forward = frame[2]
         cos_half = math.cos(0.5 * light.data.spot_size)
@@ -281,21 +288,72 @@ def build_shaft_group(light, shadow, images, samples, g):
     m = CompOps(ng, dict(images))
     m.images[spec.name] = m.wrap(gin.outputs[SHAFT_MAP], vector=True)
     g_ = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
+    cone_args = ()
+    if shadow.cone:   # the rows' 9 components, cos(size / 2) and blend: scalar inputs of the node groups
+        axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+        cone_args = tuple(m.dot(g_[n], a) for n in groups.SPOT_ROWS for a in axes) + (g_[groups.SPOT_COS],
+                                                                                        g_[groups.SPOT_BLEND])
+
+        def driven_falloff(mm, u, d, *cone_):   # (inside the node groups: their own inputs, ``cone_args``)
+            rows = [mm.combine(*cone_[3 * i:3 * i + 3]) for i in range(3)]
+            x, y, z = spot_.light_space(mm, rows, u)
+            return spot_.spot_falloff(mm, -1.0 * z / mm.maximum(mm.sqrt(x * x + y * y + z * z), 1e-30), cone_[9],
+                                      cone_[10])
+        falloff = driven_falloff
     node = f"Shaft Node {kind} g {g:.6g}"   # one group for every quadrature node
     share, far = shafts.lit_share(m, g_["Camera"], g_["Direction"], g_["Shaft Length"], g_["Light"], g_["Beta"],
                                   (spec, shadow.spot), samples.view_nodes, shift=g_["Shaft Offset"], g=g,
                                   falloff=falloff, name=node,
-                                  tail_nodes=max(samples.view_nodes // shafts.TAIL_SHARE, 2), far=SKY_LENGTH)
+                                  tail_nodes=max(samples.view_nodes // shafts.TAIL_SHARE, 2), far=SKY_LENGTH,
+                                  cone=cone_args)
     m.feed(gout.inputs["Share"], share)
     m.feed(gout.inputs["Share Far"], far)
     lit_sum, total = shafts.surface_share(m, g_["Surface Position"], g_["Surface Normal"], g_["Camera"],
                                           g_["Light"], g_["Beta"], (spec, shadow.spot),
                                           shift=g_["Surface Offset"], g=g, falloff=falloff, name=node, parts=True,
-                                          directions=samples.surface_directions, nodes=samples.surface_nodes)
+                                          directions=samples.surface_directions, nodes=samples.surface_nodes,
+                                          cone=cone_args)
     m.feed(gout.inputs["Visible"], m.combine(lit_sum, total, 1.0))   # their ratio after the mean (``build_bundle``)
     ng[owned.BUILT] = groups.code_fingerprint()
     m.place()
     return groups._install(ng, name)
+
+
+def _atlas_tile(m, image, label):
+    """The map of the frame being rendered, cut from ``image``, a light's atlas of an animation's maps
+    (``shadow_maps.Atlas``): its tile t (``shafts.ATLAS_TILE``, a simple-expression driver of the frame and the
+    atlas's first frame, stride and tile count, read from the image's ``shadow_maps.ATLAS`` property, so an atlas
+    baked again for another range needs no new nodes) in slot t // 4 (a Crop node at its column and row: the
+    atlas's columns and its maps' grid read from the image too) and channel t % 4 (selected by weights 0 or 1:
+    exact, a NO_HIT of 1e30 times 0 is 0), in all four channels of an image of one map, as the shaft group's Map
+    input reads a still map (the compositor's Crop, Separate and Combine Color and Map UV read it bit-exactly)."""
+    from .. import shadow_maps
+    prop = f'["{shadow_maps.ATLAS}"]'
+    tile = _value(m, f"{label} Tile", shafts.ATLAS_TILE,
+                  [("s", image, f"{prop}[0]"), ("k", image, f"{prop}[1]"), ("n", image, f"{prop}[2]")])
+    columns, width, height = (_value(m, f"{label} {part}", "v", [("v", image, f"{prop}[{i}]")])
+                              for i, part in ((3, "Columns"), (5, "Width"), (6, "Height")))
+    slot = m.floor(tile * (1.0 / shafts.ATLAS_CHANNELS))
+    channel = tile - slot * float(shafts.ATLAS_CHANNELS)
+    row = m.floor(slot / columns)
+    column = slot - row * columns
+    source = m.node("CompositorNodeImage", 4)
+    source.image = image
+    crop = m.node("CompositorNodeCrop", 5)
+    m.tree.links.new(source.outputs["Image"], crop.inputs["Image"])
+    for socket, v in (("X", column * width), ("Y", row * height), ("Width", width), ("Height", height)):
+        m.feed(crop.inputs[socket], v)
+    split = m.node("CompositorNodeSeparateColor", 6)
+    m.tree.links.new(crop.outputs[0], split.inputs[0])
+    depth = None
+    for c in range(shafts.ATLAS_CHANNELS):
+        weight = m.less(m.abs(channel - float(c)), 0.5)
+        term = m.wrap(split.outputs[c]) * weight
+        depth = term if depth is None else depth + term
+    joined = m.node("CompositorNodeCombineColor", 8)
+    for c in range(4):
+        m.feed(joined.inputs[c], depth)
+    return m.wrap(joined.outputs[0], vector=True)
 
 
 def _shared_group(m, name, inputs, output, build):
@@ -687,9 +745,13 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
             half, half_length = _half_view(m, {s: crop(v) for s, v in HALF_SHAFT.items()}, g[HALF + "Step"])
             for socket, _ in SHAFT_SHARED:
                 m.feed(shaft.inputs[socket], half[socket] if socket in SHAFT_PER_PIXEL else g[socket])
-            source = m.node("CompositorNodeImage", 5)
-            source.image = images[maps[light.name].spec.name]
-            ng.links.new(source.outputs["Image"], shaft.inputs[SHAFT_MAP])
+            shadow = maps[light.name]
+            if shadow.atlas is None:
+                source = m.node("CompositorNodeImage", 5)
+                source.image = images[shadow.spec.name]
+                ng.links.new(source.outputs["Image"], shaft.inputs[SHAFT_MAP])
+            else:   # the frame's map, cut from the light's atlas of the animation's
+                m.feed(shaft.inputs[SHAFT_MAP], _atlas_tile(m, images[shadow.spec.name], f"Light {k} Shadow"))
             for socket in ("Position", "Normal", "Offset"):   # the surface share at half resolution
                 m.feed(shaft.inputs["Surface " + socket], g[HALF + socket])
             m.feed(shaft.inputs["Light"], position)
@@ -743,6 +805,12 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
             for node in built[1:] + ([halo[0]] if halo is not None else []):
                 for socket, _ in groups._spot_inputs(mod):
                     ng.links.new(built[0].inputs[socket].links[0].from_socket, node.inputs[socket])
+        if shaft is not None and groups.SPOT_ROWS[0] in shaft.inputs:   # a moving spot's shafts: its cone now
+            if built and groups.SPOT_ROWS[0] in built[0].inputs:
+                for socket in (*groups.SPOT_ROWS, groups.SPOT_COS, groups.SPOT_BLEND):
+                    ng.links.new(built[0].inputs[socket].links[0].from_socket, shaft.inputs[socket])
+            else:
+                groups._drive_spot(ng, k, light, shaft)
     if halos:
         fine = _fine(m, g, coarse, halos)
         for o in GLOW_OUTPUTS:

@@ -166,6 +166,75 @@ def spot_map_directions(frame, half_width, size=SPOT_MAP):
     return d / np.linalg.norm(d, axis=-1, keepdims=True)
 
 
+# --- an animation's maps: one atlas a light (``shadow_maps.ensure``) ------------------------------------------
+
+ANIMATED_POINT_MAP = (512, 256)   # grid points of a moving point light's map each frame (0.7 deg apart; 4x fewer than
+#                                   POINT_MAP: docs/measurements/2026-11-29-animated-shadow-maps.md)
+ANIMATED_SPOT_MAP = 256   # grid points across a moving spot's map each frame (over the cones of all its poses)
+ATLAS_MAX_FRAMES = 128    # maps an animation's atlas holds at most: a longer range takes every k-th frame
+ATLAS_CHANNELS = 4        # maps a texel holds (R, G, B, A: four frames in one slot of the atlas)
+ATLAS_MAX_SIDE = 16384    # px: an atlas's side at most (the GPU compositor's textures)
+SPOT_UNION_LIMIT = math.radians(75.0)   # a moving spot's poses' cones in one map out to this angle from its axis,
+#                                          else it takes a point light's map (the whole sphere)
+# the atlas's tile at a frame, a simple expression (no Python: a farm without the add-on evaluates it) of the frame and
+# the atlas's first frame s, stride k and tile count n: the latest baked frame at or before it, clamped to the range
+ATLAS_TILE = "min(max(floor((frame - s) / k + 0.001), 0), n - 1)"
+
+
+def atlas_frames(start, end, step, cap=ATLAS_MAX_FRAMES):
+    """(first, stride, count): the frames an animation's maps are baked for, start + stride t for t < count, every
+    ``step``-th frame of start..end (as a render of the animation takes them), every k-th of those if they are more
+    than ``cap`` (stride = k step)."""
+    step = max(int(step), 1)
+    frames = max((int(end) - int(start)) // step + 1, 1)
+    stride = step * math.ceil(frames / cap)
+    return int(start), stride, (max(int(end) - int(start), 0)) // stride + 1
+
+
+def atlas_layout(count, width, height):
+    """(columns, rows) of the slots of an atlas of ``count`` maps of width x height grid points, ATLAS_CHANNELS maps
+    a slot (one a channel), about as wide as high."""
+    slots = max(math.ceil(count / ATLAS_CHANNELS), 1)
+    columns = min(max(int(round(math.sqrt(slots * height / width))), 1), slots, max(ATLAS_MAX_SIDE // width, 1))
+    return columns, math.ceil(slots / columns)
+
+
+def atlas_place(tile, columns):
+    """(column, row, channel) of the atlas's ``tile`` (the driver's ATLAS_TILE; ``comp_fog._atlas_tile`` in nodes)."""
+    slot, channel = divmod(int(tile), ATLAS_CHANNELS)
+    row, column = divmod(slot, columns)
+    return column, row, channel
+
+
+def spot_union(frames, cos_half, limit=SPOT_UNION_LIMIT):
+    """(frame, half_width) of one spot map that holds the cone (its map's, ``spot_half_width``) of each of ``frames``
+    ((right, up, forward) of the spot's poses, ``spot_frame``): the axis their mean, the half width the widest of the
+    cones' edges seen along it (64 directions on each); None if an edge lies beyond ``limit`` from the axis."""
+    frames = [tuple(np.asarray(v, float) for v in f) for f in frames]
+    forward = np.sum([f[2] for f in frames], axis=0)
+    if np.linalg.norm(forward) < 1e-6:
+        return None
+    forward /= np.linalg.norm(forward)
+    up = frames[0][1] - forward * np.dot(frames[0][1], forward)
+    if np.linalg.norm(up) < 1e-6:
+        up = frames[0][0] - forward * np.dot(frames[0][0], forward)
+    up /= np.linalg.norm(up)
+    right = np.cross(up, -forward)
+    half = spot_half_width(cos_half)
+    phi = np.linspace(0.0, 2.0 * math.pi, 64, endpoint=False)
+    widest = 0.0
+    for r, u, f in frames:
+        edge = f + half * (np.cos(phi)[:, None] * r + np.sin(phi)[:, None] * u)
+        edge /= np.linalg.norm(edge, axis=1, keepdims=True)
+        z = edge @ forward
+        if z.min() <= math.cos(limit):
+            return None
+        widest = max(widest, float(np.max(np.abs(edge @ right) / z)), float(np.max(np.abs(edge @ up) / z)))
+    if widest > math.tan(limit):
+        return None
+    return (tuple(map(float, right)), tuple(map(float, up)), tuple(map(float, forward))), widest * 1.01
+
+
 def spot_map_xy(m, u, frame, half_width):
     """(x, y) in [0, 1] of the world direction ``u`` in a spot's map (clamped at its edges; behind the
     light the lookup is meaningless and the spot's factor is 0 there)."""
@@ -218,7 +287,8 @@ def hemisphere_direction(m, normal, r2, phi):
 
 
 def surface_share(m, point, normal, viewer, light, beta, shadow, shift=0.5, g=0.0, falloff=None, name=None,
-                  directions=DEFAULT_SAMPLES.surface_directions, nodes=DEFAULT_SAMPLES.surface_nodes, parts=False):
+                  directions=DEFAULT_SAMPLES.surface_directions, nodes=DEFAULT_SAMPLES.surface_nodes, parts=False,
+                  cone=()):
     """The share of the fog light a diffuse surface ``point`` receives (Sun et al. 2005 Eq. 17's G_0: the
     airlight of every direction over it, weighted cos / pi) that the light's shadows leave:
 
@@ -234,28 +304,29 @@ def surface_share(m, point, normal, viewer, light, beta, shadow, shift=0.5, g=0.
     face ``viewer`` (the camera).  ``g``, ``falloff``, ``name``: as ``lit_share``.  ``parts``: return the two
     integrals' sums (numerator, denominator), which neighbouring pixels' interleaved sets average before the
     division (a mean of ratios would weigh a set that misses the bright directions as much as one that
-    holds them)."""
+    holds them).  ``cone``: as ``lit_share``'s."""
     facing = m.select(m.less(m.dot(normal, viewer - point), 0.0), -1.0, 1.0)
     normal = m.scale(normal, facing)
 
-    def ray(mm, px, py, pz, nx, ny, nz, lx, ly, lz, beta_, r2, phi, shift_):   # one direction's two integrals
+    def ray(mm, px, py, pz, nx, ny, nz, lx, ly, lz, beta_, r2, phi, shift_, *cone_):   # one direction's integrals
         u = hemisphere_direction(mm, mm.combine(nx, ny, nz), r2, phi)
         return ray_integrals(mm, mm.combine(px, py, pz), u, mm.combine(lx, ly, lz), beta_, shadow, nodes, shift_, g,
-                             falloff, name)
+                             falloff, name, cone_)
     lit_sum, total = hemisphere_sums(m, ray, (point, normal, light), beta, directions, shift,
-                                     name and f"{name} Hemisphere Ray {nodes}")
+                                     name and f"{name} Hemisphere Ray {nodes}", tuple(cone))
     return (lit_sum, total) if parts else share_of(lit_sum, total)
 
 
-def hemisphere_sums(m, ray, vectors, beta, directions, shift, name=None):
-    """(sum of lit, sum of total) of ``ray(m, *xyz, beta, r2, phi, shift)`` over ``directions`` cosine-weighted
-    directions of ``hemisphere_angles`` turned by ``shift``; xyz: the components of the three ``vectors`` (a point,
-    its normal, a third), each direction one node group ``name`` (or inline with None)."""
+def hemisphere_sums(m, ray, vectors, beta, directions, shift, name=None, extra=()):
+    """(sum of lit, sum of total) of ``ray(m, *xyz, beta, r2, phi, shift, *extra)`` over ``directions``
+    cosine-weighted directions of ``hemisphere_angles`` turned by ``shift``; xyz: the components of the three
+    ``vectors`` (a point, its normal, a third), each direction one node group ``name`` (or inline with None);
+    ``extra``: more scalars for ``ray`` (a moving spot's cone: ``lit_share``'s ``cone``)."""
     axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
     xyz = [m.dot(v, a) for v in vectors for a in axes]
     lit_sum, total = 0.0, 0.0
     for r2, phi in hemisphere_angles(m, directions, shift):
-        args = (*xyz, beta, r2, phi, shift)
+        args = (*xyz, beta, r2, phi, shift, *extra)
         lit_j, total_j = m.group(name, ray, *args) if name else ray(m, *args)
         lit_sum, total = lit_sum + lit_j, total + total_j
     return lit_sum, total
@@ -308,7 +379,7 @@ def bayer_rank_surface(i, j, levels=None):
 
 
 def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.5, g=0.0, falloff=None,
-              name=None, tail_nodes=0, far=1.0e6):
+              name=None, tail_nodes=0, far=1.0e6, cone=()):
     """S in [0, 1], the share of the glow along the segment [0, ``length``] m of the ray from ``camera``
     along the unit ``direction`` that the light at ``light`` (world, m) reaches (module docstring).
 
@@ -321,8 +392,12 @@ def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.
     With ``tail_nodes`` > 0, returns (S, S_far): S_far is the share of the whole ray to ``far`` m, its part
     beyond ``length`` integrated by that many more nodes (a pixel that sees both a surface and the sky past
     its edge: the glow to the surface takes S, the glow to the sky S_far).
+
+    ``cone``: scalars the falloff takes after (m, u, d) (a moving spot's driven cone, ``comp_fog.build_shaft_group``),
+    passed into the node groups as their inputs.
     """
     t_c, h, args = _ray_frame(m, camera, direction, light, beta)
+    args = args + tuple(cone)
     theta_far = m.minimum(m.atan2(far - t_c, h), MAX_ANGLE)
     theta1 = m.minimum(m.atan2(length - t_c, h), theta_far)
     # a segment that ends more than h / 1e-3 before the light lies within MAX_ANGLE of -pi/2: its nodes sit at
@@ -339,11 +414,13 @@ def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.
     return share, share_of(lit_sum * step + lit_tail * tail_step, total * step + total_tail * tail_step)
 
 
-def ray_integrals(m, origin, direction, light, beta, shadow, nodes, shift=0.5, g=0.0, falloff=None, name=None):
+def ray_integrals(m, origin, direction, light, beta, shadow, nodes, shift=0.5, g=0.0, falloff=None, name=None,
+                  cone=()):
     """(G_H, G) along the whole ray from ``origin`` along the unit ``direction`` (module docstring, to
     infinity), each over beta I0 / 4 pi, in 1/m: (1 / h) int e^{-beta (t + d)} w f (H) d theta by ``nodes``
-    equiangular nodes (``lit_share``'s)."""
+    equiangular nodes (``lit_share``'s; ``cone`` too)."""
     t_c, h, args = _ray_frame(m, origin, direction, light, beta)
+    args = args + tuple(cone)
     theta0 = m.maximum(m.atan2(-1.0 * t_c, h), -MAX_ANGLE)
     step = (MAX_ANGLE - theta0) * (1.0 / nodes)
     lit_sum, total = _quadrature(m, theta0, step, nodes, shift, shadow, g, falloff, name, args)
@@ -366,8 +443,9 @@ def _ray_frame(m, origin, direction, light, beta):
 def _quadrature(m, start, width, count, shift, shadow, g, falloff, name, args):
     """(sum of H e_k, sum of e_k) over ``count`` nodes at start + width (k + shift) (``node_terms``), each one
     node group ``name`` (or inline with None)."""
-    def terms(mm, theta, t_c, h, ox, oy, oz, dx, dy, dz, minus_beta):
-        return node_terms(mm, theta, t_c, h, (ox, oy, oz), (dx, dy, dz), minus_beta, shadow, g, falloff)
+    def terms(mm, theta, t_c, h, ox, oy, oz, dx, dy, dz, minus_beta, *cone):
+        bound = falloff if not cone else (lambda m_, u_, d_: falloff(m_, u_, d_, *cone))
+        return node_terms(mm, theta, t_c, h, (ox, oy, oz), (dx, dy, dz), minus_beta, shadow, g, bound)
 
     def nodes(mm, start_, width_, shift_, *args_):
         lit_sum, total = 0.0, 0.0

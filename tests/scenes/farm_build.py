@@ -4,6 +4,8 @@
     python farm_build.py osl OUTDIR      # nofog_cycles.exr, osl_cycles.exr, osl.blend
     python farm_build.py anim OUTDIR     # anim.blend (the light's position and power and the camera keyframed), then
                                          # expect_<f>.exr: the same scene made STATIC at frame f, fog re-added
+    python farm_build.py anim_shafts OUTDIR   # anim_shafts.blend (a lamp moving behind a panel, light shafts), then
+                                         # stale_shafts_<f>.exr (frame 1's map) and expect_shafts_<f>.exr (static at f)
 
 The last line of stdout is one JSON object (see tests/test_farm.py).
 """
@@ -154,8 +156,7 @@ def anim(outdir, method="NODES"):
     _key(cam, "location", CAMERA_LOC)
     fog_addon.register()
     scene.analytic_fog.method = method
-    # the moving lamp's shadow maps are baked per frame by the add-on: a farm without it needs still lights and
-    # occluders (the fog says so; tests/test_auto_method.py); this file tests the drivers and windows alone
+    # this file tests the drivers and windows alone (the moving lamp's shafts: ``anim_shafts``, an atlas of its maps)
     scene.analytic_fog.use_shafts = False
     assert bpy.ops.fog.add(density=DENSITY) == {"FINISHED"}
     scene.frame_set(1)
@@ -183,9 +184,86 @@ def anim(outdir, method="NODES"):
     emit({"packed": packed_report(), "poses": poses, "render_s": log})
 
 
+SHAFT_FRAMES = (1, 5, 8)   # the frames the moving shafts are rendered at (tests/test_farm.py)
+SHAFT_RES = (64, 36)
+SCREEN = ((0.3, -0.45, 1.3), (0.6, 0.03, 1.0))   # (centre, half extents) m: a panel Lamp A passes 0.45 m behind
+
+
+def anim_shafts(outdir):
+    """anim_shafts.blend: the farm scene with a panel before the path of Lamp A, which moves behind it and the ball
+    over frames 1..10, with light shafts (the Compositor method, 64 x 36): the saved file holds an atlas of the lamp's
+    shadow maps at every frame, picked by a driver on the frame.  Then the expectations expect_shafts_<f>.exr: the
+    scene made static at frame f (the add-on bakes the lamp's map at its pose, at the full resolution of a still map,
+    as its frame handler did for each frame) for f in SHAFT_FRAMES, and stale_shafts_<f>.exr: frame f rendered with
+    the map of frame 1 (what a farm rendered before the atlas: the map of the frame the file was saved at)."""
+    import numpy as np
+    from demo_scenes import add_box
+    from fog_addon import shadow_maps
+    log = {}
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = build(bpy.context.scene)
+    add_box(scene, "Screen", *SCREEN, material("Screen", (0.6, 0.6, 0.6), roughness=0.7))
+    scene.render.resolution_x, scene.render.resolution_y = SHAFT_RES
+    scene.frame_start, scene.frame_end = 1, 10
+    lamp = scene.objects[LIGHT_A]
+    _key(lamp, "location", LIGHT_A_X, index=0)
+    fog_addon.register()
+    scene.analytic_fog.method = "COMPOSITOR"
+    scene.analytic_fog.use_shafts = True
+    scene.frame_set(1)
+    t = time.perf_counter()
+    assert bpy.ops.fog.add(density=DENSITY) == {"FINISHED"}
+    log["add_s"] = round(time.perf_counter() - t, 2)
+    atlas = bpy.data.images[shadow_maps.IMAGE_PREFIX + LIGHT_A]
+    still = bpy.data.images[shadow_maps.IMAGE_PREFIX + LIGHT_B]
+    info = {"atlas": list(atlas.get(shadow_maps.ATLAS, [])), "atlas_size": list(atlas.size),
+            "atlas_packed_bytes": atlas.packed_file.size, "still_size": list(still.size),
+            "still_packed_bytes": still.packed_file.size, "still_atlas": shadow_maps.ATLAS in still}
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(outdir, "anim_shafts.blend"))
+    packed = packed_report()
+
+    # the stale farm: frame 1's map at every frame (the atlas's first tile copied into each channel and slot)
+    px = np.empty(atlas.size[0] * atlas.size[1] * 4, np.float32)
+    atlas.pixels.foreach_get(px)
+    w, h = int(atlas[shadow_maps.ATLAS][5]), int(atlas[shadow_maps.ATLAS][6])
+    first = px.reshape(atlas.size[1], atlas.size[0], 4)[:h, :w, 0]
+    stale = np.repeat(np.tile(first, (atlas.size[1] // h, atlas.size[0] // w))[..., None], 4, axis=-1)
+    saved = px.copy()
+    atlas.pixels.foreach_set(stale.ravel())
+    atlas.update()
+    handlers = list(bpy.app.handlers.frame_change_post)
+    bpy.app.handlers.frame_change_post.clear()   # (the add-on's frame handler would bake the frame's map again)
+    for f in SHAFT_FRAMES:
+        scene.frame_set(f)
+        timed(log, f"stale_shafts_{f}", render_exr, scene, os.path.join(outdir, f"stale_shafts_{f}.exr"))
+    bpy.app.handlers.frame_change_post.extend(handlers)
+    atlas.pixels.foreach_set(saved)
+    atlas.update()
+
+    # the add-on's frame f: the lamp still at its pose, its map baked there
+    states = {}
+    for f in SHAFT_FRAMES:
+        scene.frame_set(f)
+        states[f] = lamp.matrix_world.copy()
+    lamp.animation_data_clear()
+    poses = {}
+    for f in SHAFT_FRAMES:
+        lamp.matrix_world = states[f]
+        scene.frame_current = f
+        # removed first: a fog added again for the same lights keeps its groups and maps (a still light's map is baked
+        # when the groups are built, and at frame changes while something moves)
+        assert bpy.ops.fog.remove() == {"FINISHED"}
+        assert bpy.ops.fog.add(density=DENSITY) == {"FINISHED"}
+        img = bpy.data.images[shadow_maps.IMAGE_PREFIX + LIGHT_A]
+        assert shadow_maps.ATLAS not in img and tuple(img.size) == (1024, 512), (f, tuple(img.size))
+        poses[f] = {"lamp": list(lamp.matrix_world.translation)}
+        timed(log, f"expect_shafts_{f}", render_exr, scene, os.path.join(outdir, f"expect_shafts_{f}.exr"))
+    emit({"packed": packed, "poses": poses, "render_s": log, "maps": info})
+
+
 if __name__ == "__main__":
     mode, outdir = sys.argv[1], sys.argv[2]
     {"nodes": nodes, "osl": osl, "anim": anim, "compositor": lambda out: osl(out, "compositor"),
      "compositor_eevee": lambda out: osl(out, "compositor", "BLENDER_EEVEE"),
      "dense": lambda out: osl(out, "compositor", dense=True), "daylight": daylight,
-     "anim_compositor": lambda out: anim(out, "COMPOSITOR")}[mode](outdir)
+     "anim_compositor": lambda out: anim(out, "COMPOSITOR"), "anim_shafts": anim_shafts}[mode](outdir)
