@@ -190,7 +190,7 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
         name="Dense Fog (Multiple Scattering)", default=False, update=_rebuild,
         description="Add the light scattered more than once around point lights: the wide halo of thick fog "
                     "(optical distance to a lamp above about 1). The first use of an anisotropy bakes its "
-                    "table (about a minute, then cached)")
+                    "table (10-20 s, announced on the console, then cached)")
     use_passes: bpy.props.BoolProperty(
         name="Fog Passes", default=False, update=_rebuild,
         description="Write the render passes Fog Light (the light the fog adds) and Fog Transmittance "

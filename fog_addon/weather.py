@@ -362,7 +362,7 @@ def run(image_path, depth_path, out_path, visibility_m, anisotropy=0.85, sky=(1.
     def progress(k, n, t):
         print(f"weather: layer {k}/{n} (optical depth {t:.3g})", file=stream, flush=True)
     print(f"weather: {image.shape[1]}x{image.shape[0]}, visibility {visibility_m:g} m, g {anisotropy:g}; the "
-          "multiple-scattering table is baked once per g (about a minute)", file=stream, flush=True)
+          "multiple-scattering table is baked once per g (10-20 s)", file=stream, flush=True)
     out = add_weather(image, depth, visibility_m, anisotropy, sky, fov_deg, albedo, scale, progress=progress)
     imageio.write_exr(out_path, out)
     print(f"weather: wrote {out_path}", file=stream, flush=True)

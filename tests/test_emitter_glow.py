@@ -86,7 +86,9 @@ def test_table_columns_are_the_optical_depths_of_its_coordinate():
 def test_the_table_read_between_its_columns_holds_the_kernel(dense):
     """The glow's weights read from the table halfway between two columns (as the compositor reads them:
     ``source_weight`` x ``rung_share``) against the ladder fitted at that very T, ring sums 1.5-160 px: within
-    1 % for single scattering, 4 % with Dense Fog's field (whose halo widens between columns).  A linear read of
+    1 % for single scattering, 6 % with Dense Fog's field (whose halo widens between columns; the point table's
+    own Monte Carlo noise moves this by 2-3 points from one seed to another: 2.9-5.2 % with the 100k-photon
+    walks, 4.3 % with the bounded ones, docs/measurements/2026-11-29-bake-time.md).  A linear read of
     the weights themselves over ln T (24 columns) was 13 % bright at T 4.5 and 3 % dark at T 1.6: a glowing
     object's single scattering read 1.12-1.15 of Cycles' at T 4.5."""
     from fog_addon.precompute.ops import NumpyOps
@@ -104,7 +106,7 @@ def test_the_table_read_between_its_columns_holds_the_kernel(dense):
         k = sum(w * b for w, b in zip(weights, basis))
         return np.array([k[ring].sum() for ring in rings])
 
-    bound = 0.04 if dense else 0.01
+    bound = 0.06 if dense else 0.01
     for k in range(1, len(columns)):
         x = (k - 0.5) / (len(columns) - 1)
         t = float(eg.optical_depths(2 * len(columns) - 1)[2 * k - 1])   # the T of table X x

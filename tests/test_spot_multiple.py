@@ -128,10 +128,13 @@ def test_area_light_glow_against_64_bounces(case):
 
 @pytest.mark.parametrize("case", ["side", "side_thin"])
 def test_quadrature_converges(case):
-    """NODES points per ray against 600, pixel by pixel: 99 % within 4 %."""
+    """NODES points per ray against 600, pixel by pixel: 99 % within 6 %.  The table's Monte Carlo noise near
+    the lamp sets the 99th percentile in the thin case (a noisy integrand is what the 600 points integrate
+    exactly): 2.5 % and 5.1 % for the tables of the bake before issue 43 with two seeds, 4.2 % and 5.4 % for
+    today's (docs/measurements/2026-11-29-bake-time.md); the side-on case 0.8-2.2 %."""
     ours, fine = _glow(case), _glow(case, nodes=(200, 200, 200))
     err = np.abs(ours / fine - 1.0)
-    assert np.percentile(err, 99) < 0.04, np.percentile(err, 99)
+    assert np.percentile(err, 99) < 0.06, np.percentile(err, 99)
 
 
 def _sphere_and_point():

@@ -199,13 +199,13 @@ MUTATIONS = [
     Mutation("mc_crossing_radiance", "multiple scattering: the Monte Carlo tallies flux, not radiance (a crossing "
              "at mu counts 1, not 1 / |mu|)",
              "fog_addon/precompute/point_source_mc.py",
-             "        val = w[i_photon] * np.exp(-s[hit]) / np.maximum(np.abs(mu_h), 1e-3)\n",
-             "        val = w[i_photon] * np.exp(-s[hit])\n",
+             "        val = w[i_photon] * np.exp(-s_h) / np.maximum(np.abs(mu_h), 1e-3)\n",
+             "        val = w[i_photon] * np.exp(-s_h)\n",
              ("tests/test_apsf.py::test_monte_carlo_single_scattering_matches_quadrature",)),
     Mutation("mc_expected_crossing", "multiple scattering: the Monte Carlo's expected-value crossings drop their "
              "e^{-s} (every crossing ahead counts as if reached)",
              "fog_addon/precompute/point_source_mc.py",
-             "        val = w[i_photon] * np.exp(-s[hit]) / np.maximum(np.abs(mu_h), 1e-3)\n",
+             "        val = w[i_photon] * np.exp(-s_h) / np.maximum(np.abs(mu_h), 1e-3)\n",
              "        val = w[i_photon] / np.maximum(np.abs(mu_h), 1e-3)\n",
              ("tests/test_apsf.py::test_monte_carlo_single_scattering_matches_quadrature",)),
     Mutation("multiple_segment_attenuation", "multiple scattering: the field beyond a surface is not dimmed on its "
@@ -236,15 +236,18 @@ MUTATIONS = [
     Mutation("spot_multiple_first_collision", "spot multiple scattering: the first collision drawn log-uniformly "
              "without its weight e^-s s ln(hi/lo) (the photons' first scattering as if it were exponential)",
              "fog_addon/precompute/spot_multiple.py",
-             "                w = w * np.exp(-s) * s * math.log(hi / lo)\n",
-             "                w = w\n",
+             "            w[-fresh:] *= np.exp(-s0) * s0 * log_range\n",
+             "            w[-fresh:] *= 1.0\n",
              ("tests/test_spot_multiple.py::test_a_cone_as_wide_as_the_sphere_is_the_point_light",)),
     Mutation("spot_multiple_surface_cosine", "spot multiple scattering: a surface takes |w . n| of the radiance, "
              "light from behind it too (the irradiance's clamped cosine, Narasimhan §7.4)",
              "fog_addon/precompute/spot_multiple.py",
-             "                    facing = 0.5 * (np.maximum(-(local @ out.T), 0.0) + np.maximum(-(local @ mirror.T), "
-             "0.0))\n",
-             "                    facing = 0.5 * (np.abs(local @ out.T) + np.abs(local @ mirror.T))\n",
+             "        np.maximum(-dot[:, :n_flat], 0.0, out=face[:, :n_flat])\n"
+             "        np.maximum(-plus, 0.0, out=face[:, n_flat:])\n"
+             "        face[:, n_flat:] += np.maximum(-minus, 0.0)\n",
+             "        np.abs(dot[:, :n_flat], out=face[:, :n_flat])\n"
+             "        np.abs(plus, out=face[:, n_flat:])\n"
+             "        face[:, n_flat:] += np.abs(minus)\n",
              ("tests/test_spot_multiple.py::test_a_cone_as_wide_as_the_sphere_lights_surfaces_as_the_point_light",)),
     Mutation("area_multiple_profile", "area multiple scattering: the emitter's photons leave isotropically, not by "
              "Lambert's cosine about its normal",

@@ -188,6 +188,15 @@ def _extra_tables(spec, models=()):
     return (multiple.table_spec(spec.anisotropy, spec.multiple_albedo), *spots)
 
 
+def bake_missing_tables(spec, models, progress=progress_.silent):
+    """Bake the Dense Fog tables ``models`` read that are not cached yet, each announced with its estimate
+    (``bakers.missing``) and reporting through ``progress`` (``progress.bake_progress``); a BakeCancelled raised
+    by it propagates before anything is built (nothing half-baked is cached)."""
+    for table, seconds in bakers.missing(_extra_tables(spec, models)):
+        bakers.table_array(table, spec.anisotropy,
+                           progress=progress_.bake_progress(progress, bakers.label(table), seconds))
+
+
 def stored_choice():
     """The choice the scene groups were last built with (see choose_models, plus its "quality"), or None."""
     surface = bpy.data.node_groups.get(groups.SURFACE)
@@ -354,7 +363,8 @@ def _signature(scene, spec, method, plan_):
 _rebuilt = set()   # names of scenes whose groups ``_build_scene_groups`` rebuilt since ``refresh_lights`` asked
 
 
-def _build_scene_groups(scene, spec, lights, method=None, reason=None, rechoose=True, this_frame=False):
+def _build_scene_groups(scene, spec, lights, method=None, reason=None, rechoose=True, this_frame=False,
+                        progress=progress_.silent):
     """(Re)build the Surface and World groups (and the method's own) for ``spec`` and ``lights`` with ``method``
     (default: ``resolve_method``) unless built for them already; per-light groups no longer used are deleted,
     lights that no longer take part lose the fog's attenuation, Cycles' OSL is switched on while some model
@@ -364,11 +374,13 @@ def _build_scene_groups(scene, spec, lights, method=None, reason=None, rechoose=
     """
     if method is None:
         method, reason = resolve_method(scene, spec, lights, keep=not rechoose)
+    bake_missing_tables(spec, (), progress)   # Dense Fog's point table: the Quality's choice reads it
     plan_ = plan(scene, spec, method, lights, reason, rechoose, this_frame)
     signature = _signature(scene, spec, method, plan_)
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if (surface is None or bpy.data.node_groups.get(groups.WORLD) is None
             or surface.get(LIGHTS_KEY) != signature or not method.is_built()):
+        bake_missing_tables(spec, plan_.models, progress)
         imgs = method.build(scene, spec, plan_,
                             images.all_table_images(spec.anisotropy, _extra_tables(spec, plan_.models)))
         _rebuilt.add(scene.name)   # the compositor's chain must take the new groups (``refresh_lights``)
@@ -451,7 +463,7 @@ def apply(scene, spec, objects=None, progress=progress_.silent):
             skipped.append((mat.name, why))
     progress("materials", len(mats), len(mats))
     progress("world", 0, 1)
-    skipped += _build_scene_groups(scene, spec, lights, method, reason)
+    skipped += _build_scene_groups(scene, spec, lights, method, reason, progress=progress)
     if scene.world is None:
         skipped.append((scene.name, "has no World: no airlight on the background"))
     else:
@@ -599,7 +611,8 @@ def sync(scene, level="groups"):
             method, reason = resolve_method(scene, spec, lights)
             check_method(scene, spec, method)
             groups.set_params(spec.beta_per_unit, spec.albedo, spec.anisotropy, world_light=spec.world_light)
-            _build_scene_groups(scene, spec, lights, method, reason, rechoose=level == "rechoose")
+            _build_scene_groups(scene, spec, lights, method, reason, rechoose=level == "rechoose",
+                                progress=progress_.ConsoleProgress(prefix="Analytic Fog: "))
             follow_compositor(scene, rebuild=True)
         else:
             groups.set_params(spec.beta_per_unit, spec.albedo, world_light=spec.world_light)

@@ -22,6 +22,7 @@ measures it ring by ring).
 The weights depend on the camera's pixel angle (rad / px at the picture's centre; the kernel is taken as
 radial there) and on g; they are baked when the fog is applied.
 """
+import functools
 import math
 
 import numpy as np
@@ -117,6 +118,20 @@ def kernel_grid(t, pixel_angle, single, albedo, half):
     ``single(T, cos gamma)``: I_1 per unit intensity at extinction 1), its core supersampled."""
     d = np.arange(-half, half + 1, dtype=float)
     dx, dy = np.meshgrid(d, d)
+    kern = _kernel_at(t, pixel_angle, single, albedo, dx, dy)
+    return kern.reshape(dx.shape)
+
+
+def kernel_octant(t, pixel_angle, single, albedo, half):
+    """``kernel_grid``'s values at ``_octant``'s points only (the kernel is radial; the fit reads no others)."""
+    (rows, cols), _ = _octant(half)
+    return _kernel_at(t, pixel_angle, single, albedo, (cols - half).astype(float), (rows - half).astype(float))
+
+
+def _kernel_at(t, pixel_angle, single, albedo, dx, dy):
+    """K(T, gamma) at the pixel offsets (dx, dy) from a source (any shape, flattened), those within CORE of it
+    supersampled (CORE_SUBSAMPLES^2 points each)."""
+    dx, dy = np.ravel(dx), np.ravel(dy)
 
     def k_at(r_px):
         c = np.cos(r_px * pixel_angle)
@@ -125,9 +140,8 @@ def kernel_grid(t, pixel_angle, single, albedo, half):
     kern = k_at(np.hypot(dx, dy))
     sub = (np.arange(CORE_SUBSAMPLES) + 0.5) / CORE_SUBSAMPLES - 0.5
     sx, sy = np.meshgrid(sub, sub)
-    for i in range(half - CORE, half + CORE + 1):
-        for j in range(half - CORE, half + CORE + 1):
-            kern[i, j] = float(np.mean(k_at(np.hypot(dx[i, j] + sx, dy[i, j] + sy))))
+    for k in np.nonzero((np.abs(dx) <= CORE) & (np.abs(dy) <= CORE))[0]:
+        kern[k] = float(np.mean(k_at(np.hypot(dx[k] + sx, dy[k] + sy))))
     return kern * (pixel_angle ** 2) * float(t) ** 2
 
 
@@ -146,13 +160,24 @@ def fit_weights(kern, sizes=None):
     """(a_j) >= 0 with sum_j a_j B_j ~ ``kern`` (square, centred), least squares relative to the kernel (each
     pixel weighted by 1 / K, so the tail counts as much as the core), on the grid's octant (each point weighted
     by the pixels it stands for)."""
-    sizes = SIZES if sizes is None else sizes
     half = kern.shape[0] // 2
-    idx, count = _octant(half)
-    basis = np.stack([blur_kernel_2d(s, half)[idx] for s in sizes], axis=1)
-    target = kern[idx]
+    idx, _ = _octant(half)
+    return fit_octant(kern[idx], half, sizes)
+
+
+def fit_octant(target, half, sizes=None):
+    """``fit_weights`` of a kernel given at ``_octant(half)``'s points (``kernel_octant``)."""
+    sizes = SIZES if sizes is None else tuple(sizes)
+    basis, count = _octant_basis(half, sizes)
     weight = np.sqrt(count) / np.maximum(target, 1e-30 * max(float(target.max()), 1e-300))
     return _nnls(basis * weight[:, None], target * weight)
+
+
+@functools.lru_cache(maxsize=4)
+def _octant_basis(half, sizes):
+    """(the Blur nodes' kernels of ``sizes`` at the octant's points (points, sizes), the points' counts)."""
+    idx, count = _octant(half)
+    return np.stack([blur_kernel_2d(s, half)[idx] for s in sizes], axis=1), count
 
 
 def rung_angle(size, pixel_angle):
@@ -219,7 +244,7 @@ def table_spec(g, pixel_angle, multiple_albedo=None):
                             count, len(SIZES) + 1, g=float(g))
 
 
-def bake_weights(single, pixel_angle, count=T_COUNT):
+def bake_weights(single, pixel_angle, count=T_COUNT, progress=None):
     """(len(SIZES) + 1, count) float32 per unit albedo: at each ``optical_depths`` T, the fit's weights a_j(T)
     (``fit_weights``) as shares a_j / N of their sum N(T), and in the last row ln(N e^T / T).
 
@@ -228,21 +253,40 @@ def bake_weights(single, pixel_angle, count=T_COUNT):
     N e^T / T is nearly flat for single scattering, and the shares change slowly."""
     out = np.zeros((len(SIZES) + 1, count))
     for k, t in enumerate(optical_depths(count)):
-        a = fit_weights(kernel_grid(t, pixel_angle, single, 1.0, HALF))
+        if progress is not None:
+            progress(k, count)
+        a = fit_octant(kernel_octant(t, pixel_angle, single, 1.0, HALF), HALF)
         total = float(a.sum())
         if total > 0.0:
             out[:-1, k] = a / total
             out[-1, k] = math.log(total) + t - math.log(t)
         else:
             out[-1, k] = -80.0
+    if progress is not None:
+        progress(count, count)
     return out.astype(np.float32)
 
 
-def bake_table(g, pixel_angle, multiple_albedo=None):
+def bake_table(g, pixel_angle, multiple_albedo=None, progress=None):
     """The weights' table (``table_spec``) of anisotropy g at ``pixel_angle``: ``bake_weights`` of its field
-    (``glow_field``)."""
+    (``glow_field``).  ``progress(done, total)``: called at each column (it may raise
+    ``table_cache.BakeCancelled``)."""
     count = T_COUNT if multiple_albedo is None else T_COUNT_DENSE
-    return bake_weights(glow_field(g, multiple_albedo), pixel_angle, count)
+    return bake_weights(glow_field(g, multiple_albedo), pixel_angle, count, progress)
+
+
+COLUMN_SECONDS = 0.05   # ``bake_weights``' time a column on 2 cores (docs/measurements/2026-11-29-bake-time.md)
+
+
+def multiple_albedo_of(spec):
+    """The Dense Fog albedo a ``table_spec`` was named for, or None (single scattering)."""
+    return float(spec.name.rsplit("multiple W0 ", 1)[1].rstrip(")")) if "multiple W0 " in spec.name else None
+
+
+def estimate_seconds(spec):
+    """About how long ``bake_table`` of ``spec`` (``table_spec``) takes, s: COLUMN_SECONDS a column (the Dense
+    Fog field's own table not counted: ``bakers.estimate_seconds`` adds it)."""
+    return 0.3 + COLUMN_SECONDS * spec.width
 
 
 def source_weight(m, spec, t):

@@ -47,7 +47,10 @@ COLUMNS = 64
 U_POWER = 0.35         # theta = 180 u^(1 / U_POWER) deg: column 1 at 0.002 deg, u = 0.1 at 0.25 deg, 0.3 at 6 deg
 MAX_ORDER = 200        # orders followed; the rest by ``_order_tail``
 TAIL_POWER = 1.5       # I_k ~ k^-1.5 past MAX_ORDER (a random walk's return to a sphere in 3D)
-PHOTONS = 100_000      # of a baked field (seconds per g; 3-5 % noise a column before smoothing)
+PHOTONS = 100_000      # of a baked field (3-5 % noise a column before smoothing)
+WINDOW_FROM = 20       # the orders from which the bake's weight window acts (``window``)
+WINDOW_M = 3           # its roulette's 1 / survival beyond 2 r_near, and copies within r_near
+WINDOW_SHARE = 0.5     # the share of a flight's sphere crossings tallied from WINDOW_FROM on
 R_MAX = T_MAX + 40.0   # photons farther than this are dropped
 SEED = 20261127
 FLOOR = 1e-30          # ln of the table never below ln FLOOR
@@ -80,11 +83,35 @@ def orders_spec(g):
     return tables.TableSpec(f"AnalyticFog Multiple Orders (g {float(g):+.3f})", COLUMNS, ROWS * MAX_ORDER, float(g))
 
 
-def bake_orders(spec):
-    """I_k(T, theta) for k = 1 .. MAX_ORDER at the rows and columns, float64 (ROWS * MAX_ORDER, COLUMNS)."""
+def window(g):
+    """``point_source_mc.radiance_by_order``'s weight window for anisotropy g: (WINDOW_FROM, r_near, WINDOW_M,
+    WINDOW_SHARE), r_near = 3.1 / sqrt(1 - g) (at least 2): about where a walk's WINDOW_FROM-th collision
+    lies (a diffusion's sqrt(2 k / (1 - g)) / 2).  The photons past it far from the source, where the spheres are
+    large and the field smooth, are followed one in WINDOW_M; those near it all."""
+    return WINDOW_FROM, max(2.0, 3.1 / math.sqrt(max(1.0 - float(g), 1e-3))), WINDOW_M, WINDOW_SHARE
+
+
+def bake_orders(spec, progress=None):
+    """I_k(T, theta) for k = 1 .. MAX_ORDER at the rows and columns, float64 (ROWS * MAX_ORDER, COLUMNS).
+    ``progress(done, total)``: as ``point_source_mc.radiance_by_order`` calls it."""
     arr = point_source_mc.radiance_by_order(row_distances(), spec.g, MAX_ORDER, photons=PHOTONS,
-                                            edges_deg=column_edges_deg(), r_max=R_MAX, seed=SEED)
+                                            edges_deg=column_edges_deg(), r_max=R_MAX, seed=SEED,
+                                            window=window(spec.g), progress=progress)
     return arr.reshape(ROWS * MAX_ORDER, COLUMNS)
+
+
+# seconds of ``bake_orders`` on 2 cores: ORDERS_SECONDS[0] + ORDERS_SECONDS[1] (1 - g) (its walks stay nearer
+# the source at low g, where they cross more of the spheres), and of a table from cached orders (the same for
+# every albedo): TABLE_SECONDS (docs/measurements/2026-11-29-bake-time.md)
+ORDERS_SECONDS = (7.0, 8.0)
+TABLE_SECONDS = 0.8
+
+
+def estimate_seconds(spec, orders_cached=False):
+    """About how long ``bake_table(spec)`` takes, s: its orders' bake unless ``orders_cached``, then the
+    table's."""
+    orders = 0.0 if orders_cached else ORDERS_SECONDS[0] + ORDERS_SECONDS[1] * (1.0 - float(spec.g))
+    return orders + TABLE_SECONDS
 
 
 def table_spec(g, albedo):
@@ -162,13 +189,13 @@ def irradiance_of_field(log_field):
     return out
 
 
-def bake_table(spec, orders=None):
+def bake_table(spec, orders=None, progress=None):
     """The two tables of ``spec`` (``table_spec``), float32 (2 ROWS, COLUMNS); ``orders``: ``bake_orders``'s
-    array for spec.g (baked through the table cache if None)."""
+    array for spec.g (baked through the table cache if None, reporting to ``progress(done, total)``)."""
     if orders is None:
         from .table_cache import cached_bake
         o_spec = orders_spec(spec.g)
-        orders = cached_bake(o_spec, lambda: bake_orders(o_spec))
+        orders = cached_bake(o_spec, lambda: bake_orders(o_spec, progress))
     field = _merge_cap(field_of_orders(orders, albedo_of(spec)))
     log_field = _smooth(np.log(np.maximum(field, FLOOR)))
     return np.concatenate([log_field, irradiance_of_field(log_field)]).astype(np.float32)

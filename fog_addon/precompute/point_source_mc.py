@@ -65,24 +65,77 @@ def _batches(rng, photons, batch):
         yield np.zeros((n, 3)), u / np.linalg.norm(u, axis=1, keepdims=True)
 
 
-def _tally_crossings(tally, radii, edges_rad, b, c, w, kind, kinds, nb):
+def _tally_crossings(tally, radii, edges_rad, b, c, w, kind, kinds, nb, share=1.0, rng=None, share_below=np.inf):
     """Add the expected-value crossings of flights (b = p.d, c = p.p at their starts, weights w, each of a
     ``kind`` in range(kinds)) with every sphere of ``radii`` to ``tally`` (flat: radius, kind, theta bin).  A
-    line p + s d meets the sphere T at s = -b -+ sqrt(b^2 - c + T^2), where mu = x.d / T = -+ sqrt(...) / T."""
-    root = np.sqrt(np.maximum(b[:, None] * b[:, None] - c[:, None] + radii[None, :] ** 2, 0.0))
-    meets = (b[:, None] * b[:, None] - c[:, None] + radii[None, :] ** 2) > 0.0
+    line p + s d meets the sphere T at s = -b -+ sqrt(b^2 - c + T^2), where mu = x.d / T = -+ sqrt(...) / T.
+    Only the spheres a flight can cross ahead of it are visited (``_candidates``): those farther out than the
+    line's closest approach to the source and, for a flight moving away from it, than its start; the entering
+    crossing (-) only where the flight starts outside the sphere.  The bins by mu against the cosines of the
+    ``edges_rad`` (theta ascending).  ``share`` < 1: each (flight, sphere) pair of a sphere smaller than
+    ``share_below`` is tallied with that probability (``rng``), at 1 / share the weight (unbiased: a flight's
+    crossings of neighbouring spheres say much the same)."""
+    ip, ir = _candidates(radii, b, c)
+    scale = None
+    if share < 1.0:
+        small = radii[ir] < share_below
+        pick = ~small | (rng.random(len(ip)) < share)
+        ip, ir = ip[pick], ir[pick]
+        scale = np.where(small[pick], 1.0 / share, 1.0)
+    if not len(ip):
+        return
+    cos_edges = np.cos(edges_rad)[::-1]        # ascending
+    bb, cc, rr = b[ip], c[ip], radii[ir]
+    rr2 = rr ** 2
+    disc = bb * bb - cc + rr2
+    root = np.sqrt(np.maximum(disc, 0.0))
+    meets = disc > 0.0
+    outside = rr2 < cc
     for sign in (-1.0, 1.0):
-        s = -b[:, None] + sign * root
-        mu = sign * root / radii[None, :]
-        hit = meets & (s > 0.0) & (s < EXPECT_LENGTH)
+        if sign < 0.0:
+            sub = np.nonzero(outside & meets)[0]
+            s = -bb[sub] - root[sub]
+            hit = (s > 0.0) & (s < EXPECT_LENGTH)
+        else:
+            sub = None
+            s = -bb + root
+            hit = meets & (s > 0.0) & (s < EXPECT_LENGTH)
         if not hit.any():
             continue
-        i_photon, i_radius = np.nonzero(hit)
-        mu_h = np.clip(mu[hit], -1.0, 1.0)
-        k = np.clip(np.searchsorted(edges_rad, np.arccos(mu_h)) - 1, 0, nb - 1)
-        val = w[i_photon] * np.exp(-s[hit]) / np.maximum(np.abs(mu_h), 1e-3)
+        at = np.nonzero(hit)[0] if sub is None else sub[hit]
+        s_h = s[hit]
+        i_photon, i_radius = ip[at], ir[at]
+        mu_h = np.clip(sign * root[at] / rr[at], -1.0, 1.0)
+        k = np.clip(nb - np.searchsorted(cos_edges, mu_h, side="right"), 0, nb - 1)
+        val = w[i_photon] * np.exp(-s_h) / np.maximum(np.abs(mu_h), 1e-3)
+        if scale is not None:
+            val = val * scale[at]
         index = (i_radius * kinds + kind[i_photon]) * nb + k
         tally += np.bincount(index, weights=val, minlength=len(tally))
+
+
+def _candidates(radii, b, c):
+    """(photon, radius) index pairs, photon-major and in the order of ``radii`` within a photon, of the spheres
+    each flight may cross ahead of it: T^2 > c - b^2 (its line comes nearer the source than T) and, if b >= 0
+    (moving away), T^2 > c (the sphere is about it).  A slightly generous bound: ``_tally_crossings`` tests
+    each pair exactly."""
+    order = np.argsort(radii, kind="stable")
+    sorted_sq = np.asarray(radii, float)[order] ** 2
+    bound = np.where(b >= 0.0, c, np.maximum(c - b * b, 0.0)) * (1.0 - 1e-9)
+    start = np.searchsorted(sorted_sq, bound, side="right")
+    counts = len(radii) - start
+    total = int(counts.sum())
+    if not total:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    ip = np.repeat(np.arange(len(b)), counts)
+    offsets = np.cumsum(counts) - counts
+    slot = start[ip] + (np.arange(total) - offsets[ip])
+    ir = order[slot]
+    if not np.all(np.diff(order) > 0):   # radii not ascending: keep each photon's pairs in their given order
+        key = ip * len(radii) + ir
+        keep = np.argsort(key, kind="stable")
+        ip, ir = ip[keep], ir[keep]
+    return ip, ir
 
 
 def radiance(radii, q, albedo, photons=200_000, edges_deg=DEFAULT_EDGES_DEG, max_order=None, r_max=None,
@@ -130,31 +183,70 @@ def radiance(radii, q, albedo, photons=200_000, edges_deg=DEFAULT_EDGES_DEG, max
 
 
 def radiance_by_order(radii, q, max_order, photons=100_000, edges_deg=DEFAULT_EDGES_DEG, r_max=None, seed=0,
-                      batch=50_000):
+                      batch=50_000, window=None, progress=None):
     """I_k(T, theta) / I0 of each scattering order k = 1 .. ``max_order`` without absorption: an array
     (len(radii), max_order, bins), extinction 1.  Any albedo's field then follows without another run:
     a photon scattered k times carries W0^k, so I(W0) = sum_k W0^k I_k (the orders above ``max_order``
-    left out: W0^max_order of the light).  Photons farther than ``r_max`` from the source are dropped."""
+    left out: W0^max_order of the light).  Photons farther than ``r_max`` from the source are dropped.
+
+    ``window`` = (from_order, r_near, m, share): a weight window in the distance from the source for the orders
+    from ``from_order`` on: a photon that goes farther than 2 r_near plays Russian roulette (surviving with 1/m
+    at m times the weight), one that comes back within r_near is split into m copies of 1/m the weight
+    (unbiased; far out, where the spheres are large and crossed by many, one photon in m is followed); and a
+    flight's crossings of the spheres within r_near are tallied each with probability ``share``
+    (``_tally_crossings``).  ``progress(done, total)``: called every order of every batch (``done`` of
+    ``photons * max_order`` photon-orders); it may raise an exception (``table_cache.BakeCancelled``) to stop."""
     radii = np.asarray(radii, float)
     r_max = float(r_max if r_max is not None else radii.max() + 40.0)
     nb = len(edges_deg) - 1
     theta_of_bin = np.radians(np.asarray(edges_deg, float))
-    tally = np.zeros(len(radii) * max_order * nb)
+    tally = np.zeros((len(radii), max_order, nb))
+    own = np.zeros(len(radii) * nb)           # one order's tally
+    zero_kind = np.zeros(batch, dtype=np.int64)
     rng = np.random.default_rng(seed)
+    from_order, r_near, m, share = window if window is not None else (max_order + 1, 0.0, 1, 1.0)
+    done = 0
     for p, d in _batches(rng, photons, batch):
+        n_batch = len(p)
+        w = np.ones(n_batch)
+        thin = np.zeros(n_batch, dtype=bool)
         order = 0
         while len(p) and order <= max_order:
             if order > 0:
                 b = np.einsum("ij,ij->i", p, d)
                 c = np.einsum("ij,ij->i", p, p)
-                _tally_crossings(tally, radii, theta_of_bin, b, c, np.ones(len(p)),
-                                 np.full(len(p), order - 1, dtype=np.int64), max_order, nb)
+                own[:] = 0.0
+                kind = zero_kind[:len(p)] if len(p) <= batch else np.zeros(len(p), dtype=np.int64)
+                _tally_crossings(own, radii, theta_of_bin, b, c, w, kind, 1, nb,
+                                 share if order >= from_order else 1.0, rng, r_near)
+                tally[:, order - 1, :] += own.reshape(len(radii), nb)
+            if order == max_order:
+                break
             step = -np.log(1.0 - rng.random(len(p)))
             p = p + step[:, None] * d
             d = turn(d, sample_hg(rng, q, len(p)), rng.uniform(0.0, 2.0 * math.pi, len(p)))
             order += 1
-            keep = np.einsum("ij,ij->i", p, p) < r_max * r_max
-            p, d = p[keep], d[keep]
+            r2 = np.einsum("ij,ij->i", p, p)
+            if progress is not None:
+                progress(done + order * n_batch, photons * max_order)
+            if m > 1 and order >= from_order:
+                going = ~thin & (r2 > 4.0 * r_near * r_near)
+                if going.any():
+                    live = rng.random(len(p)) < 1.0 / m
+                    w = np.where(going, np.where(live, w * m, 0.0), w)
+                    thin |= going
+                back = thin & (r2 < r_near * r_near) & (w > 0.0)
+                if back.any():
+                    w[back] /= m
+                    thin &= ~back
+                    copies = np.repeat(np.arange(len(p)), np.where(back, m, 1))
+                    p, d, w, thin, r2 = p[copies], d[copies], w[copies], thin[copies], r2[copies]
+            keep = (r2 < r_max * r_max) & (w > 0.0)
+            if not keep.all():
+                p, d, w, thin = p[keep], d[keep], w[keep], thin[keep]
+        done += n_batch * max_order
+    if progress is not None:
+        progress(photons * max_order, photons * max_order)
     solid = 2.0 * math.pi * (np.cos(np.radians(edges_deg[:-1])) - np.cos(np.radians(edges_deg[1:])))
     scale = 1.0 / photons / (radii[:, None, None] ** 2) / solid[None, None, :]
-    return tally.reshape(len(radii), max_order, nb) * scale
+    return tally * scale

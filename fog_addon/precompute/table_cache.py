@@ -25,6 +25,12 @@ import numpy as np
 
 from . import fingerprint
 
+
+class BakeCancelled(Exception):
+    """Raised by a bake's ``progress(done, total)`` callback to stop it (the bakers of ``spot_multiple``,
+    ``multiple``, ``emitter_glow`` call it as they go): ``cached_bake`` lets it through and stores nothing."""
+
+
 ENV = "ANALYTIC_FOG_CACHE"   # the cache folder; "" or "off": no cache
 KEEP = 16                    # fingerprint subfolders kept (the most recently used); older ones are deleted
 _SUBFOLDER = re.compile(r"^[0-9a-f]{12}-numpy[0-9A-Za-z.+_-]+$")   # what ``cache_path`` names (and may prune)
@@ -50,9 +56,16 @@ def cache_path(spec):
     return folder / f"{slug}-{hashlib.sha256(repr(spec).encode()).hexdigest()[:8]}.npz"
 
 
+def is_cached(spec):
+    """True if ``spec``'s table is in the cache (a readable entry for it: ``cached_bake`` would not bake)."""
+    path = cache_path(spec)
+    return path is not None and path.is_file() and _load(path, spec) is not None
+
+
 def cached_bake(spec, bake):
     """``bake()``, ``spec``'s table, read from the cache if there, else baked and stored there (module
-    docstring).  Only bakers defined in ``precompute/`` are cached: the cache key holds only its source."""
+    docstring).  Only bakers defined in ``precompute/`` are cached: the cache key holds only its source.  A
+    bake stopped by ``BakeCancelled`` (or any error) stores nothing."""
     fn = getattr(bake, "func", bake)   # a functools.partial's function
     path = cache_path(spec)
     if path is None or not getattr(fn, "__module__", "").startswith(fingerprint.PRECOMPUTE_MODULE + "."):
