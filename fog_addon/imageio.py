@@ -55,19 +55,25 @@ def oiio():
     return _oiio
 
 
+def _open(path):
+    """An OIIO ImageInput of ``path``; FileNotFoundError or IOError saying why not."""
+    o = oiio()
+    if not os.path.isfile(path):
+        raise FileNotFoundError(f"no such image: {path}")
+    inp = o.ImageInput.open(path)
+    if inp is None:
+        raise IOError(f"cannot open image {path}: {o.geterror()}")
+    return inp
+
+
 def read(path, subimage=0, channels=None):
     """Read an image as float32 ``(H, W, C)``; top row first.
 
     ``channels``: optional number of leading channels to keep (e.g. 3 for RGB).
     For multi-part EXRs, ``subimage`` selects the part.
     """
-    o = oiio()
     path = os.fspath(path)
-    if not os.path.isfile(path):
-        raise FileNotFoundError(f"no such image: {path}")
-    inp = o.ImageInput.open(path)
-    if inp is None:
-        raise IOError(f"cannot open image {path}: {o.geterror()}")
+    inp = _open(path)
     try:
         if subimage and not inp.seek_subimage(subimage, 0):
             raise IOError(f"{path}: no subimage {subimage}")
@@ -90,11 +96,8 @@ def read_layers(path):
     Call it from a process that has not rendered: in one that has, OpenImageIO crashed (segmentation
     fault) reading multi-part files (bpy 5.0.1).
     """
-    o = oiio()
     path = os.fspath(path)
-    inp = o.ImageInput.open(path)
-    if inp is None:
-        raise IOError(f"cannot open image {path}: {o.geterror()}")
+    inp = _open(path)
     out, k = {}, 0
     try:
         while inp.seek_subimage(k, 0):
@@ -136,11 +139,7 @@ def channels(path):
     the headers."""
     o = oiio()
     path = os.fspath(path)
-    if not os.path.isfile(path):
-        raise FileNotFoundError(f"no such image: {path}")
-    inp = o.ImageInput.open(path)
-    if inp is None:
-        raise IOError(f"cannot open image {path}: {o.geterror()}")
+    inp = _open(path)
     out, k = [], 0
     floats = (o.HALF, o.FLOAT, o.DOUBLE)
     try:
@@ -161,11 +160,8 @@ def read_channels(path, chans):
     """The ``Channel``s ``chans`` of ``path`` (from ``channels``) as float32 ``(H, W, len(chans))`` in that order,
     top row first; integer types are divided by their maximum (as ``read``).  Each part is read once, only the
     range of channels asked of it."""
-    o = oiio()
     path = os.fspath(path)
-    inp = o.ImageInput.open(path)
-    if inp is None:
-        raise IOError(f"cannot open image {path}: {o.geterror()}")
+    inp = _open(path)
     planes = {}
     try:
         for sub in sorted({c.subimage for c in chans}):

@@ -255,7 +255,7 @@ def _scatter_case(rng, m, g):
     return ours, exact, point, max(float(c_axis), 0.0) * point
 
 
-@pytest.mark.parametrize("g", [0.0, 0.85])
+@pytest.mark.parametrize("g", [0.0, pytest.param(0.85, marks=pytest.mark.slow)])
 def test_area_diffuse_scatter_against_hemisphere_quadrature(g):
     """24 random points a g: the diffuse lobe within 0.12 of the point light's fog light (the spot's bound,
     tests/test_spot_scatter.py), and on the whole closer than Lambert's cosine at the point times the point

@@ -23,8 +23,8 @@ CYCLE = re.compile(r"(?i)dependency cycle")
 @pytest.fixture(scope="module")
 def run():
     proc = h.run([SCRIPT], timeout=600)
-    text = proc.stdout + proc.stderr
-    assert not h.log_errors(text)
+    # Blender's log, the control probes' deliberate cycles left out (each case's cycles are checked below)
+    assert not [e for e in h.log_errors(proc.stdout + proc.stderr) if not CYCLE.search(e)]
     logs, case = {}, None
     for line in proc.stdout.splitlines():
         if line.startswith("=== CASE "):

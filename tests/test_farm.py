@@ -294,6 +294,7 @@ def shaft_farm(tmp_path_factory):
     return res
 
 
+@pytest.mark.slow   # (10 s; the default tier's farm lanes hold an animation and the shafts' packed maps)
 def test_moving_shafts_render_without_the_add_on(shaft_farm):
     """A lamp moving behind a panel, with light shafts (Compositor method): the saved file, rendered without the
     add-on at frames 1, 5 and 8, gives each frame's shafts (the atlas of the lamp's maps, picked by a driver on the

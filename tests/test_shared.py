@@ -31,6 +31,7 @@ def _one_copy_each(state, expect, where):
     assert state["suffixed_refs"] == [], f"{where}: still used: {state['suffixed_refs']}"
 
 
+@pytest.mark.slow   # (9 s; appending fogged files keeps one copy in the default tier: test_append_from_fogged_file)
 def test_add_remove_add_keeps_one_copy(tmp_path):
     res = _run("shared_add_remove.py", tmp_path)
     assert len(res["steps"]) > 10

@@ -202,6 +202,7 @@ def test_view_transmittance_is_the_layers():
     assert got == pytest.approx(math.exp(-0.01 * 40.0), rel=1e-9)
 
 
+@pytest.mark.slow   # (7 s; the air's kernels are checked against quadrature in the default tier: test_air_kernels.py)
 def test_fog_light_with_air_against_sphere_quadrature():
     """With air the map of one colour channel (blue, a clear day's haze, g 0.76, albedo 0.9: both species' light,
     the albedos in it) against the sphere's quadrature of ``ray_glow`` with air itself: within 1 % of the fog light
