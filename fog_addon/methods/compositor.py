@@ -58,8 +58,8 @@ class Compositor(Method):
                              tails=caveats.specular_paths(bpy.data.materials), day=day,
                              day_dims=dims and not daylit, day_exact=not daylit)
         shafted = shafted_lights(scene, spec, plan.in_groups) if spec.shafts else []
-        from .. import handlers   # (a rebuild from the depsgraph handler does not step through the frames)
-        maps, shadow_images = shadow_maps.ensure(scene, shafted, lazy=plan.partial or bool(handlers._refreshing))
+        # (a handler's rebuild does not step through the frames: the save completes the atlases)
+        maps, shadow_images = shadow_maps.ensure(scene, shafted, lazy=plan.this_frame)
         sun_shadow, sun_images = sunsky.sun_shadow(scene, spec) if daylit else (None, {})
         shadow_maps.remove_unused(set(shadow_images) | set(sun_images))
         images = dict(images, **shadow_images, **sun_images)

@@ -225,6 +225,7 @@ def setup(scene, fog=None):
     chain = (lambda tree, rl, k: _fog_chain(tree, rl, k, fog)) if fog is not None else (
         lambda tree, rl, k: _chain(scene, tree, rl, k))
     needs = (lambda vl: vl is not None and vl.use) if fog is not None else (lambda vl: _denoised(scene, vl))
+    spliced = None   # the user's links the chain took over ([Render Layers node, node, input identifier]), if spliced
     if tree is None:
         vl = next((v for v in scene.view_layers if v.use), None)
         if not needs(vl):
@@ -259,12 +260,12 @@ def setup(scene, fog=None):
             last = chain(tree, rl, k)
             for sock in users:
                 tree.links.new(last, sock)
-        scene[STATE] = {"tree": tree.name, "fog": fog is not None, "engine": scene.render.engine,
-                        LINKS: json.dumps(spliced)}
     if fog is None:
         overrides.override(scene, "cycles.use_denoising", False)
-    if scene.get(STATE) is None:
-        scene[STATE] = {"tree": tree.name, "fog": fog is not None, "engine": scene.render.engine}
+    state = {"tree": tree.name, "fog": fog is not None, "engine": scene.render.engine}
+    if spliced is not None:   # (a tree of the user's)
+        state[LINKS] = json.dumps(spliced)
+    scene[STATE] = state
     return []
 
 

@@ -38,7 +38,7 @@ def fog_lights(scene):
     """(lights taking part, [(name, reason)] for lights left out or worth a note)."""
     lights, notes = [], []
     eye = scene.camera.matrix_world.translation if scene.camera is not None else None
-    near = AT_CAMERA * scene_size(scene) if eye is not None else 0.0
+    near = None   # AT_CAMERA x the scene's depth, computed once a light takes part (the depsgraph handler calls this)
     for obj in scene.objects:
         if obj.type != "LIGHT":
             continue
@@ -56,6 +56,8 @@ def fog_lights(scene):
             notes.append((obj.name, "has zero power: it lights no fog"))
         else:
             lights.append(obj)
+            if eye is not None and near is None:
+                near = AT_CAMERA * scene_size(scene)
             if eye is not None and (obj.matrix_world.translation - eye).length <= near:
                 notes.append((obj.name, f"is {(obj.matrix_world.translation - eye).length:.2g} units from the camera: "
                                         "the fog's light from a lamp grows without bound as it nears the camera, so "
@@ -288,6 +290,7 @@ class Plan(NamedTuple):
     shader_models: list
     windows: Any              # where the compositor evaluates each term (``view.windows``), or None
     partial: bool             # the windows are this frame's only (the handlers')
+    this_frame: bool          # a handler's rebuild, which must not step through the frames (``plan``)
 
 
 def built_method():
@@ -348,7 +351,7 @@ def plan(scene, spec, method, lights, reason=None, rechoose=True, this_frame=Fal
     shader_lights, shader_models = method.shader_lights(scene, spec, in_groups, grouped)
     partial = this_frame and view.animated(scene)
     return Plan(lights, models, choice, in_groups, grouped, shader_lights, shader_models,
-                method.windows(scene, in_groups, partial), partial)
+                method.windows(scene, in_groups, partial), partial, this_frame)
 
 
 def _signature(scene, spec, method, plan_):
@@ -485,17 +488,24 @@ def apply(scene, spec, objects=None, progress=progress_.silent):
     return skipped + [(scene.name, n) for n in notes]
 
 
+GEOMETRY = ("MESH", "CURVE", "SURFACE", "META", "FONT", "VOLUME", "CURVES", "POINTCLOUD", "GREASEPENCIL")   # object
+#                                                                              types with surfaces to render
+
+
+def _rendered_geometry(scene):
+    """The scene's objects that render geometry (``GEOMETRY``, not hidden from rendering)."""
+    return [obj for obj in scene.objects if obj.type in GEOMETRY and not obj.hide_render]
+
+
 def nearest_distance(scene):
-    """The distance (units) from the camera to the nearest point of any rendered object's bounding box (mesh,
-    curve, text, surface, metaball, volume), or 0 without a camera or objects; 0 from inside one."""
+    """The distance (units) from the camera to the nearest point of any rendered object's bounding box
+    (``GEOMETRY``), or 0 without a camera or objects; 0 from inside one."""
     cam = scene.camera
     if cam is None:
         return 0.0
     eye = cam.matrix_world.translation
     best = math.inf
-    for obj in scene.objects:
-        if obj.type in ("CAMERA", "LIGHT", "EMPTY", "LIGHT_PROBE", "SPEAKER", "ARMATURE", "LATTICE") or obj.hide_render:
-            continue
+    for obj in _rendered_geometry(scene):
         box = [tuple(c) for c in obj.bound_box]
         lo = [min(c[k] for c in box) for k in range(3)]
         hi = [max(c[k] for c in box) for k in range(3)]
@@ -508,11 +518,10 @@ def nearest_distance(scene):
     return 0.0 if best == math.inf else best
 
 
-def lowest_top(scene):
+def highest_z(scene):
     """The highest z (units) of any rendered object's bounding box, or None without objects."""
     tops = [max((obj.matrix_world @ type(obj.matrix_world.translation)(c)).z for c in obj.bound_box)
-            for obj in scene.objects if obj.type in ("MESH", "CURVE", "SURFACE", "META", "FONT", "VOLUME")
-            and not obj.hide_render]
+            for obj in _rendered_geometry(scene)]
     return max(tops) if tops else None
 
 
@@ -527,7 +536,7 @@ def scene_notes(scene, spec):
     note = presets.opaque_fog_note(spec.density, nearest_distance(scene) * spec.scene_scale)
     if note:
         notes.append(note)
-    top = lowest_top(scene) if spec.layered else None
+    top = highest_z(scene) if spec.layered else None
     if top is not None and spec.ground_level > top:
         notes.append(f"Ground Level (z {spec.ground_level:.3g}) is above every object (the highest reaches z "
                      f"{top:.3g}): the whole scene lies under the fog layer's ground, where the layer's model does "

@@ -10,7 +10,7 @@ their bakers take ``progress(done, total)``, which may raise ``BakeCancelled`` t
 """
 import functools
 
-from . import airlight, emitter_glow, multiple, spot, spot_multiple, surface, tables
+from . import airlight, emitter_glow, multiple, spot, spot_multiple, surface, table_cache, tables
 from .table_cache import BakeCancelled, cached_bake, is_cached  # noqa: F401 - BakeCancelled: the callers'
 
 BASE_SECONDS = (1.5, 8.0)   # ``bakers(g)``'s tables cold on 2 cores at g 0, at any other g (its 256 x 256 airlight
@@ -82,13 +82,24 @@ def table_array(spec, g=0.0, progress=None):
 _EXTRA = {}   # the arrays ``table_array`` read or baked this process, by spec
 
 
+def _kept_from_cache(spec):
+    """True if ``spec``'s table is in the cache; one of ``table_array``'s extra tables is then kept for the process
+    as read (it was read whole to check it: ``table_array`` need not read it again)."""
+    if spec.name in bakers(spec.g):
+        return is_cached(spec)
+    arr = table_cache.read(spec)
+    if arr is not None:
+        _EXTRA[spec] = arr
+    return arr is not None
+
+
 def estimate_seconds(spec, baked=()):
     """About how long baking ``spec``'s table takes from a cold cache on 2 cores, s (0 if it is in the cache):
     a spot's or an area light's multiply scattered table (``spot_multiple.estimate_seconds``), a point light's
     (``multiple.estimate_seconds``: with its orders' bake if they are not cached), the glowing objects' weights
     (``emitter_glow.estimate_seconds``, with the point light's table they read under Dense Fog unless it is in
     ``baked``: tables baked before it) or one of ``bakers(g)``'s (BASE_SECONDS for them all)."""
-    if spec in _EXTRA or is_cached(spec):
+    if spec in _EXTRA or _kept_from_cache(spec):
         return 0.0
     if is_spot_multiple(spec):
         return spot_multiple.estimate_seconds(spec)

@@ -56,10 +56,15 @@ def cache_path(spec):
     return folder / f"{slug}-{hashlib.sha256(repr(spec).encode()).hexdigest()[:8]}.npz"
 
 
+def read(spec):
+    """``spec``'s table as the cache holds it, or None (no readable entry: ``cached_bake`` would bake)."""
+    path = cache_path(spec)
+    return _load(path, spec) if path is not None and path.is_file() else None
+
+
 def is_cached(spec):
     """True if ``spec``'s table is in the cache (a readable entry for it: ``cached_bake`` would not bake)."""
-    path = cache_path(spec)
-    return path is not None and path.is_file() and _load(path, spec) is not None
+    return read(spec) is not None
 
 
 def cached_bake(spec, bake):
