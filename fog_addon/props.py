@@ -21,12 +21,14 @@ _quiet = []   # non-empty while the add-on itself writes the settings (``quiet``
 _pending = {}   # scene name -> the sync level (``SYNC_LEVELS``) waiting for the timer
 SYNC_LEVELS = ("params", "groups", "rechoose")   # what a sync does: the params group; + the scene groups
 #                                                  (lights keep their steps); + every light's models chosen again
-_sync = []   # the sync function (``set_sync``: ``apply.sync``, which builds the fog from these settings)
+_sync = []   # the sync functions (``set_sync``): in line, and with a window
 
 
-def set_sync(fn):
-    """``fn(scene, level)`` makes the fog follow the settings (``ops/apply.py`` sets it when imported)."""
-    _sync[:] = [fn]
+def set_sync(fn, windowed=None):
+    """``fn(scene, level)`` makes the fog follow the settings (``ops/apply.py`` sets it when imported);
+    ``windowed(scene, level)`` does it from the timer of a session with a window (``ops``: Dense Fog's missing
+    tables are baked first by the cancellable ``fog.bake_tables``).  Default: ``fn``."""
+    _sync[:] = [fn, windowed or fn]
 
 
 @contextlib.contextmanager
@@ -51,6 +53,13 @@ def schedule_sync(scene, level):
     if bpy.app.background:
         _sync[0](scene, level)
         return
+    request_sync(scene, level)
+
+
+def request_sync(scene, level):
+    """Queue a sync of ``scene`` at ``level`` for the timer (the highest level asked for wins): a setting's change,
+    or the depsgraph handler's build that found Dense Fog tables missing (``apply.TablesMissing``: the timer's
+    sync bakes them first, cancellable)."""
     old = _pending.get(scene.name)
     _pending[scene.name] = level if old is None or SYNC_LEVELS.index(level) > SYNC_LEVELS.index(old) else old
     if not bpy.app.timers.is_registered(_run_pending):
@@ -63,7 +72,7 @@ def _run_pending():
     for name, level in pending.items():
         scene = bpy.data.scenes.get(name)
         if scene is not None and scene.analytic_fog.enabled and _sync:
-            _sync[0](scene, level)
+            _sync[1](scene, level)
     return None
 
 
@@ -190,7 +199,7 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
         name="Dense Fog (Multiple Scattering)", default=False, update=_rebuild,
         description="Add the light scattered more than once around point lights: the wide halo of thick fog "
                     "(optical distance to a lamp above about 1). The first use of an anisotropy bakes its "
-                    "table (10-20 s, announced on the console, then cached)")
+                    "tables (3-15 s each, then cached): the status bar shows the bake, and Esc cancels it")
     use_passes: bpy.props.BoolProperty(
         name="Fog Passes", default=False, update=_rebuild,
         description="Write the render passes Fog Light (the light the fog adds) and Fog Transmittance "

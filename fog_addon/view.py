@@ -328,7 +328,7 @@ MAX_WINDOW_FRAMES = 250   # an animation longer than this gets no windows (every
 GEOMETRY = {"MESH", "CURVE", "SURFACE", "FONT", "META", "CURVES", "POINTCLOUD", "VOLUME"}
 
 
-def _camera_frame(scene, camera):
+def frame_extent(scene, camera):
     """(left, right, bottom, top) of ``camera``'s frame at unit distance (shifts included)."""
     corners = np.array([tuple(v) for v in camera.data.view_frame(scene=scene)])
     x, y = corners[:, 0] / -corners[:, 2], corners[:, 1] / -corners[:, 2]
@@ -341,7 +341,7 @@ def _frame_windows(scene, depsgraph, lights):
     camera = scene.camera.evaluated_get(depsgraph)
     mw = np.array(camera.matrix_world)
     mw[:3, :3] /= np.linalg.norm(mw[:3, :3], axis=0)   # the view's axes (a camera's scale does not scale its rays)
-    frame = _camera_frame(scene, camera)
+    frame = frame_extent(scene, camera)
     boxes = [footprint.box_points(inst.object.bound_box, inst.matrix_world)
              for inst in depsgraph.object_instances if inst.object.type in GEOMETRY]
     surfaces = footprint.boxes_window(np.array(boxes), mw, frame) if boxes else footprint.EMPTY

@@ -241,3 +241,57 @@ def test_missing_counts_each_bake_once(cache):
     assert listed[glow] < alone and abs(alone - listed[glow] - listed[point]) < 1e-9
     assert max(listed.values()) < 30.0 and sum(listed.values()) < 60.0, listed
     assert bakers.label(spot).startswith("the spot table (") and bakers.label(area).startswith("the area light")
+
+
+def test_bake_job_cancels_on_its_thread_and_caches_nothing(cache):
+    """The operators' worker (``ops.bake_job``): the shipped spot bake started on its thread reports progress
+    and a status line; ``cancel`` stops it within seconds, nothing is cached, and the job says it was cancelled."""
+    from fog_addon.ops import bake_job
+    spec = sm.table_spec(0.85, 0.9, COS_HALF, BLEND)
+    job = bake_job.BakeJob(bakers.missing([spec]), 0.85).start()
+    t0 = time.perf_counter()
+    while job.fraction == 0.0 and time.perf_counter() - t0 < 30.0:
+        time.sleep(0.05)
+    assert 0.0 < job.overall() < 1.0 and "Esc cancels" in job.status() and "spot table" in job.status()
+    job.cancel()
+    assert job.wait(10.0) and job.cancelled and job.error is None
+    assert not table_cache.is_cached(spec) and spec not in bakers._EXTRA
+
+
+def test_bake_job_bakes_every_table_in_order(cache, monkeypatch):
+    """Done: every table baked in order with its progress; a failure is kept as the job's error."""
+    from fog_addon.ops import bake_job
+    seen = []
+
+    def fake(spec, g, progress=None):
+        for k in range(5):
+            progress(k + 1, 5)
+        seen.append((spec, g))
+        if spec == "bad":
+            raise RuntimeError("broken")
+
+    monkeypatch.setattr(bake_job.bakers, "table_array", fake)
+    monkeypatch.setattr(bake_job.bakers, "label", str)
+    job = bake_job.BakeJob([("a", 2.0), ("b", 6.0)], 0.3).start()
+    assert job.wait(5.0) and not job.cancelled and job.error is None
+    assert seen == [("a", 0.3), ("b", 0.3)] and job.overall() == 1.0
+    job = bake_job.BakeJob([("bad", 1.0), ("c", 1.0)], 0.0).start()
+    assert job.wait(5.0) and job.error == "RuntimeError: broken" and seen[-1] == ("bad", 0.0)
+
+
+@pytest.mark.render
+@pytest.mark.slow
+def test_bake_operator_bakes_then_builds_without_a_window(tmp_path):
+    """``fog.bake_tables`` without a window (tests/scenes/bake_operator.py, a cache of its own): the table listed
+    missing is baked in line, nothing is missing after, and the fog is rebuilt with Dense Fog at the new g;
+    ``fog.add('INVOKE_DEFAULT')`` without a window runs as execute."""
+    import json
+    from fog_scenes import render_harness as h
+    proc = h.run([h.ROOT / "tests" / "scenes" / "bake_operator.py", tmp_path / "cache"], timeout=600)
+    assert not h.log_errors(proc.stdout + proc.stderr)
+    out = json.loads(next(ln for ln in proc.stdout.splitlines() if ln.startswith("BAKE_JSON ")).split(" ", 1)[1])
+    assert out["add"] == ["FINISHED"] and out["bake"] == ["FINISHED"]
+    assert out["before"] == ["the point light table (g +0.350, W0 1.000)"] and out["after"] == []
+    assert out["built"]["multiple_scattering"] and out["built"]["anisotropy"] == pytest.approx(0.35, abs=1e-6)
+    log = proc.stdout + proc.stderr
+    assert "baking the point light table" in log and "done in" in log, log[-2000:]

@@ -876,7 +876,7 @@ EMITTERS = "Emission"   # the fog group's input of the emitters' light: the Rend
 def emitter_pixel_angle(scene):
     """rad a pixel at the picture's centre (the emitters' glow kernels are baked for it)."""
     from .. import view
-    left, right, _, _ = view._camera_frame(scene, scene.camera)
+    left, right, _, _ = view.frame_extent(scene, scene.camera)
     return math.atan(float(right - left) / max(view.render_size(scene)[0], 1))
 
 

@@ -1,10 +1,18 @@
-"""Operators: ``fog.add``, ``fog.remove`` (both undoable) and ``fog.preset_add`` (Blender's preset system)."""
+"""Operators: ``fog.add``, ``fog.remove`` (both undoable), ``fog.bake_tables`` and ``fog.preset_add`` (Blender's
+preset system).
+
+A build that needs a Dense Fog table not yet baked (``apply.missing_tables``) bakes it first on a worker thread
+(``bake_job``) when there is a window: the status bar says what is baking and how long is left, the progress
+cursor follows it, and Esc cancels it with nothing changed.  Without a window (scripts, ``-b``) the bake runs in
+line, announced on the console (``progress.ConsoleProgress``).
+"""
 import math
 
 import bpy
 from bl_operators.presets import AddPresetBase
 
-from . import apply, progress
+from . import apply, bake_job, progress
+from .. import props
 from ..precompute import presets
 
 PRESET_SUBDIR = "analytic_fog"
@@ -34,7 +42,59 @@ def _report_skipped(op, skipped):
         op.report({"WARNING"}, f"{name}: {why}")
 
 
-class FOG_OT_add(bpy.types.Operator):
+class _BakesFirst:
+    """Mixin of the operators that bake missing tables first (``invoke``): ``modal`` polls the ``BakeJob`` each
+    timer tick, Esc cancels it; once nothing is left to bake it calls ``after_bake(context)``."""
+    _job = _timer = None
+
+    def missing(self, context):
+        """The tables still to bake for the build this operator does (``apply.missing_tables``)."""
+        return apply.missing_tables(context.scene, apply.spec_of(context.scene))
+
+    def start_bakes(self, context):
+        """Start the bake of what ``missing`` lists and go modal; None if nothing is missing (or no window)."""
+        if context.window is None:
+            return None
+        try:
+            tables = self.missing(context)
+        except ValueError:
+            return None   # the build itself says why
+        if not tables:
+            return None
+        self._job = bake_job.BakeJob(tables, apply.spec_of(context.scene).anisotropy).start()
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(0.2, window=context.window)
+        wm.modal_handler_add(self)
+        wm.progress_begin(0.0, 1.0)
+        context.workspace.status_text_set(self._job.status())
+        return {"RUNNING_MODAL"}
+
+    def _end(self, context):
+        wm = context.window_manager
+        wm.event_timer_remove(self._timer)
+        wm.progress_end()
+        context.workspace.status_text_set(None)
+
+    def modal(self, context, event):
+        job = self._job
+        if event.type == "ESC" and event.value == "PRESS":
+            job.cancel()
+        if event.type != "TIMER" and not job.done:
+            return {"PASS_THROUGH"}
+        if not job.done:
+            context.window_manager.progress_update(job.overall())
+            context.workspace.status_text_set(job.status())
+            return {"RUNNING_MODAL"}
+        self._end(context)
+        if job.cancelled or job.error:
+            why = apply.decline_bake(context.scene, job.current, job.error)
+            self.report({"WARNING"} if job.cancelled else {"ERROR"}, why)
+            return {"CANCELLED"}
+        restarted = self.start_bakes(context)   # the lights' tables, once the point table let them be chosen
+        return restarted if restarted is not None else self.after_bake(context)
+
+
+class FOG_OT_add(_BakesFirst, bpy.types.Operator):
     """Add analytic fog to the scene (or update it): glows around point lights, fogged surfaces and background"""
     bl_idname = "fog.add"
     bl_label = "Add Fog"
@@ -51,6 +111,13 @@ class FOG_OT_add(bpy.types.Operator):
         items=[("SCENE", "Scene Setting", "As the scene's Selected Only setting"),
                ("ALL", "All", "Every material in the scene"),
                ("SELECTED", "Selected", "Only the selected objects' materials")])
+
+    def invoke(self, context, event):
+        apply.accept_bake(context.scene)   # asked for by the user: a bake declined before is started again
+        return self.start_bakes(context) or self.execute(context)
+
+    def after_bake(self, context):
+        return self.execute(context)
 
     def execute(self, context):
         scene = context.scene
@@ -75,6 +142,33 @@ class FOG_OT_add(bpy.types.Operator):
         if len(lines) > 1 and lines[1].strip().startswith("Method"):
             self.report({"INFO"}, lines[1].strip())
         return {"FINISHED"}
+
+
+class FOG_OT_bake_tables(_BakesFirst, bpy.types.Operator):
+    """Bake the Dense Fog tables the fog's settings need (Esc cancels), then let the fog follow the settings"""
+    bl_idname = "fog.bake_tables"
+    bl_label = "Bake Fog Tables"
+
+    level: bpy.props.StringProperty(name="Sync Level", default="rechoose",
+                                    description="What the fog rebuilds once the tables are baked (props.SYNC_LEVELS)")
+
+    def invoke(self, context, event):
+        return self.start_bakes(context) or self.after_bake(context)
+
+    def after_bake(self, context):
+        if context.scene.analytic_fog.enabled:
+            why = apply.sync(context.scene, self.level)
+            if why:
+                self.report({"WARNING"}, why)
+        return {"FINISHED"}
+
+    def execute(self, context):
+        """Without a window: bake in line (announced on the console), then sync."""
+        for table, seconds in self.missing(context):
+            bake_job.bakers.table_array(table, apply.spec_of(context.scene).anisotropy,
+                                        progress=progress.ConsoleProgress(prefix="Analytic Fog: ").bake(
+                                            bake_job.bakers.label(table), seconds))
+        return self.after_bake(context)
 
 
 class FOG_OT_remove(bpy.types.Operator):
@@ -149,5 +243,25 @@ class FOG_OT_preset_add(AddPresetBase, bpy.types.Operator):
                      "fog.height_falloff", "fog.air_density"]
 
 
-CLASSES = (FOG_OT_add, FOG_OT_remove, FOG_OT_preset_builtin, FOG_MT_presets, FOG_OT_preset_add)
-register, unregister = bpy.utils.register_classes_factory(CLASSES)
+def sync_in_window(scene, level):
+    """The settings' timer (``props.set_sync``): a change that needs Dense Fog tables not yet baked (Dense Fog
+    turned on, a new anisotropy) bakes them first with the cancellable ``fog.bake_tables`` in a window showing
+    ``scene``, which then syncs at ``level``; anything else syncs at once (``apply.sync``).  A bake declined
+    (cancelled) for these very settings is not started again: the panel says so (``apply.sync_error``)."""
+    if level != "params" and not bake_job.running() and not apply.bake_declined(scene):
+        for window in bpy.context.window_manager.windows:
+            if window.scene == scene:
+                with bpy.context.temp_override(window=window, scene=scene):
+                    bpy.ops.fog.bake_tables("INVOKE_DEFAULT", level=level)   # it syncs, at once if nothing is missing
+                return
+    if not bake_job.running():
+        apply.sync(scene, level)
+
+
+CLASSES = (FOG_OT_add, FOG_OT_bake_tables, FOG_OT_remove, FOG_OT_preset_builtin, FOG_MT_presets, FOG_OT_preset_add)
+_register, unregister = bpy.utils.register_classes_factory(CLASSES)
+
+
+def register():
+    _register()
+    props.set_sync(apply.sync, sync_in_window)

@@ -190,13 +190,66 @@ def _extra_tables(spec, models=()):
     return (multiple.table_spec(spec.anisotropy, spec.multiple_albedo), *spots)
 
 
-def bake_missing_tables(spec, models, progress=progress_.silent):
+class TablesMissing(Exception):
+    """A build needs Dense Fog tables not yet baked, and its caller may not bake them in line (the depsgraph
+    handler with a window: the cancellable ``fog.bake_tables`` bakes them, then syncs)."""
+
+
+_declined = {}   # scene name -> the spec (JSON) whose bake the user cancelled (``decline_bake``)
+
+
+def decline_bake(scene, table, error=None):
+    """The bake of ``table`` for ``scene``'s settings was cancelled (or failed with ``error``): the fog keeps what
+    it was built with, the panel says why (``sync_error``), and the handlers do not start it again for the same
+    settings (``bake_declined``).  Returns the message."""
+    what = bakers.label(table) if table is not None else "Dense Fog's tables"
+    why = (f"the bake of {what} was cancelled" if error is None else f"the bake of {what} failed ({error})")
+    why += ": the fog keeps what it was built with; Update Fog bakes it, or turn Dense Fog off"
+    _sync_errors[scene.name] = why
+    try:
+        _declined[scene.name] = spec_of(scene).to_json()
+    except ValueError:
+        pass
+    return why
+
+
+def bake_declined(scene):
+    """True if the user cancelled the bake of the tables ``scene``'s present settings need."""
+    try:
+        return _declined.get(scene.name) == spec_of(scene).to_json()
+    except ValueError:
+        return False
+
+
+def accept_bake(scene):
+    """Add Fog / Update Fog asked for the fog again: a bake cancelled before may start again."""
+    _declined.pop(scene.name, None)
+
+
+def bake_missing_tables(spec, models, progress=progress_.silent, in_line=True):
     """Bake the Dense Fog tables ``models`` read that are not cached yet, each announced with its estimate
     (``bakers.missing``) and reporting through ``progress`` (``progress.bake_progress``); a BakeCancelled raised
-    by it propagates before anything is built (nothing half-baked is cached)."""
-    for table, seconds in bakers.missing(_extra_tables(spec, models)):
+    by it propagates before anything is built (nothing half-baked is cached).  ``in_line`` False: raise
+    TablesMissing instead of baking."""
+    tables = bakers.missing(_extra_tables(spec, models))
+    if tables and not in_line:
+        raise TablesMissing(", ".join(bakers.label(t) for t, _ in tables))
+    for table, seconds in tables:
         bakers.table_array(table, spec.anisotropy,
                            progress=progress_.bake_progress(progress, bakers.label(table), seconds))
+
+
+def missing_tables(scene, spec):
+    """[(TableSpec, seconds)]: the Dense Fog tables the next build of ``scene``'s fog for ``spec`` would bake
+    first (``bakers.missing``), so that an operator can bake them on a worker thread, cancellable
+    (``bake_job``).  In two rounds: the point light's table (the Quality's choice reads it) if it is missing,
+    else the tables of the lights' chosen models; empty once nothing is left to bake."""
+    first = bakers.missing(_extra_tables(spec, ()))
+    if first or spec.multiple_albedo is None:
+        return first
+    lights = fog_lights(scene)[0]
+    method, reason = resolve_method(scene, spec, lights)
+    return bakers.missing(_extra_tables(spec, plan(scene, spec, method, lights, reason).models))
 
 
 def stored_choice():
@@ -367,23 +420,24 @@ _rebuilt = set()   # names of scenes whose groups ``_build_scene_groups`` rebuil
 
 
 def _build_scene_groups(scene, spec, lights, method=None, reason=None, rechoose=True, this_frame=False,
-                        progress=progress_.silent):
+                        progress=progress_.silent, bake_in_line=True):
     """(Re)build the Surface and World groups (and the method's own) for ``spec`` and ``lights`` with ``method``
     (default: ``resolve_method``) unless built for them already; per-light groups no longer used are deleted,
     lights that no longer take part lose the fog's attenuation, Cycles' OSL is switched on while some model
-    needs it, and the view layers have the method's AOVs.  ``rechoose``, ``this_frame``: see ``plan``.
+    needs it, and the view layers have the method's AOVs.  ``rechoose``, ``this_frame``: see ``plan``;
+    ``bake_in_line``: see ``bake_missing_tables``.
 
     Returns [(name, reason)] for lights left unfogged, clashing AOVs and a choice the render engine limited.
     """
     if method is None:
         method, reason = resolve_method(scene, spec, lights, keep=not rechoose)
-    bake_missing_tables(spec, (), progress)   # Dense Fog's point table: the Quality's choice reads it
+    bake_missing_tables(spec, (), progress, bake_in_line)   # Dense Fog's point table: the choice reads it
     plan_ = plan(scene, spec, method, lights, reason, rechoose, this_frame)
     signature = _signature(scene, spec, method, plan_)
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if (surface is None or bpy.data.node_groups.get(groups.WORLD) is None
             or surface.get(LIGHTS_KEY) != signature or not method.is_built()):
-        bake_missing_tables(spec, plan_.models, progress)
+        bake_missing_tables(spec, plan_.models, progress, bake_in_line)
         imgs = method.build(scene, spec, plan_,
                             images.all_table_images(spec.anisotropy, _extra_tables(spec, plan_.models)))
         _rebuilt.add(scene.name)   # the compositor's chain must take the new groups (``refresh_lights``)
@@ -712,9 +766,15 @@ def refresh_lights(scene, rechoose=False, this_frame=False):
     _rebuilt.discard(scene.name)
     try:
         spec = spec_of(scene)
-        _build_scene_groups(scene, spec, fog_lights(scene)[0], rechoose=rechoose, this_frame=this_frame)
+        _build_scene_groups(scene, spec, fog_lights(scene)[0], rechoose=rechoose, this_frame=this_frame,
+                            progress=progress_.ConsoleProgress(prefix="Analytic Fog: "),
+                            bake_in_line=bpy.app.background)
     except ValueError as e:
         _sync_errors[scene.name] = str(e)
+        return
+    except TablesMissing:   # with a window: baked by the cancellable operator, which then syncs
+        if not bake_declined(scene):
+            props.request_sync(scene, "rechoose" if rechoose else "groups")
         return
     # the engine or the denoiser flag may have changed; rebuilt groups need the chain built anew
     follow_compositor(scene, rebuild=scene.name in _rebuilt)

@@ -142,7 +142,7 @@ def occluder_cases(scene):
         depsgraph = bpy.context.evaluated_depsgraph_get()
         cam = scene.camera.evaluated_get(depsgraph)
         mw = np.array(cam.matrix_world)
-        faces = view.occluders(depsgraph, cam, mw, view._camera_frame(scene, cam), view.occlusion_margin(scene))
+        faces = view.occluders(depsgraph, cam, mw, view.frame_extent(scene, cam), view.occlusion_margin(scene))
         return any(np.abs(face[:, 2]).max() < 1e-6 and len(face) == 4 for face, _ in faces)
 
     ground = scene.objects["ground"]
