@@ -12,7 +12,7 @@ shafts on), the atlas's time (``ensure_atlases``: stepping the frames, the caste
 frame), a still map's bake for comparison, the atlas's layout, its pixels in memory (16 bytes a texel: float RGBA),
 its packed size (ZIP OpenEXR) and Blender's own (uncompressed) packing of the same pixels, the .blend's size (zstd,
 Blender's default) and what a copy of the atlas packed Blender's way adds to it, the process's peak memory.
-Figures: docs/measurements/2026-11-29-animated-shadow-maps.md.
+Figures: docs/measurements/2026-11-29-animated-shadow-maps.md.  Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): 3 frames.
 """
 import argparse
 import json
@@ -31,6 +31,8 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
+
+import smoke  # noqa: E402
 
 
 def build(kind, light_kind, frames):
@@ -73,7 +75,7 @@ def build(kind, light_kind, frames):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--frames", type=int, default=100)
+    ap.add_argument("--frames", type=int, default=smoke.pick(100, 3))
     ap.add_argument("--scene", choices=("farm", "hall"), default="farm")
     ap.add_argument("--light", choices=("point", "spot"), default="point")
     args = ap.parse_args()

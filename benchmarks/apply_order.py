@@ -8,15 +8,16 @@ small (4 lights).  This times the two orders of the same work, each in a fresh
 process (the scene of materials_1000.py: N cubes with their own Principled
 material, L point lights):
 
-* A, today's order (``apply_fog``): build the scene groups for the L lights
-  (``apply._build_scene_groups``), then wrap every material (``wrap_material``);
+* A: build the scene groups for the L lights (``build.build_scene_groups``), then wrap every material
+  (``wrap_material``);
 * B: build the groups with no light (small), wrap every material, then build
   the groups for the L lights (built beside the old ones, the 1 000 users
-  moved over with one ``user_remap``: ``groups._new_group``/``_install``).
+  moved over with one ``user_remap``: ``groups.new_group``/``install``).
 
 Both end with every material fogged against the same groups.  Wall and CPU
-time of each step; not the add-on's code path (a what-if for a fix in
-``ops/apply.py``).  Output: benchmarks/out/apply_order.csv.
+time of each step; ``apply.apply`` takes order B (its Surface group is
+first built without lights).  Output: benchmarks/out/apply_order.csv.
+Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): 4 materials, 2 lights.
 """
 import argparse
 import json
@@ -27,9 +28,10 @@ import sys
 import time
 
 import csv_rows
+import smoke
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-OUT = ROOT / "benchmarks" / "out"
+OUT = smoke.out(ROOT / "benchmarks" / "out")
 
 
 def load_avg():
@@ -45,21 +47,30 @@ def worker(order, n, n_lights):
     import materials_1000 as mb
     from fog_addon.nodes import groups, owned
     from fog_addon.nodes.material import wrap_material
-    from fog_addon.ops import apply
+    from fog_addon import methods
+    from fog_addon.ops import build, plan
+    from fog_addon.precompute.spec import FogSpec
+    from fog_addon.props import store_spec
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     mb.build(scene, n, n_lights)
-    lights, _ = apply.fog_lights(scene)
-    groups.set_params(mb.DENSITY, (1.0, 1.0, 1.0))
-    mats = apply.scene_materials(scene)
-    steps = ([("groups, all lights (no users)", lambda: apply._build_scene_groups(scene, lights, "nodes", False)),
+    spec = FogSpec(density=mb.DENSITY, method="nodes").validated()
+    store_spec(scene, spec)
+    lights, _ = plan.fog_lights(scene)
+    groups.set_params(spec.beta_per_unit, spec.albedo, spec.anisotropy)
+    mats = plan.scene_materials(scene)
+    nodes = methods.get("nodes")
+
+    def scene_groups(lights):
+        return build.build_scene_groups(scene, spec, lights, nodes)
+
+    steps = ([("groups, all lights (no users)", lambda: scene_groups(lights)),
               ("wrap materials (Surface group for all lights)", lambda: [wrap_material(m) for m in mats])]
              if order == "A" else
-             [("groups, no light (no users)", lambda: apply._build_scene_groups(scene, [], "nodes", False)),
+             [("groups, no light (no users)", lambda: scene_groups([])),
               ("wrap materials (Surface group for no light)", lambda: [wrap_material(m) for m in mats]),
-              ("groups, all lights (built beside, users remapped)",
-               lambda: apply._build_scene_groups(scene, lights, "nodes", False))])
+              ("groups, all lights (built beside, users remapped)", lambda: scene_groups(lights))])
     for label, fn in steps:
         c, t = time.process_time(), time.perf_counter()
         fn()
@@ -72,8 +83,8 @@ def worker(order, n, n_lights):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--materials", type=int, default=1000)
-    ap.add_argument("--lights", type=int, default=64)
+    ap.add_argument("--materials", type=int, default=smoke.pick(1000, 4))
+    ap.add_argument("--lights", type=int, default=smoke.pick(64, 2))
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.worker:
@@ -83,9 +94,13 @@ def main(argv=None):
     rows = []
     for order in ("A", "B"):
         proc = subprocess.run([python, __file__, "--worker", order, "--materials", str(args.materials),
-                               "--lights", str(args.lights)], capture_output=True, text=True, check=True)
+                               "--lights", str(args.lights)], capture_output=True, text=True)
+        smoke.echo(proc.stdout, proc.stderr)
+        if proc.returncode:
+            raise RuntimeError(f"order {order} failed (exit {proc.returncode}):\n{proc.stderr[-3000:]}")
         got = [json.loads(ln.split(" ", 1)[1]) for ln in proc.stdout.splitlines() if ln.startswith("APPLY_ORDER ")]
         fogged = next(g["fogged"] for g in got if g["step"] == "fogged")
+        smoke.check(fogged == args.materials, f"order {order}: {fogged} of {args.materials} materials fogged")
         for g in got:
             if g["step"] == "fogged":
                 continue

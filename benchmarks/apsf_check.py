@@ -6,7 +6,7 @@ is multiply scattered, over the issue's range (T 1.5-8, q 0.5-0.9, albedo 0.8-0.
 
 Writes benchmarks/out/apsf_check.csv (per case and annulus: the Monte Carlo's single and multiple scattering,
 the series, their ratios) and apsf_check.png (profiles).  Figures and their reading:
-docs/measurements/2026-11-27-apsf.md.
+docs/measurements/2026-11-27-apsf.md.  Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): one case, 2 000 photons.
 """
 import argparse
 import csv
@@ -18,11 +18,12 @@ import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+import smoke  # noqa: E402
 from fog_addon.precompute import apsf  # noqa: E402
 from fog_addon.precompute import point_source_mc as mc  # noqa: E402
 
-OUT = ROOT / "benchmarks" / "out"
-CASES = [(0.5, 0.8), (0.5, 0.99), (0.9, 0.8), (0.9, 0.99)]   # (q, albedo)
+OUT = smoke.out(ROOT / "benchmarks" / "out")
+CASES = smoke.pick([(0.5, 0.8), (0.5, 0.99), (0.9, 0.8), (0.9, 0.99)], [(0.9, 0.8)])   # (q, albedo)
 RADII = [1.5, 2.0, 4.0, 8.0]
 ANNULI = [(0.25, 1.0), (1.0, 3.0), (3.0, 10.0), (10.0, 30.0), (30.0, 90.0), (90.0, 180.0)]   # deg
 
@@ -35,7 +36,7 @@ def annulus_mean(values, edges, lo, hi):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--photons", type=int, default=200_000)
+    ap.add_argument("--photons", type=int, default=smoke.pick(200_000, 2_000))
     args = ap.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     edges = np.unique(np.concatenate([[0.0], np.geomspace(0.25, 180.0, 61), [1.0, 3.0, 10.0, 30.0, 90.0]]))
@@ -69,7 +70,7 @@ def chart(profiles, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(len(CASES), len(RADII), figsize=(16, 13), sharex=True)
+    fig, axes = plt.subplots(len(CASES), len(RADII), figsize=(16, 13), sharex=True, squeeze=False)
     for i, (q, w0) in enumerate(CASES):
         for j, T in enumerate(RADII):
             ax = axes[i][j]

@@ -6,6 +6,7 @@ down (same positions and power), warm renders.
 
 Cycles CPU, 640x360, 32 spp, fog of density 0.15/m, g 0.85, albedo 0.9, shafts off.  Writes
 benchmarks/out/area_cost.csv and .png.  Figures: docs/measurements/2026-11-27-area-lights.md.
+Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): 1 lamp, 8x4 px, 1 spp, one warm render.
 """
 import argparse
 import json
@@ -14,10 +15,12 @@ import sys
 import time
 
 import csv_rows
+import smoke
 import worker_result
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-OUT = ROOT / "benchmarks" / "out"
+OUT = smoke.out(ROOT / "benchmarks" / "out")
+SIZE = smoke.pick((640, 360, 32), (8, 4, 1))   # width, height, samples
 DENSITY, G, ALBEDO = 0.15, 0.85, 0.9
 AREA_SIZE_M = 1.0
 
@@ -26,7 +29,7 @@ def worker(spec):
     sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks"), str(ROOT / "tests")]
     import bpy
     from shafts_cost import hall
-    from fog_addon import measure
+    from cycles_timing import cycles_cpu
     from fog_addon.ops import apply
     from fog_addon.precompute.spec import FogSpec
     bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -37,11 +40,7 @@ def worker(spec):
                 obj.data.type = "AREA"
                 obj.data.shape = "SQUARE"
                 obj.data.size = AREA_SIZE_M
-    scene.render.engine = "CYCLES"
-    measure.set_resolution(scene, 640, 360)
-    measure.set_samples(scene, 32)
-    measure.set_cycles_cpu(scene)
-    scene.cycles.use_denoising = False
+    cycles_cpu(scene, *SIZE)
 
     def warm_render():
         bpy.ops.render.render()   # first: shader compilation, compositor set-up
@@ -64,9 +63,9 @@ def worker(spec):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--lights", default="4,16")
-    ap.add_argument("--methods", default="compositor,nodes")
-    ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--lights", default=smoke.pick("4,16", "1"))
+    ap.add_argument("--methods", default=smoke.pick("compositor,nodes", "compositor"))
+    ap.add_argument("--repeats", type=int, default=smoke.pick(2, 1))
     ap.add_argument("--worker")
     args = ap.parse_args()
     if args.worker:

@@ -4,7 +4,8 @@ error distributions as docs/figures/2026-11-27-daylight-kernels.png.
 
     .venv/bin/python benchmarks/daylight_check.py [--figure]
 
-Numbers go to docs/measurements/2026-11-27-daylight-kernels.md.
+Numbers go to docs/measurements/2026-11-27-daylight-kernels.md.  Smoke mode (``FOG_BENCH_SMOKE=1``,
+benchmarks/smoke.py): the same, the figure drawn into the smoke folder.
 """
 import argparse
 import pathlib
@@ -14,6 +15,8 @@ import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+
+import smoke                                       # noqa: E402
 
 from fog_addon.precompute import daylight as dl   # noqa: E402
 from tests import test_daylight as t               # noqa: E402
@@ -26,7 +29,7 @@ def stats(err):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--figure", action="store_true")
+    ap.add_argument("--figure", action="store_true", default=smoke.ON)
     a = ap.parse_args()
     c = dict(np.load(t.CACHE))
     out = {}
@@ -75,7 +78,8 @@ def main():
         ax.set_title("Daylight kernels against quadrature (tests/data/daylight_reference.npz)")
         ax.legend(fontsize=8)
         fig.tight_layout()
-        path = ROOT / "docs" / "figures" / "2026-11-27-daylight-kernels.png"
+        path = smoke.out(ROOT / "docs" / "figures" / "2026-11-27-daylight-kernels.png")
+        path.parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(path, dpi=110)
         print("wrote", path)
 

@@ -25,7 +25,7 @@ Each (engine, method, case) runs in ONE worker process (this script with ``--wor
 * add the fog (``apply_*``: the whole call; inside it, timed by wrapping the add-on's functions: ``bake_*``
   ``sunlight.bake_fog_light``, the fog light's irradiance map; ``probe_*`` ``sunsky.probe_sky``, the World's
   equirectangular probe render; ``comp_group_*`` ``comp_fog.build_fog_group``; ``surface_group_*``
-  ``groups.build_surface``);
+  ``surface_group.build_surface``);
 * render with fog: a first render, then the minimum of ``repeats`` warm ones;
 * with the compositor's fog group muted (``nocomp_warm_*``, warm renders): what the rest of the fog costs
   (the materials' daylight terms and AOVs); the compositor's part is ``fog_warm - nocomp_warm``.
@@ -40,7 +40,8 @@ fog warm / no-fog warm; ``ratio_first_render`` = fog first / no-fog first; ``rat
 / no-fog first.  The pictures are checked off the clock (overhead.py ``picture_stats``: no black materials).
 
 Outputs: benchmarks/out/daylight_cost.csv and daylight_cost.png.  Figures and their reading:
-docs/measurements/2026-11-27-daylight-cost.md.
+docs/measurements/2026-11-27-daylight-cost.md.  Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): the case
+falloff_g0.7_inside_air, Cycles and the Compositor, 8x4 px, 1 spp, one warm render.
 """
 import os
 import pathlib
@@ -50,21 +51,22 @@ import time
 
 import cost_cli
 import csv_rows
+import smoke
 import worker_result
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-OUT = ROOT / "benchmarks" / "out"
+OUT = smoke.out(ROOT / "benchmarks" / "out")
 CSV = OUT / "daylight_cost.csv"
 PNG = OUT / "daylight_cost.png"
 KEPT = ROOT / "docs" / "measurements" / "data" / "daylight_cost_2026-11-27.csv"   # the committed run, if kept
 
-CASES = ("hard_g0_inside", "hard_g0.7_inside", "falloff_g0_inside", "falloff_g0.7_inside", "hard_g0_inside_air",
-         "falloff_g0.7_inside_air")
+CASES = smoke.pick(("hard_g0_inside", "hard_g0.7_inside", "falloff_g0_inside", "falloff_g0.7_inside",
+                    "hard_g0_inside_air", "falloff_g0.7_inside_air"), ("falloff_g0.7_inside_air",))
 AIR_SUFFIX = "_air"   # a case with Air 1 (``split_air``)
-RUNS = ("cycles:compositor", "cycles:nodes", "eevee:compositor")   # engine:method
-RESOLUTION, SAMPLES = (640, 360), 32
-EEVEE_RESOLUTION, EEVEE_SAMPLES = (160, 90), 16
-REPEATS = 2
+RUNS = smoke.pick(("cycles:compositor", "cycles:nodes", "eevee:compositor"), ("cycles:compositor",))   # engine:method
+RESOLUTION, SAMPLES = smoke.pick(((640, 360), 32), ((8, 4), 1))
+EEVEE_RESOLUTION, EEVEE_SAMPLES = smoke.pick(((160, 90), 16), ((8, 4), 1))
+REPEATS = smoke.pick(2, 1)
 GOAL = 1.3   # the issue's: fog / no fog, Cycles
 FIELDS = ["engine", "method", "case", "status", "choice", "picture_check", "surface_ratio", "dark_frac",
           "mean_nofog", "mean_fog",
@@ -129,7 +131,7 @@ def worker(spec):
     import bpy
     import overhead as ov
     from fog_addon import sunsky
-    from fog_addon.nodes import comp_fog, groups
+    from fog_addon.nodes import comp_fog, groups, surface_group
     from fog_addon.ops import apply
     from fog_addon.precompute import sunlight
     from fog_addon.precompute.spec import FogSpec
@@ -153,7 +155,7 @@ def worker(spec):
     _wrap(sunlight, "bake_fog_light", "bake", wall, cpu)
     _wrap(sunsky, "probe_sky", "probe", wall, cpu)
     _wrap(comp_fog, "build_fog_group", "comp_group", wall, cpu)
-    _wrap(groups, "build_surface", "surface_group", wall, cpu)
+    _wrap(surface_group, "build_surface", "surface_group", wall, cpu)
     f = dl.layer(case)
     fog = FogSpec(density=f["beta0"], albedo=(f["albedo"],) * 3, anisotropy=f["g"], method=spec["method"],
                   fog_top=f["h0"], height_falloff=f["H"], air=air)
@@ -162,6 +164,9 @@ def worker(spec):
     res["apply_s"], res["apply_cpu_s"] = time.perf_counter() - t, time.process_time() - c
     for key in ("bake", "probe", "comp_group", "surface_group"):
         res[f"{key}_s"], res[f"{key}_cpu_s"] = wall.get(key, 0.0), cpu.get(key, 0.0)
+    # a wrapped function the add-on no longer calls through its module would time 0 s unseen
+    smoke.check(spec["method"] != "compositor" or len(wall) == 4, f"wrapped functions not called: "
+                f"{sorted({'bake', 'probe', 'comp_group', 'surface_group'} - set(wall))}")
     res["choice"] = apply.method_line(apply.stored_choice() or {}) or ""
     res["notes"] = " | ".join(f"{a}: {b}" for a, b in notes)[:600]
     for key, name in (("comp", comp_fog.FOG_GROUP), ("surface", groups.SURFACE), ("world", groups.WORLD)):

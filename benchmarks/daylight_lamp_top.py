@@ -3,9 +3,15 @@ quadrature of the single-scattering airlight along camera rays through a homogen
 top (the truth for a hard top, ignoring that the light reaching the fog above the top crossed less fog) against
 uncut (the add-on's kernel).
 Run: .venv/bin/python benchmarks/daylight_lamp_top.py (scipy, about a minute); figures in
-docs/measurements/2026-11-27-daylight.md."""
+docs/measurements/2026-11-27-daylight.md.  Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): one case, three
+ray elevations."""
 import numpy as np, math
 from scipy import integrate
+import smoke
+BETAS = smoke.pick((0.02, 0.1), (0.1,))
+LAMPS_TOPS = smoke.pick(((5.0, 10.0), (5.0, 20.0), (5.0, 50.0), (9.0, 10.0)), ((5.0, 10.0),))   # (lamp height, top) m
+GS = smoke.pick((0.0, 0.7), (0.7,))
+ELEVATIONS = np.linspace(-5, 40, smoke.pick(19, 3))   # deg
 def glow(cam, d, lamp, beta, top, g=0.0, cut=True, tmax=2000.0):
     def f(t):
         p = cam + t * d
@@ -17,12 +23,12 @@ def glow(cam, d, lamp, beta, top, g=0.0, cut=True, tmax=2000.0):
         return beta * ph * math.exp(-beta * (t + dist)) / dist ** 2
     return integrate.quad(f, 0, tmax, limit=400, points=[np.dot(lamp - cam, d)])[0]
 rows = []
-for beta in (0.02, 0.1):
-    for lamp_h, top in ((5.0, 10.0), (5.0, 20.0), (5.0, 50.0), (9.0, 10.0)):
-        for g in (0.0, 0.7):
+for beta in BETAS:
+    for lamp_h, top in LAMPS_TOPS:
+        for g in GS:
             lamp = np.array([0.0, 30.0, lamp_h]); cam = np.array([0.0, 0.0, 1.6])
             worst = 0.0; whole = []
-            for elev in np.linspace(-5, 40, 19):
+            for elev in ELEVATIONS:
                 for az in (0.0, 10.0):
                     e, a = math.radians(elev), math.radians(az)
                     d = np.array([math.cos(e) * math.sin(a), math.cos(e) * math.cos(a), math.sin(e)])

@@ -22,6 +22,9 @@ Cases: every path-traced reference in tests/references/ (``<scene>_<beta>[_g<G>]
 
 Outputs: benchmarks/out/demo_auto.csv (copy it to docs/measurements/data/ to keep it) and
 docs/figures/demo_auto.png (per case: warm CPU ratio and relative RMSE, before and after).
+
+Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): the case street_lamps_0.08, timed at 8x4 px and 1 spp with
+one warm render, its error at the reference's 64x36 and 1 spp; a timing worker not "ok" fails the run.
 """
 import argparse
 import json
@@ -38,15 +41,17 @@ import overhead as ov   # the timed renders (_render, _warm, BEAT), _emit, load_
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+import smoke  # noqa: E402
 from fog_scenes import render_harness as h  # noqa: E402
 
-OUT = ROOT / "benchmarks" / "out"
+OUT = smoke.out(ROOT / "benchmarks" / "out")
 CSV = OUT / "demo_auto.csv"
-PNG = ROOT / "docs" / "figures" / "demo_auto.png"
+PNG = smoke.out(ROOT / "docs" / "figures" / "demo_auto.png")
 METHODS = ("nodes", "auto")   # before, after
 # samples of the render tests using each reference (test_render.py, test_eevee_direct.py); others: the CLI's 16
 SAMPLES = {"boulevard": 512, "concert_stage": 256, "headlights": 256, "glossy_lamps": 128}
-RESOLUTION, TIMING_SAMPLES = (320, 180), 16
+RESOLUTION, TIMING_SAMPLES = smoke.pick(((320, 180), 16), ((8, 4), 1))
+ERROR_SAMPLES = smoke.pick(None, 1)   # None: the samples of the render tests (``SAMPLES``)
 BUDGET_S = 600.0
 REF = re.compile(r"(?P<scene>[a-z_]+)_(?P<beta>[0-9.]+)(?:_g(?P<g>[0-9.]+))?\.exr$")
 FIELDS = ["case", "scene", "beta", "g", "engine", "method", "rel_rmse", "rel_rmse_nolamps", "mean_ratio", "p95_rel",
@@ -118,6 +123,7 @@ def timing(blend, beta, g, method, repeats, budget):
         p = subprocess.run([h.PYTHON, __file__, "--worker", json.dumps(spec)], cwd=str(ROOT), env=env,
                            capture_output=True, text=True, timeout=budget)
         out, status = p.stdout, ("ok" if p.returncode == 0 else f"exit {p.returncode}: {p.stderr.strip()[-300:]}")
+        smoke.echo(p.stdout, p.stderr)
     except subprocess.TimeoutExpired as exc:
         out = exc.stdout.decode(errors="replace") if isinstance(exc.stdout, bytes) else (exc.stdout or "")
         status = f"timeout after {budget:.0f} s"
@@ -147,12 +153,13 @@ def error(scene, beta, g, engine, method, blend, ref, work, uv):
     """The render test's metrics for one (case, engine, method), and the CLI's Method line."""
     from fog_addon import compare, imageio
     log = []
-    samples = SAMPLES.get(scene) if engine == "cycles" else None
+    samples = ERROR_SAMPLES or (SAMPLES.get(scene) if engine == "cycles" else None)
     out = h.render_test(scene, beta, str(work / f"{ref.stem}_{engine}_{method}.exr"), engine=engine,
                         method=method, samples=samples, blend=blend, log=log, timeout=1800,
                         extra=["--anisotropy", repr(g)] if g else ())
     a, b = imageio.read_rgb(out), imageio.read_rgb(ref)
     m, mask = compare.metrics(a, b), lamp_mask(b.shape, uv)
+    smoke.echo(log[0])
     line = next((ln[len("models: "):] for ln in log[0].splitlines() if ln.startswith("models: Method")), "")
     return {"rel_rmse": m["rel_rmse"], "mean_ratio": m["mean_ratio"], "p95_rel": m["p95_rel"],
             "rel_rmse_nolamps": compare.metrics(a, b, mask=mask)["rel_rmse"], "lamp_pixels": int((~mask).sum()),
@@ -191,8 +198,9 @@ def chart(rows, path):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--worker")
-    ap.add_argument("--cases", help="comma-separated case names (reference stems); default all")
-    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--cases", default=smoke.pick(None, "street_lamps_0.08"),
+                    help="comma-separated case names (reference stems); default all")
+    ap.add_argument("--repeats", type=int, default=smoke.pick(3, 1))
     ap.add_argument("--budget", type=float, default=BUDGET_S, help="s per timing worker")
     ap.add_argument("--methods", default=",".join(METHODS))
     ap.add_argument("--no-timing", action="store_true")
@@ -222,9 +230,11 @@ def main(argv=None):
                 if engine == "cycles" and not args.no_timing:
                     row.update(timing(blend, beta, g, method, args.repeats, args.budget),
                                timing_resolution="{}x{}".format(*RESOLUTION), timing_samples=TIMING_SAMPLES)
+                smoke.check(row.get("status", "ok") == "ok", f"{case} {method}: {row.get('status')}")
                 uv = row.pop("lamp_uv", None) or lamp_uvs.get(scene) or timing_uv(blend)
                 lamp_uvs[scene] = uv
                 row.update(error(scene, beta, g, engine, method, blend, ref, work, uv))
+                smoke.check(row["auto_choice"], f"{case} {engine} {method}: no 'models: Method' line from the CLI")
                 row.setdefault("load_avg_end", ov.load_avg())
                 rows.append(row)
                 print(f"{case} {engine} {method}: ratio warm CPU {row.get('ratio_warm_cpu', float('nan')):.3g} "
@@ -233,6 +243,8 @@ def main(argv=None):
                       f"load {row['load_avg_end']}; {row['auto_choice']} / {row.get('timing_choice', '')}",
                       flush=True)
             csv_rows.write(args.out, rows, FIELDS, digits=4)
+    if not rows:
+        raise SystemExit(f"no case of {args.cases or 'tests/references'} ran")
     chart(rows, args.chart)
     print(f"wrote {args.out}, {args.chart} (scratch {work})")
     return 0

@@ -8,6 +8,7 @@ The scene is shafts_cost.py's hall of columns with 4 point lamps and N glowing s
 strength 20, turned 30-70 degrees from the camera), Cycles CPU, 640x360, 32 spp, fog of density 0.15/m, g 0.85,
 albedo 0.9, shafts off.  Writes benchmarks/out/emitter_cost.csv and .png.  Figures:
 docs/measurements/2026-11-28-emitter-table.md.
+Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): 1 lamp, 2 signs, 8x4 px, 1 spp, one warm render.
 """
 import argparse
 import json
@@ -16,10 +17,13 @@ import pathlib
 import sys
 
 import csv_rows
+import smoke
 import worker_result
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-OUT = ROOT / "benchmarks" / "out"
+OUT = smoke.out(ROOT / "benchmarks" / "out")
+SIZE = smoke.pick((640, 360, 32), (8, 4, 1))   # width, height, samples
+LAMPS = smoke.pick(4, 1)
 DENSITY, G, ALBEDO = 0.15, 0.85, 0.9
 
 
@@ -53,9 +57,9 @@ def worker(spec):
     from fog_addon.precompute import emitter_glow
     from fog_addon.precompute.spec import FogSpec
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = hall(bpy.context.scene, 4)
+    scene = hall(bpy.context.scene, LAMPS)
     add_signs(scene, spec["signs"])
-    cycles_cpu(scene, 640, 360, 32)
+    cycles_cpu(scene, *SIZE)
 
     res = {"signs": spec["signs"]}
     res["nofog_s"], res["nofog_cpu_s"] = warm(spec["repeats"])
@@ -73,8 +77,8 @@ def worker(spec):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--signs", default="4,32")
-    ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--signs", default=smoke.pick("4,32", "2"))
+    ap.add_argument("--repeats", type=int, default=smoke.pick(2, 1))
     ap.add_argument("--worker")
     args = ap.parse_args()
     if args.worker:

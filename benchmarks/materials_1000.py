@@ -11,9 +11,9 @@ and a World, then times in one bpy process:
 * ``apply_fog`` (first: the tables are baked), ``remove_fog``, ``apply_fog``
   again (tables baked again: remove deletes them), ``apply_fog`` a third time
   with the fog already on (idempotent: groups rebuilt, materials skipped);
-* what-if (not the add-on's code path): rebuilding the Surface group in
-  place while the 1 000 materials use it, against building it as a new
-  group and moving the users over with one ``user_remap``;
+* ``build_surface`` again while the 1 000 materials use the Surface group
+  (``groups.new_group`` builds it beside the one in use, ``groups.install``
+  moves the users over with one ``user_remap``);
 * after ``fog_addon.register()``: ``bpy.ops.fog.remove``, ``bpy.ops.fog.add``,
   ``bpy.ops.fog.add`` again, ``bpy.ops.fog.remove``.
 
@@ -28,16 +28,16 @@ work being single-threaded) on a shared machine: approximate.
 ``--method`` (default nodes; compositor renders with Cycles) is the Method for ``apply_fog`` and the
 panel; another method than nodes writes materials_1000_<method>.csv and _profile.txt.
 ``--error`` (Quality: target error, a number, ``draft``, ``final`` or ``exact``) is passed to
-``apply_fog(error=...)`` and ``bpy.ops.fog.add(error=...)`` when they have
-that keyword (checked), and recorded.
+``apply_fog(error=...)`` and, for ``bpy.ops.fog.add``, set as the panel's
+Quality (``scene.analytic_fog.quality``, ``target_error``), and recorded.
 
 Output: benchmarks/out/materials_1000.csv (step, seconds, cpu_seconds,
 materials, lights, error, fogged, ok, load_avg), the profile in
-benchmarks/out/materials_1000_profile.txt.
+benchmarks/out/materials_1000_profile.txt.  Smoke mode (``FOG_BENCH_SMOKE=1``,
+benchmarks/smoke.py): 4 materials, 2 lights.
 """
 import argparse
 import cProfile
-import inspect
 import io
 import os
 import pathlib
@@ -46,6 +46,7 @@ import sys
 import time
 
 import csv_rows
+import smoke
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -54,15 +55,17 @@ import bpy  # noqa: E402
 import bmesh  # noqa: E402
 
 import fog_addon  # noqa: E402
+from fog_addon import caveats  # noqa: E402
 from demo_scenes import add_camera, add_point_light, render_settings, set_world  # noqa: E402
-from fog_addon.nodes import comp_fog, compositor, groups, images, owned  # noqa: E402
+from fog_addon.nodes import (comp_bundles, comp_fog, compositor, groups, images, light_bundles, owned,  # noqa: E402
+                             surface_group)
 from fog_addon.ops import apply  # noqa: E402
 from fog_addon.precompute import rungs  # noqa: E402
 
-OUT = ROOT / "benchmarks" / "out"
+OUT = smoke.out(ROOT / "benchmarks" / "out")
 DENSITY = 0.05
 TARGET_S = 20.0                 # issue 8: 1 000 materials, 64 lights, <= 20 s
-LIGHTS = 64
+LIGHTS = smoke.pick(64, 2)
 COLOURS = ((1.0, 0.62, 0.25), (1.0, 1.0, 1.0), (0.75, 0.85, 1.0), (1.0, 0.85, 0.6))
 KW = {}                         # extra keywords for apply_fog (error=...), set by main
 ERROR_TAG = "default"
@@ -115,35 +118,19 @@ def shared_ok(on):
     want = sorted({groups.PARAMS, groups.SURFACE, groups.WORLD}
                   | {groups.light_group_name(m) for m in models} | {groups.background_group_name(m) for m in models}
                   | set(images.table_names())
-                  | {f"{prefix} {k + 1}-{min(k + groups.BUNDLE, len(lights))}"   # the lights' bundles
-                     for prefix in (groups.SURFACE_LIGHTS, groups.WORLD_LIGHTS) for k in range(0, len(lights), groups.BUNDLE)}
+                  | {f"{prefix} {k + 1}-{min(k + light_bundles.BUNDLE, len(lights))}"   # the lights' bundles
+                     for prefix in (groups.SURFACE_LIGHTS, groups.WORLD_LIGHTS)
+                     for k in range(0, len(lights), light_bundles.BUNDLE)}
                   ) if on else []
     if on and compositor.is_set_up(bpy.context.scene):   # the scene's own denoising set-up (Cycles, denoiser on)
         want = sorted(want + [compositor.GROUP])
     if on and KW.get("method") == "compositor":   # the lights are the compositor's: its groups, once each
-        bundles = {comp_fog.bundle_name(k, min(comp_fog.BUNDLE_SIZE, len(lights) - k))
-                   for k in range(0, len(lights), comp_fog.BUNDLE_SIZE)}
+        bundles = {comp_bundles.bundle_name(k, min(comp_bundles.BUNDLE_SIZE, len(lights) - k))
+                   for k in range(0, len(lights), comp_bundles.BUNDLE_SIZE)}
         need = {groups.PARAMS, groups.SURFACE, groups.WORLD, comp_fog.FOG_GROUP, compositor.GROUP} | bundles
         return need <= set(ours) and not any(owned.SUFFIX.match(n) for n in ours) and not any(
             n.startswith((groups.SURFACE_LIGHTS, groups.WORLD_LIGHTS)) for n in ours)
     return ours == want
-
-
-def side_built(name, build, *args):
-    """What-if for a fix in groups.py: build the shared group ``name`` as a new, unused group, then move
-    every user onto it with one ``user_remap`` (its interface identifiers are the same, so every
-    instance keeps its links and values) and delete the old one."""
-    old = bpy.data.node_groups.get(name)
-    if old is not None:
-        old.name = name + " (old)"
-    new = build(*args)
-    if old is not None:
-        for key in old.keys():   # markers such as the lights signature
-            if key not in new:
-                new[key] = old[key]
-        old.user_remap(new)
-        bpy.data.node_groups.remove(old)
-    return new
 
 
 def load_avg():
@@ -169,16 +156,23 @@ def timed(rows, label, fn, n, fog_on):
 
 PHASES = (  # (label, module file, function): the phases of apply_fog, cumulative time from the profile
     ("tables (all_table_images)", "images.py", "all_table_images"),
-    ("Light group (build_light)", "groups.py", "build_light"),
-    ("Background Light group", "groups.py", "build_background_light"),
-    ("Surface group (build_surface)", "groups.py", "build_surface"),
-    ("World group (build_world)", "groups.py", "build_world"),
-    ("scene groups (_build_scene_groups)", "apply.py", "_build_scene_groups"),
-    ("scene_materials", "apply.py", "scene_materials"),
+    ("Light group (build_light)", "light_groups.py", "build_light"),
+    ("Background Light group", "light_groups.py", "build_background_light"),
+    ("Surface group (build_surface)", "surface_group.py", "build_surface"),
+    ("World group (build_world)", "world_group.py", "build_world"),
+    ("scene groups (build_scene_groups)", "build.py", "build_scene_groups"),
+    ("scene_materials", "plan.py", "scene_materials"),
     ("wrap_material (all)", "material.py", "wrap_material"),
     ("wrap_world", "world.py", "wrap_world"),
     ("wrap_light", "light.py", "wrap_light"),
 )
+
+
+def check_phases():
+    """Raise unless every ``PHASES`` function is defined in its module (a moved one would profile as 0 s)."""
+    for label, fname, func in PHASES:
+        if not any(f"\ndef {func}(" in p.read_text() for p in (ROOT / "fog_addon").rglob(fname)):
+            raise RuntimeError(f"PHASES: {label}: no {func}() in fog_addon/**/{fname}")
 
 
 def profile(scene, top, fresh):
@@ -207,7 +201,7 @@ def profile(scene, top, fresh):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--materials", type=int, default=1000)
+    ap.add_argument("--materials", type=int, default=smoke.pick(1000, 4))
     ap.add_argument("--lights", type=int, default=LIGHTS, help="point lights (default 64, the issue's)")
     ap.add_argument("--error", help="Quality: target error for apply_fog(error=...) if it has that keyword: "
                                     "a number (0.05, 0.01), draft, final or exact; default: the add-on's")
@@ -219,16 +213,13 @@ def main(argv=None):
     tag = "" if args.method == "nodes" else f"_{args.method}"
     n = args.materials
     global ERROR_TAG
-    op_kw = {}
+    check_phases()
     if args.error is not None:
         exact = args.error.lower() in ("exact", "none")
         named = args.error.lower() in ("draft", "final")
         ERROR_TAG = "exact" if exact else (args.error.lower() if named else f"{float(args.error):g}")
-        if "error" in inspect.signature(apply.apply_fog).parameters:
-            KW["error"] = None if exact else (args.error.lower() if named else float(args.error))
-        else:
-            ERROR_TAG += " (ignored: apply_fog has no error=)"
-        print(f"Quality --error {args.error}: apply_fog keywords {KW or 'none (no error= keyword)'}", flush=True)
+        KW["error"] = None if exact else (args.error.lower() if named else float(args.error))
+        print(f"Quality --error {args.error}: apply_fog keywords {KW}", flush=True)
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
@@ -245,18 +236,23 @@ def main(argv=None):
     if args.method != "compositor":   # (the Compositor method's Surface group has no lights)
         lights, _ = apply.fog_lights(scene)
         surface_args = (lights, [rungs.choose("nodes")] * len(lights), images.all_table_images())
-        timed(rows, "what-if: build_surface in place", lambda: groups.build_surface(*surface_args), n, True)
-        timed(rows, "what-if: build_surface side-built",
-              lambda: side_built(groups.SURFACE, groups.build_surface, *surface_args), n, True)
+        tails = caveats.specular_paths(bpy.data.materials)   # as the node groups method builds it
+
+        def build_surface(*args):
+            return surface_group.build_surface(*args, tails=tails)
+        timed(rows, "build_surface (the fog on)", lambda: build_surface(*surface_args), n, True)
     fog_addon.register()
     scene.analytic_fog.method = args.method.upper()
-    if isinstance(KW.get("error"), float) and "error" in bpy.ops.fog.add.get_rna_type().properties.keys():
-        op_kw["error"] = KW["error"]   # a number; names and "exact" are not passed to the operator (its own form)
-    print(f"bpy.ops.fog.add keywords: {op_kw or 'none (its defaults)'}", flush=True)
+    if "error" in KW:   # the operator takes the Quality from the panel's settings
+        err = KW["error"]
+        scene.analytic_fog.quality = "EXACT" if err is None else (err.upper() if isinstance(err, str) else "CUSTOM")
+        if isinstance(err, float):
+            scene.analytic_fog.target_error = err
+    print(f"bpy.ops.fog.add with the panel's Quality {scene.analytic_fog.quality}", flush=True)
     try:
         timed(rows, "bpy.ops.fog.remove", lambda: bpy.ops.fog.remove(), n, False)
-        timed(rows, "bpy.ops.fog.add", lambda: bpy.ops.fog.add(density=DENSITY, **op_kw), n, True)
-        timed(rows, "bpy.ops.fog.add (fog already on)", lambda: bpy.ops.fog.add(density=DENSITY, **op_kw), n, True)
+        timed(rows, "bpy.ops.fog.add", lambda: bpy.ops.fog.add(density=DENSITY), n, True)
+        timed(rows, "bpy.ops.fog.add (fog already on)", lambda: bpy.ops.fog.add(density=DENSITY), n, True)
         timed(rows, "bpy.ops.fog.remove (again)", lambda: bpy.ops.fog.remove(), n, False)
     finally:
         fog_addon.unregister()

@@ -9,6 +9,7 @@ density 0.15/m, g 0.85, albedo 0.9, shafts off (they are measured on their own);
 spot lights pointing down (60 degrees, blend 0.15), ``area``: 0.5 m square area lights facing down (the
 compositor gives both their multiply scattered light).  Writes benchmarks/out/multiple_cost.csv and .png
 (multiple_cost_<kind>.* for the other kinds).  Figures: docs/measurements/2026-11-27-multiple-scattering.md.
+Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): 1 lamp, 8x4 px, 1 spp, one warm render.
 """
 import argparse
 import json
@@ -16,10 +17,12 @@ import pathlib
 import sys
 
 import csv_rows
+import smoke
 import worker_result
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-OUT = ROOT / "benchmarks" / "out"
+OUT = smoke.out(ROOT / "benchmarks" / "out")
+SIZE = smoke.pick((640, 360, 32), (8, 4, 1))   # width, height, samples
 DENSITY, G, ALBEDO = 0.15, 0.85, 0.9
 
 
@@ -42,7 +45,7 @@ def worker(spec):
                     o.data.spot_size, o.data.spot_blend = math.radians(60.0), 0.15
                 else:
                     o.data.shape, o.data.size = "SQUARE", 0.5
-    cycles_cpu(scene, 640, 360, 32)
+    cycles_cpu(scene, *SIZE)
 
     res = {"lights": spec["lights"], "method": spec["method"], "kind": kind}
     for ms in (False, True):
@@ -51,7 +54,7 @@ def worker(spec):
         res[f"apply_{'ms' if ms else 'ss'}_s"] = timed_apply(scene, fog)
         key = "ms" if ms else "ss"
         res[f"{key}_s"], res[f"{key}_cpu_s"] = warm(spec["repeats"])
-    apply.remove(scene) if hasattr(apply, "remove") else None
+    apply.remove_fog(scene)
     res["ratio"] = res["ms_s"] / res["ss_s"]
     res["ratio_cpu"] = res["ms_cpu_s"] / res["ss_cpu_s"]
     worker_result.emit(res)
@@ -59,9 +62,9 @@ def worker(spec):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--lights", default="4,16")
+    ap.add_argument("--lights", default=smoke.pick("4,16", "1"))
     ap.add_argument("--methods", default="compositor,nodes")
-    ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--repeats", type=int, default=smoke.pick(2, 1))
     ap.add_argument("--kind", default="point", choices=("point", "spot", "area"))
     ap.add_argument("--worker")
     args = ap.parse_args()

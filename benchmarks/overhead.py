@@ -71,9 +71,8 @@ is "suspect" if its fogged mean is below ``DARK_GAIN`` times its no-fog mean (th
 fog's glow brightens every scene here: measured 1.5-2.4x).
 
 ``--error`` (Quality: target error, a number, ``draft``, ``final`` or ``exact``) is passed to
-``apply_fog(error=...)`` when that keyword exists (``inspect.signature``); the
-CSV records it (``error``: what was asked, ``error_passed``: whether
-``apply_fog`` took it).  Without ``--error`` the add-on's default is used.
+``apply_fog(error=...)``; the CSV records it (``error``: what was asked, ``error_passed``: whether
+it was passed).  Without ``--error`` the add-on's default is used.
 With ``--error`` the outputs default to ``overhead_error-<E>.csv/png``, so a
 run per Quality keeps the others.  ``--anisotropy G`` (Henyey-Greenstein g, default 0)
 is passed to ``apply_fog(anisotropy=G)``; with G != 0 the outputs get ``_g<G>``
@@ -89,10 +88,12 @@ Adding the fog to 1 000 materials: benchmarks/materials_1000.py.
 Outputs: benchmarks/out/overhead.csv and docs/figures/overhead.png (ratio vs
 number of lights, log-log, one line per method/engine, the issue's goals
 drawn: 1 light <= 1.5x, 16 lights <= 2x, 64 lights <= 3x).
+
+Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): 1 light, no boulevard, Cycles' node groups and EEVEE,
+8x4 px, 1 sample, one warm render; a row not "ok" or with log errors fails the run.
 """
 import argparse
 import csv
-import inspect
 import json
 import math
 import os
@@ -105,26 +106,27 @@ import tempfile
 import time
 
 import csv_rows
+import smoke
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))   # a script run by path: the repository root (fog_addon, fog_scenes)
 
-OUT = ROOT / "benchmarks" / "out"
+OUT = smoke.out(ROOT / "benchmarks" / "out")
 CSV = OUT / "overhead.csv"
 DATA = ROOT / "docs" / "measurements" / "data"   # the committed CSVs (benchmarks/out is not tracked)
-PNG = ROOT / "docs" / "figures" / "overhead.png"
+PNG = smoke.out(ROOT / "docs" / "figures" / "overhead.png")
 
-LIGHTS = (1, 4, 16, 64, 256)
+LIGHTS = smoke.pick((1, 4, 16, 64, 256), (1,))
 BOULEVARD_LIGHTS = 45
 # name: (engine, method preference); the order of the table and the chart
 METHODS = {"cycles_nodes": ("CYCLES", "nodes"), "cycles_osl": ("CYCLES", "osl"), "eevee": ("BLENDER_EEVEE", "nodes"),
            "cycles_compositor": ("CYCLES", "compositor"), "eevee_compositor": ("BLENDER_EEVEE", "compositor"),
            "cycles_auto": ("CYCLES", "auto"), "eevee_auto": ("BLENDER_EEVEE", "auto")}
-RESOLUTION = (320, 180)
-SAMPLES = 16
+RESOLUTION = smoke.pick((320, 180), (8, 4))
+SAMPLES = smoke.pick(16, 1)
 DENSITY = 0.1                  # 1/m for the many-lights scenes (the boulevard uses its own default)
 BUDGET_S = 200.0               # per worker
-REPEATS = 3
+REPEATS = smoke.pick(3, 1)
 REPEAT_BUDGET_S = 12.0         # no more warm repeats once they have taken this long
 BEAT_S = 2.0                   # heartbeat period during a render (for timeouts)
 DARK_SURFACE_RATIO = 0.05      # picture check: median fog / no-fog over lit pixels below this: "dark"
@@ -298,12 +300,10 @@ def picture_stats(nofog, fog):
     return out
 
 
-def _apply_kwargs(apply, error):
-    """(kwargs for apply_fog, passed?): ``error=`` only when apply_fog has that keyword."""
+def _apply_kwargs(error):
+    """(kwargs for apply_fog, passed?): ``error=`` when a Quality was asked for."""
     if error is None:
         return {}, ""
-    if "error" not in inspect.signature(apply.apply_fog).parameters:
-        return {}, False
     return {"error": None if error == "exact" else (error if isinstance(error, str) else float(error))}, True
 
 
@@ -341,7 +341,7 @@ def worker(spec):
     bpy.app.handlers.render_stats.append(BEAT)
     tmp = pathlib.Path(os.environ.get("TMPDIR") or tempfile.gettempdir())
     tag = f"{spec['case']}_{spec['lights']}_{spec['method']}_{os.getpid()}"
-    kwargs, passed = _apply_kwargs(apply, spec.get("error"))
+    kwargs, passed = _apply_kwargs(spec.get("error"))
     res = {"lights": len([o for o in scene.objects if o.type == "LIGHT"]), "error_passed": passed,
            "threads": scene.render.threads}
     res["nofog_first_s"], res["nofog_first_cpu_s"] = _render(scene, "nofog_first")
@@ -356,8 +356,7 @@ def worker(spec):
     c, t = time.process_time(), time.perf_counter()
     apply.apply_fog(scene, density, anisotropy=spec.get("anisotropy", 0.0), method=method, **kwargs)
     res["fog_apply_s"], res["fog_apply_cpu_s"] = time.perf_counter() - t, time.process_time() - c
-    if hasattr(apply, "method_line"):   # the method Auto chose, and why
-        res["note"] = apply.method_line(apply.stored_choice() or {}) or ""
+    res["note"] = apply.method_line(apply.stored_choice() or {}) or ""   # the method Auto chose, and why
     scene.cycles.use_denoising = False
     _emit(res)
     if spec.get("apply_only"):
@@ -422,6 +421,7 @@ def measure_case(case, n, method, args, apply_only=False):
     load0 = load_avg()
     res, beat, log, timed_out, wall, cpu = run_worker(spec, args.budget)
     errors = log_errors(log)
+    smoke.echo(log)
     row = {"case": case, "lights": res.get("lights", n), "method": method, "engine": engine,
            "error": error_tag(args.error), "error_passed": res.get("error_passed", ""), "anisotropy": args.anisotropy,
            "spots": args.spots, "budget_s": args.budget, "process_s": wall, "process_cpu_s": cpu, "load_avg_start": load0,
@@ -488,8 +488,6 @@ def measure_case(case, n, method, args, apply_only=False):
     if dark:
         notes.append(f"picture dark with fog: surface ratio {row.get('surface_ratio', float('nan')):.3g}, "
                      f"{100 * row.get('dark_frac', float('nan')):.0f} % of lit pixels dark")
-    if res.get("error_passed") is False:
-        notes.append("apply_fog has no error= keyword: --error ignored (the add-on's default used)")
     if res.get("note"):
         notes.insert(0, res["note"])
     row["note"] = "; ".join(notes)
@@ -660,9 +658,9 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--budget", type=float, default=BUDGET_S, help="seconds per (scene, method) worker")
     ap.add_argument("--lights", default=",".join(map(str, LIGHTS)))
-    ap.add_argument("--methods", default=",".join(METHODS))
+    ap.add_argument("--methods", default=smoke.pick(",".join(METHODS), "cycles_nodes,eevee"))
     ap.add_argument("--repeats", type=int, default=REPEATS)
-    ap.add_argument("--no-boulevard", action="store_true")
+    ap.add_argument("--no-boulevard", action="store_true", default=smoke.ON)
     ap.add_argument("--apply-only", action="store_true", help="only time adding the fog (no fog renders)")
     ap.add_argument("--update", action="store_true",
                     help="keep the CSV's other rows: replace only the (case, lights, method) rows run now")
@@ -737,6 +735,8 @@ def main(argv=None):
                   f"/ {fmt(row.get('ratio_first'), 'x')} wall  apply {fmt(row.get('fog_apply_s'), ' s')}  "
                   f"pic {row.get('picture_check', '-')} surf {fmt(row.get('surface_ratio'))}  "
                   f"{row['note'][:160]}  (load {row['load_avg_start']} -> {row['load_avg_end']})", flush=True)
+            smoke.check(row["status"] == "ok" and not row["log_errors"], f"{case} {n} {method}: {row['status']}, "
+                        f"{row['log_errors']} log errors: {row['note']}")
             if row["status"] == "timeout" and apply_only:
                 apply_stopped_at = n
             elif row["status"] == "timeout" and stopped_at is None:

@@ -24,7 +24,7 @@ Each (engine, N, variant) runs in ONE worker process (this script with ``--worke
   default Quality, shafts on or off) (``fog_apply_*``: the whole call, i.e. the shadow work: choosing the
   method, baking the maps, building the groups); inside it, timed by wrapping the add-on's functions:
   ``bvh_*`` (``shadow_maps.scene_bvh``: the casters' BVH), ``bake_*`` (``shadow_maps.bake``: the maps' ray
-  casts), ``shaft_groups_*`` (``comp_fog.build_shaft_group``), ``shadowing_*`` (``caveats.shadowing_lights``,
+  casts), ``shaft_groups_*`` (``comp_shafts.build_shaft_group``), ``shadowing_*`` (``caveats.shadowing_lights``,
   called by Auto, the method and the notes);
 * render with fog: a first render, then the minimum of ``repeats`` warm ones.
 
@@ -48,7 +48,8 @@ and the worker prints its top 10 functions by cumulative and by own time (``prof
 Outputs: benchmarks/out/shafts_cost.csv and shafts_cost.png (ratio against lamps, CPU time: first with the
 shadow work, first render alone and warm, shafts on and off; the issue's goals: 4 lamps <= 2x, 16 <= 3x), the
 workers' logs in benchmarks/out/logs/; copy the CSV and the chart to docs/measurements/data/ under dated
-names to keep them.
+names to keep them.  Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): 1 lamp, shafts on, 8x4 px,
+1 spp, one warm render, apply() profiled; a worker not ok or with log errors fails the run.
 """
 import cProfile
 import io
@@ -66,26 +67,27 @@ import time
 
 import cost_cli
 import csv_rows
+import smoke
 import overhead as ov   # the timed renders (_render, _warm, BEAT), _emit, picture checks, load_avg, source_id
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-OUT = ROOT / "benchmarks" / "out"
+OUT = smoke.out(ROOT / "benchmarks" / "out")
 CSV = OUT / "shafts_cost.csv"
 KEPT = ROOT / "docs" / "measurements" / "data" / "shafts_cost_2026-11-26.csv"   # the committed run
 PNG = OUT / "shafts_cost.png"
 
-LIGHTS = (4, 16, 64)
+LIGHTS = smoke.pick((4, 16, 64), (1,))
 DENSITY = 0.04                 # 1/m: ~1 optical thickness across the 24 m hall
 LAMP_POWER = 500.0             # W per lamp
 LAMP_HEIGHT = 2.0              # m
 COLUMN_HALF, COLUMN_HEIGHT, COLUMN_SPACING, COLUMNS = 0.15, 3.0, 1.5, 16
 HALL_HALF = 0.5 * COLUMNS * COLUMN_SPACING   # 12 m
 CAMERA = ((-20.0, -20.0, 14.0), (0.0, 0.0, 0.0), 24.0)   # position m, target m, lens mm
-RESOLUTION, EEVEE_RESOLUTION, SAMPLES = (640, 360), (160, 90), 32
+RESOLUTION, EEVEE_RESOLUTION, SAMPLES = smoke.pick(((640, 360), (160, 90), 32), ((8, 4), (8, 4), 1))
 BUDGET_S = 1800.0
-REPEATS = 2
+REPEATS = smoke.pick(2, 1)
 # variant: (method, Light Shafts, Quality; None: the default, Final)
 VARIANTS = {"shafts": ("auto", True, None), "shafts_draft": ("auto", True, "draft"), "noshafts": ("auto", False, None),
             "noshafts_comp": ("compositor", False, None)}
@@ -168,7 +170,7 @@ def worker(spec):
     """Time one (engine, lights, variant): no fog (first, warm), apply, fog (first, warm); print as it goes."""
     import bpy
     from fog_addon import caveats, shadow_maps
-    from fog_addon.nodes import comp_fog
+    from fog_addon.nodes import comp_shafts
     from fog_addon.ops import apply
     from fog_addon.precompute.spec import FogSpec
 
@@ -189,7 +191,7 @@ def worker(spec):
     timers = _Timers()
     timers.wrap(shadow_maps, "scene_bvh", "bvh")
     timers.wrap(shadow_maps, "bake", "bake")
-    timers.wrap(comp_fog, "build_shaft_group", "shaft_groups")
+    timers.wrap(comp_shafts, "build_shaft_group", "shaft_groups")
     timers.wrap(caveats, "shadowing_lights", "shadowing")
     method, shafts_on, quality = VARIANTS[spec["variant"]]
     fog = FogSpec(density=DENSITY, method=method, shafts=shafts_on,
@@ -205,10 +207,13 @@ def worker(spec):
     for key in ("bvh", "bake", "shaft_groups", "shadowing"):
         res[f"{key}_s"], res[f"{key}_cpu_s"] = timers.wall.get(key, 0.0), timers.cpu.get(key, 0.0)
     res["bake_calls"], res["shaft_group_calls"] = timers.calls.get("bake", 0), timers.calls.get("shaft_groups", 0)
+    # a wrapped function the add-on no longer calls through its module would time 0 s unseen
+    smoke.check(not shafts_on or len(timers.calls) == 4, f"wrapped functions not called: "
+                f"{sorted({'bvh', 'bake', 'shaft_groups', 'shadowing'} - set(timers.calls))}")
     res["choice"] = apply.method_line(apply.stored_choice() or {}) or ""
     res["method"] = (apply.stored_choice() or {}).get("method", "")
     res["shadow_maps"] = sum(1 for img in bpy.data.images if img.name.startswith(shadow_maps.IMAGE_PREFIX))
-    res["shafted_groups"] = sum(1 for ng in bpy.data.node_groups if ng.name.startswith(comp_fog.SHAFT_GROUP + " "))
+    res["shafted_groups"] = sum(1 for ng in bpy.data.node_groups if ng.name.startswith(comp_shafts.SHAFT_GROUP + " "))
     res["notes"] = [f"{a}: {b}" for a, b in notes]
     if prof is not None:
         for key in ("cumulative", "tottime"):
@@ -275,6 +280,8 @@ def measure(engine, n, variant, args):
     load0 = ov.load_avg()
     res, log, status, wall, cpu = run_worker(spec, args.budget)
     errors = log_errors(log)
+    smoke.echo(log)
+    smoke.check(status == "ok" and not errors, f"{engine} {n} {variant}: {status}, log errors {errors[:3]}")
     row = {k: v for k, v in res.items() if k in FIELDS}
     row.update(engine=engine, lights=n, variant=variant, shafts=VARIANTS[variant][1], status=status,
                log_errors=len(errors), process_s=wall, process_cpu_s=cpu, load_avg_start=load0,
@@ -372,10 +379,10 @@ def print_table(rows):
 def main(argv=None):
     ap = cost_cli.parser(__doc__, SAMPLES, RESOLUTION, EEVEE_RESOLUTION, REPEATS, CSV, PNG)
     ap.add_argument("--lights", default=",".join(map(str, LIGHTS)))
-    ap.add_argument("--variants", default="shafts,noshafts")
+    ap.add_argument("--variants", default=smoke.pick("shafts,noshafts", "shafts"))
     ap.add_argument("--engines", default="cycles")
     ap.add_argument("--budget", type=float, default=BUDGET_S, help="seconds per worker")
-    ap.add_argument("--profile-from", type=int, default=64, help="profile apply() from this many lamps")
+    ap.add_argument("--profile-from", type=int, default=smoke.pick(64, 1), help="profile apply() from this many lamps")
     args = ap.parse_args(argv)
     code = cost_cli.dispatch(args, worker, read_csv, chart, print_table, KEPT)
     if code is not None:

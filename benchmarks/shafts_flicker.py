@@ -10,10 +10,10 @@ keyed before the fog is added so its windows cover the move.  Each worker (this 
 the frames with shafts on, then off, in one process.  Per pixel and pair of frames: |b - a| / max(a, b, floor),
 floor 1 % of the frame's mean (dark pixels' noise is no flicker); its mean, p99 and max over the picture.  Below
 144 px on the shorter side the shafts' shares are at full resolution, from 144 at half, from 288 at a quarter
-(``comp_fog._halved``), so the resolutions show each.
+(``comp_shafts.halved``), so the resolutions show each.
 
 Outputs: benchmarks/out/shafts_flicker.csv (one row per resolution and shafts on/off); figures and their reading:
-docs/measurements/2026-11-26-shafts-cost.md.
+docs/measurements/2026-11-26-shafts-cost.md.  Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): 16x8 px, 1 sample, 2 frames.
 """
 import argparse
 import json
@@ -26,7 +26,9 @@ import tempfile
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-OUT = ROOT / "benchmarks" / "out" / "shafts_flicker.csv"
+import smoke  # noqa: E402
+
+OUT = smoke.out(ROOT / "benchmarks" / "out" / "shafts_flicker.csv")
 SCENE, DENSITY = "shaft_wall", 0.1
 FLOOR = 0.01   # of the frame's mean: the change of a pixel darker than this counts against this
 
@@ -82,9 +84,9 @@ def worker(spec):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--resolutions", default="192x108,512x288,640x360")
-    ap.add_argument("--samples", type=int, default=16)
-    ap.add_argument("--frames", type=int, default=8)
+    ap.add_argument("--resolutions", default=smoke.pick("192x108,512x288,640x360", "16x8"))
+    ap.add_argument("--samples", type=int, default=smoke.pick(16, 1))
+    ap.add_argument("--frames", type=int, default=smoke.pick(8, 2))
     ap.add_argument("--step", type=float, default=0.036, help="m the camera moves a frame")
     ap.add_argument("--out", type=pathlib.Path, default=OUT)
     ap.add_argument("--worker")
@@ -99,6 +101,7 @@ def main(argv=None):
                 "step": args.step, "tmp": tempfile.mkdtemp(prefix="shafts_flicker_")}
         proc = subprocess.run([h.PYTHON, str(pathlib.Path(__file__).resolve()), "--worker", json.dumps(spec)],
                               cwd=str(ROOT), env=h._env(), capture_output=True, text=True, timeout=3600)
+        smoke.echo(proc.stdout, proc.stderr)
         lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("FLICKER_JSON ")]
         if proc.returncode != 0 or not lines:
             print(proc.stdout[-3000:], proc.stderr[-3000:])

@@ -11,7 +11,7 @@ The code under test is ``fog_addon/precompute/shafts.py``: ``lit_share`` with K 
 the numpy ops, a point light's 1024 x 512 map (``POINT_MAP``) baked here from closed-form ray casts against
 spheres and planes at the map's grid points (``point_map_directions``), stored float32 as the add-on's image.
 S_map is the mean of the 4 interleaved shares (shift (k + 0.5) / 4, k = 0..3: the 2 x 2 pattern of
-``shafts.offset``), as the compositor's filter (``comp_fog._interleave_mean``, SHAFT_TAPS) averages them.
+``shafts.offset``), as the compositor's filter (``comp_shafts._interleave_mean``, SHAFT_TAPS) averages them.
 
 Two references:
 
@@ -79,12 +79,13 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import csv_rows  # noqa: E402
+import smoke  # noqa: E402
 from fog_addon.precompute import shafts  # noqa: E402
 from fog_addon.precompute.ops import NumpyOps  # noqa: E402
 from fog_addon.precompute.tables import TableSpec  # noqa: E402
 from fog_scenes.occluders import sphere_hit  # noqa: E402
 
-OUT = ROOT / "benchmarks" / "out"
+OUT = smoke.out(ROOT / "benchmarks" / "out")
 KEPT = ROOT / "docs" / "measurements" / "data" / "shafts_stability_2026-11-27.csv"
 WIDTH, HEIGHT = shafts.POINT_MAP
 CELL = 2.0 * math.pi / (WIDTH - 1)     # rad: one cell of the map
@@ -95,22 +96,22 @@ LIGHT = np.array([0.3, -0.2, 3.0])
 I0, J0 = 700, 255                      # the grid point the scenes face (latitude -0.003 rad)
 SPEC = TableSpec("shadow", WIDTH, HEIGHT)
 
-SIZES = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)      # cells across
-DISTANCES = (0.5, 2.0, 8.0, 32.0)            # m, light to the occluder's centre
+SIZES = smoke.pick((0.25, 0.5, 1.0, 2.0, 4.0, 8.0), (0.5, 4.0))      # cells across
+DISTANCES = smoke.pick((0.5, 2.0, 8.0, 32.0), (2.0,))   # m, light to the occluder's centre
 BEHIND, WALL = 3.0, 5.0                      # m: the crossing behind the centre; the wall past the crossing
-CAMERAS = (4.0, 4.37, 4.71, 5.13)            # m, camera before the crossing
-ORIENTS = (0.0, 45.0, 90.0)                  # deg, the ray about the shadow's axis from the map's rows
-PHASES = [((i + 0.5) / 8, (j + 0.5) / 8) for j in range(8) for i in range(8)]   # sub-cell, part 1
-PHASES16 = [((i + 0.5) / 4, (j + 0.5) / 4) for j in range(4) for i in range(4)]  # part 2
+CAMERAS = smoke.pick((4.0, 4.37, 4.71, 5.13), (4.0,))   # m, camera before the crossing
+ORIENTS = smoke.pick((0.0, 45.0, 90.0), (45.0,))   # deg, the ray about the shadow's axis from the map's rows
+PHASES = smoke.pick([((i + 0.5) / 8, (j + 0.5) / 8) for j in range(8) for i in range(8)], [(0.5, 0.5)])   # sub-cell, part 1
+PHASES16 = smoke.pick([((i + 0.5) / 4, (j + 0.5) / 4) for j in range(4) for i in range(4)], [(0.5, 0.5)])  # part 2
 
-PSIS = (90.0, 60.0, 30.0, 15.0, 8.0, 4.0, 2.0, 1.0)   # deg, the ray to the shadow's surface
+PSIS = smoke.pick((90.0, 60.0, 30.0, 15.0, 8.0, 4.0, 2.0, 1.0), (90.0, 4.0))   # deg, the ray to the shadow's surface
 GRAZE_R, GRAZE_DIST, GRAZE_AT = 1.0, 4.0, 8.0         # m: sphere radius, its centre, the crossing
 GRAZE_CAMERA, GRAZE_END = 5.0, 3.0
 
-PLANE_DISTANCES = (0.5, 2.0, 8.0, 32.0)
-INCIDENCES = (0.0, 45.0, 75.0, 85.0)
-DELTAS = (1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3, 1.0, 3.0)   # m
-CONTACT_POINTS = 4000
+PLANE_DISTANCES = smoke.pick((0.5, 2.0, 8.0, 32.0), (2.0,))
+INCIDENCES = smoke.pick((0.0, 45.0, 75.0, 85.0), (0.0, 75.0))
+DELTAS = smoke.pick((1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3, 1.0, 3.0), (1e-3, 0.1))   # m
+CONTACT_POINTS = smoke.pick(4000, 200)
 
 FIELDS = ["part", "n_cells", "distance_m", "psi_deg", "chi", "incidence_deg", "delta_m", "side", "case", "dtype",
           "g", "samples", "s_exact", "s_ideal_mean", "s_map_mean", "err_mean", "err_max", "err_ideal_max",

@@ -78,6 +78,8 @@ highest spp s (independent seeds, error^2 = a (1/s + 1/S) for S gt spp).
 
 Outputs: benchmarks/out/speed_error.csv, benchmarks/out/speed_error_summary.csv,
 docs/figures/speed_error.png (one panel per scene, log time vs log error).
+Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): the street lamps at 8x4 px, ground truth 4 spp, path tracing
+at 1 and 2 spp, EEVEE's volumetrics (low, 1 sample), the Compositor at Quality final, outputs in the smoke folder.
 """
 import argparse
 import csv
@@ -98,17 +100,18 @@ import csv_rows
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))   # a script run by path: the repository root (fog_addon, fog_scenes)
 
+import smoke  # noqa: E402
 from fog_scenes import render_harness as h  # noqa: E402
 from fog_addon import cli, compare  # noqa: E402  (no bpy at import)
 
-OUT = ROOT / "benchmarks" / "out"
+OUT = smoke.out(ROOT / "benchmarks" / "out")
 CSV = OUT / "speed_error.csv"
 SUMMARY_CSV = OUT / "speed_error_summary.csv"
 DATA = ROOT / "docs" / "measurements" / "data"   # the committed CSVs (benchmarks/out is not tracked)
 READ_CSV = CSV if CSV.is_file() else DATA / CSV.name   # a run of one's own, else the committed rows
-PNG = ROOT / "docs" / "figures" / "speed_error.png"
+PNG = smoke.out(ROOT / "docs" / "figures" / "speed_error.png")
 
-SCENES = [("street_lamps", 0.08), ("spheres", 0.15)]   # (demo scene, fog density 1/m)
+SCENES = smoke.pick([("street_lamps", 0.08), ("spheres", 0.15)], [("street_lamps", 0.08)])   # (scene, 1/m)
 PATH_TRACED = "path_traced"
 EEVEE_VOLUMETRICS = "eevee_volumetrics"
 QUALITIES = ("draft", "final", "exact")   # `render --error`: the add-on's automatic model choice
@@ -132,6 +135,8 @@ EEVEE_VOLUMETRICS_SETTINGS = [
     ("high", dict(volumetric_tile_size='2', volumetric_samples=128, volumetric_shadow_samples=32,
                   taa_render_samples=16)),
 ]
+EEVEE_VOLUMETRICS_SETTINGS = smoke.pick(EEVEE_VOLUMETRICS_SETTINGS,
+                                        [("low", dict(EEVEE_VOLUMETRICS_SETTINGS[0][1], taa_render_samples=1))])
 EEVEE_VOLUME_START = 0.05   # m: the fog nearer the camera is < 0.1 % of any pixel's airlight here
 EEVEE_VOLUME_DEPTH = 7.0    # optical depth of the custom range's end (transmittance e^-7)
 EEVEE_VOLUMETRICS_COMMON = dict(use_volume_custom_range=True, volumetric_start=EEVEE_VOLUME_START,
@@ -143,7 +148,10 @@ SETTINGS = {
     # Quick: each METHODS line only at its highest spp (every Cycles render of the fog
     # re-syncs its shaders: seconds per render even at 48x27).
     "quick": dict(resolution=(48, 27), gt_samples=512, ladder=(1, 16, 64), repeats=1, max_spp_only=True),
+    # Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py), with Quality final and ``SMOKE_FAMILIES``.
+    "smoke": dict(resolution=(8, 4), gt_samples=4, ladder=(1, 2), repeats=1, max_spp_only=True),
 }
+SMOKE_FAMILIES = "path_traced,eevee_volumetrics,compositor/cycles"
 PT_SEED = 1   # the ground truth has the reference command's default seed, 0
 REPEAT_BUDGET_S = 20.0
 FIELDS = ["scene", "beta", "method", "engine", "setting", "spp", "render_s", "render_cpu_s", "setup_s",
@@ -309,6 +317,8 @@ def measure_case(case, scene, beta, blend, gt, cfg, scratch):
         spec["argv"] = (["render", str(blend), "--engine", engine, "--method", method.split("/")[0],
                          "--error", setting, "--pixel-centre"] + flags)
     proc, wall = run_worker(spec)
+    smoke.echo(proc.stdout, proc.stderr)
+    smoke.check(proc.returncode == 0, f"{scene} {method}/{engine}: exit {proc.returncode}")
     base = {"scene": scene, "beta": beta, "method": method, "engine": engine, "setting": setting,
             "process_s": wall, "load_avg": os.getloadavg()[0],
             "resolution": "{}x{}".format(*cfg["resolution"]), "gt_spp": cfg["gt_samples"]}
@@ -524,7 +534,7 @@ def replot(key):
     csv_rows.write(SUMMARY_CSV, summary, SUMMARY_FIELDS, digits=6)
     chart(rows, summary, cfg, key)
     print_summary(summary)
-    print(f"\nwrote {SUMMARY_CSV.relative_to(ROOT)}, {PNG.relative_to(ROOT)} from {READ_CSV.relative_to(ROOT)}")
+    print(f"\nwrote {SUMMARY_CSV}, {PNG} from {READ_CSV}")
     return 0
 
 
@@ -543,12 +553,12 @@ def main(argv=None):
     ap.add_argument("--scenes", help="comma-separated subset of " + ",".join(s for s, _ in SCENES))
     ap.add_argument("--ladder", type=_int_list, metavar="SPP,...", help="path-tracing spp (default "
                     + ",".join(map(str, SETTINGS["full"]["ladder"])) + ")")
-    ap.add_argument("--qualities", default=",".join(QUALITIES), help="comma-separated subset of "
+    ap.add_argument("--qualities", default=smoke.pick(",".join(QUALITIES), "final"), help="comma-separated subset of "
                     + ",".join(QUALITIES) + " (default all)")
     ap.add_argument("--time", choices=sorted(TIME_KEYS), default="cpu",
                     help="render time of the speed-ups and the chart: the process CPU time (default; with "
                          "--threads 1 the time on an idle core, robust to other load) or the wall time")
-    ap.add_argument("--methods", default=",".join(FAMILIES),
+    ap.add_argument("--methods", default=smoke.pick(",".join(FAMILIES), SMOKE_FAMILIES),
                     help="comma-separated subset of " + ",".join(FAMILIES) + " (default all)")
     ap.add_argument("--update", action="store_true",
                     help="keep the CSV's rows of the methods not run now (same resolution and ground truth)")
@@ -561,7 +571,7 @@ def main(argv=None):
     key = TIME_KEYS[args.time]
     if args.replot:
         return replot(key)
-    cfg = dict(SETTINGS["quick" if args.quick else "full"])
+    cfg = dict(SETTINGS["quick" if args.quick else smoke.pick("full", "smoke")])
     cfg["resolution"] = args.resolution or cfg["resolution"]
     cfg["repeats"] = args.repeats or cfg["repeats"]
     cfg["ladder"] = args.ladder or cfg["ladder"]
@@ -593,8 +603,7 @@ def main(argv=None):
     csv_rows.write(SUMMARY_CSV, summary, SUMMARY_FIELDS, digits=6)
     chart(rows, summary, cfg, key)
     print_summary(summary)
-    print(f"\nwrote {CSV.relative_to(ROOT)}, {SUMMARY_CSV.relative_to(ROOT)}, {PNG.relative_to(ROOT)} "
-          f"in {time.perf_counter() - t_start:.0f} s")
+    print(f"\nwrote {CSV}, {SUMMARY_CSV}, {PNG} in {time.perf_counter() - t_start:.0f} s")
     return 0
 
 

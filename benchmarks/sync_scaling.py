@@ -5,7 +5,7 @@
     .venv/bin/python benchmarks/sync_scaling.py --chart-only [--out CSV] [--chart PNG]
 
 Every fogged material inlines one copy of a light's node group per fog light
-(``nodes/groups.py``: about 450 nodes a light).  Before Cycles compiles a
+(``nodes/light_groups.py``: about 450 nodes a light).  Before Cycles compiles a
 material to SVM it simplifies the inlined graph, and its node deduplication
 (``ShaderGraph::deduplicate_nodes``, intern/cycles/scene/shader_graph.cpp)
 compares every node with every earlier node of the same type: a profile of
@@ -34,6 +34,9 @@ debug log on (fog_scenes/cycles_debug_log.py) and records:
 Outputs benchmarks/out/sync_scaling.csv and docs/figures/sync_scaling.png
 (sync time against lights and against materials, log-log, with the fitted
 exponent of sync time against lights over N >= 9).
+
+Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): 1 and 4 lights, 5 materials at 1 light, 4x2 px; a case not
+"ok" fails the run.
 """
 import argparse
 import csv
@@ -45,14 +48,16 @@ import sys
 import time
 
 import csv_rows
+import smoke
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-OUT = ROOT / "benchmarks" / "out"
+OUT = smoke.out(ROOT / "benchmarks" / "out")
 CSV = OUT / "sync_scaling.csv"
 DATA = ROOT / "docs" / "measurements" / "data"   # the committed CSVs (benchmarks/out is not tracked)
-PNG = ROOT / "docs" / "figures" / "sync_scaling.png"
+PNG = smoke.out(ROOT / "docs" / "figures" / "sync_scaling.png")
 BETA = 0.1
-RESOLUTION = (16, 9)
+RESOLUTION = smoke.pick((16, 9), (4, 2))
+MATERIAL_LIGHTS = smoke.pick(16, 1)   # the lights of the materials sweep
 FIELDS = ["lights", "materials", "status", "sync_s", "nofog_sync_s", "render_cpu_s", "nofog_render_cpu_s",
           "apply_cpu_s", "svm_nodes", "material_nodes", "note"]
 FIT_FROM = 9   # lights: the fit of sync time against lights uses N >= this
@@ -133,6 +138,7 @@ def run_case(n_lights, n_materials, budget, tmp):
                               env=dict(os.environ, TMPDIR=str(tmp)))
     except subprocess.TimeoutExpired:
         return dict(row, status="timeout", note=f"over the {budget:.0f} s budget")
+    smoke.echo(proc.stdout, proc.stderr)
     if proc.returncode or not result.exists():
         return dict(row, status="error", note=(proc.stderr or proc.stdout).strip().splitlines()[-1][:200])
     return dict(row, status="ok", **json.loads(result.read_text()))
@@ -164,14 +170,15 @@ def chart(rows, path):
     a.set_ylabel("Cycles sync time per render, s")
     a.legend()
     a.grid(True, which="both", alpha=0.3)
-    mats = sorted((r for r in ok if r["lights"] == 16), key=lambda r: r["materials"])
-    b.loglog([r["materials"] for r in mats], [r["sync_s"] for r in mats], "o-", label="with fog, 16 lights")
+    mats = sorted((r for r in ok if r["lights"] == MATERIAL_LIGHTS), key=lambda r: r["materials"])
+    b.loglog([r["materials"] for r in mats], [r["sync_s"] for r in mats], "o-",
+             label=f"with fog, {MATERIAL_LIGHTS} lights")
     b.loglog([r["materials"] for r in mats], [r["nofog_sync_s"] for r in mats], "s--", label="without fog")
     for ax in (a, b):
         ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     b.set_xlabel("materials")
     b.set_ylabel("Cycles sync time per render, s")
-    b.set_title("16 lights")
+    b.set_title(f"{MATERIAL_LIGHTS} lights")
     b.legend()
     b.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
@@ -181,8 +188,9 @@ def chart(rows, path):
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--lights", default="1,4,9,16,25,36,64")
-    p.add_argument("--materials", default="4,16,64", help="material counts at 16 lights")
+    p.add_argument("--lights", default=smoke.pick("1,4,9,16,25,36,64", "1,4"))
+    p.add_argument("--materials", default=smoke.pick("4,16,64", "5"),
+                   help=f"material counts at {MATERIAL_LIGHTS} lights")
     p.add_argument("--budget", type=float, default=600.0, help="seconds per case")
     p.add_argument("--out", type=pathlib.Path, default=CSV)
     p.add_argument("--chart", type=pathlib.Path, default=PNG)
@@ -197,12 +205,13 @@ def main(argv=None):
         return 0
     import tempfile
     cases = [(int(n), 4) for n in a.lights.split(",")]
-    cases += [(16, int(m)) for m in a.materials.split(",") if (16, int(m)) not in cases]
+    cases += [(MATERIAL_LIGHTS, int(m)) for m in a.materials.split(",") if (MATERIAL_LIGHTS, int(m)) not in cases]
     rows = []
     with tempfile.TemporaryDirectory(prefix="sync_scaling_") as tmp:
         for n, m in cases:
             row = run_case(n, m, a.budget, tmp)
             print(json.dumps(row), flush=True)
+            smoke.check(row["status"] == "ok", f"{n} lights, {m} materials: {row['status']}: {row.get('note')}")
             rows.append(row)
     csv_rows.write(a.out, rows, FIELDS, digits=4)
     k = fit_exponent(rows)

@@ -10,6 +10,8 @@ Each figure is one fresh process:
 * ``apply``: a typical test process: Blender (bpy) adds the fog with the node groups to a small scene
   (a sphere, a plane, a point light; ``apply.apply_fog``) and with the Compositor method, no render;
   the whole process's wall time, warm against off.
+
+Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): g 0 only, one repetition, the node groups only.
 """
 import json
 import os
@@ -19,7 +21,11 @@ import sys
 import tempfile
 import time
 
+import smoke
+
 ROOT = pathlib.Path(__file__).resolve().parents[1]
+ANISOTROPIES = smoke.pick((0.0, 0.85), (0.0,))
+APPLY_CASES = smoke.pick(((0.0, "nodes"), (0.85, "nodes"), (0.0, "compositor")), ((0.0, "nodes"),))   # (g, method)
 
 _TABLES = r"""
 import json, sys, time
@@ -56,13 +62,14 @@ def run(script, env, *args):
     r = subprocess.run([sys.executable, "-c", script, str(ROOT), *map(str, args)], capture_output=True, text=True,
                        env=env, timeout=900)
     wall = time.perf_counter() - t
+    smoke.echo(r.stdout, r.stderr)
     assert r.returncode == 0, r.stderr[-3000:]
     return dict(json.loads(r.stdout.strip().splitlines()[-1]), wall_s=wall)
 
 
-def main(repeats=3):
+def main(repeats=smoke.pick(3, 1)):
     rows = []
-    for g in (0.0, 0.85):
+    for g in ANISOTROPIES:
         for k in range(repeats):
             with tempfile.TemporaryDirectory() as d:
                 env = dict(os.environ, ANALYTIC_FOG_CACHE=d)
@@ -70,7 +77,7 @@ def main(repeats=3):
                 rows.append(("tables", g, "warm", run(_TABLES, env, g)))
             rows.append(("tables", g, "off", run(_TABLES, dict(os.environ, ANALYTIC_FOG_CACHE="off"), g)))
     with tempfile.TemporaryDirectory() as d:
-        for g, method in ((0.0, "nodes"), (0.85, "nodes"), (0.0, "compositor")):
+        for g, method in APPLY_CASES:
             env = dict(os.environ, ANALYTIC_FOG_CACHE=d)
             run(_APPLY, env, g, method)   # fills the cache
             for k in range(repeats):

@@ -1,6 +1,7 @@
 """Figure (issue 28, like Narasimhan et al. Fig. 11-12): a fog-free render with its distance pass, the same with
 ``weather`` (visibility 39 m and 13 m), and Cycles' path-traced fog of the scene (64 volume bounces), tone-mapped
-alike.  Writes docs/figures/2026-11-27-weather.png.  Run: .venv/bin/python benchmarks/weather_figure.py"""
+alike.  Writes docs/figures/2026-11-27-weather.png.  Run: .venv/bin/python benchmarks/weather_figure.py
+Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): the same, the figure in the smoke folder."""
 import pathlib
 import sys
 
@@ -8,6 +9,7 @@ import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+import smoke  # noqa: E402
 from fog_addon import imageio, weather  # noqa: E402
 
 REF = ROOT / "tests" / "references" / "glowing_sphere_d15_R0.15_L100_120x120"
@@ -38,7 +40,10 @@ def main():
         ax.set_title(title, fontsize=8)
         ax.axis("off")
     fig.tight_layout()
-    fig.savefig(ROOT / "docs" / "figures" / "2026-11-27-weather.png", dpi=100)
+    path = smoke.out(ROOT / "docs" / "figures" / "2026-11-27-weather.png")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=100)
+    print(f"wrote {path}")
 
 
 if __name__ == "__main__":

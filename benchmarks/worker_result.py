@@ -1,9 +1,12 @@
 """A benchmark's measurement in a fresh Blender process: the script run with ``--worker <spec as JSON>`` prints
-one line ``RESULT <json>``; ``run`` returns that dict (or None, printing the process's output tail)."""
+one line ``RESULT <json>``; ``run`` returns that dict (or None, printing the process's output tail; in smoke mode,
+benchmarks/smoke.py, a worker without a result stops the run and its whole output is shown)."""
 import json
 import pathlib
 import subprocess
 import sys
+
+import smoke
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -17,7 +20,10 @@ def run(script, spec):
     """``script --worker <spec>`` in a fresh process from the repository root: its RESULT dict, or None."""
     proc = subprocess.run([sys.executable, str(script), "--worker", json.dumps(spec)], capture_output=True,
                           text=True, cwd=str(ROOT))
+    smoke.echo(proc.stdout, proc.stderr)
     lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")]
+    smoke.check(proc.returncode == 0 and lines, f"{pathlib.Path(script).name} worker {spec} failed "
+                f"(exit {proc.returncode})")
     if not lines:
         print(proc.stdout[-2000:], proc.stderr[-2000:])
         return None

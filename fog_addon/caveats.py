@@ -7,12 +7,12 @@
   has fallen by e^-3: ``GLOW_OPTICAL_DEPTH`` / beta, at most the scene's size): only they get shadow maps,
   and ``shadow_notes`` says what their shafts don't do (or that there are none).
 * **Glass and mirrors.** In Cycles the node groups shade the fog along a ray's segments after a Glass BSDF or a
-  sharp mirror (``groups.specular_segment``); elsewhere a camera ray gets the fog of its first segment only
+  sharp mirror (``glass_tails.specular_segment``); elsewhere a camera ray gets the fog of its first segment only
   (``see_through`` names the materials, ``glass_note`` says which cases hold).
 """
 import numpy as np
 
-from .precompute import footprint, shafts as shafts_
+from .precompute import capabilities, footprint, shafts as shafts_
 
 GLOW_OPTICAL_DEPTH = 3.0   # beta x distance within which a light's glow is worth a shadow (e^-3 = 5 %)
 _SEE_THROUGH = ("ShaderNodeBsdfTransparent", "ShaderNodeBsdfGlass", "ShaderNodeBsdfRefraction",
@@ -41,7 +41,7 @@ SHARP = 1e-3   # a roughness at or below which a glossy or metallic surface is a
 
 def specular_paths(materials):
     """True if some of ``materials`` starts a path of sharp bounces the fog shades segment by segment in
-    Cycles (``groups._place_tails``): a Glass BSDF, or a mirror (a Glossy BSDF, or a Principled BSDF with
+    Cycles (``glass_tails.place_tails``): a Glass BSDF, or a mirror (a Glossy BSDF, or a Principled BSDF with
     metallic above 0, of roughness at most SHARP, unlinked).  Without one the Surface group holds no tails:
     they cost SVM stack in every material (out of stack space with 16 spots)."""
     for mat in materials:
@@ -111,7 +111,7 @@ def shadowing_lights(scene, lights, beta, reach_m):
     return {light.name: int(n) for light, n in zip(lights, counts) if n}
 
 
-def _names(names):
+def listed(names):
     names = sorted(names)
     return ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
 
@@ -125,24 +125,25 @@ def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None):
     if not found:
         return []
     if not shafts:
-        why = why_off or "the node groups and OSL have none: Method Compositor or Auto casts them"
+        why = why_off or (f"this method has none: {capabilities.suggestion('shafts', scene.render.engine)} "
+                          "casts them")
         return [f"light shafts are not modelled ({why}): objects cast no shadow into the fog, so the glow of "
-                f"{len(found)} light(s) ({_names(found)}) passes through the objects near them (a lamp's hood, "
+                f"{len(found)} light(s) ({listed(found)}) passes through the objects near them (a lamp's hood, "
                 "a wall, a window frame)"]
     notes = []
     areas = [o.name for o in lights if o.name in found and o.data.type == "AREA"]
     if areas:
-        notes.append(f"area lights cast no shafts yet: the glow of {_names(areas)} passes through the objects "
+        notes.append(f"area lights cast no shafts yet: the glow of {listed(areas)} passes through the objects "
                      "near them")
     shafted = [o for o in lights if o.name in found and o.data.type != "AREA"]
     soft = [o.name for o in shafted if getattr(o.data, "shadow_soft_size", 0.0) > 0.0]
     if soft:
-        notes.append(f"light shafts are sharp: the Radius of {_names(soft)} softens their shadows on surfaces "
+        notes.append(f"light shafts are sharp: the Radius of {listed(soft)} softens their shadows on surfaces "
                      "(Cycles) but not in the fog")
-    moving = [o.name for o in [*shafted, *shadow_casters(scene)] if _animated(o)]
+    moving = [o.name for o in [*shafted, *shadow_casters(scene)] if is_animated(o)]
     first, stride, count = shafts_.atlas_frames(scene.frame_start, scene.frame_end, scene.frame_step)
     if moving and stride > max(scene.frame_step, 1):   # (every rendered frame's map is baked and packed up to the cap)
-        notes.append(f"{_names(moving)} move over more than {shafts_.ATLAS_MAX_FRAMES} rendered frames: the shafts' "
+        notes.append(f"{listed(moving)} move over more than {shafts_.ATLAS_MAX_FRAMES} rendered frames: the shafts' "
                      f"shadow maps are baked for every {stride}th frame from {first} ({count} maps a light, packed in "
                      "the file), and the frames between take the latest of them")
     return notes
@@ -152,7 +153,7 @@ DENSE_T = 1.0   # optical distance camera to light from which the multiply scatt
 #                (docs/measurements/2026-11-27-apsf.md: it outweighs the single a few degrees out from T ~ 2)
 
 
-def multiple_notes(lights, multiple, method_name, is_spot, optical_distance=None):
+def multiple_notes(lights, multiple, method_name, is_spot, optical_distance=None, engine=capabilities.CYCLES):
     """Notes on the multiply scattered light (Dense Fog): what it leaves out with it on (spot and area lights
     with a method other than the compositor; the OSL method); with it off, the lights seen through dense fog
     (``optical_distance(light)``: beta times the camera's distance to it, at least DENSE_T), whose wide halo is
@@ -161,16 +162,17 @@ def multiple_notes(lights, multiple, method_name, is_spot, optical_distance=None
         dense = [o.name for o in lights if optical_distance is not None and optical_distance(o) >= DENSE_T]
         if not dense:
             return []
-        return [f"the fog is dense around {len(dense)} light(s) ({_names(dense)}; optical distance up to "
+        return [f"the fog is dense around {len(dense)} light(s) ({listed(dense)}; optical distance up to "
                 f"{max(optical_distance(o) for o in lights):.1f} from the camera) and multiple scattering is "
                 "off: their glow lacks its wide halo; turn on Dense Fog"]
-    if method_name == "osl":
-        return ["multiple scattering is not modelled by Method OSL (its glow is quadrature, the dense fog's a "
-                "table): use Node Groups, Compositor or Auto"]
-    shaped = [o.name for o in lights if is_spot(o)] if method_name != "compositor" else []
+    if not capabilities.can(method_name, "dense_point", engine):
+        return [f"multiple scattering is not modelled by Method {capabilities.LABELS[method_name]} (its glow is "
+                f"quadrature, the dense fog's a table): use {capabilities.suggestion('dense_point', engine)}"]
+    shaped = [] if capabilities.can(method_name, "dense_shaped", engine) else [o.name for o in lights if is_spot(o)]
     if shaped:
-        return [f"the multiply scattered light of {len(shaped)} spot or area light(s) ({_names(shaped)}) is "
-                "modelled by Method Compositor (or Auto): with this method it is single scattering"]
+        return [f"the multiply scattered light of {len(shaped)} spot or area light(s) ({listed(shaped)}) is "
+                f"modelled by {capabilities.suggestion('dense_shaped', engine)}: with this method it is single "
+                "scattering"]
     return []
 
 
@@ -181,13 +183,13 @@ def glow_notes(glowing, method_name, engine="CYCLES"):
     the fog (Cycles dims it in the materials: ``material._dim_emitted_light``)."""
     if not glowing:
         return []
-    names = _names([o.name for o in glowing])
+    names = listed([o.name for o in glowing])
     notes = [f"glowing objects ({names}): the light they scatter in the fog does not light other surfaces"]
     if engine != "CYCLES":
         notes.append(f"glowing objects ({names}): in EEVEE their light on other surfaces is not dimmed by the fog")
-    if method_name != "compositor":
-        notes.insert(0, f"glowing objects ({names}) have no glow in the fog with this method: Method Compositor "
-                        "(or Auto) gives them one")
+    if not capabilities.can(method_name, "emitters", engine):
+        notes.insert(0, f"glowing objects ({names}) have no glow in the fog with this method: "
+                        f"{capabilities.suggestion('emitters', engine)} gives them one")
     return notes
 
 
@@ -199,7 +201,7 @@ def shadow_casters(scene):
     return [o for o in scene.objects if o.type in CASTER_TYPES and not o.hide_render and o.visible_shadow]
 
 
-def _animated(obj):
+def is_animated(obj):
     """True if ``obj`` (or an object it hangs from) has an action, drivers or constraints."""
     while obj is not None:
         ad = obj.animation_data
@@ -234,6 +236,7 @@ def clip_note(scene, method_name):
     ratio = cam.data.clip_end / max(cam.data.clip_start, 1e-12)
     if ratio <= EEVEE_CLIP_RATIO:
         return None
-    where = " and the fog's light (NaN where its depth fails)" if method_name == "compositor" else ""
+    depth = capabilities.can(method_name, "depth_pass", scene.render.engine)
+    where = " and the fog's light (NaN where its depth fails)" if depth else ""
     return (f"{cam.name}: its clip end is {ratio:.2g} x its clip start: EEVEE's depth fails beyond "
             f"{EEVEE_CLIP_RATIO:.0e} (a black World{where}); raise Clip Start")

@@ -4,7 +4,7 @@ and fog appended from another file is folded onto this file's shared copies.
 Only the two scene groups are rebuilt (``apply.refresh_lights``), never the
 materials.  Positions, power and colour are followed by drivers without it.
 When the camera, lights or objects moved, the lights' models are chosen again
-for the Quality (``apply.choose_models``), RECHOOSE_DELAY_S after the scene
+for the Quality (``ops/plan.choose_models``), RECHOOSE_DELAY_S after the scene
 stopped changing (not while rendering: a render keeps the stored choice, as a
 farm without the add-on does).  The Compositor method's windows (``view.windows``) grow at once by the
 current frame's (and by each frame an animation plays or renders); they are computed over an animation's
@@ -13,6 +13,7 @@ range again before the file is saved.
 import bpy
 from bpy.app.handlers import persistent
 
+from .methods import compositor as compositor_method
 from .nodes import comp_fog, dedupe
 from . import view
 from .ops import apply
@@ -93,8 +94,7 @@ def on_save_pre(*_):
     if settings is not None and settings.enabled and comp_fog.windows_partial():
         apply.refresh_lights(scene)
     if settings is not None and settings.enabled:
-        from .methods import compositor as compositor_method
-        compositor_method.complete_shadows(scene)
+        compositor_method.complete_shadows(scene, apply.usable_spec(scene))
 
 
 def register():

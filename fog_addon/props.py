@@ -1,13 +1,13 @@
 """The fog's settings: ``scene.analytic_fog`` and each light's ``light.analytic_fog``.
 
-These properties are the one store of the fog's settings: ``apply.spec_of`` reads them as a validated
+These properties are the one store of the fog's settings: ``spec_of`` reads them as a validated
 ``precompute.spec.FogSpec``, and everything that decides reads that.  Changing a setting while the fog is on
 schedules a sync (``schedule_sync``): the shared node groups follow (the viewport too); materials are never
 rebuilt for it.  A sync that fails keeps the fog as it was, and the panel says why.
 
 The properties have soft limits only (the sliders' range): a value typed beyond them reaches the spec's
 validation (``FogSpec.validated``), which refuses it with the message the operator gives for the same value,
-shown in the panel (``apply.sync_error``, and ``settings_error`` before the fog is added).  Hard limits would
+shown in the panel (``ops/sync.sync_error``, and ``settings_error`` before the fog is added).  Hard limits would
 clamp it in silence.
 """
 import contextlib
@@ -15,6 +15,7 @@ import contextlib
 import bpy
 
 from .precompute import predict, presets, tables
+from .precompute.spec import FogSpec
 
 
 _quiet = []   # non-empty while the add-on itself writes the settings (``quiet``): no sync for those writes
@@ -25,7 +26,7 @@ _sync = []   # the sync functions (``set_sync``): in line, and with a window
 
 
 def set_sync(fn, windowed=None):
-    """``fn(scene, level)`` makes the fog follow the settings (``ops/apply.py`` sets it when imported);
+    """``fn(scene, level)`` makes the fog follow the settings (``ops/sync.py`` sets it when imported);
     ``windowed(scene, level)`` does it from the timer of a session with a window (``ops``: Dense Fog's missing
     tables are baked first by the cancellable ``fog.bake_tables``).  Default: ``fn``."""
     _sync[:] = [fn, windowed or fn]
@@ -33,7 +34,7 @@ def set_sync(fn, windowed=None):
 
 @contextlib.contextmanager
 def quiet():
-    """Write settings without scheduling a sync (``apply.store_spec``: the fog is being built from them)."""
+    """Write settings without scheduling a sync (``store_spec``: the fog is being built from them)."""
     _quiet.append(True)
     try:
         yield
@@ -42,12 +43,12 @@ def quiet():
 
 
 def schedule_sync(scene, level):
-    """A setting changed: the fog follows it (``apply.sync``) once the change is done.
+    """A setting changed: the fog follows it (``ops/sync.sync``) once the change is done.
 
     With a user interface, a timer runs the sync after the callback returns (several changes at once, such
     as a preset's, sync once, at the highest level asked for); a background process (scripts, the command
     line, farms) has no event loop to run timers, so it syncs at once.  A failed sync keeps the fog as it
-    was built, and the panel says why (``apply.sync_error``)."""
+    was built, and the panel says why (``ops/sync.sync_error``)."""
     if _quiet or not scene.analytic_fog.enabled or not _sync:
         return
     if bpy.app.background:
@@ -58,7 +59,7 @@ def schedule_sync(scene, level):
 
 def request_sync(scene, level):
     """Queue a sync of ``scene`` at ``level`` for the timer (the highest level asked for wins): a setting's change,
-    or the depsgraph handler's build that found Dense Fog tables missing (``apply.TablesMissing``: the timer's
+    or the depsgraph handler's build that found Dense Fog tables missing (``ops/build.TablesMissing``: the timer's
     sync bakes them first, cancellable)."""
     old = _pending.get(scene.name)
     _pending[scene.name] = level if old is None or SYNC_LEVELS.index(level) > SYNC_LEVELS.index(old) else old
@@ -226,6 +227,22 @@ def ensure_registered():
     file's ``scene.analytic_fog`` and ``light.analytic_fog`` as bare ID properties that nothing reads."""
     if not hasattr(bpy.types.Scene, "analytic_fog") or not hasattr(bpy.types.Light, "analytic_fog"):
         register()
+
+
+def spec_of(scene):
+    """The scene's fog settings as a validated ``FogSpec`` (``scene.analytic_fog``); raises ValueError."""
+    ensure_registered()
+    return FogSpec.from_settings(scene.analytic_fog)
+
+
+def store_spec(scene, spec):
+    """Write ``spec`` into ``scene.analytic_fog`` (the one store of the fog's settings), without its callbacks."""
+    ensure_registered()
+    settings = scene.analytic_fog
+    with quiet():
+        for key, value in spec.settings_values().items():
+            if key == "color" or getattr(settings, key) != value:
+                setattr(settings, key, value)
 
 
 def register():

@@ -10,10 +10,10 @@ import time
 
 from . import measure, props
 from .ops import apply, progress
+from .precompute import capabilities
 from .precompute.spec import FogSpec
 
 DEFAULT_SAMPLES = {"CYCLES": 16, "BLENDER_EEVEE": 16}
-CYCLES_ONLY = {"osl": "EEVEE cannot run OSL"}
 EEVEE_LIGHT_THRESHOLD = 1e-4   # EEVEE's default 0.01 windows point lights (ratio 0.92 at 4.5 m for 100 W)
 
 
@@ -56,12 +56,13 @@ def fog_settings(scene, args):
     if spec.fog_top is None and any(flags[k] is not None for k in ("height_falloff", "ground_level", "air")):
         notes.append(("fog top", "the fog fills all space, so the height falloff, the ground level and the air "
                                  "change nothing: give --fog-top for a fog layer"))
-    if spec.method in CYCLES_ONLY and args.engine_id != "CYCLES":
+    if spec.method != "auto" and not capabilities.runs(spec.method, args.engine_id):
+        runs_in = " or ".join(capabilities.engines_of(spec.method))
         if source["method"] == "flag":
-            raise SystemExit(f"error: --method {spec.method} needs --engine cycles ({CYCLES_ONLY[spec.method]}); "
-                             "use --method nodes or auto")
-        notes.append(("method", f"the file's method is {spec.method}, which needs Cycles "
-                                f"({CYCLES_ONLY[spec.method]}): rendering with the node groups"))
+            raise SystemExit(f"error: --method {spec.method} needs --engine {runs_in.lower()} (it renders in "
+                             f"{runs_in} only); use --method nodes or auto")
+        notes.append(("method", f"the file's method is {spec.method}, which renders in {runs_in} only: rendering "
+                                "with the node groups"))
         spec = spec.replace(method="nodes")
     objects = None
     if s.selected_only:

@@ -14,7 +14,7 @@ atlas of its maps at every frame an animation renders (``shafts.atlas_frames``: 
 frame_step, every k-th of those beyond ``shafts.ATLAS_MAX_FRAMES``), four frames a texel in R, G, B and A, at
 ``shafts.ANIMATED_POINT_MAP`` (``ANIMATED_SPOT_MAP``) grid points a frame (``Atlas``).  The compositor picks the
 frame's map with a simple-expression driver on the frame (``shafts.ATLAS_TILE``: no Python at render time, so a
-farm without the add-on renders every frame's shafts; ``comp_fog._atlas_tile``).  A moving spot's maps all lie in
+farm without the add-on renders every frame's shafts; ``comp_shafts.atlas_tile``).  A moving spot's maps all lie in
 one frame that holds the cones of all its poses (``shafts.spot_union``; else a point light's map of the whole
 sphere), and its shafts take its cone from the drivers of its glow.  In the add-on the frame handler bakes the
 frame's map again where the light or the casters changed since (``follow_frame``) and the file's save bakes and
@@ -38,12 +38,11 @@ import numpy as np
 from mathutils import Vector
 from mathutils.bvhtree import BVHTree
 
-from . import caveats
-from .nodes import owned
+from . import caveats, view
 from .precompute import footprint, shafts
 from .precompute.tables import TableSpec
 
-IMAGE_PREFIX = f"{owned.PREFIX} Shadow "   # a light's map: "<IMAGE_PREFIX><light name>"
+IMAGE_PREFIX = "AnalyticFog Shadow "   # a light's map: "<IMAGE_PREFIX><light name>" (``nodes/owned.PREFIX``)
 KEY = "analytic_fog_shadow_key"            # on the image: what the map was baked from (``ShadowMap.key``)
 # on an animation's atlas (``Atlas``): its layout [first frame, stride, tiles, columns, rows, width, height] (the
 # compositor's drivers read it), what it was laid out for (``_layout``), each baked frame's key, and whether a frame's
@@ -175,7 +174,7 @@ class SunShadow(NamedTuple):
     frame: shafts.SunFrame
 
 
-SUN_IMAGE = f"{owned.PREFIX} Sun Shadow"   # the sun's map (one sun shines through a fog layer)
+SUN_IMAGE = "AnalyticFog Sun Shadow"   # the sun's map (one sun shines through a fog layer)
 
 
 def sun_shadow(scene, sun, region):
@@ -298,11 +297,11 @@ def _store(spec, depth, version):
 
 def moving_lights(scene, lights):
     """The ``lights`` whose maps change over the animation: all of them where a shadow caster is animated
-    (``caveats._animated``: an action, drivers or constraints on it or on what it hangs from), else those animated
+    (``caveats.is_animated``: an action, drivers or constraints on it or on what it hangs from), else those animated
     themselves."""
-    if any(caveats._animated(o) for o in caveats.shadow_casters(scene)):
+    if any(caveats.is_animated(o) for o in caveats.shadow_casters(scene)):
         return list(lights)
-    return [o for o in lights if caveats._animated(o)]
+    return [o for o in lights if caveats.is_animated(o)]
 
 
 def frames_of(scene):
@@ -353,7 +352,6 @@ def ensure_atlases(scene, lights, only_stale=False, lazy=False):
     rebuild from the depsgraph handler, which must not step through frames): an atlas laid out for this range is
     taken as it is; a new one gets the map of the current frame only (a spot's over the whole sphere), STALE: the
     frame handler bakes each frame's as it is shown (``follow_frame``), the file's save all of them (``complete``)."""
-    from . import view
     frames = frames_of(scene)
     if only_stale:
         lights = [o for o in lights if _needs_baking(o, frames)]
@@ -371,7 +369,7 @@ def ensure_atlases(scene, lights, only_stale=False, lazy=False):
                 unions[o.name] = (tuple(tuple(v) for v in layout[2][0]), layout[2][1])
     elif spots:   # first the spots' poses: where their maps lie
         poses = {o.name: [] for o in spots}
-        for _ in view._at_frames(scene, frame_list):
+        for _ in view.at_frames(scene, frame_list):
             for o in spots:
                 poses[o.name].append(shafts.spot_frame(np.asarray(o.matrix_world)[:3, :3]))
         unions = {o.name: shafts.spot_union(poses[o.name], math.cos(0.5 * o.data.spot_size)) for o in spots}
@@ -397,7 +395,7 @@ def ensure_atlases(scene, lights, only_stale=False, lazy=False):
             else:
                 plan["stale"] = bool(bpy.data.images[IMAGE_PREFIX + plan["light"].name].get(STALE))
         return _store_atlases(plans, frames, dedupe=False)
-    for t, (_, depsgraph) in enumerate(view._at_frames(scene, frame_list)):
+    for t, (_, depsgraph) in enumerate(view.at_frames(scene, frame_list)):
         geometry = scene_bvh(scene, depsgraph)
         for plan in plans:
             version = key(plan["light"], geometry)

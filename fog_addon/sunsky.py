@@ -14,8 +14,8 @@ import math
 import bpy
 import numpy as np
 
-from .nodes import comp_fog
-from .precompute import sunlight
+from .nodes import comp_ops
+from .precompute import capabilities, sunlight
 
 SUN_KEY_DIGITS = 4   # the sun's direction enters the built groups' signature at this precision (the map is baked)
 
@@ -159,8 +159,7 @@ def holds_air(world):
 
 def world_sky_spec():
     """The TableSpec of the World's radiance table (``world_sky_table``)."""
-    from .precompute import tables
-    return tables.TableSpec(sunlight.SKY_TABLE, sunlight.SKY_COLUMNS, sunlight.SKY_ROWS, channels=4)
+    return sunlight.sky_spec()
 
 
 def world_sky_table(scene, spec):
@@ -281,8 +280,7 @@ def fog_light_table(scene, spec):
     images.update(world_sky_table(scene, spec)[1])            # (and the World's own sky, where it holds its air)
     for channel in channels:   # with air one map per colour channel, both species' light, the albedos in it
         table = sunlight.table_spec(beta, top, falloff, direction, spec.anisotropy, channel)
-        images[table.name] = images_.table_image(table, functools.partial(
-            sunlight.bake_fog_light, beta, top, falloff, direction, spec.anisotropy, channel))   # disk-cached baker
+        images[table.name] = images_.table_image(table)   # (its kind's baker, through the disk cache)
         tables_.append(table)
     return (tables_[0] if air is None else tuple(tables_)), images
 
@@ -293,10 +291,10 @@ def uses_glow_table(scene, spec):
     a camera and a sun that are not animated (a frame of a farm's render would read another frame's table: those
     scenes keep the kernels, which follow every frame)."""
     from . import caveats
-    if not is_daylit(scene, spec) or scene.camera is None or caveats._animated(scene.camera):
+    if not is_daylit(scene, spec) or scene.camera is None or caveats.is_animated(scene.camera):
         return False
     suns = scene_suns(scene)
-    return not (suns and caveats._animated(suns[0]))
+    return not (suns and caveats.is_animated(suns[0]))
 
 
 def _glow_bake_args(scene, spec):
@@ -393,10 +391,10 @@ def _shaft_note(scene, spec, method_name):
     casters = caveats.shadow_casters(scene)
     if not casters:
         return "nothing casts a shadow: no shafts in the fog"
-    if method_name != "compositor":
-        return (f"with {method_name} its shadows fall on surfaces but cast no shafts into the fog: the Compositor "
-                "method (Auto's choice in daylight) casts them")
-    moving = [o.name for o in [scene.camera, *casters] if caveats._animated(o)]
+    if not capabilities.can(method_name, "shafts", scene.render.engine):
+        return (f"with {method_name} its shadows fall on surfaces but cast no shafts into the fog: "
+                f"{capabilities.suggestion('shafts', scene.render.engine)} casts them")
+    moving = [o.name for o in [scene.camera, *casters] if caveats.is_animated(o)]
     said = ("its shafts in the fog come from a map of the scene's shadows baked at Update Fog around the camera's "
             "view; the sky's light in the fog and on surfaces is not shadowed by the buildings, nor the air's glow")
     if moving:
@@ -445,9 +443,9 @@ def _sky(m, scene, in_world):
             node.inputs[i].default_value = c
         return m.wrap(node.outputs[0], vector=True)
     path = f'nodes["{bg.name}"].inputs'
-    return comp_fog._vector(m, "Sky Radiance", ["c*s"] * 3,
-                            lambda i: [("c", world, f'node_tree.{path}["Color"].default_value[{i}]'),
-                                       ("s", world, f'node_tree.{path}["Strength"].default_value')])
+    return comp_ops.driven_vector(m, "Sky Radiance", ["c*s"] * 3,
+                                  lambda i: [("c", world, f'node_tree.{path}["Color"].default_value[{i}]'),
+                                             ("s", world, f'node_tree.{path}["Strength"].default_value')])
 
 
 def background_animated(world):
@@ -496,10 +494,11 @@ def daylight(m, scene, spec, beta, albedo=1.0, in_world=False):
     suns = scene_suns(scene)
     if suns:
         sun = suns[0]
-        direction = comp_fog._vector(m, "Sun Direction", ["x"] * 3, lambda i: [("x", sun, f"matrix_world[2][{i}]")])
+        direction = comp_ops.driven_vector(m, "Sun Direction", ["x"] * 3,
+                                           lambda i: [("x", sun, f"matrix_world[2][{i}]")])
         direction = m.scale(direction, 1.0 / m.length(direction))
-        irradiance = comp_fog._vector(m, "Sun Irradiance", ["e*c"] * 3,
-                                      lambda i: [("e", sun.data, "energy"), ("c", sun.data, f"color[{i}]")])
+        irradiance = comp_ops.driven_vector(m, "Sun Irradiance", ["e*c"] * 3,
+                                            lambda i: [("e", sun.data, "energy"), ("c", sun.data, f"color[{i}]")])
     else:
         direction, irradiance = m.wrap((0.0, 0.0, 1.0)), m.wrap((0.0, 0.0, 0.0))
     sky = _sky(m, scene, in_world)
@@ -511,7 +510,7 @@ def daylight(m, scene, spec, beta, albedo=1.0, in_world=False):
         world_sky = world_sky_spec()   # (baked by ``fog_light_table`` with the groups' other tables)
     return sunlight.Daylight(beta, top, falloff, ground, direction, irradiance, sky, spec.anisotropy, albedo,
                              None if air is None else tuple(air[0]), 0.0 if air is None else air[1], table, world_sky,
-                             grey_air=not isinstance(m, comp_fog.CompOps))
+                             grey_air=not isinstance(m, comp_ops.CompOps))
 
 
 def notes(scene, spec, method_name, lamps=()):
@@ -537,36 +536,38 @@ def notes(scene, spec, method_name, lamps=()):
                            "glow fades to it (a pixel of sky shows it as it is, dimmed only by the fog layer), and the "
                            "Sun light is taken as the sun at the ground, already through the air; a haze layer adds its "
                            "own glow on top (a Sky Texture's aerosol density is haze of its own)"))
-    if spec.air_per_unit() is not None and method_name != "compositor" and is_daylit(scene, spec):
+    engine = scene.render.engine
+    if spec.air_per_unit() is not None and not capabilities.can(method_name, "air_colour", engine) and is_daylit(scene, spec):
         out.append(("Air", f"with {method_name} the air dims surfaces by the mean of its colour (a shader's factor "
-                           "is one number): the distance greys but does not blue; the Compositor method (Auto's "
-                           "choice) gives its colour"))
-    if method_name != "compositor" and is_daylit(scene, spec):
+                           f"is one number): the distance greys but does not blue; "
+                           f"{capabilities.suggestion('air_colour', engine)} gives its colour"))
+    if not capabilities.can(method_name, "daylight_once", engine) and is_daylit(scene, spec):
         out.append(("Daylight", f"with {method_name} the sun's and the sky's glow and fog light are evaluated on "
-                                "every sample (3-8x the fog-free render in a city); the Compositor method (Auto's "
-                                "choice) does them once per pixel"))
-    if method_name != "compositor" and uses_glow_table(scene, spec) and background_animated(scene.world):
+                                "every sample (3-8x the fog-free render in a city); "
+                                f"{capabilities.suggestion('daylight_once', engine)} does them once per pixel"))
+    if not capabilities.can(method_name, "animated_sky", engine) and uses_glow_table(scene, spec) and background_animated(
+            scene.world):
         out.append((scene.world.name, "its Background is animated: the sky's glow where the sky is seen keeps its "
                                       "colour of the last fog update on every frame (on surfaces it follows); the "
-                                      "Compositor method (Auto's choice) follows it everywhere"))
+                                      f"{capabilities.suggestion('animated_sky', engine)} follows it everywhere"))
     if suns:
         from . import caveats
         sun = suns[0]
         out.append((sun.name, "its light on surfaces and the sky's are dimmed by one factor weighted by the two "
                               "(lamps' light on the same surfaces is dimmed by it too)"))
         out.append((sun.name, _shaft_note(scene, spec, method_name)))
-        if caveats._animated(sun):
+        if caveats.is_animated(sun):
             out.append((sun.name, "is animated: its fog light on surfaces is baked for the sun's direction when "
                                   "the fog was last updated (its glow and dimming follow every frame)"))
     if lamps and not suns and any(c > 0.0 for c in sky_colour(scene.world)[0]):
         out.append(("Fog Top", "with lamps and no sun the sky's light on surfaces is not dimmed by the layer "
                                "(one factor would dim the lamps' light too)"))
-    if lamps and method_name == "compositor":
+    if lamps and capabilities.can(method_name, "layer_ends", engine):
         out.append(("Fog Top", f"the lamps' glows ({len(lamps)}) end at the layer's top (with a falloff, one falloff "
                                "length above it); their fog light on surfaces is that of fog everywhere"))
     elif lamps:
         out.append(("Fog Top", f"with {method_name} the lamps' glows ({len(lamps)}) take the layer's density "
                                "everywhere, also above its top: a lamp within a few of its heights of the top glows "
-                               "too bright on rays that pass above it (tens of per cent to several times); the "
-                               "Compositor method (Auto's choice) ends them at the top"))
+                               "too bright on rays that pass above it (tens of per cent to several times); "
+                               f"{capabilities.suggestion('layer_ends', engine)} ends them at the top"))
     return out

@@ -3,7 +3,7 @@ import bpy
 
 from .methods.node_groups import MANY_LIGHTS
 from .ops import FOG_MT_presets, apply
-from .precompute import rungs
+from .precompute import capabilities, rungs
 
 ENGINE_NOTES = {
     "AUTO": "Auto: Node Groups or Compositor, per scene",
@@ -87,11 +87,12 @@ def draw_fog(layout, context):
     col.prop(s, "visibility")
     col.prop(s, "density")
     col.prop(s, "color")
+    col.prop(s, "anisotropy")
     col.prop(s, "scene_scale")
     _draw_layer(col, s)
     col.prop(s, "method")
     col.label(text=ENGINE_NOTES[s.method], icon="INFO")
-    if s.method == "OSL" and scene.render.engine != "CYCLES":
+    if s.method != "AUTO" and not capabilities.runs(s.method.lower(), scene.render.engine):
         col.label(text=f"Switch the render engine to Cycles to see {s.method.title()} fog", icon="ERROR")
     col.prop(s, "selected_only")
     row = col.row()
@@ -116,7 +117,8 @@ def draw_fog(layout, context):
         box.label(text=rest, icon="BLANK1")
     lights, notes = apply.fog_lights(scene)
     layout.label(text=f"{len(lights)} light(s) light the fog", icon="LIGHT_POINT")
-    if len(lights) >= MANY_LIGHTS and s.method in ("NODES", "OSL"):
+    if (len(lights) >= MANY_LIGHTS and s.method != "AUTO"
+            and not capabilities.can(s.method.lower(), "per_pixel_lights", scene.render.engine)):
         layout.label(text="With this many lights the Compositor method renders far faster", icon="INFO")
     for name, why in notes:
         layout.label(text=f"{name}: {why}", icon="ERROR")

@@ -17,7 +17,6 @@ import bpy
 import numpy as np
 from mathutils.bvhtree import BVHTree
 
-from .nodes import graph, owned
 from .precompute import area, footprint, predict, surface, tables
 
 MAX_SAMPLES = 160 * 90          # rays per frame at most: one per pixel centre up to this, else a coarser grid
@@ -44,7 +43,7 @@ def _frame_set(scene, frame, subframe=0.0):
         _sampling.pop()
 
 
-def _at_frames(scene, frames):
+def at_frames(scene, frames):
     """Yield (frame, evaluated depsgraph) at each of ``frames``, the scene's frame restored afterwards."""
     current = scene.frame_current, scene.frame_subframe
     try:
@@ -242,6 +241,15 @@ def _sample_frame(scene, depsgraph, lights, grid):
     return origin, rows, light_pos, inverse
 
 
+def scene_size(scene):
+    """Largest distance (m in scene units) from the camera to an object origin: the depth fog must cross."""
+    cam = scene.camera
+    if cam is None:
+        return 0.0
+    c = cam.matrix_world.translation
+    return max(((o.matrix_world.translation - c).length for o in scene.objects if o is not cam), default=0.0)
+
+
 def render_size(scene):
     """(width, height) of the render in pixels (its resolution times its percentage)."""
     r = scene.render
@@ -265,7 +273,7 @@ def view_samples(scene, lights, frames=None, grid=None):
     frames = sample_frames(scene) if frames is None else frames
     grid = sample_grid(scene) if grid is None else grid
     cams, dirs, dists, normals, rds, rss, levels, lps, invs, fr = [], [], [], [], [], [], [], [], [], []
-    for f, depsgraph in _at_frames(scene, frames):
+    for f, depsgraph in at_frames(scene, frames):
         origin, rows, light_pos, inverse = _sample_frame(scene, depsgraph, lights, grid)
         for d, dist, n, (rd, rs, lev) in rows:
             cams.append(origin)
@@ -320,7 +328,7 @@ def light_intensities(lights):
 
 def area_half_sizes(light):
     """(a, b) half sizes (m) of an area light's rectangle (``area.half_sizes``), its object's scale included
-    (the largest axis of it: ``ops.apply.fog_lights`` notes a non-uniform one)."""
+    (the largest axis of it: ``ops/plan.fog_lights`` notes a non-uniform one)."""
     return area.half_sizes(light.data.shape, light.data.size, light.data.size_y, max(light.matrix_world.to_scale()))
 
 
@@ -335,7 +343,7 @@ def frame_extent(scene, camera):
     return x.min(), x.max(), y.min(), y.max()
 
 
-def _frame_windows(scene, depsgraph, lights):
+def _frame_windows(scene, depsgraph, lights, fogged, opaque):
     """(surfaces' window, [each spot's glow window, None for a point light]) at the current frame; a spot's
     glow window heeds the picture's occluders (``occluders``, ``footprint.occluded_window``)."""
     camera = scene.camera.evaluated_get(depsgraph)
@@ -346,7 +354,7 @@ def _frame_windows(scene, depsgraph, lights):
              for inst in depsgraph.object_instances if inst.object.type in GEOMETRY]
     surfaces = footprint.boxes_window(np.array(boxes), mw, frame) if boxes else footprint.EMPTY
     margin = occlusion_margin(scene)
-    faces = occluders(depsgraph, camera, mw, frame, margin) if any(is_spot(o) for o in lights) else []
+    faces = occluders(depsgraph, camera, mw, frame, margin, fogged, opaque) if any(is_spot(o) for o in lights) else []
     glows = []
     for o in lights:
         if not is_spot(o):
@@ -381,25 +389,16 @@ def occlusion_margin(scene):
     return px / max(r.resolution_x * scale, 1.0), px / max(r.resolution_y * scale, 1.0)
 
 
-def _fogged(mat, cache):
-    """True if the fog's Surface node is in material ``mat`` (it writes the pixel's coverage)."""
+def _asked(test, mat, cache):
+    """``test(mat)`` (False for an empty slot), asked once per material in ``cache``."""
     if mat is None:
         return False
-    if ("fogged", mat.name) not in cache:
-        cache["fogged", mat.name] = mat.node_tree is not None and owned.find(mat.node_tree, "Surface") is not None
-    return cache["fogged", mat.name]
+    if (test, mat.name) not in cache:
+        cache[test, mat.name] = test(mat)
+    return cache[test, mat.name]
 
 
-def _opaque(mat, cache):
-    """True if nothing in fogged material ``mat`` lets light through (no Transparent BSDF, Holdout or Alpha,
-    no backface culling)."""
-    if ("opaque", mat.name) not in cache:
-        cache["opaque", mat.name] = not getattr(mat, "use_backface_culling", False) and all(
-            not k.passes and not k.hidden for k in graph.plan(mat.node_tree)[2].values())
-    return cache["opaque", mat.name]
-
-
-def occluders(depsgraph, camera, camera_matrix, frame, margin):
+def occluders(depsgraph, camera, camera_matrix, frame, margin, fogged, opaque):
     """[(face, its window)] of flat convex polygons ((K, 3) world corners in order) that end every camera ray
     meeting them: the faces of rendered meshes (not instances) seen by the camera whose materials are all
     fogged and opaque, and such a mesh's outline where its faces tile a flat convex region
@@ -407,7 +406,9 @@ def occluders(depsgraph, camera, camera_matrix, frame, margin):
     the picture; the OCCLUDER_FACES largest in the picture (among the OCCLUDER_CANDIDATES largest in the
     world; none smaller than twice ``margin``, which ``footprint.occluded_window`` shrinks them by).  None at
     all unless every surface the camera can see is fogged (elsewhere the compositor takes a pixel for sky
-    and adds its ray's glow to the sky), and none with depth of field (rays from the whole lens)."""
+    and adds its ray's glow to the sky), and none with depth of field (rays from the whole lens).  What the
+    fog's nodes make of a material is the caller's to say: ``fogged(mat)``, the fog's Surface node is in it (it
+    writes the pixel's coverage); ``opaque(mat)``, nothing in that fogged material lets light through."""
     if camera.data.dof.use_dof:
         return []
     cache, hidden, meshes = {}, _render_hidden_collections(), []
@@ -416,7 +417,7 @@ def occluders(depsgraph, camera, camera_matrix, frame, margin):
         if obj.type not in GEOMETRY - {"VOLUME"} or not obj.visible_camera:
             continue
         mats = [slot.material for slot in obj.material_slots]
-        if not mats or not all(_fogged(m, cache) for m in mats) or obj.is_holdout or obj.is_shadow_catcher:
+        if not mats or not all(_asked(fogged, m, cache) for m in mats) or obj.is_holdout or obj.is_shadow_catcher:
             return []
         if (obj.type == "MESH" and not inst.is_instance and len(obj.data.polygons) <= OCCLUDER_POLYGONS
                 and not obj.original.hide_render and not (hidden and hidden & set(obj.original.users_collection))):
@@ -425,7 +426,7 @@ def occluders(depsgraph, camera, camera_matrix, frame, margin):
     found = []
     for k in np.argsort(-footprint.boxes_areas(boxes, camera_matrix, frame))[:OCCLUDER_OBJECTS]:
         obj, mw, mats = meshes[k]
-        if all(_opaque(m, cache) for m in mats):
+        if all(_asked(opaque, m, cache) for m in mats):
             faces, area, corners = _flat_convex_faces(obj.data, mw)
             outline = footprint.flat_outline(corners, area) if len(faces) != 1 else None
             found += faces + ([(area, outline)] if outline is not None else [])
@@ -483,14 +484,15 @@ def full_windows(lights):
     return footprint.FULL, [footprint.FULL if is_spot(o) else None for o in lights]
 
 
-def windows(scene, lights, frames=None, halos=False):
+def windows(scene, lights, frames=None, halos=False, *, fogged, opaque):
     """The windows of the Compositor method (``precompute/footprint.py``): (the surfaces' window, [each
     light's glow window: a spot's, None for a point light]) holding ``frames`` (default: every frame of an
     animated scene's range, else the current one).  Full windows where they can't be bounded: border
     renders, animations over MAX_WINDOW_FRAMES frames or with motion blur.  ``halos``: the spots' glows have
-    a multiply scattered halo (Dense Fog), which fills the picture as a point light's does: no window."""
+    a multiply scattered halo (Dense Fog), which fills the picture as a point light's does: no window.
+    ``fogged``, ``opaque``: the material tests of ``occluders``."""
     if halos:
-        surfaces, glows = windows(scene, lights, frames)
+        surfaces, glows = windows(scene, lights, frames, fogged=fogged, opaque=opaque)
         return surfaces, [None if is_spot(o) else g for o, g in zip(lights, glows)]
     if scene.render.use_border or scene.camera is None or scene.camera.data.type != "PERSP":
         return full_windows(lights)
@@ -500,8 +502,8 @@ def windows(scene, lights, frames=None, halos=False):
         frames = range(scene.frame_start, scene.frame_end + 1)
     frames = [scene.frame_current] if frames is None else frames
     surfaces, glows = footprint.EMPTY, [footprint.EMPTY if is_spot(o) else None for o in lights]
-    for _, depsgraph in _at_frames(scene, frames):
-        s, g = _frame_windows(scene, depsgraph, lights)
+    for _, depsgraph in at_frames(scene, frames):
+        s, g = _frame_windows(scene, depsgraph, lights, fogged, opaque)
         surfaces = footprint.union(surfaces, s)
         glows = [None if a is None else footprint.union(a, b) for a, b in zip(glows, g)]
     return surfaces, glows

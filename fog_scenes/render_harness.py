@@ -89,7 +89,12 @@ def log_errors(text):
     return [line.strip() for line in text.splitlines() if any(p.search(line) for p in LOG_ERRORS)]
 
 
+NUMPY_TIER = "FOG_NUMPY_TIER"   # set by ``scripts/test.sh --numpy``: a test that starts Blender there is mis-marked
+
+
 def _env():
+    if os.environ.get(NUMPY_TIER) == "1":
+        raise RuntimeError("a test of the numpy tier started Blender: mark it pytest.mark.render")
     env = dict(os.environ)
     env.setdefault("TMPDIR", tempfile.gettempdir())
     env["PYTHONPATH"] = str(ROOT) + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
@@ -102,6 +107,7 @@ def bpy_flow(code, workdir, timeout=600):
     preferences, presets or add-ons of the machine's) and return the JSON its last printed line holds."""
     import json
     workdir = pathlib.Path(workdir)
+    _env()   # (refused in the numpy tier)
     env = dict(os.environ, BLENDER_USER_RESOURCES=str(workdir / "user"), HOME=str(workdir / "home"),
                PYTHONPATH=str(ROOT))
     r = subprocess.run([PYTHON, "-c", code], capture_output=True, text=True, timeout=timeout, cwd=workdir, env=env)

@@ -8,7 +8,7 @@ command -v "$PY" >/dev/null || PY=python3
 if [ ! -x .venv/bin/python ]; then
   "$PY" -m venv .venv
 fi
-if ! .venv/bin/python -c "import bpy, numpy, scipy, pytest, matplotlib" 2>/dev/null; then
+if ! .venv/bin/python -c "import bpy, numpy, scipy, pytest, matplotlib, xdist" 2>/dev/null; then
   .venv/bin/python -m pip install --quiet --upgrade pip
   .venv/bin/python -m pip install --quiet -r requirements-dev.txt
 fi

@@ -37,6 +37,13 @@ def pytest_configure(config):
                                 f"registered (tests/pytest.ini): {sorted(known)}")
 
 
+def pytest_sessionfinish(session, exitstatus):
+    """The numpy tier (``scripts/test.sh --numpy``) must not have imported Blender in this process."""
+    if os.environ.get("FOG_NUMPY_TIER") == "1" and "bpy" in sys.modules and exitstatus == 0:
+        session.exitstatus = 1
+        print("\nthe numpy tier imported bpy: the test that did must be marked render")
+
+
 def pytest_addoption(parser):
     parser.addoption("--regen-references", action="store_true", default=False,
                      help="recompute cached references (quadrature, path-traced renders)")

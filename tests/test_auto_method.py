@@ -98,6 +98,7 @@ def test_what_is_not_modelled_is_said(res):
     assert res["glass_add"] == ["FINISHED"]
     text = " | ".join(res["caveats"])
     assert "light shafts" not in text and "Window Glass" in text, res["caveats"]
-    assert any("light shafts are not modelled (the node groups and OSL have none" in n for n in res["caveats_nodes"])
+    said = "light shafts are not modelled (this method has none: Method Compositor (or Auto) casts them"
+    assert any(said in n for n in res["caveats_nodes"])
     assert any("light shafts are not modelled (Light Shafts is off)" in n for n in res["caveats_off"])
     assert any("are sharp" in n and "L000" in n for n in res["caveats_soft"]), res["caveats_soft"]

@@ -1,4 +1,4 @@
-"""The Compositor method's peak factor in EEVEE (``pixel.bake_eevee_filter``, ``comp_fog.pixel_filter``):
+"""The Compositor method's peak factor in EEVEE (``pixel.bake_eevee_filter``, ``comp_lights.pixel_filter``):
 tests/scenes/eevee_peaks.py renders the many-lights scene's fog (4 lights, 96 x 54, 16 samples, EEVEE's
 default filter size 1.5 px) and compares the pixels around each light's image with the pixel means of
 EEVEE's film filter, integrated with the numpy twin on a 241 x 241 grid (independent of the table).

@@ -1,9 +1,9 @@
-"""The fog's drivers pass their values through unchanged (``groups._new_driver``).
+"""The fog's drivers pass their values through unchanged (``drivers._new_driver``).
 
 Blender 5.0's ``driver_add`` gives a driver's F-Curve two keyframes, (0, 0) and (1, 1), through which its result is
 mapped, and their evaluation snaps values within 1e-4 of a key: a haze's density of 9.78e-5 /m (a visibility of
 40 km) reached the Compositor method's fog group as 0, and 0.99995 as 1.  Checked in a Blender process: a value
-driven through ``groups._drive_expression`` and a location through ``groups._drive_location``, in the scene's
+driven through ``drivers.drive_expression`` and a location through ``drivers.drive_location``, in the scene's
 compositor group (which the depsgraph evaluates), against the values they read.
 """
 import json
@@ -14,10 +14,12 @@ import pytest
 
 from fog_scenes import render_harness as h
 
+pytestmark = pytest.mark.render   # starts Blender (bpy) in a subprocess
+
 _CODE = r"""
 import json
 import bpy
-from fog_addon.nodes import groups
+from fog_addon.nodes import drivers
 bpy.ops.wm.read_factory_settings(use_empty=True)
 scene = bpy.context.scene
 src = bpy.data.node_groups.new("Source", "ShaderNodeTree")
@@ -27,9 +29,9 @@ ob = bpy.data.objects.new("Target", None)
 scene.collection.objects.link(ob)
 tree = bpy.data.node_groups.new("Driven", "CompositorNodeTree")
 driven = tree.nodes.new("ShaderNodeValue")
-groups._drive_expression(driven.outputs[0], "b", [("b", src, 'nodes["V"].outputs[0].default_value')])
+drivers.drive_expression(driven.outputs[0], "b", [("b", src, 'nodes["V"].outputs[0].default_value')])
 loc = tree.nodes.new("ShaderNodeCombineXYZ")
-groups._drive_location(loc, ob)
+drivers.drive_location(loc, ob)
 scene.compositing_node_group = tree
 out = []
 for v in (9.78e-5, 5e-5, 0.99995, 0.3, 1.0e-7, 250.0):

@@ -1,5 +1,5 @@
 """Fog along glass and mirror paths (Node Groups, Cycles): a segment past a pane or a mirror gets the glow
-and extinction of its own segment (``groups._place_tails``, ``groups.specular_segment``).
+and extinction of its own segment (``glass_tails.place_tails``, ``glass_tails.specular_segment``).
 
 Each case renders tests/scenes/glass_mirror.py twice: fogged by the add-on, and path-traced in Cycles'
 World volume (single scattering; the reference is computed by Cycles, never by the fog's code).  The lamp's

@@ -148,18 +148,18 @@ before = pixels()
 cam.location.z = 6.0
 bpy.context.view_layer.update()
 apply.refresh_lights(scene)
-R["moved_up"] = dict(rebuilt=scene.name in apply._rebuilt, changed=float(np.abs(pixels() - before).max()),
+R["moved_up"] = dict(rebuilt=scene.name in apply.rebuilt, changed=float(np.abs(pixels() - before).max()),
                      matches=float(np.abs(pixels() - expected()).max()), same_image=bpy.data.images.get(name) == img)
 cam.location.x = 3.0   # sideways: the table holds
 bpy.context.view_layer.update()
 kept = pixels()
 apply.refresh_lights(scene)
-R["moved_sideways"] = dict(rebuilt=scene.name in apply._rebuilt, changed=float(np.abs(pixels() - kept).max()))
+R["moved_sideways"] = dict(rebuilt=scene.name in apply.rebuilt, changed=float(np.abs(pixels() - kept).max()))
 cam.keyframe_insert("location", frame=1)
 cam.location.z = 20.0
 cam.keyframe_insert("location", frame=10)
 apply.refresh_lights(scene)
-R["animated"] = dict(rebuilt=scene.name in apply._rebuilt, exists=bpy.data.images.get(name) is not None,
+R["animated"] = dict(rebuilt=scene.name in apply.rebuilt, exists=bpy.data.images.get(name) is not None,
                      uses=sunsky.uses_glow_table(scene, spec))
 print(json.dumps(R))
 """

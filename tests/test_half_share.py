@@ -1,10 +1,10 @@
-"""The surface share's depth-aware upsampling (``comp_fog._upsampled``), run by Blender's compositor on synthetic
+"""The surface share's depth-aware upsampling (``comp_shafts._upsampled``), run by Blender's compositor on synthetic
 images against the rule written out here in numpy.
 
 Two surfaces meet at an odd column, so the coarse sample of the 2 x 2 block that straddles them lies on the near
 one: the far surface's pixel in that block must take its far neighbour's sample, not its own.  With a step of
-1 px (a picture too small to halve, ``comp_fog.HALF_FROM``) every pixel keeps its own value; a step of 4 is a
-picture of ``comp_fog.QUARTER_FROM`` pixels or more.
+1 px (a picture too small to halve, ``comp_shafts.HALF_FROM``) every pixel keeps its own value; a step of 4 is a
+picture of ``comp_shafts.QUARTER_FROM`` pixels or more.
 """
 import json
 
@@ -23,7 +23,7 @@ _CODE = r"""
 import json, sys
 import bpy
 import numpy as np
-from fog_addon.nodes import comp_fog
+from fog_addon.nodes import comp_ops, comp_shafts
 W, H, step = int(sys.argv[1]), int(sys.argv[2]), float(sys.argv[3])
 data = json.loads(open(sys.argv[4]).read())
 bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -48,7 +48,7 @@ def image(name, rows):
 
 tree = bpy.data.node_groups.new("Test", "CompositorNodeTree")
 tree.interface.new_socket("Image", in_out="OUTPUT", socket_type="NodeSocketColor")
-m = comp_fog.CompOps(tree, {})
+m = comp_ops.CompOps(tree, {})
 reads = {}
 for key in (k for k in data if k != "scaled"):
     node = tree.nodes.new("CompositorNodeImage")
@@ -56,12 +56,12 @@ for key in (k for k in data if k != "scaled"):
     reads[key] = m.wrap(node.outputs["Image"], vector=True)
 scalar = lambda v: m.dot(v, (1.0, 0.0, 0.0))
 if "share" in data:   # the glows' lit shares at half resolution back at the picture's (_full_view)
-    coarse = (lambda v: scalar(v)) if "scaled" not in data else (lambda v: scalar(comp_fog._scaled(m, v, 1.0 / step)))
-    near, far = comp_fog._full_view(m, [coarse(reads["share"]), coarse(reads["share_far"])],
+    coarse = (lambda v: scalar(v)) if "scaled" not in data else (lambda v: scalar(comp_ops.scaled(m, v, 1.0 / step)))
+    near, far = comp_shafts.full_view(m, [coarse(reads["share"]), coarse(reads["share_far"])],
                                     coarse(reads["half_length"]), scalar(reads["length"]), step)
     out = m.combine(near, far, 0.0)
 else:
-    out = comp_fog._upsampled_group(m, reads["value"], scalar(reads["sample_length"]), scalar(reads["length"]), step)
+    out = comp_shafts.upsampled_group(m, reads["value"], scalar(reads["sample_length"]), scalar(reads["length"]), step)
 rgba = tree.nodes.new("CompositorNodeSetAlpha")
 m.feed(rgba.inputs["Image"], out)
 tree.links.new(rgba.outputs[0], tree.nodes.new("NodeGroupOutput").inputs[0])
@@ -91,7 +91,7 @@ def _upsampled(value, sample_length, length, step, edge):
 @pytest.mark.parametrize("step", [2, 4, 1])
 def test_upsampling_keeps_each_surface_its_own_share(tmp_path, step):
     from fog_addon import imageio
-    from fog_addon.nodes import comp_fog
+    from fog_addon.nodes import comp_shafts
     rng = np.random.default_rng(7)
     cols = np.arange(W)
     length = np.broadcast_to(np.where(cols < EDGE_COLUMN, NEAR, FAR), (H, W)).astype(float)
@@ -104,7 +104,7 @@ def test_upsampling_keeps_each_surface_its_own_share(tmp_path, step):
     out = tmp_path / "out.exr"
     h.run_bpy_code(_CODE, W, H, step, data, out, timeout=300)
     got = imageio.read_rgb(out)[::-1]   # the file's first row is the top
-    want = _upsampled(coarse, sample_length, length, step, comp_fog.UPSAMPLE_EDGE)
+    want = _upsampled(coarse, sample_length, length, step, comp_shafts.UPSAMPLE_EDGE)
     if step == 2:   # the far surface's pixels in the straddling block take their far neighbour's sample
         assert np.allclose(want[:, EDGE_COLUMN], coarse[np.arange(H) // 2, (EDGE_COLUMN + 1) // 2]
                            + 1e-3 * coarse[np.arange(H) // 2, EDGE_COLUMN // 2])
@@ -113,12 +113,12 @@ def test_upsampling_keeps_each_surface_its_own_share(tmp_path, step):
 
 @pytest.mark.parametrize("step", [2, 4, 1])
 def test_glow_shares_come_back_each_surface_its_own(tmp_path, step):
-    """``comp_fog._full_view``: the lit shares (S, S_far) of two surfaces, each constant over its surface at half
+    """``comp_shafts.full_view``: the lit shares (S, S_far) of two surfaces, each constant over its surface at half
     resolution, come back at full resolution as the upsampling's rule divided by its weights (the interleaving's
     mean of a constant is that constant): their own surface's share, but for the straddling column's far pixels,
     whose own sample (on the near surface) counts a thousandth."""
     from fog_addon import imageio
-    from fog_addon.nodes import comp_fog
+    from fog_addon.nodes import comp_shafts
     cols = np.arange(W)
     length = np.broadcast_to(np.where(cols < EDGE_COLUMN, NEAR, FAR), (H, W)).astype(float)
     near_side = length == NEAR
@@ -127,7 +127,7 @@ def test_glow_shares_come_back_each_surface_its_own(tmp_path, step):
     coarse = own[::step, ::step]
     sample_length = half_length[np.arange(H)[:, None] // step, cols[None, :] // step]
     packed = _upsampled(np.concatenate([coarse, np.ones(coarse.shape[:2] + (1,))], axis=-1), sample_length, length,
-                        step, comp_fog.UPSAMPLE_EDGE)
+                        step, comp_shafts.UPSAMPLE_EDGE)
     want = packed[..., :2] / packed[..., 2:]
     assert np.abs(want - own).max() < 1e-3 * 0.5 + 1e-9   # (0.001 x 0.3 + 0.8) / 1.001 at the straddling column
     data = tmp_path / "data.json"
@@ -142,15 +142,15 @@ def test_glow_shares_come_back_each_surface_its_own(tmp_path, step):
 _SCALE_CODE = r"""
 import json
 import bpy
-from fog_addon.nodes import comp_fog
+from fog_addon.nodes import comp_ops, comp_shafts
 bpy.ops.wm.read_factory_settings(use_empty=True)
 scene = bpy.context.scene
 tree = bpy.data.node_groups.new("Test", "CompositorNodeTree")
-m = comp_fog.CompOps(tree, {})
+m = comp_ops.CompOps(tree, {})
 coords = tree.nodes.new("CompositorNodeImageCoordinates")
 pixel = m.wrap(coords.outputs["Pixel"], vector=True)
 x, y = m.dot(pixel, (1.0, 0.0, 0.0)), m.dot(pixel, (0.0, 1.0, 0.0))
-comp_fog._halved(m, scene, pixel, pixel, x, y, m.wrap((0.0, 0.0, 0.0)), (x, y))
+comp_shafts.halved(m, scene, pixel, pixel, x, y, m.wrap((0.0, 0.0, 0.0)), (x, y))
 node = next(n for n in tree.nodes if n.label == "Surface Share Scale")
 scene.compositing_node_group = tree   # in the depsgraph: its drivers are evaluated
 out = []
@@ -164,22 +164,22 @@ print("RESULT " + json.dumps(out))
 
 
 def test_share_scale_follows_the_render_size():
-    """The shares' scale (``comp_fog._halved``'s driver): 1 below HALF_FROM pixels on the picture's shorter side
+    """The shares' scale (``comp_shafts.halved``'s driver): 1 below HALF_FROM pixels on the picture's shorter side
     (its resolution times its percentage), 1/2 from there, 1/4 from QUARTER_FROM, exactly (the Scale nodes' sizes)."""
-    from fog_addon.nodes import comp_fog
+    from fog_addon.nodes import comp_shafts
     log = h.run_bpy_code(_SCALE_CODE, timeout=300).stdout
     rows = json.loads(next(ln for ln in log.splitlines() if ln.startswith("RESULT "))[7:])
     for rx, ry, p, factor in rows:
         side = min(rx, ry) * p // 100
-        want = 0.25 if side >= comp_fog.QUARTER_FROM else 0.5 if side >= comp_fog.HALF_FROM else 1.0
+        want = 0.25 if side >= comp_shafts.QUARTER_FROM else 0.5 if side >= comp_shafts.HALF_FROM else 1.0
         assert abs(factor - want) < 1e-6, (rx, ry, p, factor)
 
 
 @pytest.mark.parametrize("width,height,step", [(30, 18, 4), (34, 17, 2), (31, 19, 4)])
 def test_a_size_not_a_multiple_of_the_step_keeps_every_pixel(tmp_path, width, height, step):
-    """Full-resolution shares scaled down (``comp_fog._scaled``, as ``_half_view`` does) and back (``_full_view``)
-    at a size the step does not divide: every pixel takes the share of a pixel at most ``step`` away in each
-    direction (S holds each pixel's column, S_far its row); none is left at zero at the picture's edges."""
+    """Full-resolution shares scaled down (``comp_ops.scaled``, as ``comp_shafts.half_view`` does) and back
+    (``full_view``) at a size the step does not divide: every pixel takes the share of a pixel at most ``step`` away
+    in each direction (S holds each pixel's column, S_far its row); none is left at zero at the picture's edges."""
     from fog_addon import imageio
     rows, cols = np.mgrid[0:height, 0:width].astype(float)
     length = np.full((height, width), 5.0)

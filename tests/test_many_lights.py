@@ -22,7 +22,7 @@ emission closure per light, summed by a balanced tree of Add Shader nodes)
 Cycles' node groups and OSL pass up to 64 lights, EEVEE up to 256 (within its budget); 256
 lights are too slow for CI everywhere.  The twin takes each light's models from the add-on's
 stored choice: in EEVEE the choice must fit its uniform block (64 KiB of node
-constants a material, ``groups.eevee_budget``): 16 lights fit fully modelled since
+constants a material, ``budgets.eevee_budget``): 16 lights fit fully modelled since
 709fad8 (eight lost their scattered fog light before it, predicted error 15 %), and at
 64 most lights step down or leave the groups (reported), and the test checks the
 picture renders exactly that choice.  Before the budget, EEVEE at 16 lights
@@ -193,7 +193,7 @@ def test_log_scan_catches_known_errors():
 
 @pytest.mark.render
 def test_closure_sum_renders_every_closure(tmp_path):
-    """The fog's per-light closure sum (``groups._closure_sum``, surfaces' Emission and the World's
+    """The fog's per-light closure sum (``closures.closure_sum``, surfaces' Emission and the World's
     Background) renders whole in SVM and OSL, for 1 to 256 closures, in a few seconds.
 
     Cycles' OSL flattens a closure tree with a 16-entry stack (``flatten_closure_tree``,
@@ -233,7 +233,7 @@ def test_switching_to_eevee_rechooses_within_its_budget(switched):
 @pytest.mark.render
 def test_many_lights_in_cycles_node_groups_are_told_of_the_compositor(switched):
     """With MANY_LIGHTS or more lights in Cycles, the node groups' report says what each material holds (about
-    248 nodes a fully modelled light, ``groups.material_nodes``) and points to the Compositor method, whose
+    248 nodes a fully modelled light, ``budgets.material_nodes``) and points to the Compositor method, whose
     report does not (tests/scenes/engine_switch.py: 25 lights)."""
     res = switched
     said = [why for _, why in res["notes"]["nodes"] if "Compositor method" in why]

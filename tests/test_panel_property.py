@@ -35,7 +35,7 @@ def test_panel_sequence_keeps_the_users_compositor():
 
 # With spots and Dense Fog the sequences find a shader too big for Cycles' SVM stack ("out of SVM stack space,
 # shader 'default_background' / 'Glossy' too big": the material renders black, silently) in some of the states they
-# visit: the node groups' budgets (groups.py's hand-kept constants) no longer hold what spots, area lights and
+# visit: the node groups' budgets (budgets.py's hand-kept constants) no longer hold what spots, area lights and
 # Dense Fog add (issue 44).  Strict: when the budgets are measured, these pass and must be made tests again.
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="the node groups' SVM budget is exceeded in some states with spots and Dense "

@@ -5,7 +5,7 @@ seen through fog lit by ``LIGHTS`` point lights that light the fog only, every l
 the Fog Passes on, Cycles 64x36 at 1 sample per pixel centre, so Combined is the fog's light alone.
 
 * No line of the process's log says a shader is too big (``render_harness.log_errors``).  Before the
-  passes' sums were chained (see ``groups._write_world_passes`` and ``groups._chained_closure_sum``)
+  passes' sums were chained (see ``world_group._world_pass_instances`` and ``closures.chained_closure_sum``)
   the World's pass kept 15 floats per light on SVM's 255-float stack: from 17 lights on "out of SVM
   stack space, shader "default_background" too big." and the whole sky black, Combined and Fog Light;
   the Surface's kept 3 per light, the materials black from about 50 lights.

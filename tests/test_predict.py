@@ -159,14 +159,14 @@ def test_eevee_budget_holds_fewer_full_lights_than_glow_only_ones():
     """The measured EEVEE constants (a saved file's): full lights fit about twenty times into the block,
     glow-only ones about thirty, off ones 170, left out any number (tests/test_many_lights.py renders 16
     and 64 lights in EEVEE with the choice they make)."""
-    from fog_addon.nodes import groups  # noqa: PLC0415 (bpy)
-    b = groups.eevee_budget()
+    from fog_addon.nodes import budgets  # noqa: PLC0415 (bpy)
+    b = budgets.eevee_budget()
     assert b.fits([0] * 18) and not b.fits([0] * 22)
     assert b.fits([1] * 29) and not b.fits([1] * 33)
     assert b.fits([2] * 160) and not b.fits([2] * 180)
     assert b.fits([3] * 10000)
     # anisotropic fog: the phase weight's constants (measured +712 bytes a full light at g = 0.85)
-    hg = groups.eevee_budget(0.85)
+    hg = budgets.eevee_budget(0.85)
     assert hg.fits([0] * 16) and not hg.fits([0] * 17)
     assert hg.fits([1] * 22) and not hg.fits([1] * 23)
 
@@ -174,8 +174,8 @@ def test_eevee_budget_holds_fewer_full_lights_than_glow_only_ones():
 def test_osl_budget_keeps_a_material_under_osl_group_limit():
     """Cycles' OSL crashed on a 256-light material (53 195 nodes > 32 767 layers): full lights fit about
     120 times, glow-only ones about 475, and 256 lights fit with most of them glow only."""
-    from fog_addon.nodes import groups  # noqa: PLC0415 (bpy)
-    b = groups.osl_budget()
+    from fog_addon.nodes import budgets  # noqa: PLC0415 (bpy)
+    b = budgets.osl_budget()
     assert b.fits([0] * 120) and not b.fits([0] * 121)
     assert b.fits([1] * 256) and b.fits([0] * 70 + [1] * 186) and not b.fits([0] * 256)
 
@@ -185,16 +185,16 @@ def test_budgets_charge_spots_their_own_cost():
     modelled spot in a material at g = 0.85 against 3 348 a point, 8 940 in the World; OSL 924 layers against
     249): a budget over a mix of lights charges each its own, so fewer spots than point lights fit, and a
     choice that fits with points may not with spots."""
-    from fog_addon.nodes import groups  # noqa: PLC0415 (bpy)
-    points = groups.eevee_budget(0.85, [False] * 8)
+    from fog_addon.nodes import budgets  # noqa: PLC0415 (bpy)
+    points = budgets.eevee_budget(0.85, [False] * 8)
     assert points.fits([0] * 8)
-    spots = groups.eevee_budget(0.85, [True] * 8)
+    spots = budgets.eevee_budget(0.85, [True] * 8)
     assert not spots.fits([0] * 8)                      # 8 x 13 570 bytes > 57 344
     assert spots.fits([0] * 4 + [2] * 4) and not spots.fits([0] * 5 + [2] * 3)
-    mixed = groups.eevee_budget(0.85, [True] * 2 + [False] * 6)
-    assert mixed.fits([0] * 8) and not groups.eevee_budget(0.85, [True] * 4 + [False] * 4).fits([0] * 8)
-    osl = groups.osl_budget([True] * 110)
-    assert not osl.fits([0] * 110) and groups.osl_budget([False] * 110).fits([0] * 110)
+    mixed = budgets.eevee_budget(0.85, [True] * 2 + [False] * 6)
+    assert mixed.fits([0] * 8) and not budgets.eevee_budget(0.85, [True] * 4 + [False] * 4).fits([0] * 8)
+    osl = budgets.osl_budget([True] * 110)
+    assert not osl.fits([0] * 110) and budgets.osl_budget([False] * 110).fits([0] * 110)
 
 
 def test_opaque_fog_predicts_no_nan():

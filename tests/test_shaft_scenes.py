@@ -42,8 +42,8 @@ def test_shaft_scene_against_path_tracing(tmp_path, regen, scene, density, aniso
     assert BOUND[scene] <= GOAL.get(scene, 0.05) * 1.15   # a bound is never far past the issue's goal
 
 
-# A picture whose shorter side has comp_fog.HALF_FROM pixels or more takes the shafts' shares (the glows' and the
-# surfaces') at half its resolution, from comp_fog.QUARTER_FROM at a quarter.  At k times the references' size
+# A picture whose shorter side has comp_shafts.HALF_FROM pixels or more takes the shafts' shares (the glows' and the
+# surfaces') at half its resolution, from comp_shafts.QUARTER_FROM at a quarter.  At k times the references' size
 # (k = 2, 4), k x k pixels averaged are one reference pixel: the shares then have as many samples over each patch
 # of the scene as the references' own resolution gives them.  Averaging pixel centres is not a pixel centre where
 # the picture changes within a pixel (glow peaks, edges, thin slats), so the check keeps the pixels where the
@@ -67,11 +67,11 @@ def smooth_pixels(image, tol=SMOOTH):
 
 @pytest.mark.parametrize("scene,density,anisotropy,k", HALF_CASES)
 def test_shares_at_half_resolution_against_path_tracing(tmp_path, regen, scene, density, anisotropy, k):
-    from fog_addon.nodes import comp_fog
+    from fog_addon.nodes import comp_shafts
     resolution = (fs.SHAFT_RESOLUTION[0] * k, fs.SHAFT_RESOLUTION[1] * k)
-    assert min(fs.SHAFT_RESOLUTION) < comp_fog.HALF_FROM   # the references' size keeps full resolution
-    assert {2: comp_fog.HALF_FROM <= min(resolution) < comp_fog.QUARTER_FROM,
-            4: comp_fog.QUARTER_FROM <= min(resolution)}[k]   # this render takes a sample every k x k pixels
+    assert min(fs.SHAFT_RESOLUTION) < comp_shafts.HALF_FROM   # the references' size keeps full resolution
+    assert {2: comp_shafts.HALF_FROM <= min(resolution) < comp_shafts.QUARTER_FROM,
+            4: comp_shafts.QUARTER_FROM <= min(resolution)}[k]   # this render takes a sample every k x k pixels
     ref = imageio.read_rgb(fs.ensure_shaft_reference(scene, density, regen=regen, anisotropy=anisotropy))
     log = []
     out = h.render_test(scene, density, tmp_path / f"{scene}_{k}.exr", engine="cycles", method="compositor",

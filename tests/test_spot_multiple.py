@@ -310,7 +310,7 @@ def test_area_light_render_against_64_bounces(tmp_path):
 @pytest.mark.render
 @pytest.mark.slow
 def test_coarse_halo_at_a_quarter_of_the_resolution(tmp_path):
-    """At 480 x 480 the compositor samples the halo every 4 x 4 pixels (``comp_fog.HALO_STEP``) and upsamples it:
+    """At 480 x 480 the compositor samples the halo every 4 x 4 pixels (``comp_halos.HALO_STEP``) and upsamples it:
     the side-on spot's rings (the same angles, 4x the pixels) within BOUND of 64 bounces, as at 120 x 120."""
     case = "side"
     c = ds.CASES[case]

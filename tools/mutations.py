@@ -3,10 +3,27 @@
     .venv/bin/python tools/mutations.py [--list] [--markdown] [--update-readme] [--json] [--baseline]
                                         [--rev REV] [--keep] [--quick | --rest] [NAME ...]
 
-Each mutation is data (``MUTATIONS``): a name, what it breaks, a file, the
-exact text it replaces (found exactly once, or the tool refuses, so the list
-cannot go stale silently), the new text and the test node ids that should
-kill it, cheapest first.  The tool snapshots the repository once into a
+Each mutation is data (``MUTATIONS``): a name, what it breaks, the symbol
+that holds the term, the exact text it replaces there, the new text and the
+test node ids that should kill it, cheapest first.
+
+A mutation names its place by symbol, not by file, so moving code between
+modules leaves the list alone: ``target`` is a def, a class or a constant (a
+name assigned at module or class level) looked up by ``ast`` across every
+``.py`` file under fog_addon/, wherever it is defined (``find_symbol``).  It
+is a dotted suffix of the definition's full name: ``shade_point``,
+``NodeOps.place``, ``_quadrature.nodes`` (a def inside a def), or, when a bare
+name is defined in several places, ``shading.view_transmittance`` or the
+whole ``fog_addon.precompute.shading.view_transmittance``; it must match
+exactly one definition.  The old text must occur exactly once within that
+definition's lines (``ast``'s lineno to end_lineno, decorators included), or
+the tool refuses, naming the symbol and the lines it searched, so the list
+cannot go stale silently.  Old and new texts are written as the symbol reads
+dedented to its own first line: the symbol's indentation is taken off before
+the search and put back on the replacement (``replace_in_symbol``), so a
+function that becomes a method, or the reverse, keeps its mutations too.
+
+The tool snapshots the repository once into a
 scratch folder (the files ``git ls-files`` lists, tracked and untracked but
 not ignored, as they are in the working tree; or with ``--rev`` a commit's
 tree; ``.venv`` is symlinked, not copied), so edits made meanwhile do not
@@ -37,6 +54,7 @@ al. 2005's equations, Eq. 19 written out by hand, Cycles path tracing).  The
 twin comparisons kill mutations of the node wiring (``fog_addon/nodes``).
 """
 import argparse
+import ast
 import json
 import os
 import pathlib
@@ -54,194 +72,194 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 class Mutation(NamedTuple):
     name: str
     what: str                 # the physics (or the promise) the mutation removes
-    file: str                 # path from the repository root
-    old: str                  # exact text, present exactly once in ``file``
-    new: str
+    target: str               # the symbol holding ``old``: NAME, Class.method, outer.inner or module.NAME
+    old: str                  # exact text, present exactly once in the symbol's source as it reads dedented
+    new: str                  # what replaces it, written at the same indentation as ``old``
     killers: Tuple[str, ...]  # pytest node ids from the repository root, cheapest first
 
 
-SHADING = "fog_addon/precompute/shading.py"
 SHADE_TEST = "tests/test_shading.py"
 
 MUTATIONS = [
-    Mutation("glow_on_surfaces", "glow (airlight) along camera rays that hit surfaces zeroed (Eq. 11)", SHADING,
+    Mutation("glow_on_surfaces", "glow (airlight) along camera rays that hit surfaces zeroed (Eq. 11)", "shade_point",
              "airlight=m.scale(light.intensity, air),",
              "airlight=m.scale(light.intensity, 0.0 * air),",
              (f"{SHADE_TEST}::test_shade_point_against_quadrature",)),
     Mutation("density_zero_hides_the_world", "a fog of no density still hides the World (transmittance 0 at "
-             "beta = 0: the limit e^{-beta t} -> 1 is not taken)", SHADING,
+             "beta = 0: the limit e^{-beta t} -> 1 is not taken)", "shade_background",
              "    transmittance = kept + m.less(medium.beta, MIN_BETA) * (1.0 - kept)",
              "    transmittance = kept + 0.0 * m.less(medium.beta, MIN_BETA) * (1.0 - kept)",
              (f"{SHADE_TEST}::test_background_against_quadrature",)),
-    Mutation("view_attenuation", "the user's shader not dimmed by e^{−β D_vp} on camera rays", SHADING,
+    Mutation("view_attenuation", "the user's shader not dimmed by e^{−β D_vp} on camera rays",
+             "shading.view_transmittance",
              "transmit = 1.0 + is_camera * (t_vp - 1.0)",
              "transmit = 1.0 + is_camera * (0.0 * t_vp)",
              (f"{SHADE_TEST}::test_shade_surface_is_eq19",)),
     Mutation("direct_attenuation_cycles", "Cycles: the light's node tree no longer multiplies by "
-             "e^{−β · Ray Length}", "fog_addon/nodes/light.py",
+             "e^{−β · Ray Length}", "wrap_light",
              "neg.inputs[1].default_value = -1.0",
              "neg.inputs[1].default_value = 0.0",
              ("tests/test_render.py::test_cycles_nodes[spheres-0.15]",)),
-    Mutation("direct_attenuation_eevee", "EEVEE: the weighted direct attenuation forced to 1", SHADING,
+    Mutation("direct_attenuation_eevee", "EEVEE: the weighted direct attenuation forced to 1", "surface_fog",
              "direct = (num + 1e-30) / (den + 1e-30)",
              "direct = (den + 1e-30) / (den + 1e-30)",
              (f"{SHADE_TEST}::test_shade_surface_is_eq19",)),
-    Mutation("diffuse_fog_light", "fog light the diffuse lobe reflects (ρ_d M_1) zeroed", SHADING,
+    Mutation("diffuse_fog_light", "fog light the diffuse lobe reflects (ρ_d M_1) zeroed", "shade_point",
              "reflected = m.scale(material.diffuse, diffuse) + ",
              "reflected = m.scale(material.diffuse, 0.0 * diffuse) + ",
              (f"{SHADE_TEST}::test_shade_point_against_quadrature",)),
-    Mutation("glossy_fog_light", "fog light the glossy lobe reflects (ρ_s M_n) zeroed", SHADING,
+    Mutation("glossy_fog_light", "fog light the glossy lobe reflects (ρ_s M_n) zeroed", "shade_point",
              "+ m.scale(material.specular, glossy)",
              "+ m.scale(material.specular, 0.0 * glossy)",
              (f"{SHADE_TEST}::test_shade_point_against_quadrature",)),
-    Mutation("glossy_mirror_axis", "glossy lobe about the normal instead of the mirrored view vector", SHADING,
+    Mutation("glossy_mirror_axis", "glossy lobe about the normal instead of the mirrored view vector", "shade_point",
              "mirrored = mirror(m, geo.incoming, geo.normal)",
              "mirrored = geo.normal",
              (f"{SHADE_TEST}::test_glossy_lobe_follows_the_mirror_direction",)),
-    Mutation("background_glow", "the background's fog (World airlight, Eq. 12) zeroed", SHADING,
+    Mutation("background_glow", "the background's fog (World airlight, Eq. 12) zeroed", "background_point",
              "return m.scale(light.intensity, m.run(models.background, medium.beta, d_sv, along, h,",
              "return m.scale(light.intensity, 0.0 * m.run(models.background, medium.beta, d_sv, along, h,",
              (f"{SHADE_TEST}::test_background_against_quadrature",)),
-    Mutation("albedo_surface", "fog colour (albedo) ignored on surfaces", SHADING,
+    Mutation("albedo_surface", "fog colour (albedo) ignored on surfaces", "sum_lights",
              "    albedo = medium.albedo\n",
              "    albedo = 0.0 * medium.albedo + 1.0\n",
              (f"{SHADE_TEST}::test_shade_surface_is_eq19",)),
     Mutation("albedo_nodes", "fog colour (albedo) not passed from the Params group to the shading",
-             "fog_addon/nodes/groups.py",
+             "light_groups.medium",
              "Medium(m.wrap(beta), m.wrap(albedo, vector=True))",
              "Medium(m.wrap(beta))",
              ("tests/test_nodes.py::test_cycles_whole_fog_matches_numpy_twin[nodes]",)),
     Mutation("view_attenuation_nodes", "material: the user's shader not scaled by the fog's mix factor "
-             "(Mix Shader factor 0)", "fog_addon/nodes/material.py",
+             "(Mix Shader factor 0)", "_build",
              "tree.links.new(mix_factor, mix.inputs[0])",
              "mix.inputs[0].default_value = 0.0",
              ("tests/test_render.py::test_cycles_nodes[spheres-0.15]",)),
     Mutation("direct_attenuation_eevee_nodes", "material: EEVEE given the Cycles mix factor (direct light "
-             "not dimmed)", "fog_addon/nodes/material.py",
+             "not dimmed)", "_build",
              "f\"{'EEVEE' if target == 'EEVEE' else 'Cycles'} Mix Factor\"",
              "\"Cycles Mix Factor\"",
              ("tests/test_render.py::test_eevee_nodes[spheres-0.15]",)),
     Mutation("fog_emission_nodes", "material: the fog's emission (glow and fog light) not added to the shader",
-             "fog_addon/nodes/material.py",
+             "_build",
              "tree.links.new(fog_shader, add.inputs[1])",
              "pass",
              ("tests/test_nodes.py::test_cycles_whole_fog_matches_numpy_twin[nodes]",)),
     Mutation("background_glow_nodes", "World: the fog group's glow not linked into the World's output",
-             "fog_addon/nodes/world.py",
+             "wrap_world",
              "tree.links.new(fog.outputs[\"Fog\"], mix.inputs[2])",
              "pass",
              ("tests/test_nodes.py::test_cycles_whole_fog_matches_numpy_twin[nodes]",)),
     Mutation("restore_emission_sampling", "fog.remove leaves the materials' `cycles.emission_sampling` off",
-             "fog_addon/nodes/overrides.py",
+             "restore",
              "    for path, value in dict(idblock.get(WAS, {})).items():\n",
              "    for path, value in dict(idblock.get(WAS, {})).items():\n"
              "        if path == \"cycles.emission_sampling\":\n            continue\n",
              ("tests/test_ops.py::test_add_twice_remove_restores",)),
     Mutation("restore_world_sampling", "fog.remove leaves the World's `cycles.sampling_method` off",
-             "fog_addon/nodes/overrides.py",
+             "restore",
              "    for path, value in dict(idblock.get(WAS, {})).items():\n",
              "    for path, value in dict(idblock.get(WAS, {})).items():\n"
              "        if path == \"cycles.sampling_method\":\n            continue\n",
              ("tests/test_ops.py::test_add_twice_remove_restores",)),
     Mutation("restore_osl_switch", "fog.remove leaves the scene's `cycles.shading_system` (OSL) on",
-             "fog_addon/ops/apply.py",
+             "use_osl",
              "scene.cycles.shading_system = bool(scene[OSL_WAS])",
              "pass",
              ("tests/test_artist.py::test_method_switch_keeps_materials",)),
     Mutation("restore_light_use_nodes", "fog.remove leaves the light's `use_nodes` on",
-             "fog_addon/nodes/light.py",
+             "unwrap_light",
              "light_data.use_nodes = light_data[_USE_NODES]",
              "pass",
              ("tests/test_ops.py::test_add_twice_remove_restores",)),
     Mutation("composer_reflected_extinction", "the composer adds the fog light a surface reflects without its "
-             "extinction e^{−β D_vp} on the way to the camera (Eq. 19)", SHADING,
+             "extinction e^{−β D_vp} on the way to the camera (Eq. 19)", "surface_light",
              "([m.scale(total(reflected), t_vp)] if reflected else [])",
              "([total(reflected)] if reflected else [])",
              ("tests/test_composer.py::test_pixel_light_is_eq19_over_the_surface_and_eq12_over_the_sky",
               f"{SHADE_TEST}::test_shade_surface_is_eq19")),
     Mutation("composer_sky_coverage", "the compositor's pixel takes the glows to infinity over its whole area, "
-             "not over the part its rays reach the sky (Eq. 12 weighted by 1 − coverage)", SHADING,
+             "not over the part its rays reach the sky (Eq. 12 weighted by 1 − coverage)", "pixel_light",
              "([m.scale(total(sky), 1.0 - coverage)] if sky else [])",
              "([total(sky)] if sky else [])",
              ("tests/test_composer.py::test_pixel_light_is_eq19_over_the_surface_and_eq12_over_the_sky",)),
     Mutation("segment_lit_clip", "a segment's lit intervals not clipped to the segment: light beyond its end "
-             "glows (Biri 2006 §III.D over [0, length])", "fog_addon/precompute/segments.py",
+             "glows (Biri 2006 §III.D over [0, length])", "_clamp",
              "    return m.minimum(m.maximum(t, 0.0), end)",
              "    return m.maximum(t, 0.0)",
              ("tests/test_segments.py::test_empty_and_out_of_range_intervals",)),
     Mutation("auto_needs_before_cost", "Method Auto ignores what the scene needs (fog passes, a panoramic "
-             "camera): the compositor by cost alone", "fog_addon/methods/auto.py",
+             "camera): the compositor by cost alone", "auto.choose",
              "    if hard is not None:\n",
              "    if False:\n",
              ("tests/test_auto_method.py::test_what_only_the_node_groups_have",)),
     Mutation("shaft_visibility", "light shafts: the lit share counts every node as lit (Dobashi 2002 Eq. 2's H = 1)",
-             "fog_addon/precompute/shafts.py",
-             "        lit_sum = lit_sum + lit_weight\n",
-             "        lit_sum = lit_sum + weight\n",
+             "_quadrature.nodes",
+             "    lit_sum = lit_sum + lit_weight\n",
+             "    lit_sum = lit_sum + weight\n",
              ("tests/test_shafts.py::test_sphere_shadow_matches_quadrature",)),
     Mutation("shaft_extinction", "light shafts: the nodes' weights lose the extinction from the light, e^{-beta d}",
-             "fog_addon/precompute/shafts.py",
+             "node_terms",
              "    weight = m.exp((t + d) * minus_beta)\n",
              "    weight = m.exp(t * minus_beta)\n",
              ("tests/test_shafts.py::test_sphere_shadow_matches_quadrature",)),
     Mutation("shaft_phase", "light shafts: the nodes' Henyey-Greenstein weight turned backwards",
-             "fog_addon/precompute/shafts.py",
+             "node_terms",
              "        weight = weight * _hg_of_sine(m, g, sin)\n",
              "        weight = weight * _hg(m, g, sin)\n",
              ("tests/test_shafts.py::test_sphere_shadow_matches_quadrature",)),
     Mutation("surface_share_hemisphere", "light shafts: a surface's fog light sees the fog within 30 degrees of its "
              "normal only (Sun 2005 Eq. 17's G_0 is over the whole hemisphere, cos-weighted)",
-             "fog_addon/precompute/shafts.py",
+             "hemisphere_angles",
              "    return [((place + j) * (1.0 / count), ",
              "    return [((place + j) * (0.25 / count), ",
              ("tests/test_shafts.py::test_hemisphere_directions_are_cosine_weighted",
               "tests/test_shafts.py::test_surface_share_matches_quadrature")),
     Mutation("mc_crossing_radiance", "multiple scattering: the Monte Carlo tallies flux, not radiance (a crossing "
              "at mu counts 1, not 1 / |mu|)",
-             "fog_addon/precompute/point_source_mc.py",
+             "_tally_crossings",
              "        val = w[i_photon] * np.exp(-s_h) / np.maximum(np.abs(mu_h), 1e-3)\n",
              "        val = w[i_photon] * np.exp(-s_h)\n",
              ("tests/test_apsf.py::test_monte_carlo_single_scattering_matches_quadrature",)),
     Mutation("mc_expected_crossing", "multiple scattering: the Monte Carlo's expected-value crossings drop their "
              "e^{-s} (every crossing ahead counts as if reached)",
-             "fog_addon/precompute/point_source_mc.py",
+             "_tally_crossings",
              "        val = w[i_photon] * np.exp(-s_h) / np.maximum(np.abs(mu_h), 1e-3)\n",
              "        val = w[i_photon] / np.maximum(np.abs(mu_h), 1e-3)\n",
              ("tests/test_apsf.py::test_monte_carlo_single_scattering_matches_quadrature",)),
     Mutation("multiple_segment_attenuation", "multiple scattering: the field beyond a surface is not dimmed on its "
              "way back to the camera (the segment's e^{-beta D})",
-             "fog_addon/precompute/multiple.py",
+             "multiple_airlight",
              "    return multiple_background(m, spec, beta, d_sv, along, h) - m.exp(-1.0 * beta * d_vp) * beyond\n",
              "    return multiple_background(m, spec, beta, d_sv, along, h) - beyond\n",
              ("tests/test_multiple.py::test_segment_formula_on_the_single_scattering_field",)),
     Mutation("multiple_albedo_power", "multiple scattering: order k weighted W0^k per unit albedo (it is W0^(k-1): "
              "the shading multiplies by W0 once more)",
-             "fog_addon/precompute/multiple.py",
+             "field_of_orders",
              "    weights = float(albedo) ** np.arange(0, MAX_ORDER, dtype=float)",
              "    weights = float(albedo) ** np.arange(1, MAX_ORDER + 1, dtype=float)",
              ("tests/test_multiple.py::test_field_per_unit_albedo_vanishes_with_albedo",
               "tests/test_multiple.py::test_table_matches_an_independent_monte_carlo")),
     Mutation("multiple_irradiance_cosine", "multiple scattering: a surface's irradiance from the field without "
              "the cosine of incidence (Narasimhan §7.4 / Sun Eq. 17 weigh by cos)",
-             "fog_addon/precompute/multiple.py",
+             "irradiance_of_field",
              "    weight = (cp * sp * (0.5 * math.pi / n_polar)",
              "    weight = (sp * (0.5 * math.pi / n_polar)",
              ("tests/test_multiple.py::test_irradiance_of_the_single_scattering_field_is_sun_g0",)),
     Mutation("spot_multiple_azimuth", "spot multiple scattering: the source function read at one azimuth about "
              "the lamp's direction (a beam's scattered light does not depend on which side of it the camera is)",
-             "fog_addon/precompute/spot_multiple.py",
+             "_read",
              "    slot = phi * ((PHI_NODES - 1.0) / math.pi)\n",
              "    slot = 0.0 * phi\n",
              ("tests/test_spot_multiple.py::test_glow_against_64_bounces",)),
     Mutation("spot_multiple_first_collision", "spot multiple scattering: the first collision drawn log-uniformly "
              "without its weight e^-s s ln(hi/lo) (the photons' first scattering as if it were exponential)",
-             "fog_addon/precompute/spot_multiple.py",
+             "collide",
              "            w[-fresh:] *= np.exp(-s0) * s0 * log_range\n",
              "            w[-fresh:] *= 1.0\n",
              ("tests/test_spot_multiple.py::test_a_cone_as_wide_as_the_sphere_is_the_point_light",)),
     Mutation("spot_multiple_surface_cosine", "spot multiple scattering: a surface takes |w . n| of the radiance, "
              "light from behind it too (the irradiance's clamped cosine, Narasimhan §7.4)",
-             "fog_addon/precompute/spot_multiple.py",
+             "_tally_exact",
              "        np.maximum(-dot[:, :n_flat], 0.0, out=face[:, :n_flat])\n"
              "        np.maximum(-plus, 0.0, out=face[:, n_flat:])\n"
              "        face[:, n_flat:] += np.maximum(-minus, 0.0)\n",
@@ -251,118 +269,118 @@ MUTATIONS = [
              ("tests/test_spot_multiple.py::test_a_cone_as_wide_as_the_sphere_lights_surfaces_as_the_point_light",)),
     Mutation("area_multiple_profile", "area multiple scattering: the emitter's photons leave isotropically, not by "
              "Lambert's cosine about its normal",
-             "fog_addon/precompute/spot_multiple.py",
+             "_emit",
              "        c = np.sqrt(rng.random(n))\n",
              "        c = 2.0 * rng.random(n) - 1.0\n",
              ("tests/test_spot_multiple.py::test_area_light_glow_against_64_bounces",)),
     Mutation("halo_not_upsampled", "Dense Fog halos: the coarse halo sum brought back without its upsampling (the "
              "samples every Halo Step pixels taken as the picture's)",
-             "fog_addon/nodes/comp_fog.py",
+             "fine",
              "    step = g[HALO_STEP]\n    args = ",
              "    step = 1.0\n    args = ",
              ("tests/test_spot_multiple.py::test_coarse_halo_at_a_quarter_of_the_resolution",)),
     Mutation("weather_layers_in_ln_t", "weather: the layers even in ln T (far apart in T where T >> 1, where the "
              "multiply scattered halo widens with T)",
-             "fog_addon/weather.py",
+             "LAYER_SLOPE",
              "LAYER_SLOPE = 0.5 ",
              "LAYER_SLOPE = 0.0 ",
              ("tests/test_weather.py::test_a_pixel_between_layers_glows_with_its_own_kernel",)),
     Mutation("weather_source_intensity", "weather: a pixel's intensity without its depth squared (L Omega z^2 is "
              "the intensity of a patch filling a pixel at depth z)",
-             "fog_addon/weather.py",
+             "glow_kernel",
              "    return kern * (pixel_angle ** 2) * t * t\n",
              "    return kern * (pixel_angle ** 2) * t\n",
              ("tests/test_weather.py::test_a_lamps_pixels_glow_like_path_traced_fog",)),
     Mutation("area_solid_angle_sign", "area lights: the corner terms of the emitter's solid angle all added (the "
              "rectangle from the foot point to each corner is signed by the side it lies on)",
-             "fog_addon/precompute/area.py",
+             "_cell_solid_angle",
              "    return corners[i + 1][j + 1] - corners[i][j + 1] - corners[i + 1][j] + corners[i][j]\n",
              "    return corners[i + 1][j + 1] + corners[i][j + 1] + corners[i + 1][j] + corners[i][j]\n",
              ("tests/test_area.py::test_reference_emitter_quadrature_is_the_solid_angle",)),
     Mutation("area_cell_extinction", "area lights: each cell's extinction taken from the emitter's centre (the "
              "cells' e^{-beta (r_k - r)} left out)",
-             "fog_addon/precompute/area.py",
+             "_profile",
              "                w = omega * m.exp(beta * (r - rk))   # the cell's extinction over the centre's\n",
              "                w = omega\n",
              ("tests/test_area.py::test_glow_against_quadrature_far_from_the_emitter",)),
     Mutation("area_phase_per_cell", "area lights: the phase function of the emitter's centre for every cell "
              "(the direction from each cell left out)",
-             "fog_addon/precompute/area.py",
+             "_profile",
              "                cos_theta = -m.mul_add(cx, dx, m.mul_add(cy, dy, z * dz)) / m.maximum(rk, 1e-30)\n",
              "                cos_theta = -m.mul_add(x, dx, m.mul_add(y, dy, z * dz)) / m.maximum(r, 1e-30)\n",
              ("tests/test_area.py::test_glow_near_the_emitter_as_documented",)),
     Mutation("area_one_sided", "area lights: the emitter shines from both sides (the fog behind it lit)",
-             "fog_addon/precompute/area.py",
+             "front_interval",
              "    hi = m.select(heads_out, cross, t_end)\n",
              "    hi = t_end\n",
              ("tests/test_area.py::test_glow_against_quadrature_far_from_the_emitter",)),
     Mutation("emitter_glow_undimmed", "glowing objects: the Emission pass taken as the emitters' light (it is dimmed "
              "by the fog in front of them: their light is the pass times e^{beta D_vp})",
-             "fog_addon/nodes/comp_fog.py",
+             "glows",
              "    light = m.scale(p[EMITTERS], emitter_glow.source_weight(m, spec, t))\n",
              "    light = m.scale(p[EMITTERS], emitter_glow.source_weight(m, spec, t) * m.exp(-t))\n",
              ("tests/test_emitter_glow.py::test_glowing_sphere_against_path_traced_fog[cycles-0.1-False]",)),
     Mutation("emitter_glow_table_normalisation", "glowing objects: the weights' total read from its table without the "
              "T of its normalisation N e^T / T",
-             "fog_addon/precompute/emitter_glow.py",
+             "source_weight",
              "    return m.exp(m.table(spec, table_x(m, t), 1.0)) * t\n",
              "    return m.exp(m.table(spec, table_x(m, t), 1.0))\n",
              ("tests/test_emitter_glow.py::test_the_table_read_between_its_columns_holds_the_kernel",)),
     Mutation("emitter_glow_dipole_sign", "glowing objects: a flat emitter glows more on the side its normal leans "
              "away from (the dipole's sign)",
-             "fog_addon/nodes/comp_fog.py",
+             "glows",
              "            lean_grey = (dx + dy) * (-0.5 * emitter_glow.dipole_scale(size))\n",
              "            lean_grey = (dx + dy) * (0.5 * emitter_glow.dipole_scale(size))\n",
              ("tests/test_emitter_glow.py::test_flat_glowing_square_against_path_traced_fog[0.3-False]",)),
     Mutation("emitter_glow_depth_squared", "glowing objects: a pixel's intensity without its depth squared (L "
              "Omega z^2 is the intensity of a patch filling a pixel at depth z)",
-             "fog_addon/precompute/emitter_glow.py",
+             "_kernel_at",
              "    return kern * (pixel_angle ** 2) * float(t) ** 2\n",
              "    return kern * (pixel_angle ** 2) * float(t)\n",
              ("tests/test_emitter_glow.py::test_glowing_sphere_against_path_traced_fog[cycles-0.1-False]",)),
     Mutation("emitted_light_undimmed", "glowing objects: their light on other surfaces not dimmed by its path through "
              "the fog (the emission of (e^{-beta L} - 1) times the user's, off camera rays)",
-             "fog_addon/nodes/material.py",
+             "_build",
              "            last = _dim_emitted_light(ops, tree, emitting, last, (x0 + 500, y - 120))\n",
              "            pass\n",
              ("tests/test_emitter_glow.py::test_a_glowing_objects_light_on_the_ground_is_dimmed",)),
     Mutation("emitter_glow_edges_extended", "glowing objects: the Blur nodes extend the picture's edge pixels outwards "
              "(a glowing object cut by the frame glows as if it went on)",
-             "fog_addon/nodes/comp_fog.py",
+             "glows",
              "            blur.inputs[\"Extend Bounds\"].default_value = True",
              "            blur.inputs[\"Extend Bounds\"].default_value = False",
              ("tests/test_emitter_glow.py::test_a_sign_cut_by_the_frame_glows_as_its_pixels_do",)),
     Mutation("daylight_sky_isotropic", "daylight: the sky's in-scattering ignores the fog's anisotropy",
-             "fog_addon/precompute/daylight.py",
+             "sky_airlight",
              "        if g:\n",
              "        if False:\n",
              ("tests/test_sunlight.py::test_sky_airlight_anisotropic_against_quad",)),
     Mutation("daylight_sky_tilt_flat", "daylight: every surface's sky light is dimmed as a floor's (walls see the "
              "sky near the horizon through longer paths)",
-             "fog_addon/precompute/daylight.py",
+             "tilted_irradiance_of_column",
              "    return m.maximum(a + nz * (half_up + nz * (half_up - a)), 0.0)",
              "    return half_up * (1.0 + nz)",
              ("tests/test_sunlight.py::test_sky_tilted_irradiance_against_quad",)),
     Mutation("daylight_fog_light_no_peak", "daylight: the fog light on surfaces without the sun's phase peak",
-             "fog_addon/precompute/sunlight.py",
+             "_irradiance",
              "        peak = _coefficient(m, spec, x, 2 * SH_COUNT) * _coefficient(",
              "        peak = 0.0 * _coefficient(m, spec, x, 2 * SH_COUNT) * _coefficient(",
              ("tests/test_sunlight.py::test_fog_light_against_sphere_quadrature",)),
     Mutation("driver_keyframes", "drivers: the F-Curve's (0, 0), (1, 1) keyframes kept (Blender snaps a driven value "
              "within 1e-4 of them: a 40 km haze's density 9.8e-5 /m driven as 0)",
-             "fog_addon/nodes/groups.py",
+             "_new_driver",
              "    curve.keyframe_points.clear()",
              "    pass",
              ("tests/test_drivers.py::test_driven_values_pass_through",)),
     Mutation("air_sky_source_isotropic", "air: the sky's Rayleigh scattering taken as isotropic over each ring "
              "(the Rayleigh phase's (v.w)^2 term averaged away)",
-             "fog_addon/precompute/daylight.py",
+             "rayleigh_sky_source",
              "    return (3.0 / 8.0) * ((1.0 + 0.5 * s) * expint2(m, c) + (vz * vz - 0.5 * s) * expint4(m, c))",
              "    return (1.0 / 2.0) * expint2(m, c)",
              ("tests/test_air_kernels.py::test_rayleigh_sky_source_against_quadrature",)),
     Mutation("air_layer_sky_undimmed", "air: the fog layer's sky glow not changed by the air (neither the sky's light "
              "dimmed on its way to the layer nor the glow on its way to the camera)",
-             "fog_addon/precompute/sunlight.py",
+             "_ray_glow",
              "    return _air_glow_light(m, day, p_l, p_r, [(sun_l, sun_a, sky * sky_ratio, sky_a) for sun_l, sun_a, "
              "sky_a, sky_ratio",
              "    return _air_glow_light(m, day, p_l, p_r, [(sun_l, sun_a, sky, sky_a) for sun_l, sun_a, "
@@ -370,165 +388,165 @@ MUTATIONS = [
              ("tests/test_air_kernels.py::test_ray_glow_with_air_against_quadrature",)),
     Mutation("air_fog_light_layer_only", "air: the fog light on surfaces without the air's own scattered sunlight "
              "and skylight",
-             "fog_addon/precompute/sunlight.py",
-             "        return (lit * (p_l * (sun_l - i_s) + p_r * sun_a), albedo * l_sky * ratio + sky_a, "
+             "_bake_fog_light_air.fields",
+             "    return (lit * (p_l * (sun_l - i_s) + p_r * sun_a), albedo * l_sky * ratio + sky_a, "
              "lit * albedo * i_s)",
-             "        return (lit * (p_l * (sun_l - i_s)), albedo * l_sky * ratio, lit * albedo * i_s)",
+             "    return (lit * (p_l * (sun_l - i_s)), albedo * l_sky * ratio, lit * albedo * i_s)",
              ("tests/test_sunlight.py::test_fog_light_with_air_against_sphere_quadrature",)),
     Mutation("daylight_glow_table_no_rayleigh", "daylight: the glow table's reader leaves out the air's Rayleigh "
              "scattering of the sun",
-             "fog_addon/precompute/sunlight.py",
+             "table_glow",
              "    return _air_glow_light(m, day, p_l, daylight.rayleigh_phase(m, cos_theta),",
              "    return _air_glow_light(m, day, p_l, 0.0 * daylight.rayleigh_phase(m, cos_theta),",
              ("tests/test_glow_table.py::test_table_glow_against_the_kernels",)),
     Mutation("daylight_proxy_uncorrected", "daylight, Compositor: the materials' grey stand-in transmittance is "
              "left on the picture (not corrected per pixel to the layer's and the air's exact colour)",
-             "fog_addon/nodes/comp_fog.py",
+             "build_fog_group",
              "        inv = 1.0 / m.maximum(sunlight.proxy_transmittance(m, daylight, d_vp), 1e-30)",
              "        inv = 1.0",
              ("tests/test_haze_render.py::test_haze_against_cycles",)),
     Mutation("lamp_glow_past_the_top", "fog layer: a lamp's glow goes on past the layer's top (the ray's span "
              "never ends where it leaves the layer)",
-             "fog_addon/precompute/sunlight.py",
+             "lamp_glow_span",
              "    t1 = m.select(leaves, m.minimum(to_top, far), far)",
              "    t1 = far + 0.0 * to_top",
              ("tests/test_lamp_layer.py::test_glow_over_the_span_against_quadrature",)),
     Mutation("lamp_sky_glow_past_the_top", "fog layer, Compositor: a pixel that sees the sky takes the lamps' glow "
              "to infinity, not to where its ray leaves the layer",
-             "fog_addon/nodes/comp_fog.py",
+             "build_fog_group",
              "        bounded, meets = m.less(t1, LAYER_OPEN), m.less(t0, LAYER_OPEN)",
              "        bounded, meets = 0.0, m.less(t0, LAYER_OPEN)",
              ("tests/test_lamp_layer_render.py::test_lamp_glow_ends_at_the_layers_top",)),
     Mutation("probe_keeps_sun_disc", "daylight: the World's mean over the sky takes a Sky Texture's sun disc in (a sun "
              "counted as sky)",
-             "fog_addon/sunsky.py",
+             "_probe_pixels",
              "            node.sun_disc = False",
              "            pass",
              ("tests/test_sky_probe.py::test_sun_disc_is_left_out_of_the_skys_mean",)),
     Mutation("emitter_own_pixels_shared", "glowing objects: an emitter's own pixels take only the share of the glow "
              "in front of a surface at its depth (half), not the whole",
-             "fog_addon/nodes/comp_fog.py",
+             "glows",
              "    t_surface = m.select(glowing, 1.0e6, t_surface)",
              "    t_surface = t_surface",
              ("tests/test_emitter_glow.py::test_glowing_sphere_against_path_traced_fog",)),
     Mutation("daylight_sun_undimmed", "daylight: the sun's light on surfaces is not dimmed by the layer above them",
-             "fog_addon/precompute/sunlight.py",
+             "direct_dimming",
              "    t_sun = daylight.sun_transmittance(m, z, sun_elevation(m, day), *args)",
              "    t_sun = 1.0",
              ("tests/test_sunlight.py::test_direct_dimming_limits",)),
     Mutation("world_sky_air_counted_twice", "a Sky Texture World with Air: the air's kernels scatter the sun and the "
              "sky again on top of the World, which already holds the air",
-             "fog_addon/precompute/sunlight.py",
+             "_air_glow_light",
              "    if day.world_sky is not None:   # the air's own scattering is in the World",
              "    if False:",
              ("tests/test_world_sky.py::test_a_pixel_of_sky_is_the_world_itself",)),
     Mutation("world_sky_no_limit", "a Sky Texture World with Air: the air's glow is not the World's radiance times the "
              "air's opacity (distant terrain does not fade to the sky above it)",
-             "fog_addon/precompute/sunlight.py",
+             "ray_glow",
              "    return glow + world_radiance(m, day, direction) * m.combine(*(1.0 - c for c in t))",
              "    return glow + 0.0 * world_radiance(m, day, direction) * m.combine(*(1.0 - c for c in t))",
              ("tests/test_world_sky.py::test_far_terrain_fades_to_the_world_above_it",)),
     Mutation("world_sky_sun_above_the_air", "a Sky Texture World with Air: the Sun light is dimmed by the whole air "
              "column again, though it is the sun at the ground",
-             "fog_addon/precompute/sunlight.py",
+             "direct_dimming",
              "        c_a = c_a - daylight.air_column_depth(m, 0.0, 1.0, day.air_height)",
              "        c_a = c_a - 0.0",
              ("tests/test_world_sky.py::test_the_sun_light_is_the_sun_at_the_ground",)),
     Mutation("sun_shafts_ignore_the_map", "sun shafts: the fog is lit wherever the sun's map says it is in a shadow",
-             "fog_addon/precompute/shafts.py",
+             "sun_lit",
              "    return m.select(inside, m.less(beyond, depth - frame.bias), 1.0)",
              "    return 1.0 + 0.0 * m.select(inside, m.less(beyond, depth - frame.bias), 1.0)",
              ("tests/test_sun_shafts.py::test_sun_share_matches_quadrature",)),
     Mutation("sun_nodes_not_importance_placed", "sun shafts: the lit share's nodes are spread evenly along the ray, "
              "not in the quantiles of the sun's single scattering (the share then weighs the far fog as the near)",
-             "fog_addon/precompute/shafts.py",
+             "sun_node_place",
              "    return m.select(flat, u, placed)",
              "    return u + 0.0 * placed",
              ("tests/test_sun_shafts.py::test_node_places_are_the_quantiles",)),
     Mutation("sun_surface_share_unweighted", "sun shafts: the fog light's share weighs every hemisphere direction "
              "alike, not by the sun's single scattering along it (its phase function and its span in the layer)",
-             "fog_addon/precompute/shafts.py",
-             "        weight = integral * (_hg(mm, g, mm.dot(u, s)) if g else 1.0)",
-             "        weight = 1.0 + 0.0 * integral",
+             "sun_surface_share.ray",
+             "    weight = integral * (_hg(mm, g, mm.dot(u, s)) if g else 1.0)",
+             "    weight = 1.0 + 0.0 * integral",
              ("tests/test_sun_shafts.py::test_sun_surface_share_matches_quadrature",)),
     Mutation("quiet_default_dropped", "node building: a constant fed to a node whose inputs are all numbers is read "
              "and written back unchanged (the quiet write loses the value)",
-             "fog_addon/nodes/sockets.py",
+             "quiet_default",
              "        values[list(inputs).index(sock)] = float(value)\n",
              "        values[list(inputs).index(sock)] += 0.0 * float(value)\n",
              ("tests/test_node_building.py::test_constants_and_places_are_set_without_updates",)),
     Mutation("nodes_left_unplaced", "node building: the nodes of a tree stay where Blender made them (place does "
              "nothing)",
-             "fog_addon/nodes/sockets.py",
-             "        if not self._places or self.tree is None:\n",
-             "        if True:\n",
+             "NodeOps.place",
+             "    if not self._places or self.tree is None:\n",
+             "    if True:\n",
              ("tests/test_node_building.py::test_constants_and_places_are_set_without_updates",)),
     Mutation("point_casts_too_few", "light shafts, a point light's map: its rows cast half the rays their latitude "
              "needs (neighbouring rays twice the equator's spacing apart)",
-             "fog_addon/precompute/shafts.py",
+             "point_map_casts",
              "    counts = np.ceil(np.cos(lat).clip(0.0, 1.0) * (width - 1) - 1e-9)",
              "    counts = np.ceil(np.cos(lat).clip(0.0, 1.0) * (width - 1) / 2.0 - 1e-9)",
              ("tests/test_shafts.py::test_point_map_casts_resolve_the_equator_spacing_everywhere",)),
     Mutation("half_share_offsets_alike", "light shafts, surface share at half resolution: its samples take the "
              "interleaving offsets of the picture's pixels, not their own (the samples of a 2 x 2 block's corner "
              "share a quarter of the pattern)",
-             "fog_addon/nodes/comp_fog.py",
+             "halved",
              "    whole = shafts.surface_offset(m, m.floor(pixel_x * factor), m.floor(pixel_y * factor))",
              "    whole = shafts.surface_offset(m, pixel_x, pixel_y)",
              ("tests/test_shaft_scenes.py::test_shares_at_half_resolution_against_path_tracing[window_room-2]",)),
     Mutation("half_view_unweighted", "light shafts, the glows' lit share at half resolution: the upsampled sums are "
              "not divided by their weights",
-             "fog_addon/nodes/comp_fog.py",
+             "full_view",
              "    weight = m.maximum(m.dot(packed, (0.0, 0.0, 1.0)), 1e-6)",
              "    weight = 1.0 + 0.0 * m.dot(packed, (0.0, 0.0, 1.0))",
              ("tests/test_half_share.py::test_glow_shares_come_back_each_surface_its_own",)),
     Mutation("half_view_offsets_alike", "light shafts, the glows' lit share at half resolution: its samples take the "
              "interleaving offsets of the picture's pixels, not their own (every sample the same rank)",
-             "fog_addon/nodes/comp_fog.py",
+             "halved",
              '            HALF + "Shaft Offset": shafts.offset(m, m.floor(px * factor), m.floor(py * factor))}',
              '            HALF + "Shaft Offset": shafts.offset(m, px, py)}',
              ("tests/test_shaft_scenes.py::test_shares_at_half_resolution_against_path_tracing[window_room-2]",
               "tests/test_shaft_scenes.py::test_shares_at_half_resolution_against_path_tracing[colonnade-2]")),
     Mutation("quarter_share_dropped", "light shafts: a picture of 288 px or more keeps its shares at half resolution "
              "(the driver's quarter term dropped)",
-             "fog_addon/nodes/comp_fog.py",
+             "halved",
              '{HALF_FROM}),1)-0.25*min(floor({size}/"',
              '{HALF_FROM}),1)-0.0*min(floor({size}/"',
              ("tests/test_half_share.py::test_share_scale_follows_the_render_size",)),
     Mutation("scaled_edges_clipped", "light shafts, shares at half or quarter resolution: a picture whose size the "
              "step does not divide loses its edge pixels' shares (the Scale nodes clip)",
-             "fog_addon/nodes/comp_fog.py",
+             "scaled",
              '        node.inputs[f"Extension {axis}"].default_value = "Extend"',
              '        node.inputs[f"Extension {axis}"].default_value = "Clip"',
              ("tests/test_half_share.py::test_a_size_not_a_multiple_of_the_step_keeps_every_pixel",)),
     Mutation("half_share_upsampled_blind", "light shafts, surface share at half resolution: a pixel takes its sample's "
              "share whatever surface that sample lies on (no depth test)",
-             "fog_addon/nodes/comp_fog.py",
+             "_upsampled",
              "    own = m.less(m.abs(log_sample - log), UPSAMPLE_EDGE)",
              "    own = 1.0",
              ("tests/test_half_share.py::test_upsampling_keeps_each_surface_its_own_share",)),
     Mutation("emitter_facing_isotropic", "glowing objects: each pixel an isotropic source of what it shows the camera "
              "(a flat sign sends as much light sideways as towards the camera), not the two-sided Lambertian source "
              "its surface is",
-             "fog_addon/nodes/comp_fog.py",
+             "glows",
              "        light = m.scale(light, emitter_glow.facing_factor(m, facing, m.table(emitter_glow.facing_spec(g), c, "
              "0.0)))",
              "        light = light",
              ("tests/test_emitter_glow.py::test_a_sign_cut_by_the_frame_glows_as_its_pixels_do",)),
     Mutation("emitter_facing_no_phase", "glowing objects: the facing mean weighs the fog's directions alike, not by "
              "the phase function of their scattering towards the camera (forward fog sees a sign's face)",
-             "fog_addon/precompute/emitter_glow.py",
+             "facing_mean",
              "    weight = (1.0 - g * g) / (1.0 + g * g - 2.0 * g * mu) ** 1.5\n",
              "    weight = 1.0 + 0.0 * mu\n",
              ("tests/test_emitter_glow.py::test_facing_mean_against_quadrature",)),
     Mutation("sun_shadow_dims_as_lit", "sun shafts: a surface in the sun's shadow takes the sun's and the sky's "
              "weighted dimming, as if the sun reached it",
-             "fog_addon/nodes/comp_fog.py",
+             "build_fog_group",
              "        sun_visible = (None if sun_share is None else",
              "        sun_visible = (None if True else",
              ("tests/test_sun_shafts_render.py::test_sun_shafts_against_cycles[hard_g0.7_inside_low]",)),
     Mutation("sun_shafts_unwired", "sun shafts, Compositor: the glow and the fog light on surfaces take no shares",
-             "fog_addon/nodes/comp_fog.py",
+             "build_fog_group",
              "                              cover, sun_share, surface_share)",
              "                              cover, None, None)",
              ("tests/test_sun_shafts_render.py::test_sun_shafts_against_cycles[hard_g0.7_inside_low]",)),
@@ -587,22 +605,165 @@ def copy_snapshot(src, dest):
     return pathlib.Path(shutil.copytree(src, dest, symlinks=True))
 
 
+# --- where a mutation applies -----------------------------------------------------------------------
+
+PACKAGE = "fog_addon"   # the symbols a mutation may name are defined under this folder
+
+
+class Symbol(NamedTuple):
+    """One definition under ``PACKAGE``: a def, a class, or a constant (a name assigned at module or class level)."""
+    dotted: str   # module, then qualified name: fog_addon.precompute.shading.shade_point, fog_addon.x.Class.method
+    kind: str     # "def", "class" or "constant"
+    path: str     # file from the repository root
+    first: int    # first line (decorators included), 1-based
+    last: int     # last line, inclusive
+
+
+def _definitions(tree, module, path):
+    """Every def and class at any depth of ``tree`` and every name assigned outside a function, as Symbols.
+
+    Statements that are not definitions (``if``, ``try``, ``with``, ...) are looked into but add nothing to the
+    qualified name, as in Python's own ``__qualname__`` (minus its ``<locals>``)."""
+    found = []
+
+    def visit(node, qual, in_function):
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                first = min([child.lineno] + [d.lineno for d in child.decorator_list])
+                kind = "class" if isinstance(child, ast.ClassDef) else "def"
+                found.append(Symbol(".".join([module, *qual, child.name]), kind, path, first, child.end_lineno))
+                visit(child, qual + [child.name], kind == "def")
+            elif isinstance(child, (ast.Assign, ast.AnnAssign)):
+                if not in_function:
+                    targets = child.targets if isinstance(child, ast.Assign) else [child.target]
+                    names = [n for t in targets for n in (t.elts if isinstance(t, (ast.Tuple, ast.List)) else [t])]
+                    for n in names:
+                        if isinstance(n, ast.Name):
+                            found.append(Symbol(".".join([module, *qual, n.id]), "constant", path, child.lineno,
+                                                child.end_lineno))
+            elif isinstance(child, (ast.stmt, ast.excepthandler, ast.match_case)):
+                visit(child, qual, in_function)
+
+    visit(tree, [], False)
+    return found
+
+
+_INDEX_CACHE = {}
+
+
+def symbols(root=ROOT):
+    """(Symbols of every ``.py`` file under ``root/PACKAGE``, {file: why it could not be parsed}).
+
+    Cached on the files' names, sizes and modification times."""
+    root = pathlib.Path(root)
+    files = sorted(p for p in (root / PACKAGE).rglob("*.py")
+                   if not any(part.startswith((".", "__pycache__")) for part in p.relative_to(root).parts))
+    key = (str(root), tuple((str(p), p.stat().st_mtime_ns, p.stat().st_size) for p in files))
+    if key not in _INDEX_CACHE:
+        found, broken = [], {}
+        for p in files:
+            rel = p.relative_to(root)
+            parts = list(rel.with_suffix("").parts)
+            module = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+            try:
+                tree = ast.parse(p.read_text(), filename=str(rel))
+            except (SyntaxError, ValueError, UnicodeDecodeError) as e:
+                broken[rel.as_posix()] = f"{type(e).__name__}: {e}"
+                continue
+            found += _definitions(tree, module, rel.as_posix())
+        if len(_INDEX_CACHE) > 8:
+            _INDEX_CACHE.clear()
+        _INDEX_CACHE[key] = (found, broken)
+    return _INDEX_CACHE[key]
+
+
+def find_symbol(target, root=ROOT):
+    """The one Symbol whose dotted name ends with ``target``'s dotted parts: ``NAME``, ``Class.method``,
+    ``outer.inner``, ``module.NAME`` or the whole ``fog_addon.module.NAME``.  A bare name is found wherever it is
+    defined under ``PACKAGE``, so a move to another module needs no edit.  ValueError if none or several match
+    (qualify the name then)."""
+    want = target.split(".")
+    found, broken = symbols(root)
+    hits = [s for s in found if s.dotted.split(".")[-len(want):] == want]
+    if len(hits) == 1:
+        return hits[0]
+    if not hits:
+        unparsed = "".join(f"; could not parse {f} ({why})" for f, why in broken.items())
+        raise ValueError(f"no def, class or constant {target!r} under {PACKAGE}/{unparsed}")
+    places = ", ".join(f"{s.dotted} ({s.kind}, {s.path}:{s.first})" for s in hits)
+    raise ValueError(f"{target!r} names {len(hits)} definitions under {PACKAGE}/: {places} "
+                     f"(qualify it: Class.method, outer.inner or module.name)")
+
+
+def _lines(text):
+    """``text`` cut after each newline, as ``ast`` numbers lines (``str.splitlines`` also cuts at form feeds)."""
+    parts = text.split("\n")
+    return [p + "\n" for p in parts[:-1]] + ([parts[-1]] if parts[-1] else [])
+
+
+def _indent(line):
+    return line[:len(line) - len(line.lstrip(" \t"))]
+
+
+def _occurrences(text, old):
+    """Start offsets of ``old`` in ``text``, overlapping ones included."""
+    starts, i = [], text.find(old)
+    while i >= 0:
+        starts.append(i)
+        i = text.find(old, i + 1)
+    return starts
+
+
+def replace_in_symbol(text, first, last, old, new):
+    """``text`` with ``old`` replaced by ``new`` inside lines ``first``..``last`` (1-based, inclusive).
+
+    ``old`` and ``new`` are written as the symbol reads dedented: its first line's indentation is taken off
+    every line of the span that starts with it before ``old`` is looked for, and put back on the lines the
+    replacement makes (the line the match starts on as it was, every further non-blank line of ``new``), so a
+    move that changes the symbol's indentation does not change the mutation.  Returns (new text, number of
+    occurrences of ``old`` in the span); the text is None unless that number is 1."""
+    lines = _lines(text)
+    span = lines[first - 1:last]
+    indent = _indent(span[0]) if span else ""
+    stripped = [bool(indent) and line.startswith(indent) for line in span]
+    flat = [line[len(indent):] if s else line for line, s in zip(span, stripped)]
+    dedented = "".join(flat)
+    starts = _occurrences(dedented, old) if old else []
+    if len(starts) != 1:
+        return None, len(starts)
+    begin, end = starts[0], starts[0] + len(old)
+    offsets = [0]
+    for line in flat:
+        offsets.append(offsets[-1] + len(line))
+    i = max(k for k in range(len(flat)) if offsets[k] <= begin)
+    j = max(k for k in range(len(flat)) if offsets[k] <= end - 1)
+    region = _lines(flat[i][:begin - offsets[i]] + new + flat[j][end - offsets[j]:])
+    region = [(indent if (stripped[i] if n == 0 else line.strip()) else "") + line for n, line in enumerate(region)]
+    return "".join(lines[:first - 1 + i] + region + lines[first + j:]), 1
+
+
 def check(mutation, root=ROOT):
-    """The file's text; raises ValueError unless ``mutation.old`` occurs in it exactly once."""
-    path = pathlib.Path(root) / mutation.file
-    if not path.is_file():
-        raise ValueError(f"mutation {mutation.name}: {mutation.file} does not exist")
-    text = path.read_text()
-    n = text.count(mutation.old)
+    """(file from the repository root, its text with the mutation applied); raises ValueError unless
+    ``mutation.target`` names exactly one symbol under ``PACKAGE`` whose source holds ``mutation.old`` exactly
+    once."""
+    try:
+        sym = find_symbol(mutation.target, root)
+    except ValueError as e:
+        raise ValueError(f"mutation {mutation.name}: {e} (update tools/mutations.py)") from None
+    mutated, n = replace_in_symbol((pathlib.Path(root) / sym.path).read_text(), sym.first, sym.last,
+                                   mutation.old, mutation.new)
     if n != 1:
-        raise ValueError(f"mutation {mutation.name}: the old text occurs {n} times in {mutation.file} "
-                         f"(must be exactly once; update tools/mutations.py):\n{mutation.old!r}")
-    return text
+        raise ValueError(f"mutation {mutation.name}: the old text occurs {n} times in {sym.dotted} "
+                         f"({sym.kind}, {sym.path} lines {sym.first}-{sym.last}; must be exactly once; "
+                         f"update tools/mutations.py):\n{mutation.old!r}")
+    return sym.path, mutated
 
 
 def apply(mutation, root):
-    path = pathlib.Path(root) / mutation.file
-    path.write_text(check(mutation, root).replace(mutation.old, mutation.new))
+    """Apply ``mutation`` to the repository copy ``root``; returns the file it changed."""
+    path, mutated = check(mutation, root)
+    (pathlib.Path(root) / path).write_text(mutated)
+    return path
 
 
 # --- running ----------------------------------------------------------------------------------------
@@ -649,13 +810,14 @@ def run_mutation(mutation, base, scratch, keep=False):
     work = pathlib.Path(tempfile.mkdtemp(prefix=mutation.name + "-", dir=scratch))
     try:
         repo = copy_snapshot(base, work / "repo")
-        apply(mutation, repo)
+        changed = apply(mutation, repo)
         code, failed, output, seconds = run_pytest(repo, mutation.killers, work / "tmp")
     finally:
         if not keep:
             shutil.rmtree(work, ignore_errors=True)
     status = {0: "SURVIVED", 1: "killed"}.get(code, "ERROR")
-    return {"name": mutation.name, "what": mutation.what, "file": mutation.file, "status": status,
+    return {"name": mutation.name, "what": mutation.what, "target": mutation.target, "file": changed,
+            "status": status,
             "killed_by": failed[0][0] if (status == "killed" and failed) else None,
             "reason": failed[0][1] if (status == "killed" and failed) else None, "exit_code": code,
             "seconds": round(seconds, 1), "output": None if status == "killed" else output[-4000:]}
@@ -710,14 +872,14 @@ def _short(node):
 
 
 def list_text(mutations):
-    return "\n".join(f"{mu.name:32} {mu.file:34} {mu.what}\n{'':32} killers: {', '.join(mu.killers)}"
+    return "\n".join(f"{mu.name:32} {mu.target:34} {mu.what}\n{'':32} killers: {', '.join(mu.killers)}"
                      for mu in mutations)
 
 
 def markdown(mutations):
-    rows = ["| mutation | what it removes | file | killed by |", "|---|---|---|---|"]
+    rows = ["| mutation | what it removes | symbol | killed by |", "|---|---|---|---|"]
     for mu in mutations:
-        rows.append(f"| `{mu.name}` | {mu.what} | `{mu.file}` | `{_short(mu.killers[0])}` |")
+        rows.append(f"| `{mu.name}` | {mu.what} | `{mu.target}` | `{_short(mu.killers[0])}` |")
     return "\n".join(rows)
 
 

@@ -3,6 +3,7 @@
 Method Auto (the default) chooses per scene (``auto.py``).  Adding a method: subclass ``base.Method``,
 add an instance to ``METHODS_BY_NAME`` and its name to ``precompute.spec.METHODS``.
 """
+from . import auto
 from .base import Method  # noqa: F401
 from .compositor import Compositor
 from .node_groups import NodeGroups, Osl
@@ -22,7 +23,6 @@ def resolve(scene, spec, lights, materials):
     """(method, reason) for ``spec`` on ``scene``: Auto's choice (``auto.choose``) or the user's, whose reason
     is None.  ``lights``: the lights taking part; ``materials``: the fogged materials."""
     if spec.method == "auto":
-        from . import auto
-        name, reason = auto.choose(scene, spec, lights, materials)
+        name, reason = auto.choose(scene, spec, lights, materials, METHODS_BY_NAME)
         return METHODS_BY_NAME[name], reason
     return get(spec.method), None

@@ -33,16 +33,10 @@ What the scene needs comes first:
   materials on objects the camera sees, depth of field, motion blur): the node groups, unless their
   predicted cost exceeds SOFT_COST_LIMIT; then the compositor, and the choice says what it gets wrong.
 """
-from .. import caveats, sunsky
-from ..nodes import groups
-from ..precompute import rungs
-from . import METHODS_BY_NAME
-
-
-def compositor_glowing(scene):
-    """The glowing objects the camera sees (``methods.compositor.glowing_objects``)."""
-    from .compositor import glowing_objects
-    return glowing_objects(scene)
+from .. import caveats, sunsky, view
+from ..nodes import budgets
+from ..precompute import capabilities, rungs
+from .compositor import glowing_objects, unfogged_layers
 
 SOFT_COST_LIMIT = 6.0   # a soft need keeps the node groups while they cost at most this (x the fog-free render)
 _REFERENCE_SAMPLES = 16
@@ -91,19 +85,6 @@ def pixels_of(scene):
     return int(r.resolution_x * r.resolution_y * (r.resolution_percentage / 100.0) ** 2)
 
 
-def unfogged_layers(scene):
-    """The view layers that render but that the compositor's fog would not reach: with no compositor of the
-    user's, the fog's own (``nodes/compositor.py``) makes the composite of the first layer that renders, as Blender
-    does without one; the others' own passes (a multilayer EXR's, the Image Editor's) then hold no fog light.  A
-    user's compositor gets the fog after each of its Render Layers nodes.  [] otherwise."""
-    from ..nodes import compositor, owned
-    tree = scene.compositing_node_group
-    if tree is not None and tree.get(owned.TAG) is None and tree.name != compositor.GROUP:
-        return []
-    used = [vl.name for vl in scene.view_layers if vl.use]
-    return used[1:]
-
-
 def _soft_needs(scene, materials):
     """What the compositor's one surface point per pixel would get wrong in ``scene``, as phrases."""
     needs = []
@@ -114,7 +95,7 @@ def _soft_needs(scene, materials):
         needs.append("motion blur")
     layers = unfogged_layers(scene)
     if layers:
-        needs.append(f"view layers the composite does not show ({caveats._names(layers)})")
+        needs.append(f"view layers the composite does not show ({caveats.listed(layers)})")
     see = caveats.see_through(materials, scene.objects)
     if see:
         shown = ", ".join(see[:3]) + (f" and {len(see) - 3} more" if len(see) > 3 else "")
@@ -122,16 +103,37 @@ def _soft_needs(scene, materials):
     return needs
 
 
-def choose(scene, spec, lights, materials):
+def _needs(scene, spec, lights):
+    """[(capability, phrase)]: what the scene needs that one method alone may model (``capabilities.only``), in
+    Auto's order of precedence, each with what in the scene needs it."""
+    needs = []
+    if spec.shafts and lights:
+        shafted = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(view.scene_size(scene), 1e-6))
+        if shafted:
+            needs.append(("shafts", f"light shafts: objects cast shadows into the glow of {len(shafted)} light(s)"))
+    if sunsky.is_daylit(scene, spec):
+        needs.append(("daylight_once", "daylight in a fog layer"))
+    if spec.layered and lights:
+        needs.append(("layer_ends", "a fog layer with lamps"))
+    glowing = glowing_objects(scene)
+    if glowing:
+        needs.append(("emitters", f"glowing objects ({caveats.listed([o.name for o in glowing])})"))
+    shaped = [o.name for o in lights if o.data.type in ("SPOT", "AREA")] if spec.multiple_scattering else []
+    if shaped:
+        needs.append(("dense_shaped", f"Dense Fog with spot or area lights ({caveats.listed(shaped)})"))
+    return needs
+
+
+def choose(scene, spec, lights, materials, methods):
     """(method name, reason) for ``scene``: Auto's choice (module docstring).  ``lights``: the lights taking
-    part; ``materials``: the fogged materials."""
+    part; ``materials``: the fogged materials; ``methods``: {name: ``base.Method``}, whose compositor's ``check``
+    and node groups' ``budget`` it asks."""
     engine = scene.render.engine
     if spec.anisotropy < rungs.MIN_TABLE_ANISOTROPY:
         if engine == "CYCLES":
             return "osl", f"anisotropy {spec.anisotropy:g} is below the node groups' tables: OSL serves it"
         return "nodes", "no method serves this anisotropy in EEVEE"   # (the node groups' check says why)
-    compositor = METHODS_BY_NAME["compositor"]
-    hard = compositor.check(scene, spec)
+    hard = methods["compositor"].check(scene, spec)
     n, m = light_load(lights), len(materials)
     px, spp = pixels_of(scene), samples_of(scene)
     cost = {name: predicted_ratio(name, engine, n, m, px, spp) for name in ("nodes", "compositor")}
@@ -139,32 +141,18 @@ def choose(scene, spec, lights, materials):
     if hard is not None:
         why = hard.split(":")[0].replace("the Compositor method", "the compositor")
         return "nodes", why
-    if engine == groups.EEVEE_ENGINE and lights:
-        if not METHODS_BY_NAME["nodes"].budget(scene, spec, lights).fits([0] * len(lights)):
+    if engine == budgets.EEVEE_ENGINE and lights:
+        if not methods["nodes"].budget(scene, spec, lights).fits([0] * len(lights)):
             return "compositor", (f"EEVEE's uniform block can't hold the node groups of {len(lights)} lights at full "
                                   "models; "
                                   f"{costs}")
     soft = _soft_needs(scene, materials)
     caveat = f"; it is approximate with {' and '.join(soft)}" if soft else ""
-    if spec.shafts and lights:
-        from ..ops.apply import scene_size
-        shafted = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(scene_size(scene), 1e-6))
-        if shafted:
-            return "compositor", (f"light shafts: objects cast shadows into the glow of {len(shafted)} light(s), "
-                                  f"and only the compositor models them{caveat}; {costs}")
-    if sunsky.is_daylit(scene, spec):
-        return "compositor", (f"daylight: only the compositor gives the sun and the sky their glow and fog light in "
-                              f"the fog layer{caveat}; {costs}")
-    if spec.layered and lights:
-        return "compositor", (f"a fog layer: only the compositor ends the lights' glows at its top{caveat}; {costs}")
-    glowing = compositor_glowing(scene)
-    if glowing:
-        return "compositor", (f"glowing objects ({caveats._names([o.name for o in glowing])}): only the "
-                              f"compositor gives them a glow{caveat}; {costs}")
-    shaped = [o.name for o in lights if o.data.type in ("SPOT", "AREA")] if spec.multiple_scattering else []
-    if shaped:
-        return "compositor", (f"Dense Fog with spot or area lights ({caveats._names(shaped)}): only the compositor "
-                              f"gives them their multiply scattered light{caveat}; {costs}")
+    for feature, phrase in _needs(scene, spec, lights):
+        name = capabilities.only(feature, engine)
+        if name is not None:
+            what = capabilities.BY_KEY[feature].label
+            return name, f"{phrase}: only the {capabilities.LABELS[name]} method models {what}{caveat}; {costs}"
     if soft and cost["nodes"] <= SOFT_COST_LIMIT:
         return "nodes", f"the compositor would get these wrong: {' and '.join(soft)}; {costs}"
     if cost["compositor"] < cost["nodes"]:

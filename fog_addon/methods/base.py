@@ -1,9 +1,9 @@
 """The method interface: how the fog's light reaches the picture.
 
-A method is one unit behind one interface (``Method``).  ``ops/apply.py`` runs every method the same way:
+A method is one unit behind one interface (``Method``).  ``ops/`` runs every method the same way:
 
     spec (``precompute/spec.FogSpec``) -> lights -> method (``methods.resolve``: Auto picks one) ->
-    ``method.check`` -> plan (``apply.plan``: each light's models for the Quality within ``method.budget``)
+    ``method.check`` -> plan (``ops/plan.plan``: each light's models for the Quality within ``method.budget``)
     -> ``method.build`` -> ``method.passes`` (the view layers' AOVs) -> ``method.follow`` (the compositor)
 
 and calls ``method.frame_change`` on each frame of an animation and ``method.teardown`` when the fog or
@@ -15,6 +15,7 @@ the method goes.  The methods:
 * ``Compositor`` (``compositor.py``): the materials keep only what depends on each sample's depth, and
   the compositor adds the fog's light once per pixel (``nodes/comp_fog.py``).
 """
+from ..nodes import compositor
 
 
 class Method:
@@ -52,7 +53,7 @@ class Method:
         return True
 
     def build(self, scene, spec, plan, images):
-        """Build the scene groups of ``plan`` (``apply.Plan``); returns the table images in use."""
+        """Build the scene groups of ``plan`` (``ops/plan.Plan``); returns the table images in use."""
         raise NotImplementedError
 
     def update(self, scene, spec, plan):
@@ -66,16 +67,16 @@ class Method:
         """[(name, note)] worth telling the user about this method on this scene."""
         return []
 
-    def frame_change(self, scene, lights):
-        """A frame of an animation plays or renders."""
+    def frame_change(self, scene, spec, lights):
+        """A frame of an animation plays or renders; ``lights``: those the fog's groups hold; ``spec``: the scene's
+        settings, None while they can't be used (the fog keeps what it was built with)."""
 
     def follow(self, scene, rebuild):
         """The scene's compositor set-up as this method needs it; returns [(name, note)]."""
-        from ..nodes import compositor
         return compositor.follow(scene, rebuild, None)
 
     def teardown(self, scene):
-        """Take off what only this method made (the fog's shared groups are ``apply.remove_fog``'s)."""
+        """Take off what only this method made (the fog's shared groups are ``ops/apply.remove_fog``'s)."""
 
     def __repr__(self):
         return f"<{type(self).__name__} {self.name}>"

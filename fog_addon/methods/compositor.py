@@ -9,7 +9,8 @@ import functools
 
 import bpy
 
-from ..nodes import comp_fog, compositor, groups
+from ..nodes import (budgets, comp_daylight, comp_fog, comp_shafts, compositor, graph, owned, surface_group,
+                     world_group)
 from .. import caveats, shadow_maps, sunsky, view
 from ..precompute import rungs, shafts
 from .base import Method
@@ -43,7 +44,8 @@ class Compositor(Method):
                 f"|glow:{bool(glowing_objects(scene))}|dimming:" + ",".join(o.name_full for o in shader_lights))
 
     def windows(self, scene, lights, partial):
-        return view.windows(scene, lights, [scene.frame_current] if partial else None, _halos(scene))
+        return view.windows(scene, lights, [scene.frame_current] if partial else None, _halos(scene),
+                            fogged=has_fog_surface, opaque=lets_nothing_through)
 
     def is_built(self):
         return bpy.data.node_groups.get(comp_fog.FOG_GROUP) is not None
@@ -54,9 +56,9 @@ class Compositor(Method):
         table, table_images = sunsky.fog_light_table(scene, spec)   # (None: no daylight to glow)
         images = dict(images, **table_images)
         daylit = table is not None
-        groups.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs,
-                             tails=caveats.specular_paths(bpy.data.materials), day=day,
-                             day_dims=dims and not daylit, day_exact=not daylit)
+        surface_group.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs,
+                                    tails=caveats.specular_paths(bpy.data.materials), day=day,
+                                    day_dims=dims and not daylit, day_exact=not daylit)
         shafted = shafted_lights(scene, spec, plan.in_groups) if spec.shafts else []
         # (a handler's rebuild does not step through the frames: the save completes the atlases)
         maps, shadow_images = shadow_maps.ensure(scene, shafted, lazy=plan.this_frame)
@@ -69,11 +71,11 @@ class Compositor(Method):
                                                          spec.anisotropy),
                                           emitters=((spec.anisotropy, spec.multiple_albedo) if glowing_objects(scene)
                                                     else None),
-                                          day=(comp_fog.Day(day, table, dims, sun_shadow,
-                                                            shafts.samples_for(spec.quality).view_nodes)
+                                          day=(comp_daylight.Day(day, table, dims, sun_shadow,
+                                                                 shafts.samples_for(spec.quality).view_nodes)
                                                if daylit else None),
                                           layer=spec.layer_per_unit() if spec.layered else None)
-        groups.build_world([], [], scene.camera, images, spec.passes, day=day, day_dims=not daylit)
+        world_group.build_world([], [], scene.camera, images, spec.passes, day=day, day_dims=not daylit)
         return images
 
     def update(self, scene, spec, plan):
@@ -84,25 +86,25 @@ class Compositor(Method):
         return comp_fog.aovs(scene.render.engine)
 
     def notes(self, scene, spec, plan):
-        from .auto import unfogged_layers
         layers = unfogged_layers(scene)
         layer_note = [(scene.name, f"{len(layers) + 1} view layers render, and without a compositor of yours the "
                                    f"Compositor method's fog is in the composite (the first layer) only: "
-                                   f"the own passes of {caveats._names(layers)} hold no fog light (use the Node "
+                                   f"the own passes of {caveats.listed(layers)} hold no fog light (use the Node "
                                    "Groups method, or a compositor of yours with a Render Layers node per layer)")
                       ] if layers else []
         n, kept = len(plan.in_groups), len(plan.shader_lights)
-        if scene.render.engine == groups.EEVEE_ENGINE and kept < n:
+        if scene.render.engine == budgets.EEVEE_ENGINE and kept < n:
             return layer_note + [(scene.render.engine, f"{n - kept} of {n} lights are not in the materials' shared "
                                   "dimming of direct light (EEVEE's uniform block): their direct light is dimmed as "
                                   "the nearer lights' is")]
         return layer_note
 
-    def frame_change(self, scene, lights):
+    def frame_change(self, scene, spec, lights):
         if comp_fog.FOG_GROUP in bpy.data.node_groups:
-            comp_fog.set_windows(lights, view.windows(scene, lights, [scene.frame_current], _halos(scene)),
+            comp_fog.set_windows(lights, view.windows(scene, lights, [scene.frame_current], _halos(scene),
+                                                      fogged=has_fog_surface, opaque=lets_nothing_through),
                                  grow=True)
-            follow_shadows(scene, lights)
+            follow_shadows(scene, spec, lights)
 
     def follow(self, scene, rebuild):
         return compositor.follow(scene, rebuild, bpy.data.node_groups.get(comp_fog.FOG_GROUP))
@@ -118,12 +120,12 @@ def dimming_lights(scene, spec, lights):
     """The Compositor method's materials' lights: ([], []) in Cycles, whose lights dim their own direct light
     (``light.py``); in EEVEE, which has no light node trees, (lights, models) of the lights whose direct
     light the materials dim by the shared weights of ``shading.surface_fog`` (rungs step "off": no fog light,
-    which the compositor adds), as many as EEVEE's uniform block holds (``groups.eevee_budget``), the
+    which the compositor adds), as many as EEVEE's uniform block holds (``budgets.eevee_budget``), the
     brightest at the camera first (radiant intensity over squared distance)."""
-    if scene.render.engine != groups.EEVEE_ENGINE or not lights:
+    if scene.render.engine != budgets.EEVEE_ENGINE or not lights:
         return [], []
     spots = [view.has_shape(o) for o in lights]
-    budget = groups.eevee_budget(0.0, spots)   # step "off" has no phase weight: its cost does not depend on g
+    budget = budgets.eevee_budget(0.0, spots)   # step "off" has no phase weight: its cost does not depend on g
     eye = scene.camera.matrix_world.translation
     intensity = view.light_intensities(lights).sum(axis=1)
     order = sorted(range(len(lights)), key=lambda i: -intensity[i] / max(
@@ -141,8 +143,7 @@ def dimming_lights(scene, spec, lights):
 
 def glowing_objects(scene):
     """The objects the camera sees whose materials emit (``graph.emits``): they glow in the fog
-    (``comp_fog._emitter_glow``)."""
-    from ..nodes import graph
+    (``comp_emitters.glows``)."""
     emitting = {}
     found = []
     for obj in scene.objects:
@@ -160,67 +161,88 @@ def shafted_lights(scene, spec, lights):
     """The ``lights`` whose shadows fall in fog the camera may see (``caveats.shadowing_lights``: an object
     casting shadows within the glow's reach): only they get a shadow map and a shaft group (area lights none:
     ``caveats.shadow_notes`` says so)."""
-    from ..ops.apply import scene_size
-    found = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(scene_size(scene), 1e-6))
+    found = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(view.scene_size(scene), 1e-6))
     return [light for light in lights if light.name in found and light.data.type != "AREA"]
 
 
 def _moving(scene):
     """What of the shafts' maps moves over the animation (the lights animated, the casters), as the signature says it:
     a light that starts or stops moving takes an atlas of its maps or a still map (``shadow_maps.ensure``), other
-    nodes (``comp_fog._atlas_tile``)."""
+    nodes (``comp_shafts.atlas_tile``)."""
     if shadow_maps.frames_of(scene)[2] < 2:
         return ""
-    casters = any(caveats._animated(o) for o in caveats.shadow_casters(scene))
-    lights = sorted(o.name for o in scene.objects if o.type == "LIGHT" and caveats._animated(o))
+    casters = any(caveats.is_animated(o) for o in caveats.shadow_casters(scene))
+    lights = sorted(o.name for o in scene.objects if o.type == "LIGHT" and caveats.is_animated(o))
     return f":moving {int(casters)} " + ",".join(lights) if casters or lights else ""
 
 
-def follow_shadows(scene, lights):
+def follow_shadows(scene, spec, lights):
     """The frame changed: the shadow maps of the shafted lights follow the lights and objects that move.  A still
     map is baked again where a light's pose or the casters' geometry changed (``shadow_maps.ensure``; a spot whose
-    map turned gets its shaft group again, its frame is built in); an animation's atlas has this frame's map baked
+    map turned gets its shaft group again, its frame is built in, for ``spec``: None while the scene's settings
+    can't be used, and the still maps stay as they were built); an animation's atlas has this frame's map baked
     again where it changed since (``shadow_maps.follow_frame``: the animation was edited)."""
     maps_now = [bpy.data.images.get(shadow_maps.IMAGE_PREFIX + o.name) for o in lights]
     shafted = [o for o, img in zip(lights, maps_now) if img is not None]
-    if not shafted or not any(caveats._animated(o) for o in [*shafted, *caveats.shadow_casters(scene)]):
+    if not shafted or not any(caveats.is_animated(o) for o in [*shafted, *caveats.shadow_casters(scene)]):
         return
     atlases = [o for o in shafted if shadow_maps.ATLAS in bpy.data.images[shadow_maps.IMAGE_PREFIX + o.name]]
     shadow_maps.follow_frame(scene, atlases)
     still = [o for o in shafted if o not in atlases]
-    if not still:
+    if not still or spec is None:
         return
-    from ..ops.apply import spec_of
-    spec = spec_of(scene)
     before = {o.name: bpy.data.images[shadow_maps.IMAGE_PREFIX + o.name].get(shadow_maps.KEY) for o in still}
     maps, images = shadow_maps.ensure(scene, still)
     for light in still:
         shadow = maps[light.name]
         if shadow.spot is not None and images[shadow.spec.name].get(shadow_maps.KEY) != before[light.name]:
-            comp_fog.build_shaft_group(light, shadow, images, shafts.samples_for(spec.quality, len(shafted)),
-                                       spec.anisotropy)
+            comp_shafts.build_shaft_group(light, shadow, images, shafts.samples_for(spec.quality, len(shafted)),
+                                          spec.anisotropy)
 
 
-def complete_shadows(scene):
+def complete_shadows(scene, spec):
     """Before the file is saved (``handlers.on_save_pre``): the atlases of the shafted lights' maps that a frame
     change found out of date, or that were laid out for another frame range, are baked over the scene's range again
     and packed (``shadow_maps.complete``), so a farm without the add-on renders each frame's shafts; a moving spot
-    whose maps' frame changed gets its shaft group again."""
+    whose maps' frame changed gets its shaft group again, for ``spec`` (None while the scene's settings can't be
+    used: its shaft groups stay as they were built)."""
     if bpy.data.node_groups.get(comp_fog.FOG_GROUP) is None:
         return
     lights = [o for o in scene.objects if o.type == "LIGHT"
               and bpy.data.images.get(shadow_maps.IMAGE_PREFIX + o.name) is not None]
     spots = {o.name: bpy.data.images[shadow_maps.IMAGE_PREFIX + o.name].get(shadow_maps.LAYOUT) for o in lights}
     maps, images = shadow_maps.complete(scene, lights)
-    if not maps:
+    if not maps or spec is None:
         return
-    from ..ops.apply import spec_of
-    spec = spec_of(scene)
     for light in lights:
         shadow = maps.get(light.name)
         if shadow is not None and shadow.cone and images[shadow.spec.name].get(shadow_maps.LAYOUT) != spots[light.name]:
-            comp_fog.build_shaft_group(light, shadow, images, shafts.samples_for(spec.quality, len(lights)),
-                                       spec.anisotropy)
+            comp_shafts.build_shaft_group(light, shadow, images, shafts.samples_for(spec.quality, len(lights)),
+                                          spec.anisotropy)
+
+
+def unfogged_layers(scene):
+    """The view layers that render but that the compositor's fog would not reach: with no compositor of the
+    user's, the fog's own (``nodes/compositor.py``) makes the composite of the first layer that renders, as Blender
+    does without one; the others' own passes (a multilayer EXR's, the Image Editor's) then hold no fog light.  A
+    user's compositor gets the fog after each of its Render Layers nodes.  [] otherwise."""
+    tree = scene.compositing_node_group
+    if tree is not None and tree.get(owned.TAG) is None and tree.name != compositor.GROUP:
+        return []
+    used = [vl.name for vl in scene.view_layers if vl.use]
+    return used[1:]
+
+
+def has_fog_surface(material):
+    """True if the fog's Surface node is in ``material`` (it writes the pixel's coverage: ``view.occluders``)."""
+    return material.node_tree is not None and owned.find(material.node_tree, "Surface") is not None
+
+
+def lets_nothing_through(material):
+    """True if nothing in fogged ``material`` lets light through (no Transparent BSDF, Holdout or Alpha, no backface
+    culling): its flat faces end every camera ray that meets them (``view.occluders``)."""
+    return not getattr(material, "use_backface_culling", False) and all(
+        not k.passes and not k.hidden for k in graph.plan(material.node_tree)[2].values())
 
 
 def _halos(scene):

@@ -8,10 +8,16 @@ target until they fit.
 """
 import bpy
 
-from ..nodes import groups, passes
+from ..nodes import budgets, passes, surface_group, world_group
 from .. import caveats, sunsky, view
 from .base import Method
 
+# A spot's or an area light's glow with a fog layer and the fog passes, in Cycles' SVM: the material's
+# shader runs out of SVM stack space at one such light (255 of 255 floats; 155 without the passes) and renders
+# black (docs/measurements/2026-11-29-shader-budgets.md).  Said, until the pass's graph keeps them apart.
+SHAPED_LAYER_PASSES_NOTE = ("spot or area lights ({}) with a Fog Top and Fog Passes: the fogged materials' shaders "
+                            "are too big for Cycles (out of SVM stack space: black materials); turn Fog Passes off, "
+                            "or use the Compositor method")
 MANY_LIGHTS = 8   # from this many fog lights on, Cycles' node groups get a note (``many_lights_note``)
 
 
@@ -21,28 +27,34 @@ class NodeGroups(Method):
     preference = "nodes"
 
     def budget(self, scene, spec, lights):
-        if scene.render.engine == groups.EEVEE_ENGINE:
-            return groups.eevee_budget(spec.anisotropy, [view.has_shape(o) for o in lights])
+        if scene.render.engine == budgets.EEVEE_ENGINE:
+            return budgets.eevee_budget(spec.anisotropy, [view.has_shape(o) for o in lights])
         return None
 
     def build(self, scene, spec, plan, images):
         day = sunsky.builder(scene, spec)
         table, table_images = sunsky.fog_light_table(scene, spec)   # (None: no daylight to glow)
         images = dict(images, **table_images)
-        groups.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes,
-                             tails=caveats.specular_paths(bpy.data.materials), day=day, day_table=table,
-                             day_dims=sunsky.dims_surfaces(scene, plan.in_groups))
-        groups.build_world(plan.shader_lights, plan.shader_models, scene.camera, images, spec.passes, day=day,
-                           day_table=table)
+        surface_group.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes,
+                                    tails=caveats.specular_paths(bpy.data.materials), day=day, day_table=table,
+                                    day_dims=sunsky.dims_surfaces(scene, plan.in_groups))
+        world_group.build_world(plan.shader_lights, plan.shader_models, scene.camera, images, spec.passes, day=day,
+                                day_table=table)
         return images
 
     def passes(self, scene, spec):
         return passes.AOVS if spec.passes else ()
 
     def notes(self, scene, spec, plan):
+        notes = []
         if scene.render.engine == "CYCLES" and len(plan.in_groups) >= MANY_LIGHTS:
-            return [(scene.render.engine, many_lights_note(plan.in_groups, plan.choice))]
-        return []
+            notes.append((scene.render.engine, many_lights_note(plan.in_groups, plan.choice)))
+        if scene.render.engine == "CYCLES" and self.name == "nodes" and spec.passes and spec.layered:
+            shaped = [o.name for o in plan.in_groups if view.has_shape(o)
+                      and plan.choice["lights"].get(o.name, [0])[0] < 2]
+            if shaped:
+                notes.append((scene.render.engine, SHAPED_LAYER_PASSES_NOTE.format(caveats.listed(shaped))))
+        return notes
 
 
 class Osl(NodeGroups):
@@ -53,7 +65,7 @@ class Osl(NodeGroups):
     preference = "osl"
 
     def budget(self, scene, spec, lights):
-        return groups.osl_budget([view.has_shape(o) for o in lights])
+        return budgets.osl_budget([view.has_shape(o) for o in lights])
 
     def notes(self, scene, spec, plan):
         if scene.render.engine != "CYCLES":
@@ -64,9 +76,9 @@ class Osl(NodeGroups):
 
 def many_lights_note(lights, choice):
     """Why the Compositor method suits ``lights`` (as many as MANY_LIGHTS or more) in Cycles better than the
-    materials' node groups or OSL: what each fogged material holds (``groups.material_nodes``)."""
-    nodes = groups.material_nodes([choice["lights"].get(o.name, [0])[0] for o in lights],
-                                  [view.has_shape(o) for o in lights])
+    materials' node groups or OSL: what each fogged material holds (``budgets.material_nodes``)."""
+    nodes = budgets.material_nodes([choice["lights"].get(o.name, [0])[0] for o in lights],
+                                   [view.has_shape(o) for o in lights])
     return (f"{len(lights)} lights: each fogged material holds about {nodes:,} fog nodes and evaluates them on "
             "every sample, and Cycles' set-up before the first sample grows with their square (64 lights on 4 "
             "materials: about 20 s of CPU per render, 256 lights: about 30 min); the Compositor method's "

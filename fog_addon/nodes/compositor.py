@@ -209,7 +209,7 @@ def _store_passes(scene, layers, fog=None):
             names = {i.name for i in fog.interface.items_tree if i.in_out == "INPUT"}
             if DEPTH in names:
                 overrides.override(vl, "use_pass_z", True)
-            if EMISSION in names:   # the glowing objects' light (comp_fog.EMITTERS)
+            if EMISSION in names:   # the glowing objects' light (comp_emitters.EMITTERS)
                 overrides.override(vl, "use_pass_emit", True)
             continue
         overrides.override(vl, "use_pass_emit", True)

@@ -14,13 +14,15 @@ def table_version(spec):
     return fingerprint.package_fingerprint(spec)
 
 
-def table_image(spec, bake):
+def table_image(spec, bake=None, g=None):
     """The image holding ``spec``'s table, baked and packed if missing or stale.
 
     A one-channel table's values go to all four channels; the node tree reads Alpha, an exact float
     output (CHANNEL_PACKED keeps it independent of RGB).  A table of ``spec.channels`` = 4 fills RGBA.
-    ``use_half_precision`` is off or EEVEE would upload half floats.  ``bake``: a baker of ``precompute/``
-    (read from the table cache if there: ``table_cache.cached_bake``) or a callable returning the array.
+    ``use_half_precision`` is off or EEVEE would upload half floats.  The array is its kind's
+    (``bakers.table_array``: the table cache, and the arrays this process already holds; ``g``: the fog's
+    anisotropy, for the tables every fog reads), or ``bake()``'s if given (a baker of ``precompute/`` is read
+    from the table cache if there: ``table_cache.cached_bake``).
     """
     version = table_version(spec)
     img = bpy.data.images.get(spec.name)
@@ -29,7 +31,11 @@ def table_image(spec, bake):
         return img
     if img is not None:
         bpy.data.images.remove(img)
-    arr = np.asarray(table_cache.cached_bake(spec, bake), np.float32)   # from the table cache if there
+    if bake is None:
+        arr = bakers.table_array(spec, spec.g if g is None else g)
+    else:
+        arr = table_cache.cached_bake(spec, bake)   # from the table cache if there
+    arr = np.asarray(arr, np.float32)
     return _fill(_new_image(spec), spec, arr)
 
 
@@ -77,13 +83,11 @@ def keyed_image(spec, key, bake):
 
 def all_table_images(g=0.0, extra=()):
     """{TableSpec.name: image} for every table the node groups use with Henyey-Greenstein anisotropy g.  A
-    missing or stale image takes its array from ``bakers.numpy_tables`` (the table cache, and the arrays this
-    process already holds for the predictor).  ``extra``: TableSpecs of ``bakers.extra_baker`` too (the
-    multiply scattered field's)."""
-    out = {name: table_image(spec, lambda name=name: bakers.numpy_tables(float(g))[name])
-           for name, (spec, _) in bakers.bakers(g).items()}
-    out.update({spec.name: table_image(spec, bakers.extra_baker(spec)) for spec in extra})
-    return out
+    missing or stale image takes its array from ``bakers.table_array`` (the table cache, and the arrays this
+    process already holds for the predictor).  ``extra``: the specs of other tables too (the multiply
+    scattered field's)."""
+    specs = [spec for spec, _ in bakers.bakers(g).values()] + list(extra)
+    return {spec.name: table_image(spec, g=float(g)) for spec in specs}
 
 
 def table_names():

@@ -72,7 +72,7 @@ The weights, the opacity o and the emission given back are built by
 """
 import bpy
 
-from . import graph, groups, overrides, owned, passes
+from . import glass_tails, graph, groups, overrides, owned, passes
 from .graph import BLACK, TARGETS, WHITE
 from .sockets import NodeOps, Val
 
@@ -284,7 +284,7 @@ def _build(tree, anchor, outs, srcs, kinds, copies):
         if target == "CYCLES":   # the glows past glass and mirrors: Cycles traces those segments, EEVEE doesn't
             see = owned.add(tree, "ShaderNodeAddShader", f"{target} See Through", (x0 + 725, y - 60), named=False)
             tree.links.new(add.outputs[0], see.inputs[0])
-            tree.links.new(fog.outputs[groups.SEE_THROUGH], see.inputs[1])
+            tree.links.new(fog.outputs[glass_tails.SEE_THROUGH], see.inputs[1])
             add = see
         if out.target == target:   # the user's own output for this engine: route it through the fog
             tree.links.new(add.outputs[0], out.inputs["Surface"])
@@ -301,13 +301,13 @@ def _build(tree, anchor, outs, srcs, kinds, copies):
 
 def _glass_copies(srcs):
     """[(Surface group input, value or source socket)] for a Glass BSDF that is a material's shader (its
-    Color and IOR: ``groups._place_tails`` adds the glow past it in Cycles), else []."""
+    Color and IOR: ``glass_tails.place_tails`` adds the glow past it in Cycles), else []."""
     for src in srcs.values():
         if src is not None and src.node.bl_idname == "ShaderNodeBsdfGlass":
             node = src.node
             colour = graph.source(node.inputs["Color"]) or tuple(node.inputs["Color"].default_value)[:3]
             ior = graph.source(node.inputs["IOR"]) or float(node.inputs["IOR"].default_value)
-            return [(groups.GLASS_COLOR, colour), (groups.GLASS_IOR, ior)]
+            return [(glass_tails.GLASS_COLOR, colour), (glass_tails.GLASS_IOR, ior)]
     return []
 
 

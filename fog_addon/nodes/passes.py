@@ -22,7 +22,7 @@ linked or not), so a material gets no node of its own for them: one that lets
 light through feeds its opacity to the Surface node's ``Opacity`` input (white
 by default).  Per-material AOV Output nodes cost 1.1-1.4 ms per material (the
 1000-material add went over its 10 s budget).  The World's Fog Light reads
-its own instances of the lights' groups (``groups.build_world`` says why).
+its own instances of the lights' groups (``world_group.build_world`` says why).
 The view layers get the two AOVs while the fog is on; each view layer records
 the names it was given (``ADDED``), so Remove deletes exactly those.  A user's
 AOV of the same name and type is used and kept.

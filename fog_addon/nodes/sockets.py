@@ -76,7 +76,7 @@ class NodeOps:
     """Builds ``model.py`` formulas into ``tree``; ``images`` maps TableSpec.name -> bpy image.
 
     The node types of a group and its tree are class attributes, so a subclass can build the same
-    formulas into another kind of node tree (the compositor's: ``comp_fog.CompOps``)."""
+    formulas into another kind of node tree (the compositor's: ``comp_ops.CompOps``)."""
 
     GROUP_NODE = "ShaderNodeGroup"
     GROUP_TREE = "ShaderNodeTree"
@@ -216,7 +216,7 @@ class NodeOps:
         the shader instead.  Measured on the many-lights scene (36 to 81 lights): 4 608 bytes a light,
         under 805 with this and the tables' identity mapping (``_tap``), the same pixels, and EEVEE's
         first render 2.8x faster.  Blender does not save ``hide_value``: a reopened file is back to the
-        uniforms (``groups.EEVEE_MATERIAL_BYTES`` counts them).
+        uniforms (``budgets.EEVEE_MATERIAL_BYTES`` counts them).
         """
         for sock in node.inputs:
             if not sock.is_linked and sock.type in ("VALUE", "VECTOR", "RGBA"):
@@ -414,7 +414,7 @@ class NodeOps:
 
     def _socket_images(self):
         """[(table name, Val)] of the tables this tree reads from an image socket, not an image of the file (a
-        group shared by lights whose maps differ: ``comp_fog.build_shaft_group``): a kernel group built here
+        group shared by lights whose maps differ: ``comp_shafts.build_shaft_group``): a kernel group built here
         takes each as a colour input of its own."""
         return [(k, v) for k, v in self.images.items() if isinstance(v, Val)]
 

@@ -1,7 +1,9 @@
-"""The one map from every table the shaders read to its baker (numpy only).
+"""Every table the models read, baked through the one registry of table kinds (numpy only).
 
-Each baked array goes through the on-disk table cache (``table_cache.cached_bake``): baking every table
-takes seconds in every process that needs them.
+A table's kind (``registry.kind_of``: a ``tables.TableKind``, found by the key its spec carries) gives its
+baker, its bake-time estimate and its progress label; nothing here depends on a table's name.  Each baked
+array goes through the on-disk table cache (``table_cache.cached_bake``): baking every table takes seconds in
+every process that needs them, and is then kept for the process (``numpy_tables``, ``table_array``).
 
 The Monte Carlo bakes of Dense Fog (``multiple``, ``spot_multiple``) and the glowing objects' weights
 (``emitter_glow``) take seconds to tens of seconds: ``estimate_seconds`` says about how long a table's bake
@@ -10,28 +12,20 @@ their bakers take ``progress(done, total)``, which may raise ``BakeCancelled`` t
 """
 import functools
 
-from . import airlight, emitter_glow, multiple, spot, spot_multiple, surface, table_cache, tables
+from . import registry, table_cache
 from .table_cache import BakeCancelled, cached_bake, is_cached  # noqa: F401 - BakeCancelled: the callers'
 
 BASE_SECONDS = (1.5, 8.0)   # ``bakers(g)``'s tables cold on 2 cores at g 0, at any other g (its 256 x 256 airlight
                            # table): docs/measurements/2026-11-29-bake-time.md
 
 
-@functools.lru_cache(maxsize=None)
-def _spot_tables(g):
-    return spot.bake_scatter_tables(g)
-
-
 def bakers(g=0.0):
-    """{TableSpec.name: (TableSpec, baker)} of the tables for Henyey-Greenstein anisotropy g (the lobe
-    response and the specular albedo are the same for every g)."""
-    air, surf = tables.anisotropic(tables.AIRLIGHT, g), tables.anisotropic(tables.SURFACE, g)
-    out = {air.name: (air, lambda: airlight.bake_airlight_table(air)),
-           surf.name: (surf, lambda: surface.bake_surface_table(surf)),
-           tables.LOBE_RESPONSE.name: (tables.LOBE_RESPONSE, spot.bake_lobe_response),
-           tables.SPECULAR_ALBEDO.name: (tables.SPECULAR_ALBEDO, surface.bake_specular_albedo)}
-    spot_spec = tables.anisotropic(tables.SPOT_MOMENTS, g)
-    out[spot_spec.name] = (spot_spec, lambda: _spot_tables(float(g)))
+    """{TableSpec.name: (TableSpec, baker)} of the tables every fog of Henyey-Greenstein anisotropy g reads
+    (``registry.PER_G``; the lobe response and the specular albedo are the same for every g)."""
+    out = {}
+    for kind in registry.PER_G:
+        spec = kind.make(g)
+        out[spec.name] = (spec, lambda spec=spec, kind=kind: kind.bake(spec))
     return out
 
 
@@ -43,37 +37,35 @@ def numpy_tables(g=0.0):
 
 
 def extra_baker(spec, progress=None):
-    """The baker of a table that depends on more than g (``multiple.table_spec``: g and the albedo;
-    ``spot_multiple.table_spec``: and a spot's cone), for ``table_cache.cached_bake``; ``progress(done,
-    total)`` goes to the bake (it may raise ``BakeCancelled``)."""
-    if is_multiple(spec):
-        return functools.partial(multiple.bake_table, spec, progress=progress)
-    if is_spot_multiple(spec):
-        return functools.partial(spot_multiple.bake_table, spec, progress=progress)
-    raise KeyError(f"no baker for table {spec.name!r}")
+    """The baker of ``spec``'s table (its kind's, ``registry.kind_of``), for ``table_cache.cached_bake``;
+    ``progress(done, total)`` goes to the bake (it may raise ``BakeCancelled``).  KeyError for a table baked per
+    scene (its kind has no baker)."""
+    kind = registry.kind_of(spec)
+    if kind.bake is None:
+        raise KeyError(f"{spec.name!r} is baked per scene, not by its spec")
+    return functools.partial(kind.bake, spec, progress=progress)
 
 
-def is_multiple(spec):
-    """True for a point light's multiply scattered table (``multiple.table_spec``)."""
-    return spec.name.startswith("AnalyticFog Multiple (")
+def _is(key):
+    def test(spec):
+        return spec.kind == key
+    test.__doc__ = f"True for a table of the kind {key!r}."
+    return test
 
 
-def is_spot_multiple(spec):
-    """True for a spot's multiply scattered table (``spot_multiple.table_spec``)."""
-    return spec.name.startswith("AnalyticFog Spot Multiple (")
-
-
-def is_emitter_glow(spec):
-    """True for the glowing objects' weights (``emitter_glow.table_spec``)."""
-    return spec.name.startswith("AnalyticFog Emitter Glow (")
+is_multiple = _is("multiple")               # a point light's multiply scattered table (``multiple.table_spec``)
+is_spot_multiple = _is("spot_multiple")     # a spot's or an area light's (``spot_multiple.table_spec``)
+is_emitter_glow = _is("emitter_glow")       # the glowing objects' weights (``emitter_table.table_spec``)
 
 
 def table_array(spec, g=0.0, progress=None):
-    """The float32 array of any table the models read (``bakers`` or ``extra_baker``), through the cache (and
-    kept for the process); ``progress``: the bake's, if it bakes (``extra_baker``)."""
-    known = bakers(g)
-    if spec.name in known:
-        return numpy_tables(float(g))[spec.name]
+    """The float32 array of any table with a baker, through the cache (and kept for the process): one of
+    ``bakers(g)``'s from ``numpy_tables`` (that of spec.g if it is not one of g's), any other from its kind's
+    baker (``extra_baker``); ``progress``: the bake's, if it bakes."""
+    kind = registry.kind_of(spec)
+    if kind.per_g:
+        tabs = numpy_tables(float(g))
+        return tabs[spec.name] if spec.name in tabs else numpy_tables(float(spec.g))[spec.name]
     if spec not in _EXTRA:
         _EXTRA[spec] = cached_bake(spec, extra_baker(spec, progress))
     return _EXTRA[spec]
@@ -82,10 +74,10 @@ def table_array(spec, g=0.0, progress=None):
 _EXTRA = {}   # the arrays ``table_array`` read or baked this process, by spec
 
 
-def _kept_from_cache(spec):
-    """True if ``spec``'s table is in the cache; one of ``table_array``'s extra tables is then kept for the process
+def _kept_from_cache(spec, kind):
+    """True if ``spec``'s table is in the cache; an image's table outside ``bakers(g)`` is then kept for the process
     as read (it was read whole to check it: ``table_array`` need not read it again)."""
-    if spec.name in bakers(spec.g):
+    if kind.per_g or not kind.image:
         return is_cached(spec)
     arr = table_cache.read(spec)
     if arr is not None:
@@ -93,28 +85,32 @@ def _kept_from_cache(spec):
     return arr is not None
 
 
+def _with_needs(specs):
+    """``specs`` and, recursively, the tables their bakes read (``TableKind.needs``)."""
+    out, todo = set(), list(specs)
+    while todo:
+        spec = todo.pop()
+        if spec not in out:
+            out.add(spec)
+            todo += registry.kind_of(spec).needs(spec)
+    return out
+
+
 def estimate_seconds(spec, baked=()):
-    """About how long baking ``spec``'s table takes from a cold cache on 2 cores, s (0 if it is in the cache):
-    a spot's or an area light's multiply scattered table (``spot_multiple.estimate_seconds``), a point light's
-    (``multiple.estimate_seconds``: with its orders' bake if they are not cached), the glowing objects' weights
-    (``emitter_glow.estimate_seconds``, with the point light's table they read under Dense Fog unless it is in
-    ``baked``: tables baked before it) or one of ``bakers(g)``'s (BASE_SECONDS for them all)."""
-    if spec in _EXTRA or _kept_from_cache(spec):
+    """About how long baking ``spec``'s table takes from a cold cache on 2 cores, s (0 if it is in the cache): its
+    kind's estimate (``TableKind.estimate``; BASE_SECONDS for all of ``bakers(g)``'s), plus that of each table its
+    bake reads (``TableKind.needs``: a point light's orders, the point light's table that the glowing objects'
+    weights read under Dense Fog) unless that is cached or read by ``baked`` (tables baked before it) too."""
+    return _seconds(spec, _with_needs(baked))
+
+
+def _seconds(spec, baked):
+    kind = registry.kind_of(spec)
+    if kind.bake is None:
+        raise KeyError(f"no estimate for table {spec.name!r}: it is baked per scene")
+    if spec in baked or spec in _EXTRA or _kept_from_cache(spec, kind):
         return 0.0
-    if is_spot_multiple(spec):
-        return spot_multiple.estimate_seconds(spec)
-    if is_multiple(spec):
-        orders = multiple.orders_spec(spec.g)
-        cached = is_cached(orders) or any(is_multiple(b) and b.g == spec.g for b in baked)
-        return multiple.estimate_seconds(spec, orders_cached=cached)
-    if is_emitter_glow(spec):
-        albedo = emitter_glow.multiple_albedo_of(spec)
-        field = None if albedo is None else multiple.table_spec(spec.g, albedo)
-        extra = 0.0 if field is None or field in baked else estimate_seconds(field, baked)
-        return emitter_glow.estimate_seconds(spec) + extra
-    if spec.name in bakers(spec.g):
-        return BASE_SECONDS[0] if spec.g == 0.0 else BASE_SECONDS[1]
-    raise KeyError(f"no estimate for table {spec.name!r}")
+    return kind.estimate(spec) + sum(_seconds(need, baked) for need in kind.needs(spec))
 
 
 def missing(specs):
@@ -130,13 +126,6 @@ def missing(specs):
 
 
 def label(spec):
-    """A short name of ``spec``'s table for a progress line: "the spot table (cone 45 deg, blend 0.15)"."""
-    inside = spec.name.split("(", 1)[1].rstrip(")") if "(" in spec.name else ""
-    if is_spot_multiple(spec):
-        kind = "the area light table" if "lambert" in spec.name else "the spot table"
-        return f"{kind} ({inside})"
-    if is_multiple(spec):
-        return f"the point light table ({inside})"
-    if is_emitter_glow(spec):
-        return f"the glowing objects' table ({inside})"
-    return f"the table {spec.name}"
+    """A short name of ``spec``'s table for a progress line (``TableKind.label``): "the spot table (cone 45 deg,
+    blend 0.15)"."""
+    return registry.kind_of(spec).label(spec)

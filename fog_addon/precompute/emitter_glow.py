@@ -27,12 +27,11 @@ import math
 
 import numpy as np
 
-from . import tables
+from . import bakers, multiple, rungs
+from .emitter_table import SIZES, T_COUNT, T_COUNT_DENSE, T_MAX, T_MIN
+from .emitter_table import FACING_COUNT, estimate_seconds, facing_spec, table_spec  # noqa: F401 - for its readers
+from .ops import NumpyOps
 
-SIZES = tuple(2 ** k for k in range(0, 10))   # the Blur nodes' sizes, px (sigma = size / 3: 0.33 to 171 px)
-T_MIN, T_MAX = 1e-3, 30.0     # the weights' table's optical depths
-T_COUNT = 32                  # its columns, single scattering (uniform in ln T + T: ``table_x``)
-T_COUNT_DENSE = 48            # its columns with Dense Fog (the halo's shape changes faster with T)
 CORE_SUBSAMPLES = 8   # the kernel at a source's own pixel and its neighbours, averaged over 8 x 8 points
 CORE = 2              # px: the core's half-width
 HALF = 400            # px: the fit's grid about a source (the largest blur reaches 512)
@@ -45,8 +44,6 @@ def glow_field(g, multiple_albedo=None):
     single = single_field(g)
     if multiple_albedo is None:
         return single
-    from . import bakers, multiple
-    from .ops import NumpyOps
     spec = multiple.table_spec(g, multiple_albedo)
     m = NumpyOps({spec.name: bakers.table_array(spec, g)})
     return lambda t, c: single(t, c) + multiple.field(m, spec, t, c)
@@ -55,8 +52,6 @@ def glow_field(g, multiple_albedo=None):
 def single_field(g):
     """I_1(T, cos gamma): the single-scattering field of an endless ray at extinction 1 per unit intensity (Sun et
     al. 2005 Eq. 12, the background rung of anisotropy g on numpy), T the distance to the source."""
-    from . import bakers, rungs
-    from .ops import NumpyOps
     background = rungs.anisotropic_rungs(g)[1]
     m = NumpyOps(bakers.numpy_tables(g))
 
@@ -196,7 +191,7 @@ def segment_share(m, t_surface, t_source, gamma):
         [atan((T_p - T cos gamma) / (T sin gamma)) + pi/2 - gamma] / (pi - gamma):
 
     0 at the camera, 1/2 at the closest point, 1 far behind the source.  A glowing object's glow stops at the
-    surfaces in front of it so (``comp_fog._emitter_glow``, one share per rung of the ladder at its
+    surfaces in front of it so (``comp_emitters.glows``, one share per rung of the ladder at its
     ``rung_angle``)."""
     c, s_ = math.cos(gamma), max(math.sin(gamma), 1e-6)
     x = (t_surface - t_source * c) / m.maximum(t_source * s_, 1e-12)
@@ -234,16 +229,6 @@ def table_x(m, t):
     return m.clamp01((m.log(tt) + tt - lo) * (1.0 / (hi - lo)))
 
 
-def table_spec(g, pixel_angle, multiple_albedo=None):
-    """The TableSpec of the weights for anisotropy ``g``, ``pixel_angle`` (rad/px) and, with Dense Fog, the
-    multiply scattered field's albedo: one row per size (its share), and the normalisation's row
-    (``bake_weights``)."""
-    dense = "" if multiple_albedo is None else f", multiple W0 {float(multiple_albedo):.3f}"
-    count = T_COUNT if multiple_albedo is None else T_COUNT_DENSE
-    return tables.TableSpec(f"AnalyticFog Emitter Glow (g {float(g):+.3f}, {float(pixel_angle):.6g} rad/px{dense})",
-                            count, len(SIZES) + 1, g=float(g))
-
-
 def bake_weights(single, pixel_angle, count=T_COUNT, progress=None):
     """(len(SIZES) + 1, count) float32 per unit albedo: at each ``optical_depths`` T, the fit's weights a_j(T)
     (``fit_weights``) as shares a_j / N of their sum N(T), and in the last row ln(N e^T / T).
@@ -275,20 +260,6 @@ def bake_table(g, pixel_angle, multiple_albedo=None, progress=None):
     return bake_weights(glow_field(g, multiple_albedo), pixel_angle, count, progress)
 
 
-COLUMN_SECONDS = 0.05   # ``bake_weights``' time a column on 2 cores (docs/measurements/2026-11-29-bake-time.md)
-
-
-def multiple_albedo_of(spec):
-    """The Dense Fog albedo a ``table_spec`` was named for, or None (single scattering)."""
-    return float(spec.name.rsplit("multiple W0 ", 1)[1].rstrip(")")) if "multiple W0 " in spec.name else None
-
-
-def estimate_seconds(spec):
-    """About how long ``bake_table`` of ``spec`` (``table_spec``) takes, s: COLUMN_SECONDS a column (the Dense
-    Fog field's own table not counted: ``bakers.estimate_seconds`` adds it)."""
-    return 0.3 + COLUMN_SECONDS * spec.width
-
-
 def source_weight(m, spec, t):
     """e^T N(T): what the (dimmed) Emission pass of a pixel at optical depth ``t`` is multiplied by to give its
     glow's total weight (undimmed by e^T; N the sum of its rungs' weights), from the last row of ``spec``'s table:
@@ -313,7 +284,6 @@ def rung_share(m, spec, x, j):
 # direction (a line meets that half of the surface once on average), so its pixels' factors average to 1: only
 # flat and open emitters change.
 
-FACING_COUNT = 64    # the facing table's samples over c = |cos| in [0, 1]
 MIN_FACING = 0.02    # c below this counts as this (a sphere's limb, a sign seen edge-on: at most 20x the isotropic)
 FACING_NODES = 512   # midpoint nodes over theta of ``facing_mean``
 
@@ -379,12 +349,6 @@ def dipole_scale(size):
 
 
 DIPOLE_MIN_SIZE = 4   # px: rungs of this size and up carry the dipole (their gradient by +-1 px differences)
-
-
-def facing_spec(g):
-    """The TableSpec of the facing table for anisotropy ``g``: FACING_COUNT samples over c in [0, 1]; row 0
-    ``facing_mean``, row 1 ``facing_dipole``."""
-    return tables.TableSpec(f"AnalyticFog Emitter Facing (g {float(g):+.3f})", FACING_COUNT, 2, g=float(g))
 
 
 def bake_facing(g):

@@ -80,7 +80,8 @@ def column_edges_deg():
 
 def orders_spec(g):
     """The cached array of I_k (``bake_orders``): ROWS x MAX_ORDER rows of COLUMNS (not an image)."""
-    return tables.TableSpec(f"AnalyticFog Multiple Orders (g {float(g):+.3f})", COLUMNS, ROWS * MAX_ORDER, float(g))
+    return tables.TableSpec(f"AnalyticFog Multiple Orders (g {float(g):+.3f})", COLUMNS, ROWS * MAX_ORDER, float(g),
+                            kind=ORDERS_KIND_KEY, args=(float(g),))
 
 
 def window(g):
@@ -110,20 +111,25 @@ TABLE_SECONDS = 0.8
 def estimate_seconds(spec, orders_cached=False):
     """About how long ``bake_table(spec)`` takes, s: its orders' bake unless ``orders_cached``, then the
     table's."""
-    orders = 0.0 if orders_cached else ORDERS_SECONDS[0] + ORDERS_SECONDS[1] * (1.0 - float(spec.g))
-    return orders + TABLE_SECONDS
+    return (0.0 if orders_cached else orders_seconds(spec)) + TABLE_SECONDS
+
+
+def orders_seconds(spec):
+    """About how long ``bake_orders`` takes for ``spec``'s g (a table's or its ``orders_spec``), s."""
+    return ORDERS_SECONDS[0] + ORDERS_SECONDS[1] * (1.0 - float(spec.g))
 
 
 def table_spec(g, albedo):
     """The image for anisotropy g and grey albedo W0 (rounded to 3 decimals): rows 0 .. ROWS-1 hold
     ln(I_{>=2} / W0) (``field``), rows ROWS .. 2 ROWS-1 ln(E_{>=2} / (pi W0)) (``irradiance``)."""
-    return tables.TableSpec(f"AnalyticFog Multiple (g {float(g):+.3f}, W0 {round(float(albedo), 3):.3f})",
-                            COLUMNS, 2 * ROWS, float(g))
+    w0 = f"{round(float(albedo), 3):.3f}"
+    return tables.TableSpec(f"AnalyticFog Multiple (g {float(g):+.3f}, W0 {w0})", COLUMNS, 2 * ROWS, float(g),
+                            kind=KIND_KEY, args=(float(g), float(w0)))
 
 
 def albedo_of(spec):
-    """The albedo a ``table_spec`` was named for."""
-    return float(spec.name.rsplit("W0 ", 1)[1].rstrip(")"))
+    """The albedo a ``table_spec`` was made for (rounded to 3 decimals, as its name shows it)."""
+    return spec.args[1]
 
 
 def _order_tail(last, albedo):
@@ -199,6 +205,16 @@ def bake_table(spec, orders=None, progress=None):
     field = _merge_cap(field_of_orders(orders, albedo_of(spec)))
     log_field = _smooth(np.log(np.maximum(field, FLOOR)))
     return np.concatenate([log_field, irradiance_of_field(log_field)]).astype(np.float32)
+
+
+KIND_KEY, ORDERS_KIND_KEY = "multiple", "multiple_orders"
+ORDERS_KIND = tables.TableKind(ORDERS_KIND_KEY, make=orders_spec, bake=bake_orders, estimate=orders_seconds,
+                               label=lambda spec: f"the point light's orders ({tables.details(spec)})", image=False)
+KIND = tables.TableKind(KIND_KEY, make=table_spec, bake=bake_table,
+                        estimate=lambda spec: estimate_seconds(spec, orders_cached=True),
+                        label=lambda spec: f"the point light table ({tables.details(spec)})",
+                        needs=lambda spec: (orders_spec(spec.g),))
+TABLE_KINDS = (ORDERS_KIND, KIND)   # (``registry.KINDS``)
 
 
 # --- the kernel (any backend: ``ops.ShaderOps``) ----------------------------------------------------------

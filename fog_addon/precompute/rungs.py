@@ -36,7 +36,7 @@ from dataclasses import dataclass, replace
 import functools
 from typing import Callable, NamedTuple
 
-from . import area, model, multiple, spot, spot_multiple, surface, tables
+from . import area, capabilities, model, multiple, spot, spot_multiple, surface, tables
 
 TERMS = ("airlight", "background", "scatter", "direct")
 BACKENDS = ("numpy", "nodes", "osl")
@@ -150,10 +150,10 @@ class LightModels(NamedTuple):
 
 
 # What a light's terms hand on to the composition of Eq. 19 and 12 (``shading.py``), one descriptor per
-# quantity: the fog's groups derive their sockets from OUTPUTS (``nodes/groups.py``: a light's shader groups
-# and the bundles that read them; ``nodes/comp_fog.py``: the compositor's per-light groups and bundles), and
-# ``shading.surface_light`` / ``pixel_light`` compose them by kind.  A new physical term adds its descriptor
-# here; no builder lists terms by hand.
+# quantity: the fog's groups derive their sockets from OUTPUTS (``nodes/light_groups.py``: a light's shader groups,
+# read by the bundles; ``nodes/comp_lights.py``, ``comp_bundles.py``: the compositor's per-light groups and
+# bundles), and ``shading.surface_light`` / ``pixel_light`` compose them by kind.  A new physical term adds its
+# descriptor here; no builder lists terms by hand.
 GLOW = "glow"             # RGB radiance gathered along the ray up to its end, W/(m^2 sr): added as it is
 REFLECTED = "reflected"   # RGB radiance leaving the ray's surface point: dimmed by e^{-beta D_vp} on its way
 DIMMING = "dimming"       # grey factor on the light's direct light at the surface (EEVEE's shared dimming)
@@ -453,7 +453,7 @@ def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NOD
     if step not in range(len(STEPS)):
         raise ValueError(f"unknown ladder step {step!r}; use 0 to {len(STEPS) - 1}")
     air_table, bg_table, air_quad, bg_quad, scatter = anisotropic_rungs(g)
-    if preference == "osl":
+    if capabilities.can(preference, "quadrature"):
         models = LightModels(air_quad, bg_quad, scatter, DIRECT_EXACT)
     elif g < MIN_TABLE_ANISOTROPY:
         raise ValueError(f"anisotropy {g} is below {MIN_TABLE_ANISOTROPY}: the node groups' tables lose accuracy "
@@ -465,11 +465,12 @@ def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NOD
     elif spot:
         models = models._replace(direct=DIRECT_SPOT, scatter=spot_scatter_rung(models.scatter, g))._replace(
             **dict(zip(("airlight", "background"), spot_rungs(models.airlight, models.background, g, rim_nodes))))
-    if (multiple_albedo is not None and (area or (spot and cone is not None)) and preference == "compositor"
-            and step < 2):
+    if (multiple_albedo is not None and (area or (spot and cone is not None))
+            and capabilities.can(preference, "dense_shaped") and step < 2):
         models = models._replace(**dict(zip(("airlight", "background", "scatter"), spot_multiple_rungs(
             models.airlight, models.background, models.scatter, g, multiple_albedo, None if area else cone))))
-    if multiple_albedo is not None and not spot and not area and preference != "osl" and step < 2:
+    if (multiple_albedo is not None and not spot and not area and capabilities.can(preference, "dense_point")
+            and step < 2):
         models = models._replace(**dict(zip(("airlight", "background", "scatter"), multiple_rungs(
             models.airlight, models.background, models.scatter, g, multiple_albedo))))
     if step >= 1:
@@ -482,7 +483,7 @@ def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NOD
 def split_halo(models):
     """(models with their glows' single scattering alone, models with the multiply scattered glows alone) of a
     light whose glow rungs carry a halo (``spot_multiple_rungs``), else None.  The compositor evaluates the
-    halo, which varies slowly over the picture, at a coarser resolution (``comp_fog.build_bundle``)."""
+    halo, which varies slowly over the picture, at a coarser resolution (``comp_bundles.build_bundle``)."""
     if models.airlight.halo is None or models.background.halo is None:
         return None
     return (models._replace(airlight=models.airlight.single, background=models.background.single),

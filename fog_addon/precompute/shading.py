@@ -3,7 +3,7 @@
 ``shade_point`` is one light's contribution at a surface point seen by the
 camera; ``shade_surface`` sums the lights and applies Eq. 19; the background
 functions do the same for camera rays that meet no surface.  The node
-builder (``fog_addon/nodes/groups.py``) only connects sockets to these
+builders (``fog_addon/nodes/light_groups.py``) only connect sockets to these
 functions; numpy runs them as the shaders' twin (tests compare the two pixel
 by pixel).  Every term's formula is a rung of ``rungs.py``, run through
 ``m.run`` so each light can get its own models.
@@ -16,7 +16,7 @@ the albedo), ``pixel_light`` (a pixel that sees a surface over a fraction of
 its area and the sky over the rest), ``sum_lights`` / ``surface_fog`` (the
 materials' sums), ``shade_background`` (the World).  Every backend calls them:
 the node groups through ``NodeOps``, the compositor's per-pixel sum through
-``CompOps`` (``nodes/comp_fog.py``), the error predictor with broadcast
+``CompOps`` (``nodes/comp_ops.py``), the error predictor with broadcast
 (P, N, 3) numpy arrays (``predict.light_fog``).  The groups' sockets are
 derived from ``rungs.OUTPUTS`` too.
 
@@ -30,10 +30,10 @@ Adding a physical term (a light's new quantity) touches:
   ``sky_terms`` for a glow) and a field of LightTerms / SkyTerms; the
   composition picks it up by its kind;
 * ``osl.py`` / ``sockets.py`` only if the kernel needs an operation the ops
-  lack, ``groups.py``'s budgets (measured costs per light) and
+  lack, ``budgets.py``'s budgets (measured costs per light) and
   ``tools/mutations.py`` (a mutation that removes it).
 
-The builders (``groups.py``, ``comp_fog.py``) and the predictor
+The builders (``light_groups.py``, ``comp_lights.py``) and the predictor
 (``predict.py``) need no edit: they take their sockets and sums from OUTPUTS
 and these functions.  A term that needs new inputs from the scene (a light's
 or the camera's property: ``nodes/light.py``, ``view.py``, the settings)

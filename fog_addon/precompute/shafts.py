@@ -200,7 +200,7 @@ def atlas_layout(count, width, height):
 
 
 def atlas_place(tile, columns):
-    """(column, row, channel) of the atlas's ``tile`` (the driver's ATLAS_TILE; ``comp_fog._atlas_tile`` in nodes)."""
+    """(column, row, channel) of the atlas's ``tile`` (the driver's ATLAS_TILE; ``comp_shafts.atlas_tile`` in nodes)."""
     slot, channel = divmod(int(tile), ATLAS_CHANNELS)
     row, column = divmod(slot, columns)
     return column, row, channel
@@ -393,8 +393,8 @@ def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.
     beyond ``length`` integrated by that many more nodes (a pixel that sees both a surface and the sky past
     its edge: the glow to the surface takes S, the glow to the sky S_far).
 
-    ``cone``: scalars the falloff takes after (m, u, d) (a moving spot's driven cone, ``comp_fog.build_shaft_group``),
-    passed into the node groups as their inputs.
+    ``cone``: scalars the falloff takes after (m, u, d) (a moving spot's driven cone,
+    ``comp_shafts.build_shaft_group``), passed into the node groups as their inputs.
     """
     t_c, h, args = _ray_frame(m, camera, direction, light, beta)
     args = args + tuple(cone)

@@ -108,30 +108,29 @@ def table_spec(g, albedo, cos_half, blend):
     """The table of a spot of cone ``cos_half`` = cos(spot size / 2) and ``blend`` in fog of anisotropy g and
     grey albedo W0: 2 PSI_NODES bands of ROWS rows (T) by THETA_NODES columns, PHI_NODES channels."""
     half, hundredths = cone_key(cos_half, blend)
-    return _spec(g, albedo, f"cone {half} deg, blend {hundredths / 100:.2f}")
+    blend = f"{hundredths / 100:.2f}"
+    return _spec(g, albedo, f"cone {half} deg, blend {blend}", math.cos(math.radians(half)), float(blend))
 
 
 def lambert_table_spec(g, albedo):
     """The table of a one-sided Lambertian emitter about the axis, f(c) = max(0, c) (an area light far from
     it, per unit normal intensity I_n): as ``table_spec``'s."""
-    return _spec(g, albedo, "lambert")
+    return _spec(g, albedo, "lambert", 0.0, None)
 
 
-def _spec(g, albedo, profile):
-    return tables.TableSpec(f"AnalyticFog Spot Multiple (g {float(g):+.3f}, W0 {round(float(albedo), 3):.3f}, "
-                            f"{profile})", THETA_NODES, 2 * ROWS * PSI_NODES, float(g), channels=PHI_NODES)
+def _spec(g, albedo, profile, cos_half, blend):
+    """The table's spec; its ``args`` (``spec_parameters``) hold g, W0 and the cone as rounded in its name: the
+    bake is a function of the name's values alone."""
+    g_name, w0 = f"{float(g):+.3f}", f"{round(float(albedo), 3):.3f}"
+    return tables.TableSpec(f"AnalyticFog Spot Multiple (g {g_name}, W0 {w0}, {profile})", THETA_NODES,
+                            2 * ROWS * PSI_NODES, float(g), channels=PHI_NODES, kind=KIND_KEY,
+                            args=(float(g_name), float(w0), cos_half, blend))
 
 
 def spec_parameters(spec):
-    """(g, albedo, cos_half, blend) a ``table_spec`` was named for; a ``lambert_table_spec``'s: (g, albedo,
-    0, None)."""
-    inside = spec.name.split("(", 1)[1].rstrip(")")
-    fields = dict(part.strip().split(" ", 1) if " " in part.strip() else (part.strip(), "")
-                  for part in inside.split(","))
-    if "lambert" in fields:
-        return float(fields["g"]), float(fields["W0"]), 0.0, None
-    return (float(fields["g"]), float(fields["W0"]), math.cos(math.radians(float(fields["cone"].split()[0]))),
-            float(fields["blend"]))
+    """(g, albedo, cos_half, blend) a ``table_spec`` was made for, as rounded in its name (the cone's half-angle
+    to whole degrees); a ``lambert_table_spec``'s: (g, albedo, 0, None)."""
+    return spec.args
 
 
 def _falloff(c, cos_half, blend):
@@ -551,6 +550,16 @@ def estimate_seconds(spec, photons=PHOTONS):
     g, albedo, _, _ = spec_parameters(spec)
     counts = walk_counts(g, albedo, photons)
     return COST["fixed"] + sum(COST[k] * v for k, v in counts.items())
+
+
+def _label(spec):
+    """"the spot table (g +0.850, W0 0.900, cone 45 deg, blend 0.15)", or the area light's."""
+    return f"the {'area light' if spec.args[3] is None else 'spot'} table ({tables.details(spec)})"
+
+
+KIND_KEY = "spot_multiple"
+KIND = tables.TableKind(KIND_KEY, make=table_spec, bake=bake_table, estimate=estimate_seconds, label=_label)
+TABLE_KINDS = (KIND,)   # (``registry.KINDS``; ``lambert_table_spec`` makes this kind's specs too)
 
 
 def _row_y(m, optical_distance):

@@ -334,12 +334,17 @@ def glow_length_scale(beta, air=None):
     return 1.0 / max(extinction, 1e-9)
 
 
+def sky_spec():
+    """The TableSpec of the World's radiance table (``sky_table_from_probe``; ``world_radiance`` reads it)."""
+    return tables.TableSpec(SKY_TABLE, SKY_COLUMNS, SKY_ROWS, channels=4, kind=SKY_KIND.key)
+
+
 def glow_table(beta, air=None):
     """The ``GlowTable`` of a layer of extinction ``beta`` (1/unit) and ``air`` (three channels' ground extinction,
     1/unit, or None): one image per file, its texels re-baked in place for another camera height."""
     blocks = 1 if air is None else 3
-    return GlowTable(tables.TableSpec(GLOW_NAME, GLOW_DISTANCES, GLOW_ELEVATIONS * blocks, channels=4),
-                     glow_length_scale(beta, air), blocks)
+    return GlowTable(tables.TableSpec(GLOW_NAME, GLOW_DISTANCES, GLOW_ELEVATIONS * blocks, channels=4,
+                                      kind=GLOW_KIND.key), glow_length_scale(beta, air), blocks)
 
 
 def glow_coordinates(m, vz, length, length_scale):
@@ -493,7 +498,7 @@ def table_spec(beta, top, falloff, sun, g, air=None):
     a = "" if air is None else ", air " + ", ".join(f"{float(v):.6g}" for v in air)
     return tables.TableSpec(f"AnalyticFog Daylight Fog Light (beta {float(beta):.6g}, top {float(top):.6g}, "
                             f"H {float(falloff):.6g}, sun {s}, g {float(g):+.3f}{a})", Z_COUNT, TABLE_ROWS,
-                            g=float(g), channels=4)
+                            g=float(g), channels=4, kind=FOG_LIGHT_KIND_KEY, args=(beta, top, falloff, sun, g, air))
 
 
 def peak_irradiance(g, cos_ns):
@@ -550,6 +555,21 @@ def bake_fog_light(beta, top, falloff, sun, g, air=None):
         l_sky = daylight.sky_airlight(m, z, mu_g, length, *args, albedo=1.0, g=g)
         return (i_d - i_s) * phase, l_sky, i_s
     return _bake_map(m, top, falloff, g, mu_g, d, dw, fields)
+
+
+def bake_fog_light_table(spec, progress=None):
+    """``bake_fog_light`` of the arguments ``spec`` was made from (``table_spec``)."""
+    return bake_fog_light(*spec.args)
+
+
+FOG_LIGHT_KIND_KEY = "daylight_fog_light"
+FOG_LIGHT_KIND = tables.TableKind(FOG_LIGHT_KIND_KEY, make=table_spec, bake=bake_fog_light_table,
+                                  estimate=lambda spec: 0.4)   # s on 2 cores
+# the glow's table and the World's sky are baked per scene, in place (``nodes/images.keyed_image``): for a camera's
+# height (``bake_glow_table``), from a probe of the World (``sky_table_from_probe``)
+GLOW_KIND = tables.TableKind("daylight_glow", make=lambda beta, air=None: glow_table(beta, air).spec)
+SKY_KIND = tables.TableKind("world_sky", make=lambda: sky_spec())
+TABLE_KINDS = (FOG_LIGHT_KIND, GLOW_KIND, SKY_KIND)   # (``registry.KINDS``)
 
 
 def _bake_grid():

@@ -12,9 +12,17 @@ Lookups are bilinear in (X, Y) with clamping at the edges, identical in numpy
 
 Coordinate maps are written against an ``m`` ops namespace (numpy or node
 sockets, see ``ops.py``) so the same code runs in both.
+
+**Kinds.**  Every table belongs to one ``TableKind``: the phenomenon it tabulates, with its spec constructor,
+its baker, its bake-time estimate and its progress label.  A spec names its kind by key (``TableSpec.kind``,
+set by the kind's constructor) and carries the arguments it was made from (``TableSpec.args``), so the one
+registry (``registry.py``) finds a table's baker without reading its name.  Neither field is part of a spec's
+identity: its name, size, g and channels decide its values, its image and its cache entry (``table_cache``
+keys on ``repr(spec)``, which leaves them out).
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 import math
+from typing import Any, Callable, Optional
 
 HALF_PI = 0.5 * math.pi
 
@@ -26,10 +34,47 @@ class TableSpec:
     height: int        # samples along Y
     g: float = 0.0     # the Henyey-Greenstein anisotropy the table is baked for (a table per g, Biri 2006)
     channels: int = 1  # values per texel, as RGBA; a one-channel table holds its value in all four
+    kind: str = field(default="", compare=False, repr=False)   # its TableKind's key ("": not a registry table)
+    args: tuple = field(default=(), compare=False, repr=False)  # what its kind's constructor made it from
+
+
+def _no_needs(spec):
+    return ()
+
+
+def _named(spec):
+    return f"the table {spec.name}"
+
+
+def details(spec):
+    """What a parameterised table's name holds between its parentheses ("g +0.850, W0 0.800"), for a label."""
+    return spec.name.split("(", 1)[1].rstrip(")") if "(" in spec.name else ""
+
+
+@dataclass(frozen=True)
+class TableKind:
+    """One phenomenon's tables: how they are made, baked, timed and announced (``registry.KINDS`` lists them all).
+
+    ``bake(spec, progress=None)`` returns the float32 array of one of its specs (``progress(done, total)`` is
+    called by the long bakes and may raise ``table_cache.BakeCancelled``); None for a table baked per scene by its
+    caller (from the scene's camera, World or geometry: not a function of its spec, so never cached on disk).
+    ``estimate(spec)``: about how long its own bake takes from a cold cache on 2 cores, s; ``needs(spec)``: the
+    tables its bake reads through the cache (their bake time counts too unless they are cached).  ``make``:
+    its spec constructor (for the tables every fog reads, ``per_g``: ``make(g)``); ``fixed``: specs of it that
+    are constants of another module.  ``image``: packed as an image (False: an intermediate array)."""
+    key: str
+    make: Optional[Callable[..., TableSpec]] = None
+    bake: Optional[Callable[..., Any]] = None
+    estimate: Callable[[TableSpec], float] = lambda spec: 0.0
+    label: Callable[[TableSpec], str] = _named
+    needs: Callable[[TableSpec], tuple] = _no_needs
+    fixed: tuple = ()
+    per_g: bool = False
+    image: bool = True
 
 
 # Normalised airlight kernel N(rho, xi); see airlight.py.
-AIRLIGHT = TableSpec("AnalyticFog Airlight N", 128, 64)
+AIRLIGHT = TableSpec("AnalyticFog Airlight N", 128, 64, kind="airlight")
 MAX_ANISOTROPY = 0.95   # |g| up to this: the Henyey-Greenstein range the tables are baked and tested for
 
 
@@ -50,13 +95,13 @@ SPOT_PSI = 65
 SPOT_CONES = 19
 SPOT_SLICES = SPOT_CONES + 2
 SPOT_SPHERE_SLICE, SPOT_LAMBERT_SLICE = SPOT_CONES, SPOT_CONES + 1
-SPOT_MOMENTS = TableSpec("AnalyticFog Spot Moments", 64, SPOT_PSI * SPOT_SLICES, channels=4)
+SPOT_MOMENTS = TableSpec("AnalyticFog Spot Moments", 64, SPOT_PSI * SPOT_SLICES, channels=4, kind="spot_moments")
 SPOT_SHARE, SPOT_MOMENT_LIGHT, SPOT_MOMENT_AXIS, SPOT_MOMENT_POINT = range(4)   # its channels
 
 # The Lambertian response of light arriving from a von Mises-Fisher distribution of directions
 # (``spot.lobe_response``): X = (c + 1) / 2, c the cosine between the normal and the mean direction;
 # Y = the mean resultant length R in [0, 1].  No g: the distribution's shape only.
-LOBE_RESPONSE = TableSpec("AnalyticFog Lobe Response", 129, 65)
+LOBE_RESPONSE = TableSpec("AnalyticFog Lobe Response", 129, 65, kind="lobe_response")
 
 
 # The directional albedo of the Principled BSDF's specular layer (``surface.bake_specular_albedo``):
@@ -66,7 +111,7 @@ LOBE_RESPONSE = TableSpec("AnalyticFog Lobe Response", 129, 65)
 SPECULAR_MU = 33
 SPECULAR_ROUGHNESS = 33
 SPECULAR_IOR = 1.5
-SPECULAR_ALBEDO = TableSpec("AnalyticFog Specular Albedo", SPECULAR_MU, 3 * SPECULAR_ROUGHNESS)
+SPECULAR_ALBEDO = TableSpec("AnalyticFog Specular Albedo", SPECULAR_MU, 3 * SPECULAR_ROUGHNESS, kind="specular_albedo")
 
 
 def anisotropic(spec, g):
@@ -75,7 +120,7 @@ def anisotropic(spec, g):
     if g == 0.0:
         return spec
     width, height = AIRLIGHT_HG_SIZE if spec == AIRLIGHT else (spec.width, spec.height)
-    return TableSpec(f"{spec.name} (g {g:+.3f})", width, height, g, spec.channels)
+    return TableSpec(f"{spec.name} (g {g:+.3f})", width, height, g, spec.channels, kind=spec.kind, args=(g,))
 
 
 def hg_stretch(g):
@@ -93,7 +138,7 @@ SURFACE_T = 96
 SURFACE_THETA = 65            # odd: theta = pi/2 (the clamped-cosine kink of n = 1) is a grid row
 PHONG_LEVELS_PER_OCTAVE = 4
 PHONG_EXPONENTS = tuple(2.0 ** (k / PHONG_LEVELS_PER_OCTAVE) for k in range(41))   # 1 ... 1024
-SURFACE = TableSpec("AnalyticFog Surface M", SURFACE_T, SURFACE_THETA * len(PHONG_EXPONENTS))
+SURFACE = TableSpec("AnalyticFog Surface M", SURFACE_T, SURFACE_THETA * len(PHONG_EXPONENTS), kind="surface")
 
 SURFACE_T_MAX = 60.0          # X = 1; beyond it the lookup clamps (exp(-T) < 1e-26 there)
 SURFACE_T_SCALE = 1.0         # T0 of surface_x

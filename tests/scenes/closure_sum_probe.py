@@ -1,4 +1,4 @@
-"""The fog's per-light closure sum (``groups._closure_sum``) renders every closure, in SVM and OSL.
+"""The fog's per-light closure sum (``closures.closure_sum``) renders every closure, in SVM and OSL.
 
     python tests/scenes/closure_sum_probe.py OUT_DIR N [N ...]
 
@@ -25,7 +25,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 from fog_addon import imageio, measure  # noqa: E402
-from fog_addon.nodes import groups  # noqa: E402
+from fog_addon.nodes import closures  # noqa: E402
 from fog_addon.nodes.sockets import NodeOps  # noqa: E402
 
 
@@ -67,7 +67,7 @@ def build(n):
     nt.nodes.clear()
     out = nt.nodes.new("ShaderNodeOutputMaterial")
     m = NodeOps(nt, {})
-    groups._closure_sum(m, out.inputs["Surface"], "ShaderNodeEmission", _varying(m, cols))
+    closures.closure_sum(m, out.inputs["Surface"], "ShaderNodeEmission", _varying(m, cols))
     depth = osl_stack_depth(out.inputs["Surface"])
     bpy.ops.mesh.primitive_plane_add(size=2.0)
     plane = bpy.context.object
@@ -79,7 +79,7 @@ def build(n):
     wt.nodes.clear()
     wout = wt.nodes.new("ShaderNodeOutputWorld")
     wm = NodeOps(wt, {})
-    groups._closure_sum(wm, wout.inputs["Surface"], "ShaderNodeBackground", _varying(wm, cols))
+    closures.closure_sum(wm, wout.inputs["Surface"], "ShaderNodeBackground", _varying(wm, cols))
 
     cam = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
     s.collection.objects.link(cam)

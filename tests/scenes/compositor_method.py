@@ -29,7 +29,7 @@ sys.path.insert(0, str(ROOT))
 import bpy  # noqa: E402
 
 from demo_scenes import spheres  # noqa: E402
-from fog_addon.nodes import comp_fog, compositor, groups, images, owned  # noqa: E402
+from fog_addon.nodes import budgets, comp_bundles, comp_fog, comp_ops, compositor, groups, images, owned  # noqa: E402
 from fog_addon.precompute import spot  # noqa: E402
 from fog_addon.nodes.sockets import NodeOps  # noqa: E402
 from fog_addon.methods.compositor import dimming_lights  # noqa: E402
@@ -85,7 +85,7 @@ def shared():
     exp(x * 2)), and exp(3x) once; the rim groups in a spot's glow pair."""
     tree = bpy.data.node_groups.new("Shared test", "CompositorNodeTree")
     tree.interface.new_socket("x", in_out="INPUT", socket_type="NodeSocketFloat")
-    x = comp_fog.CompOps(tree).wrap(tree.nodes.new("NodeGroupInput").outputs[0])
+    x = comp_ops.CompOps(tree).wrap(tree.nodes.new("NodeGroupInput").outputs[0])
     m = x.ops
     a = m.exp(2.0 * x) + m.sqrt(x)
     b = m.exp(x * 2.0) + m.sqrt(x)
@@ -98,7 +98,7 @@ def shared():
     spot_tree = bpy.data.node_groups.new("Spot test", "CompositorNodeTree")
     for k in range(13):
         spot_tree.interface.new_socket(f"In {k}", in_out="INPUT", socket_type="NodeSocketFloat")
-    m = comp_fog.CompOps(spot_tree, images.all_table_images())
+    m = comp_ops.CompOps(spot_tree, images.all_table_images())
     spot.airlight_pair(m, *(m.wrap(o) for o in spot_tree.nodes.new("NodeGroupInput").outputs[:13]))
     pair = next(n.node_tree for n in spot_tree.nodes if n.bl_idname == "CompositorNodeGroup")
     # the rims are inline in the pair (so they share what they can): each of their points has one Map Range node
@@ -215,7 +215,7 @@ def main():
     lamp.location.x += 1.25
     scene.frame_set(scene.frame_current)
 
-    nodes = [n for ng in bpy.data.node_groups if ng.name.startswith((comp_fog.FOG_GROUP, comp_fog.BUNDLE))
+    nodes = [n for ng in bpy.data.node_groups if ng.name.startswith((comp_fog.FOG_GROUP, comp_bundles.BUNDLE))
              for n in ng.nodes]
 
     def value(label, i=None):
@@ -244,8 +244,8 @@ def main():
     kept, models = dimming_lights(scene, apply.spec_of(scene), lamps)
     score = {o.name: o.data.energy / (o.matrix_world.translation - eye).length_squared for o in lamps}
     res["dimming"] = {"kept": len(kept), "models": sorted({m.airlight.name for m in models}),
-                      "fits": groups.eevee_budget(0.0).fits([2] * len(kept)),
-                      "one_more_fits": groups.eevee_budget(0.0).fits([2] * (len(kept) + 1)),
+                      "fits": budgets.eevee_budget(0.0).fits([2] * len(kept)),
+                      "one_more_fits": budgets.eevee_budget(0.0).fits([2] * (len(kept) + 1)),
                       "brightest": min(score[o.name] for o in kept) >= max(
                           [score[o.name] for o in lamps if o not in kept], default=0.0)}
     scene.render.engine = "CYCLES"   # Cycles' lights dim their own direct light: none in the materials

@@ -31,6 +31,7 @@ from fog_scenes import many_lights  # noqa: E402
 from fog_addon import measure  # noqa: E402
 from fog_addon.nodes import comp_fog  # noqa: E402
 from fog_addon import view  # noqa: E402
+from fog_addon.methods.compositor import has_fog_surface, lets_nothing_through  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 from fog_addon.precompute import footprint  # noqa: E402
 
@@ -123,10 +124,11 @@ def run(out, windowed):
         apply.refresh_lights(scene)
         flags["saved"] = comp_fog.windows_partial()
         shares = flags
-        surfaces, glows = view.windows(scene, lights)
+        surfaces, glows = view.windows(scene, lights, fogged=has_fog_surface, opaque=lets_nothing_through)
         shares.update({"surfaces": _share(surfaces), **{o.name: _share(g) for o, g in zip(lights, glows)}})
         found, view.occluders = view.occluders, lambda *args: []   # the windows without occluders
-        shares.update({o.name + " plain": _share(g) for o, g in zip(lights, view.windows(scene, lights)[1])})
+        plain = view.windows(scene, lights, fogged=has_fog_surface, opaque=lets_nothing_through)[1]
+        shares.update({o.name + " plain": _share(g) for o, g in zip(lights, plain)})
         view.occluders = found
         shares["occluders"] = occluder_cases(scene)
     return paths, shares
@@ -142,7 +144,8 @@ def occluder_cases(scene):
         depsgraph = bpy.context.evaluated_depsgraph_get()
         cam = scene.camera.evaluated_get(depsgraph)
         mw = np.array(cam.matrix_world)
-        faces = view.occluders(depsgraph, cam, mw, view.frame_extent(scene, cam), view.occlusion_margin(scene))
+        faces = view.occluders(depsgraph, cam, mw, view.frame_extent(scene, cam), view.occlusion_margin(scene),
+                               has_fog_surface, lets_nothing_through)
         return any(np.abs(face[:, 2]).max() < 1e-6 and len(face) == 4 for face, _ in faces)
 
     ground = scene.objects["ground"]

@@ -30,7 +30,7 @@ import numpy as np  # noqa: E402
 from fog_scenes import many_lights  # noqa: E402
 from fog_scenes.probe_common import light_pixel  # noqa: E402
 from fog_addon import imageio, measure  # noqa: E402
-from fog_addon.nodes import comp_fog  # noqa: E402
+from fog_addon.nodes import comp_lights  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 
 W, H = 96, 54
@@ -44,13 +44,13 @@ def render(out, n, method, samples, radius, peak=True):
     measure.set_resolution(scene, W, H)
     measure.set_samples(scene, samples)
     scene.eevee.light_threshold = 1e-6
-    found = comp_fog.pixel_filter
+    found = comp_lights.pixel_filter
     if not peak:
-        comp_fog.pixel_filter = lambda scene: None
+        comp_lights.pixel_filter = lambda scene: None
     try:
         apply.apply_fog(scene, many_lights.BETA, albedo=many_lights.ALBEDO, method=method, error="exact")
     finally:
-        comp_fog.pixel_filter = found
+        comp_lights.pixel_filter = found
     path = out / f"{method}_{samples}_{'peak' if peak else 'nopeak'}.exr"
     im = scene.render.image_settings
     im.file_format, im.color_depth, im.color_mode = "OPEN_EXR", "32", "RGB"

@@ -5,7 +5,7 @@
 The many-lights scene with 25 lights, the fog added in Cycles with the add-on registered (its
 depsgraph handler on); the engine switched to EEVEE, then back to Cycles; then the Compositor method.
 Prints one line ``ENGINE_SWITCH_JSON {...}``: after each step the stored choice's engine, steps, "limited"
-and whether its steps fit EEVEE's budget (``groups.eevee_budget``); the notes the node groups' and the
+and whether its steps fit EEVEE's budget (``budgets.eevee_budget``); the notes the node groups' and the
 Compositor method's ``apply_fog`` returned.
 """
 import json
@@ -19,7 +19,7 @@ import bpy  # noqa: E402
 
 import fog_addon  # noqa: E402
 from fog_scenes import many_lights  # noqa: E402
-from fog_addon.nodes import groups  # noqa: E402
+from fog_addon.nodes import budgets  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 
 
@@ -27,7 +27,7 @@ def state():
     choice = apply.stored_choice()
     steps = [step for step, _ in choice["lights"].values()]
     return {"engine": choice["engine"], "steps": steps, "limited": choice["limited"],
-            "fits_eevee": groups.eevee_budget().fits(steps), "error": choice["error"]}
+            "fits_eevee": budgets.eevee_budget().fits(steps), "error": choice["error"]}
 
 
 def main():

@@ -10,7 +10,7 @@ if str(ROOT) not in sys.path:
 import bpy  # noqa: E402
 
 from fog_addon import caveats  # noqa: E402
-from fog_addon.nodes import compositor, groups, images, osl, owned  # noqa: E402
+from fog_addon.nodes import compositor, groups, images, light_bundles, osl, owned  # noqa: E402
 from fog_addon.precompute import rungs  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 
@@ -50,10 +50,11 @@ def expected_names(method, scene=None, texts_of=None):
              groups.light_group_name(models), groups.background_group_name(models)]
     if scene is not None:   # the lights' bundles: every light full (these files' Quality keeps them all)
         n = len(apply.fog_lights(scene)[0])
-        names += [f"{prefix} {k + 1}-{min(k + groups.BUNDLE, n)}" for prefix in (groups.SURFACE_LIGHTS, groups.WORLD_LIGHTS)
-                  for k in range(0, n, groups.BUNDLE)]
+        names += [f"{prefix} {k + 1}-{min(k + light_bundles.BUNDLE, n)}"
+                  for prefix in (groups.SURFACE_LIGHTS, groups.WORLD_LIGHTS) for k in range(0, n, light_bundles.BUNDLE)]
         if method in ("nodes", "osl") and caveats.specular_paths(bpy.data.materials):   # past glass and mirrors
-            names += [f"{groups.SURFACE_TAILS} {k + 1}-{min(k + groups.BUNDLE, n)}" for k in range(0, n, groups.BUNDLE)]
+            names += [f"{groups.SURFACE_TAILS} {k + 1}-{min(k + light_bundles.BUNDLE, n)}"
+                      for k in range(0, n, light_bundles.BUNDLE)]
     names += images.table_names()
     names += [osl.text_name(r) for r in rungs.choose(texts_of or method) if r.backends == {"numpy", "osl"}]
     tree = scene.compositing_node_group if scene is not None and compositor.is_set_up(scene) else None

@@ -1,0 +1,69 @@
+"""A fog layer's daylight in the compositor, per pixel: the sun's and the sky's glow and fog light
+(``daylight``), and the lit shares of the sun's shafts from its map (``sun_shares``)."""
+import hashlib
+from typing import Any, NamedTuple
+
+from ..precompute import model, shafts, sunlight
+from . import comp_shafts, surface_group
+from .comp_shafts import SHAFT_EDGE, SHAFT_GROUP, SHAFT_TAPS, SURFACE_EDGE, SURFACE_TAPS
+
+LAYER_OPEN = 1.0e9   # units: a fog layer's span end beyond this is open (``sunlight.lamp_glow_span``'s UNBOUNDED)
+
+
+def daylight(m, day, table, camera, direction, position, normal, reflectance, d_vp, t_vp, cover, sun_share=None,
+             surface_share=None):
+    """The sun's and the sky's light in a fog layer at a pixel (albedos included): ``surface_group.daylight_light``
+    where the pixel sees a surface, the glow to the sky (``sunlight.ray_glow``) where it does not.  With air the glow
+    is evaluated once, to the surface where it covers most of the pixel and to the sky elsewhere (without the glow's
+    table its kernel is the costliest part of the picture: a pixel on a silhouette takes one side's glow).
+    ``sun_share``, ``surface_share``: the lit shares of the layer's sun glow and of the sun's part of the fog light on
+    the pixel's surface (``sun_shares``), or None."""
+    if day.air is None:
+        to_surface = surface_group.daylight_light(m, day, table, camera, direction, position, normal, reflectance,
+                                                  d_vp, t_vp, sun_share, surface_share)
+        to_sky = sunlight.ray_glow(m, day, camera, direction, model.FAR, sun_share)
+        return m.scale(to_surface, cover) + m.scale(to_sky, 1.0 - cover)
+    surface = m.less(0.5, cover)
+    glow = sunlight.ray_glow(m, day, camera, direction, m.select(surface, d_vp, model.FAR), sun_share)
+    reflected = sunlight.times(m, reflectance * sunlight.fog_light(m, table, day, position, normal, surface_share),
+                               t_vp)
+    return glow + m.scale(reflected, cover)
+
+
+class Day(NamedTuple):
+    """``comp_fog.build_fog_group``'s ``day``: what the compositor takes of a fog layer's daylight."""
+    build: Any             # ``surface_group.build_surface``'s ``day``: (m, beta, albedo) -> ``sunlight.Daylight``
+    table: Any             # the fog light's TableSpec (``sunsky.fog_light_table``)
+    dims: bool             # whether surfaces take the sun's and the sky's dimming (``sunsky.dims_surfaces``)
+    sun_shadow: Any = None   # the sun's map (``shadow_maps.SunShadow``), or None: no shafts from the sun
+    sun_nodes: int = 0       # the sun's lit share's nodes a pixel (``shafts.Samples.view_nodes``)
+
+
+SUN_SHAFT_NODE = f"{SHAFT_GROUP} Sun Node"   # one group per quadrature node of the sun's lit share
+
+
+def sun_shares(m, sun_shadow, nodes, day, camera, direction, layer, length, beta, point, normal, offsets,
+               shaft_length):
+    """(the lit share of the layer's sun glow at a pixel, the lit share of the sun's part of the fog light on its
+    surface) from the sun's map ``sun_shadow`` (``shadow_maps.SunShadow``).  The glow's (``shafts.sun_lit_share``)
+    over the part of the pixel's ray in the layer (``sunlight.lamp_glow_span`` below its lamps' glow top), to the
+    pixel's surface or, past ``length``, the sky, at most SUN_REACH mean free paths, ``nodes`` a pixel interleaved
+    over 2 x 2 pixels; the surface's (``shafts.sun_surface_share``) interleaved over 4 x 4 (``offsets``: the pixel's
+    ``shafts.offset`` and ``surface_offset``).  Each is averaged over its pattern depth-aware
+    (``comp_shafts.interleave_mean_group``, by ``shaft_length``)."""
+    spec, frame = sun_shadow
+    top_z = sunlight.lamp_glow_top(*layer)
+    t0, t1 = sunlight.lamp_glow_span(m, top_z, camera, direction)
+    meets = m.less(t0, LAYER_OPEN)
+    start = m.minimum(t0, LAYER_OPEN)
+    span = m.maximum(m.minimum(m.minimum(t1, length) - start, shafts.SUN_REACH / m.maximum(beta, 1e-9)), 0.0)
+    rate = shafts.sun_attenuation_rate(m, beta, m.dot(direction, (0.0, 0.0, 1.0)), sunlight.sun_elevation(m, day))
+    name = f"{SUN_SHAFT_NODE} {hashlib.sha1(repr((spec, tuple(frame))).encode()).hexdigest()[:12]}"
+    lit = shafts.sun_lit_share(m, spec, frame, camera + m.scale(direction, start), direction, span, rate, nodes,
+                               offsets[0], name=name)
+    share = comp_shafts.interleave_mean_group(m, m.select(meets, lit, 1.0), shaft_length, SHAFT_TAPS, SHAFT_EDGE)
+    lit, total = shafts.sun_surface_share(m, spec, frame, point, normal, camera, beta, day.sun, float(day.g), top_z,
+                                          float(layer[2]), offsets[1], name=name)
+    parts = comp_shafts.interleave_mean_group(m, m.combine(lit, total, 1.0), shaft_length, SURFACE_TAPS,
+                                              SURFACE_EDGE)
+    return share, shafts.share_of(m.dot(parts, (1.0, 0.0, 0.0)), m.dot(parts, (0.0, 1.0, 0.0)))

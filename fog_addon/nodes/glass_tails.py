@@ -1,0 +1,118 @@
+"""The Surface group's See Through shader (Cycles): the fog's glows along the segments past a glass pane or a
+sharp mirror, by differences of tails to infinity (``place_tails``), built only where the scene has them
+(``caveats.specular_paths``).  The Surface group's Glass Color and Glass IOR inputs (fed by ``material.py``)
+weight them."""
+from ..precompute import rungs, shading
+from . import closures, groups, light_bundles, light_groups
+from .groups import C, F, V
+from .sockets import NodeOps
+
+GLASS_COLOR, GLASS_IOR = "Glass Color", "Glass IOR"   # the Surface group's inputs for a Glass BSDF (material.py)
+SEE_THROUGH = "See Through"   # its output: the glows past glass and mirrors (Cycles; ``place_tails``)
+
+
+def specular_segment(m, path):
+    """1 on a ray that leaves a glass pane or a mirror on a path of sharp bounces from the camera (Cycles'
+    Light Path: not a camera ray, Is Singular Ray, Diffuse Depth 0), else 0.  Such a ray is a segment of
+    its own: it starts at P + Incoming x Ray Length (Ray Length is the segment's length on every ray but
+    the camera's, which Cycles measures from the near clip plane).  EEVEE traces no such rays (its Is
+    Singular Ray is 0): what it refracts or reflects is its picture or its probes."""
+    singular = m.wrap(path.outputs["Is Singular Ray"])
+    first = m.less(m.wrap(path.outputs["Diffuse Depth"]), 0.5)
+    return (1.0 - m.wrap(path.outputs["Is Camera Ray"])) * singular * first
+
+
+def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp, shared, below):
+    """The Surface group's See Through shader (Cycles only: ``material.py`` adds it to the Cycles output):
+    the glows of the segments past a glass pane or a mirror, by differences of tails.
+
+    The glow of a light along a segment from a to b is G_inf(a) - e^{-beta |ab|} G_inf(b) (Sun et al. 2005
+    Eq. 12's glow to infinity, ``shading.background_point``, from each end in the segment's direction; the
+    sum of differences of one primitive, Biri 2006 §III.D).  So each vertex of a sharp path adds what it
+    can compute without knowing where the next segment ends, the glow to infinity of the segments leaving
+    it, weighted as Cycles weights them; and each vertex a sharp segment reaches takes away the tail past
+    itself, dimmed by its own segment, e^{-beta Ray Length}.  A segment that escapes to the sky keeps its
+    whole tail: the World, which knows no ray origin, adds nothing on those rays
+    (``world_group.build_world``).  Cycles multiplies by the path's throughput, so each segment's glow and
+    extinction compose along the path (Eq. 19 applied at every vertex).  The leaving segments' weights:
+
+    * a Glass BSDF (``GLASS_COLOR``, ``GLASS_IOR`` fed by ``material.py``): colour x (1 - F) straight on
+      (the segment's direction through a thin pane, exact for IOR 1 and for a parallel slab up to its
+      thickness) and colour x F about the mirrored direction, F the dielectric Fresnel factor (Fresnel
+      node, as Cycles' glass);
+    * a mirror (Principled, roughness 0): its glossy fog light (``shading.shade_point``'s Phong lobe of
+      the highest exponent, which is a blurred tail to infinity) already is.
+
+    ``below``: the Surface group's light bundles placed (their rows).  Returns the bundle groups built.
+    """
+    kept = [(light, mod) for light, mod in zip(lights, models)
+            if any(o.computed(mod) for o in rungs.SKY_OUTPUTS if o.colour)]
+    if not kept:
+        return []
+    fresnel = ng.nodes.new("ShaderNodeFresnel")
+    fresnel.location = (-600, 600)
+    ng.links.new(g[GLASS_IOR], fresnel.inputs["IOR"])
+    f = m.wrap(fresnel.outputs[0])
+    glass = m.wrap(g[GLASS_COLOR], vector=True)
+    incoming = m.wrap(geo.outputs["Incoming"], vector=True)
+    seg3 = m.combine(segment, segment, segment)
+    # the tails' own copy of Position (the same value): the light groups' nodes that read Position would
+    # otherwise be one node in Cycles' graph (its deduplication) with the Surface bundles' and, read by both
+    # sides of the closure tree, stay on SVM's stack for both: 4 floats a light (199 floats at 24 lights)
+    position = m.wrap(shared["Position"], vector=True) + closures.exact_zero(m, incoming)
+    inputs = dict(shared, **{"Position": position.sock, "Straight": m.scale(incoming, -1.0).sock,
+                             "Mirrored": shading.mirror(m, incoming, m.wrap(geo.outputs["Normal"], vector=True)).sock,
+                             "Straight Weight": (m.scale(glass, 1.0 - f) - seg3).sock,
+                             "Mirrored Weight": m.scale(glass, f).sock, "Transmittance": t_vp.sock})
+    fogs, trees = [], []
+    for first, some, mods in light_bundles.split([light for light, _ in kept], [mod for _, mod in kept]):
+        tree = build_tail_bundle(images, first, some, mods)
+        trees.append(tree)
+        node = light_bundles.group_node(ng, tree, tree.name.removesuffix(groups.BUILDING), -300,
+                                        -300 * (below + len(fogs)), [(src, n) for n, src in inputs.items()])
+        fogs.append(node.outputs["Fog"])
+    out = next(n for n in ng.nodes if n.bl_idname == "NodeGroupOutput").inputs[SEE_THROUGH]
+    closures.shader_tree(ng, out, fogs)
+    # only on a specular segment, or on a camera ray that meets glass: a factor of exactly 0 elsewhere, where
+    # Cycles' SVM jumps over the tails (``closures.camera_rays_only``)
+    has_glass = m.less(0.0, m.dot(glass, m.combine(1.0, 1.0, 1.0)))
+    gate = m.clamp(segment + is_camera * has_glass)
+    closures.camera_rays_only(ng, out, gate.sock, "Specular Paths Only")
+    return trees
+
+
+def build_tail_bundle(images, first, lights, models):
+    """One bundle of the Surface group's See Through shader (``place_tails``): for each light, the albedo
+    times Transmittance times (Straight Weight x its glow to infinity from Position along Straight + Mirrored
+    Weight x along Mirrored), from two instances of its World group (``light_groups.build_background_light``),
+    as one Emission closure (its colour may be negative: Cycles passes negative emission through)."""
+    name = light_bundles.bundle_name(groups.SURFACE_TAILS, first, lights)
+    ng, gin, gout = groups.new_group(name, [("Beta", F), ("Albedo", C), ("Position", V), ("Straight", V),
+                                            ("Mirrored", V), ("Straight Weight", C), ("Mirrored Weight", C),
+                                            ("Transmittance", F)], [("Fog", "NodeSocketShader")])
+    m = NodeOps(ng, {})
+    g = {s.name: s for s in gin.outputs if s.name}
+    albedo = m.wrap(g["Albedo"], vector=True)
+    scale = m.scale(albedo, m.wrap(g["Transmittance"]))
+    colours = []
+    for k, (light, mod) in enumerate(zip(lights, models)):
+        group = light_groups.build_background_light(mod, images).name
+        straight = light_groups.light_instance(ng, first + k, light, group, [
+            (g["Beta"], "Beta"), (g["Position"], "Camera"), (g["Straight"], "Direction")])
+        mirrored = ng.nodes.new("ShaderNodeGroup")
+        mirrored.node_tree = straight.node_tree
+        mirrored.name = mirrored.label = f"{straight.name} (mirrored)"
+        mirrored.location = (straight.location.x, straight.location.y - 150)
+        for sock in straight.inputs:
+            src = g["Mirrored"] if sock.name == "Direction" else (sock.links[0].from_socket if sock.is_linked
+                                                                  else None)
+            if src is not None:
+                ng.links.new(src, mirrored.inputs[sock.name])
+        tail = (m.wrap(straight.outputs[rungs.BACKGROUND_OUT.name], vector=True) * m.wrap(g["Straight Weight"],
+                                                                                        vector=True)
+                + m.wrap(mirrored.outputs[rungs.BACKGROUND_OUT.name], vector=True) * m.wrap(g["Mirrored Weight"],
+                                                                                          vector=True))
+        colours.append(tail * scale)
+    closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", colours)
+    m.place()
+    return ng

@@ -1,0 +1,187 @@
+"""The Surface group, ``AnalyticFog Surface``, which every fogged material uses: ``shading.shade_surface`` (Sun et
+al. 2005 Eq. 19) over the scene's fog lights in bundles (``build_surface_bundle``), with a fog layer's daylight
+(``daylight_light``) and the glows past glass and mirrors (``glass_tails.py``)."""
+import functools
+
+import bpy
+
+from ..precompute import rungs, shading, sunlight, surface
+from . import closures, glass_tails, groups, light_bundles, light_groups, passes
+from .groups import C, F, V
+from .sockets import NodeOps
+
+_SURFACE_SHARED = (("Beta", F), ("Position", V), ("Incoming", V), ("View Distance", F), ("Normal", V),
+                   ("Diffuse", C), ("Specular", C), ("Glossy Level", F))   # a light group's inputs but its own
+
+
+def build_surface_bundle(images, first, lights, models, with_passes, chained):
+    """One bundle of the Surface group (``light_bundles.split``): ``shading.sum_lights`` over ``lights``
+    (Sun et al. 2005 Eq. 19's L_a) from their per-light groups (``light_groups.build_light``).
+
+    Outputs: Fog (one Emission closure per lit light, times the Opacity input), Emission (their colours'
+    sum), Weighted and Weight (``shading.LightSums``).  ``with_passes``: Running Sum out is Running Sum in
+    (``chained``; else nothing) plus this bundle's Fog Light (``closures.chained_closure_sum``).
+    """
+    name = light_bundles.bundle_name(groups.SURFACE_LIGHTS, first, lights)
+    inputs = [*_SURFACE_SHARED, ("Albedo", C), ("View Transmittance", F), ("Is Camera", F), (passes.OPACITY, C)]
+    outputs = [("Fog", "NodeSocketShader"), ("Emission", C), ("Weighted", F), ("Weight", F)]
+    if with_passes:
+        inputs, outputs = inputs + [(light_bundles.RUNNING, C)], outputs + [(light_bundles.RUNNING, C)]
+    ng, gin, gout = groups.new_group(name, inputs, outputs)
+    m = NodeOps(ng, {})
+    g = {s.name: s for s in gin.outputs if s.name}
+    terms = []
+    for k, (light, mod) in enumerate(zip(lights, models)):
+        node = light_groups.light_instance(ng, first + k, light, light_groups.build_light(mod, images).name,
+                                           [(g[n], n) for n, _ in _SURFACE_SHARED])
+        terms.append(light_groups.read(m, node, rungs.SURFACE_OUTPUTS, shading.LightTerms))
+    sums = shading.sum_lights(m, terms, light_groups.medium(m, g["Beta"], g["Albedo"]),
+                              m.wrap(g["View Transmittance"]), m.wrap(g["Is Camera"]))
+    opacity = m.wrap(g[passes.OPACITY], vector=True)
+    closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", [_times(m, e, opacity, with_passes)
+                                                                        for e, mod in zip(sums.emissions, models)
+                                                                        if _lit(mod)])
+    for sock, v in (("Emission", sums.emission), ("Weighted", sums.weighted), ("Weight", sums.weight)):
+        m.feed(gout.inputs[sock], m.wrap(v))
+    if with_passes:
+        start = m.wrap(g[light_bundles.RUNNING], vector=True) if chained else None
+        m.feed(gout.inputs[light_bundles.RUNNING], closures.chained_closure_sum(m, gout.inputs["Fog"], start))
+    m.place()
+    return ng
+
+
+def build_surface(lights, models, images, with_passes=False, extra=None, tails=True, day=None, day_table=None,
+                  day_dims=True, day_exact=True):
+    """Scene group for materials: ``shading.shade_surface`` (Sun et al. 2005 Eq. 19) over ``lights``.
+
+    ``models``: one rungs.LightModels per light.  Inputs mirror the Principled
+    BSDF; outputs are the fields of ``shading.SurfaceFog``: Fog, the fog's
+    light as a shader (one Emission closure per light, times the Opacity
+    input), and Emission, the same as one colour (camera rays only),
+    Transmittance e^{-beta D_vp} to scale the material, Direct Attenuation
+    (EEVEE's stand-in for the per-light e^{-beta D_sp}) and per engine the
+    Mix Factor 1 - scale of the user's shader.  ``with_passes``: it writes the
+    fog passes (``passes.py``), weighted by the Opacity input (white: opaque).  ``extra(group)``: adds
+    nodes of its own (the Compositor method's AOVs, ``comp_fog.add_surface_aovs``).  ``tails``: the glows
+    past glass and mirrors (See Through, ``glass_tails.place_tails``), only where the scene has them
+    (``caveats.specular_paths``).  ``day(m, beta)``: the fog layer's ``sunlight.Daylight`` in this tree
+    (``sunsky.daylight``), or None for fog that fills all space: the camera segment's transmittance is then the
+    layer's, and the user's shader on every ray takes the sun's and the sky's dimming (``sunlight.direct_dimming``);
+    with ``day_table`` (the fog light's TableSpec, its image in ``images``) camera rays also get the sun's and the
+    sky's glow and their fog light on the surface (``daylight_light``); ``day_dims`` False leaves the sun's and the
+    sky's dimming to the compositor (``comp_fog.build_fog_group``: once per pixel), ``day_exact`` False dims the
+    camera segment by ``sunlight.proxy_transmittance`` (the compositor puts the exact colour on every pixel).  The
+    lights sit in bundle groups (``light_bundles.split``, ``build_surface_bundle``).
+
+    Why closures: Cycles' SVM emits a shader's value nodes in the order of
+    their ids, so one colour summed over the lights keeps every light's values
+    on its stack of 255 floats at once (out of SVM stack space, every fogged
+    material black, at 4 lights), while each closure's inputs are compiled
+    and released before the next closure's.
+    """
+    ng, gin, gout = groups.new_group(groups.SURFACE, [
+        ("Base Color", C), ("Metallic", F), ("Roughness", F), ("Specular IOR Level", F), (passes.OPACITY, C),
+        (glass_tails.GLASS_COLOR, C), (glass_tails.GLASS_IOR, F),
+    ], [("Fog", "NodeSocketShader"), ("Emission", C), ("Transmittance", F), ("Direct Attenuation", F),
+        ("Cycles Mix Factor", F), ("EEVEE Mix Factor", F), (glass_tails.SEE_THROUGH, "NodeSocketShader")])
+    items = {i.name: i for i in ng.interface.items_tree if i.item_type == "SOCKET" and i.in_out == "INPUT"}
+    items[passes.OPACITY].default_value = (1.0, 1.0, 1.0, 1.0)
+    items[glass_tails.GLASS_COLOR].default_value = (0.0, 0.0, 0.0, 1.0)
+    items[glass_tails.GLASS_IOR].default_value = 1.5
+    m = NodeOps(ng, images)
+    params = ng.nodes.new("ShaderNodeGroup")
+    params.node_tree = bpy.data.node_groups[groups.PARAMS]
+    geo = ng.nodes.new("ShaderNodeNewGeometry")
+    cam = ng.nodes.new("ShaderNodeCameraData")
+    path = ng.nodes.new("ShaderNodeLightPath")
+    g = {s.name: s for s in gin.outputs if s.name}
+    diffuse, specular, level = surface.principled_to_phong(
+        m, m.wrap(g["Base Color"], vector=True), m.wrap(g["Metallic"]), m.wrap(g["Roughness"]),
+        m.wrap(g["Specular IOR Level"]), m.dot(m.wrap(geo.outputs["Incoming"], vector=True),
+                                               m.wrap(geo.outputs["Normal"], vector=True)))
+    is_camera = m.wrap(path.outputs["Is Camera Ray"])
+    segment = glass_tails.specular_segment(m, path)
+    fogged = is_camera + segment   # the rays the fog shades: 0 or 1
+    view = m.wrap(cam.outputs["View Distance"])
+    # the segment's length: from the camera on camera rays (Ray Length starts at the near clip there), from the
+    # pane or mirror on a specular segment (Ray Length: the point is P + Incoming x Ray Length's end)
+    length = m.select(segment, m.wrap(path.outputs["Ray Length"]), view)
+    t_vp, transmit = shading.view_transmittance(m, m.wrap(params.outputs["Beta"]), length, fogged)
+    if day is not None:
+        daylight = day(m, m.wrap(params.outputs["Beta"]), m.wrap(params.outputs["Albedo"], vector=True))
+        position, incoming = m.wrap(geo.outputs["Position"], vector=True), m.wrap(geo.outputs["Incoming"], vector=True)
+        # a shader's factor is one number: with air, the mean of its colour (the Compositor takes the colour)
+        t_vp = (sunlight.grey(m, sunlight.view_transmittance(m, daylight, position, incoming, length)) if day_exact
+                else sunlight.proxy_transmittance(m, daylight, length))
+        transmit = 1.0 + fogged * (t_vp - 1.0)
+        if day_dims:
+            transmit = transmit * sunlight.grey(m, sunlight.direct_dimming(
+                m, daylight, position, m.wrap(geo.outputs["Normal"], vector=True)))
+    glow_length = view * (1.0 - segment)   # a specular segment's glow is the tails' (``glass_tails``)
+    shared = {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"], "Position": geo.outputs["Position"],
+              "Incoming": geo.outputs["Incoming"], "View Distance": glow_length.sock,
+              "Normal": geo.outputs["Normal"], "Diffuse": diffuse.sock, "Specular": specular.sock,
+              "Glossy Level": level.sock, "View Transmittance": t_vp.sock, "Is Camera": fogged.sock,
+              passes.OPACITY: g[passes.OPACITY]}
+    placed, bundles, running = light_bundles.place_bundles(
+        ng, lights, models, functools.partial(build_surface_bundle, images), shared, with_passes)
+    sums = None
+    for node, _ in placed:
+        sums = shading.merge_sums(sums, shading.LightSums(
+            [], *(m.wrap(node.outputs[f], vector=f == "Emission") for f in ("Emission", "Weighted", "Weight"))))
+    fogs = [node.outputs["Fog"] for node, mods in placed if any(_lit(mod) for mod in mods)]
+    fog = shading.surface_fog(m, sums, transmit)
+    if day is not None and day_table is not None:
+        light = m.scale(daylight_light(
+            m, daylight, day_table, position + m.scale(incoming, length), m.scale(incoming, -1.0), position,
+            m.wrap(geo.outputs["Normal"], vector=True), diffuse + specular, length, t_vp), is_camera)
+        emit = ng.nodes.new("ShaderNodeEmission")
+        emit.location = (3000, -600)
+        m.feed(emit.inputs["Color"], light)
+        fogs.append(emit.outputs["Emission"])
+        fog = fog._replace(emission=fog.emission + light)
+    closures.shader_tree(ng, gout.inputs["Fog"], fogs)
+    for sock, v in (("Emission", fog.emission), ("Transmittance", fog.transmittance),
+                    ("Direct Attenuation", fog.direct_attenuation), ("Cycles Mix Factor", fog.cycles_mix),
+                    ("EEVEE Mix Factor", fog.eevee_mix)):
+        m.feed(gout.inputs[sock], m.wrap(v))
+    if with_passes:
+        light = m.wrap(running, vector=True) if running is not None else m.wrap((0.0, 0.0, 0.0))
+        passes.write_group(m, ng, light, m.wrap(fog.transmittance), m.wrap(g[passes.OPACITY], vector=True),
+                           light_weighted=True)
+    else:
+        closures.camera_rays_only(ng, gout.inputs["Fog"], fogged.sock)
+    tails = glass_tails.place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
+                                    {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"],
+                                     "Position": geo.outputs["Position"]}, len(placed)) if tails else []
+    if extra is not None:   # before it replaces the group the materials use: adding a node there costs more
+        extra(ng)
+    m.place()
+    ng = groups.install(ng, groups.SURFACE)
+    light_bundles.name_bundles(bundles + tails)
+    return ng
+
+
+def _lit(models):
+    """False for a light whose every fog term is off (``rungs.STEPS`` "off"): it adds no fog light."""
+    return any(o.computed(models) for o in rungs.SURFACE_OUTPUTS if o.colour)
+
+
+def _times(m, emission, factor, flat):
+    """A light's fog light (a colour or ``shading.Gated``) times the colour ``factor``; ``flat``: a Gated
+    as one colour (the fog passes read every closure's colour, ``closures.chained_closure_sum``)."""
+    if not isinstance(emission, shading.Gated):
+        return m.wrap(emission, vector=True) * factor
+    glow, rest = m.wrap(emission.glow, vector=True) * factor, m.wrap(emission.rest, vector=True) * factor
+    return glow + rest if flat else emission._replace(glow=glow, rest=rest)
+
+
+def daylight_light(m, day, table, camera, direction, position, normal, reflectance, length, t_vp, sun_share=None,
+                   surface_share=None):
+    """The sun's and the sky's light in a fog layer on a camera ray that meets a surface, the layer's and the air's
+    albedo included (``precompute/sunlight.py``): the glow along the ray plus the fog light the surface reflects,
+    dimmed on its way (Sun et al. 2005 Eq. 19's L_a; the reflectance taken as Lambertian: the diffuse plus the
+    specular albedo times the irradiance over pi).  The Compositor's per pixel (``comp_daylight.daylight``) and the
+    Surface group's.  ``sun_share``: ``sunlight.ray_glow``'s, ``surface_share``: ``sunlight.fog_light``'s."""
+    return sunlight.ray_glow(m, day, camera, direction, length, sun_share) + sunlight.times(
+        m, reflectance * sunlight.fog_light(m, table, day, position, normal, surface_share), t_vp)

@@ -1,0 +1,168 @@
+"""What the fog tells the user about a scene (the panel, the operators' reports, ``render --explain``): the choice
+of models and what it is predicted to err (``explain``), settings that make the picture useless (``scene_notes``),
+and what the fog can't model there (``not_modelled``, kept on the Surface group for the panel: ``stored_caveats``).
+"""
+import json
+import math
+
+import bpy
+
+from .. import caveats, methods, shadow_maps, sunsky, view
+from ..nodes import groups
+from ..precompute import capabilities, presets, rungs, shafts
+from .plan import stored_choice
+
+CAVEATS_KEY = "analytic_fog_caveats"   # on the Surface group: what the fog can't model in the scene (notes)
+
+
+def method_line(choice):
+    """One line: the method ``choice`` was built with, and why where Auto chose it; None before this was stored."""
+    name = choice.get("method")
+    if name is None:
+        return None
+    label = methods.get(name).label
+    reason = choice.get("method_reason")
+    return f"Method Auto: {label} ({reason})" if reason else f"Method {label}"
+
+
+def quality_head(choice):
+    """One line: the Quality of ``choice`` (see choose_models) and the error it is predicted to make."""
+    target = choice["target"]
+    if target is None and not choice.get("limited"):
+        return "Quality Exact: every light fully modelled"
+    if target is None:
+        return f"Quality Exact: predicted error {choice['error']:.2%}"
+    return f"Quality {target:.3g}: predicted error {choice['error']:.2%} (target {target:.2%})"
+
+
+def limit_text(choice):
+    """What limited ``choice`` beyond its target (EEVEE's uniform block, OSL's group size), as a phrase, or None."""
+    return f"limited by {choice['limited']}: lights step down beyond the target" if choice.get("limited") else None
+
+
+def explain(choice=None):
+    """Lines that say which models each light got and the error predicted (panel, operator, ``--explain``):
+    the Quality (and what limited it), then one line per light.  ``choice``: default the stored one."""
+    choice = stored_choice() if choice is None else choice
+    if choice is None:
+        return ["the fog is not on"]
+    limit = limit_text(choice)
+    lines = [quality_head(choice) + (f"; {limit}" if limit else "")]
+    if (line := method_line(choice)) is not None:
+        lines.append("  " + line)
+    rims = choice.get("rims", {})
+    for name, (step, err) in sorted(choice["lights"].items()):
+        rim = f", {rims[name]}-point rim" if name in rims else ""
+        lines.append(f"  {name}: {rungs.STEPS[step]}{rim}" + (f" (leaves out up to {err:.2%})" if step else
+                                                               f" (moves up to {err:.2%})" if rim else ""))
+    thin = choice.get("thin", {})
+    if thin:
+        lines.append(f"  Dense Fog left out for {len(thin)} light(s) ({', '.join(sorted(thin)[:3])}"
+                     f"{' and more' if len(thin) > 3 else ''}): their multiply scattered light is at most "
+                     f"{max(thin.values()):.2%} of the fog")
+    shafted = sorted(i.name.removeprefix(shadow_maps.IMAGE_PREFIX) for i in bpy.data.images
+                     if i.name.startswith(shadow_maps.IMAGE_PREFIX))
+    if shafted:
+        own, used = shafts.samples_for(choice.get("quality")), shafts.samples_for(choice.get("quality"), len(shafted))
+        fewer = (f", fewer than the Quality's {own.view_nodes} beyond {shafts.BUDGET_LIGHTS} shafted lights"
+                 if used != own else "")
+        lines.append(f"  Light shafts of {len(shafted)} light(s): {used.view_nodes} nodes a ray, "
+                     f"{used.surface_directions} directions x {used.surface_nodes} nodes over surfaces{fewer}; their "
+                     f"error is not in the prediction ({SHAFT_ERROR_NOTE})")
+    sun_map = bpy.data.images.get(shadow_maps.SUN_IMAGE)
+    if sun_map is not None:
+        lines.append(f"  The sun's shafts: a {sun_map.size[0]} x {sun_map.size[1]} map, "
+                     f"{shafts.samples_for(choice.get('quality')).view_nodes} nodes a ray, "
+                     f"{shafts.SUN_SURFACE_SAMPLES[0]} directions x {shafts.SUN_SURFACE_SAMPLES[1]} nodes over surfaces")
+    return lines
+
+
+# what the shafts' quadrature adds to a Quality's error, measured (docs/measurements/2026-11-26-light-shafts.md)
+SHAFT_ERROR_NOTE = "at Final up to 1.5 % from Exact's 48 nodes, boulevard"
+
+
+GEOMETRY = ("MESH", "CURVE", "SURFACE", "META", "FONT", "VOLUME", "CURVES", "POINTCLOUD", "GREASEPENCIL")   # object
+#                                                                              types with surfaces to render
+
+
+def _rendered_geometry(scene):
+    """The scene's objects that render geometry (``GEOMETRY``, not hidden from rendering)."""
+    return [obj for obj in scene.objects if obj.type in GEOMETRY and not obj.hide_render]
+
+
+def nearest_distance(scene):
+    """The distance (units) from the camera to the nearest point of any rendered object's bounding box
+    (``GEOMETRY``), or 0 without a camera or objects; 0 from inside one."""
+    cam = scene.camera
+    if cam is None:
+        return 0.0
+    eye = cam.matrix_world.translation
+    best = math.inf
+    for obj in _rendered_geometry(scene):
+        box = [tuple(c) for c in obj.bound_box]
+        lo = [min(c[k] for c in box) for k in range(3)]
+        hi = [max(c[k] for c in box) for k in range(3)]
+        try:
+            local = obj.matrix_world.inverted() @ eye
+        except ValueError:   # a singular (zero-scaled) object
+            continue
+        nearest = obj.matrix_world @ type(local)([min(max(local[k], lo[k]), hi[k]) for k in range(3)])
+        best = min(best, (nearest - eye).length)
+    return 0.0 if best == math.inf else best
+
+
+def highest_z(scene):
+    """The highest z (units) of any rendered object's bounding box, or None without objects."""
+    tops = [max((obj.matrix_world @ type(obj.matrix_world.translation)(c)).z for c in obj.bound_box)
+            for obj in _rendered_geometry(scene)]
+    return max(tops) if tops else None
+
+
+def scene_notes(scene, spec):
+    """Notes on settings that make the picture useless in ``scene`` (the operator, the panel and ``render`` say
+    them): a fog invisible at the scene's size, a fog opaque before the nearest object, a fog layer whose ground
+    is above everything."""
+    notes = []
+    note = presets.invisible_fog_note(spec.beta_per_unit, view.scene_size(scene))
+    if note:
+        notes.append(note)
+    note = presets.opaque_fog_note(spec.density, nearest_distance(scene) * spec.scene_scale)
+    if note:
+        notes.append(note)
+    top = highest_z(scene) if spec.layered else None
+    if top is not None and spec.ground_level > top:
+        notes.append(f"Ground Level (z {spec.ground_level:.3g}) is above every object (the highest reaches z "
+                     f"{top:.3g}): the whole scene lies under the fog layer's ground, where the layer's model does "
+                     "not hold; set Ground Level to the ground's height")
+    return notes
+
+
+def _optical_distance(scene, spec):
+    """light -> beta x its distance to the scene's camera (None without a camera)."""
+    camera = scene.camera
+    if camera is None:
+        return None
+    origin = camera.matrix_world.translation
+    return lambda o: spec.beta_per_unit * (o.matrix_world.translation - origin).length
+
+
+def not_modelled(scene, spec, lights, materials, method=None):
+    """What the fog can't model in ``scene`` (``caveats.py``: light shafts where ``method`` (a method name)
+    has none or they are off, their limits where it has them; glass and mirrors), as notes."""
+    name, engine = getattr(method, "name", method), scene.render.engine
+    casting = bool(spec.shafts and capabilities.can(name, "shafts", engine))
+    notes = [*caveats.shadow_notes(scene, lights, spec.beta_per_unit, max(view.scene_size(scene), 1e-6), casting,
+                                   None if spec.shafts else "Light Shafts is off"),
+             caveats.glass_note(materials, scene.objects),
+             caveats.clip_note(scene, name),
+             *caveats.multiple_notes(lights, spec.multiple_scattering, name, view.has_shape,
+                                     _optical_distance(scene, spec), engine),
+             *caveats.glow_notes(methods.compositor.glowing_objects(scene), name, engine),
+             *(f"{what}: {why}" for what, why in sunsky.notes(scene, spec, name, lights))]
+    return [n for n in notes if n]
+
+
+def stored_caveats():
+    """The notes of ``not_modelled`` from the last Add/Update Fog (the panel shows them), [] if none."""
+    surface = bpy.data.node_groups.get(groups.SURFACE)
+    return json.loads(surface[CAVEATS_KEY]) if surface is not None and CAVEATS_KEY in surface else []
