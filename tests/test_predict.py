@@ -197,6 +197,19 @@ def test_budgets_charge_spots_their_own_cost():
     assert not osl.fits([0] * 110) and budgets.osl_budget([False] * 110).fits([0] * 110)
 
 
+def test_osl_budget_charges_an_area_light_its_own_glow():
+    """Measured (docs/measurements/2026-11-29-shader-budgets.md): a fully modelled area light adds 3 812 OSL
+    layers to a material, so about 8 fit in OSL's 32 767 (a spot adds 668: about 48).  The budget must not let 9
+    area lights through at full models, where charging them as spots let 31 through."""
+    from fog_addon.nodes import budgets  # noqa: PLC0415 (bpy)
+    measured_limit = (budgets.OSL_LAYER_LIMIT - 156) // 3812   # 156: the material with no light (measured)
+    assert measured_limit == 8
+    areas = budgets.osl_budget([True] * (measured_limit + 1), [True] * (measured_limit + 1))
+    assert not areas.fits([0] * (measured_limit + 1))
+    assert budgets.osl_budget([True] * 6, [True] * 6).fits([0] * 6)
+    assert budgets.osl_budget([True] * 31, [False] * 31).fits([0] * 31)   # spots: as before
+
+
 def test_opaque_fog_predicts_no_nan():
     """An opaque fog's far samples carry fog light that underflows (e^{-beta d} ~ 1e-310): they are not judged,
     so the predicted errors stay finite (they were NaN, with overflow warnings, at density 100 1/m)."""

@@ -65,7 +65,7 @@ class Osl(NodeGroups):
     preference = "osl"
 
     def budget(self, scene, spec, lights):
-        return budgets.osl_budget([view.has_shape(o) for o in lights])
+        return budgets.osl_budget([view.has_shape(o) for o in lights], [view.is_area(o) for o in lights])
 
     def notes(self, scene, spec, plan):
         if scene.render.engine != "CYCLES":

@@ -56,16 +56,24 @@ OSL_WORLD_LAYERS = (15, 15, 0, 0)
 # (EEVEE_MATERIAL_BYTES plus EEVEE_ANISOTROPIC_EXTRA) with a 3 % margin; off keeps the cone's factor (a few
 # constants, estimated).
 OSL_SPOT_EXTRA = ((700, 170, 40, 0), (140, 140, 0, 0))
+# An area light's glow (area.py: the emitter's quadrature) is far bigger in OSL: measured at bpy 5.0.1 (g = 0.85,
+# N = 1 and 4, docs/measurements/2026-11-29-shader-budgets.md) 3 812 nodes a fully modelled area light adds to a
+# material and 3 340 to the World.  The extras over the point's, with a 3 % margin; glow only taken as the World's
+# glow, off as a spot's (estimates: not measured).
+OSL_AREA_EXTRA = ((3680, 3380, 40, 0), (3430, 3430, 0, 0))
 EEVEE_SPOT_EXTRA = ((10010, 7540, 100, 0), (8960, 8960, 0, 0))
 
 
-def _per_light(costs, extra, spots):
-    """(K, N, STEPS) costs of lights ``spots`` (True for a spot) from the point light's ``costs`` (K, STEPS)
-    and a spot's ``extra``; the (K, STEPS) costs themselves when no light is a spot."""
+def _per_light(costs, extra, spots, area_extra=None, areas=()):
+    """(K, N, STEPS) costs of lights ``spots`` (True for a spot or an area light) from the point light's ``costs``
+    (K, STEPS) and a spot's ``extra``, an area light's (``areas``: True for one) ``area_extra`` where given; the
+    (K, STEPS) costs themselves when no light is a spot."""
     if not any(spots):
         return costs
-    return tuple(tuple(tuple(c + (e if spot else 0) for c, e in zip(cost, more)) for spot in spots)
-                 for cost, more in zip(costs, extra))
+    areas = list(areas) + [False] * (len(spots) - len(areas))
+    return tuple(tuple(tuple(c + (a if area and area_extra is not None else e if spot else 0)
+                             for c, e, a in zip(cost, more, area_more)) for spot, area in zip(spots, areas))
+                 for cost, more, area_more in zip(costs, extra, area_extra or extra))
 
 
 def material_nodes(steps, spots):
@@ -75,11 +83,12 @@ def material_nodes(steps, spots):
     return sum(OSL_MATERIAL_LAYERS[k] + (OSL_SPOT_EXTRA[0][k] if spot else 0) for k, spot in zip(steps, spots))
 
 
-def osl_budget(spots=()):
+def osl_budget(spots=(), areas=()):
     """What a fogged material and the World can hold as one OSL shader group (predict.Budget); ``spots``:
-    one bool per light, True for a spot."""
+    one bool per light, True for a spot or an area light; ``areas``: True for an area light."""
     room = OSL_LAYER_LIMIT - OSL_LAYER_RESERVE
-    return predict.Budget(_per_light((OSL_MATERIAL_LAYERS, OSL_WORLD_LAYERS), OSL_SPOT_EXTRA, spots), (room, room),
+    return predict.Budget(_per_light((OSL_MATERIAL_LAYERS, OSL_WORLD_LAYERS), OSL_SPOT_EXTRA, spots,
+                                     OSL_AREA_EXTRA, areas), (room, room),
                           "OSL's shader group size (32 767 nodes per material)")
 
 
