@@ -19,7 +19,7 @@ import numpy as np
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 import smoke  # noqa: E402
-from fog_addon.precompute import apsf  # noqa: E402
+from tools.research import apsf  # noqa: E402
 from fog_addon.precompute import point_source_mc as mc  # noqa: E402
 
 OUT = smoke.out(ROOT / "benchmarks" / "out")

@@ -14,7 +14,7 @@ import pytest
 from numpy.polynomial import legendre
 from scipy.integrate import quad
 
-from fog_addon.precompute import apsf
+from tools.research import apsf
 from fog_addon.precompute import point_source_mc as mc
 
 

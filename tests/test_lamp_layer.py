@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from fog_addon.precompute import daylight, segments, sunlight
+from fog_addon.precompute import daylight, sunlight
+from tools.research import segments
 from fog_addon.precompute.ops import NumpyOps
 
 FAR = daylight.UNBOUNDED

@@ -19,7 +19,8 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from fog_addon.precompute import airlight, model, rungs, segments, spot, tables
+from fog_addon.precompute import airlight, model, rungs, spot, tables
+from tools.research import segments
 from fog_addon.precompute.ops import NumpyOps
 from tools import spot_reference as ref
 from tools.shader_float32 import Float32Ops

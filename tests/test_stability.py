@@ -284,7 +284,7 @@ def test_documented_bound_everywhere(grid, name):
 # model at g = 0, its power series is HG's Legendre series, it converges to Eq. 5 where that series
 # does, and it fails (the documented failure, README "Stability map") where ours does not.
 
-from fog_addon.precompute import phase_series as ps  # noqa: E402
+from tools.research import phase_series as ps  # noqa: E402
 from fog_addon.precompute import rungs, tables  # noqa: E402
 
 _HG_TABLES = {}

@@ -182,11 +182,6 @@ MUTATIONS = [
              "([m.scale(total(sky), 1.0 - coverage)] if sky else [])",
              "([total(sky)] if sky else [])",
              ("tests/test_composer.py::test_pixel_light_is_eq19_over_the_surface_and_eq12_over_the_sky",)),
-    Mutation("segment_lit_clip", "a segment's lit intervals not clipped to the segment: light beyond its end "
-             "glows (Biri 2006 §III.D over [0, length])", "_clamp",
-             "    return m.minimum(m.maximum(t, 0.0), end)",
-             "    return m.maximum(t, 0.0)",
-             ("tests/test_segments.py::test_empty_and_out_of_range_intervals",)),
     Mutation("auto_needs_before_cost", "Method Auto ignores what the scene needs (fog passes, a panoramic "
              "camera): the compositor by cost alone", "auto.choose",
              "    if hard is not None:\n",

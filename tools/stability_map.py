@@ -94,7 +94,7 @@ from tools import airlight_reference as ref  # noqa: E402
 from tools import shader_float32 as f32  # noqa: E402
 from fog_addon.precompute import airlight as al  # noqa: E402
 from fog_addon.precompute import model  # noqa: E402
-from fog_addon.precompute import phase_series as ps  # noqa: E402
+from tools.research import phase_series as ps  # noqa: E402
 from fog_addon.precompute import rungs, tables  # noqa: E402
 
 CACHE = ROOT / "tests" / "data" / "stability_reference.npz"

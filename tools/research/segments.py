@@ -51,7 +51,7 @@ and as OSL (``quadrature=True``: OSL reads no tables), and runs in numpy.
 import functools
 from typing import Any, NamedTuple
 
-from . import model, spot
+from fog_addon.precompute import model, spot
 
 
 class Segment(NamedTuple):
