@@ -56,6 +56,7 @@ def _schedule_rechoose():
 
 @persistent
 def on_depsgraph_update(scene, depsgraph):
+    apply.scene_changed()   # the panel's notes are computed again at its next redraw
     settings = getattr(scene, "analytic_fog", None)
     if settings is None or not settings.enabled or _choosing:
         return

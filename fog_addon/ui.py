@@ -103,7 +103,7 @@ def draw_fog(layout, context):
     col.prop(s, "use_passes")
     _draw_models(layout, s)
     try:
-        notes = apply.scene_notes(scene, apply.spec_of(scene))
+        notes = apply.panel_notes(scene, apply.spec_of(scene))
     except ValueError:   # (said above)
         notes = []
     for note in notes:

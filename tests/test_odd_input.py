@@ -66,3 +66,13 @@ def test_auto_fogs_every_view_layer(res):
 
 def test_no_nan_in_reports(res):
     assert res["nan"] == []
+
+
+def test_the_panels_notes_are_kept_until_the_scene_changes(res):
+    """The panel draws the scene's notes on every redraw from a memo (they walk every object); a change of the scene
+    (the depsgraph handler) computes them again."""
+    r = res["notes"]["panel_notes"]
+    assert r["memo"], "a second redraw reuses the notes"
+    ground = [n for n in r["first"] if "Ground Level" in n]
+    assert ground and not [n for n in r["moved"] if "Ground Level" in n], r
+    assert r["back"] == r["first"], r

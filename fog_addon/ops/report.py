@@ -118,6 +118,25 @@ def highest_z(scene):
     return max(tops) if tops else None
 
 
+_generation = [0]   # bumped by every depsgraph update (``scene_changed``)
+_notes_memo = {}    # scene name -> (spec JSON, generation, notes): ``panel_notes``
+
+
+def scene_changed():
+    """Something in the scenes changed (the depsgraph handler): ``panel_notes`` computes its notes again."""
+    _generation[0] += 1
+
+
+def panel_notes(scene, spec):
+    """``scene_notes`` as the panel draws them on every redraw: computed again only after the scene or the settings
+    changed (they walk every object: a redraw of a big scene must not)."""
+    key = (spec.to_json(), _generation[0])
+    kept = _notes_memo.get(scene.name)
+    if kept is None or kept[:2] != key:
+        kept = _notes_memo[scene.name] = (*key, scene_notes(scene, spec))
+    return kept[2]
+
+
 def scene_notes(scene, spec):
     """Notes on settings that make the picture useless in ``scene`` (the operator, the panel and ``render`` say
     them): a fog invisible at the scene's size, a fog opaque before the nearest object, a fog layer whose ground

@@ -135,6 +135,7 @@ def notes():
     s = scene.analytic_fog
     s.use_fog_top, s.fog_top, s.ground_level = True, 20.0, 100.0
     out["ground_above"] = run_add(scene, nan)
+    out["panel_notes"] = panel_notes(scene)
     # Scene Scale 1e6
     scene = fresh()
     scene.analytic_fog.scene_scale = 1e6
@@ -167,6 +168,24 @@ def run_add(scene, nan):
     choice = apply.stored_choice() or {}
     return {"ok": sorted(ok), "notes": reports, "explain": lines, "method": choice.get("method"),
             "reason": choice.get("method_reason"), "skipped": _last_skipped(scene)}
+
+
+def panel_notes(scene):
+    """The panel's memo of the scene's notes (``apply.panel_notes``): the same list on a second redraw, computed
+    again once the scene changed (the ground moved above Ground Level: the note goes) and said again when it
+    comes back."""
+    spec = apply.spec_of(scene)
+    first = apply.panel_notes(scene, spec)
+    again = apply.panel_notes(scene, spec)
+    ground = next(o for o in scene.objects if o.type == "MESH")
+    z = ground.location.z
+    ground.location.z = 150.0
+    bpy.context.view_layer.update()
+    moved = apply.panel_notes(scene, spec)
+    ground.location.z = z
+    bpy.context.view_layer.update()
+    back = apply.panel_notes(scene, spec)
+    return {"memo": again is first, "first": first, "moved": moved, "back": back}
 
 
 def _last_skipped(scene):
