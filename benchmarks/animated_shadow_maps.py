@@ -12,7 +12,8 @@ shafts on), the atlas's time (``ensure_atlases``: stepping the frames, the caste
 frame), a still map's bake for comparison, the atlas's layout, its pixels in memory (16 bytes a texel: float RGBA),
 its packed size (ZIP OpenEXR) and Blender's own (uncompressed) packing of the same pixels, the .blend's size (zstd,
 Blender's default) and what a copy of the atlas packed Blender's way adds to it, the process's peak memory.
-Figures: docs/measurements/2026-11-29-animated-shadow-maps.md.  Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): 3 frames.
+Figures: docs/measurements/2026-11-29-animated-shadow-maps.md.  Smoke mode (``FOG_BENCH_SMOKE=1``,
+benchmarks/smoke.py): 3 frames.
 """
 import argparse
 import json

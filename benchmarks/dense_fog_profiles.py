@@ -21,8 +21,10 @@ c = dn.lamp_image_centre()
 for ax, (dist, dens, seeds) in zip(axes, CASES):
     ms = imageio.read_rgb(dn.render_ms_reference(dist, dens, 0.85, 0.9, volume_bounces=64, samples=2048, seeds=seeds))
     ss = imageio.read_rgb(dn.render_ms_reference(dist, dens, 0.85, 0.9, volume_bounces=0, samples=4096, seeds=2))
-    on = imageio.read_rgb(dn.render_ours(dist, dens, 0.85, 0.9, str(OUT / f"dense_on_{dens}.exr"), multiple_scattering="on", log=LOG))
-    off = imageio.read_rgb(dn.render_ours(dist, dens, 0.85, 0.9, str(OUT / f"dense_off_{dens}.exr"), multiple_scattering="off", log=LOG))
+    on = imageio.read_rgb(dn.render_ours(dist, dens, 0.85, 0.9, str(OUT / f"dense_on_{dens}.exr"),
+                                         multiple_scattering="on", log=LOG))
+    off = imageio.read_rgb(dn.render_ours(dist, dens, 0.85, 0.9, str(OUT / f"dense_off_{dens}.exr"),
+                                          multiple_scattering="off", log=LOG))
     mid = np.sqrt(edges[1:] * edges[:-1]) * 0.1
     for img, lab, st in ((ms, "Cycles, 64 volume bounces", "k-"), (ss, "Cycles, single scattering", "k--"),
                          (on, "ours, Dense Fog on", "C1o"), (off, "ours, Dense Fog off", "C0s")):

@@ -13,11 +13,11 @@ floor 1 % of the frame's mean (dark pixels' noise is no flicker); its mean, p99 
 (``comp_shafts.halved``), so the resolutions show each.
 
 Outputs: benchmarks/out/shafts_flicker.csv (one row per resolution and shafts on/off); figures and their reading:
-docs/measurements/2026-11-26-shafts-cost.md.  Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): 16x8 px, 1 sample, 2 frames.
+docs/measurements/2026-11-26-shafts-cost.md.  Smoke mode (``FOG_BENCH_SMOKE=1``, benchmarks/smoke.py): 16x8 px,
+1 sample, 2 frames.
 """
 import argparse
 import json
-import os
 import pathlib
 import subprocess
 import sys

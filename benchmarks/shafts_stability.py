@@ -101,8 +101,10 @@ DISTANCES = smoke.pick((0.5, 2.0, 8.0, 32.0), (2.0,))   # m, light to the occlud
 BEHIND, WALL = 3.0, 5.0                      # m: the crossing behind the centre; the wall past the crossing
 CAMERAS = smoke.pick((4.0, 4.37, 4.71, 5.13), (4.0,))   # m, camera before the crossing
 ORIENTS = smoke.pick((0.0, 45.0, 90.0), (45.0,))   # deg, the ray about the shadow's axis from the map's rows
-PHASES = smoke.pick([((i + 0.5) / 8, (j + 0.5) / 8) for j in range(8) for i in range(8)], [(0.5, 0.5)])   # sub-cell, part 1
-PHASES16 = smoke.pick([((i + 0.5) / 4, (j + 0.5) / 4) for j in range(4) for i in range(4)], [(0.5, 0.5)])  # part 2
+PHASES = smoke.pick([((i + 0.5) / 8, (j + 0.5) / 8) for j in range(8) for i in range(8)],   # sub-cell, part 1
+                    [(0.5, 0.5)])
+PHASES16 = smoke.pick([((i + 0.5) / 4, (j + 0.5) / 4) for j in range(4) for i in range(4)],   # part 2
+                      [(0.5, 0.5)])
 
 PSIS = smoke.pick((90.0, 60.0, 30.0, 15.0, 8.0, 4.0, 2.0, 1.0), (90.0, 4.0))   # deg, the ray to the shadow's surface
 GRAZE_R, GRAZE_DIST, GRAZE_AT = 1.0, 4.0, 8.0         # m: sphere radius, its centre, the crossing

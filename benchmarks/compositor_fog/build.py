@@ -5,7 +5,8 @@ and ``peaks.py``.
 The many-lights scene with N lights (320x180, 16 spp, Blender's default pixel filter): the fog in the
 materials (Quality Exact, Fog Passes: the Fog Light AOV is the reference) plus the Compositor method's
 AOVs and fog group, whose Fog Light is the Composite; a multilayer EXR and OUT.exr.json (the lights'
-pixels).  Prints one JSON line: set-up and render seconds.  (Its cost: ``benchmarks/overhead.py
+pixels).  Prints one JSON line: set-up and render seconds.  Smoke mode (``FOG_BENCH_SMOKE=1``,
+benchmarks/smoke.py): 32x18 px, 1 spp.  (Its cost: ``benchmarks/overhead.py
 --methods cycles_compositor``.)
 """
 import json
@@ -15,6 +16,7 @@ import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))   # a script run by path: the repository root
+sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import bpy  # noqa: E402
 
@@ -25,8 +27,9 @@ from fog_addon import view  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 from fog_addon.precompute import rungs  # noqa: E402
 from fog_scenes.probe_common import light_pixel  # noqa: E402,F401  (peaks.py reads it here)
+import smoke  # noqa: E402
 
-W, H, SPP = 320, 180, 16
+W, H, SPP = smoke.pick((320, 180, 16), (32, 18, 1))
 
 
 def write_light_pixels(scene, path):
