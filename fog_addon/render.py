@@ -61,8 +61,9 @@ def fog_settings(scene, args):
         if source["method"] == "flag":
             raise SystemExit(f"error: --method {spec.method} needs --engine {runs_in.lower()} (it renders in "
                              f"{runs_in} only); use --method nodes or auto")
-        notes.append(("method", f"the file's method is {spec.method}, which renders in {runs_in} only: rendering "
-                                "with the node groups"))
+        engine = capabilities.ENGINE_LABELS.get(args.engine_id, args.engine_id)
+        notes.append(("method", f"the file's method is {spec.method}, which renders in {runs_in} only, not in "
+                                f"{engine}: rendering with the node groups"))
         spec = spec.replace(method="nodes")
     objects = None
     if s.selected_only:

@@ -15,14 +15,32 @@ from fog_scenes import render_harness as h
 pytestmark = pytest.mark.render   # starts Blender (bpy) in a subprocess
 
 SCRIPT = h.ROOT / "tests" / "scenes" / "dependency_cycles.py"
-FOG_CASES = ["point_compositor", "point_nodes", "daylight_nodes", "daylight_compositor", "dense", "spot", "area"]
+CORE = ["point_compositor", "daylight_nodes", "daylight_compositor"]   # the default tier's: the defect's cases
+REST = ["point_nodes", "dense", "spot", "area"]                       # the slow tier's
 PROBES = ["probe_group_world", "probe_tree", "probe_context"]
+FOG_CASES = [*CORE, *(pytest.param(c, marks=pytest.mark.slow) for c in REST)]
 CYCLE = re.compile(r"(?i)dependency cycle")
+_RUNS = {}
 
 
 @pytest.fixture(scope="module")
-def run():
-    proc = h.run([SCRIPT], timeout=600)
+def runs():
+    """One Blender process for the default tier's cases and the probes, another (slow tier) for the rest."""
+    def get(case):
+        cases = tuple(REST) if case in REST else (*CORE, *PROBES)
+        if cases not in _RUNS:
+            _RUNS[cases] = _run(cases)
+        return _RUNS[cases]
+    return get
+
+
+@pytest.fixture(scope="module")
+def run(runs):
+    return runs(CORE[0])
+
+
+def _run(cases):
+    proc = h.run([SCRIPT, *cases], timeout=600)
     # Blender's log, the control probes' deliberate cycles left out (each case's cycles are checked below)
     assert not [e for e in h.log_errors(proc.stdout + proc.stderr) if not CYCLE.search(e)]
     logs, case = {}, None
@@ -39,7 +57,7 @@ def run():
 def test_the_log_is_read_case_by_case(run):
     """Every case printed its marker, and Blender's C log reached stdout (nothing left on stderr to miss)."""
     logs, res, stderr = run
-    assert list(logs) == FOG_CASES + PROBES + ["end"]
+    assert list(logs) == CORE + PROBES + ["end"]
     assert not CYCLE.search(stderr)
 
 
@@ -53,17 +71,17 @@ def test_a_world_read_into_its_own_shading_is_a_cycle(run, case):
 
 
 @pytest.mark.parametrize("case", FOG_CASES)
-def test_no_dependency_cycle(run, case):
-    logs, res, _ = run
+def test_no_dependency_cycle(runs, case):
+    logs, res, _ = runs(case)
     assert res[case]["added"] == ["FINISHED"]
     cycles = [line for line in logs[case] if CYCLE.search(line)]
     assert cycles == [], (case, cycles[:8])
 
 
 @pytest.mark.parametrize("case", FOG_CASES)
-def test_every_driver_follows_the_frame(run, case):
+def test_every_driver_follows_the_frame(runs, case):
     """On frames 1, 10 and 5 every driver of the fog holds the value of its variables on that frame (none stale)."""
-    _, res, _ = run
+    _, res, _ = runs(case)
     for frame, f in res[case]["frames"].items():
         assert f["drivers"] >= 10, (case, frame, f["drivers"])
         assert f["n_stale"] == 0, (case, frame, f["stale"])

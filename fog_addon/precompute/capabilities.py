@@ -90,6 +90,9 @@ def runs(method, engine):
     return (method, engine) in COLUMNS
 
 
+ENGINE_LABELS = {CYCLES: "Cycles", EEVEE: "EEVEE"}
+
+
 def engines_of(method):
     """The engines ``method`` renders in, as the panel names them ("Cycles", "EEVEE")."""
     return [HEADERS[k].split(",")[0] for k, (m, _) in enumerate(COLUMNS) if m == method]

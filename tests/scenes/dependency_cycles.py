@@ -281,22 +281,30 @@ def probe(name):
     return {"value": vec.inputs[0].default_value}
 
 
-def main():
+CASES = {
+    "point_compositor": lambda: fog_case("point_compositor", "COMPOSITOR"),
+    "point_nodes": lambda: fog_case("point_nodes", "NODES"),
+    "daylight_nodes": lambda: fog_case("daylight_nodes", "NODES", daylight=True),
+    "daylight_compositor": lambda: fog_case("daylight_compositor", "COMPOSITOR", daylight=True),
+    "dense": lambda: fog_case("dense", "NODES", dense=True),
+    "spot": lambda: fog_case("spot", "COMPOSITOR", kind="SPOT"),
+    "area": lambda: fog_case("area", "NODES", kind="AREA"),
+}
+PROBES = ("probe_group_world", "probe_tree", "probe_context")
+
+
+def main(names):
+    """The cases ``names`` (default: every fog case and probe), in CASES' then PROBES' order."""
     fog_addon.register()
-    res = {}
-    res["point_compositor"] = fog_case("point_compositor", "COMPOSITOR")
-    res["point_nodes"] = fog_case("point_nodes", "NODES")
-    res["daylight_nodes"] = fog_case("daylight_nodes", "NODES", daylight=True)
-    res["daylight_compositor"] = fog_case("daylight_compositor", "COMPOSITOR", daylight=True)
-    res["dense"] = fog_case("dense", "NODES", dense=True)
-    res["spot"] = fog_case("spot", "COMPOSITOR", kind="SPOT")
-    res["area"] = fog_case("area", "NODES", kind="AREA")
-    for name in ("probe_group_world", "probe_tree", "probe_context"):
-        res[name] = probe(name)
+    names = set(names or (*CASES, *PROBES))
+    res = {name: make() for name, make in CASES.items() if name in names}
+    for name in PROBES:
+        if name in names:
+            res[name] = probe(name)
     mark("end")
     fog_addon.unregister()
     print("CYCLES_JSON " + json.dumps(res), flush=True)
 
 
 if __name__ == "__main__":
-    main()
+    main(sys.argv[1:])
