@@ -287,16 +287,14 @@ def view_samples(scene, lights, frames=None, grid=None):
             invs.append(inverse)
             fr.append(f)
     n_lights = len(lights)
-    areas = np.array([is_area(o) for o in lights], bool)
-    spot = np.array([is_spot(o) for o in lights], bool) | areas
-    shapes = [area_half_sizes(o) if is_area(o) else spot_cone(o) if is_spot(o) else (1.0, 0.0) for o in lights]
-    spots = predict.SpotSamples(spot, np.array(invs).reshape(-1, n_lights, 3, 3),
-                                np.array([s[0] for s in shapes], float), np.array([s[1] for s in shapes], float),
-                                areas if areas.any() else None)
+    kinds = [predict.Rectangle(*area_half_sizes(o)) if is_area(o) else predict.Cone(*spot_cone(o)) if is_spot(o)
+             else None for o in lights]
+    shapes = predict.LightShapes(kinds, np.array(invs).reshape(-1, n_lights, 3, 3))
     return predict.ViewSamples(np.array(cams).reshape(-1, 3), np.array(dirs).reshape(-1, 3), np.array(dists, float),
                                np.array(normals).reshape(-1, 3), np.array(rds).reshape(-1, 3),
                                np.array(rss).reshape(-1, 3), np.array(levels, float),
-                               np.array(lps).reshape(-1, n_lights, 3), np.array(fr), spots if spot.any() else None)
+                               np.array(lps).reshape(-1, n_lights, 3), np.array(fr),
+                               shapes if any(k is not None for k in kinds) else None)
 
 
 def is_spot(light):

@@ -50,17 +50,26 @@ class ViewSamples(NamedTuple):
     level: Any        # (P,) table level of the glossy exponent
     lights: Any       # (P, N, 3) each light's position when the sample was taken
     frame: Any = None  # (P,) the frame of each sample (for reports)
-    spots: Any = None  # SpotSamples, or None: every light a point light
+    shapes: Any = None  # LightShapes, or None: every light a point light
 
 
-class SpotSamples(NamedTuple):
-    """The cones of the lights that are spots (``shading.Spot``) and the emitters of the area lights
-    (``shading.Area``), as the view samples saw them."""
-    is_spot: Any      # (N,) bool: a spot or an area light (the spot kernels' arguments)
+class Cone(NamedTuple):
+    """A spot light's cone as Blender gives it (``shading.Spot``'s parameters)."""
+    cos_half: float   # cos(spot_size / 2)
+    blend: float      # spot_blend in [0, 1]
+
+
+class Rectangle(NamedTuple):
+    """An area light's emitter (``shading.Area``'s parameters, ``area.half_sizes``)."""
+    half_x: float     # m
+    half_y: float     # m
+
+
+class LightShapes(NamedTuple):
+    """The shapes of the lights as the view samples saw them: each light a point (None), a spot's ``Cone`` or an
+    area light's ``Rectangle``, and the orientation the kernels read them in."""
+    kinds: Any        # (N,) a Cone, a Rectangle or None for each light
     rows: Any         # (P, N, 3, 3) the inverse of each light's 3x3 world matrix (identity for a point light)
-    cos_half: Any     # (N,) cos(spot_size / 2); an area light's half size a (m)
-    blend: Any        # (N,) spot_blend; an area light's half size b (m)
-    is_area: Any = None   # (N,) bool: an area light, or None: none is
 
 
 class Prediction(NamedTuple):
@@ -169,22 +178,20 @@ def _light_kinds(samples, intensity):
     """[(indices k, shading.Light of the lights k as (P, K, 3) arrays)]: the point lights', the spots'
     (``shading.Spot`` of their cones), then the area lights' (``shading.Area``), each only if there is one."""
     lights = np.asarray(samples.lights, float)
-    spots = samples.spots
-    n = lights.shape[1]
-    is_spot = np.zeros(n, bool) if spots is None else np.asarray(spots.is_spot, bool)
-    is_area = np.zeros(n, bool) if spots is None or spots.is_area is None else np.asarray(spots.is_area, bool)
+    shapes = samples.shapes
+    kinds = [None] * lights.shape[1] if shapes is None else list(shapes.kinds)
     out = []
-    if not is_spot.all():
-        k = np.flatnonzero(~is_spot)
-        out.append((k, shading.Light(lights[:, k], intensity[k])))
-    for kind, chosen in ((shading.Spot, is_spot & ~is_area), (shading.Area, is_area)):
-        if chosen.any():
-            k = np.flatnonzero(chosen)
-            rows = np.asarray(spots.rows, float)[:, k]
-            out.append((k, shading.Light(lights[:, k], intensity[k],
-                                         kind(tuple(rows[..., i, :] for i in range(3)),
-                                              np.asarray(spots.cos_half, float)[k],
-                                              np.asarray(spots.blend, float)[k]))))
+    for shape, kernel in ((type(None), None), (Cone, shading.Spot), (Rectangle, shading.Area)):
+        k = np.array([i for i, s in enumerate(kinds) if isinstance(s, shape)], int)
+        if not len(k):
+            continue
+        if kernel is None:
+            out.append((k, shading.Light(lights[:, k], intensity[k])))
+            continue
+        rows = np.asarray(shapes.rows, float)[:, k]
+        params = np.array([tuple(kinds[i]) for i in k], float)
+        out.append((k, shading.Light(lights[:, k], intensity[k], kernel(tuple(rows[..., i, :] for i in range(3)),
+                                                                         params[:, 0], params[:, 1]))))
     return out
 
 
