@@ -66,12 +66,7 @@ def build_light(models, images):
     material = shading.Material(g["Diffuse"], g["Specular"], g["Glossy Level"])
     light = light_of(g, models)
     terms = shading.shade_point(m, geo, material, light, medium(m, g["Beta"]), models)
-    for o in rungs.SURFACE_OUTPUTS:
-        if o.present(models):
-            m.feed(gout.inputs[o.name], m.wrap(getattr(terms, o.field)))
-    ng[owned.BUILT] = groups.code_fingerprint()
-    m.place()
-    return groups.install(ng, name)
+    return _finish(m, ng, gout, name, rungs.SURFACE_OUTPUTS, models, terms)
 
 
 def build_background_light(models, images):
@@ -86,7 +81,13 @@ def build_background_light(models, images):
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
     light = light_of(g, models)
     terms = shading.sky_terms(m, g["Camera"], g["Direction"], light, medium(m, g["Beta"]), models)
-    for o in rungs.SKY_OUTPUTS:
+    return _finish(m, ng, gout, name, rungs.SKY_OUTPUTS, models, terms)
+
+
+def _finish(m, ng, gout, name, outputs, models, terms):
+    """Feed each of ``outputs`` the ``models`` compute from ``terms`` (a LightTerms or SkyTerms), mark the group
+    with the code's fingerprint and install it as ``name``."""
+    for o in outputs:
         if o.present(models):
             m.feed(gout.inputs[o.name], m.wrap(getattr(terms, o.field)))
     ng[owned.BUILT] = groups.code_fingerprint()
