@@ -298,8 +298,13 @@ def view_samples(scene, lights, frames=None, grid=None):
 
 
 def is_spot(light):
-    """True for a spot light object (its fog follows the cone: ``rungs.choose(..., spot=True)``)."""
+    """True for a spot light object (its fog follows the cone)."""
     return light.data.type == "SPOT"
+
+
+def light_kind(light):
+    """The light object's kind as the ladder models it (``rungs.LIGHT_KINDS``): "point", "spot" or "area"."""
+    return {"SPOT": "spot", "AREA": "area"}.get(light.data.type, "point")
 
 
 def spot_cone(light):
@@ -314,7 +319,7 @@ def has_shape(light):
 
 
 def is_area(light):
-    """True for an area light object (its fog: ``precompute/area.py``, ``rungs.choose(..., area=True)``)."""
+    """True for an area light object (its fog: ``precompute/area.py``)."""
     return light.data.type == "AREA"
 
 

@@ -63,7 +63,7 @@ def test_the_ladder_grants_dense_fog_where_the_table_says():
     """``rungs.choose`` gives a spot's Dense Fog models only to the methods the table lets model it."""
     cone = (0.92, 0.15)
     for method in ("nodes", "osl", "compositor"):
-        spot = rungs.choose(method, 0, 0.0, spot=True, multiple_albedo=1.0, cone=cone)
+        spot = rungs.choose(method, 0, 0.0, kind="spot", multiple_albedo=1.0, cone=cone)
         point = rungs.choose(method, 0, 0.0, multiple_albedo=1.0)
         has = [any("multiple" in r.name for r in m) for m in (spot, point)]
         assert has == [c.can(method, "dense_shaped"), c.can(method, "dense_point")], (method, has)

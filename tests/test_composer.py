@@ -33,14 +33,14 @@ def test_pixel_light_is_eq19_over_the_surface_and_eq12_over_the_sky():
 
 def test_socket_names_are_the_saved_files():
     """The per-light groups' outputs and the compositor's sockets, as saved files and farms know them."""
-    point, spot = rungs.choose("nodes"), rungs.choose("nodes", spot=True)
+    point, spot = rungs.choose("nodes"), rungs.choose("nodes", kind="spot")
     names = lambda outputs, models: [(o.name, o.colour) for o in outputs if o.present(models)]
     assert names(rungs.SURFACE_OUTPUTS, point) == [("Airlight", True), ("Scattered", True), ("Attenuation", False),
                                                    ("Weight", False)]
     assert names(rungs.SURFACE_OUTPUTS, spot) == names(rungs.SURFACE_OUTPUTS, point) + [("Seen", False)]
     assert names(rungs.SKY_OUTPUTS, point) == [("Airlight", True)]
     assert names(rungs.SKY_OUTPUTS, spot) == [("Airlight", True), ("Seen", False)]
-    assert names(rungs.SURFACE_OUTPUTS, rungs.choose("nodes", step=rungs.OFF, spot=True))[-1] == ("Weight", False)
+    assert names(rungs.SURFACE_OUTPUTS, rungs.choose("nodes", step=rungs.OFF, kind="spot"))[-1] == ("Weight", False)
     assert [o.compositor for o in rungs.COMPOSITOR_OUTPUTS] == ["Airlight", "Scattered", "Background"]
     for o in rungs.OUTPUTS:
         assert o.term in rungs.TERMS and o.field in (shading.LightTerms._fields if o.at == rungs.SURFACE_POINT

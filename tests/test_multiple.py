@@ -84,8 +84,8 @@ def test_multiple_rungs_add_the_multiple_glow_to_the_single():
     assert abs(models.airlight.kernel(m, *args) - want) <= 1e-12 * abs(want)
     want_bg = bg.kernel(m, *args[:4]) + mu.multiple_background(m, spec, *args[:4])
     assert abs(models.background.kernel(m, *args[:4]) - want_bg) <= 1e-12 * abs(want_bg)
-    assert rungs.choose("nodes", 0, G, spot=True, multiple_albedo=ALBEDO).airlight.tables == \
-        rungs.choose("nodes", 0, G, spot=True).airlight.tables   # spots: not modelled (yet)
+    assert rungs.choose("nodes", 0, G, kind="spot", multiple_albedo=ALBEDO).airlight.tables == \
+        rungs.choose("nodes", 0, G, kind="spot").airlight.tables   # spots: not modelled (yet)
 
 
 def test_segment_formula_on_the_single_scattering_field():

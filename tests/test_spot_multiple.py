@@ -219,15 +219,15 @@ def test_compositor_spots_and_area_lights_take_it():
     """With Dense Fog, spots' and area lights' rungs add the multiply scattered light with the compositor
     only (an area light's table: Lambert's cosine); other methods keep single scattering (the notes say so)."""
     cone = (COS_HALF, 0.15)
-    comp = rungs.choose("compositor", 0, G, spot=True, multiple_albedo=ALBEDO, cone=cone)
+    comp = rungs.choose("compositor", 0, G, kind="spot", multiple_albedo=ALBEDO, cone=cone)
     assert any(bakers.is_spot_multiple(t) for t in rungs.tables_of(comp))
     assert any(bakers.is_spot_multiple(t) for t in comp.scatter.tables)
-    area = rungs.choose("compositor", 0, G, spot=True, multiple_albedo=ALBEDO, area=True)
+    area = rungs.choose("compositor", 0, G, kind="area", multiple_albedo=ALBEDO)
     assert sm.lambert_table_spec(G, ALBEDO) in rungs.tables_of(area)
-    for models in (rungs.choose("nodes", 0, G, spot=True, multiple_albedo=ALBEDO, cone=cone),
-                   rungs.choose("compositor", 0, G, spot=True, multiple_albedo=None, cone=cone),
-                   rungs.choose("nodes", 0, G, spot=True, multiple_albedo=ALBEDO, area=True),
-                   rungs.choose("compositor", 2, G, spot=True, multiple_albedo=ALBEDO, cone=cone)):
+    for models in (rungs.choose("nodes", 0, G, kind="spot", multiple_albedo=ALBEDO, cone=cone),
+                   rungs.choose("compositor", 0, G, kind="spot", multiple_albedo=None, cone=cone),
+                   rungs.choose("nodes", 0, G, kind="area", multiple_albedo=ALBEDO),
+                   rungs.choose("compositor", 2, G, kind="spot", multiple_albedo=ALBEDO, cone=cone)):
         assert not any(bakers.is_spot_multiple(t) for t in rungs.tables_of(models))
 
 
@@ -273,11 +273,11 @@ def test_spot_over_surfaces_against_64_bounces(tmp_path):
     brighter than single scattering), the picture within 6 % (clipped pixels) and 10 % (4 x 4 blocks) of the
     reference's own noise."""
     from fog_scenes import dense_surfaces as surf
-    seeds = surf.reference_seeds(64, 2048, 4, spot=True)
+    seeds = surf.reference_seeds(64, 2048, 4, kind="spot")
     log = []
-    out = surf.render_ours(tmp_path / "ours.exr", multiple_scattering="on", log=log, spot=True)
+    out = surf.render_ours(tmp_path / "ours.exr", multiple_scattering="on", log=log, kind="spot")
     assert not h.log_errors(log[0]), h.log_errors(log[0])
-    c = surf.compare(imageio.read_rgb(out), seeds, surf.geometry(spot=True))
+    c = surf.compare(imageio.read_rgb(out), seeds, surf.geometry(kind="spot"))
     print(c)
     assert abs(c["ground_ratio"] - 1.0) <= 0.08 and abs(c["wall_ratio"] - 1.0) <= 0.08, c
     assert c["excess_clipped"] <= 0.06 and c["excess_blocks"] <= 0.10, c

@@ -45,7 +45,7 @@ def compositor_fog_alone(scene):
     lights = apply.fog_lights(scene)[0]
     g = apply.spec_of(scene).anisotropy
     choice = apply.stored_choice()
-    lights, models = zip(*[(o, rungs.choose("nodes", choice["lights"][o.name][0], g, view.is_spot(o)))
+    lights, models = zip(*[(o, rungs.choose("nodes", choice["lights"][o.name][0], g, view.light_kind(o)))
                            for o in lights])
     imgs = comp_fog.build_fog_group(scene, lights, models, images.all_table_images(g))
     comp_fog.add_surface_aovs(bpy.data.node_groups[groups.SURFACE])

@@ -137,8 +137,8 @@ def dimming_lights(scene, spec, lights):
             steps[i] = rungs.LEFT_OUT
             break
     kept = [i for i in range(len(lights)) if steps[i] == rungs.OFF]
-    return [lights[i] for i in kept], [rungs.choose("compositor", rungs.OFF, spec.anisotropy, spots[i],
-                                                          area=view.is_area(lights[i])) for i in kept]
+    return [lights[i] for i in kept], [rungs.choose("compositor", rungs.OFF, spec.anisotropy,
+                                                          view.light_kind(lights[i])) for i in kept]
 
 
 def glowing_objects(scene):

@@ -68,8 +68,8 @@ def all_group_names():
                    if _BUNDLE_NAME.match(base := owned.base_name(ng.name)))
     names += [PARAMS, SURFACE, WORLD]
     for pref in rungs.PREFERENCES:
-        for spot in (False, True):
-            models = rungs.choose(pref, spot=spot)
+        for kind in rungs.LIGHT_KINDS:
+            models = rungs.choose(pref, kind=kind)
             names += [light_group_name(models), background_group_name(models)]
     names += sorted(base for ng in bpy.data.node_groups if ng.get(FOG_PROP)   # another anisotropy's
                     and (base := owned.base_name(ng.name)).startswith((f"{LIGHT} [", f"{BACKGROUND_LIGHT} [")))

@@ -119,8 +119,8 @@ def choose_models(scene, spec, method, lights):
 def _models(spec, method, lights, steps, rims, thin=frozenset()):
     """Each light's models at its step, a spot's glow with its rim's point count (``rims``: by name), Dense Fog
     left out for the lights ``thin`` names."""
-    return [rungs.choose(method.preference, k, spec.anisotropy, view.is_spot(o), rims.get(o.name, spot.RIM_NODES),
-                         multiple_albedo=None if o.name in thin else spec.multiple_albedo, area=view.is_area(o),
+    return [rungs.choose(method.preference, k, spec.anisotropy, view.light_kind(o), rims.get(o.name, spot.RIM_NODES),
+                         multiple_albedo=None if o.name in thin else spec.multiple_albedo,
                          cone=view.spot_cone(o) if view.is_spot(o) else None)
             for o, k in zip(lights, steps)]
 

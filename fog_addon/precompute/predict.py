@@ -197,8 +197,8 @@ def _light_kinds(samples, intensity):
 
 def _models(g, light, rim_nodes=spot_mod.RIM_NODES, multiple_albedo=None):
     """The exact models of ``light`` (a shading.Light of ``_light_kinds``) the predictor judges with."""
-    return rungs.choose(_preference(g), 0, g, light.spot is not None, rim_nodes, multiple_albedo=multiple_albedo,
-                        area=isinstance(light.spot, shading.Area))
+    kind = "area" if isinstance(light.spot, shading.Area) else "spot" if light.spot is not None else "point"
+    return rungs.choose(_preference(g), 0, g, kind, rim_nodes, multiple_albedo=multiple_albedo)
 
 
 def multiple_share(samples, intensity, beta, g, albedo, single=None):

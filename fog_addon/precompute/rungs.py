@@ -431,12 +431,25 @@ def spot_multiple_rungs(air, background, scatter, g, albedo, cone):
                     evidence="tests/test_spot_multiple.py (a 360-degree cone against the point light's irradiance)"))
 
 
-def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NODES, multiple_albedo=None,
-           area=False, cone=None):
+LIGHT_KINDS = ("point", "spot", "area")   # the lights the ladder models (a fog layer's sun is ``sunlight``'s)
+
+
+def _dense_fog(preference, kind, step, multiple_albedo, cone):
+    """True if a light of ``kind`` at ``step`` gets its multiply scattered light (Dense Fog) with ``preference``:
+    the method models it for the kind (``capabilities``), the step keeps the glow, and a spot's cone is known."""
+    if multiple_albedo is None or step >= 2:
+        return False
+    if kind == "point":
+        return capabilities.can(preference, "dense_point")
+    return capabilities.can(preference, "dense_shaped") and (kind == "area" or cone is not None)
+
+
+def choose(preference="nodes", step=0, g=0.0, kind="point", rim_nodes=spot.RIM_NODES, multiple_albedo=None,
+           cone=None):
     """The models for one light's terms, honouring the user's ``preference`` (PREFERENCES), ``step``
-    (index into STEPS) rungs down the ladder, for Henyey-Greenstein anisotropy ``g``; ``spot``: for a
-    spot light (``spot_rungs``, DIRECT_SPOT) whose glow's rim takes ``rim_nodes`` points (spot.RIM_LADDER);
-    ``area``: for an area light (``area_rungs``, whatever ``spot`` says).
+    (index into STEPS) rungs down the ladder, for Henyey-Greenstein anisotropy ``g``; ``kind`` (LIGHT_KINDS):
+    a point light, a spot light (``spot_rungs``, DIRECT_SPOT) whose glow's rim takes ``rim_nodes`` points
+    (spot.RIM_LADDER), or an area light (``area_rungs``).
 
     "nodes": every term from the node groups' tables; "osl": the glow by
     quadrature in OSL (Cycles only), the other terms as "nodes" (they have no
@@ -460,19 +473,18 @@ def choose(preference="nodes", step=0, g=0.0, spot=False, rim_nodes=spot.RIM_NOD
                          "with so much back-scattering; use the OSL method (Cycles)")
     else:
         models = LightModels(air_table, bg_table, scatter, DIRECT_EXACT)
-    if area:
+    if kind not in LIGHT_KINDS:
+        raise ValueError(f"unknown light kind {kind!r}; use one of {', '.join(LIGHT_KINDS)}")
+    if kind == "area":
         models = LightModels(*area_rungs(models.scatter, g))
-    elif spot:
+    elif kind == "spot":
         models = models._replace(direct=DIRECT_SPOT, scatter=spot_scatter_rung(models.scatter, g))._replace(
             **dict(zip(("airlight", "background"), spot_rungs(models.airlight, models.background, g, rim_nodes))))
-    if (multiple_albedo is not None and (area or (spot and cone is not None))
-            and capabilities.can(preference, "dense_shaped") and step < 2):
-        models = models._replace(**dict(zip(("airlight", "background", "scatter"), spot_multiple_rungs(
-            models.airlight, models.background, models.scatter, g, multiple_albedo, None if area else cone))))
-    if (multiple_albedo is not None and not spot and not area and capabilities.can(preference, "dense_point")
-            and step < 2):
-        models = models._replace(**dict(zip(("airlight", "background", "scatter"), multiple_rungs(
-            models.airlight, models.background, models.scatter, g, multiple_albedo))))
+    if _dense_fog(preference, kind, step, multiple_albedo, cone):
+        dense = (multiple_rungs(models.airlight, models.background, models.scatter, g, multiple_albedo)
+                 if kind == "point" else spot_multiple_rungs(models.airlight, models.background, models.scatter, g,
+                                                             multiple_albedo, cone if kind == "spot" else None))
+        models = models._replace(**dict(zip(("airlight", "background", "scatter"), dense)))
     if step >= 1:
         models = models._replace(scatter=SCATTER_OFF)
     if step >= 2:
@@ -491,13 +503,13 @@ def split_halo(models):
 
 
 def is_spot(models):
-    """True if ``models`` take the spot kernels' arguments: a spot light's or an area light's
-    (``choose(..., spot=True)``, ``choose(..., area=True)``)."""
+    """True if ``models`` take the spot kernels' arguments: a spot light's or an area light's (``choose``'s kind
+    "spot" or "area")."""
     return models.direct.spot
 
 
 def is_area(models):
-    """True if ``models`` are an area light's (``choose(..., area=True)``)."""
+    """True if ``models`` are an area light's (``choose``'s kind "area")."""
     return models.direct.area
 
 

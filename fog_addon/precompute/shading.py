@@ -107,8 +107,8 @@ def direct_falloff(m, light, cone):
 class Light(NamedTuple):
     position: Any        # m
     intensity: Any       # RGB radiant intensity I0, W/sr
-    spot: Any = None     # Spot for a spot light (its models: rungs.choose(..., spot=True)), Area for an area light
-    #                      (rungs.choose(..., spot=True, area=True)), None for a point light
+    spot: Any = None     # Spot for a spot light (its models: rungs.choose's kind "spot"), Area for an area light
+    #                      (kind "area"), None for a point light
 
 
 class LightTerms(NamedTuple):

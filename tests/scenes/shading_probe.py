@@ -99,7 +99,7 @@ def twin(c, d, case, method, without=None, g=0.0, spots=None):
     geo = shading.Geometry(c, c + d * t[..., None], -d, t, np.array([0.0, 0.0, 1.0]))
     material = shading.Material(rho_d, rho_s, level)
     med = Medium(BETA, np.asarray(ALBEDO))
-    models = rungs.choose(method, 0, g, spots is not None)
+    models = rungs.choose(method, 0, g, "spot" if spots is not None else "point")
     lights = [shading.Light(np.asarray(loc, float), power / (4 * math.pi) * np.asarray(col),
                             None if spots is None else spots[k]) for k, (loc, power, col) in enumerate(LIGHTS)]
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
