@@ -38,12 +38,13 @@ def _draw_models(layout, settings):
     if (limit := apply.limit_text(choice)) is not None:   # EEVEE's uniform block: a warning of its own
         box.label(text=limit[0].upper() + limit[1:], icon="ERROR")
     lines = apply.explain(choice)
-    cheaper = [line for line in lines[1:] if not line.endswith(": full")]
+    cheaper = [line for line in lines[1:] if not line.endswith(": full") and not line.strip().startswith("Method")]
     for line in cheaper[:MAX_LISTED]:
         box.label(text=line.strip(), icon="DOT")
     if len(cheaper) > MAX_LISTED:
         box.label(text=f"... and {len(cheaper) - MAX_LISTED} more lights with cheaper models")
-    box.label(text=f"{len(lines) - 1 - len(cheaper)} light(s) fully modelled")
+    full = sum(1 for name, (step, _) in choice["lights"].items() if step == 0 and name not in choice.get("rims", {}))
+    box.label(text=f"{full} light(s) fully modelled")
 
 
 def _draw_layer(col, settings):
