@@ -18,7 +18,7 @@ sys.path.insert(0, str(ROOT))
 
 import smoke                                       # noqa: E402
 
-from fog_addon.precompute import daylight as dl   # noqa: E402
+from fog_addon.precompute import aerial, daylight as dl   # noqa: E402
 from tests import test_daylight as t               # noqa: E402
 from tools.shader_float32 import Float32Ops        # noqa: E402
 
@@ -52,14 +52,14 @@ def main():
     for n in (4, 6, 8, 12, 16):
         e = t._rel(t.k_haze(haze, panels=n), href)
         print(f"haze_airlight, {n:2d} panels, {len(href)} samples: {stats(e)}")
-        if n == dl.HAZE_PANELS:
+        if n == aerial.HAZE_PANELS:
             out["haze"] = e
     with np.errstate(all="ignore"):
         h32 = t.k_haze(haze, Float32Ops({}))
     print(f"haze_airlight float32: {stats(t._rel(h32, href))}; finite {np.all(np.isfinite(h32))}")
     for d in (5e3, 1e4, 2e4, 5e4, 1e5):
-        print(f"flat Earth at {d / 1e3:5.0f} km: Rayleigh {dl.flat_earth_error(d, dl.RAYLEIGH_HEIGHT):.3g}, "
-              f"Mie {dl.flat_earth_error(d, dl.MIE_HEIGHT):.3g}")
+        print(f"flat Earth at {d / 1e3:5.0f} km: Rayleigh {aerial.flat_earth_error(d, aerial.RAYLEIGH_HEIGHT):.3g}, "
+              f"Mie {aerial.flat_earth_error(d, aerial.MIE_HEIGHT):.3g}")
     if a.figure:
         import matplotlib
         matplotlib.use("Agg")
@@ -67,7 +67,7 @@ def main():
         fig, ax = plt.subplots(figsize=(7, 4))
         bins = np.geomspace(1e-17, 1e-1, 81)
         for key, label in (("sun", "sun, closed form (f64)"), ("sun32", "sun, closed form (f32)"),
-                           ("sky", f"sky, {dl.SKY_NODES} directions"), ("haze", f"haze, {dl.HAZE_PANELS} panels")):
+                           ("sky", f"sky, {dl.SKY_NODES} directions"), ("haze", f"haze, {aerial.HAZE_PANELS} panels")):
             ax.hist(np.maximum(out[key], 1e-17), bins=bins, histtype="step", label=label, density=False)
         ax.axvline(5e-3, color="k", ls="--", lw=0.8)
         ax.text(5.5e-3, ax.get_ylim()[1] * 0.9, "0.5 %", fontsize=8)

@@ -23,7 +23,7 @@ Each (engine, method, case) runs in ONE worker process (this script with ``--wor
 
 * build the city; render without fog: a first render, then the minimum of ``repeats`` warm ones;
 * add the fog (``apply_*``: the whole call; inside it, timed by wrapping the add-on's functions: ``bake_*``
-  ``sunlight.bake_fog_light``, the fog light's irradiance map (0 when the table cache,
+  ``daylight_tables.bake_fog_light``, the fog light's irradiance map (0 when the table cache,
   ``precompute/table_cache.py``, holds it); ``probe_*`` ``sunsky.probe_sky``, the World's equirectangular probe
   render; ``comp_group_*`` ``comp_fog.build_fog_group``; ``surface_group_*``
   ``surface_group.build_surface``);

@@ -20,7 +20,7 @@ Two references:
   the ray's crossings of each sphere and of its shadow cone (closed form), the visibility of each piece is
   checked by ``sphere_hit`` at 7 points inside it, and each piece is integrated by ``quad`` (epsrel 1e-10).
 * S_ideal: ``lit_share`` itself with the map replaced by the exact distance to the first sphere in each
-  node's own direction (``shafts.map_depth`` patched for the call): the K x 4 nodes with an infinitely fine
+  node's own direction (``shaft_maps.map_depth`` patched for the call): the K x 4 nodes with an infinitely fine
   map.  S_ideal - S_exact is the nodes' error, S_map - S_ideal the map's.
 
 Cells: a map cell is 2 pi / 1023 rad (0.352 deg) of longitude; latitude's is pi / 511, 1.0006 x that.  The
@@ -47,7 +47,7 @@ Parts (column ``part`` of the CSV, one summary row per cell of the map):
    phases and 16 azimuths of the crossing around the axis.
 3. ``contact``: fog points a distance delta in front of (``side`` = front: should be lit) or behind (``side``
    = behind: should be in shadow) a plane D = 0.5 ... 32 m from the light whose normal makes the angle
-   ``incidence`` = 0 ... 85 deg with the light's direction; ``shafts.lit`` with the map's depth at 4000
+   ``incidence`` = 0 ... 85 deg with the light's direction; ``shaft_maps.lit`` with the map's depth at 4000
    directions over +-4 cells (every sub-cell phase), float64 and float32.  ``lit``: the share of them lit.
    ``contact_edge``: the same directions, the distance where ``lit`` turns off found by bisection:
    ``contact_max_m`` / ``contact_mean_m``, how deep the fog in front of the surface is dark (a contact
@@ -80,14 +80,14 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import csv_rows  # noqa: E402
 import smoke  # noqa: E402
-from fog_addon.precompute import shafts  # noqa: E402
+from fog_addon.precompute import shaft_maps, shafts  # noqa: E402
 from fog_addon.precompute.ops import NumpyOps  # noqa: E402
 from fog_addon.precompute.tables import TableSpec  # noqa: E402
 from fog_scenes.occluders import sphere_hit  # noqa: E402
 
 OUT = smoke.out(ROOT / "benchmarks" / "out")
 KEPT = ROOT / "docs" / "measurements" / "data" / "shafts_stability_2026-11-27.csv"
-WIDTH, HEIGHT = shafts.POINT_MAP
+WIDTH, HEIGHT = shaft_maps.POINT_MAP
 CELL = 2.0 * math.pi / (WIDTH - 1)     # rad: one cell of the map
 K = shafts.samples_for("final").view_nodes   # 24
 SHIFTS = [(k + 0.5) / 4 for k in range(4)]
@@ -127,7 +127,7 @@ FIELDS = ["part", "n_cells", "distance_m", "psi_deg", "chi", "incidence_deg", "d
 
 def grid_frame(fi, fj):
     """(a, e_lon, e_lat): the unit direction of the map's fractional grid point (fi, fj) and the unit vectors
-    along its row and its column there (``shafts.point_map_directions``' grid)."""
+    along its row and its column there (``shaft_maps.point_map_directions``' grid)."""
     lo = -math.pi + 2.0 * math.pi * fi / (WIDTH - 1)
     la = -0.5 * math.pi + math.pi * fj / (HEIGHT - 1)
     a = np.array([math.cos(la) * math.cos(lo), math.cos(la) * math.sin(lo), math.sin(la)])
@@ -146,7 +146,7 @@ def sphere_first(origin, dirs, centre, radius):
     root = np.sqrt(np.maximum(disc, 0.0))
     near, far = -b - root, -b + root
     t = np.where(near > 0, near, far)
-    return np.where((disc > 0) & (t > 0), t, shafts.NO_HIT)
+    return np.where((disc > 0) & (t > 0), t, shaft_maps.NO_HIT)
 
 
 _DIRS = None
@@ -155,7 +155,7 @@ _DIRS = None
 def map_directions():
     global _DIRS
     if _DIRS is None:
-        _DIRS = shafts.point_map_directions(WIDTH, HEIGHT).reshape(-1, 3)
+        _DIRS = shaft_maps.point_map_directions(WIDTH, HEIGHT).reshape(-1, 3)
     return _DIRS
 
 
@@ -163,7 +163,7 @@ def bake(light, spheres=(), planes=(), hit=sphere_hit):
     """The point light's map (HEIGHT, WIDTH) float32 of ``spheres`` ((centre, radius)) and ``planes``
     ((point, normal)) at the map's grid points."""
     dirs = map_directions()
-    depth = np.full(len(dirs), shafts.NO_HIT)
+    depth = np.full(len(dirs), shaft_maps.NO_HIT)
     for centre, radius in spheres:
         depth = np.minimum(depth, hit(light, dirs, centre, radius))
     for point, normal in planes:
@@ -177,7 +177,7 @@ def plane_hit(origin, dirs, point, normal):
     den = dirs @ np.asarray(normal, float)
     with np.errstate(divide="ignore", invalid="ignore"):
         t = num / den
-    return np.where(np.isfinite(t) & (t > 0), t, shafts.NO_HIT)
+    return np.where(np.isfinite(t) & (t > 0), t, shaft_maps.NO_HIT)
 
 
 def glow(t, camera, e, light, beta):
@@ -246,22 +246,22 @@ def exact_share(camera, e, length, light, beta, spheres):
 
 @contextlib.contextmanager
 def exact_map(spheres):
-    """``shafts.map_depth`` returns the exact distance to the first sphere in the node's own direction (an
+    """``shaft_maps.map_depth`` returns the exact distance to the first sphere in the node's own direction (an
     infinitely fine map) while inside."""
-    original = shafts.map_depth
+    original = shaft_maps.map_depth
 
     def depth(m, spec, spot, u):
         d = np.linalg.norm(u, axis=-1, keepdims=True)
         dirs = u / np.maximum(d, 1e-300)
-        out = np.full(dirs.shape[:-1], shafts.NO_HIT)
+        out = np.full(dirs.shape[:-1], shaft_maps.NO_HIT)
         for c, r in spheres:
             out = np.minimum(out, sphere_hit(LIGHT, dirs, c, r))
         return out
-    shafts.map_depth = depth
+    shaft_maps.map_depth = depth
     try:
         yield
     finally:
-        shafts.map_depth = original
+        shaft_maps.map_depth = original
 
 
 def interleaved(m, cameras, dirs, lengths, light, beta=BETA, nodes=K):
@@ -313,7 +313,7 @@ def size_map(samples):
                 a, e_lon, e_lat = grid_frame(I0 + px, J0 + py)
                 spheres = [(LIGHT + r * a, radius)]
                 depth = bake(LIGHT, spheres)
-                hits.append(bool((depth < shafts.NO_HIT).any()))
+                hits.append(bool((depth < shaft_maps.NO_HIT).any()))
                 cams, dirs, lens, s_ex, keys = [], [], [], [], []
                 for phi in ORIENTS:
                     e = math.cos(math.radians(phi)) * e_lon + math.sin(math.radians(phi)) * e_lat
@@ -417,15 +417,15 @@ def contact():
                         if not keep.any():
                             continue
                         uu, dd = u[keep].astype(dtype), d[keep].astype(dtype)
-                        lit = shafts.lit(m, dd, shafts.map_depth(m, SPEC, None, uu))
+                        lit = shaft_maps.lit(m, dd, shaft_maps.map_depth(m, SPEC, None, uu))
                         rows.append(dict(part="contact", distance_m=dist, incidence_deg=inc, delta_m=delta, side=side,
                                          dtype=np.dtype(dtype).name, samples=int(keep.sum()),
                                          lit=float(np.mean(lit))))
-                md = shafts.map_depth(m, SPEC, None, u.astype(dtype))
+                md = shaft_maps.map_depth(m, SPEC, None, u.astype(dtype))
                 lo, hi = np.zeros(len(u)), surface + 10.0    # lit at 0, dark 10 m behind the surface
                 for _ in range(64):
                     mid = 0.5 * (lo + hi)
-                    ok = shafts.lit(m, mid.astype(dtype), md) > 0.5
+                    ok = shaft_maps.lit(m, mid.astype(dtype), md) > 0.5
                     lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
                 edge = lo - surface   # > 0: fog behind the surface lit up to it; < 0: fog in front in shadow
                 rows.append(dict(part="contact_edge", distance_m=dist, incidence_deg=inc, dtype=np.dtype(dtype).name,

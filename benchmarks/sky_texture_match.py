@@ -224,25 +224,25 @@ def sky_texture_figures(cfg, read):
 # --- the add-on's daylight at the same directions -----------------------------------------------------------------
 
 def our_day(kind, sun_irradiance, sky_radiance):
-    from fog_addon.precompute import daylight, presets, sunlight
+    from fog_addon.precompute import aerial, presets, sunlight
     if kind == "air only":
         beta, top, falloff, g, albedo = 1e-9, 0.0, 1200.0, 0.76, 0.9
     else:
         p = presets.LAYERED[kind]
         beta, top, falloff, g, albedo = p["density"], p["fog_top"], p["height_falloff"], p["anisotropy"], p["albedo"][0]
     return sunlight.Daylight(beta, top, falloff, 0.0, sun_vector(), np.asarray(sun_irradiance, float),
-                             np.asarray(sky_radiance, float), g, albedo, tuple(daylight.RAYLEIGH_RGB),
-                             daylight.RAYLEIGH_HEIGHT)
+                             np.asarray(sky_radiance, float), g, albedo, tuple(aerial.RAYLEIGH_RGB),
+                             aerial.RAYLEIGH_HEIGHT)
 
 
 def ground_sun_transmittance(day):
     """e^{-(C_layer + C_air)/mu_s} per channel at the ground: what the add-on takes off a Sun light's irradiance
     before it reaches the ground (the Daylight's sun_irradiance is the sun above the air)."""
-    from fog_addon.precompute import daylight
+    from fog_addon.precompute import aerial, daylight
     from fog_addon.precompute.ops import NumpyOps
     m = NumpyOps()
     c_l = daylight.column_depth(m, 0.0, day.beta, day.top, day.falloff)
-    c_a = daylight.air_column_depth(m, 0.0, 1.0, day.air_height)
+    c_a = aerial.air_column_depth(m, 0.0, 1.0, day.air_height)
     return np.array([math.exp(-(c_l + b * c_a) / day.sun[2]) for b in day.air])
 
 
@@ -393,7 +393,7 @@ def main():
         return
     render_missing()
     from fog_addon import imageio
-    from fog_addon.precompute import daylight
+    from fog_addon.precompute import aerial
     read = imageio.read_rgb
     print(f"panorama mapping against the rendered direction map: max {check_mapping(read):.2f} pixel widths")
     bias = step_bias()
@@ -471,7 +471,7 @@ def main():
         cw.writerows([r[:5] + [f"{x:.5g}" for x in r[5:]] for r in rows_sky])
     with open(DATA / f"sky_texture_renders_{DATE}.json", "w") as fh:
         json.dump({"sun_elevation_deg": SUN_ELEVATION, "pano": PANO, "pano_spp": PANO_SPP, "zoom": ZOOM,
-                   "zoom_fov_deg": ZOOM_FOV, "zoom_spp": ZOOM_SPP, "rayleigh_rgb": daylight.RAYLEIGH_RGB,
+                   "zoom_fov_deg": ZOOM_FOV, "zoom_spp": ZOOM_SPP, "rayleigh_rgb": aerial.RAYLEIGH_RGB,
                    "sky_textures": summary}, fh, indent=1)
     print("\n== horizon (0-2.1 deg) ours / Sky Texture, R / G / B: as set | sun above the air | that, no sky glow"
           " | that over a converged single-scattering Sky Texture | as set, the sky's mean probed with the disc on")

@@ -6,8 +6,9 @@ and imports without Blender.
 
 
 def _modules():
-    from . import handlers, ops, props, ui
-    return props, ops, ui, handlers
+    from . import handlers, props, ui
+    from .ops import operators
+    return props, operators, ui, handlers
 
 
 def register():

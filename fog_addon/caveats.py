@@ -12,7 +12,7 @@
 """
 import numpy as np
 
-from .precompute import capabilities, footprint, shafts as shafts_
+from .precompute import capabilities, footprint, shaft_maps
 
 GLOW_OPTICAL_DEPTH = 3.0   # beta x distance within which a light's glow is worth a shadow (e^-3 = 5 %)
 _SEE_THROUGH = ("ShaderNodeBsdfTransparent", "ShaderNodeBsdfGlass", "ShaderNodeBsdfRefraction",
@@ -141,9 +141,9 @@ def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None):
         notes.append(f"light shafts are sharp: the Radius of {listed(soft)} softens their shadows on surfaces "
                      "(Cycles) but not in the fog")
     moving = [o.name for o in [*shafted, *shadow_casters(scene)] if is_animated(o)]
-    first, stride, count = shafts_.atlas_frames(scene.frame_start, scene.frame_end, scene.frame_step)
+    first, stride, count = shaft_maps.atlas_frames(scene.frame_start, scene.frame_end, scene.frame_step)
     if moving and stride > max(scene.frame_step, 1):   # (every rendered frame's map is baked and packed up to the cap)
-        notes.append(f"{listed(moving)} move over more than {shafts_.ATLAS_MAX_FRAMES} rendered frames: the shafts' "
+        notes.append(f"{listed(moving)} move over more than {shaft_maps.ATLAS_MAX_FRAMES} rendered frames: the shafts' "
                      f"shadow maps are baked for every {stride}th frame from {first} ({count} maps a light, packed in "
                      "the file), and the frames between take the latest of them")
     return notes

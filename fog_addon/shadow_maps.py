@@ -10,12 +10,12 @@ without the add-on (the compositor reads it with Map UV).  A map holds the light
 frame it was baked at (``ShadowMap.key``).
 
 **Animations.**  Where a shafted light or a shadow caster is animated (``moving_lights``), the light's image is an
-atlas of its maps at every frame an animation renders (``shafts.atlas_frames``: frame_start..frame_end by
-frame_step, every k-th of those beyond ``shafts.ATLAS_MAX_FRAMES``), four frames a texel in R, G, B and A, at
-``shafts.ANIMATED_POINT_MAP`` (``ANIMATED_SPOT_MAP``) grid points a frame (``Atlas``).  The compositor picks the
-frame's map with a simple-expression driver on the frame (``shafts.ATLAS_TILE``: no Python at render time, so a
+atlas of its maps at every frame an animation renders (``shaft_maps.atlas_frames``: frame_start..frame_end by
+frame_step, every k-th of those beyond ``shaft_maps.ATLAS_MAX_FRAMES``), four frames a texel in R, G, B and A, at
+``shaft_maps.ANIMATED_POINT_MAP`` (``ANIMATED_SPOT_MAP``) grid points a frame (``Atlas``).  The compositor picks the
+frame's map with a simple-expression driver on the frame (``shaft_maps.ATLAS_TILE``: no Python at render time, so a
 farm without the add-on renders every frame's shafts; ``comp_shafts.atlas_tile``).  A moving spot's maps all lie in
-one frame that holds the cones of all its poses (``shafts.spot_union``; else a point light's map of the whole
+one frame that holds the cones of all its poses (``shaft_maps.spot_union``; else a point light's map of the whole
 sphere), and its shafts take its cone from the drivers of its glow.  In the add-on the frame handler bakes the
 frame's map again where the light or the casters changed since (``follow_frame``) and the file's save bakes and
 packs the atlas's whole range again after such a change (``complete``).
@@ -39,7 +39,7 @@ from mathutils import Vector
 from mathutils.bvhtree import BVHTree
 
 from . import caveats, view
-from .precompute import footprint, shafts
+from .precompute import footprint, shaft_maps, sun_shafts
 from .precompute.tables import TableSpec
 
 IMAGE_PREFIX = "AnalyticFog Shadow "   # a light's map: "<IMAGE_PREFIX><light name>" (``nodes/owned.PREFIX``)
@@ -54,8 +54,8 @@ STALE = "analytic_fog_shadow_stale"
 
 
 class Atlas(NamedTuple):
-    """Where an animation's maps lie in a light's atlas image: tile t (``shafts.ATLAS_TILE``) is the map of frame
-    first + t stride, in slot t // 4 (column, row: ``shafts.atlas_place``), channel t % 4, each map width x height
+    """Where an animation's maps lie in a light's atlas image: tile t (``shaft_maps.ATLAS_TILE``) is the map of frame
+    first + t stride, in slot t // 4 (column, row: ``shaft_maps.atlas_place``), channel t % 4, each map width x height
     grid points.  ``tiles`` is 1 where every frame's map was the same (a light the moving casters do not shadow)."""
     first: int
     stride: int
@@ -125,10 +125,10 @@ def scene_bvh(scene, depsgraph=None, objects=None):
 
 
 @functools.lru_cache(maxsize=2)
-def _point_casts(width=shafts.POINT_MAP[0], height=shafts.POINT_MAP[1]):
-    """(the rays of a point light's map as mathutils Vectors, the ray each grid point takes): ``shafts.point_map_casts``
-    (every point light's map of this grid shares them)."""
-    directions, fill = shafts.point_map_casts(width, height)
+def _point_casts(width=shaft_maps.POINT_MAP[0], height=shaft_maps.POINT_MAP[1]):
+    """(the rays of a point light's map as mathutils Vectors, the ray each grid point takes):
+    ``shaft_maps.point_map_casts`` (every point light's map of this grid shares them)."""
+    directions, fill = shaft_maps.point_map_casts(width, height)
     return _vectors(directions), fill
 
 
@@ -154,7 +154,7 @@ def cast(bvh, origin, directions):
 
 def cast_parallel(bvh, origins, direction):
     """Distance (units) from each of ``origins`` ((N, 3) array) along the one unit ``direction`` to the first
-    triangle, NO_HIT if none (a sun's map: ``shafts.SunFrame``)."""
+    triangle, NO_HIT if none (a sun's map: ``sun_shafts.SunFrame``)."""
     return _first_hits(bvh, _vectors(origins), itertools.repeat(Vector(tuple(direction)), len(origins)), len(origins))
 
 
@@ -163,15 +163,16 @@ def _first_hits(bvh, origins, directions, count):
     Vectors) to the first triangle of ``bvh``, NO_HIT where none (or no BVH).  The rays go through ``map``, not a
     Python loop: most of a map's time is the interpreter's, not the BVH's."""
     if bvh is None:
-        return np.full(count, shafts.NO_HIT, np.float32)
+        return np.full(count, shaft_maps.NO_HIT, np.float32)
     hits = map(bvh.ray_cast, origins, directions)
-    return np.fromiter((shafts.NO_HIT if hit[0] is None else hit[3] for hit in hits), np.float32, count)
+    return np.fromiter((shaft_maps.NO_HIT if hit[0] is None else hit[3] for hit in hits), np.float32, count)
 
 
 class SunShadow(NamedTuple):
-    """A sun's baked map: ``spec`` (its image's name and grid) and ``frame`` (``shafts.SunFrame``: where it lies)."""
+    """A sun's baked map: ``spec`` (its image's name and grid) and ``frame`` (``sun_shafts.SunFrame``: where it
+    lies)."""
     spec: TableSpec
-    frame: shafts.SunFrame
+    frame: sun_shafts.SunFrame
 
 
 SUN_IMAGE = "AnalyticFog Sun Shadow"   # the sun's map (one sun shines through a fog layer)
@@ -192,7 +193,7 @@ def sun_shadow(scene, sun, region):
     if not keep.any():
         return None
     direction = tuple(float(c) for c in sun.matrix_world.to_3x3().col[2].normalized())
-    placed = shafts.sun_frame(direction, region, corners[keep].reshape(-1, 3))
+    placed = sun_shafts.sun_frame(direction, region, corners[keep].reshape(-1, 3))
     if placed is None:
         return None
     frame, (width, height) = placed
@@ -201,7 +202,7 @@ def sun_shadow(scene, sun, region):
     spec = TableSpec(SUN_IMAGE, width, height)
     img = bpy.data.images.get(SUN_IMAGE)
     if img is None or img.get(KEY) != version or img.packed_file is None:
-        origins = shafts.sun_map_origins(frame, width, height).reshape(-1, 3)
+        origins = sun_shafts.sun_map_origins(frame, width, height).reshape(-1, 3)
         depth = cast_parallel(geometry.bvh, origins, frame.forward).reshape(height, width)
         _store(spec, depth, version)
     return SunShadow(spec, frame)
@@ -216,7 +217,7 @@ def bake(light, geometry):
     origin = tuple(light.matrix_world.translation)
     spot = spot_map(light)
     if spot is not None:
-        dirs = shafts.spot_map_directions(*spot)
+        dirs = shaft_maps.spot_map_directions(*spot)
         depth = cast(geometry.bvh, origin, dirs.reshape(-1, 3)).reshape(dirs.shape[:2])
     else:
         vectors, fill = _point_casts()
@@ -226,13 +227,13 @@ def bake(light, geometry):
 
 
 def spot_map(light):
-    """(frame, half_width) of a spot's map at the light's pose (``shafts.spot_frame``, ``spot_half_width``),
+    """(frame, half_width) of a spot's map at the light's pose (``shaft_maps.spot_frame``, ``spot_half_width``),
     None for a point light (or a spot of 179 degrees or more, mapped as one)."""
     if not _is_spot(light):
         return None
-    frame = shafts.spot_frame(np.asarray(light.matrix_world)[:3, :3])
+    frame = shaft_maps.spot_frame(np.asarray(light.matrix_world)[:3, :3])
     return (tuple(tuple(float(c) for c in v) for v in frame),
-            shafts.spot_half_width(math.cos(0.5 * light.data.spot_size)))
+            shaft_maps.spot_half_width(math.cos(0.5 * light.data.spot_size)))
 
 
 def key(light, geometry):
@@ -305,8 +306,8 @@ def moving_lights(scene, lights):
 
 
 def frames_of(scene):
-    """(first, stride, count) of the frames an animation's maps are baked for (``shafts.atlas_frames``)."""
-    return shafts.atlas_frames(scene.frame_start, scene.frame_end, scene.frame_step)
+    """(first, stride, count) of the frames an animation's maps are baked for (``shaft_maps.atlas_frames``)."""
+    return shaft_maps.atlas_frames(scene.frame_start, scene.frame_end, scene.frame_step)
 
 
 def ensure(scene, lights, geometry=None, lazy=False):
@@ -337,9 +338,9 @@ def _layout(light, frames, union):
     """(what an atlas of ``light`` is laid out for: its frames, kind, grid and a spot's map frame, as JSON; the grid
     (width, height); the map frame (``spot_map``'s, or None for the whole sphere))."""
     if union is not None:
-        size = (shafts.ANIMATED_SPOT_MAP, shafts.ANIMATED_SPOT_MAP)
+        size = (shaft_maps.ANIMATED_SPOT_MAP, shaft_maps.ANIMATED_SPOT_MAP)
     else:
-        size = shafts.ANIMATED_POINT_MAP
+        size = shaft_maps.ANIMATED_POINT_MAP
     return json.dumps([list(frames), list(size), union]), size, union
 
 
@@ -347,7 +348,7 @@ def ensure_atlases(scene, lights, only_stale=False, lazy=False):
     """{light name: ShadowMap} of the moving ``lights`` and their atlas images: each light's map at every frame of
     ``frames_of(scene)`` (the scene stepped through them, its frame restored), baked where its key (``key``: the
     light's pose and the casters' geometry) differs from the one the atlas holds for that frame, and packed.  A
-    spot's maps all lie in ``shafts.spot_union``'s frame of its poses (the whole sphere where they turn too far).
+    spot's maps all lie in ``shaft_maps.spot_union``'s frame of its poses (the whole sphere where they turn too far).
     ``only_stale``: only the lights whose atlas is missing, STALE or laid out for other frames.  ``lazy`` (a
     rebuild from the depsgraph handler, which must not step through frames): an atlas laid out for this range is
     taken as it is; a new one gets the map of the current frame only (a spot's over the whole sphere), STALE: the
@@ -371,8 +372,8 @@ def ensure_atlases(scene, lights, only_stale=False, lazy=False):
         poses = {o.name: [] for o in spots}
         for _ in view.at_frames(scene, frame_list):
             for o in spots:
-                poses[o.name].append(shafts.spot_frame(np.asarray(o.matrix_world)[:3, :3]))
-        unions = {o.name: shafts.spot_union(poses[o.name], math.cos(0.5 * o.data.spot_size)) for o in spots}
+                poses[o.name].append(shaft_maps.spot_frame(np.asarray(o.matrix_world)[:3, :3]))
+        unions = {o.name: shaft_maps.spot_union(poses[o.name], math.cos(0.5 * o.data.spot_size)) for o in spots}
     plans = []
     for light in lights:
         layout, size, union = _layout(light, frames, unions.get(light.name))
@@ -418,7 +419,7 @@ def _store_atlases(plans, frames, dedupe=True):
         tiles = plan["tiles"]
         if dedupe and all(tiles[0] is not None and np.array_equal(tiles[0], tile) for tile in tiles[1:]):
             tiles = tiles[:1]   # the same map at every frame: one tile
-        columns, rows = shafts.atlas_layout(len(tiles), width, height)
+        columns, rows = shaft_maps.atlas_layout(len(tiles), width, height)
         atlas = Atlas(first, stride, len(tiles), columns, rows, width, height)
         img = bpy.data.images.get(name)
         if not plan["changed"] and img is not None and (plan.get("stale") or not img.get(STALE)):
@@ -450,7 +451,7 @@ def _bake_tile(light, geometry, union, size):
     ((frame, half_width)), or the whole sphere (None)."""
     origin = tuple(light.matrix_world.translation)
     if union is not None:
-        dirs = shafts.spot_map_directions(*union, size=size[0])
+        dirs = shaft_maps.spot_map_directions(*union, size=size[0])
         return cast(geometry.bvh, origin, dirs.reshape(-1, 3)).reshape(dirs.shape[:2])
     vectors, fill = _point_casts(*size)
     return cast(geometry.bvh, origin, vectors)[fill]
@@ -458,12 +459,12 @@ def _bake_tile(light, geometry, union, size):
 
 def _assemble(tiles, columns, rows, width, height):
     """(rows height, columns width, 4) float32: the atlas of ``tiles`` ((height, width) each, or None) in their
-    places (``shafts.atlas_place``); unused channels and missing maps NO_HIT."""
-    rgba = np.full((rows * height, columns * width, 4), shafts.NO_HIT, np.float32)
+    places (``shaft_maps.atlas_place``); unused channels and missing maps NO_HIT."""
+    rgba = np.full((rows * height, columns * width, 4), shaft_maps.NO_HIT, np.float32)
     for t, tile in enumerate(tiles):
         if tile is None:   # (not baked yet: ``ensure_atlases``'s lazy)
             continue
-        column, row, channel = shafts.atlas_place(t, columns)
+        column, row, channel = shaft_maps.atlas_place(t, columns)
         rgba[row * height:(row + 1) * height, column * width:(column + 1) * width, channel] = tile
     return rgba
 
@@ -476,7 +477,7 @@ def _tiles(img):
     rgba = rgba.reshape(img.size[1], img.size[0], 4)
     out = []
     for t in range(tiles):
-        column, row, channel = shafts.atlas_place(t, columns)
+        column, row, channel = shaft_maps.atlas_place(t, columns)
         out.append(rgba[row * height:(row + 1) * height, column * width:(column + 1) * width, channel].copy())
     count = len(img[TILE_KEYS])
     return out if tiles == count else [out[0]] * count
@@ -514,7 +515,7 @@ def follow_frame(scene, lights):
         rgba = np.empty(img.size[0] * img.size[1] * 4, np.float32)
         img.pixels.foreach_get(rgba)
         rgba = rgba.reshape(img.size[1], img.size[0], 4)
-        column, row, channel = shafts.atlas_place(tile, columns)
+        column, row, channel = shaft_maps.atlas_place(tile, columns)
         rgba[row * height:(row + 1) * height, column * width:(column + 1) * width, channel] = depth
         img.pixels.foreach_set(rgba.ravel())
         img.update()

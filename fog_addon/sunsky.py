@@ -15,7 +15,7 @@ import bpy
 import numpy as np
 
 from .nodes import comp_ops
-from .precompute import capabilities, sunlight
+from .precompute import capabilities, daylight_tables, sunlight
 
 SUN_KEY_DIGITS = 4   # the sun's direction enters the built groups' signature at this precision (the map is baked)
 
@@ -61,7 +61,7 @@ def uniform_sky(world):
 
 
 PROBE_KEY = "analytic_fog_sky_probe"   # on a World: {"fingerprint": of its nodes, "colour": ``probe_sky``'s}
-PROBE_SIZE = (sunlight.SKY_COLUMNS, 256)   # px of the equirectangular probe render (0.7 degrees a row)
+PROBE_SIZE = (daylight_tables.SKY_COLUMNS, 256)   # px of the equirectangular probe render (0.7 degrees a row)
 PROBE_SAMPLES = 16
 
 
@@ -159,7 +159,7 @@ def holds_air(world):
 
 def world_sky_spec():
     """The TableSpec of the World's radiance table (``world_sky_table``)."""
-    return sunlight.sky_spec()
+    return daylight_tables.sky_spec()
 
 
 def world_sky_table(scene, spec):
@@ -174,7 +174,7 @@ def world_sky_table(scene, spec):
     fingerprint = _probe_fingerprint(world)
 
     def bake():
-        return sunlight.sky_table_from_probe(_probe_pixels(world, fingerprint))
+        return daylight_tables.sky_table_from_probe(_probe_pixels(world, fingerprint))
     if bpy.app.is_job_running("RENDER") and bpy.data.images.get(table.name) is None:
         return None, {}
     return table, {table.name: images_.keyed_image(table, fingerprint, bake)}
@@ -263,7 +263,7 @@ def key(scene, spec):
 
 
 def fog_light_table(scene, spec):
-    """(TableSpec, {name: image}) of the fog light's irradiance map (``sunlight.bake_fog_light``) for the scene's
+    """(TableSpec, {name: image}) of the fog light's irradiance map (``daylight_tables.bake_fog_light``) for the scene's
     sun (straight up without one: its irradiance is 0 then) and the spec's layer (with air a tuple of three, one
     per colour channel); (None, {}) where the layer has no daylight (``is_daylit``)."""
     from .nodes import images as images_
@@ -279,7 +279,7 @@ def fog_light_table(scene, spec):
     tables_, images = [], dict(glow_table(scene, spec)[1])   # (the glow's table with the maps: ``daylight`` reads it)
     images.update(world_sky_table(scene, spec)[1])            # (and the World's own sky, where it holds its air)
     for channel in channels:   # with air one map per colour channel, both species' light, the albedos in it
-        table = sunlight.table_spec(beta, top, falloff, direction, spec.anisotropy, channel)
+        table = daylight_tables.table_spec(beta, top, falloff, direction, spec.anisotropy, channel)
         images[table.name] = images_.table_image(table)   # (its kind's baker, through the disk cache)
         tables_.append(table)
     return (tables_[0] if air is None else tuple(tables_)), images
@@ -298,8 +298,8 @@ def uses_glow_table(scene, spec):
 
 
 def _glow_bake_args(scene, spec):
-    """(beta, top, falloff, mu_s, g, camera height, air, air height) of ``sunlight.bake_glow_table`` for the scene
-    now: units, the sun's elevation sine rounded as ``key`` rounds the sun's direction, straight up without a sun,
+    """(beta, top, falloff, mu_s, g, camera height, air, air height) of ``daylight_tables.bake_glow_table`` for the
+    scene now: units, the sun's elevation sine rounded as ``key`` rounds the sun's direction, straight up without a sun,
     and the camera's height to 6 significant digits (the image is re-baked when it changes)."""
     top, falloff, ground = spec.layer_per_unit()
     suns = scene_suns(scene)
@@ -311,14 +311,14 @@ def _glow_bake_args(scene, spec):
 
 
 def glow_table(scene, spec):
-    """(``sunlight.GlowTable``, {name: image}) of the scene's camera (``uses_glow_table``), or (None, {}): its
+    """(``daylight_tables.GlowTable``, {name: image}) of the scene's camera (``uses_glow_table``), or (None, {}): its
     image re-baked in place when the camera's height or the layer changed (``images.keyed_image``)."""
     from .nodes import images as images_
     if not uses_glow_table(scene, spec):
         return None, {}
     args = _glow_bake_args(scene, spec)
-    table = sunlight.glow_table(args[0], args[6])
-    image = images_.keyed_image(table.spec, repr(args), functools.partial(sunlight.bake_glow_table, *args))
+    table = daylight_tables.glow_table(args[0], args[6])
+    image = images_.keyed_image(table.spec, repr(args), functools.partial(daylight_tables.bake_glow_table, *args))
     return table, {table.spec.name: image}
 
 
@@ -326,15 +326,15 @@ def refresh_glow_table(scene, spec):
     """Re-bake the glow table in place if the camera's height changed, and set the World group's copy of a uniform
     sky's radiance again (``refresh_world_sky``): the depsgraph handler's call, when nothing else needs a rebuild
     (nothing if the groups read no table)."""
-    if bpy.data.images.get(sunlight.GLOW_NAME) is not None:
+    if bpy.data.images.get(daylight_tables.GLOW_NAME) is not None:
         glow_table(scene, spec)
     if spec.layered:
         refresh_world_sky(scene)
 
 
 def sun_casts_shafts(scene, spec):
-    """The Sun light whose shadows fall in the fog layer as shafts (``shafts.sun_lit_share``), or None: the daylight's
-    sun, with Light Shafts on and the sun casting shadows."""
+    """The Sun light whose shadows fall in the fog layer as shafts (``sun_shafts.sun_lit_share``), or None: the
+    daylight's sun, with Light Shafts on and the sun casting shadows."""
     if not spec.shafts or not is_daylit(scene, spec) or scene.camera is None:
         return None
     suns = scene_suns(scene)
@@ -347,7 +347,7 @@ def shaft_region(scene, spec):
     """(8, 3) world corners of the box of fog layer the camera sees, where the sun's shafts are mapped: over the
     ground, up to the lamps' glow top (``sunlight.lamp_glow_top``), and across the part of the view frustum's corner
     and centre rays in the layer (``sunlight.lamp_glow_span``), each at most SUN_REACH mean free paths long."""
-    from .precompute import daylight as daylight_, shafts
+    from .precompute import daylight as daylight_, sun_shafts
     from .precompute.ops import NumpyOps
     top, falloff, ground = spec.layer_per_unit()
     top_z = sunlight.lamp_glow_top(top, falloff, ground)
@@ -355,7 +355,7 @@ def shaft_region(scene, spec):
     eye = np.asarray(cam.matrix_world.translation, float)
     frame = [np.asarray(cam.matrix_world.to_3x3() @ v, float) for v in cam.data.view_frame(scene=scene)]
     rays = [v / np.linalg.norm(v) for v in frame + [sum(frame)]]
-    reach = shafts.SUN_REACH / max(spec.beta_per_unit, 1e-9)
+    reach = sun_shafts.SUN_REACH / max(spec.beta_per_unit, 1e-9)
     m = NumpyOps()
     points = [eye]
     for d in rays:
@@ -503,10 +503,10 @@ def daylight(m, scene, spec, beta, albedo=1.0, in_world=False):
         direction, irradiance = m.wrap((0.0, 0.0, 1.0)), m.wrap((0.0, 0.0, 0.0))
     sky = _sky(m, scene, in_world)
     air = spec.air_per_unit()
-    table = (sunlight.glow_table(spec.beta_per_unit, None if air is None else air[0])
+    table = (daylight_tables.glow_table(spec.beta_per_unit, None if air is None else air[0])
              if uses_glow_table(scene, spec) else None)
     world_sky = None
-    if air is not None and holds_air(scene.world) and bpy.data.images.get(sunlight.SKY_TABLE) is not None:
+    if air is not None and holds_air(scene.world) and bpy.data.images.get(daylight_tables.SKY_TABLE) is not None:
         world_sky = world_sky_spec()   # (baked by ``fog_light_table`` with the groups' other tables)
     return sunlight.Daylight(beta, top, falloff, ground, direction, irradiance, sky, spec.anisotropy, albedo,
                              None if air is None else tuple(air[0]), 0.0 if air is None else air[1], table, world_sky,

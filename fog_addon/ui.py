@@ -2,7 +2,8 @@
 import bpy
 
 from .methods.node_groups import MANY_LIGHTS
-from .ops import FOG_MT_presets, apply
+from .ops import apply
+from .ops.operators import FOG_MT_presets
 from .precompute import capabilities, rungs
 
 ENGINE_NOTES = {

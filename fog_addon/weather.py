@@ -43,7 +43,7 @@ def _fields(g, albedo):
     from .precompute.ops import NumpyOps
     spec = multiple.table_spec(g, albedo)
     m = NumpyOps({spec.name: bakers.table_array(spec, g)})
-    return emitter_glow.single_field(g), (lambda t, c: multiple.field(m, spec, t, c))
+    return emitter_glow.single_field(g, bakers.READER), (lambda t, c: multiple.field(m, spec, t, c))
 
 
 def glow_kernel(shape, pixel_angle, optical_distance, single, multiple_, albedo):

@@ -2,7 +2,7 @@
 and quadratures under test (tests/test_shafts.py, benchmarks/shafts_stability.py)."""
 import numpy as np
 
-NO_HIT = 1.0e30   # m: a direction that meets nothing (as ``shafts.NO_HIT``, the maps' value for it)
+NO_HIT = 1.0e30   # m: a direction that meets nothing (as ``shaft_maps.NO_HIT``, the maps' value for it)
 
 
 def sphere_hit(origin, dirs, centre, radius):

@@ -28,7 +28,7 @@ for p in (ROOT, ROOT / "tests"):
     if str(p) not in sys.path:
         sys.path.insert(0, str(p))
 
-from fog_addon.precompute import daylight as dl   # noqa: E402
+from fog_addon.precompute import aerial, daylight as dl   # noqa: E402
 from fog_addon.precompute.ops import NumpyOps      # noqa: E402
 from test_daylight import FAR, _points, ref_beta, ref_column, ref_tau   # noqa: E402
 from tools.shader_float32 import Float32Ops        # noqa: E402
@@ -184,7 +184,7 @@ def cache(regen):
 def kernel(rows, mm=m):
     pz, vz, d, mu, b, h0, hh, ba = (np.asarray(rows[:, i], mm.dtype) for i in range(8))
     # the kernel takes the three channels' extinctions: here all three are this sample's, the first is read
-    return np.stack(dl.air_glow(mm, pz, vz, d, mu, b, h0, hh, (ba, ba, ba), HA)[0], axis=-1)
+    return np.stack(aerial.air_glow(mm, pz, vz, d, mu, b, h0, hh, (ba, ba, ba), HA)[0], axis=-1)
 
 
 def errors(got, ref):
@@ -241,7 +241,7 @@ def test_without_air_the_layers_own():
     sky glow is its own."""
     rows = samples(300, 5)
     pz, vz, d, mu, b, h0, hh, _ = (rows[:, i] for i in range(8))
-    sun_l, sun_a, sky_a, sky_ratio = dl.air_glow(m, pz, vz, d, mu, b, h0, hh, (0.0, 0.0, 0.0), HA)[0]
+    sun_l, sun_a, sky_a, sky_ratio = aerial.air_glow(m, pz, vz, d, mu, b, h0, hh, (0.0, 0.0, 0.0), HA)[0]
     exact = dl.sun_airlight(m, pz, vz, d, mu, 1.0, b, h0, hh) / dl.hg_phase(m, 0.0, 1.0)
     assert np.all(sun_a == 0.0) and np.all(sky_a == 0.0) and np.allclose(sky_ratio, 1.0, rtol=1e-12)
     ok = exact > 1e-25
@@ -259,7 +259,7 @@ def test_rayleigh_sky_source_against_quadrature():
                                       0.0, math.pi, epsabs=0, epsrel=1e-11)[0] / math.pi
             q = 2.0 * math.pi * integrate.quad(lambda mu: ring(mu) * math.exp(-c / mu) if mu > 0 else 0.0, 0.0, 1.0,
                                                epsabs=0, epsrel=1e-10, limit=200)[0]
-            got = float(dl.rayleigh_sky_source(m, np.float64(c), np.float64(vz)))
+            got = float(aerial.rayleigh_sky_source(m, np.float64(c), np.float64(vz)))
             assert got == pytest.approx(q, rel=2e-4), (c, vz)
             assert ref_rayleigh_source(c, vz) == pytest.approx(q, rel=1e-6), (c, vz)   # the cache's reference
 
@@ -335,7 +335,7 @@ def _ray_glow_error(pz, elevation, length, layer, g):
     e = math.radians(elevation)
     d = np.array([0.0, math.cos(e), math.sin(e)])
     b, h0, hh = layer
-    air = dl.RAYLEIGH_RGB
+    air = aerial.RAYLEIGH_RGB
     e_sun, l_sky = np.array([3.0, 3.0, 3.0]), np.array([0.35, 0.5, 0.8])
     day = sunlight.Daylight(b, h0, hh, 0.0, sun, e_sun, l_sky, g, 0.9, tuple(air), HA)
     got = sunlight.ray_glow(m, day, np.array([0.0, 0.0, pz]), d, length)

@@ -21,7 +21,7 @@ import pytest
 
 from fog_addon.ops import progress as progress_
 from fog_addon.precompute import bakers, emitter_glow, multiple, point_source_mc, table_cache
-from fog_addon.precompute import spot_multiple as sm
+from fog_addon.precompute import spot_multiple as sm, spot_walk
 
 COS_HALF = math.cos(math.radians(22.5))   # a spot of 45 degrees
 BLEND = 0.15
@@ -109,12 +109,12 @@ def test_cached_tables_cost_nothing(cache):
 def test_estimate_within_2x_of_a_small_bake(g, albedo):
     spec = sm.table_spec(g, albedo, COS_HALF, BLEND)
     photons = 4000
-    sm.moment_matrices(g)                                   # (per process, once per g)
+    spot_walk.moment_matrices(g)                                   # (per process, once per g)
     t0 = time.process_time()
-    sm.collide(g, albedo, COS_HALF, BLEND, photons=photons)
+    spot_walk.collide(g, albedo, COS_HALF, BLEND, photons=photons)
     took = time.process_time() - t0
-    counts = sm.walk_counts(g, albedo, photons)
-    for key, value in sm.LAST_WALK.items():
+    counts = spot_walk.walk_counts(g, albedo, photons)
+    for key, value in spot_walk.LAST_WALK.items():
         assert 1 / 1.5 < counts[key] / value < 1.5, (key, counts[key], value)
     estimate = sm.estimate_seconds(spec, photons)
     assert 0.5 < estimate / took < 2.0, (estimate, took)
@@ -150,27 +150,27 @@ def test_moments_are_the_truncated_phase_function():
     rng = np.random.default_rng(5)
     d = rng.normal(size=(50, 3))
     d /= np.linalg.norm(d, axis=1)[:, None]
-    a_j, a_e = sm.moment_matrices(g)
-    out = sm._out_directions()
+    a_j, a_e = spot_walk.moment_matrices(g)
+    out = spot_walk._out_directions()
     mirror = out * np.array([1.0, 1.0, -1.0])
-    degree = np.arange(sm.MOMENT_DEGREE + 1)
+    degree = np.arange(spot_walk.MOMENT_DEGREE + 1)
     phase = (2 * degree + 1) * g ** degree / (4.0 * math.pi)
     series = 0.5 * (np.polynomial.legendre.legval(d @ out.T, phase) + np.polynomial.legendre.legval(d @ mirror.T,
                                                                                                     phase))
-    np.testing.assert_allclose(sm._monomials(d[:, 0], d[:, 1]) @ a_j, series, atol=1e-9)
+    np.testing.assert_allclose(spot_walk._monomials(d[:, 0], d[:, 1]) @ a_j, series, atol=1e-9)
     facing = 0.5 * (np.maximum(-(d @ out.T), 0.0) + np.maximum(-(d @ mirror.T), 0.0))
-    mean_error = np.mean(sm._monomials(d[:, 0], d[:, 1]) @ a_e - facing)
+    mean_error = np.mean(spot_walk._monomials(d[:, 0], d[:, 1]) @ a_e - facing)
     assert abs(mean_error) < 0.02   # the clamped cosine's terms past degree 4 average out over directions
 
 
 def _bands(result):
     """Volume-integrated J (and E) over distance bands, per tabulated direction: (bands, 2, THETA, PHI)."""
     j, _, e = result
-    t_edges = sm._edges(sm.row_distances(), True)
-    p_edges = sm._edges(sm.psi_angles(), False)
+    t_edges = spot_walk._edges(spot_walk.row_distances(), True)
+    p_edges = spot_walk._edges(spot_walk.psi_angles(), False)
     p_edges[0], p_edges[-1] = 0.0, math.pi
     volume = ((t_edges[1:, None] ** 3 - t_edges[:-1, None] ** 3) * (np.cos(p_edges[:-1]) - np.cos(p_edges[1:])))
-    rows = sm.row_distances()
+    rows = spot_walk.row_distances()
     out = []
     for lo, hi in ((0.0, 0.3), (0.3, 3.0), (3.0, 10.0), (10.0, 41.0)):
         sel = (rows >= lo) & (rows < hi)
@@ -184,8 +184,8 @@ def test_moments_agree_with_exact_tallies_on_the_same_walks():
     1.5 % (measured: 0.02-1.6 % and 0.05-0.3 %; single directions differ by up to 20 % where one late
     collision's peaked phase function dominates the exact tally, its own noise)."""
     g, albedo, photons = 0.85, 0.9, 3000
-    exact = sm.collide(g, albedo, COS_HALF, BLEND, photons=photons, window=(1e9, 1), exact_orders=10 ** 9)
-    moments = sm.collide(g, albedo, COS_HALF, BLEND, photons=photons, window=(1e9, 1))
+    exact = spot_walk.collide(g, albedo, COS_HALF, BLEND, photons=photons, window=(1e9, 1), exact_orders=10 ** 9)
+    moments = spot_walk.collide(g, albedo, COS_HALF, BLEND, photons=photons, window=(1e9, 1))
     ratio = _bands(moments) / _bands(exact) - 1.0     # (bands, J or E, theta, phi)
     assert np.all(np.median(np.abs(ratio), axis=(2, 3)) < 0.03), np.median(np.abs(ratio), axis=(2, 3))
     assert np.all(np.abs(np.mean(ratio, axis=(2, 3))) < 0.015), np.mean(ratio, axis=(2, 3))
@@ -198,9 +198,9 @@ def test_the_weight_window_agrees_with_the_full_walks():
     faster."""
     g, albedo, photons = 0.85, 1.0, 4000
     t0 = time.process_time()
-    windowed = _bands(sm.collide(g, albedo, COS_HALF, BLEND, photons=photons, seed=1))
+    windowed = _bands(spot_walk.collide(g, albedo, COS_HALF, BLEND, photons=photons, seed=1))
     t1 = time.process_time()
-    full = _bands(sm.collide(g, albedo, COS_HALF, BLEND, photons=photons, seed=2, window=(1e9, 1)))
+    full = _bands(spot_walk.collide(g, albedo, COS_HALF, BLEND, photons=photons, seed=2, window=(1e9, 1)))
     t2 = time.process_time()
     ratio = windowed.sum(axis=(2, 3)) / full.sum(axis=(2, 3))   # (bands, J or E)
     assert np.all(np.abs(ratio - 1.0) < 0.25), ratio

@@ -24,7 +24,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from fog_addon.precompute import daylight as dl   # noqa: E402
+from fog_addon.precompute import aerial, daylight as dl   # noqa: E402
 from fog_addon.precompute.ops import NumpyOps      # noqa: E402
 from tools.shader_float32 import Float32Ops        # noqa: E402
 
@@ -276,7 +276,7 @@ def k_sky(rows, mm=m, **kw):
 
 def k_haze(rows, mm=m, **kw):
     pz, vz, d, mu, c, br, bm = (np.asarray(rows[:, i], mm.dtype) for i in range(7))
-    return dl.haze_airlight(mm, pz, vz, d, mu, c, 0.0, br, bm, **kw)
+    return aerial.haze_airlight(mm, pz, vz, d, mu, c, 0.0, br, bm, **kw)
 
 
 def _rel(a, b):
@@ -576,18 +576,18 @@ def test_haze_live_subset():
 def test_haze_depths_and_limits():
     br, bm = 13.5e-6, 2e-5
     # the sun's depth from the ground: (beta_R H_R + beta_M/0.9 H_M) / mu
-    assert float(dl.haze_sun_depth(m, np.float64(0.0), np.float64(0.5), 0.0, br, bm)) == pytest.approx(
+    assert float(aerial.haze_sun_depth(m, np.float64(0.0), np.float64(0.5), 0.0, br, bm)) == pytest.approx(
         (br * HR + bm / ALB * HM) / 0.5, rel=1e-12)
     # a level ray at 500 m: Koschmieder with the local extinction
     b500 = br * math.exp(-500 / HR) + bm / ALB * math.exp(-500 / HM)
-    assert float(dl.haze_transmittance(m, np.float64(500.0), np.float64(0.0), np.float64(2e4), 0.0, br, bm)) == \
+    assert float(aerial.haze_transmittance(m, np.float64(500.0), np.float64(0.0), np.float64(2e4), 0.0, br, bm)) == \
         pytest.approx(math.exp(-b500 * 2e4), rel=1e-12)
     # level ray: the weights are constant, the quadrature exact (up to the cut at optical depth 20)
-    got = float(dl.haze_airlight(m, *(np.float64(x) for x in (500.0, 0.0, 3e4, 0.4, 0.2)), 0.0, br, bm))
+    got = float(aerial.haze_airlight(m, *(np.float64(x) for x in (500.0, 0.0, 3e4, 0.4, 0.2)), 0.0, br, bm))
     assert got == pytest.approx(ref_haze(500.0, 0.0, 3e4, 0.4, 0.2, br, bm), rel=1e-9)
-    assert float(dl.haze_airlight(m, *(np.float64(x) for x in (500.0, 0.1, 3e4, -0.2, 0.2)), 0.0, br, bm)) == 0.0
+    assert float(aerial.haze_airlight(m, *(np.float64(x) for x in (500.0, 0.1, 3e4, -0.2, 0.2)), 0.0, br, bm)) == 0.0
     # the flat-Earth limit: the aerosols 2.6 % denser than the round Earth's at the end of a level 20 km ray
-    assert dl.flat_earth_error(20e3, HM) == pytest.approx(math.exp(20e3 ** 2 / (2 * 6.371e6 * HM)) - 1, rel=1e-12)
+    assert aerial.flat_earth_error(20e3, HM) == pytest.approx(math.exp(20e3 ** 2 / (2 * 6.371e6 * HM)) - 1, rel=1e-12)
 
 
 if __name__ == "__main__":

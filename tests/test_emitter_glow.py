@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from fog_addon import imageio
-from fog_addon.precompute import emitter_glow as eg
+from fog_addon.precompute import bakers, emitter_glow as eg
 
 G = 0.85
 PIXEL_ANGLE = math.radians(0.1)
@@ -22,7 +22,7 @@ PIXEL_ANGLE = math.radians(0.1)
 
 @pytest.fixture(scope="module")
 def single():
-    return eg.single_field(G)
+    return eg.single_field(G, bakers.READER)
 
 
 def test_nnls_against_scipy():
@@ -66,7 +66,7 @@ def test_ladder_holds_the_kernel_ring_by_ring(single, t):
 
 
 def test_weights_table_is_finite_and_non_negative():
-    table = eg.bake_table(G, PIXEL_ANGLE)
+    table = eg.bake_table(G, PIXEL_ANGLE, bakers.READER)
     assert table.shape == (len(eg.SIZES) + 1, eg.T_COUNT)
     shares = table[:-1]
     assert np.isfinite(table).all() and (shares >= 0.0).all()
@@ -92,7 +92,7 @@ def test_the_table_read_between_its_columns_holds_the_kernel(dense):
     the weights themselves over ln T (24 columns) was 13 % bright at T 4.5 and 3 % dark at T 1.6: a glowing
     object's single scattering read 1.12-1.15 of Cycles' at T 4.5."""
     from fog_addon.precompute.ops import NumpyOps
-    field = eg.glow_field(G, 0.9 if dense else None)
+    field = eg.glow_field(G, bakers.READER, 0.9 if dense else None)
     spec = eg.table_spec(G, PIXEL_ANGLE, 0.9 if dense else None)
     m = NumpyOps({spec.name: eg.bake_weights(field, PIXEL_ANGLE, spec.width)})
     columns = eg.optical_depths(spec.width)

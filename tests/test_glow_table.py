@@ -1,5 +1,5 @@
-"""The daylight glow's table (``sunlight.bake_glow_table`` / ``table_glow``): the sun's and the sky's glow along every
-camera ray of one camera height, baked from the kernels and read by one bilinear lookup per colour channel.
+"""The daylight glow's table (``daylight_tables.bake_glow_table`` / ``sunlight.table_glow``): the sun's and the sky's
+glow along every camera ray of one camera height, baked from the kernels and read by one bilinear lookup per colour channel.
 
 Expected values: ``sunlight.ray_glow``'s kernels (themselves against scipy in test_daylight.py and
 test_air_kernels.py), on random camera rays of the layers the presets and the render tests use.  The bounds are the
@@ -10,12 +10,12 @@ import math
 import numpy as np
 import pytest
 
-from fog_addon.precompute import daylight, sunlight
+from fog_addon.precompute import aerial, daylight, daylight_tables, sunlight
 from fog_addon.precompute.ops import NumpyOps
 
 SUN = np.array([0.3, math.cos(math.radians(40.0)), math.sin(math.radians(40.0))])
 SUN = SUN / np.linalg.norm(SUN)
-AIR = tuple(daylight.RAYLEIGH_RGB)
+AIR = tuple(aerial.RAYLEIGH_RGB)
 
 # name: (beta 1/m, top m, H m, g, albedo, air, camera height m, nearest and farthest surface m)
 LAYERS = {
@@ -41,7 +41,7 @@ def _rays(pz, near, far, n=4000, seed=0):
 def _day(beta, top, falloff, g, albedo, air):
     return sunlight.Daylight(beta, top, falloff, 0.0, SUN, np.array([3.0, 2.9, 2.7]), np.array([0.3, 0.5, 0.9]), g,
                              np.array(albedo) if isinstance(albedo, tuple) else albedo, air,
-                             daylight.RAYLEIGH_HEIGHT if air else 0.0)
+                             aerial.RAYLEIGH_HEIGHT if air else 0.0)
 
 
 @pytest.mark.parametrize("name", list(LAYERS))
@@ -50,8 +50,8 @@ def test_table_glow_against_the_kernels(name):
     (the worst: a ray that leaves a hard top between two rows)."""
     beta, top, falloff, g, albedo, air, pz, near, far = LAYERS[name]
     day = _day(beta, top, falloff, g, albedo, air)
-    table = sunlight.glow_table(beta, air)
-    baked = sunlight.bake_glow_table(beta, top, falloff, SUN[2], g, pz, air, day.air_height)
+    table = daylight_tables.glow_table(beta, air)
+    baked = daylight_tables.bake_glow_table(beta, top, falloff, SUN[2], g, pz, air, day.air_height)
     assert baked.shape == (table.spec.height, table.spec.width, 4) and np.isfinite(baked).all()
     m = NumpyOps({table.spec.name: baked})
     d, length = _rays(pz, near, far)
@@ -66,8 +66,8 @@ def test_table_glow_against_the_kernels(name):
 def test_sun_below_the_horizon_gives_no_sun_glow():
     """A sun at or below the horizon lights no fog: the table's sun texels are 0 (the sky's are not)."""
     for air in (None, AIR):
-        baked = sunlight.bake_glow_table(0.01, 100.0, 0.0, -0.1, 0.5, 1.6, air, daylight.RAYLEIGH_HEIGHT)
-        blocks = baked.reshape(-1, sunlight.GLOW_ELEVATIONS, sunlight.GLOW_DISTANCES, 4)
+        baked = daylight_tables.bake_glow_table(0.01, 100.0, 0.0, -0.1, 0.5, 1.6, air, aerial.RAYLEIGH_HEIGHT)
+        blocks = baked.reshape(-1, daylight_tables.GLOW_ELEVATIONS, daylight_tables.GLOW_DISTANCES, 4)
         assert np.all(blocks[..., 0] == 0.0) and blocks[..., 1 if air is None else 2].max() > 0.0
         if air is not None:
             assert np.all(blocks[..., 1] == 0.0)
@@ -77,7 +77,7 @@ def test_coordinates_reach_the_table_edges():
     """Straight down and straight up are the first and last rows, a zero length the first column and the sky
     (model.FAR and beyond) the last."""
     m = NumpyOps()
-    x, y = sunlight.glow_coordinates(m, np.array([-1.0, 0.0, 1.0]), np.array([0.0, 1.0, 1e30]), 7.0)
+    x, y = daylight_tables.glow_coordinates(m, np.array([-1.0, 0.0, 1.0]), np.array([0.0, 1.0, 1e30]), 7.0)
     assert y.tolist() == [0.0, 0.5, 1.0]
     assert x[0] == 0.0 and x[1] == pytest.approx(1.0 / 8.0) and x[2] == pytest.approx(1.0, abs=1e-14)
 
@@ -114,7 +114,7 @@ scene.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.3, 
 R = {}
 spec = FogSpec(density=0.02, fog_top=50.0, height_falloff=0.0, method="compositor").validated()
 apply.apply(scene, spec)
-name = sunlight.GLOW_NAME
+name = daylight_tables.GLOW_NAME
 
 def pixels():
     img = bpy.data.images.get(name)
@@ -125,7 +125,7 @@ def pixels():
     return a.reshape(img.size[1], img.size[0], 4)
 
 def expected():
-    return sunlight.bake_glow_table(*sunsky._glow_bake_args(scene, apply.spec_of(scene)))
+    return daylight_tables.bake_glow_table(*sunsky._glow_bake_args(scene, apply.spec_of(scene)))
 
 def reads_table():
     trees = [bpy.data.node_groups[comp_fog.FOG_GROUP]]

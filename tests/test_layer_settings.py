@@ -210,7 +210,7 @@ import argparse, dataclasses, json, sys
 import bpy
 import fog_addon
 from fog_addon import cli, render
-from fog_addon.ops import FOG_OT_preset_add
+from fog_addon.ops.operators import FOG_OT_preset_add
 from fog_addon.precompute import presets
 from fog_addon.precompute.spec import FogSpec
 

@@ -11,16 +11,16 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from fog_addon.precompute import shafts
+from fog_addon.precompute import shaft_maps, shafts
 from fog_addon.precompute.ops import NumpyOps
 from fog_addon.precompute.tables import TableSpec
 from fog_scenes.occluders import sphere_hit
 
 
 def point_map(light, occluders, size=(512, 256)):
-    dirs = shafts.point_map_directions(*size)
+    dirs = shaft_maps.point_map_directions(*size)
     flat = dirs.reshape(-1, 3)
-    depth = np.full(len(flat), shafts.NO_HIT)
+    depth = np.full(len(flat), shaft_maps.NO_HIT)
     for centre, radius in occluders:
         depth = np.minimum(depth, sphere_hit(light, flat, centre, radius))
     spec = TableSpec("shadow", size[0], size[1])
@@ -92,7 +92,7 @@ def test_thin_pole_casts_its_shaft():
     """A 5 cm pole (a row of small spheres) 4 m from the light: a ray through its shadow loses light."""
     light = np.array([0.0, 0.0, 3.0])
     occluders = [((0.0, 4.0, z), 0.025) for z in np.arange(0.0, 6.0, 0.02)]
-    spec, depth = point_map(light, occluders, shafts.POINT_MAP)
+    spec, depth = point_map(light, occluders, shaft_maps.POINT_MAP)
     direction = np.array([1.0, 0.0, 0.0])
     camera = np.array([-10.0, 8.0, 3.0])   # the ray crosses the pole's shadow 8 m from the light
     got = share(camera, direction, 20.0, light, 0.05, spec, depth, nodes=256)
@@ -109,34 +109,34 @@ def test_offset_is_the_bayer_pattern():
 
 
 def test_spot_map_round_trip():
-    frame = shafts.spot_frame(np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]], float).T)
-    half = shafts.spot_half_width(math.cos(math.radians(30)))
-    dirs = shafts.spot_map_directions(frame, half, 9)
+    frame = shaft_maps.spot_frame(np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]], float).T)
+    half = shaft_maps.spot_half_width(math.cos(math.radians(30)))
+    dirs = shaft_maps.spot_map_directions(frame, half, 9)
     m = NumpyOps()
-    x, y = shafts.spot_map_xy(m, dirs.reshape(-1, 3), frame, half)
+    x, y = shaft_maps.spot_map_xy(m, dirs.reshape(-1, 3), frame, half)
     i, j = np.meshgrid(np.arange(9), np.arange(9))
     assert np.allclose(x, i.ravel() / 8) and np.allclose(y, j.ravel() / 8)
 
 
 def test_point_map_round_trip():
-    dirs = shafts.point_map_directions(17, 9)
+    dirs = shaft_maps.point_map_directions(17, 9)
     m = NumpyOps()
-    x, y = shafts.point_map_xy(m, dirs[1:-1].reshape(-1, 3))
+    x, y = shaft_maps.point_map_xy(m, dirs[1:-1].reshape(-1, 3))
     i, j = np.meshgrid(np.arange(17), np.arange(1, 8))
     x_want = i.ravel() / 16
     ok = np.isclose(x, x_want) | (np.isclose(x_want, 0) & np.isclose(x, 1)) | (np.isclose(x_want, 1) & np.isclose(x, 0))
     assert ok.all() and np.allclose(y, j.ravel() / 8)
 
 
-@pytest.mark.parametrize("size", [shafts.POINT_MAP, (64, 33)])
+@pytest.mark.parametrize("size", [shaft_maps.POINT_MAP, (64, 33)])
 def test_point_map_casts_resolve_the_equator_spacing_everywhere(size):
     """The thinned rays of a point light's map (``point_map_casts``): each grid point takes a ray within half the
     equator's grid spacing of its own direction (``point_map_directions``, the grid the compositor reads), and no
     two neighbouring rays of a row lie farther apart than that spacing, so a thin occluder the equator resolves is
     resolved at every latitude; about 2 / pi of the grid's rays are cast."""
     width, height = size
-    directions, fill = shafts.point_map_casts(width, height)
-    grid = shafts.point_map_directions(width, height)
+    directions, fill = shaft_maps.point_map_casts(width, height)
+    grid = shaft_maps.point_map_directions(width, height)
     spacing = 2.0 * math.pi / (width - 1)   # rad between the equator's grid points
     assert fill.shape == (height, width)
     assert np.allclose(np.linalg.norm(directions, axis=-1), 1.0)
@@ -271,7 +271,7 @@ def test_segment_ending_far_before_the_light_is_dark_behind_an_occluder():
     within MAX_ANGLE of -pi/2, where the nodes once sampled the stretch between the segment's end and the
     lamp (S = 1, S_far 1.001)."""
     light, camera, direction = np.array([0.0, 0.0, 3.0]), np.array([0.0, -10.0, 3.0]), np.array([0.0, 1.0, 0.0])
-    spec, depth = point_map(light, [((0.0, -2.0, 3.0), 0.3)], shafts.POINT_MAP)
+    spec, depth = point_map(light, [((0.0, -2.0, 3.0), 0.3)], shaft_maps.POINT_MAP)
     m = NumpyOps({spec.name: depth})
     s, far = shafts.lit_share(m, camera, direction, 5.0, light, 0.1, (spec, None), 24, g=0.7, tail_nodes=6)
     assert s < 1e-6 and 0.0 <= far <= 1.0, (s, far)
@@ -299,8 +299,8 @@ def test_many_shafted_lights_keep_the_per_pixel_budget(quality):
 # --- an animation's maps (the atlas of shadow_maps.ensure_atlases) -----------------------------------------
 
 def _tile(frame, first, stride, tiles):
-    """``shafts.ATLAS_TILE`` evaluated as Blender's simple expressions do (min, max, floor of floats)."""
-    return eval(shafts.ATLAS_TILE, {"min": min, "max": max, "floor": math.floor},
+    """``shaft_maps.ATLAS_TILE`` evaluated as Blender's simple expressions do (min, max, floor of floats)."""
+    return eval(shaft_maps.ATLAS_TILE, {"min": min, "max": max, "floor": math.floor},
                 {"frame": float(frame), "s": float(first), "k": float(stride), "n": float(tiles)})
 
 
@@ -308,9 +308,9 @@ def _tile(frame, first, stride, tiles):
                                                  (0, 250, 1, (0, 2, 126)), (1, 300, 1, (1, 3, 100)),
                                                  (1, 1000, 4, (1, 8, 125))])
 def test_atlas_frames_hold_every_rendered_frame_up_to_the_cap(start, end, step, want):
-    assert shafts.atlas_frames(start, end, step) == want
+    assert shaft_maps.atlas_frames(start, end, step) == want
     first, stride, count = want
-    assert count <= shafts.ATLAS_MAX_FRAMES and stride % step == 0
+    assert count <= shaft_maps.ATLAS_MAX_FRAMES and stride % step == 0
     for frame in range(start - 3, end + 4):   # each frame takes the latest map baked at or before it, clamped
         t = _tile(frame, first, stride, count)
         assert t == min(max((frame - first) // stride, 0), count - 1), frame
@@ -319,13 +319,13 @@ def test_atlas_frames_hold_every_rendered_frame_up_to_the_cap(start, end, step, 
 @pytest.mark.parametrize("count,size", [(1, (512, 256)), (10, (512, 256)), (100, (512, 256)), (128, (512, 256)),
                                         (37, (256, 256))])
 def test_atlas_places_each_map_once_in_a_bounded_image(count, size):
-    columns, rows = shafts.atlas_layout(count, *size)
-    places = {shafts.atlas_place(t, columns) for t in range(count)}
+    columns, rows = shaft_maps.atlas_layout(count, *size)
+    places = {shaft_maps.atlas_place(t, columns) for t in range(count)}
     assert len(places) == count
-    assert all(0 <= c < columns and 0 <= r < rows and 0 <= ch < shafts.ATLAS_CHANNELS for c, r, ch in places)
-    assert columns * rows * shafts.ATLAS_CHANNELS - count < columns * shafts.ATLAS_CHANNELS   # no empty row
-    assert max(columns * size[0], rows * size[1]) <= shafts.ATLAS_MAX_SIDE
-    assert 0.5 <= columns * size[0] / (rows * size[1]) <= 4.0 or count <= shafts.ATLAS_CHANNELS
+    assert all(0 <= c < columns and 0 <= r < rows and 0 <= ch < shaft_maps.ATLAS_CHANNELS for c, r, ch in places)
+    assert columns * rows * shaft_maps.ATLAS_CHANNELS - count < columns * shaft_maps.ATLAS_CHANNELS   # no empty row
+    assert max(columns * size[0], rows * size[1]) <= shaft_maps.ATLAS_MAX_SIDE
+    assert 0.5 <= columns * size[0] / (rows * size[1]) <= 4.0 or count <= shaft_maps.ATLAS_CHANNELS
 
 
 def _spot_frames(turn_deg, poses=6, tilt_deg=-60.0):
@@ -335,23 +335,24 @@ def _spot_frames(turn_deg, poses=6, tilt_deg=-60.0):
         rz = np.array([[math.cos(a), -math.sin(a), 0], [math.sin(a), math.cos(a), 0], [0, 0, 1]])
         t = math.radians(tilt_deg)
         rx = np.array([[1, 0, 0], [0, math.cos(t), -math.sin(t)], [0, math.sin(t), math.cos(t)]])
-        out.append(shafts.spot_frame(rz @ rx))
+        out.append(shaft_maps.spot_frame(rz @ rx))
     return out
 
 
 def test_spot_union_holds_every_pose_cone():
     cos_half = math.cos(math.radians(25.0))
     still = _spot_frames(0.0, poses=1)
-    frame, half = shafts.spot_union(still, cos_half)
-    assert np.allclose(frame, still[0], atol=1e-9) and half == pytest.approx(shafts.spot_half_width(cos_half) * 1.01)
+    frame, half = shaft_maps.spot_union(still, cos_half)
+    assert np.allclose(frame, still[0], atol=1e-9)
+    assert half == pytest.approx(shaft_maps.spot_half_width(cos_half) * 1.01)
     frames = _spot_frames(40.0)
-    frame, half = shafts.spot_union(frames, cos_half)
+    frame, half = shaft_maps.spot_union(frames, cos_half)
     forward = np.asarray(frame[2])
     m = NumpyOps()
     phi = np.linspace(0.0, 2.0 * math.pi, 97)
     for pose in frames:   # every pose's cone (97 directions on its edge, the union took 64) lies inside it
         r, u, f = (np.asarray(v) for v in pose)
         edge = f + math.tan(math.radians(25.0)) * (np.cos(phi)[:, None] * r + np.sin(phi)[:, None] * u)
-        x, y = shafts.spot_map_xy(m, edge, frame, half)
+        x, y = shaft_maps.spot_map_xy(m, edge, frame, half)
         assert (edge @ forward > 0).all() and x.min() > 0 and x.max() < 1 and y.min() > 0 and y.max() < 1
-    assert shafts.spot_union(_spot_frames(170.0), cos_half) is None   # too wide: the whole sphere's map
+    assert shaft_maps.spot_union(_spot_frames(170.0), cos_half) is None   # too wide: the whole sphere's map

@@ -22,7 +22,7 @@ import pytest
 
 from fog_addon import imageio
 from fog_addon.precompute import bakers, model, multiple, rungs
-from fog_addon.precompute import spot_multiple as sm
+from fog_addon.precompute import spot_multiple as sm, spot_walk
 from fog_addon.precompute.ops import NumpyOps
 from fog_scenes import area_lights
 from fog_scenes import dense as dn
@@ -203,7 +203,7 @@ def test_table_names_round_trip():
     g, albedo, cos_half, blend = sm.spec_parameters(spec)
     assert (g, albedo, blend) == (0.7, 0.95, 0.33)
     assert sm.cone_key(cos_half, blend) == (22, 33)
-    assert bakers.is_spot_multiple(spec) and bakers.extra_baker(spec).func is sm.bake_table
+    assert bakers.is_spot_multiple(spec) and bakers.extra_baker(spec).args[0].bake is sm.bake_table
 
 
 def test_cone_power():
@@ -212,7 +212,7 @@ def test_cone_power():
     for half, blend in ((30.0, 0.15), (60.0, 1.0), (5.0, 0.0)):
         ch = math.cos(math.radians(half))
         f = ds.spot_falloff(c, 2.0 * half, blend)
-        assert abs(2.0 * math.pi * np.trapz(f, c) / sm.cone_power(ch, blend) - 1.0) < 1e-4
+        assert abs(2.0 * math.pi * np.trapz(f, c) / spot_walk.cone_power(ch, blend) - 1.0) < 1e-4
 
 
 def test_compositor_spots_and_area_lights_take_it():

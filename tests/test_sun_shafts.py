@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from fog_addon.precompute import shafts
+from fog_addon.precompute import sun_shafts
 from fog_addon.precompute.ops import NumpyOps
 from fog_addon.precompute.tables import TableSpec
 from fog_scenes.occluders import NO_HIT, box_hit
@@ -37,8 +37,8 @@ def visible(points):
 
 @pytest.fixture(scope="module")
 def sun_map():
-    frame, (w, h) = shafts.sun_frame(SUN, REGION)
-    origins = shafts.sun_map_origins(frame, w, h).reshape(-1, 3)
+    frame, (w, h) = sun_shafts.sun_frame(SUN, REGION)
+    origins = sun_shafts.sun_map_origins(frame, w, h).reshape(-1, 3)
     depth = np.full(len(origins), NO_HIT)
     for lo, hi in BOXES:
         depth = np.minimum(depth, box_hit(origins, frame.forward, lo, hi))
@@ -82,8 +82,8 @@ def got_share(sun_map, direction, length, nodes=24):
     spec, frame, depth = sun_map
     m = NumpyOps({"sun": depth})
     direction = np.asarray(direction, float)
-    rate = shafts.sun_attenuation_rate(m, BETA, direction[2], SUN[2])
-    return np.mean([shafts.sun_lit_share(m, spec, frame, CAMERA, direction, length, rate, nodes, shift)
+    rate = sun_shafts.sun_attenuation_rate(m, BETA, direction[2], SUN[2])
+    return np.mean([sun_shafts.sun_lit_share(m, spec, frame, CAMERA, direction, length, rate, nodes, shift)
                     for shift in (0.125, 0.375, 0.625, 0.875)])
 
 
@@ -119,7 +119,7 @@ def test_node_places_are_the_quantiles():
     m = NumpyOps()
     u = np.linspace(0.05, 0.95, 7)
     for A in (-30.0, -2.0, -1e-5, 0.0, 1e-5, 3.0, 39.0):
-        t = shafts.sun_node_place(m, u, A)
+        t = sun_shafts.sun_node_place(m, u, A)
         cdf = u if abs(A) < 1e-9 else (1.0 - np.exp(-A * t)) / (1.0 - math.exp(-A))
         assert np.all(np.isfinite(t)) and np.allclose(cdf, u, atol=2e-3), (A, t)
 
@@ -158,7 +158,7 @@ def expected_surface_share(point, normal, g, n_u=8, n_phi=16):
             phi = 2 * math.pi * (j + 0.5) / n_phi
             u = t1 * math.cos(phi) * math.sqrt(r2) + t2 * math.sin(phi) * math.sqrt(r2) + normal * math.sqrt(1 - r2)
             length = (TOP - point[2]) / u[2] if u[2] > 1e-6 else (point[2] / -u[2] if u[2] < -1e-6 else 1e9)
-            length = min(length, shafts.SUN_REACH / BETA)
+            length = min(length, sun_shafts.SUN_REACH / BETA)
             lit += ray_sun_glow(point, u, length, True, g)
             total += ray_sun_glow(point, u, length, False, g)
     return lit / total
@@ -175,7 +175,7 @@ def test_sun_surface_share_matches_quadrature(sun_map, surface):
     want = expected_surface_share(point, normal, g)
     spec, frame, depth = sun_map
     m = NumpyOps({"sun": depth})
-    parts = [shafts.sun_surface_share(m, spec, frame, point, normal, CAMERA, BETA, SUN, g, TOP, 0.0, shift)
+    parts = [sun_shafts.sun_surface_share(m, spec, frame, point, normal, CAMERA, BETA, SUN, g, TOP, 0.0, shift)
              for shift in (np.arange(16) + 0.5) / 16]
     got = sum(p[0] for p in parts) / sum(p[1] for p in parts)
     print(surface, want, got)
@@ -191,13 +191,13 @@ def test_degenerate_rays_give_finite_shares(sun_map):
         for mu_s in (1e-6, 0.02, 1.0):
             for beta in (1e-12, BETA, 1e3):
                 for length in (0.0, 1e-9, 40.0, 1e30):
-                    rate = shafts.sun_attenuation_rate(m, beta, direction[2], mu_s)
-                    s = shafts.sun_lit_share(m, spec, frame, CAMERA, np.asarray(direction), min(length, 6.0 / beta),
+                    rate = sun_shafts.sun_attenuation_rate(m, beta, direction[2], mu_s)
+                    s = sun_shafts.sun_lit_share(m, spec, frame, CAMERA, np.asarray(direction), min(length, 6.0 / beta),
                                              rate, 24, 0.5)
                     assert np.isfinite(s) and 0.0 <= s <= 1.0, (direction, mu_s, beta, length, s)
 
 
 def test_sun_straight_up_has_a_frame():
-    frame, size = shafts.sun_frame((0.0, 0.0, 1.0), REGION)
+    frame, size = sun_shafts.sun_frame((0.0, 0.0, 1.0), REGION)
     assert np.allclose(frame.forward, (0.0, 0.0, -1.0)) and np.isclose(np.dot(frame.right, frame.up), 0.0)
-    assert shafts.sun_frame(SUN, REGION, np.array([[1000.0, 1000.0, 0.0], [1001.0, 1001.0, 1.0]])) is None
+    assert sun_shafts.sun_frame(SUN, REGION, np.array([[1000.0, 1000.0, 0.0], [1001.0, 1001.0, 1.0]])) is None

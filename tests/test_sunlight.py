@@ -16,7 +16,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from fog_addon.precompute import daylight as dl, sunlight as sl   # noqa: E402
+from fog_addon.precompute import aerial, daylight as dl, daylight_tables, sunlight as sl   # noqa: E402
 from fog_addon.precompute.ops import NumpyOps                      # noqa: E402
 from tests.test_daylight import ref_beta, ref_column, ref_hg, ref_tau   # noqa: E402
 
@@ -106,7 +106,7 @@ def test_peak_irradiance_limits_and_quadrature():
     """C_g / pi: 1 / (4 pi) for isotropic scattering; for g 0.9 the same as a 2D quadrature of the phase times
     the clamped cosine."""
     c = np.linspace(-1, 1, 9)
-    assert np.allclose(sl.peak_irradiance(0.0, c), 1 / (4 * math.pi), rtol=1e-9)
+    assert np.allclose(daylight_tables.peak_irradiance(0.0, c), 1 / (4 * math.pi), rtol=1e-9)
     g = 0.9
     for cn in (-0.5, 0.0, 0.5, 0.9):
         sn = math.sqrt(1 - cn * cn)
@@ -117,7 +117,7 @@ def test_peak_irradiance_limits_and_quadrature():
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", integrate.IntegrationWarning)
             want = integrate.dblquad(f, -1.0, 1.0, 0.0, 2 * math.pi, epsrel=1e-8)[0] / math.pi
-        assert float(sl.peak_irradiance(g, np.array(cn))) == pytest.approx(want, rel=1e-4, abs=1e-6)
+        assert float(daylight_tables.peak_irradiance(g, np.array(cn))) == pytest.approx(want, rel=1e-4, abs=1e-6)
 
 
 def _sphere_field(z, beta, top, falloff, g, nmu=300, nphi=600):
@@ -148,8 +148,8 @@ def test_fog_light_against_sphere_quadrature(top, falloff, g):
     hard top, 7 % above the layer (where the field is a bright lower hemisphere under a dark upper one: an edge
     that order 2 smooths)."""
     beta = 0.01
-    spec = sl.table_spec(beta, top, falloff, SUN, g)
-    mm = NumpyOps({spec.name: sl.bake_fog_light(beta, top, falloff, SUN, g)})
+    spec = daylight_tables.table_spec(beta, top, falloff, SUN, g)
+    mm = NumpyOps({spec.name: daylight_tables.bake_fog_light(beta, top, falloff, SUN, g)})
     day = sl.Daylight(beta, top, falloff, 0.0, SUN, np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), g)
     worst = []
     for z in (0.0, 1.6, 30.0, 0.9 * top, top + 2.0 * falloff + 10.0):
@@ -170,8 +170,8 @@ def test_fog_light_map_is_needed():
     """Mutation guard: a surface's fog light is not the isotropic 1/4 of the sky's source (the map matters):
     a wall and a floor at the ground differ by more than 2x."""
     beta, top, falloff = 0.01, 100.0, 0.0
-    spec = sl.table_spec(beta, top, falloff, SUN, 0.0)
-    mm = NumpyOps({spec.name: sl.bake_fog_light(beta, top, falloff, SUN, 0.0)})
+    spec = daylight_tables.table_spec(beta, top, falloff, SUN, 0.0)
+    mm = NumpyOps({spec.name: daylight_tables.bake_fog_light(beta, top, falloff, SUN, 0.0)})
     day = sl.Daylight(beta, top, falloff, 0.0, SUN, np.zeros(3), np.ones(3), 0.0)
     up = sl.fog_light(mm, spec, day, np.array([0.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0]))[0]
     wall = sl.fog_light(mm, spec, day, np.array([0.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]))[0]
@@ -208,9 +208,10 @@ def test_fog_light_with_air_against_sphere_quadrature():
     the albedos in it) against the sphere's quadrature of ``ray_glow`` with air itself: within 1 % of the fog light
     at that height in the haze (0 and 300 m), 5 % at 3 km (a bright lower hemisphere under a darker sky: order 2
     smooths the edge, as for the layer alone above its top)."""
-    beta, top, falloff, g, b = 9.78e-5, 0.0, 1200.0, 0.76, dl.RAYLEIGH_RGB[2]
-    spec = sl.table_spec(beta, top, falloff, SUN, g, (b, dl.RAYLEIGH_HEIGHT, 0.9))
-    mm = NumpyOps({spec.name: sl.bake_fog_light(beta, top, falloff, SUN, g, (b, dl.RAYLEIGH_HEIGHT, 0.9))})
+    beta, top, falloff, g, b = 9.78e-5, 0.0, 1200.0, 0.76, aerial.RAYLEIGH_RGB[2]
+    spec = daylight_tables.table_spec(beta, top, falloff, SUN, g, (b, aerial.RAYLEIGH_HEIGHT, 0.9))
+    mm = NumpyOps({spec.name: daylight_tables.bake_fog_light(beta, top, falloff, SUN, g,
+                                                             (b, aerial.RAYLEIGH_HEIGHT, 0.9))})
     x, w = np.polynomial.legendre.leggauss(96)
     mu = np.concatenate([0.5 * (x - 1), 0.5 * (x + 1)])
     wm = np.concatenate([0.5 * w, 0.5 * w])
@@ -225,7 +226,7 @@ def test_fog_light_with_air_against_sphere_quadrature():
         fields = []
         for e_sun, l_sky in ((1.0, 0.0), (0.0, 1.0)):
             day = sl.Daylight(beta, top, falloff, 0.0, SUN, np.full(3, e_sun), np.full(3, l_sky), g, 0.9, (b, b, b),
-                              dl.RAYLEIGH_HEIGHT)
+                              aerial.RAYLEIGH_HEIGHT)
             fields.append(sl.ray_glow(m, day, np.array([0.0, 0.0, z]), d, length)[..., 2] * dw)
         errors, scale = [], 0.0
         for n in NORMALS:
@@ -235,7 +236,7 @@ def test_fog_light_with_air_against_sphere_quadrature():
             got = []
             for e_sun, l_sky in ((1.0, 0.0), (0.0, 1.0)):
                 day = sl.Daylight(beta, top, falloff, 0.0, SUN, np.full(3, e_sun), np.full(3, l_sky), g, 0.9, (b, b, b),
-                                  dl.RAYLEIGH_HEIGHT)
+                                  aerial.RAYLEIGH_HEIGHT)
                 got.append(float(sl.fog_light(mm, (spec,) * 3, day, np.array([0.0, 0.0, z]), n)[2]))
             errors.append(abs(got[0] - sun) + abs(got[1] - sky))
             scale = max(scale, sun + sky)

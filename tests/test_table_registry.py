@@ -7,8 +7,8 @@ import re
 
 import pytest
 
-from fog_addon.precompute import (bakers, emitter_glow, emitter_table, multiple, pixel, registry, spot_multiple,
-                                  sunlight, tables)
+from fog_addon.precompute import (bakers, daylight_tables, emitter_glow, emitter_table, multiple, pixel, registry,
+                                  spot_multiple, tables)
 
 PACKAGE = pathlib.Path(__file__).resolve().parent.parent / "fog_addon"
 
@@ -20,16 +20,16 @@ UNKINDED_CALLS = {"precompute/pixel.py": 2, "shadow_maps.py": 4, "precompute/air
 
 def _specs():
     """A spec of every constructor at a few arguments each (g 0, forward, backward, and off the 3-decimal grid)."""
-    out = [tables.LOBE_RESPONSE, tables.SPECULAR_ALBEDO, pixel.FILTER, pixel.EEVEE_FILTER, sunlight.sky_spec()]
+    out = [tables.LOBE_RESPONSE, tables.SPECULAR_ALBEDO, pixel.FILTER, pixel.EEVEE_FILTER, daylight_tables.sky_spec()]
     for g in (0.0, 0.85, -0.3, 0.4567891):
         out += [spec for spec, _ in bakers.bakers(g).values()]
         out += [multiple.orders_spec(g), multiple.table_spec(g, 0.8004),
                 spot_multiple.table_spec(g, 0.9, math.cos(0.4), 0.153), spot_multiple.lambert_table_spec(g, 0.95),
                 emitter_table.table_spec(g, 0.00123), emitter_table.table_spec(g, 0.00123, 0.8),
                 emitter_glow.facing_spec(g),
-                sunlight.table_spec(0.05, 10.0, 2.0, (0.1, 0.2, 0.97), g),
-                sunlight.table_spec(0.05, 10.0, 2.0, (0.1, 0.2, 0.97), g, (0.01, 8.0, 0.9)),
-                sunlight.glow_table(0.1).spec, sunlight.glow_table(0.1, (0.01, 0.02, 0.03)).spec]
+                daylight_tables.table_spec(0.05, 10.0, 2.0, (0.1, 0.2, 0.97), g),
+                daylight_tables.table_spec(0.05, 10.0, 2.0, (0.1, 0.2, 0.97), g, (0.01, 8.0, 0.9)),
+                daylight_tables.glow_table(0.1).spec, daylight_tables.glow_table(0.1, (0.01, 0.02, 0.03)).spec]
     out += [spec for _, spec in sorted(_kind_makes().items())]
     return out
 
@@ -98,7 +98,8 @@ def test_no_dispatch_on_a_table_names_prefix():
     assert hits == []
 
 
-@pytest.mark.parametrize("spec", [sunlight.glow_table(0.1).spec, sunlight.sky_spec()], ids=lambda s: s.name)
+@pytest.mark.parametrize("spec", [daylight_tables.glow_table(0.1).spec, daylight_tables.sky_spec()],
+                         ids=lambda s: s.name)
 def test_a_scene_table_has_no_baker(spec):
     """The tables baked per scene (a camera's height, the World's probe) are no function of their spec."""
     with pytest.raises(KeyError):

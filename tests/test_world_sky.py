@@ -13,21 +13,21 @@ import math
 import numpy as np
 import pytest
 
-from fog_addon.precompute import daylight as dl, sunlight as sl
+from fog_addon.precompute import aerial, daylight as dl, daylight_tables, sunlight as sl
 from fog_addon.precompute.ops import NumpyOps
 from fog_addon.precompute.tables import TableSpec
 
-AIR = tuple(3.0 * b for b in dl.RAYLEIGH_RGB)   # thicker than sea-level air: the opacities below are not tiny
-H = dl.RAYLEIGH_HEIGHT
-SPEC = TableSpec(sl.SKY_TABLE, sl.SKY_COLUMNS, sl.SKY_ROWS, channels=4)
+AIR = tuple(3.0 * b for b in aerial.RAYLEIGH_RGB)   # thicker than sea-level air: the opacities below are not tiny
+H = aerial.RAYLEIGH_HEIGHT
+SPEC = TableSpec(daylight_tables.SKY_TABLE, daylight_tables.SKY_COLUMNS, daylight_tables.SKY_ROWS, channels=4)
 SUN = np.array([0.0, math.cos(math.radians(30.0)), math.sin(math.radians(30.0))])
 
 
 def sky_table():
     """A World whose radiance varies with azimuth and elevation (smoothly, so the table's bilinear lookup is exact
     to well under 1 % at the cells' centres), as (rows, columns, 4)."""
-    el = sl.sky_row_elevations()
-    az = ((np.arange(sl.SKY_COLUMNS) + 0.5) / sl.SKY_COLUMNS - 0.5) * 2.0 * math.pi
+    el = daylight_tables.sky_row_elevations()
+    az = ((np.arange(daylight_tables.SKY_COLUMNS) + 0.5) / daylight_tables.SKY_COLUMNS - 0.5) * 2.0 * math.pi
     e, a = np.meshgrid(el, az, indexing="ij")
     rgb = np.stack([1.0 + 0.5 * np.cos(a) - 0.3 * e, 2.0 + 0.2 * np.sin(a) - 0.5 * e, 3.0 - e], axis=-1)
     return np.concatenate([rgb, np.ones(rgb.shape[:2] + (1,))], axis=-1), (el, az, rgb)

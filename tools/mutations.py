@@ -391,8 +391,8 @@ MUTATIONS = [
     Mutation("daylight_glow_table_no_rayleigh", "daylight: the glow table's reader leaves out the air's Rayleigh "
              "scattering of the sun",
              "table_glow",
-             "    return _air_glow_light(m, day, p_l, daylight.rayleigh_phase(m, cos_theta),",
-             "    return _air_glow_light(m, day, p_l, 0.0 * daylight.rayleigh_phase(m, cos_theta),",
+             "    return _air_glow_light(m, day, p_l, aerial.rayleigh_phase(m, cos_theta),",
+             "    return _air_glow_light(m, day, p_l, 0.0 * aerial.rayleigh_phase(m, cos_theta),",
              ("tests/test_glow_table.py::test_table_glow_against_the_kernels",)),
     Mutation("daylight_proxy_uncorrected", "daylight, Compositor: the materials' grey stand-in transmittance is "
              "left on the picture (not corrected per pixel to the layer's and the air's exact colour)",
@@ -444,7 +444,7 @@ MUTATIONS = [
     Mutation("world_sky_sun_above_the_air", "a Sky Texture World with Air: the Sun light is dimmed by the whole air "
              "column again, though it is the sun at the ground",
              "direct_dimming",
-             "        c_a = c_a - daylight.air_column_depth(m, 0.0, 1.0, day.air_height)",
+             "        c_a = c_a - aerial.air_column_depth(m, 0.0, 1.0, day.air_height)",
              "        c_a = c_a - 0.0",
              ("tests/test_world_sky.py::test_the_sun_light_is_the_sun_at_the_ground",)),
     Mutation("sun_shafts_ignore_the_map", "sun shafts: the fog is lit wherever the sun's map says it is in a shadow",

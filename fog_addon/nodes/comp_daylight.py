@@ -3,7 +3,7 @@
 import hashlib
 from typing import Any, NamedTuple
 
-from ..precompute import model, shafts, sunlight
+from ..precompute import model, shafts, sun_shafts, sunlight
 from . import comp_shafts, surface_group
 from .comp_shafts import SHAFT_EDGE, SHAFT_GROUP, SHAFT_TAPS, SURFACE_EDGE, SURFACE_TAPS
 
@@ -45,10 +45,10 @@ SUN_SHAFT_NODE = f"{SHAFT_GROUP} Sun Node"   # one group per quadrature node of 
 def sun_shares(m, sun_shadow, nodes, day, camera, direction, layer, length, beta, point, normal, offsets,
                shaft_length):
     """(the lit share of the layer's sun glow at a pixel, the lit share of the sun's part of the fog light on its
-    surface) from the sun's map ``sun_shadow`` (``shadow_maps.SunShadow``).  The glow's (``shafts.sun_lit_share``)
+    surface) from the sun's map ``sun_shadow`` (``shadow_maps.SunShadow``).  The glow's (``sun_shafts.sun_lit_share``)
     over the part of the pixel's ray in the layer (``sunlight.lamp_glow_span`` below its lamps' glow top), to the
     pixel's surface or, past ``length``, the sky, at most SUN_REACH mean free paths, ``nodes`` a pixel interleaved
-    over 2 x 2 pixels; the surface's (``shafts.sun_surface_share``) interleaved over 4 x 4 (``offsets``: the pixel's
+    over 2 x 2 pixels; the surface's (``sun_shafts.sun_surface_share``) interleaved over 4 x 4 (``offsets``: the pixel's
     ``shafts.offset`` and ``surface_offset``).  Each is averaged over its pattern depth-aware
     (``comp_shafts.interleave_mean_group``, by ``shaft_length``)."""
     spec, frame = sun_shadow
@@ -56,13 +56,13 @@ def sun_shares(m, sun_shadow, nodes, day, camera, direction, layer, length, beta
     t0, t1 = sunlight.lamp_glow_span(m, top_z, camera, direction)
     meets = m.less(t0, LAYER_OPEN)
     start = m.minimum(t0, LAYER_OPEN)
-    span = m.maximum(m.minimum(m.minimum(t1, length) - start, shafts.SUN_REACH / m.maximum(beta, 1e-9)), 0.0)
-    rate = shafts.sun_attenuation_rate(m, beta, m.dot(direction, (0.0, 0.0, 1.0)), sunlight.sun_elevation(m, day))
+    span = m.maximum(m.minimum(m.minimum(t1, length) - start, sun_shafts.SUN_REACH / m.maximum(beta, 1e-9)), 0.0)
+    rate = sun_shafts.sun_attenuation_rate(m, beta, m.dot(direction, (0.0, 0.0, 1.0)), sunlight.sun_elevation(m, day))
     name = f"{SUN_SHAFT_NODE} {hashlib.sha1(repr((spec, tuple(frame))).encode()).hexdigest()[:12]}"
-    lit = shafts.sun_lit_share(m, spec, frame, camera + m.scale(direction, start), direction, span, rate, nodes,
+    lit = sun_shafts.sun_lit_share(m, spec, frame, camera + m.scale(direction, start), direction, span, rate, nodes,
                                offsets[0], name=name)
     share = comp_shafts.interleave_mean_group(m, m.select(meets, lit, 1.0), shaft_length, SHAFT_TAPS, SHAFT_EDGE)
-    lit, total = shafts.sun_surface_share(m, spec, frame, point, normal, camera, beta, day.sun, float(day.g), top_z,
+    lit, total = sun_shafts.sun_surface_share(m, spec, frame, point, normal, camera, beta, day.sun, float(day.g), top_z,
                                           float(layer[2]), offsets[1], name=name)
     parts = comp_shafts.interleave_mean_group(m, m.combine(lit, total, 1.0), shaft_length, SURFACE_TAPS,
                                               SURFACE_EDGE)

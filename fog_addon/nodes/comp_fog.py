@@ -32,7 +32,7 @@ cameras; no fog passes (the fog's light is the compositor's).
 """
 import bpy
 
-from ..precompute import footprint, model, pixel, rungs, shading, shafts, sunlight, surface
+from ..precompute import footprint, model, pixel, rungs, shading, shafts, sun_shafts, sunlight, surface
 from . import (budgets, comp_bundles, comp_daylight, comp_emitters, comp_halos, comp_lights, comp_ops, comp_shafts,
                compositor, groups, images as images_, owned)
 from .comp_bundles import BUNDLE, BUNDLE_SIZE
@@ -321,7 +321,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     if daylight is not None:   # the dimming of the pixel's surface by the fog above it and of the sky seen through
         one = 1.0 if daylight.air is None else m.wrap((1.0, 1.0, 1.0))   # (with air the dimming is RGB)
         sun_visible = (None if sun_share is None else   # the sun's map: a surface in its shadow takes the sky's factor
-                       shafts.sun_surface_lit(m, day.sun_shadow.spec, day.sun_shadow.frame, pos, normal))
+                       sun_shafts.sun_surface_lit(m, day.sun_shadow.spec, day.sun_shadow.frame, pos, normal))
         dims = (m.select(m.less(0.0, cover), sunlight.direct_dimming(m, daylight, pos, normal, sun_visible), one)
                 if day.dims else m.const(1.0))   # the layer's
         seen = sunlight.sky_seen(m, daylight, cam, direction)

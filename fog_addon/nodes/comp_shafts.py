@@ -6,7 +6,7 @@ import dataclasses
 import hashlib
 import math
 
-from ..precompute import shafts, spot as spot_
+from ..precompute import shaft_maps, shafts, spot as spot_
 from . import comp_ops, groups, light_groups, owned
 from .comp_lights import LIGHT_GROUP, SURFACE
 from .comp_ops import CompOps
@@ -113,7 +113,7 @@ def build_shaft_group(light, shadow, images, samples, g):
 
 def atlas_tile(m, image, label):
     """The map of the frame being rendered, cut from ``image``, a light's atlas of an animation's maps
-    (``shadow_maps.Atlas``): its tile t (``shafts.ATLAS_TILE``, a simple-expression driver of the frame and the
+    (``shadow_maps.Atlas``): its tile t (``shaft_maps.ATLAS_TILE``, a simple-expression driver of the frame and the
     atlas's first frame, stride and tile count, read from the image's ``shadow_maps.ATLAS`` property, so an atlas
     baked again for another range needs no new nodes) in slot t // 4 (a Crop node at its column and row: the
     atlas's columns and its maps' grid read from the image too) and channel t % 4 (selected by weights 0 or 1:
@@ -121,12 +121,12 @@ def atlas_tile(m, image, label):
     input reads a still map (the compositor's Crop, Separate and Combine Color and Map UV read it bit-exactly)."""
     from .. import shadow_maps
     prop = f'["{shadow_maps.ATLAS}"]'
-    tile = comp_ops.driven_value(m, f"{label} Tile", shafts.ATLAS_TILE,
+    tile = comp_ops.driven_value(m, f"{label} Tile", shaft_maps.ATLAS_TILE,
                                  [("s", image, f"{prop}[0]"), ("k", image, f"{prop}[1]"), ("n", image, f"{prop}[2]")])
     columns, width, height = (comp_ops.driven_value(m, f"{label} {part}", "v", [("v", image, f"{prop}[{i}]")])
                               for i, part in ((3, "Columns"), (5, "Width"), (6, "Height")))
-    slot = m.floor(tile * (1.0 / shafts.ATLAS_CHANNELS))
-    channel = tile - slot * float(shafts.ATLAS_CHANNELS)
+    slot = m.floor(tile * (1.0 / shaft_maps.ATLAS_CHANNELS))
+    channel = tile - slot * float(shaft_maps.ATLAS_CHANNELS)
     row = m.floor(slot / columns)
     column = slot - row * columns
     source = m.node("CompositorNodeImage", 4)
@@ -138,7 +138,7 @@ def atlas_tile(m, image, label):
     split = m.node("CompositorNodeSeparateColor", 6)
     m.tree.links.new(crop.outputs[0], split.inputs[0])
     depth = None
-    for c in range(shafts.ATLAS_CHANNELS):
+    for c in range(shaft_maps.ATLAS_CHANNELS):
         weight = m.less(m.abs(channel - float(c)), 0.5)
         term = m.wrap(split.outputs[c]) * weight
         depth = term if depth is None else depth + term

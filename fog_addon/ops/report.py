@@ -9,7 +9,7 @@ import bpy
 
 from .. import caveats, methods, shadow_maps, sunsky, view
 from ..nodes import groups
-from ..precompute import capabilities, presets, rungs, shafts
+from ..precompute import capabilities, presets, rungs, shafts, sun_shafts
 from .plan import stored_choice
 
 CAVEATS_KEY = "analytic_fog_caveats"   # on the Surface group: what the fog can't model in the scene (notes)
@@ -73,7 +73,8 @@ def explain(choice=None):
     if sun_map is not None:
         lines.append(f"  The sun's shafts: a {sun_map.size[0]} x {sun_map.size[1]} map, "
                      f"{shafts.samples_for(choice.get('quality')).view_nodes} nodes a ray, "
-                     f"{shafts.SUN_SURFACE_SAMPLES[0]} directions x {shafts.SUN_SURFACE_SAMPLES[1]} nodes over surfaces")
+                     f"{sun_shafts.SUN_SURFACE_SAMPLES[0]} directions x {sun_shafts.SUN_SURFACE_SAMPLES[1]} nodes "
+                     "over surfaces")
     return lines
 
 

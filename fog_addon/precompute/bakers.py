@@ -12,11 +12,9 @@ their bakers take ``progress(done, total)``, which may raise ``BakeCancelled`` t
 """
 import functools
 
-from . import registry, table_cache
+from . import registry, table_cache, tables
 from .table_cache import BakeCancelled, cached_bake, is_cached  # noqa: F401 - BakeCancelled: the callers'
 
-BASE_SECONDS = (1.5, 8.0)   # ``bakers(g)``'s tables cold on 2 cores at g 0, at any other g (its 256 x 256 airlight
-                           # table): docs/measurements/2026-11-29-bake-time.md
 
 
 def bakers(g=0.0):
@@ -25,7 +23,7 @@ def bakers(g=0.0):
     out = {}
     for kind in registry.PER_G:
         spec = kind.make(g)
-        out[spec.name] = (spec, lambda spec=spec, kind=kind: kind.bake(spec))
+        out[spec.name] = (spec, lambda spec=spec, kind=kind: _bake(kind, spec))
     return out
 
 
@@ -43,7 +41,14 @@ def extra_baker(spec, progress=None):
     kind = registry.kind_of(spec)
     if kind.bake is None:
         raise KeyError(f"{spec.name!r} is baked per scene, not by its spec")
-    return functools.partial(kind.bake, spec, progress=progress)
+    return functools.partial(_bake, kind, spec, progress)
+
+
+def _bake(kind, spec, progress=None):
+    """``kind``'s bake of ``spec``, handed READER if it reads other tables (``TableKind.reads``)."""
+    if kind.reads:
+        return kind.bake(spec, progress=progress, tables=READER)
+    return kind.bake(spec, progress=progress)
 
 
 def _is(key):
@@ -98,7 +103,7 @@ def _with_needs(specs):
 
 def estimate_seconds(spec, baked=()):
     """About how long baking ``spec``'s table takes from a cold cache on 2 cores, s (0 if it is in the cache): its
-    kind's estimate (``TableKind.estimate``; BASE_SECONDS for all of ``bakers(g)``'s), plus that of each table its
+    kind's estimate (``TableKind.estimate``; ``registry.BASE_SECONDS`` for all of ``bakers(g)``'s), plus that of each table its
     bake reads (``TableKind.needs``: a point light's orders, the point light's table that the glowing objects'
     weights read under Dense Fog) unless that is cached or read by ``baked`` (tables baked before it) too."""
     return _seconds(spec, _with_needs(baked))
@@ -129,3 +134,6 @@ def label(spec):
     """A short name of ``spec``'s table for a progress line (``TableKind.label``): "the spot table (cone 45 deg,
     blend 0.15)"."""
     return registry.kind_of(spec).label(spec)
+
+
+READER = tables.TableReader(table_array, numpy_tables)   # how a bake reads other tables (``TableKind.reads``)

@@ -27,9 +27,10 @@ import math
 
 import numpy as np
 
-from . import bakers, multiple, rungs
+from . import multiple, rungs, tables as tables_
 from .emitter_table import SIZES, T_COUNT, T_COUNT_DENSE, T_MAX, T_MIN
-from .emitter_table import FACING_COUNT, estimate_seconds, facing_spec, table_spec  # noqa: F401 - for its readers
+from .emitter_table import (FACING_COUNT, FACING_KIND_KEY, KIND_KEY, estimate_seconds, facing_spec,  # noqa: F401
+                            needs, table_spec)
 from .ops import NumpyOps
 
 CORE_SUBSAMPLES = 8   # the kernel at a source's own pixel and its neighbours, averaged over 8 x 8 points
@@ -37,23 +38,24 @@ CORE = 2              # px: the core's half-width
 HALF = 400            # px: the fit's grid about a source (the largest blur reaches 512)
 
 
-def glow_field(g, multiple_albedo=None):
+def glow_field(g, tables, multiple_albedo=None):
     """The field a glowing pixel's kernel is made of, per unit intensity and unit albedo at extinction 1: I_1
     (``single_field``), plus I_{>=2} / W0 (``multiple.field``, Narasimhan et al.'s multiply scattered field:
-    Dense Fog) when ``multiple_albedo`` W0 is given."""
-    single = single_field(g)
+    Dense Fog) when ``multiple_albedo`` W0 is given.  ``tables``: how to read the tables (a ``TableReader``)."""
+    single = single_field(g, tables)
     if multiple_albedo is None:
         return single
     spec = multiple.table_spec(g, multiple_albedo)
-    m = NumpyOps({spec.name: bakers.table_array(spec, g)})
+    m = NumpyOps({spec.name: tables.array(spec, g)})
     return lambda t, c: single(t, c) + multiple.field(m, spec, t, c)
 
 
-def single_field(g):
+def single_field(g, tables):
     """I_1(T, cos gamma): the single-scattering field of an endless ray at extinction 1 per unit intensity (Sun et
-    al. 2005 Eq. 12, the background rung of anisotropy g on numpy), T the distance to the source."""
+    al. 2005 Eq. 12, the background rung of anisotropy g on numpy), T the distance to the source; ``tables``: a
+    ``TableReader``."""
     background = rungs.anisotropic_rungs(g)[1]
-    m = NumpyOps(bakers.numpy_tables(g))
+    m = NumpyOps(tables.per_g(g))
 
     def single(t, c):
         with np.errstate(all="ignore"):
@@ -252,12 +254,12 @@ def bake_weights(single, pixel_angle, count=T_COUNT, progress=None):
     return out.astype(np.float32)
 
 
-def bake_table(g, pixel_angle, multiple_albedo=None, progress=None):
+def bake_table(g, pixel_angle, tables, multiple_albedo=None, progress=None):
     """The weights' table (``table_spec``) of anisotropy g at ``pixel_angle``: ``bake_weights`` of its field
-    (``glow_field``).  ``progress(done, total)``: called at each column (it may raise
-    ``table_cache.BakeCancelled``)."""
+    (``glow_field``, its tables read through ``tables``).  ``progress(done, total)``: called at each column (it may
+    raise ``table_cache.BakeCancelled``)."""
     count = T_COUNT if multiple_albedo is None else T_COUNT_DENSE
-    return bake_weights(glow_field(g, multiple_albedo), pixel_angle, count, progress)
+    return bake_weights(glow_field(g, tables, multiple_albedo), pixel_angle, count, progress)
 
 
 def source_weight(m, spec, t):
@@ -355,3 +357,16 @@ def bake_facing(g):
     """(2, FACING_COUNT) float32: ``facing_mean`` and ``facing_dipole`` at c = 0 .. 1."""
     c = np.linspace(0.0, 1.0, FACING_COUNT)
     return np.stack([facing_mean(c, g), facing_dipole(c, g)]).astype(np.float32)
+
+
+def _bake_kind(spec, progress=None, tables=None):
+    """``bake_table`` of the arguments ``spec`` was made from (``table_spec``)."""
+    g, pixel_angle, multiple_albedo = spec.args
+    return bake_table(g, pixel_angle, tables, multiple_albedo, progress)
+
+
+KIND = tables_.TableKind(KIND_KEY, make=table_spec, bake=_bake_kind, estimate=estimate_seconds, needs=needs,
+                         reads=True, label=lambda spec: f"the glowing objects' table ({tables_.details(spec)})")
+FACING_KIND = tables_.TableKind(FACING_KIND_KEY, make=facing_spec, estimate=lambda spec: 0.1,
+                                bake=lambda spec, progress=None: bake_facing(spec.args[0]))
+TABLE_KINDS = (KIND, FACING_KIND)   # (``registry.KINDS``)

@@ -2,9 +2,9 @@
 
 What the registry (``registry.py``) must know of the tables without importing their bakers: ``table_spec`` names
 and sizes the weights' table, ``facing_spec`` the facing factor's, ``multiple_albedo_of`` gives the Dense Fog albedo
-a weights' table was made for, ``estimate_seconds`` how long its bake takes; ``KIND`` and ``FACING_KIND`` are their
-``TableKind`` records.  The weights themselves, the field they are fitted to and the facing factor are
-``emitter_glow``'s (imported when a bake runs: it reads the other tables through ``bakers``).
+a weights' table was made for, ``estimate_seconds`` how long its bake takes, ``needs`` the table its bake reads.  The
+weights themselves, the field they are fitted to, the facing factor and the tables' ``TableKind`` records are
+``emitter_glow``'s.
 """
 from . import tables
 
@@ -40,17 +40,11 @@ def estimate_seconds(spec):
     return 0.3 + COLUMN_SECONDS * spec.width
 
 
-def _needs(spec):
+def needs(spec):
     """The Dense Fog field's table the weights' bake reads (``emitter_glow.glow_field``), if any."""
     from . import multiple
     albedo = multiple_albedo_of(spec)
     return () if albedo is None else (multiple.table_spec(spec.g, albedo),)
-
-
-def bake(spec, progress=None):
-    """``emitter_glow.bake_table`` of the arguments ``spec`` was made from (``table_spec``)."""
-    from . import emitter_glow
-    return emitter_glow.bake_table(*spec.args, progress=progress)
 
 
 FACING_COUNT = 64    # the facing table's samples over c = |cos| in [0, 1] (``emitter_glow.facing_mean``)
@@ -63,14 +57,4 @@ def facing_spec(g):
                             kind=FACING_KIND_KEY, args=(float(g),))
 
 
-def bake_facing(spec, progress=None):
-    """``emitter_glow.bake_facing`` of ``spec``'s g (``facing_spec``)."""
-    from . import emitter_glow
-    return emitter_glow.bake_facing(spec.args[0])
-
-
 KIND_KEY, FACING_KIND_KEY = "emitter_glow", "emitter_facing"
-KIND = tables.TableKind(KIND_KEY, make=table_spec, bake=bake, estimate=estimate_seconds, needs=_needs,
-                        label=lambda spec: f"the glowing objects' table ({tables.details(spec)})")
-FACING_KIND = tables.TableKind(FACING_KIND_KEY, make=facing_spec, bake=bake_facing, estimate=lambda spec: 0.1)
-TABLE_KINDS = (KIND, FACING_KIND)   # (``registry.KINDS``)

@@ -9,7 +9,7 @@ by the key its constructor gave it (``TableSpec.kind``), or for a constant spec 
 """
 import functools
 
-from . import airlight, emitter_table, multiple, pixel, spot, spot_multiple, sunlight, surface, tables
+from . import airlight, daylight_tables, emitter_glow, multiple, pixel, spot, spot_multiple, surface, tables
 
 
 def _bake_airlight(spec, progress=None):
@@ -42,9 +42,12 @@ def _bake_pixel_filter(spec, progress=None):
     return {s: bake for s, bake in pixel.FILTERS.values()}[spec]()
 
 
+BASE_SECONDS = (1.5, 8.0)   # ``bakers.bakers(g)``'s tables cold on 2 cores at g 0, at any other g (its 256 x 256
+                           # airlight table): docs/measurements/2026-11-29-bake-time.md
+
+
 def _per_g_seconds(spec):
-    """``bakers.BASE_SECONDS`` shared by the tables of ``bakers(g)``: about how long they all bake, s."""
-    from .bakers import BASE_SECONDS
+    """BASE_SECONDS shared by the tables of ``bakers.bakers(g)``: about how long they all bake, s."""
     return BASE_SECONDS[0] if spec.g == 0.0 else BASE_SECONDS[1]
 
 
@@ -73,8 +76,8 @@ PER_G = (
 PIXEL_FILTER = tables.TableKind("pixel_filter", bake=_bake_pixel_filter, estimate=lambda spec: 1.5,   # s, 2 cores
                                 fixed=tuple(s for s, _ in pixel.FILTERS.values()))
 
-KINDS = (*PER_G, PIXEL_FILTER, *multiple.TABLE_KINDS, *spot_multiple.TABLE_KINDS, *emitter_table.TABLE_KINDS,
-         *sunlight.TABLE_KINDS)
+KINDS = (*PER_G, PIXEL_FILTER, *multiple.TABLE_KINDS, *spot_multiple.TABLE_KINDS, *emitter_glow.TABLE_KINDS,
+         *daylight_tables.TABLE_KINDS)
 BY_KEY = {kind.key: kind for kind in KINDS}
 _FIXED = {spec: kind for kind in KINDS for spec in kind.fixed}
 assert len(BY_KEY) == len(KINDS), "two table kinds share a key"

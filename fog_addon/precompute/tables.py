@@ -22,7 +22,7 @@ keys on ``repr(spec)``, which leaves them out).
 """
 from dataclasses import dataclass, field
 import math
-from typing import Any, Callable, Optional
+from typing import Any, Callable, NamedTuple, Optional
 
 HALF_PI = 0.5 * math.pi
 
@@ -51,6 +51,13 @@ def details(spec):
     return spec.name.split("(", 1)[1].rstrip(")") if "(" in spec.name else ""
 
 
+class TableReader(NamedTuple):
+    """How a bake reads other tables through the cache (``bakers.READER``), handed to the kinds that read some
+    (``TableKind.reads``) so that their modules need not import the bakers that import them."""
+    array: Callable[..., Any]    # array(spec, g): one table's float32 array
+    per_g: Callable[..., Any]    # per_g(g): {name: array} of every table a fog of anisotropy g reads
+
+
 @dataclass(frozen=True)
 class TableKind:
     """One phenomenon's tables: how they are made, baked, timed and announced (``registry.KINDS`` lists them all).
@@ -61,7 +68,8 @@ class TableKind:
     ``estimate(spec)``: about how long its own bake takes from a cold cache on 2 cores, s; ``needs(spec)``: the
     tables its bake reads through the cache (their bake time counts too unless they are cached).  ``make``:
     its spec constructor (for the tables every fog reads, ``per_g``: ``make(g)``); ``fixed``: specs of it that
-    are constants of another module.  ``image``: packed as an image (False: an intermediate array)."""
+    are constants of another module.  ``image``: packed as an image (False: an intermediate array).  ``reads``:
+    its bake reads other tables, through the ``tables=`` (a ``TableReader``) it is then given."""
     key: str
     make: Optional[Callable[..., TableSpec]] = None
     bake: Optional[Callable[..., Any]] = None
@@ -71,6 +79,7 @@ class TableKind:
     fixed: tuple = ()
     per_g: bool = False
     image: bool = True
+    reads: bool = False
 
 
 # Normalised airlight kernel N(rho, xi); see airlight.py.
