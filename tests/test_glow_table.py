@@ -91,7 +91,7 @@ import fog_addon
 from fog_addon import sunsky
 from fog_addon.nodes import comp_fog, images
 from fog_addon.ops import apply
-from fog_addon.precompute import sunlight
+from fog_addon.precompute import daylight_tables, sunlight
 from fog_addon.precompute.spec import FogSpec
 
 bpy.ops.wm.read_factory_settings(use_empty=True)
