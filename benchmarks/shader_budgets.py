@@ -11,15 +11,19 @@ probe's process, so no budget steps them down), then one tiny render:
   material's inlined node count (what becomes OSL layers) is reported;
 * ``eevee``: EEVEE, 8 x 8 px, 1 sample, on the file saved and reopened without the add-on (as a farm renders
   it: the inline marks are not saved); clean = no "Uniform block ... too big (X/65536)" line; the X of the
-  overflow lines gives the bytes.
+  overflow lines gives the bytes (each under the shader that failed to link: MA<material>, WO<World>).
 
-    TMPDIR=/tmp/h3 .venv/bin/python benchmarks/shader_budgets.py probe KIND STEP ENGINE N [--g G]
+``--count`` (OSL): the scene built, no render; the verdict is the inlined node count against 32 767.
+
+    TMPDIR=/tmp/h3 .venv/bin/python benchmarks/shader_budgets.py probe KIND STEP ENGINE N [--g G] [--count]
     TMPDIR=/tmp/h3 .venv/bin/python benchmarks/shader_budgets.py run [--kinds ...] [--steps ...]
-        [--engines ...] [--max-n 64] [--out benchmarks/shader_budgets]
+        [--engines ...] [--max-n 64] [--start N1 N2] [--count] [--out benchmarks/shader_budgets]
+    FOG_BENCH_SMOKE=1 .venv/bin/python benchmarks/shader_budgets.py   # smoke: one tiny probe (SMOKE_ARGS)
 
 ``run`` (plain Python, no bpy) probes each kind x step x engine: the per-light cost from two or three small
 N (stack floats, bytes, inlined nodes), the limit it predicts, then a bisection over N checked by renders
-(``--no-bisect``: the prediction checked at N and N + 1 only).  It writes ``results.csv`` (one row per probe),
+(``--no-bisect``: the prediction checked at N and N + 1 only; ``--start``: EEVEE's first N given instead of
+searched).  It writes ``results.csv`` (one row per probe),
 ``budgets.json`` (per-light cost and limit by kind, step, engine; the engines' limits) in ``--out``.
 """
 import argparse
@@ -34,6 +38,9 @@ import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import smoke  # noqa: E402
 
 # kind: (Blender light type, Dense Fog, a Glass BSDF in the scene)
 KINDS = {
@@ -57,6 +64,7 @@ SIZE = {"svm": (16, 12), "osl": (16, 12), "eevee": (8, 8)}
 FOGGED = ("Ground", "Glossy", "Glass")   # the fogged objects (and their materials' names)
 
 UNIFORM = re.compile(r"[Uu]niform block.*?too big \((\d+)/(\d+)\)")
+LINKING = re.compile(r"ERROR\s+(\S+)\s+Linking")
 SVM_OUT = re.compile(r"out of SVM stack space, shader \"?([^\"]*?)\"? too big")
 
 
@@ -183,7 +191,7 @@ def pixel_objects(scene, width, height):
     return names
 
 
-def probe(kind, step_name, engine, n, g=ANISOTROPY, workdir=None, passes=False, top=False):
+def probe(kind, step_name, engine, n, g=ANISOTROPY, workdir=None, passes=False, top=False, render=True):
     import bpy
     import numpy as np
     import fog_addon
@@ -221,6 +229,10 @@ def probe(kind, step_name, engine, n, g=ANISOTROPY, workdir=None, passes=False, 
                     and m.name in FOGGED}
     res["nodes"]["World"] = inlined_nodes(s.world.node_tree)
     res["t_add"] = time.perf_counter() - t0
+    if not render:   # the node counts only (OSL's layers: what an OSL render would make of them)
+        res["t_total"] = res["t_add"]
+        print("PROBE_JSON " + json.dumps(res), flush=True)
+        return
     measure.set_pixel_centre_filter(s)
     if engine == "eevee":
         path = workdir / f"{kind}_{step_name}_{n}.blend"
@@ -250,24 +262,37 @@ def probe(kind, step_name, engine, n, g=ANISOTROPY, workdir=None, passes=False, 
 # ----------------------------------------------------------------------------------------------------------
 # the driver (plain Python)
 
-def run_probe(kind, step, engine, n, g=ANISOTROPY, timeout=3600, passes=False, top=False):
-    """Run one probe in a fresh process; a dict: the probe's JSON plus the log's verdicts."""
+def run_probe(kind, step, engine, n, g=ANISOTROPY, timeout=3600, passes=False, top=False, render=True):
+    """Run one probe in a fresh process; a dict: the probe's JSON plus the log's verdicts.  ``render=False``
+    (OSL): the scene built but not rendered, the verdict is the fogged materials' and the World's inlined node
+    counts against OSL's 32 767 layers (``OSL_LAYERS``), the measure the OSL budget is built on (Cycles'
+    simplification removes some nodes, so a render may still pass beyond it)."""
     from fog_scenes import render_harness as h
     from fog_scenes.cycles_debug_log import peaks
     t0 = time.perf_counter()
     try:
-        flags = (["--passes"] if passes else []) + (["--top"] if top else [])
+        flags = (["--passes"] if passes else []) + (["--top"] if top else []) + ([] if render else ["--count"])
         proc = h.run([__file__, "probe", kind, step, engine, n, "--g", g, *flags], timeout=timeout, check=False)
         text, rc = proc.stdout + proc.stderr, proc.returncode
     except Exception as e:   # noqa: BLE001 - a timeout is a verdict too
         text, rc = f"probe failed: {e}", -999
+    smoke.echo(text)
     row = {"kind": kind, "step": step, "engine": engine, "n": n, "g": g, "passes": passes, "top": top, "rc": rc,
+           "rendered": render,
            "seconds": round(time.perf_counter() - t0, 1)}
     line = next((ln for ln in text.splitlines() if ln.startswith("PROBE_JSON ")), None)
     res = json.loads(line.split(" ", 1)[1]) if line else {}
+    # no scene reached: the add-on failed to load or build (not a verdict on the shaders' size)
+    row["broken"] = not line and "PROBE_RENDER_START" not in text
     row.update(added=res.get("added"), steps=res.get("steps"), nodes=res.get("nodes"))
     render_log = text.split("PROBE_RENDER_START", 1)[-1]
     row["uniform_bytes"] = sorted({int(a) for a, _ in UNIFORM.findall(text)})
+    # each overflow line under the shader that failed to link before it (MA<material>, WO<world>)
+    linking = [(m.start(), m.group(1)) for m in LINKING.finditer(text)]
+    row["uniform_by_shader"] = {}
+    for m in UNIFORM.finditer(text):
+        name = next((nm for at, nm in reversed(linking) if at < m.start()), "?")
+        row["uniform_by_shader"][name] = max(row["uniform_by_shader"].get(name, 0), int(m.group(1)))
     row["svm_overflow"] = sorted(set(SVM_OUT.findall(text)))
     row["svm_peaks"] = peaks(render_log)
     row["errors"] = h.log_errors(text)[:6]
@@ -276,7 +301,9 @@ def run_probe(kind, step, engine, n, g=ANISOTROPY, timeout=3600, passes=False, t
     row["black"] = sorted(name for name, o in objects.items()
                           if (name != "sky" or lit_sky) and (o["max"] <= 0.0 or not o["finite"]))
     row["objects"] = {k: round(v["median"], 5) for k, v in objects.items()}
-    if engine == "eevee":
+    if not render:
+        clean = rc == 0 and bool(row["nodes"]) and max(row["nodes"].values()) <= OSL_LAYERS
+    elif engine == "eevee":
         clean = rc == 0 and not row["uniform_bytes"] and not row["errors"]
     else:
         clean = rc == 0 and bool(objects) and not row["errors"] and not row["black"]
@@ -329,20 +356,29 @@ def predicted(engine, rows):
 
 
 def measure_case(kind, step, engine, writer, max_n, bisect=True, g=ANISOTROPY, small=(1, 2, 4), passes=False,
-                 top=False):
-    """Probe one kind x step x engine: small N for the cost, then the limit; the case's summary."""
+                 top=False, start=None, render=True):
+    """Probe one kind x step x engine: small N for the cost, then the limit; the case's summary.  ``start``
+    (EEVEE): the N probed first (two that overflow give the cost), instead of the doubling search."""
     rows = []
 
     def probe_n(n):
-        r = run_probe(kind, step, engine, n, g, passes=passes, top=top)
+        r = run_probe(kind, step, engine, n, g, passes=passes, top=top, render=render)
+        if r["broken"]:   # e.g. the add-on mid-edit: once more, then stop (a verdict it is not)
+            time.sleep(30)
+            r = run_probe(kind, step, engine, n, g, passes=passes, top=top, render=render)
+            if r["broken"]:
+                raise SystemExit(f"the probe {kind} {step} {engine} N={n} did not build its scene:\n{r.get('tail')}")
+        smoke.check(r["clean"], f"the probe {kind} {step} {engine} N={n} did not render clean: {r}")
         rows.append(r)
         writer(r)
-        print(f"  {kind:12s} {step:5s} {engine:5s} p{int(passes)}t{int(top)} N={n:4d} clean={r['clean']} {r['seconds']:6.1f}s "
-              f"peaks={r['svm_peaks']} bytes={r['uniform_bytes']} nodes={r['nodes']} black={r['black']} "
-              f"err={r['errors'][:1]}", flush=True)
+        print(f"  {kind:12s} {step:5s} {engine:5s} p{int(passes)}t{int(top)} N={n:4d} clean={r['clean']} "
+              f"{r['seconds']:6.1f}s peaks={r['svm_peaks']} bytes={r['uniform_by_shader'] or r['uniform_bytes']} "
+              f"nodes={r['nodes']} black={r['black']} err={r['errors'][:1]}", flush=True)
         return r
 
-    if engine == "eevee":
+    if engine == "eevee" and start:
+        summary = predicted(engine, [r for r in (probe_n(n) for n in start) if r["uniform_bytes"]])
+    elif engine == "eevee":
         # the block overflows only well above a few lights: find two overflowing N by doubling
         n, over = EEVEE_START.get(KINDS[kind][0], 8), []
         while n <= max_n and len(over) < 2:
@@ -355,7 +391,7 @@ def measure_case(kind, step, engine, writer, max_n, bisect=True, g=ANISOTROPY, s
         summary = predicted(engine, over)
     else:
         summary = predicted(engine, [probe_n(n) for n in small])
-    summary.update(kind=kind, step=step, engine=engine, g=g, passes=passes, top=top)
+    summary.update(kind=kind, step=step, engine=engine, g=g, passes=passes, top=top, rendered=render)
     clean_n = sorted(r["n"] for r in rows if r["clean"])
     dirty_n = sorted(r["n"] for r in rows if not r["clean"])
     guess = summary.get("predicted")
@@ -377,20 +413,23 @@ def measure_case(kind, step, engine, writer, max_n, bisect=True, g=ANISOTROPY, s
         mid = (lo + hi) // 2
         r = probe_n(mid)
         lo, hi = (mid, hi) if r["clean"] else (lo, mid)
+    if engine == "eevee":   # the cost per light over every overflowing N (the bisection's too)
+        fit = predicted(engine, [r for r in rows if r["uniform_bytes"]])
+        summary.update({k: fit[k] for k in ("bytes_per_light", "base_bytes") if k in fit})
     summary["limit"] = lo if hi is not None else None
     summary["first_bad"] = hi
-    summary["above"] = max_n if hi is None else None
+    summary["above"] = max(r["n"] for r in rows) if hi is None and rows else None
     summary["seconds"] = round(sum(r["seconds"] for r in rows), 1)
     return summary
 
 
 def main_run(args):
-    out = pathlib.Path(args.out)
+    out = smoke.out(args.out)
     out.mkdir(parents=True, exist_ok=True)
     csv_path = out / "results.csv"
     new = not csv_path.exists()
     fields = ["kind", "step", "engine", "n", "g", "passes", "top", "clean", "rc", "seconds", "added", "steps", "svm_peaks",
-              "svm_overflow", "uniform_bytes", "nodes", "black", "objects", "errors"]
+              "svm_overflow", "uniform_bytes", "nodes", "black", "objects", "errors", "uniform_by_shader", "rendered"]
     f = open(csv_path, "a", newline="")
     w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
     if new:
@@ -405,7 +444,8 @@ def main_run(args):
         for kind in args.kinds:
             for step in args.steps:
                 s = measure_case(kind, step, engine, writer, args.max_n, not args.no_bisect, args.g,
-                                 tuple(args.small), args.passes, args.top)
+                                 tuple(args.small), args.passes, args.top, args.start, not args.count)
+                smoke.check(s["limit"] is not None or s["above"] is not None, f"no verdict: {s}")
                 print("SUMMARY " + json.dumps(s), flush=True)
                 with open(summaries_path, "a") as fs:
                     fs.write(json.dumps(s) + "\n")
@@ -421,10 +461,12 @@ def summarize(out):
     for line in (out / "summaries.jsonl").read_text().splitlines():
         c = json.loads(line)
         key = f"{c['kind']}/{c['step']}/{c['engine']}" + ("+passes" if c.get("passes") else "") + (
-            "+top" if c.get("top") else "")
+            "+top" if c.get("top") else "") + (f"+g{c['g']:g}" if c.get("g", ANISOTROPY) != ANISOTROPY else "") + (
+            "+count" if c.get("rendered") is False else "")
         keep = {k: c.get(k) for k in ("limit", "first_bad", "above", "predicted", "floats_per_light",
                                       "nodes_per_light", "base_nodes", "world_nodes_per_light", "world_base",
-                                      "bytes_per_light", "base_bytes", "g", "seconds") if c.get(k) is not None}
+                                      "bytes_per_light", "base_bytes", "g", "seconds", "rendered")
+                if c.get(k) is not None}
         if "svm_peaks" in c:
             keep["svm_peaks"] = {k: v for k, v in c["svm_peaks"].items() if k in FOGGED or k == "default_background"}
         cases[key] = keep
@@ -435,14 +477,22 @@ def summarize(out):
             "engine_limits": {"svm_stack_floats": SVM_STACK, "osl_layers": OSL_LAYERS,
                               "eevee_uniform_bytes": EEVEE_BYTES},
             "notes": "limit: largest N rendering clean (bisection); first_bad: smallest N that did not; above: no "
-                     "overflow up to that N (not probed further). svm_peaks: peak SVM stack floats by N (Cycles "
+                     "overflow up to that N (not probed further); +count: OSL verdicts from the inlined node count "
+                     "against 32 767, no render. svm_peaks: peak SVM stack floats by N (Cycles "
                      "debug log; default_background is the World). Costs are per light from a line fit.",
             "cases": cases}
     (out / "budgets.json").write_text(json.dumps(data, indent=1, sort_keys=True))
     return data
 
 
+# smoke mode (benchmarks/smoke.py), with no arguments: one probe end to end (a point light with its glow off, Cycles
+# SVM, 16 x 12 px, in a fresh process), its rows and summary in the smoke folder
+SMOKE_ARGS = ["run", "--kinds", "point", "--steps", "off", "--engines", "svm", "--small", "1", "--no-bisect"]
+
+
 def main():
+    if smoke.ON and len(sys.argv) == 1:
+        sys.argv += SMOKE_ARGS
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
     p = sub.add_parser("probe")
@@ -453,6 +503,7 @@ def main():
     p.add_argument("--g", type=float, default=ANISOTROPY)
     p.add_argument("--passes", action="store_true", help="Fog Passes on")
     p.add_argument("--top", action="store_true", help="a Fog Top (a fog layer 5 m deep) over the lights")
+    p.add_argument("--count", action="store_true", help="no render: the inlined node counts only")
     r = sub.add_parser("run")
     r.add_argument("--passes", action="store_true")
     r.add_argument("--top", action="store_true")
@@ -463,6 +514,10 @@ def main():
     r.add_argument("--max-n", type=int, default=64)
     r.add_argument("--g", type=float, default=ANISOTROPY)
     r.add_argument("--no-bisect", action="store_true")
+    r.add_argument("--count", action="store_true", help="OSL: no renders, the verdict from the inlined node "
+                   "counts against OSL's 32 767 layers")
+    r.add_argument("--start", type=int, nargs="+", help="EEVEE: the N probed first (two that overflow give "
+                   "the cost per light), instead of the doubling search")
     r.add_argument("--out", default=str(ROOT / "benchmarks" / "shader_budgets"))
     j = sub.add_parser("summarize")
     j.add_argument("--out", default=str(ROOT / "benchmarks" / "shader_budgets"))
@@ -471,7 +526,8 @@ def main():
         summarize(args.out)
         return
     if args.cmd == "probe":
-        probe(args.kind, args.step, args.engine, args.n, args.g, passes=args.passes, top=args.top)
+        probe(args.kind, args.step, args.engine, args.n, args.g, passes=args.passes, top=args.top,
+              render=not args.count)
     else:
         main_run(args)
 

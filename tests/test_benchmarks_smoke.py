@@ -26,10 +26,7 @@ NOT_BENCHMARKS = {
     "smoke.py": "helper module: the smoke mode itself",
 }
 # Benchmarks without a smoke mode yet: expected to fail (strict: one that passes must leave this list).
-NO_SMOKE_MODE_YET = {
-    "shader_budgets.py": "its command line needs a subcommand (probe, run, summarize) and has no smoke mode; "
-                         "the script is owned and being changed outside benchmarks/smoke.py's convention",
-}
+NO_SMOKE_MODE_YET = {}
 TIMEOUT_S = 300   # one benchmark's smoke run; they take seconds to about half a minute
 # where a measurement writes; a smoke run writes into its own folder (``FOG_BENCH_OUT``) only
 MEASUREMENT_OUTPUTS = [h.ROOT / "benchmarks" / "out", h.ROOT / "docs" / "figures", h.ROOT / "docs" / "measurements"]

@@ -125,7 +125,8 @@ def dimming_lights(scene, spec, lights):
     if scene.render.engine != budgets.EEVEE_ENGINE or not lights:
         return [], []
     spots = [view.has_shape(o) for o in lights]
-    budget = budgets.eevee_budget(0.0, spots)   # step "off" has no phase weight: its cost does not depend on g
+    budget = budgets.eevee_budget(0.0, spots, [view.is_area(o) for o in lights])   # step "off" has no phase
+    # weight: its cost does not depend on g
     eye = scene.camera.matrix_world.translation
     intensity = view.light_intensities(lights).sum(axis=1)
     order = sorted(range(len(lights)), key=lambda i: -intensity[i] / max(

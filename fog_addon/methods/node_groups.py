@@ -28,7 +28,8 @@ class NodeGroups(Method):
 
     def budget(self, scene, spec, lights):
         if scene.render.engine == budgets.EEVEE_ENGINE:
-            return budgets.eevee_budget(spec.anisotropy, [view.has_shape(o) for o in lights])
+            return budgets.eevee_budget(spec.anisotropy, [view.has_shape(o) for o in lights],
+                                        [view.is_area(o) for o in lights], spec.multiple_albedo is not None)
         return None
 
     def build(self, scene, spec, plan, images):

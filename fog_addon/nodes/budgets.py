@@ -13,55 +13,67 @@ from ..precompute import predict
 # a node's operation leaves unused too, and a group's constants are uniforms of every instance (1 000
 # Multiply-by-a-constant nodes in a group used 20 times: 240 032 bytes).  The fog's math nodes mark
 # theirs as constants to compile in (``sockets.NodeOps.inline``), but Blender does not save that mark:
-# a saved file, as a farm renders it, has them all again.  So the budget counts what a light's group
-# costs in a saved and reopened file, by ladder step (rungs.STEPS), from the overflow messages of the
-# many-lights scene in EEVEE (bpy 5.0.1, at 709fad8): full 2 848 bytes (24 and 36 lights: 68 656,
-# 102 832), glow only 1 812 (40, 48, 72 lights: 72 784, 87 280, 130 768), off at most 334 (196 lights
-# fit, measured before the tables' identity mapping, which off does not use); the World at most 936
-# per light whose glow is on (256 lights: 239 728, before that mapping).  As built (until the file is
-# reopened) a light costs 112 / 80 / 16 bytes and the World 48.  (Before the tables' identity mapping
-# of ``sockets.NodeOps._tap``: 4 610 and 2 517; before the lighter table lookup: 4 910 and 2 649.)
+# a saved file, as a farm renders it, has them all again.  So the budget counts what a light adds to a
+# saved and reopened file, by ladder step (rungs.STEPS), and holds exactly the measured limits: the overflow
+# lines' bytes fitted over N, the limit rendered and one more overflowing (bpy 5.0.1, benchmarks/
+# shader_budgets.py: a ground and a sphere of Principled BSDF, N lights of one kind at one step; docs/
+# measurements/2026-11-29-shader-budgets.md).  A material with many constants of its own holds fewer.
 EEVEE_ENGINE = "BLENDER_EEVEE"
 EEVEE_UNIFORM_LIMIT = 65536
-EEVEE_UNIFORM_RESERVE = 8192    # the material's own nodes and the Surface group's shared ones (272 measured
-                                # for a bare Principled BSDF)
-EEVEE_MATERIAL_BYTES = (2848, 1812, 334, 0)   # by rungs.STEPS (LEFT_OUT: not in the groups)
+EEVEE_UNIFORM_RESERVE = 864     # the material's own nodes and the Surface group's shared ones: the fits' bytes at
+                                # N = 0 were 749-832 (bpy 5.0.1, Principled BSDF with emission, g = 0 and 0.85)
+# A point light at g = 0 (bpy 5.0.1): full 2 618 bytes (overflow at 25, 27, 30 lights: 66 192, 71 424, 79 280;
+# 24 render); glow only 1 938 (2 395 measured at g = 0.85, less the phase weight of a full light, taken as the
+# same); off 334 at most (196 lights fit, measured before the tables' identity mapping; not measured since).
+# The World: 936 a light whose glow is on (256 lights: 239 728, before that mapping).
+EEVEE_MATERIAL_BYTES = (2618, 1938, 334, 0)   # by rungs.STEPS (LEFT_OUT: not in the groups)
 EEVEE_WORLD_BYTES = (936, 936, 0, 0)
-# Anisotropic fog (g != 0) adds the phase weight's constants to every glow (model.hg_weight: 8 per
-# segment, 1 per background tail).  Measured, saved and reopened, 36 lights fully modelled: 103 552 bytes
-# at g = 0, 129 184 at g = 0.85: 712 more per full light.  Glow only keeps the same glow: taken as the
-# same 712; the World's background (1 of the 8 weights, and the rows' mapping) taken as 150: estimates.
-EEVEE_ANISOTROPIC_EXTRA = ((712, 712, 0, 0), (150, 150, 0, 0))
+# Anisotropic fog (g != 0) adds the phase weight's constants to every glow (model.hg_weight).  A fully
+# modelled point at g = 0.85, bpy 5.0.1: 3 075 bytes (overflow at 22, 23, 26 lights: 68 464, 71 552, 80 768;
+# 21 render) against 2 618 at g = 0: 457 more.  Glow only at g = 0.85: 2 395 (overflow at 28, 30, 34 lights:
+# 67 888, 72 672, 82 256; 27 render), its g = 0 cost not measured: the same 457 taken.  The World's background
+# (1 of the glow's weights) taken as 150: an estimate.
+EEVEE_ANISOTROPIC_EXTRA = ((457, 457, 0, 0), (150, 150, 0, 0))
+# Dense Fog (multiple scattering: rungs.choose's multiple_albedo) adds its tables to a light's terms.  A fully
+# modelled point at g = 0.85 with Dense Fog, bpy 5.0.1: 4 184 bytes (overflow at 16 and 20 lights: 67 744,
+# 84 480; 15 render), 1 109 more than without.  Glow only taken as the same, the World's as half of its
+# light's cost (its inlined nodes grow by half): estimates; spots and area lights are charged the point's.
+EEVEE_DENSE_EXTRA = ((1109, 1109, 0, 0), (550, 550, 0, 0))
 
 
 # Cycles' OSL: every node of a material becomes a layer of its OSL shader group, and liboslexec indexes
 # the layers with a signed 16-bit integer: a 256-light material (53 195 nodes) crashed (SIGSEGV) while OSL
-# optimised its groups (the index read as -32 763; no stack or memory exhaustion: helper's core dump, this
-# stop).  Nodes a light adds to a material, inlined (counted at 16 lights; Cycles' own simplification only
-# removes some): 248 full, 63 glow only, 59 off; the World 15 with the glow on.
+# optimised its groups (the index read as -32 763; no stack or memory exhaustion).  The budget counts a
+# material's inlined nodes (Cycles' own simplification only removes some, so the count bounds the layers) and
+# holds exactly the lights whose count stays within 32 767: a margin over what renders, since 9 fully modelled
+# area lights (34 464 nodes) rendered clean and the crash's own layer count was not measured.  Nodes a light
+# adds to a material with the OSL method, bpy 5.0.1, g = 0.85, fitted over N = 1 and 4 (counts are exact lines
+# in N; checked at 153 and 154 points): a point 213 full, 61 glow only, 57 off; the World 14 with the glow on.
+# The material with no light: 156 (a Principled BSDF).
 OSL_LAYER_LIMIT = 32767
-OSL_LAYER_RESERVE = 2767   # the material's own nodes and the Surface group's shared ones (48 with no light)
-OSL_MATERIAL_LAYERS = (248, 63, 59, 0)
-OSL_WORLD_LAYERS = (15, 15, 0, 0)
+OSL_LAYER_RESERVE = 156    # the material's own nodes and the Surface group's shared ones (measured with no light)
+OSL_MATERIAL_LAYERS = (213, 61, 57, 0)
+OSL_WORLD_LAYERS = (14, 14, 0, 0)
 
 
 # A spot light (rungs.spot_rungs) costs more: its glow kernel (spot.py: two cone intervals, the inner segment
 # and two rims of quadrature) in the material and the World, and its scatter's tables (spot.scatter: F, the
-# moments, the lobe response, read once for both lobes).  Measured at bpy 5.0.1 (helper, at 99dbfcf), g = 0.85,
-# files saved and reopened.  OSL, nodes a light adds with the OSL method (8 vs 4 lights): full 924 a spot
-# against 249 a point, glow only 222 against 64, off 92 against 60; the World 149 against 16.  EEVEE (overflow
-# messages): a fully modelled spot 13 276 bytes in a material (8 and 12 spots: 107 008, 160 112), a spot with
-# its glow only 9 836 (12 and 16: 118 832, 158 176), a point 3 348 (24 and 32 points: 80 656, 107 440); the
-# World 8 940 a spot (8, 12, 16: 71 632, 107 392, 143 152), 652 a point.  The extras over the budgeted point
-# (EEVEE_MATERIAL_BYTES plus EEVEE_ANISOTROPIC_EXTRA) with a 3 % margin; off keeps the cone's factor (a few
-# constants, estimated).
-OSL_SPOT_EXTRA = ((700, 170, 40, 0), (140, 140, 0, 0))
-# An area light's glow (area.py: the emitter's quadrature) is far bigger in OSL: measured at bpy 5.0.1 (g = 0.85,
-# N = 1 and 4, docs/measurements/2026-11-29-shader-budgets.md) 3 812 nodes a fully modelled area light adds to a
-# material and 3 340 to the World.  The extras over the point's, with a 3 % margin; glow only taken as the World's
-# glow, off as a spot's (estimates: not measured).
-OSL_AREA_EXTRA = ((3680, 3380, 40, 0), (3430, 3430, 0, 0))
-EEVEE_SPOT_EXTRA = ((10010, 7540, 100, 0), (8960, 8960, 0, 0))
+# moments, the lobe response, read once for both lobes).  The extras over a point light's (the costs above at
+# g = 0.85), bpy 5.0.1, g = 0.85.  OSL, nodes: a spot adds 668 full, 202 glow only, 81 off to a material and
+# 131 to the World (N = 1 and 4).  EEVEE, saved and reopened: a fully modelled spot 12 128 bytes in a material
+# (overflow at 6 and 7 spots: 73 536, 85 664; 5 render), glow only 10 064 (7 and 9: 71 280, 91 408; 6 render);
+# the World about 8 900 a spot (9 spots: 80 240, with the World's 144 bytes of its own measured for area
+# lights); off keeps the cone's factor (a few constants, estimated).
+OSL_SPOT_EXTRA = ((455, 141, 24, 0), (117, 117, 0, 0))
+EEVEE_SPOT_EXTRA = ((9053, 7669, 100, 0), (7814, 7814, 0, 0))
+# An area light's glow (area.py: the emitter's quadrature) is bigger still.  OSL, nodes (bpy 5.0.1, g = 0.85,
+# N = 1 and 4): 3 812 full, 3 407 glow only, 77 off in a material; 3 340 in the World.  EEVEE, saved and
+# reopened: a fully modelled area light 19 936 bytes in a material (overflow at 4, 5, 7 lights: 80 544,
+# 100 480, 140 352; 3 render) and 17 072 in the World (68 432, 85 504, 119 648: the World overflows at 4 too);
+# glow only 18 048 in a material (6 and 8 lights: 109 088, 145 184; 3 render), the World's the same (102 576,
+# 136 720); off as a spot's (estimated).
+OSL_AREA_EXTRA = ((3599, 3346, 20, 0), (3326, 3326, 0, 0))
+EEVEE_AREA_EXTRA = ((16861, 15653, 100, 0), (15986, 15986, 0, 0))
 
 
 def _per_light(costs, extra, spots, area_extra=None, areas=()):
@@ -83,21 +95,32 @@ def material_nodes(steps, spots):
     return sum(OSL_MATERIAL_LAYERS[k] + (OSL_SPOT_EXTRA[0][k] if spot else 0) for k, spot in zip(steps, spots))
 
 
-def osl_budget(spots=(), areas=()):
+# Room kept for the user's own nodes in a material (and the World): the reserves above are the probes' bare
+# Principled BSDF; a real material's textures and mixes add their own constants and layers.  An allowance, not a
+# measurement: about one fully modelled point light's worth in EEVEE at g = 0.85 and five in OSL.
+EEVEE_USER_ALLOWANCE = 3072   # bytes
+OSL_USER_ALLOWANCE = 1024     # nodes
+
+
+def osl_budget(spots=(), areas=(), allowance=OSL_USER_ALLOWANCE):
     """What a fogged material and the World can hold as one OSL shader group (predict.Budget); ``spots``:
-    one bool per light, True for a spot or an area light; ``areas``: True for an area light."""
-    room = OSL_LAYER_LIMIT - OSL_LAYER_RESERVE
+    one bool per light, True for a spot or an area light; ``areas``: True for an area light; ``allowance``: nodes
+    kept for the user's own (0: the measured limit itself, tests/test_shader_budgets.py)."""
+    room = OSL_LAYER_LIMIT - OSL_LAYER_RESERVE - allowance
     return predict.Budget(_per_light((OSL_MATERIAL_LAYERS, OSL_WORLD_LAYERS), OSL_SPOT_EXTRA, spots,
                                      OSL_AREA_EXTRA, areas), (room, room),
                           "OSL's shader group size (32 767 nodes per material)")
 
 
-def eevee_budget(g=0.0, spots=()):
+def eevee_budget(g=0.0, spots=(), areas=(), dense=False, allowance=EEVEE_USER_ALLOWANCE):
     """What a fogged material and the World can hold in EEVEE (predict.Budget over the lights' steps) for
-    fog of anisotropy g; ``spots``: one bool per light, True for a spot."""
-    room = EEVEE_UNIFORM_LIMIT - EEVEE_UNIFORM_RESERVE
+    fog of anisotropy g; ``spots``: one bool per light, True for a spot or an area light; ``areas``: True for
+    an area light; ``dense``: Dense Fog (multiple scattering) on; ``allowance``: bytes kept for the user's own
+    nodes (0: the measured limit itself, tests/test_shader_budgets.py)."""
+    room = EEVEE_UNIFORM_LIMIT - EEVEE_UNIFORM_RESERVE - allowance
     costs = (EEVEE_MATERIAL_BYTES, EEVEE_WORLD_BYTES)
-    if g:
-        costs = tuple(tuple(a + b for a, b in zip(c, extra)) for c, extra in zip(costs, EEVEE_ANISOTROPIC_EXTRA))
-    return predict.Budget(_per_light(costs, EEVEE_SPOT_EXTRA, spots), (room, room),
+    for on, more in ((g, EEVEE_ANISOTROPIC_EXTRA), (dense, EEVEE_DENSE_EXTRA)):
+        if on:
+            costs = tuple(tuple(a + b for a, b in zip(c, extra)) for c, extra in zip(costs, more))
+    return predict.Budget(_per_light(costs, EEVEE_SPOT_EXTRA, spots, EEVEE_AREA_EXTRA, areas), (room, room),
                           "EEVEE's uniform block (64 KiB of node constants per material)")
