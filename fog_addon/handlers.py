@@ -15,7 +15,7 @@ from bpy.app.handlers import persistent
 
 from .methods import compositor as compositor_method
 from .nodes import comp_fog, dedupe
-from . import view
+from . import sunsky, view
 from .ops import apply
 
 
@@ -89,10 +89,13 @@ def on_save_pre(*_):
     """A saved file renders on a farm without the add-on: its windows hold every frame of the range (computed
     again if they were grown by single frames since: stepping through the frames costs seconds in a big scene),
     and the atlases of the shafts' maps of an animation hold every frame's (baked again if a frame change found one
-    out of date, or the range changed: ``methods.compositor.complete_shadows``)."""
+    out of date, or the range changed: ``methods.compositor.complete_shadows``), the sun's too (the fog is rebuilt
+    where its atlas is due: ``sunsky.sun_atlas_due``)."""
     scene = bpy.context.scene
     settings = getattr(scene, "analytic_fog", None)
-    if settings is not None and settings.enabled and comp_fog.windows_partial():
+    if settings is not None and settings.enabled and sunsky.sun_atlas_due(scene, apply.usable_spec(scene)):
+        apply.refresh_lights(scene, rebuild=True)
+    elif settings is not None and settings.enabled and comp_fog.windows_partial():
         apply.refresh_lights(scene)
     if settings is not None and settings.enabled:
         compositor_method.complete_shadows(scene, apply.usable_spec(scene))

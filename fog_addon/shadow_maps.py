@@ -39,7 +39,7 @@ from mathutils import Vector
 from mathutils.bvhtree import BVHTree
 
 from . import caveats, view
-from .precompute import footprint, shaft_maps, sun_shafts
+from .precompute import shaft_maps
 from .precompute.tables import TableSpec
 
 IMAGE_PREFIX = "AnalyticFog Shadow "   # a light's map: "<IMAGE_PREFIX><light name>" (``nodes/owned.PREFIX``)
@@ -168,44 +168,7 @@ def _first_hits(bvh, origins, directions, count):
     return np.fromiter((shaft_maps.NO_HIT if hit[0] is None else hit[3] for hit in hits), np.float32, count)
 
 
-class SunShadow(NamedTuple):
-    """A sun's baked map: ``spec`` (its image's name and grid) and ``frame`` (``sun_shafts.SunFrame``: where it
-    lies)."""
-    spec: TableSpec
-    frame: sun_shafts.SunFrame
-
-
-SUN_IMAGE = "AnalyticFog Sun Shadow"   # the sun's map (one sun shines through a fog layer)
-
-
-def sun_shadow(scene, sun, region):
-    """The ``SunShadow`` of Sun light ``sun`` over ``region`` (world corners of the fog the camera sees, (N, 3)),
-    baked unless its image holds this sun, region and geometry; None if no caster's shadow can fall there.  The
-    casters that stand no higher than the region's bottom (the ground: a ground plane) are left out: they shadow no
-    fog above them, and in the map a low sun would see fog just above them as behind them (a cell's depth on the
-    ground changes by a cell over the sun's elevation tangent, several cells at a low sun)."""
-    casters = caveats.shadow_casters(scene)
-    if not casters:
-        return None
-    corners = np.array([footprint.box_points(o.bound_box, o.matrix_world) for o in casters])
-    ground = float(np.min(np.asarray(region)[:, 2]))
-    keep = corners[:, :, 2].max(axis=1) > ground + 1e-6
-    if not keep.any():
-        return None
-    direction = tuple(float(c) for c in sun.matrix_world.to_3x3().col[2].normalized())
-    placed = sun_shafts.sun_frame(direction, region, corners[keep].reshape(-1, 3))
-    if placed is None:
-        return None
-    frame, (width, height) = placed
-    geometry = scene_bvh(scene, objects=[o for o, k in zip(casters, keep) if k])
-    version = hashlib.sha1(repr((frame, width, height, geometry.digest)).encode()).hexdigest()
-    spec = TableSpec(SUN_IMAGE, width, height)
-    img = bpy.data.images.get(SUN_IMAGE)
-    if img is None or img.get(KEY) != version or img.packed_file is None:
-        origins = sun_shafts.sun_map_origins(frame, width, height).reshape(-1, 3)
-        depth = cast_parallel(geometry.bvh, origins, frame.forward).reshape(height, width)
-        _store(spec, depth, version)
-    return SunShadow(spec, frame)
+SUN_IMAGE = "AnalyticFog Sun Shadow"   # the sun's map or atlas (``sun_maps.py``: one sun shines through a fog layer)
 
 
 def _is_spot(light):
@@ -253,7 +216,7 @@ def _new_image(name, width, height):
     return img
 
 
-def _image(name, width, height, atlas):
+def map_image(name, width, height, atlas):
     """The image ``name`` of width x height to hold a map (``atlas`` False) or an atlas (True), new unless it is one
     of that size and kind already."""
     img = bpy.data.images.get(name)
@@ -263,7 +226,7 @@ def _image(name, width, height, atlas):
     return _new_image(name, width, height) if img is None else img
 
 
-def _pack(img, rgba):
+def pack_map(img, rgba):
     """Write ``rgba`` ((height, width, 4) float32, the bottom row first) into ``img`` and pack it into the file as a
     ZIP-compressed OpenEXR (lossless; Blender's own packing of a float image is uncompressed: 16 bytes a texel; a
     map's depths take 2-6x less, docs/measurements/2026-11-29-animated-shadow-maps.md).  The image then reads from
@@ -290,8 +253,8 @@ def _pack(img, rgba):
 
 
 def _store(spec, depth, version):
-    img = _image(spec.name, spec.width, spec.height, atlas=False)
-    _pack(img, np.repeat(np.asarray(depth, np.float32)[..., None], 4, axis=-1))
+    img = map_image(spec.name, spec.width, spec.height, atlas=False)
+    pack_map(img, np.repeat(np.asarray(depth, np.float32)[..., None], 4, axis=-1))
     img[KEY] = version
     return img
 
@@ -381,7 +344,7 @@ def ensure_atlases(scene, lights, only_stale=False, lazy=False):
         same = img is not None and img.get(LAYOUT) == layout and img.packed_file is not None
         keys = list(img[TILE_KEYS]) if same else [""] * count
         plans.append({"light": light, "layout": layout, "size": size, "union": union, "keys": keys,
-                      "tiles": _tiles(img) if same else [None] * count, "changed": not same})
+                      "tiles": atlas_tiles(img) if same else [None] * count, "changed": not same})
     if lazy:
         geometry = None
         for plan in plans:
@@ -411,31 +374,41 @@ def _store_atlases(plans, frames, dedupe=True):
     """({light name: ShadowMap}, images) of ``ensure_atlases``'s ``plans``: each atlas laid out and packed where
     it changed or was STALE (a plan's "stale": it is STALE still, its maps not all baked); ``dedupe``: an atlas
     whose maps are all the same holds one."""
-    first, stride, count = frames
     maps, images = {}, {}
     for plan in plans:
         light, (width, height) = plan["light"], plan["size"]
         name = IMAGE_PREFIX + light.name
-        tiles = plan["tiles"]
-        if dedupe and all(tiles[0] is not None and np.array_equal(tiles[0], tile) for tile in tiles[1:]):
-            tiles = tiles[:1]   # the same map at every frame: one tile
-        columns, rows = shaft_maps.atlas_layout(len(tiles), width, height)
-        atlas = Atlas(first, stride, len(tiles), columns, rows, width, height)
         img = bpy.data.images.get(name)
         if not plan["changed"] and img is not None and (plan.get("stale") or not img.get(STALE)):
             atlas = Atlas(*(int(v) for v in img[ATLAS]))   # as it is (``lazy``: still STALE, or all verified)
         else:
-            img = _image(name, columns * width, rows * height, atlas=True)
-            img[ATLAS] = list(atlas)
-            _pack(img, _assemble(tiles, columns, rows, width, height))
-            img[LAYOUT], img[TILE_KEYS], img[STALE] = plan["layout"], plan["keys"], bool(plan.get("stale"))
-            if KEY in img:
-                del img[KEY]
+            img, atlas = store_atlas(name, plan["tiles"], frames, plan["size"], plan["layout"], plan["keys"],
+                                     bool(plan.get("stale")), dedupe)
         spot = None if plan["union"] is None else tuple(plan["union"])
         spot = None if spot is None else (tuple(tuple(v) for v in spot[0]), spot[1])
         maps[light.name] = ShadowMap(TableSpec(name, width, height), spot, atlas, cone=_is_spot(light))
         images[name] = img
     return maps, images
+
+
+def store_atlas(name, tiles, frames, size, layout, keys, stale=False, dedupe=True):
+    """(image, ``Atlas``): the maps ``tiles`` ((height, width) float32 each, or None: not baked yet) of the frames
+    ``frames`` ((first, stride, count)) laid out and packed in the atlas image ``name`` (new unless one of that size
+    is), with what it was laid out for (``layout``), each tile's key and whether it is STALE; ``dedupe``: maps all
+    the same are stored once."""
+    first, stride, count = frames
+    width, height = size
+    if dedupe and all(tiles[0] is not None and np.array_equal(tiles[0], tile) for tile in tiles[1:]):
+        tiles = tiles[:1]   # the same map at every frame: one tile
+    columns, rows = shaft_maps.atlas_layout(len(tiles), width, height)
+    atlas = Atlas(first, stride, len(tiles), columns, rows, width, height)
+    img = map_image(name, columns * width, rows * height, atlas=True)
+    img[ATLAS] = list(atlas)
+    pack_map(img, assemble_atlas(tiles, columns, rows, width, height))
+    img[LAYOUT], img[TILE_KEYS], img[STALE] = layout, list(keys), bool(stale)
+    if KEY in img:
+        del img[KEY]
+    return img, atlas
 
 
 def _needs_baking(light, frames):
@@ -457,7 +430,7 @@ def _bake_tile(light, geometry, union, size):
     return cast(geometry.bvh, origin, vectors)[fill]
 
 
-def _assemble(tiles, columns, rows, width, height):
+def assemble_atlas(tiles, columns, rows, width, height):
     """(rows height, columns width, 4) float32: the atlas of ``tiles`` ((height, width) each, or None) in their
     places (``shaft_maps.atlas_place``); unused channels and missing maps NO_HIT."""
     rgba = np.full((rows * height, columns * width, 4), shaft_maps.NO_HIT, np.float32)
@@ -469,7 +442,7 @@ def _assemble(tiles, columns, rows, width, height):
     return rgba
 
 
-def _tiles(img):
+def atlas_tiles(img):
     """The maps an atlas image holds, one per frame of its TILE_KEYS (a one-tile atlas's map for each)."""
     first, stride, tiles, columns, rows, width, height = (int(v) for v in img[ATLAS])
     rgba = np.empty(img.size[0] * img.size[1] * 4, np.float32)
@@ -512,17 +485,24 @@ def follow_frame(scene, lights):
         tile = t if tiles > 1 else 0
         if tiles == 1:   # the one map every frame shared: now this frame's, the others to be baked again
             keys = [""] * len(keys)
-        rgba = np.empty(img.size[0] * img.size[1] * 4, np.float32)
-        img.pixels.foreach_get(rgba)
-        rgba = rgba.reshape(img.size[1], img.size[0], 4)
-        column, row, channel = shaft_maps.atlas_place(tile, columns)
-        rgba[row * height:(row + 1) * height, column * width:(column + 1) * width, channel] = depth
-        img.pixels.foreach_set(rgba.ravel())
-        img.update()
+        write_tile(img, tile, depth)
         keys[t] = version
         img[TILE_KEYS], img[STALE] = keys, True
         changed.append(light.name)
     return changed
+
+
+def write_tile(img, tile, depth):
+    """Write ``depth`` ((height, width) float32) into tile ``tile`` of the atlas image ``img`` (in memory: its
+    packed copy is old until packed again)."""
+    first, stride, tiles, columns, rows, width, height = (int(v) for v in img[ATLAS])
+    rgba = np.empty(img.size[0] * img.size[1] * 4, np.float32)
+    img.pixels.foreach_get(rgba)
+    rgba = rgba.reshape(img.size[1], img.size[0], 4)
+    column, row, channel = shaft_maps.atlas_place(tile, columns)
+    rgba[row * height:(row + 1) * height, column * width:(column + 1) * width, channel] = depth
+    img.pixels.foreach_set(rgba.ravel())
+    img.update()
 
 
 def complete(scene, lights):

@@ -368,17 +368,34 @@ def shaft_region(scene, spec):
     return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (ground, top_z)])
 
 
-def sun_shadow(scene, spec):
-    """(``shadow_maps.SunShadow`` or None, {name: image}): the sun's map over ``shaft_region`` when
-    ``sun_casts_shafts``, baked unless its image holds it already."""
-    from . import shadow_maps
+def sun_shadow(scene, spec, lazy=False):
+    """(``sun_maps.SunShadow`` or None, {image name: image}): the sun's map over ``shaft_region`` when
+    ``sun_casts_shafts``, baked unless its image holds it already (an atlas of an animation's frames where the
+    camera or a caster moves; ``lazy``: a handler's rebuild, ``sun_maps.shadow``)."""
+    from . import sun_maps
     sun = sun_casts_shafts(scene, spec)
     if sun is None:
         return None, {}
-    shadow = shadow_maps.sun_shadow(scene, sun, shaft_region(scene, spec))
+    shadow = sun_maps.shadow(scene, sun, lambda s: shaft_region(s, spec), lazy=lazy)
     if shadow is None:
         return None, {}
-    return shadow, {shadow.spec.name: bpy.data.images[shadow.spec.name]}
+    return shadow, {sun_maps.SUN_IMAGE: bpy.data.images[sun_maps.SUN_IMAGE]}
+
+
+def follow_sun(scene, spec):
+    """The frame changed: the sun's atlas follows casters that moved otherwise than it was baked for
+    (``sun_maps.follow_frame``)."""
+    from . import sun_maps
+    sun = sun_casts_shafts(scene, spec) if spec is not None else None
+    if sun is not None and bpy.data.images.get(sun_maps.SUN_IMAGE) is not None:
+        sun_maps.follow_frame(scene, sun, lambda s: shaft_region(s, spec))
+
+
+def sun_atlas_due(scene, spec):
+    """True if the sun's map should be an atlas of the animation's frames and is not one up to date
+    (``sun_maps.atlas_due``): the file's save rebuilds the fog then."""
+    from . import sun_maps
+    return spec is not None and sun_maps.atlas_due(scene, sun_casts_shafts(scene, spec))
 
 
 def _shaft_note(scene, spec, method_name):
@@ -394,12 +411,10 @@ def _shaft_note(scene, spec, method_name):
     if not capabilities.can(method_name, "shafts", scene.render.engine):
         return (f"with {method_name} its shadows fall on surfaces but cast no shafts into the fog: "
                 f"{capabilities.suggestion('shafts', scene.render.engine)} casts them")
-    moving = [o.name for o in [scene.camera, *casters] if caveats.is_animated(o)]
     said = ("its shafts in the fog come from a map of the scene's shadows baked at Update Fog around the camera's "
             "view; the sky's light in the fog and on surfaces is not shadowed by the buildings, nor the air's glow")
-    if moving:
-        said += (f"; {', '.join(moving[:3])}{' and more' if len(moving) > 3 else ''} move: the map stays as baked "
-                 "(update the fog on the frame to render)")
+    if caveats.is_animated(sun_casts_shafts(scene, spec)):
+        said += "; the sun moves: its shadow map is that of the frame the fog was last updated at"
     return said
 
 

@@ -15,7 +15,7 @@ PACKAGE = pathlib.Path(__file__).resolve().parent.parent / "fog_addon"
 # ``TableSpec(...)`` calls without a ``kind=``: the pixel filter's constants (``registry.PIXEL_FILTER.fixed``), the
 # scene's shadow maps (baked from the scene's geometry, not tables of the registry) and airlight's look-up of an
 # array it already holds
-UNKINDED_CALLS = {"precompute/pixel.py": 2, "shadow_maps.py": 4, "precompute/airlight.py": 1}
+UNKINDED_CALLS = {"precompute/pixel.py": 2, "shadow_maps.py": 3, "sun_maps.py": 3, "precompute/airlight.py": 1}
 
 
 def _specs():

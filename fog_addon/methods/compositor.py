@@ -62,7 +62,7 @@ class Compositor(Method):
         shafted = shafted_lights(scene, spec, plan.in_groups) if spec.shafts else []
         # (a handler's rebuild does not step through the frames: the save completes the atlases)
         maps, shadow_images = shadow_maps.ensure(scene, shafted, lazy=plan.this_frame)
-        sun_shadow, sun_images = sunsky.sun_shadow(scene, spec) if daylit else (None, {})
+        sun_shadow, sun_images = sunsky.sun_shadow(scene, spec, lazy=plan.this_frame) if daylit else (None, {})
         shadow_maps.remove_unused(set(shadow_images) | set(sun_images))
         images = dict(images, **shadow_images, **sun_images)
         images = comp_fog.build_fog_group(scene, plan.in_groups, plan.grouped_models, images,
@@ -105,6 +105,7 @@ class Compositor(Method):
                                                       fogged=has_fog_surface, opaque=lets_nothing_through),
                                  grow=True)
             follow_shadows(scene, spec, lights)
+            sunsky.follow_sun(scene, spec)
 
     def follow(self, scene, rebuild):
         return compositor.follow(scene, rebuild, bpy.data.node_groups.get(comp_fog.FOG_GROUP))

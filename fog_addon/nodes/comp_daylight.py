@@ -4,6 +4,7 @@ import hashlib
 from typing import Any, NamedTuple
 
 from ..precompute import model, shafts, sun_shafts, sunlight
+from ..shadow_maps import SUN_IMAGE
 from . import comp_shafts, surface_group
 from .comp_shafts import SHAFT_EDGE, SHAFT_GROUP, SHAFT_TAPS, SURFACE_EDGE, SURFACE_TAPS
 
@@ -35,7 +36,7 @@ class Day(NamedTuple):
     build: Any             # ``surface_group.build_surface``'s ``day``: (m, beta, albedo) -> ``sunlight.Daylight``
     table: Any             # the fog light's TableSpec (``sunsky.fog_light_table``)
     dims: bool             # whether surfaces take the sun's and the sky's dimming (``sunsky.dims_surfaces``)
-    sun_shadow: Any = None   # the sun's map (``shadow_maps.SunShadow``), or None: no shafts from the sun
+    sun_shadow: Any = None   # the sun's map (``sun_maps.SunShadow``), or None: no shafts from the sun
     sun_nodes: int = 0       # the sun's lit share's nodes a pixel (``shafts.Samples.view_nodes``)
 
 
@@ -45,13 +46,16 @@ SUN_SHAFT_NODE = f"{SHAFT_GROUP} Sun Node"   # one group per quadrature node of 
 def sun_shares(m, sun_shadow, nodes, day, camera, direction, layer, length, beta, point, normal, offsets,
                shaft_length):
     """(the lit share of the layer's sun glow at a pixel, the lit share of the sun's part of the fog light on its
-    surface) from the sun's map ``sun_shadow`` (``shadow_maps.SunShadow``).  The glow's (``sun_shafts.sun_lit_share``)
-    over the part of the pixel's ray in the layer (``sunlight.lamp_glow_span`` below its lamps' glow top), to the
+    surface) from the sun's map ``sun_shadow`` (``sun_maps.SunShadow``: an animation's atlas gives the frame's map,
+    ``comp_shafts.atlas_tile``, read under the map's table name from then on in this tree).  The glow's
+    (``sun_shafts.sun_lit_share``) over the part of the pixel's ray in the layer (``sunlight.lamp_glow_span`` below its lamps' glow top), to the
     pixel's surface or, past ``length``, the sky, at most SUN_REACH mean free paths, ``nodes`` a pixel interleaved
     over 2 x 2 pixels; the surface's (``sun_shafts.sun_surface_share``) interleaved over 4 x 4 (``offsets``: the pixel's
     ``shafts.offset`` and ``surface_offset``).  Each is averaged over its pattern depth-aware
     (``comp_shafts.interleave_mean_group``, by ``shaft_length``)."""
-    spec, frame = sun_shadow
+    spec, frame = sun_shadow.spec, sun_shadow.frame
+    if sun_shadow.atlas is not None and spec.name not in m.images:   # the frame's map, cut from the atlas
+        m.images = dict(m.images, **{spec.name: comp_shafts.atlas_tile(m, m.images[SUN_IMAGE], "Sun Shadow")})
     top_z = sunlight.lamp_glow_top(*layer)
     t0, t1 = sunlight.lamp_glow_span(m, top_z, camera, direction)
     meets = m.less(t0, LAYER_OPEN)

@@ -87,12 +87,13 @@ rebuilt = set()   # names of scenes whose groups ``build_scene_groups`` rebuilt 
 
 
 def build_scene_groups(scene, spec, lights, method=None, reason=None, rechoose=True, this_frame=False,
-                       progress=progress_.silent, bake_in_line=True):
+                       progress=progress_.silent, bake_in_line=True, force=False):
     """(Re)build the Surface and World groups (and the method's own) for ``spec`` and ``lights`` with ``method``
     (default: ``resolve_method``) unless built for them already; per-light groups no longer used are deleted,
     lights that no longer take part lose the fog's attenuation, Cycles' OSL is switched on while some model
     needs it, and the view layers have the method's AOVs.  ``rechoose``, ``this_frame``: see ``plan``;
-    ``bake_in_line``: see ``bake_missing_tables``.
+    ``bake_in_line``: see ``bake_missing_tables``; ``force``: rebuilt even if built for them (what the groups
+    read changed: the sun's map became an atlas).
 
     Returns [(name, reason)] for lights left unfogged, clashing AOVs and a choice the render engine limited.
     """
@@ -103,7 +104,7 @@ def build_scene_groups(scene, spec, lights, method=None, reason=None, rechoose=T
     signature = _signature(scene, spec, method, plan_)
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if (surface is None or bpy.data.node_groups.get(groups.WORLD) is None
-            or surface.get(LIGHTS_KEY) != signature or not method.is_built()):
+            or surface.get(LIGHTS_KEY) != signature or not method.is_built() or force):
         bake_missing_tables(spec, plan_.models, progress, bake_in_line)
         imgs = method.build(scene, spec, plan_,
                             images.all_table_images(spec.anisotropy, _extra_tables(spec, plan_.models)))

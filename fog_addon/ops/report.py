@@ -71,7 +71,11 @@ def explain(choice=None):
                      f"error is not in the prediction ({SHAFT_ERROR_NOTE})")
     sun_map = bpy.data.images.get(shadow_maps.SUN_IMAGE)
     if sun_map is not None:
-        lines.append(f"  The sun's shafts: a {sun_map.size[0]} x {sun_map.size[1]} map, "
+        atlas = sun_map.get(shadow_maps.ATLAS)
+        grid = (f"an atlas of {int(atlas[2])} map(s) of {int(atlas[5])} x {int(atlas[6])} over "
+                f"{len(sun_map[shadow_maps.TILE_KEYS])} frames" if atlas is not None
+                else f"a {sun_map.size[0]} x {sun_map.size[1]} map")
+        lines.append(f"  The sun's shafts: {grid}, "
                      f"{shafts.samples_for(choice.get('quality')).view_nodes} nodes a ray, "
                      f"{sun_shafts.SUN_SURFACE_SAMPLES[0]} directions x {sun_shafts.SUN_SURFACE_SAMPLES[1]} nodes "
                      "over surfaces")

@@ -125,13 +125,14 @@ def _set_and_sync(scene, level="groups", **changes):
         raise ValueError(why)
 
 
-def refresh_lights(scene, rechoose=False, this_frame=False):
+def refresh_lights(scene, rechoose=False, this_frame=False, rebuild=False):
     """Rebuild the scene groups if the fog lights, their models or the camera changed; materials are not
     touched.  Called from the depsgraph handler: when nothing changed it only compares names (and sets the
     Compositor method's windows).  ``rechoose``: also choose the lights' models (and Auto's method) again from
     the view (camera, lights or objects moved); the handler does that after the scene has stopped changing
     (``handlers.py``).  ``this_frame``: the handlers' calls, which do not step through frames (the windows
-    of an animation grow by this frame's; saving the file computes them over the range again)."""
+    of an animation grow by this frame's; saving the file computes them over the range again).  ``rebuild``:
+    the groups are built again even if nothing changed (``build_scene_groups``' force)."""
     surface = bpy.data.node_groups.get(groups.SURFACE)
     if surface is None or surface.library is not None:
         return
@@ -140,7 +141,7 @@ def refresh_lights(scene, rechoose=False, this_frame=False):
         spec = spec_of(scene)
         build_scene_groups(scene, spec, fog_lights(scene)[0], rechoose=rechoose, this_frame=this_frame,
                            progress=progress_.ConsoleProgress(prefix="Analytic Fog: "),
-                           bake_in_line=bpy.app.background)
+                           bake_in_line=bpy.app.background, force=rebuild)
     except ValueError as e:
         _sync_errors[scene.name] = str(e)
         return

@@ -20,6 +20,7 @@ from .shafts import hemisphere_direction, hemisphere_sums
 # --- the sun: an orthographic map and the lit share of its glow in a fog layer ---------------------------
 
 SUN_MAP = 1024        # grid points along the longer side of the sun's map (its cells are square)
+SUN_ANIMATED_MAP = 384   # the same for each frame's map in an animation's atlas (over every frame's region)
 SUN_REACH = 6.0       # mean free paths: the sun's map covers the layer this far around the camera (e^-6: 0.25 %)
 SUN_BIAS_CELLS = 1.0  # a fog point is lit if nearer the sun than the map's surface less this many cells
 MIN_SUN_ELEVATION = 0.02   # sine: the sun's lit-share weights take at least this elevation (a sun on the horizon)

@@ -6,6 +6,8 @@
                                          # expect_<f>.exr: the same scene made STATIC at frame f, fog re-added
     python farm_build.py anim_shafts OUTDIR   # anim_shafts.blend (a lamp moving behind a panel, light shafts), then
                                          # stale_shafts_<f>.exr (frame 1's map) and expect_shafts_<f>.exr (static at f)
+    python farm_build.py anim_sun_shafts OUTDIR   # anim_sun_shafts.blend (the ball moving across a sun's light in a
+                                         # fog layer), then stale_sun_<f>.exr and expect_sun_<f>.exr, as anim_shafts
 
 The last line of stdout is one JSON object (see tests/test_farm.py).
 """
@@ -261,9 +263,97 @@ def anim_shafts(outdir):
     emit({"packed": packed, "poses": poses, "render_s": log, "maps": info})
 
 
+SUN_SHAFT_FRAMES = (1, 5, 8)   # the frames the sun's moving shafts are rendered at (tests/test_farm.py)
+BALL_X = {1: -1.2, 10: 2.2}      # the ball's x: it crosses the sun's light before the camera
+SUN_CAMERA_LOC = {1: (0.0, -6.0, 1.5), 10: (0.6, -5.6, 1.7)}
+
+
+def anim_sun_shafts(outdir):
+    """anim_sun_shafts.blend: the daylight lane's scene (a sun at 40 degrees in a fog layer 3 m deep), the ball
+    moving across the sunlight and the camera moving over frames 1..10, keyed after the fog was added, with light
+    shafts (the Compositor method, 64 x 36): the save bakes an atlas of the sun's maps at every frame into the file,
+    picked by a driver on the frame.  Then
+    expect_sun_<f>.exr: the scene made static at f (the sun's map baked at the pose, a still map's full resolution)
+    and stale_sun_<f>.exr: frame f with frame 1's map at every frame (what a farm rendered before the atlas)."""
+    import math
+    import numpy as np
+    from fog_addon import shadow_maps
+    log = {}
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = build(bpy.context.scene)
+    scene.render.resolution_x, scene.render.resolution_y = SHAFT_RES
+    bg = next(n for n in scene.world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
+    bg.inputs["Color"].default_value = (0.35, 0.5, 0.8, 1.0)
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
+    sun.data.energy = 3.0
+    sun.rotation_euler = (math.radians(50.0), 0.0, math.radians(-50.0))
+    scene.collection.objects.link(sun)
+    scene.frame_start, scene.frame_end = 1, 10
+    ball, cam = scene.objects["Ball"], scene.camera
+    fog_addon.register()
+    settings = scene.analytic_fog
+    settings.method, settings.use_fog_top, settings.fog_top, settings.height_falloff = "COMPOSITOR", True, 3.0, 1.0
+    settings.color = (0.9, 0.9, 0.9)
+    t = time.perf_counter()
+    assert bpy.ops.fog.add(density=DENSITY) == {"FINISHED"}
+    log["add_s"] = round(time.perf_counter() - t, 2)
+    # animated after the fog was added, as an artist does: the handler's rebuild keeps this frame's map (it does not
+    # step through frames), and the file's save bakes the atlas of every frame's
+    _key(ball, "location", BALL_X, index=0)
+    _key(cam, "location", SUN_CAMERA_LOC)
+    bpy.context.view_layer.update()
+    scene.frame_set(1)
+    info = {"before_save_atlas": shadow_maps.ATLAS in bpy.data.images[shadow_maps.SUN_IMAGE]}
+    t = time.perf_counter()
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(outdir, "anim_sun_shafts.blend"))
+    log["save_s"] = round(time.perf_counter() - t, 2)
+    atlas = bpy.data.images[shadow_maps.SUN_IMAGE]
+    info.update(atlas=list(atlas.get(shadow_maps.ATLAS, [])), atlas_size=list(atlas.size),
+                atlas_packed_bytes=atlas.packed_file.size)
+    packed = packed_report()
+
+    # the stale farm: frame 1's map at every frame (the atlas's first tile copied into each channel and slot)
+    px = np.empty(atlas.size[0] * atlas.size[1] * 4, np.float32)
+    atlas.pixels.foreach_get(px)
+    w, h = int(atlas[shadow_maps.ATLAS][5]), int(atlas[shadow_maps.ATLAS][6])
+    first = px.reshape(atlas.size[1], atlas.size[0], 4)[:h, :w, 0]
+    stale = np.repeat(np.tile(first, (atlas.size[1] // h, atlas.size[0] // w))[..., None], 4, axis=-1)
+    saved = px.copy()
+    atlas.pixels.foreach_set(stale.ravel())
+    atlas.update()
+    handlers = list(bpy.app.handlers.frame_change_post)
+    bpy.app.handlers.frame_change_post.clear()   # (the add-on's frame handler would bake the frame's map again)
+    for f in SUN_SHAFT_FRAMES:
+        scene.frame_set(f)
+        timed(log, f"stale_sun_{f}", render_exr, scene, os.path.join(outdir, f"stale_sun_{f}.exr"))
+    bpy.app.handlers.frame_change_post.extend(handlers)
+    atlas.pixels.foreach_set(saved)
+    atlas.update()
+
+    # the add-on's frame f: the ball and the camera still at their poses, the sun's map baked there
+    states = {}
+    for f in SUN_SHAFT_FRAMES:
+        scene.frame_set(f)
+        states[f] = (ball.matrix_world.copy(), cam.matrix_world.copy())
+    for ob in (ball, cam):
+        ob.animation_data_clear()
+    poses = {}
+    for f in SUN_SHAFT_FRAMES:
+        ball.matrix_world, cam.matrix_world = states[f]
+        scene.frame_current = f
+        assert bpy.ops.fog.remove() == {"FINISHED"}
+        assert bpy.ops.fog.add(density=DENSITY) == {"FINISHED"}
+        img = bpy.data.images[shadow_maps.SUN_IMAGE]
+        assert shadow_maps.ATLAS not in img, f
+        poses[f] = {"ball": list(ball.matrix_world.translation), "still_size": list(img.size)}
+        timed(log, f"expect_sun_{f}", render_exr, scene, os.path.join(outdir, f"expect_sun_{f}.exr"))
+    emit({"packed": packed, "poses": poses, "render_s": log, "maps": info})
+
+
 if __name__ == "__main__":
     mode, outdir = sys.argv[1], sys.argv[2]
     {"nodes": nodes, "osl": osl, "anim": anim, "compositor": lambda out: osl(out, "compositor"),
      "compositor_eevee": lambda out: osl(out, "compositor", "BLENDER_EEVEE"),
      "dense": lambda out: osl(out, "compositor", dense=True), "daylight": daylight,
-     "anim_compositor": lambda out: anim(out, "COMPOSITOR"), "anim_shafts": anim_shafts}[mode](outdir)
+     "anim_compositor": lambda out: anim(out, "COMPOSITOR"), "anim_shafts": anim_shafts,
+     "anim_sun_shafts": anim_sun_shafts}[mode](outdir)
