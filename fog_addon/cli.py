@@ -166,7 +166,8 @@ def build_parser():
     r.add_argument("--engine", required=True, choices=["cycles", "eevee"])
     from_file = " (default: the file's setting)"
     r.add_argument("--passes", action="store_const", const=True, default=None,
-                   help="write the Fog Light and Fog Transmittance passes (default: the file's setting)")
+                   help="write the Fog Light and Fog Transmittance passes: an --out .exr is then a multilayer EXR "
+                        "with every pass (default: the file's setting)")
     r.add_argument("--shafts", choices=["on", "off"], default=None,
                    help="light shafts: objects cast shadows into the fog (default: the file's setting, on)")
     r.add_argument("--multiple-scattering", choices=["on", "off"], default=None,

@@ -71,12 +71,19 @@ def set_cycles_cpu(scene, threads=0):
         scene.render.threads = int(threads)
 
 
-def configure_output(scene, out):
-    """Set the image format from the extension of ``out``; return the absolute path."""
+def configure_output(scene, out, multilayer=False):
+    """Set the image format from the extension of ``out``; return the absolute path.  ``multilayer``: an .exr is
+    Blender's multilayer EXR, every pass of every view layer that renders (the fog passes' AOVs among them) beside
+    the composite."""
     out = os.path.abspath(os.fspath(out))
     ext = os.path.splitext(out)[1].lower()
     im = scene.render.image_settings
-    if ext == '.exr':
+    if ext == '.exr' and multilayer:
+        im.media_type = 'MULTI_LAYER_IMAGE'
+        im.file_format = 'OPEN_EXR_MULTILAYER'
+        im.color_depth = '32'
+        im.exr_codec = 'ZIP'
+    elif ext == '.exr':
         im.media_type = 'IMAGE'
         im.file_format = 'OPEN_EXR'
         im.color_depth = '32'
@@ -96,9 +103,10 @@ def configure_output(scene, out):
     return out
 
 
-def render_to_file(scene, out):
-    """Render ``scene`` through its camera and write ``out`` (.exr or .png)."""
-    out = configure_output(scene, out)
+def render_to_file(scene, out, multilayer=False):
+    """Render ``scene`` through its camera and write ``out`` (.exr or .png; ``multilayer``: see
+    ``configure_output``)."""
+    out = configure_output(scene, out, multilayer)
     d = os.path.dirname(out)
     if d:
         os.makedirs(d, exist_ok=True)

@@ -83,6 +83,12 @@ def fog_settings(scene, args):
     return spec, objects, {k: (v, source[f]) for k, (f, v) in shown.items()}, notes
 
 
+def fog_passes():
+    """The fog passes' (name, type) as the view layers hold them (``nodes/passes.AOVS``)."""
+    from .nodes import passes
+    return passes.AOVS
+
+
 def describe(shown):
     """One line: each setting with where it came from."""
     def fmt(v):
@@ -119,6 +125,12 @@ def apply_and_render(scene, args):
         print(f"models: {line}")
     if not getattr(args, "explain", False) and (line := apply.method_line(apply.stored_choice() or {})):
         print(f"models: {line}")
+    multilayer = bool(spec.passes) and str(args.out).lower().endswith(".exr")
+    if spec.passes and not multilayer:
+        print("note: fog passes: a PNG holds the picture only: give --out an .exr (multilayer) for the passes")
     t1 = time.perf_counter()
-    measure.render_to_file(scene, args.out)
+    measure.render_to_file(scene, args.out, multilayer=multilayer)
+    if multilayer:
+        print(f"passes: {args.out} is a multilayer EXR: the picture, the view layers' passes and the fog's "
+              f"({', '.join(name for name, _ in fog_passes())})")
     print(f"fog added in {t1 - t0:.2f} s, rendered in {time.perf_counter() - t1:.2f} s")

@@ -38,3 +38,25 @@ def test_render_explains_the_models(tmp_path):
     assert len(lines) == 6 and all(": " in line for line in lines[2:5]), lines
     assert lines[5].startswith("models:   Light shafts of "), lines
     assert "quality 0.5 (flag)" in text
+
+
+def test_render_writes_the_fog_passes_into_a_multilayer_exr(tmp_path):
+    """``--passes --out X.exr`` writes a multilayer EXR holding the fog's two passes beside the picture (it wrote R,
+    G, B and A only before): the Fog Light pass is not black where the fog glows, and the transmittance lies in
+    [0, 1], above 0 on the spheres."""
+    import numpy as np
+    from fog_addon import imageio
+    blend = h.scene_blend("spheres", tmp_path)
+    out = tmp_path / "out.exr"
+    r = h.run(["-m", "fog_addon", "render", blend, "--engine", "cycles", "--samples", "1", "--resolution", "32x18",
+               "--density", "0.1", "--passes", "--out", out], check=False)
+    assert r.returncode == 0, (r.stdout + r.stderr)[-2000:]
+    names = imageio.channels(out)
+    light = [c for c in names if "Fog Light" in c.name]
+    trans = [c for c in names if "Fog Transmittance" in c.name]
+    assert len(light) >= 3 and trans, [c.name for c in names]
+    values = imageio.read_channels(out, light[:3] + trans[:1])
+    assert np.isfinite(values).all()
+    assert values[..., :3].max() > 0.0, "the Fog Light pass is black"
+    t = values[..., 3]   # (0 where the sky is seen through fog that fills all space)
+    assert 0.0 <= t.min() and 0.0 < t.max() <= 1.0 + 1e-6, "the transmittance leaves [0, 1] or is 0 everywhere"
