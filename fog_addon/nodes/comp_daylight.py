@@ -1,34 +1,15 @@
-"""A fog layer's daylight in the compositor, per pixel: the sun's and the sky's glow and fog light
-(``daylight``), and the lit shares of the sun's shafts from its map (``sun_shares``)."""
+"""A fog layer's daylight in the compositor, per pixel: what the fog group takes of it (``Day``; its terms:
+``sunlight.pixel_terms``, composed by ``compose.compose``) and the lit shares of the sun's shafts from its map
+(``sun_shares``)."""
 import hashlib
 from typing import Any, NamedTuple
 
-from ..precompute import model, shafts, sun_shafts, sunlight
+from ..precompute import shafts, sun_shafts, sunlight
 from ..shadow_maps import SUN_IMAGE
-from . import comp_shafts, surface_group
+from . import comp_shafts
 from .comp_shafts import SHAFT_EDGE, SHAFT_GROUP, SHAFT_TAPS, SURFACE_EDGE, SURFACE_TAPS
 
 LAYER_OPEN = 1.0e9   # units: a fog layer's span end beyond this is open (``sunlight.lamp_glow_span``'s UNBOUNDED)
-
-
-def daylight(m, day, table, camera, direction, position, normal, reflectance, d_vp, t_vp, cover, sun_share=None,
-             surface_share=None):
-    """The sun's and the sky's light in a fog layer at a pixel (albedos included): ``surface_group.daylight_light``
-    where the pixel sees a surface, the glow to the sky (``sunlight.ray_glow``) where it does not.  With air the glow
-    is evaluated once, to the surface where it covers most of the pixel and to the sky elsewhere (without the glow's
-    table its kernel is the costliest part of the picture: a pixel on a silhouette takes one side's glow).
-    ``sun_share``, ``surface_share``: the lit shares of the layer's sun glow and of the sun's part of the fog light on
-    the pixel's surface (``sun_shares``), or None."""
-    if day.air is None:
-        to_surface = surface_group.daylight_light(m, day, table, camera, direction, position, normal, reflectance,
-                                                  d_vp, t_vp, sun_share, surface_share)
-        to_sky = sunlight.ray_glow(m, day, camera, direction, model.FAR, sun_share)
-        return m.scale(to_surface, cover) + m.scale(to_sky, 1.0 - cover)
-    surface = m.less(0.5, cover)
-    glow = sunlight.ray_glow(m, day, camera, direction, m.select(surface, d_vp, model.FAR), sun_share)
-    reflected = sunlight.times(m, reflectance * sunlight.fog_light(m, table, day, position, normal, surface_share),
-                               t_vp)
-    return glow + m.scale(reflected, cover)
 
 
 class Day(NamedTuple):

@@ -15,7 +15,10 @@ cost grows with lights x samples x materials (issue 8's overhead: 4x the fog-fre
   materials' groups, each node once), plus the peak factor of ``pixel.py`` where a light is seen in the
   picture; each light in two groups, its glows (``comp_lights.build_glow_group``) and the fog light its surface
   reflects (``comp_lights.build_scatter_group``), each evaluated only in its window (``precompute/footprint.py``: a
-  spot's cone, the picture's surfaces) through Crop nodes, and put back in place by Translate nodes.
+  spot's cone, the picture's surfaces) through Crop nodes, and put back in place by Translate nodes;
+* the pixel's fog is composed in one place, ``compose.compose`` (Sun et al. 2005 Eq. 19 and 12): the builder hands
+  it the lamps' sums over the bundles, a fog layer's sun and sky (``sunlight.pixel_terms``), the glowing objects'
+  glows (``comp_emitters.glows``) and the layer's dimmings of the render's pixel as terms, and wires its output.
 
 Everything the graph reads from the scene reaches it by simple-expression drivers (the camera's matrix,
 lens, sensor and shift, the render's size, each light's position, power, colour and cone, the fog's
@@ -32,7 +35,7 @@ cameras; no fog passes (the fog's light is the compositor's).
 """
 import bpy
 
-from ..precompute import footprint, model, pixel, rungs, shading, shafts, sun_shafts, sunlight, surface
+from ..precompute import compose, footprint, model, pixel, rungs, shafts, sun_shafts, sunlight, surface
 from . import (budgets, comp_bundles, comp_daylight, comp_emitters, comp_halos, comp_lights, comp_ops, comp_shafts,
                compositor, groups, images as images_, owned)
 from .comp_bundles import BUNDLE, BUNDLE_SIZE
@@ -184,7 +187,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     they do not hold the animation's range (``PARTIAL``); ``shafted``: ``comp_bundles.build_bundle``'s;
     ``emitters``: (the fog's g, Dense Fog's albedo or None) if glowing objects get their glows
     (``comp_emitters.glows``: an Emission input), else None; ``day``: a ``comp_daylight.Day`` for a fog layer with
-    a sun or a sky (``comp_daylight.daylight``; the render's surfaces take the sun's and the sky's dimming here, once
+    a sun or a sky (``sunlight.pixel_terms``; the render's surfaces take the sun's and the sky's dimming here, once
     per pixel, and the sky seen its transmittance), else None; ``layer``: a fog layer's (top, falloff, ground) in
     units (``FogSpec.layer_per_unit``), where the lights' glows end (``sunlight.lamp_glow_span``), or None for fog
     that fills all space.  Rebuilt in place, so the scene's compositor keeps its group node.  Returns the table
@@ -287,18 +290,15 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     if win is not None:   # the sums over the surfaces' window back in place, on the picture's domain
         sums.update({o: comp_ops.accumulate(m, comp_ops.zero(m, direction), comp_ops.uncrop(m, sums[o], win))
                      for o in SCATTER_OUTPUTS if o in sums})
+    terms = compose.output_terms(sums)   # the lamps' glows and fog light, summed over the bundles
     if layer is not None and rungs.BACKGROUND_OUT in sums:   # a ray that leaves the layer: its glow ends at the top
-        sky = sums[rungs.BACKGROUND_OUT]
-        if rungs.AIRLIGHT_OUT in sums:
-            sky = m.scale(sums[rungs.AIRLIGHT_OUT], bounded) + m.scale(sky, 1.0 - bounded)
-        sums[rungs.BACKGROUND_OUT] = m.scale(sky, meets)
+        terms += [compose.Term(compose.LAYER_END, compose.SKY, compose.LAMPS, bounded),
+                  compose.Term(compose.SHARE, compose.SKY, compose.LAMPS, meets)]
     daylight = None if day is None else day.build(m, beta, albedo)
     t_day = None if daylight is None else sunlight.view_transmittance(m, daylight, pos, incoming, d_vp)
-    t_vp = model.transmittance(m, beta, d_vp) if daylight is None else sunlight.grey(m, t_day)
-    if not sums:
-        fog = m.wrap((0.0, 0.0, 0.0))
-    else:   # Eq. 19 where the pixel sees its surface, Eq. 12 where it sees the sky
-        fog = albedo * shading.pixel_light(m, sums, t_vp, cover)
+    if rungs.SCATTERED_OUT in sums:   # the lamps' fog light on surfaces, dimmed on its way by one grey factor
+        t_vp = model.transmittance(m, beta, d_vp) if daylight is None else sunlight.grey(m, t_day)
+        terms.append(compose.Term(compose.DIMMING, compose.SURFACE, compose.LAMPS, t_vp))
     if daylight is not None:
         sun_share = surface_share = None
         if day.sun_shadow is not None and layer is not None:   # the sun's shafts
@@ -306,36 +306,36 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
                 m, day.sun_shadow, day.sun_nodes, daylight, cam, direction, layer,
                 m.select(m.less(0.5, cover), d_vp, model.FAR), beta, pos, normal,
                 (shared["Shaft Offset"], surface_offset), shared["Shaft Length"])
-        fog = fog + comp_daylight.daylight(m, daylight, day.table, cam, direction, pos, normal,
-                                           diffuse + specular, d_vp, t_day,
-                                           cover, sun_share, surface_share)
+        terms += sunlight.pixel_terms(m, daylight, day.table, cam, direction, pos, normal, diffuse + specular, d_vp,
+                                      t_day, cover, sun_share, surface_share)
     if emitters is not None:
         facing_normal = m.scale(normal, m.select(m.less(m.dot(normal, incoming), 0.0), -1.0, 1.0))
         image_x, image_y = (m.scale(v, 1.0 / m.length(v)) for v in (across, up))
         lean = m.combine(m.dot(facing_normal, image_x), m.dot(facing_normal, image_y), 0.0)
         lean = m.scale(lean, 1.0 / m.maximum(m.length(lean), 1e-6))
         pixel_angle = comp_emitters.emitter_pixel_angle(scene)
-        fog = fog + albedo * comp_emitters.glows(m, p, beta, d_vp, emitters[0], pixel_angle, emitters[1], cover,
-                                                 m.abs(m.dot(normal, incoming)), lean)
-    image = p["Image"]
+        terms.append(compose.Term(compose.GLOW, compose.RAY, compose.EMITTERS, comp_emitters.glows(
+            m, p, beta, d_vp, emitters[0], pixel_angle, emitters[1], cover, m.abs(m.dot(normal, incoming)), lean)))
     if daylight is not None:   # the dimming of the pixel's surface by the fog above it and of the sky seen through
         one = 1.0 if daylight.air is None else m.wrap((1.0, 1.0, 1.0))   # (with air the dimming is RGB)
         sun_visible = (None if sun_share is None else   # the sun's map: a surface in its shadow takes the sky's factor
                        sun_shafts.sun_surface_lit(m, day.sun_shadow.spec, day.sun_shadow.frame, pos, normal))
-        dims = (m.select(m.less(0.0, cover), sunlight.direct_dimming(m, daylight, pos, normal, sun_visible), one)
-                if day.dims else m.const(1.0))   # the layer's
-        seen = sunlight.sky_seen(m, daylight, cam, direction)
         # the materials dimmed their samples by a grey stand-in (``sunlight.proxy_transmittance``): the camera
         # segment's exact transmittance (with air its colour) comes here, per pixel
         inv = 1.0 / m.maximum(sunlight.proxy_transmittance(m, daylight, d_vp), 1e-30)
         tint = t_day * inv if daylight.air is None else m.scale(t_day, inv)
-        if daylight.air is None:
-            image = m.scale(image, cover * (tint * dims) + (1.0 - cover) * seen)
-        else:
-            image = image * (m.scale(sunlight.times(m, tint, dims), cover) + m.scale(seen, 1.0 - cover))
+        terms.append(compose.Term(compose.DIMMING, compose.SURFACE, compose.RENDER, tint))
+        if day.dims:   # the layer's dimming of the sun's and the sky's direct light
+            terms.append(compose.Term(compose.DIMMING, compose.SURFACE, compose.RENDER, m.select(
+                m.less(0.0, cover), sunlight.direct_dimming(m, daylight, pos, normal, sun_visible), one)))
+        terms.append(compose.Term(compose.DIMMING, compose.SKY, compose.RENDER,
+                                  sunlight.sky_seen(m, daylight, cam, direction)))
+    # Eq. 19 where the pixel sees its surface, Eq. 12 where it sees the sky
+    fog, factor = compose.compose(m, compose.Pixel(cover, albedo), terms)
+    fog = m.wrap((0.0, 0.0, 0.0)) if fog is None else fog
     m.feed(gout.inputs["Fog Light"], fog)
     m.place()
-    m.feed(gout.inputs["Image"], fog + image)
+    m.feed(gout.inputs["Image"], fog + compose.dimmed(m, p["Image"], factor))
     ng[PARTIAL] = partial
     ng[owned.BUILT] = groups.code_fingerprint()
     return images

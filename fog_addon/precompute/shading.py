@@ -8,17 +8,18 @@ functions; numpy runs them as the shaders' twin (tests compare the two pixel
 by pixel).  Every term's formula is a rung of ``rungs.py``, run through
 ``m.run`` so each light can get its own models.
 
-The composition of a light's terms into the pixel's fog (Eq. 19 at a surface
-point, Eq. 12 on a ray to the sky) is written here only, against the
-quantities of ``rungs.OUTPUTS`` (each with its kind: a glow, reflected light,
-a dimming factor, its weight, a gate): ``surface_light`` (Eq. 19's L_a before
-the albedo), ``pixel_light`` (a pixel that sees a surface over a fraction of
-its area and the sky over the rest), ``sum_lights`` / ``surface_fog`` (the
-materials' sums), ``shade_background`` (the World).  Every backend calls them:
-the node groups through ``NodeOps``, the compositor's per-pixel sum through
-``CompOps`` (``nodes/comp_ops.py``), the error predictor with broadcast
-(P, N, 3) numpy arrays (``predict.light_fog``).  The groups' sockets are
-derived from ``rungs.OUTPUTS`` too.
+The composition of the terms into the pixel's fog (Eq. 19 at a surface point,
+Eq. 12 on a ray to the sky) is ``compose.py``'s; here the lamps' quantities of
+``rungs.OUTPUTS`` (each with its kind: a glow, reflected light, a dimming
+factor, its weight, a gate) are handed to it: ``surface_light`` (Eq. 19's L_a
+before the albedo), ``pixel_light`` (a pixel that sees a surface over a
+fraction of its area and the sky over the rest), and the materials' sums
+around them, ``sum_lights`` / ``surface_fog``, ``shade_background`` (the
+World).  Every backend calls them: the node groups through ``NodeOps``, the
+error predictor with broadcast (P, N, 3) numpy arrays (``predict.light_fog``);
+the compositor's per-pixel sum calls ``compose.compose`` with the lamps'
+terms and the other sources'.  The groups' sockets are derived from
+``rungs.OUTPUTS`` too.
 
 Adding a physical term (a light's new quantity) touches:
 
@@ -45,7 +46,7 @@ Units: positions and distances in m, beta in 1/m, light intensity I0 in W/sr
 import math
 from typing import Any, NamedTuple
 
-from . import area, model, rungs, spot, tables
+from . import area, compose, model, rungs, spot, tables
 
 MIN_BETA = 1e-12   # 1/unit: a fog thinner than this is no fog (``shade_background``: the World seen and lighting)
 
@@ -242,12 +243,8 @@ def surface_light(m, values, t_vp):
     glows along the camera ray as they are, plus the light the surface reflects dimmed by ``t_vp`` =
     e^{-beta D_vp} on its way to the camera.  ``values``: the quantities at the surface (``rungs.OUTPUTS`` at
     SURFACE_POINT; a dict or pairs Output -> value, or LightTerms) of one light or summed over lights (the
-    composition is linear); any subset of them, None if it holds none."""
-    pairs = [(o, v) for o, v in _light_values(values) if o.at == rungs.SURFACE_POINT]
-    glow = [v for o, v in pairs if o.kind == rungs.GLOW]
-    reflected = [v for o, v in pairs if o.kind == rungs.REFLECTED]
-    parts = ([total(glow)] if glow else []) + ([m.scale(total(reflected), t_vp)] if reflected else [])
-    return total(parts) if parts else None
+    composition is linear); any subset of them, None if it holds none (``compose.surface_light``)."""
+    return compose.surface_light(m, _lamp_terms(values, t_vp))
 
 
 def pixel_light(m, values, t_vp, coverage):
@@ -256,14 +253,17 @@ def pixel_light(m, values, t_vp, coverage):
     (``surface_light``) + (1 - coverage) * the glows to infinity (Eq. 12).  ``values``: quantities of
     ``rungs.OUTPUTS`` (Output -> value) at the surface and the sky, of one light or summed over lights, any
     subset (the error predictor composes the ones a ladder step drops on their own: coverage 0 or 1 there
-    selects the sky or the surface); None if it holds none.  The compositor's per-pixel sum; the materials
-    and the World compose the same quantities through ``sum_lights`` and ``shade_background``."""
-    pairs = _light_values(values)
-    surface = surface_light(m, pairs, t_vp)
-    sky = [v for o, v in pairs if o.at == rungs.SKY]
-    parts = ([m.scale(surface, coverage)] if surface is not None else []) + \
-        ([m.scale(total(sky), 1.0 - coverage)] if sky else [])
-    return total(parts) if parts else None
+    selects the sky or the surface); None if it holds none (``compose.source_light``).  The predictor's per-sample
+    sum; the compositor's composes the lamps' sums with the other sources' (``compose.compose``), the materials and
+    the World the same quantities through ``sum_lights`` and ``shade_background``."""
+    return compose.source_light(m, coverage, _lamp_terms(values, t_vp))
+
+
+def _lamp_terms(values, t_vp):
+    """The composer's terms (``compose.Term``) of the lamps' ``values`` (``_light_values``) and the dimming ``t_vp``
+    of their reflected light on its way to the camera."""
+    return compose.output_terms(_light_values(values)) + [compose.Term(compose.DIMMING, compose.SURFACE,
+                                                                       compose.LAMPS, t_vp)]
 
 
 def sum_lights(m, terms, medium, t_vp, is_camera):
