@@ -14,7 +14,7 @@ import bpy
 from bpy.app.handlers import persistent
 
 from .methods import compositor as compositor_method
-from .nodes import comp_fog, dedupe
+from .nodes import comp_fog, dedupe, preview
 from . import sunsky, view
 from .ops import apply
 
@@ -99,24 +99,39 @@ def on_save_pre(*_):
         apply.refresh_lights(scene)
     if settings is not None and settings.enabled:
         compositor_method.complete_shadows(scene, apply.usable_spec(scene))
+    preview.before_save()   # a farm renders the file as F12 does: without the viewport's preview
+
+
+@persistent
+def on_render_pre(*_):
+    """A final render (each frame of an animation): the viewport's preview off (``nodes/preview.py``)."""
+    preview.before_render()
+
+
+@persistent
+def on_preview_back(*_):
+    """A render ended or was cancelled, the file was saved or opened: the preview as the session has it."""
+    preview.after_render()
+
+
+HANDLERS = (("depsgraph_update_post", on_depsgraph_update), ("save_pre", on_save_pre),
+            ("frame_change_post", on_frame_change), ("render_pre", on_render_pre),
+            ("render_complete", on_preview_back), ("render_cancel", on_preview_back), ("save_post", on_preview_back),
+            ("load_post", on_preview_back))
 
 
 def register():
-    if on_depsgraph_update not in bpy.app.handlers.depsgraph_update_post:
-        bpy.app.handlers.depsgraph_update_post.append(on_depsgraph_update)
-    if on_save_pre not in bpy.app.handlers.save_pre:
-        bpy.app.handlers.save_pre.append(on_save_pre)
-    if on_frame_change not in bpy.app.handlers.frame_change_post:
-        bpy.app.handlers.frame_change_post.append(on_frame_change)
+    for name, fn in HANDLERS:
+        if fn not in getattr(bpy.app.handlers, name):
+            getattr(bpy.app.handlers, name).append(fn)
+    preview.after_render()
 
 
 def unregister():
-    while on_depsgraph_update in bpy.app.handlers.depsgraph_update_post:
-        bpy.app.handlers.depsgraph_update_post.remove(on_depsgraph_update)
-    while on_save_pre in bpy.app.handlers.save_pre:
-        bpy.app.handlers.save_pre.remove(on_save_pre)
-    while on_frame_change in bpy.app.handlers.frame_change_post:
-        bpy.app.handlers.frame_change_post.remove(on_frame_change)
+    for name, fn in HANDLERS:
+        while fn in getattr(bpy.app.handlers, name):
+            getattr(bpy.app.handlers, name).remove(fn)
+    preview.show(False)
     for timer in (_merge_appended, _rechoose):
         if bpy.app.timers.is_registered(timer):
             bpy.app.timers.unregister(timer)

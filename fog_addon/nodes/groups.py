@@ -136,9 +136,10 @@ def up_to_date(name):
 
 
 def build_params(beta, albedo, world_light=False):
-    ng, gin, gout = new_group(PARAMS, [], [("Beta", F), ("Albedo", C), (WORLD_LIGHT, F)])
+    ng, gin, gout = new_group(PARAMS, [], [("Beta", F), ("Albedo", C), (WORLD_LIGHT, F), (PREVIEW, F)])
     for name, kind, value in (("Beta", "ShaderNodeValue", beta), ("Albedo", "ShaderNodeRGB", (*albedo, 1.0)),
-                              (WORLD_LIGHT, "ShaderNodeValue", float(world_light))):
+                              (WORLD_LIGHT, "ShaderNodeValue", float(world_light)),
+                              (PREVIEW, "ShaderNodeValue", 0.0)):
         node = ng.nodes.new(kind)
         node.name = node.label = name
         node.outputs[0].default_value = value
@@ -147,6 +148,8 @@ def build_params(beta, albedo, world_light=False):
 
 
 WORLD_LIGHT = "World Light"   # the params group's 0/1: the World lights surfaces through the fog
+PREVIEW = "Viewport Preview"   # the params group's 0/1: the viewport's preview of a fog added at render time shows
+#                                (``nodes/preview.py``; 0 in saved files and final renders)
 ANISOTROPY_KEY = "analytic_fog_anisotropy"   # on the params group: the g the lights' models are built for
 
 
@@ -155,12 +158,13 @@ def set_anisotropy(g):
     bpy.data.node_groups[PARAMS][ANISOTROPY_KEY] = float(g)
 
 
-def set_params(beta, albedo, g=None, world_light=None):
+def set_params(beta, albedo, g=None, world_light=None, preview=None):
     """Write the fog's settings into the shared params group (creating it if needed, or if an older
     version made it); ``g``: the anisotropy to store, ``world_light``: whether the World lights surfaces
-    through the fog (``shading.shade_background``) (None: keep them)."""
+    through the fog (``shading.shade_background``), ``preview``: whether the viewport's preview shows
+    (``preview.working``) (None: keep them)."""
     ng = bpy.data.node_groups.get(PARAMS)
-    if ng is None or ng.nodes.get(WORLD_LIGHT) is None:
+    if ng is None or ng.nodes.get(WORLD_LIGHT) is None or ng.nodes.get(PREVIEW) is None:
         kept = ng.get(ANISOTROPY_KEY) if ng is not None else None
         ng = build_params(beta, albedo, bool(world_light))
         if kept is not None:
@@ -171,4 +175,6 @@ def set_params(beta, albedo, g=None, world_light=None):
     ng.nodes["Albedo"].outputs[0].default_value = (*albedo, 1.0)
     if world_light is not None:
         ng.nodes[WORLD_LIGHT].outputs[0].default_value = float(world_light)
+    if preview is not None and ng.nodes[PREVIEW].outputs[0].default_value != float(preview):
+        ng.nodes[PREVIEW].outputs[0].default_value = float(preview)
     return ng

@@ -11,7 +11,7 @@ import json
 import bpy
 
 from .. import methods, shadow_maps, sunsky
-from ..nodes import comp_fog, compositor, dedupe, groups, images, osl, passes, surface_group
+from ..nodes import comp_fog, compositor, dedupe, groups, images, osl, passes, preview, surface_group
 from ..nodes.light import unwrap_light
 from ..nodes.material import unwrap_material, wrap_material
 from ..nodes.world import unwrap_world, wrap_world
@@ -84,7 +84,8 @@ def apply(scene, spec, objects=None, progress=progress_.silent):
     skipped = merge_appended()   # first: the tables and groups are looked up by name below
     skipped += notes
     progress("lights and tables", 0, 1)
-    groups.set_params(spec.beta_per_unit, spec.albedo, spec.anisotropy, world_light=spec.world_light)
+    groups.set_params(spec.beta_per_unit, spec.albedo, spec.anisotropy, world_light=spec.world_light,
+                          preview=preview.working())
     if bpy.data.node_groups.get(groups.SURFACE) is None:
         # The materials are wrapped around a Surface group without lights, which the lights' group then
         # replaces (``groups.install``): every node Blender's API adds to a material costs more the

@@ -9,7 +9,7 @@ import traceback
 import bpy
 
 from .. import props
-from ..nodes import groups
+from ..nodes import groups, preview
 from ..precompute import bakers
 from ..precompute.spec import validate_quality
 from ..props import spec_of, store_spec
@@ -36,12 +36,14 @@ def sync(scene, level="groups"):
             lights = fog_lights(scene)[0]
             method, reason = resolve_method(scene, spec, lights)
             check_method(scene, spec, method)
-            groups.set_params(spec.beta_per_unit, spec.albedo, spec.anisotropy, world_light=spec.world_light)
+            groups.set_params(spec.beta_per_unit, spec.albedo, spec.anisotropy, world_light=spec.world_light,
+                              preview=preview.working())
             build_scene_groups(scene, spec, lights, method, reason, rechoose=level == "rechoose",
                                progress=progress_.ConsoleProgress(prefix="Analytic Fog: "))
             follow_compositor(scene, rebuild=True)
         else:
-            groups.set_params(spec.beta_per_unit, spec.albedo, world_light=spec.world_light)
+            groups.set_params(spec.beta_per_unit, spec.albedo, world_light=spec.world_light,
+                              preview=preview.working())
     except ValueError as e:
         _sync_errors[scene.name] = str(e)
         print(f"Analytic Fog: the fog keeps what it was built with: {e}")

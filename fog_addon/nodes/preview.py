@@ -1,0 +1,86 @@
+"""The switch of the viewport's preview of a fog that is added at render time (docs/decisions/
+2026-11-29-viewport-preview.md).
+
+The Compositor method adds its fog to the render's passes after the render, which the rendered viewport never runs
+(Cycles gives the viewport compositor no passes; EEVEE's runs only when the user turns it on).  So the materials and
+the World hold a preview of that fog behind the Params group's Viewport Preview value (``groups.PREVIEW``), the
+factor of a Mix Shader: at 0 Cycles' SVM jumps over the preview's nodes and the picture is the render without them.
+The value is 1 while an artist works with the add-on, and 0
+
+* for every final render: ``render_pre`` sets it, ``render_complete`` and ``render_cancel`` set it back;
+* in every saved file: ``save_pre`` sets it, ``save_post`` sets it back, so a farm, which opens the file without
+  the add-on, renders no preview;
+* in a session without a window (``blender -b``, bpy as a module): nobody looks at its viewport.
+
+``forced`` keeps it at 1 through a render: ``render --viewport`` renders what the rendered viewport shows.
+"""
+import contextlib
+
+import bpy
+
+from . import groups
+
+_forced = []   # non-empty while a render must show the preview (``forced``)
+_held = []     # non-empty while a final render runs (``before_render``)
+
+
+def _node():
+    """The Params group's Viewport Preview node, or None (no Params group, one built before it, or Blender's data
+    not open to add-ons yet: while they register)."""
+    node_groups = getattr(bpy.data, "node_groups", None)
+    ng = node_groups.get(groups.PARAMS) if node_groups is not None else None
+    return ng.nodes.get(groups.PREVIEW) if ng is not None and ng.library is None else None
+
+
+def value():
+    """The Viewport Preview value, or None without one."""
+    node = _node()
+    return None if node is None else node.outputs[0].default_value
+
+
+def show(on):
+    """Set the Viewport Preview value to 1 (``on``) or 0, where there is one and it differs (a change makes
+    Blender evaluate every fogged material again)."""
+    node = _node()
+    if node is not None and node.outputs[0].default_value != float(on):
+        node.outputs[0].default_value = float(on)
+
+
+def _session():
+    """True in an artist's session (Blender with a window), where someone looks at the viewport."""
+    return not bpy.app.background
+
+
+def working():
+    """Whether the preview shows now: ``forced``, or an artist's session while no final render runs."""
+    return bool(_forced) or (_session() and not _held)
+
+
+@contextlib.contextmanager
+def forced():
+    """The preview shows for the renders within (``render --viewport``), whatever the handlers do."""
+    _forced.append(True)
+    show(True)
+    try:
+        yield
+    finally:
+        _forced.pop()
+        show(working())
+
+
+def before_render():
+    """A final render starts (``render_pre``, every frame of an animation): no preview, unless ``forced``."""
+    if not _held:
+        _held.append(True)
+    show(working())
+
+
+def after_render():
+    """A render ended or was cancelled, the file was saved or opened: the preview as the session has it."""
+    _held.clear()
+    show(working())
+
+
+def before_save():
+    """The file is about to be saved: it keeps no preview (a farm renders what F12 does)."""
+    show(False)
