@@ -12,12 +12,6 @@ from ..nodes import budgets, passes, surface_group, world_group
 from .. import caveats, sunsky, view
 from .base import Method
 
-# A spot's or an area light's glow with a fog layer and the fog passes, in Cycles' SVM: the material's
-# shader runs out of SVM stack space at one such light (255 of 255 floats; 155 without the passes) and renders
-# black (docs/measurements/2026-11-29-shader-budgets.md).  Said, until the pass's graph keeps them apart.
-SHAPED_LAYER_PASSES_NOTE = ("spot or area lights ({}) with a Fog Top and Fog Passes: the fogged materials' shaders "
-                            "are too big for Cycles (out of SVM stack space: black materials); turn Fog Passes off, "
-                            "or use the Compositor method")
 MANY_LIGHTS = 8   # from this many fog lights on, Cycles' node groups get a note (``many_lights_note``)
 
 
@@ -50,11 +44,6 @@ class NodeGroups(Method):
         notes = []
         if scene.render.engine == "CYCLES" and len(plan.in_groups) >= MANY_LIGHTS:
             notes.append((scene.render.engine, many_lights_note(plan.in_groups, plan.choice)))
-        if scene.render.engine == "CYCLES" and self.name == "nodes" and spec.passes and spec.layered:
-            shaped = [o.name for o in plan.in_groups if view.has_shape(o)
-                      and plan.choice["lights"].get(o.name, [0])[0] < 2]
-            if shaped:
-                notes.append((scene.render.engine, SHAPED_LAYER_PASSES_NOTE.format(caveats.listed(shaped))))
         return notes
 
 

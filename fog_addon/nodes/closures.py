@@ -7,11 +7,21 @@ OSL's closure stack of 16 entries, and the nodes SVM jumps over where a Mix Shad
 from ..precompute import shading
 
 
-def closure_sum(m, sock, bl_idname, colours):
+def closure_sum(m, sock, bl_idname, colours, gates=True):
     """Link into ``sock`` the sum of one ``bl_idname`` closure (Emission, Background) per colour
     (``shader_tree``).  A ``shading.Gated`` colour gets two: its rest (if any), and its glow behind a Mix
     Shader of factor gate, whose nodes Cycles' SVM jumps over where the gate is 0 (a spot's glow where the
-    ray misses its cone: most of the view for a narrow beam)."""
+    ray misses its cone: most of the view for a narrow beam).
+
+    ``gates`` False (the Surface group with the fog passes): the glow gets a closure of its own without the
+    Mix Shader.  An AOV reads the glow's colour there (``chained_closure_sum``), so SVM computes its nodes
+    before the jump anyway (svm.cpp ``generate_multi_closure``: an AOV's dependencies are shared by both
+    sides), and ``chained_closure_sum`` takes the Emission closures' colours.  The glow and the rest stay two
+    closures, never one of their sum: SVM compiles each closure's inputs' nodes as one set, in rounds over
+    the nodes in id order (``generate_svm_nodes``), so the sum's closure had a spot's glow and its fog light
+    on the surface computed side by side, every half-done value of both on its stack at once: 255 floats
+    (out of SVM stack space, black) at one spot with a Fog Top, 232 without it; as two closures 153, what
+    the material takes without the passes (155)."""
     ng = m.tree
     leaves = []
 
@@ -26,12 +36,15 @@ def closure_sum(m, sock, bl_idname, colours):
         if not isinstance(colour, shading.Gated):
             leaves.append(closure(k, colour).outputs[0])
             continue
-        mix = ng.nodes.new("ShaderNodeMixShader")
-        mix.name = mix.label = f"Light {k} Glow Gate"
-        mix.location = (3800, -300 * k)
-        m.feed(mix.inputs[0], m.wrap(colour.gate))
-        ng.links.new(closure(k, colour.glow, " Glow").outputs[0], mix.inputs[2])   # input 1 empty: no closure
-        leaves.append(mix.outputs[0])
+        if not gates:
+            leaves.append(closure(k, colour.glow, " Glow").outputs[0])
+        else:
+            mix = ng.nodes.new("ShaderNodeMixShader")
+            mix.name = mix.label = f"Light {k} Glow Gate"
+            mix.location = (3800, -300 * k)
+            m.feed(mix.inputs[0], m.wrap(colour.gate))
+            ng.links.new(closure(k, colour.glow, " Glow").outputs[0], mix.inputs[2])   # input 1 empty: no closure
+            leaves.append(mix.outputs[0])
         if colour.rest is not None:
             leaves.append(closure(k, colour.rest).outputs[0])
     shader_tree(ng, sock, leaves)

@@ -18,9 +18,12 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained):
     """One bundle of the Surface group (``light_bundles.split``): ``shading.sum_lights`` over ``lights``
     (Sun et al. 2005 Eq. 19's L_a) from their per-light groups (``light_groups.build_light``).
 
-    Outputs: Fog (one Emission closure per lit light, times the Opacity input), Emission (their colours'
-    sum), Weighted and Weight (``shading.LightSums``).  ``with_passes``: Running Sum out is Running Sum in
-    (``chained``; else nothing) plus this bundle's Fog Light (``closures.chained_closure_sum``).
+    Outputs: Fog (one Emission closure per lit light, times the Opacity input; a spot's or an area light's
+    glow a closure of its own, ``closures.closure_sum``), Emission (their colours' sum), Weighted and Weight
+    (``shading.LightSums``).  ``with_passes``: Running Sum out is Running Sum in (``chained``; else nothing)
+    plus this bundle's Fog Light (``closures.chained_closure_sum``); the glows are not gated then (the pass
+    reads them: SVM computes them on every ray anyway), but stay closures of their own (``closure_sum``'s
+    ``gates`` says why).
     """
     name = light_bundles.bundle_name(groups.SURFACE_LIGHTS, first, lights)
     inputs = [*_SURFACE_SHARED, ("Albedo", C), ("View Transmittance", F), ("Is Camera", F), (passes.OPACITY, C)]
@@ -38,9 +41,9 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained):
     sums = shading.sum_lights(m, terms, light_groups.medium(m, g["Beta"], g["Albedo"]),
                               m.wrap(g["View Transmittance"]), m.wrap(g["Is Camera"]))
     opacity = m.wrap(g[passes.OPACITY], vector=True)
-    closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", [_times(m, e, opacity, with_passes)
+    closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", [_times(m, e, opacity)
                                                                         for e, mod in zip(sums.emissions, models)
-                                                                        if _lit(mod)])
+                                                                        if _lit(mod)], gates=not with_passes)
     for sock, v in (("Emission", sums.emission), ("Weighted", sums.weighted), ("Weight", sums.weight)):
         m.feed(gout.inputs[sock], m.wrap(v))
     if with_passes:
@@ -167,13 +170,12 @@ def _lit(models):
     return any(o.computed(models) for o in rungs.SURFACE_OUTPUTS if o.colour)
 
 
-def _times(m, emission, factor, flat):
-    """A light's fog light (a colour or ``shading.Gated``) times the colour ``factor``; ``flat``: a Gated
-    as one colour (the fog passes read every closure's colour, ``closures.chained_closure_sum``)."""
+def _times(m, emission, factor):
+    """A light's fog light (a colour or ``shading.Gated``) times the colour ``factor``."""
     if not isinstance(emission, shading.Gated):
         return m.wrap(emission, vector=True) * factor
     glow, rest = m.wrap(emission.glow, vector=True) * factor, m.wrap(emission.rest, vector=True) * factor
-    return glow + rest if flat else emission._replace(glow=glow, rest=rest)
+    return emission._replace(glow=glow, rest=rest)
 
 
 def daylight_light(m, day, table, camera, direction, position, normal, reflectance, length, t_vp, sun_share=None,
