@@ -227,16 +227,22 @@ EEVEE_CLIP_RATIO = 1e7   # EEVEE's depth loses its way beyond this clip end / cl
 
 
 def clip_note(scene, method_name):
-    """A note when EEVEE's camera clip range is too wide for its depth: clip end / clip start beyond
-    EEVEE_CLIP_RATIO gave a black World (any node set-up) and, with the Compositor method, NaN on far ground
-    (its Depth pass, from which the pixel's position is taken); None otherwise."""
+    """A note when EEVEE's camera clip range is too wide for its depth (clip end / clip start beyond
+    EEVEE_CLIP_RATIO, with float32's rounding of Clip Start let through), None otherwise.  Measured on the haze
+    valley (a 1 mm - 200 km camera, docs/measurements/2026-11-29-eevee-clip-range.md): from a ratio between 3e7
+    and 4e7 on (about 2^25, where f - n rounds to f in float32), EEVEE drew none of the ground plane, which reaches
+    behind the camera (1216 of 3600 pixels empty, in a render without the fog too), wrote +inf in its Depth
+    pass there, and the World goes black (any node set-up, blender-facts.md).  The Compositor method, which
+    takes the pixel's surface from the Depth pass, then sees no surface there: it adds the fog's light of a
+    pixel that sees the sky (``pixel.depth_surface``)."""
     cam = scene.camera
     if scene.render.engine != "BLENDER_EEVEE" or cam is None or cam.type != "CAMERA":
         return None
     ratio = cam.data.clip_end / max(cam.data.clip_start, 1e-12)
-    if ratio <= EEVEE_CLIP_RATIO:
+    if ratio <= EEVEE_CLIP_RATIO * (1.0 + 1e-6):   # Clip Start is a float32: 0.02 is stored 0.0199999996
         return None
     depth = capabilities.can(method_name, "depth_pass", scene.render.engine)
-    where = " and the fog's light (NaN where its depth fails)" if depth else ""
-    return (f"{cam.name}: its clip end is {ratio:.2g} x its clip start: EEVEE's depth fails beyond "
-            f"{EEVEE_CLIP_RATIO:.0e} (a black World{where}); raise Clip Start")
+    where = ", and the fog's light there is the sky's" if depth else ""
+    return (f"{cam.name}: its clip end is {ratio:.2g} x its clip start, beyond the {EEVEE_CLIP_RATIO:.0e} that "
+            f"EEVEE's depth holds: EEVEE may leave out surfaces that reach behind the camera (a ground plane) and "
+            f"draw a black World{where}; raise Clip Start to {cam.data.clip_end / EEVEE_CLIP_RATIO:.3g} or more")

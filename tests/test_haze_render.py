@@ -45,3 +45,24 @@ def test_haze_against_cycles(tmp_path):
     m = h.assert_close(out, ref, name=f"haze_{case}_cycles_compositor", rel_rmse=BOUND)
     print(f"\nvalley, Cycles Compositor: relative RMSE {m['rel_rmse']:.4f}; log: "
           + next((ln for ln in log[0].splitlines() if "render" in ln.lower() and " s" in ln), ""))
+
+
+@pytest.mark.slow   # about 40 s on the 2-core machine (the fog's set-up, then EEVEE)
+def test_haze_in_eevee_is_finite(tmp_path):
+    """EEVEE, Compositor, the valley's 1 mm - 200 km camera (clip end / clip start 2e8): EEVEE draws none of the
+    ground plane (it reaches behind the camera) and writes +inf in its Depth pass there, which made those pixels
+    NaN (1216 of 3600 at 80 x 45; ``pixel.depth_surface``).  Now every pixel is finite, the ground's take the
+    sky's fog (EEVEE left no surface there), and the note says why and what Clip Start would do."""
+    case = "haze_air"
+    blend = tmp_path / "valley.blend"
+    haze.build_scene(str(blend), case, with_fog=False)
+    resolution = (32, 18)
+    assert (haze.pixel_hits(resolution)["kind"] == 0).sum() > 100   # the ground fills the lower rows
+    log = []
+    out = h.render_test("haze", haze.HAZE["beta0"], tmp_path / "eevee.exr", engine="eevee", method="compositor",
+                        resolution=resolution, blend=str(blend), log=log, extra=haze.fog_flags(case))
+    assert not h.log_errors(log[0]), h.log_errors(log[0])
+    ours = imageio.read_rgb(out)
+    assert np.isfinite(ours).all(), f"{(~np.isfinite(ours).all(-1)).sum()} pixels not finite"
+    assert (ours > 0).all()
+    assert "ground plane" in log[0] and "raise Clip Start to 0.02 or more" in log[0]

@@ -55,8 +55,8 @@ AOVS = (("Fog Coverage", "VALUE"), ("Fog Position", "COLOR"), ("Fog Normal", "CO
 # EEVEE writes AOVs as half floats accumulated with a loss (a constant 37.123 read back 37.03-37.09 at 16
 # samples, README "The Compositor method") and clamps negatives: its surface point is the Depth pass's (float32,
 # the sample nearest the pixel's centre) along the pixel's ray, with the mean View Z Depth where they disagree
+# (``pixel.depth_surface``)
 EEVEE_AOVS = tuple(("Fog Depth", "VALUE") if name == "Fog Position" else (name, kind) for name, kind in AOVS)
-DEPTH_AGREE = 0.02     # the Depth pass is the pixel's surface where within 2 % of the mean View Z Depth
 AOV_ROLE = "Compositor AOV"   # the Surface group's AOV Output nodes: "<AOV_ROLE> <AOV name>"
 PRINCIPLED = ("Base Color", "Metallic", "Roughness", "Specular IOR Level")
 
@@ -232,9 +232,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     ray = corner + m.scale(across, m.dot(uv, (1.0, 0.0, 0.0))) + m.scale(up, m.dot(uv, (0.0, 1.0, 0.0)))
     direction = m.scale(ray, 1.0 / m.length(ray))
     if eevee:   # ray is the pixel's ray at unit view depth
-        mean_depth, depth = p["Fog Depth"] * inv, p[compositor.DEPTH]
-        agree = m.less(m.abs(depth - mean_depth), DEPTH_AGREE * mean_depth)
-        pos = cam + m.scale(ray, m.select(agree, depth, mean_depth))
+        pos = pixel.depth_surface(m, cam, ray, p[compositor.DEPTH], p["Fog Depth"] * inv)
     else:
         pos = m.scale(p["Fog Position"], inv)
     to_cam = cam - pos

@@ -72,7 +72,7 @@ FEATURES = (
          readme=False),
     _row("animated_sky", "an animated World's glow followed on every frame", False, False, True, False, True,
          readme=False),
-    _row("depth_pass", "the fog's light from the depth pass (NaN where EEVEE's depth fails)", False, False, True,
+    _row("depth_pass", "the fog's light from the depth pass (the sky's where EEVEE's depth fails)", False, False, True,
          False, True, readme=False),
 )
 BY_KEY = {f.key: f for f in FEATURES}

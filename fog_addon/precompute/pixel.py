@@ -5,7 +5,8 @@ passes instead of in every material on every sample.  The formulas here are writ
 ops namespace (numpy or nodes, ``ops.py``), like ``shading.py``, plus the one table they read.
 
 * **The picture's geometry**: a pixel's camera ray and a light's position in the picture, from the
-  camera's image plane (``picture_position``).
+  camera's image plane (``picture_position``); in EEVEE the pixel's surface point, from the Depth pass
+  (``depth_surface``).
 * **Peaks**: a pixel's mean of a glow c / r about a light r px away (Sun et al. 2005 Eq. 12 as the
   angle to the light gamma -> 0: every phase function gives 1 / r there) is not its centre's value.  Cycles
   averages a pixel's samples with its Blackman-Harris filter (x and y drawn independently, support
@@ -19,7 +20,7 @@ ops namespace (numpy or nodes, ``ops.py``), like ``shading.py``, plus the one ta
 """
 import numpy as np
 
-from . import tables
+from . import model, tables
 
 FILTER_WIDTH = 3.0    # px: Cycles' default Blackman-Harris filter, width 1.5, which its filter table doubles
 FILTER_REACH = 6.0    # px: the filter table covers offsets |dx|, |dy| up to this
@@ -28,6 +29,7 @@ DEFAULT_FILTER_WIDTH = 1.5   # px: Cycles' default width and EEVEE's default rad
 EEVEE_FILTER = tables.TableSpec("AnalyticFog Pixel Filter EEVEE", 97, 97)
 EEVEE_SIGMA = 0.284          # EEVEE's film filter: a Gaussian of this sigma times its radius, cut at the radius
 EEVEE_NODES = 96             # midpoint nodes in rho and in phi of ``bake_eevee_filter``
+DEPTH_AGREE = 0.02     # EEVEE: the Depth pass is the pixel's surface where within 2 % of the mean View Z Depth
 
 
 def blackman_harris(x, width=FILTER_WIDTH):
@@ -133,6 +135,22 @@ def picture_position(m, to_light, corner, across, up, size):
     v = m.dot(q, up) * m.dot(size, (0.0, 1.0, 0.0)) / m.dot(up, up)
     behind = m.less(t, 0.0) * 1e6
     return m.combine(u + behind, v + behind, 0.0)
+
+
+def depth_surface(m, cam, ray, depth, mean_depth):
+    """EEVEE's surface point of a pixel (the Compositor method): ``cam`` + ``ray`` (the pixel's ray at unit view
+    depth) times a view depth: the Depth pass's ``depth`` (float32, the sample nearest the pixel's centre) where it
+    is within DEPTH_AGREE of ``mean_depth`` (the samples' mean View Z Depth, a half-float AOV; 0 where no sample met
+    a surface), else ``mean_depth``.
+
+    The Depth pass is taken at most model.FAR: EEVEE wrote +inf there where nothing was drawn once its clip end /
+    clip start passed about 2^25 (a 1 mm - 200 km camera, ``caveats.clip_note``; presumably the depth linearised
+    as n f / (f - d (f - n)), where f - n rounds to f in float32 and the background's d = 1 divides by 0), and the
+    choice, a Mix node (1 - c) a + c b, made 0 x inf = NaN of it: NaN in every term of that pixel's fog.  Finite
+    depths pass unchanged."""
+    depth = m.minimum(depth, model.FAR)
+    agree = m.less(m.abs(depth - mean_depth), DEPTH_AGREE * mean_depth)
+    return cam + m.scale(ray, m.select(agree, depth, mean_depth))
 
 
 FILTERS = {"BLACKMAN_HARRIS": (FILTER, bake_filter), "EEVEE": (EEVEE_FILTER, bake_eevee_filter)}
