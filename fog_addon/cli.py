@@ -205,6 +205,9 @@ def build_parser():
                    help="clear air's density (its Rayleigh scattering) as a multiple of sea-level air, at most 100: "
                         "1 is the standard atmosphere, which blues and greys a daylight scene's distance; only "
                         "with a fog top" + from_file)
+    r.add_argument("--viewport", action="store_true",
+                   help="render what the rendered viewport shows: with the Compositor method, its preview in the "
+                        "materials and the World (the lights that matter most, no shafts), not the compositor's fog")
     r.add_argument("--explain", action="store_true",
                    help="print the models each light got and the error predicted for them")
     r.add_argument("--pixel-centre", action="store_true",

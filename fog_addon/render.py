@@ -129,7 +129,13 @@ def apply_and_render(scene, args):
     if spec.passes and not multilayer:
         print("note: fog passes: a PNG holds the picture only: give --out an .exr (multilayer) for the passes")
     t1 = time.perf_counter()
-    measure.render_to_file(scene, args.out, multilayer=multilayer)
+    if getattr(args, "viewport", False):   # what the rendered viewport shows: the preview, no compositing
+        from .nodes import preview
+        scene.render.use_compositing = False
+        with preview.forced():
+            measure.render_to_file(scene, args.out, multilayer=multilayer)
+    else:
+        measure.render_to_file(scene, args.out, multilayer=multilayer)
     if multilayer:
         print(f"passes: {args.out} is a multilayer EXR: the picture, the view layers' passes and the fog's "
               f"({', '.join(name for name, _ in fog_passes())})")

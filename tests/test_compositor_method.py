@@ -61,6 +61,7 @@ def test_switching_engines(res):
     cycles, eevee, back = res["engines"]["states"]
     assert cycles["inputs_fed"] == sorted(FOG_AOVS + ["Image"]) and not cycles["depth_pass"]
     assert cycles["aovs"] == sorted(FOG_AOVS) and cycles["material_light_groups"] == 0
+    assert cycles["preview_light_groups"] >= 1   # the viewport's preview holds the lamp (nodes/preview.py)
     eevee_aovs = [name if name != "Fog Position" else "Fog Depth" for name in FOG_AOVS]
     assert eevee["engine"] == "BLENDER_EEVEE" and eevee["depth_pass"]
     assert eevee["inputs_fed"] == sorted(eevee_aovs + ["Image", "Depth"]) and eevee["aovs"] == sorted(eevee_aovs)

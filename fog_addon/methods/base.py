@@ -36,6 +36,11 @@ class Method:
         """What the renderer can hold with ``lights`` (``predict.Budget``), or None: no limit."""
         return None
 
+    def preview_budget(self, scene, spec, lights):
+        """What the viewport's preview of a fog added at render time may hold (``predict.Budget`` of the ladder's
+        steps: ``nodes/preview.py``), or None: the method's shaders are what the viewport shows."""
+        return None
+
     def shader_lights(self, scene, spec, lights, models):
         """(lights, models) the materials' and World's groups hold."""
         return lights, models

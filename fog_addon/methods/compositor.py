@@ -12,8 +12,14 @@ import bpy
 from ..nodes import (budgets, comp_daylight, comp_fog, comp_shafts, compositor, graph, owned, surface_group,
                      world_group)
 from .. import caveats, shadow_maps, sunsky, view
-from ..precompute import rungs, shafts
+from ..precompute import predict, rungs, shafts
 from .base import Method
+
+# The viewport's preview of the Compositor's fog (``nodes/preview.py``): each light's share of its budget by ladder
+# step (rungs.STEPS: full, glow only, off, left out) and the budget, two fully modelled lights or four glows (a
+# first choice, not measured yet: the preview's cost in the viewport is to be charted against the lights it holds)
+PREVIEW_COST = (2.0, 1.0, 0.0, 0.0)
+PREVIEW_LIMIT = 4.0
 
 
 class Compositor(Method):
@@ -37,6 +43,11 @@ class Compositor(Method):
     def shader_lights(self, scene, spec, lights, models):
         return dimming_lights(scene, spec, lights)
 
+    def preview_budget(self, scene, spec, lights):
+        if scene.render.engine == budgets.EEVEE_ENGINE:   # (its uniform block is the dimming lights': no preview yet)
+            return None
+        return predict.Budget([PREVIEW_COST], [PREVIEW_LIMIT], "the viewport preview's budget")
+
     def signature(self, scene, spec, shader_lights):
         c = scene.cycles
         return (f"compositor:{scene.render.engine}:{c.pixel_filter_type}:{comp_fog.horizontal_fit(scene)}:"
@@ -56,9 +67,10 @@ class Compositor(Method):
         table, table_images = sunsky.fog_light_table(scene, spec)   # (None: no daylight to glow)
         images = dict(images, **table_images)
         daylit = table is not None
+        preview = plan.preview[:2] if plan.preview and plan.preview[0] else None   # (the viewport's)
         surface_group.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs,
                                     tails=caveats.specular_paths(bpy.data.materials), day=day,
-                                    day_dims=dims and not daylit, day_exact=not daylit)
+                                    day_dims=dims and not daylit, day_exact=not daylit, preview=preview)
         shafted = shafted_lights(scene, spec, plan.in_groups) if spec.shafts else []
         # (a handler's rebuild does not step through the frames: the save completes the atlases)
         maps, shadow_images = shadow_maps.ensure(scene, shafted, lazy=plan.this_frame)
@@ -75,7 +87,8 @@ class Compositor(Method):
                                                                  shafts.samples_for(spec.quality).view_nodes)
                                                if daylit else None),
                                           layer=spec.layer_per_unit() if spec.layered else None)
-        world_group.build_world([], [], scene.camera, images, spec.passes, day=day, day_dims=not daylit)
+        world_group.build_world([], [], scene.camera, images, spec.passes, day=day, day_dims=not daylit,
+                                preview=preview)
         return images
 
     def update(self, scene, spec, plan):
@@ -93,11 +106,23 @@ class Compositor(Method):
                                    "Groups method, or a compositor of yours with a Render Layers node per layer)")
                       ] if layers else []
         n, kept = len(plan.in_groups), len(plan.shader_lights)
+        layer_note += self.preview_notes(scene, plan)
         if scene.render.engine == budgets.EEVEE_ENGINE and kept < n:
             return layer_note + [(scene.render.engine, f"{n - kept} of {n} lights are not in the materials' shared "
                                   "dimming of direct light (EEVEE's uniform block): their direct light is dimmed as "
                                   "the nearer lights' is")]
         return layer_note
+
+    def preview_notes(self, scene, plan):
+        """What the viewport's preview shows of the compositor's fog (``nodes/preview.py``)."""
+        if plan.preview is None:
+            return []
+        shown, left = plan.preview[0], [o.name for o in plan.in_groups if o not in plan.preview[0]]
+        if not left:
+            return []
+        return [("Viewport", f"the viewport's preview of the fog holds {len(shown)} of {len(plan.in_groups)} "
+                             f"lights, those that matter most to the picture; left out of it: {caveats.listed(left)} "
+                             "(final renders, F12, have every light)")]
 
     def frame_change(self, scene, spec, lights):
         if comp_fog.FOG_GROUP in bpy.data.node_groups:

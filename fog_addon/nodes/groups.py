@@ -37,8 +37,10 @@ WORLD = "AnalyticFog World"
 SURFACE_LIGHTS = SURFACE + " Lights"   # bundles: "AnalyticFog Surface Lights 1-8", ... (``light_bundles.split``)
 WORLD_LIGHTS = WORLD + " Lights"
 SURFACE_TAILS = SURFACE + " Tails"     # bundles of the glows past glass and mirrors (``glass_tails.build_tail_bundle``)
-_BUNDLE_NAME = re.compile(
-    rf"^({re.escape(SURFACE_LIGHTS)}|{re.escape(WORLD_LIGHTS)}|{re.escape(SURFACE_TAILS)}) \d+-\d+$")
+SURFACE_PREVIEW = SURFACE + " Preview Lights"   # bundles of the viewport's preview (``nodes/preview.py``)
+WORLD_PREVIEW = WORLD + " Preview Lights"
+_BUNDLES = (SURFACE_LIGHTS, WORLD_LIGHTS, SURFACE_TAILS, SURFACE_PREVIEW, WORLD_PREVIEW)
+_BUNDLE_NAME = re.compile(rf"^({'|'.join(re.escape(p) for p in _BUNDLES)}) \d+-\d+$")
 
 FOG_PROP = "analytic_fog"   # custom-property key marking data the fog made or changed
 BUILDING = " (building)"     # name suffix of a group being built beside the one in use

@@ -18,7 +18,7 @@ import contextlib
 
 import bpy
 
-from . import groups
+from . import closures, groups
 
 _forced = []   # non-empty while a render must show the preview (``forced``)
 _held = []     # non-empty while a final render runs (``before_render``)
@@ -84,3 +84,16 @@ def after_render():
 def before_save():
     """The file is about to be saved: it keeps no preview (a farm renders what F12 does)."""
     show(False)
+
+
+def behind_switch(ng, params, shaders, label="Viewport Preview"):
+    """The sum of the shader outputs ``shaders`` (``closures.shader_tree``) behind a Mix Shader in ``ng`` whose
+    factor is the Viewport Preview output of the Params group node ``params``: its output socket, or None for
+    no shaders.  At 0 Cycles' SVM jumps over every node that feeds only the preview (NODE_JUMP_IF_ZERO)."""
+    if not shaders:
+        return None
+    mix = ng.nodes.new("ShaderNodeMixShader")
+    mix.name = mix.label = label
+    ng.links.new(params.outputs[groups.PREVIEW], mix.inputs[0])
+    closures.shader_tree(ng, mix.inputs[2], shaders)
+    return mix.outputs[0]

@@ -6,7 +6,7 @@ import functools
 import bpy
 
 from ..precompute import rungs, shading, sunlight, surface
-from . import closures, glass_tails, groups, light_bundles, light_groups, passes
+from . import closures, glass_tails, groups, light_bundles, light_groups, passes, preview as preview_
 from .groups import C, F, V
 from .sockets import NodeOps
 
@@ -14,7 +14,7 @@ _SURFACE_SHARED = (("Beta", F), ("Position", V), ("Incoming", V), ("View Distanc
                    ("Diffuse", C), ("Specular", C), ("Glossy Level", F))   # a light group's inputs but its own
 
 
-def build_surface_bundle(images, first, lights, models, with_passes, chained):
+def build_surface_bundle(images, first, lights, models, with_passes, chained, prefix=groups.SURFACE_LIGHTS):
     """One bundle of the Surface group (``light_bundles.split``): ``shading.sum_lights`` over ``lights``
     (Sun et al. 2005 Eq. 19's L_a) from their per-light groups (``light_groups.build_light``).
 
@@ -25,7 +25,7 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained):
     reads them: SVM computes them on every ray anyway), but stay closures of their own (``closure_sum``'s
     ``gates`` says why).
     """
-    name = light_bundles.bundle_name(groups.SURFACE_LIGHTS, first, lights)
+    name = light_bundles.bundle_name(prefix, first, lights)   # (``prefix``: the viewport preview's have their own)
     inputs = [*_SURFACE_SHARED, ("Albedo", C), ("View Transmittance", F), ("Is Camera", F), (passes.OPACITY, C)]
     outputs = [("Fog", "NodeSocketShader"), ("Emission", C), ("Weighted", F), ("Weight", F)]
     if with_passes:
@@ -54,7 +54,7 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained):
 
 
 def build_surface(lights, models, images, with_passes=False, extra=None, tails=True, day=None, day_table=None,
-                  day_dims=True, day_exact=True):
+                  day_dims=True, day_exact=True, preview=None):
     """Scene group for materials: ``shading.shade_surface`` (Sun et al. 2005 Eq. 19) over ``lights``.
 
     ``models``: one rungs.LightModels per light.  Inputs mirror the Principled
@@ -74,7 +74,9 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     sky's glow and their fog light on the surface (``daylight_light``); ``day_dims`` False leaves the sun's and the
     sky's dimming to the compositor (``comp_fog.build_fog_group``: once per pixel), ``day_exact`` False dims the
     camera segment by ``sunlight.proxy_transmittance`` (the compositor puts the exact colour on every pixel).  The
-    lights sit in bundle groups (``light_bundles.split``, ``build_surface_bundle``).
+    lights sit in bundle groups (``light_bundles.split``, ``build_surface_bundle``).  ``preview``: (lights, models)
+    of the viewport's preview of a fog added at render time: their fog light on camera rays, behind the Params
+    group's Viewport Preview (``preview.behind_switch``), or None; it changes no other output.
 
     Why closures: Cycles' SVM emits a shader's value nodes in the order of
     their ids, so one colour summed over the lights keeps every light's values
@@ -133,6 +135,12 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
         sums = shading.merge_sums(sums, shading.LightSums(
             [], *(m.wrap(node.outputs[f], vector=f == "Emission") for f in ("Emission", "Weighted", "Weight"))))
     fogs = [node.outputs["Fog"] for node, mods in placed if any(_lit(mod) for mod in mods)]
+    if preview:
+        shown, preview_trees, _ = light_bundles.place_bundles(
+            ng, *preview, functools.partial(build_surface_bundle, images, prefix=groups.SURFACE_PREVIEW), shared,
+            False)
+        fogs += [sock for sock in [preview_.behind_switch(ng, params, [node.outputs["Fog"] for node, mods in shown
+                                                                       if any(_lit(mod) for mod in mods)])] if sock]
     fog = shading.surface_fog(m, sums, transmit)
     if day is not None and day_table is not None:
         light = m.scale(daylight_light(
@@ -161,7 +169,7 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
         extra(ng)
     m.place()
     ng = groups.install(ng, groups.SURFACE)
-    light_bundles.name_bundles(bundles + tails)
+    light_bundles.name_bundles(bundles + tails + (preview_trees if preview else []))
     return ng
 
 

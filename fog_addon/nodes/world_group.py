@@ -5,21 +5,22 @@ import functools
 import bpy
 
 from ..precompute import model, rungs, shading, sunlight
-from . import closures, drivers, groups, light_bundles, light_groups, passes
+from . import closures, drivers, groups, light_bundles, light_groups, passes, preview as preview_
 from .groups import C, F, V
 from .sockets import NodeOps
 
 
-def build_world_bundle(images, first, lights, models, with_passes, chained, scaled=False):
+def build_world_bundle(images, first, lights, models, with_passes, chained, scaled=False,
+                       prefix=groups.WORLD_LIGHTS):
     """One bundle of the World group (``light_bundles.split``): the lights' glows to infinity (Sun et al. 2005
     Eq. 12) from their per-light groups (``light_groups.build_background_light``).
 
     Outputs: Fog (one Background closure per light: its glow times the albedo on camera rays, times the input
     Scale with ``scaled``) and Airlight (the glows' sum).  ``with_passes``: Running Sum out is Running Sum in (``chained``; else
     nothing) plus the glows read by the pass's own instances of the light groups
-    (``_world_pass_instances``).
+    (``_world_pass_instances``).  ``prefix``: the bundles' name (the viewport preview's have their own).
     """
-    name = light_bundles.bundle_name(groups.WORLD_LIGHTS, first, lights)
+    name = light_bundles.bundle_name(prefix, first, lights)
     inputs = [("Beta", F), ("Albedo", C), ("Camera", V), ("Direction", V), ("Is Camera", F)]
     inputs += [("Scale", F)] if scaled else []
     outputs = [("Fog", "NodeSocketShader"), ("Airlight", C)]
@@ -54,7 +55,8 @@ def build_world_bundle(images, first, lights, models, with_passes, chained, scal
     return ng
 
 
-def build_world(lights, models, camera, images, with_passes=False, day=None, day_table=None, day_dims=True):
+def build_world(lights, models, camera, images, with_passes=False, day=None, day_table=None, day_dims=True,
+                preview=None):
     """Scene group for the World: ``shading.shade_background`` (Sun et al. 2005 Eq. 12) over ``lights``.
 
     Camera position by TRANSFORMS drivers on ``camera`` (no node gives it in a
@@ -65,7 +67,9 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
     lights surfaces on every other ray (the materials dim it: ``sunlight.direct_dimming``), and with ``day_table``
     camera rays get the sun's and the sky's glow to infinity (``sunlight.ray_glow``); ``day_dims`` False leaves the
     World untouched on every ray (the compositor dims the sky it sees: ``comp_fog.build_fog_group``).  The lights
-    whose glow is on sit in bundle groups (``light_bundles.split``, ``build_world_bundle``).
+    whose glow is on sit in bundle groups (``light_bundles.split``, ``build_world_bundle``).  ``preview``: (lights,
+    models) of the viewport's preview of a fog added at render time, their glows behind the Params group's Viewport
+    Preview (``preview.behind_switch``), or None.
     """
     ng, gin, gout = groups.new_group(groups.WORLD, [],
                                      [("Fog", "NodeSocketShader"), ("Emission", C), ("Transmittance", F)])
@@ -96,7 +100,7 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
         transmittance = 1.0 + is_camera * (seen - 1.0) if day_dims else m.const(1.0)
         if day_table is not None:
             day_glow = m.scale(sunlight.ray_glow(m, daylight, camera_at, direction, model.FAR), is_camera)
-        if kept or day_table is not None:   # (the compositor's World: no glow, the sky dimmed per pixel)
+        if kept or day_table is not None or preview:   # (the compositor's World: no glow, the sky dimmed per pixel)
             # The fogged World mixes the Fog closure by 1 - Transmittance (world.py), right where the sky is not
             # seen; through a layer it is, so every glow closure (each lamp's and the daylight's) is scaled by
             # 1 / (1 - Transmittance).  One closure a lamp, as without a layer: their sum in one closure's
@@ -108,6 +112,12 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
         ng, [light for light, _ in kept], [mod for _, mod in kept],
         functools.partial(build_world_bundle, images, scaled=layer_scale is not None), shared, with_passes)
     fogs = [node.outputs["Fog"] for node, _ in placed]
+    if preview:
+        shown, preview_trees, _ = light_bundles.place_bundles(
+            ng, *preview, functools.partial(build_world_bundle, images, scaled=layer_scale is not None,
+                                            prefix=groups.WORLD_PREVIEW), shared, False)
+        fogs += [sock for sock in [preview_.behind_switch(ng, params, [node.outputs["Fog"] for node, _ in shown])]
+                 if sock]
     emission = shading.shade_background(
         m, [m.wrap(node.outputs["Airlight"], vector=True) for node, _ in placed], medium, is_camera)[0]
     if day_glow is not None:
@@ -124,7 +134,7 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
         passes.write_group(m, ng, m.wrap(light, vector=True), m.wrap(transmittance))
     m.place()
     ng = groups.install(ng, groups.WORLD)
-    light_bundles.name_bundles(bundles)
+    light_bundles.name_bundles(bundles + (preview_trees if preview else []))
     return ng
 
 

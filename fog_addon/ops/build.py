@@ -80,7 +80,10 @@ def _signature(scene, spec, method, plan_):
                                                     for o, mod in zip(plan_.in_groups, plan_.grouped_models)]
                      + ["camera:" + (camera.name_full if camera else ""), f"passes:{spec.passes}",
                         f"method:{method.name}", f"tails:{caveats.specular_paths(bpy.data.materials)}",
-                        method.signature(scene, spec, plan_.shader_lights), sunsky.key(scene, spec)])
+                        method.signature(scene, spec, plan_.shader_lights), sunsky.key(scene, spec)]
+                     + ([] if plan_.preview is None else
+                        ["preview:" + ",".join(f"{o.name_full}:{'/'.join(r.name for r in mod)}"
+                                               for o, mod in zip(*plan_.preview[:2]))]))
 
 
 rebuilt = set()   # names of scenes whose groups ``build_scene_groups`` rebuilt since ``refresh_lights`` asked

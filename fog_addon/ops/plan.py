@@ -76,7 +76,7 @@ def scene_materials(scene, objects=None):
     return mats
 
 
-def choose_models(scene, spec, method, lights):
+def choose_models(scene, spec, method, lights, budget=None):
     """Each light's models (rungs.LightModels) at the spec's Quality with ``method``, and the choice for reports.
 
     The view is sampled by ray casts (``view.py``) and every light's step down
@@ -87,11 +87,12 @@ def choose_models(scene, spec, method, lights):
     whose glow's rim takes fewer than spot.RIM_NODES points, "error": total, "target": t, "engine": the render
     engine chosen for, "limited": what forced steps beyond the target, or None, and with Dense Fog "thin":
     {name: share} of the lights whose multiply scattered light is at most THIN_SHARE of the target
-    (``predict.multiple_share``): they are left without it, at no cost}.
+    (``predict.multiple_share``): they are left without it, at no cost}.  ``budget``: this budget instead of the
+    method's (the viewport's preview: ``preview_models``).
     """
     target = spec.target_error
     engine = scene.render.engine
-    budget = method.budget(scene, spec, lights)
+    budget = method.budget(scene, spec, lights) if budget is None else budget
     steps = [0] * len(lights)
     choice = {"target": target, "error": 0.0, "lights": {}, "rims": {}, "engine": engine, "limited": None}
     if lights and (target is not None or (budget is not None and not budget.fits(steps))):
@@ -139,6 +140,20 @@ def lights_in_groups(lights, choice):
     return [o for o in lights if choice["lights"].get(o.name, [0])[0] != rungs.LEFT_OUT]
 
 
+def preview_models(scene, spec, method, lights):
+    """(lights, models, choice) of the viewport's preview of ``method``'s fog (``Method.preview_budget``), or None
+    where the method's shaders are what the viewport shows: the Node Groups method's models of the lights that
+    matter most to the picture, chosen as the Quality chooses (``choose_models``) within the preview's budget; the
+    lights it leaves off are not in it (``choice["lights"]`` gives each light's step and what it leaves out)."""
+    budget = method.preview_budget(scene, spec, lights)
+    if budget is None or not lights:
+        return None
+    nodes = methods.get("nodes")
+    models, choice = choose_models(scene, spec, nodes, lights, budget)
+    kept = [(o, mod) for o, mod in zip(lights, models) if choice["lights"][o.name][0] < rungs.OFF]
+    return [o for o, _ in kept], [mod for _, mod in kept], choice
+
+
 class Plan(NamedTuple):
     """What a method builds (``Method.build``): the lights' models, where they go, and the choice for reports."""
     lights: list              # the lights taking part
@@ -151,6 +166,7 @@ class Plan(NamedTuple):
     windows: Any              # where the compositor evaluates each term (``view.windows``), or None
     partial: bool             # the windows are this frame's only (the handlers')
     this_frame: bool          # a handler's rebuild, which must not step through the frames (``plan``)
+    preview: Any = None       # (lights, models, choice) of the viewport's preview (``preview_models``), or None
 
 
 def built_method():
@@ -210,5 +226,16 @@ def plan(scene, spec, method, lights, reason=None, rechoose=True, this_frame=Fal
     grouped = [mod for o, mod in zip(lights, models) if o in in_groups]
     shader_lights, shader_models = method.shader_lights(scene, spec, in_groups, grouped)
     partial = this_frame and view.animated(scene)
+    preview = None
+    if method.preview_budget(scene, spec, in_groups) is not None:
+        old_preview = (old or {}).get("preview")
+        if kept is not None and old_preview is not None:   # (the stored steps: no view sampled)
+            steps = [old_preview["lights"].get(o.name, [rungs.OFF])[0] for o in in_groups]
+            shown = [(o, k) for o, k in zip(in_groups, steps) if k < rungs.OFF]
+            preview = ([o for o, _ in shown], _models(spec, methods.get("nodes"), [o for o, _ in shown],
+                                                      [k for _, k in shown], {}), old_preview)
+        else:
+            preview = preview_models(scene, spec, method, in_groups)
+        choice["preview"] = {"lights": preview[2]["lights"], "error": preview[2]["error"]} if preview else None
     return Plan(lights, models, choice, in_groups, grouped, shader_lights, shader_models,
-                method.windows(scene, in_groups, partial), partial, this_frame)
+                method.windows(scene, in_groups, partial), partial, this_frame, preview)

@@ -39,6 +39,17 @@ BETA = 0.15
 DIMMING_LIGHTS = 200   # more than EEVEE's uniform block holds in the materials' shared dimming (about 170)
 
 
+
+BUNDLES = ("AnalyticFog Surface Lights ", "AnalyticFog World Lights ")
+PREVIEW_BUNDLES = ("AnalyticFog Surface Preview Lights ", "AnalyticFog World Preview Lights ")
+
+
+def light_groups_in_bundles(prefixes=BUNDLES):
+    """The per-light groups the materials' (or the viewport preview's) bundles hold."""
+    return len({n.node_tree.name for ng in bpy.data.node_groups if ng.name.startswith(prefixes)
+                for n in ng.nodes if n.bl_idname == "ShaderNodeGroup" and n.node_tree is not None
+                and n.node_tree.name.startswith(("AnalyticFog Light [", "AnalyticFog Background Light ["))})
+
 def fresh():
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
@@ -148,20 +159,18 @@ def main():
     scene = fresh()
     scene.cycles.use_denoising = False
     apply.apply_fog(scene, BETA, method="nodes")
-    lights_in_materials = len([ng for ng in bpy.data.node_groups if ng.name.startswith("AnalyticFog Light [")])
+    lights_in_materials = light_groups_in_bundles()
     apply.set_method(scene, "compositor")
     in_compositor = {"own_tree": getattr(scene.compositing_node_group, "name", None),
                      "aovs": [a.name for a in scene.view_layers[0].aovs],
-                     "material_light_groups": len([ng for ng in bpy.data.node_groups
-                                                   if ng.name.startswith("AnalyticFog Light [")])}
+                     "material_light_groups": light_groups_in_bundles()}
     apply.set_method(scene, "nodes")
     res["switch"] = {"nodes_light_groups": lights_in_materials, "compositor": in_compositor,
                      "back": {"tree": getattr(scene.compositing_node_group, "name", None),
                               "compositing": scene.render.use_compositing,
                               "aovs": [a.name for a in scene.view_layers[0].aovs],
                               "fog_group": bpy.data.node_groups.get(comp_fog.FOG_GROUP) is not None,
-                              "material_light_groups": len([ng for ng in bpy.data.node_groups
-                                                            if ng.name.startswith("AnalyticFog Light [")])}}
+                              "material_light_groups": light_groups_in_bundles()}}
 
     scene = fresh()
     scene.cycles.use_denoising = False
@@ -174,8 +183,8 @@ def main():
         return {"engine": scene.render.engine, "inputs_fed": sorted(l.to_socket.name for l in tree.links
                                                                     if l.to_node == fog),
                 "depth_pass": vl.use_pass_z, "aovs": sorted(a.name for a in vl.aovs),
-                "material_light_groups": len([ng for ng in bpy.data.node_groups
-                                              if ng.name.startswith("AnalyticFog Light [")])}
+                "material_light_groups": light_groups_in_bundles(),
+                "preview_light_groups": light_groups_in_bundles(PREVIEW_BUNDLES)}
     engines = [engine_state()]
     for engine in ("BLENDER_EEVEE", "CYCLES"):
         scene.render.engine = engine

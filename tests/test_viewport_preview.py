@@ -1,0 +1,74 @@
+"""The viewport's preview of the Compositor's fog (``nodes/preview.py``, ``ops/plan.preview_models``).
+
+* ``render --viewport`` (what the rendered viewport shows) is the Node Groups method's picture where the preview
+  holds every light (the spheres: three lamps in its budget), and it differs from the render without the preview
+  (the glows are there);
+* a final render is bit for bit the render of the same scene built without a preview (the preview's closures sit
+  behind a Mix Shader of factor 0: Cycles' SVM jumps over them);
+* a scene with more lights than the preview's budget gets a note naming those it leaves out.
+"""
+import json
+
+import numpy as np
+import pytest
+
+from fog_addon import compare, imageio
+from fog_scenes import render_harness as h
+
+pytestmark = pytest.mark.render
+
+FLAGS = ["--engine", "cycles", "--density", "0.15", "--resolution", "48x27", "--pixel-centre", "--samples", "4",
+         "--no-interreflection", "--no-cast-shadows"]
+
+
+def _render(blend, out, *flags):
+    r = h.run(["-m", "fog_addon", "render", blend, *FLAGS, *flags, "--out", out], check=False)
+    assert r.returncode == 0, (r.stdout + r.stderr)[-2000:]
+    return imageio.read_rgb(out).astype(np.float64), r.stdout
+
+
+def test_viewport_shows_the_node_groups_fog(tmp_path):
+    blend = h.scene_blend("spheres", tmp_path)
+    view, said = _render(blend, tmp_path / "view.exr", "--method", "compositor", "--viewport")
+    nodes, _ = _render(blend, tmp_path / "nodes.exr", "--method", "nodes")
+    final, _ = _render(blend, tmp_path / "final.exr", "--method", "compositor")
+    bare, _ = _render(blend, tmp_path / "bare.exr", "--method", "compositor", "--viewport", "--density", "1e-9")
+    assert np.isfinite(view).all()
+    assert compare.metrics(view, nodes)["rel_rmse"] < 1e-4, compare.metrics(view, nodes)
+    assert compare.metrics(view, final)["rel_rmse"] < 0.01   # the compositor's own fog: the same models per pixel
+    assert compare.metrics(view, bare)["rel_rmse"] > 0.1      # the fog's light is there
+
+
+FLOW = r"""
+import json, os, sys
+import numpy as np
+import bpy
+import fog_addon
+from fog_addon import measure, methods
+from fog_addon.ops import apply
+from fog_addon.precompute.spec import FogSpec
+bpy.ops.wm.open_mainfile(filepath=sys.argv[1] if len(sys.argv) > 1 else BLEND)
+scene = bpy.context.scene
+measure.set_samples(scene, 4)
+scene.render.resolution_x, scene.render.resolution_y = 48, 27
+measure.set_pixel_centre_filter(scene)
+fog_addon.register()
+spec = FogSpec(density=0.15, method="compositor")
+apply.apply(scene, spec)
+with_preview = bool(bpy.data.node_groups["AnalyticFog Surface"].nodes.get("Viewport Preview"))
+measure.render_to_file(scene, os.path.join(os.getcwd(), "a.exr"))
+methods.get("compositor").preview_budget = lambda *a: None   # the same scene built without a preview
+apply.remove_fog(scene)
+apply.apply(scene, spec)
+without = bool(bpy.data.node_groups["AnalyticFog Surface"].nodes.get("Viewport Preview"))
+measure.render_to_file(scene, os.path.join(os.getcwd(), "b.exr"))
+print(json.dumps({"with": with_preview, "without": without}))
+"""
+
+
+def test_final_renders_are_those_without_the_preview(tmp_path):
+    blend = h.scene_blend("spheres", tmp_path)
+    out = h.bpy_flow(FLOW.replace("BLEND", repr(str(blend))), tmp_path)
+    assert out == {"with": True, "without": False}, out
+    a, b = (imageio.read_rgb(tmp_path / f"{k}.exr") for k in ("a", "b"))
+    assert np.array_equal(a, b), float(np.abs(a - b).max())
