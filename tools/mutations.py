@@ -196,6 +196,16 @@ MUTATIONS = [
              "        value = value",
              ("tests/test_compose.py::test_a_share_multiplies_its_sources_glows_where_it_is_taken",
               "tests/test_compose.py::test_a_layer_end_bounds_the_lamps_glow_to_the_sky")),
+    Mutation("preview_in_final_renders", "the viewport's preview stays on in final renders: the Compositor's "
+             "fog and the preview's glows are both in F12's picture", "preview.before_render",
+             "    show(working())",
+             "    show(True)",
+             ("tests/test_preview_switch.py::test_the_preview_is_off_in_final_renders_and_saved_files",)),
+    Mutation("preview_behind_no_switch", "the preview's closures not behind the Viewport Preview factor: "
+             "always in the picture", "preview.behind_switch",
+             "    ng.links.new(params.outputs[groups.PREVIEW], mix.inputs[0])",
+             "    mix.inputs[0].default_value = 1.0",
+             ("tests/test_viewport_preview.py::test_final_renders_are_those_without_the_preview",)),
     Mutation("auto_needs_before_cost", "Method Auto ignores what the scene needs (fog passes, a panoramic "
              "camera): the compositor by cost alone", "auto.choose",
              "    if hard is not None:\n",
