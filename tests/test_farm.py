@@ -293,14 +293,46 @@ def _frames_change(folder, prefix):
         assert change > MIN_FRAME_CHANGE, f"frames {f} and {g} differ by only {change:.3g}: the fog did not move"
 
 
+def _moving_frames(r, atlas_name, frames, prefixes, max_rel, diff_rel):
+    """A moving-shafts lane's shared checks: B ran without the add-on, neither process met a dependency cycle (the
+    atlas's drivers read the image), the atlas ``atlas_name`` is packed, every driver is a simple expression; then
+    ({frame: rel. RMSE of B's frame against A's frame made static}, {frame: that of frame 1's map at the frame}),
+    a diff image saved for a frame beyond ``max_rel``.  ``prefixes``: the farm's, the expectation's and the stale
+    render's file names."""
+    a, b = r["a"], r["b"]
+    _assert_absent(b)
+    for who, run in (("A", a), ("B", b)):
+        assert "dependency cycle" not in run["stderr"].lower(), f"{who}: {run['stderr'][-2000:]}"
+    atlas = b["images"].get(atlas_name)
+    assert atlas is not None and atlas["packed"], b["images"]
+    for job in b["jobs"]:
+        bad = [d for d in job["drivers"] if not d["valid"] or (d["type"] == "SCRIPTED" and not d["simple"])]
+        assert not bad, f"frame {job['frame']}: drivers that need Python or fail: {bad[:5]}"
+    errors, stale = {}, {}
+    for f in frames:
+        farm, expect = (_read(r["dir"] / f"{p}_{f}.exr") for p in prefixes[:2])
+        assert farm.shape == expect.shape == (36, 64, 3), farm.shape
+        errors[f] = compare.metrics(farm, expect)["rel_rmse"]
+        stale[f] = compare.metrics(_read(r["dir"] / f"{prefixes[2]}_{f}.exr"), expect)["rel_rmse"]
+        if errors[f] > max_rel:
+            FAILURES.mkdir(parents=True, exist_ok=True)
+            compare.write_diff(farm, expect, FAILURES / f"{prefixes[0]}_{f}_diff.png", max_rel=diff_rel)
+    return errors, stale
+
+
+def _lane_alone(name, tmp_path_factory):
+    """One lane of SHAFT_LANE alone (A then B), its times printed."""
+    t = time.perf_counter()
+    res = _lane(name, tmp_path_factory.mktemp(f"farm_{name}"))
+    print(f"\n{name} lane: {time.perf_counter() - t:.1f} s wall; A {res['a']['render_s']}, "
+          f"B {[j['render_s'] for j in res['b']['jobs']]}; maps {res['a']['maps']}")
+    return res
+
+
 @pytest.fixture(scope="module")
 def shaft_farm(tmp_path_factory):
     """The anim_shafts lane alone (A then B)."""
-    t = time.perf_counter()
-    res = _lane("anim_shafts", tmp_path_factory.mktemp("farm_shafts"))
-    print(f"\nanim_shafts lane: {time.perf_counter() - t:.1f} s wall; A {res['a']['render_s']}, "
-          f"B {[j['render_s'] for j in res['b']['jobs']]}; maps {res['a']['maps']}")
-    return res
+    return _lane_alone("anim_shafts", tmp_path_factory)
 
 
 @pytest.mark.slow   # (10 s; the default tier's farm lanes hold an animation and the shafts' packed maps)
@@ -309,26 +341,12 @@ def test_moving_shafts_render_without_the_add_on(shaft_farm):
     add-on at frames 1, 5 and 8, gives each frame's shafts (the atlas of the lamp's maps, picked by a driver on the
     frame) within 1 % relative RMSE of the add-on's render of that frame made static (its map baked at the pose)."""
     r = shaft_farm
-    a, b = r["a"], r["b"]
-    _assert_absent(b)
-    for who, run in (("A", a), ("B", b)):   # (the atlas's drivers read the image: no cycle with its compositor)
-        assert "dependency cycle" not in run["stderr"].lower(), f"{who}: {run['stderr'][-2000:]}"
+    a = r["a"]
     maps = a["maps"]
     assert maps["atlas"][:3] == [1, 1, 10] and not maps["still_atlas"], maps   # the still lamp keeps a still map
-    atlas = b["images"].get("AnalyticFog Shadow Lamp A")
-    assert atlas is not None and atlas["packed"], b["images"]
-    for job in b["jobs"]:
-        bad = [d for d in job["drivers"] if not d["valid"] or (d["type"] == "SCRIPTED" and not d["simple"])]
-        assert not bad, f"frame {job['frame']}: drivers that need Python or fail: {bad[:5]}"
-    errors, stale = {}, {}
-    for f in SHAFT_FRAMES:
-        farm, expect = _read(r["dir"] / f"farm_shafts_{f}.exr"), _read(r["dir"] / f"expect_shafts_{f}.exr")
-        assert farm.shape == expect.shape == (36, 64, 3), farm.shape
-        errors[f] = compare.metrics(farm, expect)["rel_rmse"]
-        stale[f] = compare.metrics(_read(r["dir"] / f"stale_shafts_{f}.exr"), expect)["rel_rmse"]
-        if errors[f] > SHAFT_MAX_REL_RMSE:
-            FAILURES.mkdir(parents=True, exist_ok=True)
-            compare.write_diff(farm, expect, FAILURES / f"farm_shafts_{f}_diff.png", max_rel=0.05)
+    errors, stale = _moving_frames(r, "AnalyticFog Shadow Lamp A", SHAFT_FRAMES, ("farm_shafts", "expect_shafts",
+                                                                                  "stale_shafts"),
+                                   SHAFT_MAX_REL_RMSE, 0.05)
     print("\nmoving shafts, rel. RMSE of the farm's frame against the add-on's: "
           + ", ".join(f"frame {f} {e:.3%} (a still map of frame 1: {stale[f]:.2%})" for f, e in errors.items()))
     assert stale[5] > STALE_MIN_REL_RMSE, f"the shafts hardly depend on the map here: {stale}"
@@ -338,11 +356,7 @@ def test_moving_shafts_render_without_the_add_on(shaft_farm):
 @pytest.fixture(scope="module")
 def sun_shaft_farm(tmp_path_factory):
     """The anim_sun_shafts lane alone (A then B)."""
-    t = time.perf_counter()
-    res = _lane("anim_sun_shafts", tmp_path_factory.mktemp("farm_sun_shafts"))
-    print(f"\nanim_sun_shafts lane: {time.perf_counter() - t:.1f} s wall; A {res['a']['render_s']}, "
-          f"B {[j['render_s'] for j in res['b']['jobs']]}; maps {res['a']['maps']}")
-    return res
+    return _lane_alone("anim_sun_shafts", tmp_path_factory)
 
 
 @pytest.mark.slow   # (about 2 min: the expectations re-add the fog at three frames)
@@ -352,26 +366,11 @@ def test_moving_sun_shafts_render_without_the_add_on(sun_shaft_farm):
     picked by a driver on the frame) as the add-on renders that frame made static (the sun's map baked there), and
     closer than frame 1's map would."""
     r = sun_shaft_farm
-    a, b = r["a"], r["b"]
-    _assert_absent(b)
-    for who, run in (("A", a), ("B", b)):
-        assert "dependency cycle" not in run["stderr"].lower(), f"{who}: {run['stderr'][-2000:]}"
+    a = r["a"]
     # keyed after Add Fog: a still map until the save baked every frame's (the ball shadows each differently)
     assert not a["maps"]["before_save_atlas"] and a["maps"]["atlas"][:3] == [1, 1, 10], a["maps"]
-    atlas = b["images"].get("AnalyticFog Sun Shadow")
-    assert atlas is not None and atlas["packed"], b["images"]
-    for job in b["jobs"]:
-        bad = [d for d in job["drivers"] if not d["valid"] or (d["type"] == "SCRIPTED" and not d["simple"])]
-        assert not bad, f"frame {job['frame']}: drivers that need Python or fail: {bad[:5]}"
-    errors, stale = {}, {}
-    for f in SUN_FRAMES:
-        farm, expect = _read(r["dir"] / f"farm_sun_{f}.exr"), _read(r["dir"] / f"expect_sun_{f}.exr")
-        assert farm.shape == expect.shape == (36, 64, 3), farm.shape
-        errors[f] = compare.metrics(farm, expect)["rel_rmse"]
-        stale[f] = compare.metrics(_read(r["dir"] / f"stale_sun_{f}.exr"), expect)["rel_rmse"]
-        if errors[f] > SUN_MAX_REL_RMSE:
-            FAILURES.mkdir(parents=True, exist_ok=True)
-            compare.write_diff(farm, expect, FAILURES / f"farm_sun_{f}_diff.png", max_rel=0.02)
+    errors, stale = _moving_frames(r, "AnalyticFog Sun Shadow", SUN_FRAMES, ("farm_sun", "expect_sun", "stale_sun"),
+                                   SUN_MAX_REL_RMSE, 0.02)
     print("\nthe sun's moving shafts, rel. RMSE of the farm's frame against the add-on's: "
           + ", ".join(f"frame {f} {e:.3%} (frame 1's map: {stale[f]:.2%})" for f, e in errors.items()))
     assert min(stale[5], stale[8]) > SUN_STALE_MIN_REL_RMSE, f"the shafts hardly depend on the map here: {stale}"

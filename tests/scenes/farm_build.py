@@ -108,22 +108,28 @@ def osl(outdir, method="osl", engine="CYCLES", dense=False):
           "render_s": log})
 
 
-def daylight(outdir):
-    """The scene under a sun (40 degrees, strength 3) and a light-blue sky, in a fog layer 3 m deep with a falloff
-    of 1 m above it (the Compositor method): expectation, then daylight.blend (the fog light's map packed, the
-    sun and the sky followed by simple-expression drivers)."""
+def add_daylight(scene):
+    """A light-blue sky and a sun 40 degrees up (strength 3), as the daylight lanes have them."""
     import math
-    from fog_addon.ops import apply
-    from fog_addon.precompute.spec import FogSpec
-    log = {}
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = build(bpy.context.scene)
     bg = next(n for n in scene.world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
     bg.inputs["Color"].default_value = (0.35, 0.5, 0.8, 1.0)
     sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
     sun.data.energy = 3.0
     sun.rotation_euler = (math.radians(50.0), 0.0, math.radians(-50.0))
     scene.collection.objects.link(sun)
+    return sun
+
+
+def daylight(outdir):
+    """The scene under a sun (40 degrees, strength 3) and a light-blue sky, in a fog layer 3 m deep with a falloff
+    of 1 m above it (the Compositor method): expectation, then daylight.blend (the fog light's map packed, the
+    sun and the sky followed by simple-expression drivers)."""
+    from fog_addon.ops import apply
+    from fog_addon.precompute.spec import FogSpec
+    log = {}
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = build(bpy.context.scene)
+    add_daylight(scene)
     timed(log, "nofog_cycles", render_exr, scene, os.path.join(outdir, "nofog_cycles.exr"))
     fog_addon.register()
     skipped = apply.apply(scene, FogSpec(density=DENSITY, albedo=(0.9, 0.9, 0.9), method="compositor",
@@ -186,6 +192,30 @@ def anim(outdir, method="NODES"):
     emit({"packed": packed_report(), "poses": poses, "render_s": log})
 
 
+def render_stale(scene, atlas, frames, prefix, log, outdir):
+    """The stale farm: ``frames`` rendered (``<prefix>_<f>.exr``) with frame 1's map at every frame (the atlas's
+    first tile copied into each channel and slot: what a farm rendered before the atlas), the add-on's frame
+    handler held off; the atlas then restored."""
+    import numpy as np
+    from fog_addon import shadow_maps
+    px = np.empty(atlas.size[0] * atlas.size[1] * 4, np.float32)
+    atlas.pixels.foreach_get(px)
+    w, h = int(atlas[shadow_maps.ATLAS][5]), int(atlas[shadow_maps.ATLAS][6])
+    first = px.reshape(atlas.size[1], atlas.size[0], 4)[:h, :w, 0]
+    stale = np.repeat(np.tile(first, (atlas.size[1] // h, atlas.size[0] // w))[..., None], 4, axis=-1)
+    saved = px.copy()
+    atlas.pixels.foreach_set(stale.ravel())
+    atlas.update()
+    handlers = list(bpy.app.handlers.frame_change_post)
+    bpy.app.handlers.frame_change_post.clear()   # (the add-on's frame handler would bake the frame's map again)
+    for f in frames:
+        scene.frame_set(f)
+        timed(log, f"{prefix}_{f}", render_exr, scene, os.path.join(outdir, f"{prefix}_{f}.exr"))
+    bpy.app.handlers.frame_change_post.extend(handlers)
+    atlas.pixels.foreach_set(saved)
+    atlas.update()
+
+
 SHAFT_FRAMES = (1, 5, 8)   # the frames the moving shafts are rendered at (tests/test_farm.py)
 SHAFT_RES = (64, 36)
 SCREEN = ((0.3, -0.45, 1.3), (0.6, 0.03, 1.0))   # (centre, half extents) m: a panel Lamp A passes 0.45 m behind
@@ -198,7 +228,6 @@ def anim_shafts(outdir):
     scene made static at frame f (the add-on bakes the lamp's map at its pose, at the full resolution of a still map,
     as its frame handler did for each frame) for f in SHAFT_FRAMES, and stale_shafts_<f>.exr: frame f rendered with
     the map of frame 1 (what a farm rendered before the atlas: the map of the frame the file was saved at)."""
-    import numpy as np
     from demo_scenes import add_box
     from fog_addon import shadow_maps
     log = {}
@@ -224,23 +253,7 @@ def anim_shafts(outdir):
     bpy.ops.wm.save_as_mainfile(filepath=os.path.join(outdir, "anim_shafts.blend"))
     packed = packed_report()
 
-    # the stale farm: frame 1's map at every frame (the atlas's first tile copied into each channel and slot)
-    px = np.empty(atlas.size[0] * atlas.size[1] * 4, np.float32)
-    atlas.pixels.foreach_get(px)
-    w, h = int(atlas[shadow_maps.ATLAS][5]), int(atlas[shadow_maps.ATLAS][6])
-    first = px.reshape(atlas.size[1], atlas.size[0], 4)[:h, :w, 0]
-    stale = np.repeat(np.tile(first, (atlas.size[1] // h, atlas.size[0] // w))[..., None], 4, axis=-1)
-    saved = px.copy()
-    atlas.pixels.foreach_set(stale.ravel())
-    atlas.update()
-    handlers = list(bpy.app.handlers.frame_change_post)
-    bpy.app.handlers.frame_change_post.clear()   # (the add-on's frame handler would bake the frame's map again)
-    for f in SHAFT_FRAMES:
-        scene.frame_set(f)
-        timed(log, f"stale_shafts_{f}", render_exr, scene, os.path.join(outdir, f"stale_shafts_{f}.exr"))
-    bpy.app.handlers.frame_change_post.extend(handlers)
-    atlas.pixels.foreach_set(saved)
-    atlas.update()
+    render_stale(scene, atlas, SHAFT_FRAMES, "stale_shafts", log, outdir)
 
     # the add-on's frame f: the lamp still at its pose, its map baked there
     states = {}
@@ -275,19 +288,12 @@ def anim_sun_shafts(outdir):
     picked by a driver on the frame.  Then
     expect_sun_<f>.exr: the scene made static at f (the sun's map baked at the pose, a still map's full resolution)
     and stale_sun_<f>.exr: frame f with frame 1's map at every frame (what a farm rendered before the atlas)."""
-    import math
-    import numpy as np
     from fog_addon import shadow_maps
     log = {}
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = build(bpy.context.scene)
     scene.render.resolution_x, scene.render.resolution_y = SHAFT_RES
-    bg = next(n for n in scene.world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
-    bg.inputs["Color"].default_value = (0.35, 0.5, 0.8, 1.0)
-    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
-    sun.data.energy = 3.0
-    sun.rotation_euler = (math.radians(50.0), 0.0, math.radians(-50.0))
-    scene.collection.objects.link(sun)
+    add_daylight(scene)
     scene.frame_start, scene.frame_end = 1, 10
     ball, cam = scene.objects["Ball"], scene.camera
     fog_addon.register()
@@ -312,23 +318,7 @@ def anim_sun_shafts(outdir):
                 atlas_packed_bytes=atlas.packed_file.size)
     packed = packed_report()
 
-    # the stale farm: frame 1's map at every frame (the atlas's first tile copied into each channel and slot)
-    px = np.empty(atlas.size[0] * atlas.size[1] * 4, np.float32)
-    atlas.pixels.foreach_get(px)
-    w, h = int(atlas[shadow_maps.ATLAS][5]), int(atlas[shadow_maps.ATLAS][6])
-    first = px.reshape(atlas.size[1], atlas.size[0], 4)[:h, :w, 0]
-    stale = np.repeat(np.tile(first, (atlas.size[1] // h, atlas.size[0] // w))[..., None], 4, axis=-1)
-    saved = px.copy()
-    atlas.pixels.foreach_set(stale.ravel())
-    atlas.update()
-    handlers = list(bpy.app.handlers.frame_change_post)
-    bpy.app.handlers.frame_change_post.clear()   # (the add-on's frame handler would bake the frame's map again)
-    for f in SUN_SHAFT_FRAMES:
-        scene.frame_set(f)
-        timed(log, f"stale_sun_{f}", render_exr, scene, os.path.join(outdir, f"stale_sun_{f}.exr"))
-    bpy.app.handlers.frame_change_post.extend(handlers)
-    atlas.pixels.foreach_set(saved)
-    atlas.update()
+    render_stale(scene, atlas, SUN_SHAFT_FRAMES, "stale_sun", log, outdir)
 
     # the add-on's frame f: the ball and the camera still at their poses, the sun's map baked there
     states = {}
