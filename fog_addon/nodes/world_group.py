@@ -69,7 +69,8 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
     World untouched on every ray (the compositor dims the sky it sees: ``comp_fog.build_fog_group``).  The lights
     whose glow is on sit in bundle groups (``light_bundles.split``, ``build_world_bundle``).  ``preview``: (lights,
     models) of the viewport's preview of a fog added at render time, their glows behind the Params group's Viewport
-    Preview (``preview.behind_switch``), or None.
+    Preview (``preview.behind_switch``), or None; not where the World is left to the compositor (``day_dims``
+    False: the sky through a daylit layer), whose glows on sky rays the preview then leaves out.
     """
     ng, gin, gout = groups.new_group(groups.WORLD, [],
                                      [("Fog", "NodeSocketShader"), ("Emission", C), ("Transmittance", F)])
@@ -100,7 +101,8 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
         transmittance = 1.0 + is_camera * (seen - 1.0) if day_dims else m.const(1.0)
         if day_table is not None:
             day_glow = m.scale(sunlight.ray_glow(m, daylight, camera_at, direction, model.FAR), is_camera)
-        if kept or day_table is not None or preview:   # (the compositor's World: no glow, the sky dimmed per pixel)
+        if kept or day_table is not None or (preview and day_dims):   # (the compositor's World: no glow, the sky
+            #                                                              dimmed per pixel)
             # The fogged World mixes the Fog closure by 1 - Transmittance (world.py), right where the sky is not
             # seen; through a layer it is, so every glow closure (each lamp's and the daylight's) is scaled by
             # 1 / (1 - Transmittance).  One closure a lamp, as without a layer: their sum in one closure's
@@ -112,6 +114,7 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
         ng, [light for light, _ in kept], [mod for _, mod in kept],
         functools.partial(build_world_bundle, images, scaled=layer_scale is not None), shared, with_passes)
     fogs = [node.outputs["Fog"] for node, _ in placed]
+    preview = preview if day is None or day_dims else None   # (a World the compositor dims: its Fog is not shown)
     if preview:
         shown, preview_trees, _ = light_bundles.place_bundles(
             ng, *preview, functools.partial(build_world_bundle, images, scaled=layer_scale is not None,
