@@ -83,9 +83,10 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
 
 def build_tail_bundle(images, first, lights, models):
     """One bundle of the Surface group's See Through shader (``place_tails``): for each light, the albedo
-    times Transmittance times (Straight Weight x its glow to infinity from Position along Straight + Mirrored
-    Weight x along Mirrored), from two instances of its World group (``light_groups.build_background_light``),
-    as one Emission closure (its colour may be negative: Cycles passes negative emission through)."""
+    times Transmittance times Straight Weight x its glow to infinity from Position along Straight, and the
+    same with Mirrored Weight along Mirrored, from two instances of its World group
+    (``light_groups.build_background_light``), each tail an Emission closure of its own (its colour may be
+    negative: Cycles passes negative emission through)."""
     name = light_bundles.bundle_name(groups.SURFACE_TAILS, first, lights)
     ng, gin, gout = groups.new_group(name, [("Beta", F), ("Albedo", C), ("Position", V), ("Straight", V),
                                             ("Mirrored", V), ("Straight Weight", C), ("Mirrored Weight", C),
@@ -108,11 +109,12 @@ def build_tail_bundle(images, first, lights, models):
                                                                   else None)
             if src is not None:
                 ng.links.new(src, mirrored.inputs[sock.name])
-        tail = (m.wrap(straight.outputs[rungs.BACKGROUND_OUT.name], vector=True) * m.wrap(g["Straight Weight"],
-                                                                                        vector=True)
-                + m.wrap(mirrored.outputs[rungs.BACKGROUND_OUT.name], vector=True) * m.wrap(g["Mirrored Weight"],
-                                                                                          vector=True))
-        colours.append(tail * scale)
+        # two closures, never one of their sum (``closures.closure_sum`` says why): SVM compiles a closure's
+        # inputs' nodes together, so one Emission of straight + mirrored had both tails' kernels on its stack
+        # at once (a spot at the full step: 255 floats, out of SVM stack space, the glass black; 178 as two)
+        for node, weight in ((straight, g["Straight Weight"]), (mirrored, g["Mirrored Weight"])):
+            colours.append(m.wrap(node.outputs[rungs.BACKGROUND_OUT.name], vector=True) * m.wrap(weight, vector=True)
+                           * scale)
     closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", colours)
     m.place()
     return ng
