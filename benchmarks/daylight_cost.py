@@ -134,7 +134,7 @@ def worker(spec):
     from fog_addon import sunsky
     from fog_addon.nodes import comp_fog, groups, surface_group
     from fog_addon.ops import apply
-    from fog_addon.precompute import sunlight
+    from fog_addon.precompute import daylight_tables
     from fog_addon.precompute.spec import FogSpec
     from fog_scenes import daylight as dl
 
@@ -153,7 +153,7 @@ def worker(spec):
     nofog = ov._save_render(scene, tmp / f"{tag}_nofog.exr")
 
     wall, cpu = {}, {}
-    _wrap(sunlight, "bake_fog_light", "bake", wall, cpu)
+    _wrap(daylight_tables, "bake_fog_light", "bake", wall, cpu)
     _wrap(sunsky, "probe_sky", "probe", wall, cpu)
     _wrap(comp_fog, "build_fog_group", "comp_group", wall, cpu)
     _wrap(surface_group, "build_surface", "surface_group", wall, cpu)

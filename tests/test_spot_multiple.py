@@ -273,11 +273,11 @@ def test_spot_over_surfaces_against_64_bounces(tmp_path):
     brighter than single scattering), the picture within 6 % (clipped pixels) and 10 % (4 x 4 blocks) of the
     reference's own noise."""
     from fog_scenes import dense_surfaces as surf
-    seeds = surf.reference_seeds(64, 2048, 4, kind="spot")
+    seeds = surf.reference_seeds(64, 2048, 4, spot=True)
     log = []
-    out = surf.render_ours(tmp_path / "ours.exr", multiple_scattering="on", log=log, kind="spot")
+    out = surf.render_ours(tmp_path / "ours.exr", multiple_scattering="on", log=log, spot=True)
     assert not h.log_errors(log[0]), h.log_errors(log[0])
-    c = surf.compare(imageio.read_rgb(out), seeds, surf.geometry(kind="spot"))
+    c = surf.compare(imageio.read_rgb(out), seeds, surf.geometry(spot=True))
     print(c)
     assert abs(c["ground_ratio"] - 1.0) <= 0.08 and abs(c["wall_ratio"] - 1.0) <= 0.08, c
     assert c["excess_clipped"] <= 0.06 and c["excess_blocks"] <= 0.10, c
