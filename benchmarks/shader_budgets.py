@@ -99,23 +99,15 @@ def build_scene(kind, n, engine):
     """A fresh file: ground, glossy sphere (and a glass pane), ``n`` lights of ``kind``, camera, black World."""
     import bmesh
     import bpy
+    from fog_scenes import probe_common
     from fog_scenes.probe_common import look_at
     bpy.ops.wm.read_factory_settings(use_empty=True)
     s = bpy.context.scene
     look_at(s, (0.0, -9.0, 2.5), (0.0, 0.0, 1.2), 30.0)
     ltype, _, glass = KINDS[kind]
 
-    def mesh_object(name, make, mat, location=(0, 0, 0), rotation=(0, 0, 0)):
-        bm = bmesh.new()
-        make(bm)
-        me = bpy.data.meshes.new(name)
-        bm.to_mesh(me)
-        bm.free()
-        me.materials.append(mat)
-        ob = bpy.data.objects.new(name, me)
-        ob.location, ob.rotation_euler = location, rotation
-        s.collection.objects.link(ob)
-        return ob
+    def mesh_object(*args, **kw):
+        return probe_common.mesh_object(s, *args, **kw)
 
     mesh_object("Ground", lambda bm: bmesh.ops.create_grid(bm, x_segments=1, y_segments=1, size=30.0),
                 _material(bpy, "Ground", (0.4, 0.4, 0.4), 0.8))

@@ -88,3 +88,18 @@ def light_pixel(scene, light):
     p = world_to_camera_view(scene, scene.camera, light.matrix_world.translation)
     w, h = view.render_size(scene)
     return (p.x * w, p.y * h, 0.0) if p.z > 0 else (1e6, 1e6, 0.0)
+
+
+def mesh_object(scene, name, make, mat, location=(0, 0, 0), rotation=(0, 0, 0)):
+    """A mesh object ``name`` in ``scene`` whose mesh ``make(bm)`` builds in a bmesh, with material ``mat``."""
+    import bmesh
+    bm = bmesh.new()
+    make(bm)
+    me = bpy.data.meshes.new(name)
+    bm.to_mesh(me)
+    bm.free()
+    me.materials.append(mat)
+    ob = bpy.data.objects.new(name, me)
+    ob.location, ob.rotation_euler = location, rotation
+    scene.collection.objects.link(ob)
+    return ob

@@ -28,6 +28,7 @@ import numpy as np  # noqa: E402
 from fog_addon import measure  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 from fog_scenes import cycles_debug_log  # noqa: E402
+from fog_scenes.probe_common import mesh_object  # noqa: E402
 from fog_scenes.probe_common import camera_rays, look_at  # noqa: E402
 
 WIDTH, HEIGHT = 16, 12
@@ -57,31 +58,20 @@ def _glass_bsdf(name):
     return mat
 
 
-def _mesh(scene, name, make, mat, location=(0, 0, 0), rotation=(0, 0, 0)):
-    bm = bmesh.new()
-    make(bm)
-    me = bpy.data.meshes.new(name)
-    bm.to_mesh(me)
-    bm.free()
-    me.materials.append(mat)
-    ob = bpy.data.objects.new(name, me)
-    ob.location, ob.rotation_euler = location, rotation
-    scene.collection.objects.link(ob)
-    return ob
 
 
 def build(spots=1, points=0):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     look_at(scene, (0.0, -9.0, 2.5), (0.0, 0.0, 1.2), 30.0)
-    _mesh(scene, "Ground", lambda bm: bmesh.ops.create_grid(bm, x_segments=1, y_segments=1, size=30.0),
+    mesh_object(scene, "Ground", lambda bm: bmesh.ops.create_grid(bm, x_segments=1, y_segments=1, size=30.0),
           _principled("Ground", (0.4, 0.4, 0.4), 0.8))
-    _mesh(scene, "Glossy", lambda bm: bmesh.ops.create_uvsphere(bm, u_segments=24, v_segments=12, radius=1.0),
+    mesh_object(scene, "Glossy", lambda bm: bmesh.ops.create_uvsphere(bm, u_segments=24, v_segments=12, radius=1.0),
           _principled("Glossy", (0.2, 0.4, 0.8), 0.2), (0.0, 0.0, 1.0))
     mats = {"Glass": _glass_bsdf("Glass"),
             "Trans": _principled("Trans", (1.0, 1.0, 1.0), 0.0, **{"Transmission Weight": 1.0})}
     for name, where in PANES.items():
-        _mesh(scene, name, lambda bm: bmesh.ops.create_grid(bm, x_segments=1, y_segments=1, size=0.6), mats[name],
+        mesh_object(scene, name, lambda bm: bmesh.ops.create_grid(bm, x_segments=1, y_segments=1, size=0.6), mats[name],
               where, (math.pi / 2, 0.0, 0.0))
     n = spots + points
     for i in range(n):
