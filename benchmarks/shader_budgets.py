@@ -83,16 +83,8 @@ def _material(bpy, name, base, rough):
 
 
 def _glass(bpy):
-    mat = bpy.data.materials.new("Glass")
-    nt = mat.node_tree
-    for nd in list(nt.nodes):
-        if nd.bl_idname != "ShaderNodeOutputMaterial":
-            nt.nodes.remove(nd)
-    glass = nt.nodes.new("ShaderNodeBsdfGlass")
-    glass.inputs["Roughness"].default_value = 0.0
-    out = next(nd for nd in nt.nodes if nd.bl_idname == "ShaderNodeOutputMaterial")
-    nt.links.new(glass.outputs[0], out.inputs["Surface"])
-    return mat
+    from fog_scenes import probe_common
+    return probe_common.glass_material("Glass")
 
 
 def build_scene(kind, n, engine):

@@ -103,3 +103,17 @@ def mesh_object(scene, name, make, mat, location=(0, 0, 0), rotation=(0, 0, 0)):
     ob.location, ob.rotation_euler = location, rotation
     scene.collection.objects.link(ob)
     return ob
+
+
+def glass_material(name="Glass"):
+    """A material of one sharp Glass BSDF (roughness 0) into its output."""
+    mat = bpy.data.materials.new(name)
+    nt = mat.node_tree
+    for node in list(nt.nodes):
+        if node.bl_idname != "ShaderNodeOutputMaterial":
+            nt.nodes.remove(node)
+    glass = nt.nodes.new("ShaderNodeBsdfGlass")
+    glass.inputs["Roughness"].default_value = 0.0
+    out = next(node for node in nt.nodes if node.bl_idname == "ShaderNodeOutputMaterial")
+    nt.links.new(glass.outputs[0], out.inputs["Surface"])
+    return mat

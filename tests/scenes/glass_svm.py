@@ -28,7 +28,7 @@ import numpy as np  # noqa: E402
 from fog_addon import measure  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 from fog_scenes import cycles_debug_log  # noqa: E402
-from fog_scenes.probe_common import mesh_object  # noqa: E402
+from fog_scenes.probe_common import glass_material, mesh_object  # noqa: E402
 from fog_scenes.probe_common import camera_rays, look_at  # noqa: E402
 
 WIDTH, HEIGHT = 16, 12
@@ -46,16 +46,7 @@ def _principled(name, base, rough, **inputs):
 
 
 def _glass_bsdf(name):
-    mat = bpy.data.materials.new(name)
-    nt = mat.node_tree
-    for node in list(nt.nodes):
-        if node.bl_idname != "ShaderNodeOutputMaterial":
-            nt.nodes.remove(node)
-    glass = nt.nodes.new("ShaderNodeBsdfGlass")
-    glass.inputs["Roughness"].default_value = 0.0
-    out = next(node for node in nt.nodes if node.bl_idname == "ShaderNodeOutputMaterial")
-    nt.links.new(glass.outputs[0], out.inputs["Surface"])
-    return mat
+    return glass_material(name)
 
 
 
