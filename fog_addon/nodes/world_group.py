@@ -93,6 +93,7 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
     is_camera = m.wrap(path.outputs["Is Camera Ray"])
     transmittance = shading.shade_background(m, [], medium, is_camera, m.wrap(params.outputs[groups.WORLD_LIGHT]))[1]
     day_glow, layer_scale = None, None
+    preview = preview if day is None or day_dims else None   # (a World the compositor dims: its Fog is not shown)
     if day is not None:   # (``in_world``: no driver reads the World from its own group: a dependency cycle)
         daylight = day(m, m.wrap(params.outputs["Beta"]), m.wrap(params.outputs["Albedo"], vector=True),
                        in_world=True)
@@ -101,8 +102,7 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
         transmittance = 1.0 + is_camera * (seen - 1.0) if day_dims else m.const(1.0)
         if day_table is not None:
             day_glow = m.scale(sunlight.ray_glow(m, daylight, camera_at, direction, model.FAR), is_camera)
-        if kept or day_table is not None or (preview and day_dims):   # (the compositor's World: no glow, the sky
-            #                                                              dimmed per pixel)
+        if kept or day_table is not None or preview:   # (the compositor's World: no glow, the sky dimmed per pixel)
             # The fogged World mixes the Fog closure by 1 - Transmittance (world.py), right where the sky is not
             # seen; through a layer it is, so every glow closure (each lamp's and the daylight's) is scaled by
             # 1 / (1 - Transmittance).  One closure a lamp, as without a layer: their sum in one closure's
@@ -114,7 +114,6 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
         ng, [light for light, _ in kept], [mod for _, mod in kept],
         functools.partial(build_world_bundle, images, scaled=layer_scale is not None), shared, with_passes)
     fogs = [node.outputs["Fog"] for node, _ in placed]
-    preview = preview if day is None or day_dims else None   # (a World the compositor dims: its Fog is not shown)
     if preview:
         shown, preview_trees, _ = light_bundles.place_bundles(
             ng, *preview, functools.partial(build_world_bundle, images, scaled=layer_scale is not None,

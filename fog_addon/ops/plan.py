@@ -140,13 +140,12 @@ def lights_in_groups(lights, choice):
     return [o for o in lights if choice["lights"].get(o.name, [0])[0] != rungs.LEFT_OUT]
 
 
-def preview_models(scene, spec, method, lights):
-    """(lights, models, choice) of the viewport's preview of ``method``'s fog (``Method.preview_budget``), or None
-    where the method's shaders are what the viewport shows: the Node Groups method's models of the lights that
-    matter most to the picture, chosen as the Quality chooses (``choose_models``) within the preview's budget; the
-    lights it leaves off are not in it (``choice["lights"]`` gives each light's step and what it leaves out)."""
-    budget = method.preview_budget(scene, spec, lights)
-    if budget is None or not lights:
+def preview_models(scene, spec, lights, budget):
+    """(lights, models, choice) of the viewport's preview within ``budget`` (``Method.preview_budget``), or None
+    without lights: the Node Groups method's models of the lights that matter most to the picture, chosen as the
+    Quality chooses (``choose_models``) within the budget; the lights it leaves off are not in it
+    (``choice["lights"]`` gives each light's step and what it leaves out)."""
+    if not lights:
         return None
     nodes = methods.get("nodes")
     models, choice = choose_models(scene, spec, nodes, lights, budget)
@@ -227,7 +226,7 @@ def plan(scene, spec, method, lights, reason=None, rechoose=True, this_frame=Fal
     shader_lights, shader_models = method.shader_lights(scene, spec, in_groups, grouped)
     partial = this_frame and view.animated(scene)
     preview = None
-    if method.preview_budget(scene, spec, in_groups) is not None:
+    if (preview_budget := method.preview_budget(scene, spec, in_groups)) is not None:
         old_preview = (old or {}).get("preview")
         if kept is not None and old_preview is not None:   # (the stored steps: no view sampled)
             steps = [old_preview["lights"].get(o.name, [rungs.OFF])[0] for o in in_groups]
@@ -235,7 +234,7 @@ def plan(scene, spec, method, lights, reason=None, rechoose=True, this_frame=Fal
             preview = ([o for o, _ in shown], _models(spec, methods.get("nodes"), [o for o, _ in shown],
                                                       [k for _, k in shown], {}), old_preview)
         else:
-            preview = preview_models(scene, spec, method, in_groups)
+            preview = preview_models(scene, spec, in_groups, preview_budget)
         choice["preview"] = {"lights": preview[2]["lights"], "error": preview[2]["error"]} if preview else None
     return Plan(lights, models, choice, in_groups, grouped, shader_lights, shader_models,
                 method.windows(scene, in_groups, partial), partial, this_frame, preview)
