@@ -78,10 +78,20 @@ def test_operator_reports_and_stores_the_choice(res):
 
 
 def test_refused_change_is_shown_and_changes_nothing(res):
-    """Fog passes with Method Compositor: refused; the fog keeps its groups, the panel shows why; Auto then
-    serves the passes with the node groups and the message clears."""
+    """Fog passes with Method Compositor: refused; the fog keeps its groups, the panel shows why.  A lamp moved
+    while refused: the handlers rebuild with the settings the fog was built with and keep saying why (they built
+    the refused settings, and the World's preview bundle had no pass sockets: a KeyError that left half-built
+    groups and no word).  Auto then serves the passes with the node groups and the message clears."""
     r = res["refused"]
     assert r["error"] and "no fog passes" in r["error"] and r["built"] == "compositor" and not r["passes_aovs"], r
+    # a lamp moved after it: the handlers rebuild the fog with the settings it was built with, still saying why
+    m = res["refused_then_moved"]
+    assert m["raised"] is None and m["built"] == "compositor" and not m["building"], m
+    assert m["error"] == r["error"] and not m["passes_aovs"], m
+    # a fault of the add-on's in a handler's rebuild is said, not raised, and the next rebuild clears it
+    f = res["fault"]
+    assert f["raised"] is None and "could not follow the scene (ZeroDivisionError" in f["error"], f
+    assert f["after"] is None and f["built"] == "compositor", f
     a = res["auto_with_passes"]
     assert a["error"] is None and a["built"] == "nodes" and "fog passes" in a["line"], a
 

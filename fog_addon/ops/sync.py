@@ -11,13 +11,14 @@ import bpy
 from .. import props
 from ..nodes import groups, preview
 from ..precompute import bakers
-from ..precompute.spec import validate_quality
+from ..precompute.spec import FogSpec, validate_quality
 from ..props import spec_of, store_spec
 from . import progress as progress_
-from .build import TablesMissing, build_scene_groups, follow_compositor, rebuilt
+from .build import SPEC_KEY, TablesMissing, build_scene_groups, follow_compositor, rebuilt
 from .plan import built_method, check_method, fog_lights, lights_in_groups, resolve_method, stored_choice
 
 _sync_errors = {}   # scene name -> why the last sync failed (the panel shows it), absent if it succeeded
+_handler_errors = {}   # scene name -> what the handlers said last (a refusal or a fault), cleared once mended
 _declined = {}   # scene name -> the spec (JSON) whose bake the user cancelled (``decline_bake``)
 
 
@@ -59,6 +60,10 @@ def sync(scene, level="groups"):
         return why
     _sync_errors.pop(scene.name, None)
     return None
+
+
+def _handler_error(scene, why):
+    _sync_errors[scene.name] = _handler_errors[scene.name] = why
 
 
 def sync_error(scene):
@@ -140,19 +145,44 @@ def refresh_lights(scene, rechoose=False, this_frame=False, rebuild=False):
         return
     rebuilt.discard(scene.name)
     try:
-        spec = spec_of(scene)
-        build_scene_groups(scene, spec, fog_lights(scene)[0], rechoose=rechoose, this_frame=this_frame,
+        lights = fog_lights(scene)[0]
+        spec, refused = followed_spec(scene, surface, lights, rechoose)
+        if refused is not None:
+            _handler_error(scene, refused)
+        if spec is None:
+            return
+        build_scene_groups(scene, spec, lights, rechoose=rechoose, this_frame=this_frame,
                            progress=progress_.ConsoleProgress(prefix="Analytic Fog: "),
                            bake_in_line=bpy.app.background, force=rebuild)
     except ValueError as e:
-        _sync_errors[scene.name] = str(e)
+        _handler_error(scene, str(e))
         return
     except TablesMissing:   # with a window: baked by the cancellable operator, which then syncs
         if not bake_declined(scene):
             props.request_sync(scene, "rechoose" if rechoose else "groups")
         return
+    except Exception as e:   # noqa: BLE001 - a fault of the add-on's in a handler: said, the compositor spliced again
+        _handler_error(scene, f"the fog could not follow the scene ({type(e).__name__}: {e}); Update Fog rebuilds it")
+        traceback.print_exc()
+        follow_compositor(scene, rebuild=True)
+        return
+    if refused is None and _sync_errors.get(scene.name) == _handler_errors.pop(scene.name, None):
+        _sync_errors.pop(scene.name, None)   # what the handlers said last is mended: the scene is served again
     # the engine or the denoiser flag may have changed; rebuilt groups need the chain built anew
     follow_compositor(scene, rebuild=scene.name in rebuilt)
+
+
+def followed_spec(scene, surface, lights, rechoose=False):
+    """(spec, why) of the handlers' build: the scene's settings and None, or, while the method refuses them (a
+    setting the panel was told the method can't serve), the settings the fog was built with and why, so that
+    lamps and the camera are still followed.  The spec is None while neither can be used."""
+    try:
+        spec = spec_of(scene)
+        check_method(scene, spec, resolve_method(scene, spec, lights, keep=not rechoose)[0])
+    except ValueError as e:
+        built = surface.get(SPEC_KEY)
+        return (FogSpec.from_json(built) if built else None), str(e)
+    return spec, None
 
 
 def grow_windows(scene):
