@@ -195,3 +195,26 @@ def test_daylight_terms_are_the_sun_and_the_sky_at_a_pixel(monkeypatch, air):
     else:
         want = c * (g(length) + tt * reflected) + (1 - c) * g(np.full(N, far))
     np.testing.assert_allclose(light, want, rtol=1e-12)
+
+
+def test_daylight_on_a_surface_ray_and_a_sky_ray(monkeypatch):
+    """The Surface group's daylight (``sunlight.surface_terms`` composed by ``compose.surface_light``): the glow to
+    the surface plus the reflected fog light dimmed by T; the World's (``sunlight.sky_terms`` composed at coverage
+    0): the glow to the sky, taken as it is (a Python coverage of 0 or 1 weighs nothing by a node)."""
+    m, v = NumpyOps(), _values(9)
+    length = np.array([3.0, 20.0, 50.0, 7.0, 1.0])
+    glow = lambda mm, day, camera, direction, to, share=None: np.stack(
+        [np.log1p(np.broadcast_to(np.asarray(to, float), (N,)) * (k + 1.0)) for k in range(3)], axis=-1)
+    fog = lambda mm, table, day, position, normal, share=None: v.day_reflected
+    monkeypatch.setattr(sunlight, "ray_glow", glow)
+    monkeypatch.setattr(sunlight, "fog_light", fog)
+    day = types.SimpleNamespace(air=None)
+    rho = np.array([0.5, 0.4, 0.3])
+    terms = sunlight.surface_terms(m, day, None, None, None, None, None, rho, length, v.t_day)
+    want = glow(m, day, None, None, length) + _col(v.t_day) * rho * v.day_reflected
+    np.testing.assert_allclose(compose.surface_light(m, terms), want, rtol=1e-12)
+    scaled = []
+    monkeypatch.setattr(m, "scale", lambda a, b: scaled.append(b) or a * b, raising=False)
+    sky = compose.source_light(m, 0.0, sunlight.sky_terms(m, day, None, None))
+    np.testing.assert_allclose(sky, glow(m, day, None, None, 1e15), rtol=1e-12)
+    assert scaled == [], scaled

@@ -1,11 +1,12 @@
 """The Surface group, ``AnalyticFog Surface``, which every fogged material uses: ``shading.shade_surface`` (Sun et
 al. 2005 Eq. 19) over the scene's fog lights in bundles (``build_surface_bundle``), with a fog layer's daylight
-(``daylight_light``) and the glows past glass and mirrors (``glass_tails.py``)."""
+(``sunlight.surface_terms``, composed by ``compose.surface_light``) and the glows past glass and mirrors
+(``glass_tails.py``)."""
 import functools
 
 import bpy
 
-from ..precompute import rungs, shading, sunlight, surface
+from ..precompute import compose, rungs, shading, sunlight, surface
 from . import closures, glass_tails, groups, light_bundles, light_groups, passes, preview as preview_
 from .groups import C, F, V
 from .sockets import NodeOps
@@ -71,7 +72,7 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     (``sunsky.daylight``), or None for fog that fills all space: the camera segment's transmittance is then the
     layer's, and the user's shader on every ray takes the sun's and the sky's dimming (``sunlight.direct_dimming``);
     with ``day_table`` (the fog light's TableSpec, its image in ``images``) camera rays also get the sun's and the
-    sky's glow and their fog light on the surface (``daylight_light``); ``day_dims`` False leaves the sun's and the
+    sky's glow and their fog light on the surface (``sunlight.surface_terms``, composed); ``day_dims`` False leaves the sun's and the
     sky's dimming to the compositor (``comp_fog.build_fog_group``: once per pixel), ``day_exact`` False dims the
     camera segment by ``sunlight.proxy_transmittance`` (the compositor puts the exact colour on every pixel).  The
     lights sit in bundle groups (``light_bundles.split``, ``build_surface_bundle``).  ``preview``: (lights, models)
@@ -143,9 +144,9 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
                                                                        if any(_lit(mod) for mod in mods)])] if sock]
     fog = shading.surface_fog(m, sums, transmit)
     if day is not None and day_table is not None:
-        light = m.scale(daylight_light(
+        light = m.scale(compose.surface_light(m, sunlight.surface_terms(
             m, daylight, day_table, position + m.scale(incoming, length), m.scale(incoming, -1.0), position,
-            m.wrap(geo.outputs["Normal"], vector=True), diffuse + specular, length, t_vp), is_camera)
+            m.wrap(geo.outputs["Normal"], vector=True), diffuse + specular, length, t_vp)), is_camera)
         emit = ng.nodes.new("ShaderNodeEmission")
         emit.location = (3000, -600)
         m.feed(emit.inputs["Color"], light)
@@ -184,14 +185,3 @@ def _times(m, emission, factor):
         return m.wrap(emission, vector=True) * factor
     glow, rest = m.wrap(emission.glow, vector=True) * factor, m.wrap(emission.rest, vector=True) * factor
     return emission._replace(glow=glow, rest=rest)
-
-
-def daylight_light(m, day, table, camera, direction, position, normal, reflectance, length, t_vp, sun_share=None,
-                   surface_share=None):
-    """The sun's and the sky's light in a fog layer on a camera ray that meets a surface, the layer's and the air's
-    albedo included (``precompute/sunlight.py``): the glow along the ray plus the fog light the surface reflects,
-    dimmed on its way (Sun et al. 2005 Eq. 19's L_a; the reflectance taken as Lambertian: the diffuse plus the
-    specular albedo times the irradiance over pi).  The Compositor's per pixel (``comp_daylight.daylight``) and the
-    Surface group's.  ``sun_share``: ``sunlight.ray_glow``'s, ``surface_share``: ``sunlight.fog_light``'s."""
-    return sunlight.ray_glow(m, day, camera, direction, length, sun_share) + sunlight.times(
-        m, reflectance * sunlight.fog_light(m, table, day, position, normal, surface_share), t_vp)

@@ -4,7 +4,7 @@ import functools
 
 import bpy
 
-from ..precompute import model, rungs, shading, sunlight
+from ..precompute import compose, rungs, shading, sunlight
 from . import closures, drivers, groups, light_bundles, light_groups, passes, preview as preview_
 from .groups import C, F, V
 from .sockets import NodeOps
@@ -101,7 +101,8 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
         seen = sunlight.grey(m, sunlight.sky_seen(m, daylight, camera_at, direction))
         transmittance = 1.0 + is_camera * (seen - 1.0) if day_dims else m.const(1.0)
         if day_table is not None:
-            day_glow = m.scale(sunlight.ray_glow(m, daylight, camera_at, direction, model.FAR), is_camera)
+            day_glow = m.scale(compose.source_light(m, 0.0, sunlight.sky_terms(m, daylight, camera_at, direction)),
+                               is_camera)
         if kept or day_table is not None or preview:   # (the compositor's World: no glow, the sky dimmed per pixel)
             # The fogged World mixes the Fog closure by 1 - Transmittance (world.py), right where the sky is not
             # seen; through a layer it is, so every glow closure (each lamp's and the daylight's) is scaled by

@@ -134,10 +134,17 @@ def source_light(m, coverage, terms):
                 sky = m.scale(total(along), end) + m.scale(sky, 1.0 - end)
         sky = _shared(m, sky, _values(terms, SHARE, SKY))
     ray = _values(terms, GLOW, RAY)
-    parts = (([m.scale(surface, coverage)] if surface is not None else [])
-             + ([m.scale(sky, 1.0 - coverage)] if sky is not None else [])
+    parts = (_weighted(m, surface, coverage) + _weighted(m, sky, 1.0 - coverage)
              + ([_shared(m, total(ray), _values(terms, SHARE, RAY))] if ray else []))
     return total(parts) if parts else None
+
+
+def _weighted(m, value, weight):
+    """[``value`` times a coverage ``weight``], or [] for no value; a Python weight of 1 (a surface ray, a sky ray)
+    takes the value as it is, one of 0 leaves it out."""
+    if value is None or (isinstance(weight, (int, float)) and weight == 0.0):
+        return []
+    return [value if isinstance(weight, (int, float)) and weight == 1.0 else m.scale(value, weight)]
 
 
 def surface_light(m, terms):

@@ -400,13 +400,35 @@ def pixel_terms(m, day, table, camera, direction, position, normal, reflectance,
     once, along the RAY: to the surface where ``cover`` is above one half, to the sky elsewhere (without the glow's
     table its kernel is the costliest part of the picture: a pixel on a silhouette takes one side's glow).
     ``sun_share``: ``ray_glow``'s lit share of the sun's glow, ``surface_share``: ``fog_light``'s (``sun_shafts``)."""
-    def term(kind, at, value):
-        return compose.Term(kind, at, compose.DAYLIGHT, value)
-    reflected = [term(compose.REFLECTED, compose.SURFACE, reflectance * fog_light(m, table, day, position, normal,
-                                                                                   surface_share)),
-                 term(compose.DIMMING, compose.SURFACE, t_vp)]
     if day.air is None:
-        return [term(compose.GLOW, compose.SURFACE, ray_glow(m, day, camera, direction, length, sun_share)), *reflected,
-                term(compose.GLOW, compose.SKY, ray_glow(m, day, camera, direction, model.FAR, sun_share))]
+        return (surface_terms(m, day, table, camera, direction, position, normal, reflectance, length, t_vp,
+                              sun_share, surface_share) + sky_terms(m, day, camera, direction, sun_share))
     to = m.select(m.less(0.5, cover), length, model.FAR)
-    return [term(compose.GLOW, compose.RAY, ray_glow(m, day, camera, direction, to, sun_share)), *reflected]
+    return [_term(compose.GLOW, compose.RAY, ray_glow(m, day, camera, direction, to, sun_share)),
+            *_reflected_terms(m, day, table, position, normal, reflectance, t_vp, surface_share)]
+
+
+def surface_terms(m, day, table, camera, direction, position, normal, reflectance, length, t_vp, sun_share=None,
+                  surface_share=None):
+    """The sun's and the sky's light on a camera ray that meets a surface at ``length``, as the composer's terms
+    (source ``compose.DAYLIGHT``; ``compose.surface_light`` sums them: Sun et al. 2005 Eq. 19): the glow along the
+    ray (``ray_glow``) and the fog light the surface reflects (``fog_light`` times its ``reflectance``), dimmed on
+    its way by ``t_vp``.  The Surface group's (its camera rays), and a pixel's without air (``pixel_terms``)."""
+    return [_term(compose.GLOW, compose.SURFACE, ray_glow(m, day, camera, direction, length, sun_share)),
+            *_reflected_terms(m, day, table, position, normal, reflectance, t_vp, surface_share)]
+
+
+def sky_terms(m, day, camera, direction, sun_share=None):
+    """The sun's and the sky's glow along a camera ray that meets no surface, to where it leaves the layer and its
+    air (Eq. 12), as the composer's term at SKY: the World's camera rays, and a pixel's without air."""
+    return [_term(compose.GLOW, compose.SKY, ray_glow(m, day, camera, direction, model.FAR, sun_share))]
+
+
+def _reflected_terms(m, day, table, position, normal, reflectance, t_vp, surface_share):
+    return [_term(compose.REFLECTED, compose.SURFACE,
+                  reflectance * fog_light(m, table, day, position, normal, surface_share)),
+            _term(compose.DIMMING, compose.SURFACE, t_vp)]
+
+
+def _term(kind, at, value):
+    return compose.Term(kind, at, compose.DAYLIGHT, value)
