@@ -180,8 +180,8 @@ MUTATIONS = [
               "tests/test_compose.py::test_a_pixel_is_eq19_over_its_surface_and_eq12_over_its_sky")),
     Mutation("composer_sky_coverage", "the compositor's pixel takes the glows to infinity over its whole area, "
              "not over the part its rays reach the sky (Eq. 12 weighted by 1 − coverage)", "source_light",
-             "             + ([m.scale(sky, 1.0 - coverage)] if sky is not None else [])",
-             "             + ([sky] if sky is not None else [])",
+             "_weighted(m, sky, 1.0 - coverage)",
+             "_weighted(m, sky, 1.0)",
              ("tests/test_composer.py::test_pixel_light_is_eq19_over_the_surface_and_eq12_over_the_sky",
               "tests/test_compose.py::test_a_pixel_is_eq19_over_its_surface_and_eq12_over_its_sky")),
     Mutation("composer_layer_end", "the composer's layer end dropped: a ray that leaves a fog layer takes the lamps' "
