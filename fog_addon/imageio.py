@@ -272,6 +272,21 @@ def write_layers(path, layers, half=False):
         out.close()
 
 
+def add_parts(dest, source, prefix):
+    """Add every part of the multilayer EXR ``source`` to the multilayer EXR ``dest`` (rewritten), each named
+    "<prefix>.<its name>": the Compositor method's fog passes ("Fog Light", written by a File Output node) into the
+    render's file ("ViewLayer.Fog Light", beside "ViewLayer.Combined").  Reads multi-part files: call it from a
+    process that has not rendered (``read_layers``)."""
+    parts = {}
+    for path, pre in ((dest, ""), (source, f"{prefix}.")):
+        suffixes = {}
+        for c in channels(path):
+            suffixes.setdefault(c.subimage, []).append(c.suffix)
+        for k, (name, arr) in enumerate(read_layers(path).items()):
+            parts[pre + name] = (arr, suffixes[k])
+    write_layers(dest, parts)
+
+
 def write_png(path, arr, bits=8):
     """Write a PNG from values in [0, 1] (clipped; no colour transform applied)."""
     o = oiio()
@@ -296,3 +311,9 @@ def write(path, arr):
         write_png(path, arr)
     else:
         raise ValueError(f"unsupported image extension {ext!r} (use .exr or .png)")
+
+
+if __name__ == "__main__":   # python imageio.py add-parts DEST SOURCE PREFIX (``render.compositor_passes``)
+    if len(sys.argv) != 5 or sys.argv[1] != "add-parts":
+        sys.exit("usage: python imageio.py add-parts DEST.exr SOURCE.exr PREFIX")
+    add_parts(*sys.argv[2:])

@@ -5,10 +5,15 @@ colour, scene scale, method, anisotropy, the fog's top, Selected Only) and each 
 ``light.analytic_fog.use``, unless a command-line flag overrides it: without
 flags the file's fog is rendered as the artist left it.
 """
+import contextlib
 import dataclasses
+import os
+import subprocess
+import sys
+import tempfile
 import time
 
-from . import measure, props
+from . import imageio, measure, props
 from .ops import apply, progress
 from .precompute import capabilities
 from .precompute.spec import FogSpec
@@ -83,6 +88,37 @@ def fog_settings(scene, args):
     return spec, objects, {k: (v, source[f]) for k, (f, v) in shown.items()}, notes
 
 
+@contextlib.contextmanager
+def compositor_passes(scene, out):
+    """With the Compositor method's fog passes (its File Output nodes, ``nodes/compositor.py``) and a multilayer
+    ``out``: they are written to a folder of their own during the render, then added to ``out`` as each view
+    layer's "Fog Light" and "Fog Transmittance" (``imageio.add_parts``, in a process that has not rendered), so
+    ``out`` holds them as it holds the node groups' passes.  The nodes' folder is the file's again after."""
+    from .nodes import compositor
+    nodes = compositor.passes_outputs(scene) if out is not None else []
+    if not nodes:
+        yield
+        return
+    kept = [(n, n.directory) for n in nodes]
+    with tempfile.TemporaryDirectory(prefix="analytic_fog_passes_") as folder:
+        try:
+            for n, _ in kept:
+                n.directory = folder + os.sep
+            yield
+        finally:
+            for n, directory in kept:
+                n.directory = directory
+        for n, _ in kept:
+            layer = n.file_name.rpartition(f" {compositor.PASSES_SUFFIX}")[0]
+            stem = n.file_name.replace("####", f"{scene.frame_current:04d}")
+            path = next((os.path.join(folder, f) for f in sorted(os.listdir(folder)) if f.startswith(stem)), None)
+            if path is None:   # (the file's extension follows the render's Output File Extensions)
+                raise RuntimeError(f"the Compositor method's fog passes of {layer!r} were not written ({stem}: "
+                                   f"{os.listdir(folder)} in {folder})")
+            subprocess.run([sys.executable, imageio.__file__, "add-parts", os.path.abspath(os.fspath(out)), path,
+                            layer], check=True)
+
+
 def fog_passes():
     """The fog passes' (name, type) as the view layers hold them (``nodes/passes.AOVS``)."""
     from .nodes import passes
@@ -135,7 +171,8 @@ def apply_and_render(scene, args):
         with preview.forced():
             measure.render_to_file(scene, args.out, multilayer=multilayer)
     else:
-        measure.render_to_file(scene, args.out, multilayer=multilayer)
+        with compositor_passes(scene, args.out if multilayer else None):
+            measure.render_to_file(scene, args.out, multilayer=multilayer)
     if multilayer:
         print(f"passes: {args.out} is a multilayer EXR: the picture, the view layers' passes and the fog's "
               f"({', '.join(name for name, _ in fog_passes())})")

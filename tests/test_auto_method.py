@@ -43,7 +43,9 @@ def test_few_samples_keep_the_node_groups(res):
 
 
 def test_what_only_the_node_groups_have(res):
-    assert res["cycles_1_passes"][0] == "nodes" and "fog passes" in res["cycles_1_passes"][1]
+    # fog passes: both methods serve them, so they do not move the choice
+    assert res["cycles_1_passes"][0] == res["cycles_1_shafts"][0] == "compositor", res["cycles_1_passes"]
+    assert res["cycles_1_passes_no_shafts"][0] == res["cycles_1"][0], res["cycles_1_passes_no_shafts"]
     assert res["cycles_1_panoramic"][0] == "nodes" and "perspective" in res["cycles_1_panoramic"][1]
     assert res["cycles_1_g_below_tables"][0] == "osl", res["cycles_1_g_below_tables"]
 
@@ -78,22 +80,32 @@ def test_operator_reports_and_stores_the_choice(res):
 
 
 def test_refused_change_is_shown_and_changes_nothing(res):
-    """Fog passes with Method Compositor: refused; the fog keeps its groups, the panel shows why.  A lamp moved
-    while refused: the handlers rebuild with the settings the fog was built with and keep saying why (they built
-    the refused settings, and the World's preview bundle had no pass sockets: a KeyError that left half-built
-    groups and no word).  Auto then serves the passes with the node groups and the message clears."""
+    """Anisotropy -0.9 with Method Compositor (beyond its tables): refused; the fog keeps its groups, the panel
+    shows why.  A lamp moved while refused: the handlers rebuild with the settings the fog was built with and
+    keep saying why (they built the refused settings: with Fog Passes, once refused too, the World's preview
+    bundle had no pass sockets, a KeyError that left half-built groups and no word).  Served again, the message
+    clears."""
     r = res["refused"]
-    assert r["error"] and "no fog passes" in r["error"] and r["built"] == "compositor" and not r["passes_aovs"], r
-    # a lamp moved after it: the handlers rebuild the fog with the settings it was built with, still saying why
+    assert r["error"] and "anisotropy -0.9 is below -0.8" in r["error"] and r["built"] == "compositor" and r["g"] == 0.0, r
     m = res["refused_then_moved"]
     assert m["raised"] is None and m["built"] == "compositor" and not m["building"], m
-    assert m["error"] == r["error"] and not m["passes_aovs"], m
+    assert m["error"] == r["error"] and m["g"] == 0.0, m
     # a fault of the add-on's in a handler's rebuild is said, not raised, and the next rebuild clears it
     f = res["fault"]
     assert f["raised"] is None and "could not follow the scene (ZeroDivisionError" in f["error"], f
     assert f["after"] is None and f["built"] == "compositor", f
+
+
+def test_compositor_serves_fog_passes(res):
+    """Fog Passes with Method Compositor: a File Output node of the fog's writes the fog group's Fog Light and Fog
+    Transmittance (the view layer holds the materials' transmittance, not the fog light); Auto then chooses by
+    cost among the methods that serve them, and says so."""
+    c = res["compositor_passes"]
+    assert c["error"] is None and c["built"] == "compositor", c
+    assert c["outputs"] == [["//fog_passes/", "ViewLayer Fog Passes_####", ["Fog Light", "Fog Transmittance"]]], c
+    assert c["aovs"] == ["Fog Transmittance"], c
     a = res["auto_with_passes"]
-    assert a["error"] is None and a["built"] == "nodes" and "fog passes" in a["line"], a
+    assert a["error"] is None and a["built"] in ("nodes", "compositor") and "Method Auto" in a["line"], a
 
 
 def test_what_is_not_modelled_is_said(res):

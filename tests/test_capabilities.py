@@ -40,8 +40,8 @@ def test_no_method_name_is_compared_outside_methods():
 @pytest.mark.parametrize("feature, engine, expected", [
     ("shafts", c.CYCLES, ["compositor"]), ("shafts", c.EEVEE, ["compositor"]),
     ("emitters", c.CYCLES, ["compositor"]), ("dense_shaped", c.EEVEE, ["compositor"]),
-    ("dense_point", c.CYCLES, ["nodes", "compositor"]), ("passes", c.CYCLES, ["nodes"]),
-    ("passes", c.EEVEE, ["nodes"]), ("glass", c.CYCLES, ["nodes"]), ("glass", c.EEVEE, []),
+    ("dense_point", c.CYCLES, ["nodes", "compositor"]), ("passes", c.CYCLES, ["nodes", "compositor"]),
+    ("passes", c.EEVEE, ["nodes", "compositor"]), ("glass", c.CYCLES, ["nodes"]), ("glass", c.EEVEE, []),
     ("panoramic", c.CYCLES, ["nodes", "osl"]), ("strong_backscatter", c.CYCLES, ["osl"]),
 ])
 def test_who_models_what(feature, engine, expected):

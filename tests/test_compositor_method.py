@@ -79,7 +79,7 @@ def test_eevee_dimming_holds_what_fits_brightest_first(res):
     assert d["cycles"] == 0
 
 
-@pytest.mark.parametrize("case,words", [("workbench", "needs Cycles or EEVEE"), ("passes", "no fog passes"),
+@pytest.mark.parametrize("case,words", [("workbench", "needs Cycles or EEVEE"), ("backscatter", "is below -0.8"),
                                         ("panoramic", "perspective camera")])
 def test_refused_changing_nothing(res, case, words):
     assert res["refused"][case] is not None and words in res["refused"][case]

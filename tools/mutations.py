@@ -206,8 +206,8 @@ MUTATIONS = [
              "    ng.links.new(params.outputs[groups.PREVIEW], mix.inputs[0])",
              "    mix.inputs[0].default_value = 1.0",
              ("tests/test_viewport_preview.py::test_final_renders_are_those_without_the_preview",)),
-    Mutation("auto_needs_before_cost", "Method Auto ignores what the scene needs (fog passes, a panoramic "
-             "camera): the compositor by cost alone", "auto.choose",
+    Mutation("auto_needs_before_cost", "Method Auto ignores what the scene needs (a panoramic camera): the "
+             "compositor by cost alone", "auto.choose",
              "    if hard is not None:\n",
              "    if False:\n",
              ("tests/test_auto_method.py::test_what_only_the_node_groups_have",)),
@@ -569,6 +569,17 @@ MUTATIONS = [
              "                                      t_day, cover, sun_share, surface_share)",
              "                                      t_day, cover, None, None)",
              ("tests/test_sun_shafts_render.py::test_sun_shafts_against_cycles[hard_g0.7_inside_low]",)),
+    Mutation("compositor_pass_no_light", "fog passes, Compositor: the Fog Light pass holds no light",
+             "build_fog_group",
+             "    m.feed(gout.inputs[passes.FOG_LIGHT], fog)\n",
+             "    m.feed(gout.inputs[passes.FOG_LIGHT], m.scale(fog, 0.5))\n",
+             ("tests/test_passes.py::test_compositor_passes_are_the_fogs_part",)),
+    Mutation("compositor_pass_transmittance", "fog passes, Compositor: Fog Transmittance left at 1, not the "
+             "materials' e^{-beta D}",
+             "build_fog_group",
+             "compose.dimmed(m, m.combine(t, t, t), factor)",
+             "compose.dimmed(m, m.combine(1.0, 1.0, 1.0), factor)",
+             ("tests/test_passes.py::test_compositor_passes_are_the_fogs_part",)),
 ]
 
 

@@ -16,8 +16,7 @@ N counts lights; a scene's Quality steps some of them down the ladder, which bot
 
 What the scene needs comes first:
 
-* fog passes, or a camera that is not perspective (panoramic): the node groups (hard: the compositor has
-  neither);
+* a camera that is not perspective (panoramic): the node groups (hard: the compositor has none);
 * anisotropy below the node groups' tables (g < rungs.MIN_TABLE_ANISOTROPY): OSL in Cycles;
 * EEVEE's uniform block can't hold every light's node groups: the compositor (the node groups would step
   lights down beyond the Quality's target);

@@ -3,13 +3,14 @@
 The materials keep only what depends on each sample's depth (the camera ray's extinction, and in EEVEE
 the lights' shared dimming of direct light: ``dimming_lights``); the compositor's group evaluates each
 light's glows and the fog light its pixel's surface reflects, within the light's window
-(``precompute/footprint.py``).  Limits: one surface point per pixel, perspective cameras, no fog passes.
+(``precompute/footprint.py``).  Limits: one surface point per pixel, perspective cameras.  The fog passes are
+the compositor's, written by a File Output node (``nodes/compositor.py``).
 """
 import functools
 
 import bpy
 
-from ..nodes import (budgets, comp_daylight, comp_fog, comp_shafts, compositor, graph, owned, surface_group,
+from ..nodes import (budgets, comp_daylight, comp_fog, comp_shafts, compositor, graph, owned, passes, surface_group,
                      world_group)
 from .. import caveats, shadow_maps, sunsky, view
 from ..precompute import predict, rungs, shafts
@@ -35,9 +36,6 @@ class Compositor(Method):
         if camera is not None and camera.data.type != "PERSP":
             return (f"the Compositor method needs a perspective camera ({camera.name!r} is "
                     f"{camera.data.type.lower()}): use the Node Groups method")
-        if spec.passes:
-            return ("the Compositor method adds the fog's light in the compositor, so there are no fog passes: "
-                    "switch Fog Passes off or use the Node Groups method")
         return None
 
     def shader_lights(self, scene, spec, lights, models):
@@ -86,7 +84,8 @@ class Compositor(Method):
                                           day=(comp_daylight.Day(day, table, dims, sun_shadow,
                                                                  shafts.samples_for(spec.quality).view_nodes)
                                                if daylit else None),
-                                          layer=spec.layer_per_unit() if spec.layered else None)
+                                          layer=spec.layer_per_unit() if spec.layered else None,
+                                          with_passes=spec.passes)
         world_group.build_world([], [], scene.camera, images, spec.passes, day=day, day_dims=not daylit,
                                 preview=preview)
         return images
@@ -95,8 +94,8 @@ class Compositor(Method):
         if plan.windows is not None:
             comp_fog.set_windows(plan.in_groups, plan.windows, grow=plan.partial)
 
-    def passes(self, scene, spec):
-        return comp_fog.aovs(scene.render.engine)
+    def passes(self, scene, spec):   # (the fog passes: the materials' transmittance, the fog group's light)
+        return comp_fog.aovs(scene.render.engine) + (((passes.TRANSMITTANCE, "VALUE"),) if spec.passes else ())
 
     def notes(self, scene, spec, plan):
         layers = unfogged_layers(scene)
@@ -107,6 +106,11 @@ class Compositor(Method):
                       ] if layers else []
         n, kept = len(plan.in_groups), len(plan.shader_lights)
         layer_note += self.preview_notes(scene, plan)
+        if spec.passes:
+            where = compositor.PASSES_DIRECTORY + compositor.passes_file_name("<view layer>").replace("####", "<frame>")
+            layer_note.append((scene.name, f"the fog passes are the compositor's: each render writes them to {where}.exr "
+                                           "(multilayer EXR: Fog Light, Fog Transmittance); the view layers' own "
+                                           "passes hold no fog light"))
         if scene.render.engine == budgets.EEVEE_ENGINE and kept < n:
             return layer_note + [(scene.render.engine, f"{n - kept} of {n} lights are not in the materials' shared "
                                   "dimming of direct light (EEVEE's uniform block): their direct light is dimmed as "

@@ -31,13 +31,14 @@ dimming of direct light (EEVEE has no light node trees: ``methods.compositor.dim
 
 Limits (README "The Compositor method"): one surface point per pixel, so a pixel that sees two surfaces
 gets the fog light of one point (Cycles: their mean position; EEVEE: the one its centre sees); perspective
-cameras; no fog passes (the fog's light is the compositor's).
+cameras.  The fog passes are the group's outputs (Fog Light, Fog Transmittance), which a File Output node after
+it writes (``compositor.py``): the view layers' own passes hold no fog light.
 """
 import bpy
 
 from ..precompute import compose, footprint, model, pixel, rungs, shafts, sun_shafts, sunlight, surface
 from . import (budgets, comp_bundles, comp_daylight, comp_emitters, comp_halos, comp_lights, comp_ops, comp_shafts,
-               compositor, groups, images as images_, owned)
+               compositor, groups, images as images_, owned, passes)
 from .comp_bundles import BUNDLE, BUNDLE_SIZE
 from .comp_daylight import LAYER_OPEN
 from .comp_emitters import EMITTERS
@@ -179,9 +180,11 @@ def _picture_scale(m, scene, filter_path):
 
 
 def build_fog_group(scene, lights, models, images, windows=None, partial=False, shafted=None, emitters=None,
-                    day=None, layer=None):
+                    day=None, layer=None, with_passes=False):
     """(Re)build the compositor group ``FOG_GROUP``: Image (the render) and the AOVs in; Image (the render
-    plus the fog's light) and Fog Light out.  ``lights``: the fog's lights, ``models``: each light's
+    plus the fog's light) and Fog Light out, and with the fog passes (``with_passes``) Fog Transmittance: the
+    materials' Fog Transmittance AOV (``passes.py``) times the factor the group puts on the render, so that
+    Image = Fog Transmittance x (the surface as lit through the fog) + Fog Light, as the node groups' passes.  ``lights``: the fog's lights, ``models``: each light's
     rungs.LightModels; ``windows``: (the surfaces' window, [each light's glow window or None]) of
     ``footprint.py`` (``view.windows``), or None to evaluate every term over the whole picture; ``partial``:
     they do not hold the animation's range (``PARTIAL``); ``shafted``: ``comp_bundles.build_bundle``'s;
@@ -201,19 +204,21 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
                                                             emitters[1]))
     eevee = scene.render.engine == budgets.EEVEE_ENGINE
     inputs = ((("Image", "COLOR"),) + aovs(scene.render.engine) + (((compositor.DEPTH, "VALUE"),) if eevee else ())
-              + (((EMITTERS, "COLOR"),) if emitters is not None else ()))
+              + (((EMITTERS, "COLOR"),) if emitters is not None else ())
+              + (((passes.TRANSMITTANCE, "VALUE"),) if with_passes else ()))
+    outputs = ("Image", passes.FOG_LIGHT) + ((passes.TRANSMITTANCE,) if with_passes else ())
     ng = bpy.data.node_groups.get(FOG_GROUP)
     if ng is None:
         ng = bpy.data.node_groups.new(FOG_GROUP, "CompositorNodeTree")
         ng[groups.FOG_PROP] = True
     have = [(i.name, i.in_out) for i in ng.interface.items_tree if i.item_type == "SOCKET"]
     if ([s for s in have if s[1] == "INPUT"] != [(n, "INPUT") for n, _ in inputs]   # (Blender lists outputs first)
-            or [s for s in have if s[1] == "OUTPUT"] != [("Image", "OUTPUT"), ("Fog Light", "OUTPUT")]):
+            or [s for s in have if s[1] == "OUTPUT"] != [(n, "OUTPUT") for n in outputs]):
         # new, or another engine's: its group nodes lose their links, and the chain links them anew
         ng.interface.clear()
         for name, kind in inputs:
             ng.interface.new_socket(name, in_out="INPUT", socket_type=C if kind == "COLOR" else F)
-        for name in ("Image", "Fog Light"):
+        for name in outputs:
             ng.interface.new_socket(name, in_out="OUTPUT", socket_type=C)
     ng.animation_data_clear()
     ng.nodes.clear()
@@ -331,7 +336,10 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     # Eq. 19 where the pixel sees its surface, Eq. 12 where it sees the sky
     fog, factor = compose.compose(m, compose.Pixel(cover, albedo), terms)
     fog = m.wrap((0.0, 0.0, 0.0)) if fog is None else fog
-    m.feed(gout.inputs["Fog Light"], fog)
+    m.feed(gout.inputs[passes.FOG_LIGHT], fog)
+    if with_passes:
+        t = p[passes.TRANSMITTANCE]
+        m.feed(gout.inputs[passes.TRANSMITTANCE], compose.dimmed(m, m.combine(t, t, t), factor))
     m.place()
     m.feed(gout.inputs["Image"], fog + compose.dimmed(m, p["Image"], factor))
     ng[PARTIAL] = partial

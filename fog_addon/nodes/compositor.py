@@ -41,7 +41,10 @@ With the Compositor method (``comp_fog.py``) the render holds no fog light: Cycl
 and the chain after each Render Layers node is instead one group node, the fog's ``AnalyticFog
 Compositor Fog``, fed with the Image and the method's AOVs, which adds the fog's light.  It is spliced
 into a user's compositor the same way, for every view layer that renders, denoised or not, in Cycles and
-EEVEE (where the group also reads the Depth pass, switched on and restored like the passes below).
+EEVEE (where the group also reads the Depth pass, switched on and restored like the passes below).  With the
+fog passes a File Output node of the fog's after it writes the group's Fog Light and Fog Transmittance
+(``PASSES_DIRECTORY``: a multilayer EXR per view layer and frame, ``passes_file_name``): the view layers' own
+passes cannot take what the compositor computes.
 
 The settings changed (the scene's denoiser and Compositing flags, each view
 layer's Emission, Environment, Denoising Data and Depth passes) are recorded by ``overrides.py`` and restored
@@ -51,7 +54,7 @@ import json
 
 import bpy
 
-from . import overrides, owned
+from . import overrides, owned, passes
 
 EMISSION, ENVIRONMENT = "Emission", "Environment"   # the Render Layers outputs of Cycles' Emit and Env passes
 DEPTH = "Depth"   # the Render Layers output of the Z pass (``use_pass_z``), which the fog group reads in EEVEE
@@ -60,6 +63,8 @@ STATE = "analytic_fog_compositor"   # on the scene: {"tree": the compositor tree
 LINKS = "links"   # in STATE: JSON [[Render Layers node, node, input identifier], ...], the user's links from each
 #                   spliced Render Layers' Image, which ``teardown`` gives back whatever became of the chain
 GROUP = "AnalyticFog Compositor"
+PASSES_DIRECTORY = "//fog_passes/"   # the Compositor method's fog passes: a multilayer EXR a view layer and frame
+PASSES_SUFFIX = "Fog Passes"
 _PREFILTER = {"NONE": "None", "FAST": "Fast", "ACCURATE": "Accurate"}
 _QUALITY = {"HIGH": "High", "BALANCED": "Balanced", "FAST": "Fast"}
 _MIX_A, _MIX_B, _MIX_OUT = "A_Color", "B_Color", "Result_Color"   # ShaderNodeMix (RGBA) socket identifiers
@@ -197,7 +202,27 @@ def _fog_chain(tree, rl, k, fog):
     for sock in node.inputs:
         if rl.outputs.get(sock.name) is not None:
             tree.links.new(rl.outputs[sock.name], sock)
+    if node.outputs.get(passes.TRANSMITTANCE) is not None:   # the fog passes: written beside the render
+        out = owned.add(tree, "CompositorNodeOutputFile", f"Compositor {k} Fog Passes",
+                        (node.location.x + 300, node.location.y - 250), directory=PASSES_DIRECTORY,
+                        file_name=passes_file_name(rl.layer))
+        out.file_output_items.clear()
+        for name in (passes.FOG_LIGHT, passes.TRANSMITTANCE):
+            out.file_output_items.new("RGBA", name)
+            tree.links.new(node.outputs[name], out.inputs[name])
     return node.outputs["Image"]
+
+
+def passes_file_name(layer):
+    """The fog passes' file name (without the frame's digits and extension) of the view layer ``layer``."""
+    return f"{layer} {PASSES_SUFFIX}_####"
+
+
+def passes_outputs(scene):
+    """The Compositor method's File Output nodes of the fog passes in ``scene``'s compositor."""
+    tree = scene.compositing_node_group
+    return [] if tree is None else [n for n in tree.nodes if owned.is_ours(n)
+                                    and n.bl_idname == "CompositorNodeOutputFile"]
 
 
 def _store_passes(scene, layers, fog=None):

@@ -118,7 +118,8 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
     if preview:
         shown, preview_trees, _ = light_bundles.place_bundles(
             ng, *preview, functools.partial(build_world_bundle, images, scaled=layer_scale is not None,
-                                            prefix=groups.WORLD_PREVIEW), shared, False)
+                                            prefix=groups.WORLD_PREVIEW),
+            {k: v for k, v in shared.items() if k != "Pass Direction"}, False)   # (the preview writes no pass)
         fogs += [sock for sock in [preview_.behind_switch(ng, params, [node.outputs["Fog"] for node, _ in shown])]
                  if sock]
     emission = shading.shade_background(

@@ -469,7 +469,7 @@ def choose(preference="nodes", step=0, g=0.0, kind="point", rim_nodes=spot.RIM_N
     if capabilities.can(preference, "quadrature"):
         models = LightModels(air_quad, bg_quad, scatter, DIRECT_EXACT)
     elif g < MIN_TABLE_ANISOTROPY:
-        raise ValueError(f"anisotropy {g} is below {MIN_TABLE_ANISOTROPY}: the node groups' tables lose accuracy "
+        raise ValueError(f"anisotropy {g:g} is below {MIN_TABLE_ANISOTROPY}: the node groups' tables lose accuracy "
                          "with so much back-scattering; use the OSL method (Cycles)")
     else:
         models = LightModels(air_table, bg_table, scatter, DIRECT_EXACT)

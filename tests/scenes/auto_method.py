@@ -16,6 +16,7 @@ import bpy  # noqa: E402
 
 import fog_addon  # noqa: E402
 from fog_addon import methods  # noqa: E402
+from fog_addon.nodes import compositor as compositor_nodes  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 from fog_scenes import many_lights  # noqa: E402
 
@@ -53,6 +54,7 @@ def main():
     RES["cycles_1_shafts"] = choice(scene)   # the spheres stand in the lamp's glow: light shafts
     RES["cycles_1"] = choice(scene, shafts=False)
     RES["cycles_1_passes"] = choice(scene, passes=True)
+    RES["cycles_1_passes_no_shafts"] = choice(scene, passes=True, shafts=False)
     RES["cycles_1_explicit_nodes"] = choice(scene, method="nodes")
     RES["cycles_1_g_below_tables"] = choice(scene, anisotropy=-0.9)
     scene.camera.data.type = "PANO"
@@ -108,9 +110,9 @@ def main():
     RES["spec_method"] = scene.analytic_fog.method
     s = scene.analytic_fog
     s.method = "COMPOSITOR"
-    s.use_passes = True   # the Compositor method has no passes: refused, the fog keeps what it has
+    s.anisotropy = -0.9   # beyond the Compositor method's tables: refused, the fog keeps what it has
     RES["refused"] = {"error": apply.sync_error(scene), "built": apply.built_method().name,
-                      "passes_aovs": [a.name for a in scene.view_layers[0].aovs if a.name.startswith("Fog Light")]}
+                      "g": json.loads(bpy.data.node_groups["AnalyticFog Surface"][apply.SPEC_KEY])["anisotropy"]}
     lamp = next(o for o in scene.objects if o.type == "LIGHT")
     lamp.location.x += 0.5   # the handlers follow the lamp with the settings the fog was built with
     bpy.context.view_layer.update()
@@ -122,8 +124,8 @@ def main():
     RES["refused_then_moved"] = {
         "raised": raised, "error": apply.sync_error(scene), "built": getattr(apply.built_method(), "name", None),
         "building": [g.name for g in bpy.data.node_groups if "(building)" in g.name],
-        "passes_aovs": [a.name for a in scene.view_layers[0].aovs if a.name.startswith("Fog Light")]}
-    s.use_passes = False   # served again: the message clears
+        "g": json.loads(bpy.data.node_groups["AnalyticFog Surface"][apply.SPEC_KEY])["anisotropy"]}
+    s.anisotropy = 0.0   # served again: the message clears
     # a fault of the add-on's in a handler's rebuild: said, and cleared by the next rebuild that works
     compositor = methods.get("compositor")
     compositor.build = lambda *a, **k: 1 / 0
@@ -137,8 +139,13 @@ def main():
     fault = {"raised": raised, "error": apply.sync_error(scene)}
     apply.refresh_lights(scene, rebuild=True)
     RES["fault"] = dict(fault, after=apply.sync_error(scene), built=getattr(apply.built_method(), "name", None))
-    s.use_passes = True
-    s.method = "AUTO"   # Auto serves fog passes with the node groups: the error clears
+    s.use_passes = True   # the Compositor method's passes: a File Output node writes them
+    RES["compositor_passes"] = {
+        "error": apply.sync_error(scene), "built": apply.built_method().name,
+        "outputs": [[n.directory, n.file_name, [i.name for i in n.inputs if i.is_linked]]
+                    for n in compositor_nodes.passes_outputs(scene)],
+        "aovs": [a.name for a in scene.view_layers[0].aovs if a.name in ("Fog Light", "Fog Transmittance")]}
+    s.method = "AUTO"   # Auto chooses by cost among the methods that serve fog passes
     RES["auto_with_passes"] = {"error": apply.sync_error(scene), "built": apply.built_method().name,
                                "line": apply.method_line(apply.stored_choice())}
     print("AUTO_JSON " + json.dumps(RES), flush=True)

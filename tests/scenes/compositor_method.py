@@ -197,13 +197,13 @@ def main():
                                                      "fog": fog_data()}}
 
     refused = {}
-    for case in ("workbench", "passes", "panoramic"):
+    for case in ("workbench", "backscatter", "panoramic"):
         scene = fresh()
         kwargs = {}
         if case == "workbench":
             scene.render.engine = "BLENDER_WORKBENCH"
-        elif case == "passes":
-            kwargs["with_passes"] = True
+        elif case == "backscatter":
+            kwargs["anisotropy"] = -0.9
         else:
             scene.camera.data.type = "PANO"
         try:

@@ -12,6 +12,7 @@ MODE
   passes     ENGINE (CYCLES or BLENDER_EEVEE): a grey plane lit by two lamps; render A as it is, render B
              with the lamps lighting no surface (Cycles: light ray visibility; EEVEE: diffuse and specular
              factors 0), so B's Combined is the fog's part alone: OUT/passes_<engine>_{lit,unlit}.exr
+  passes_blend ENGINE: the same two scenes saved without the fog, OUT/passes_<engine>_{lit,unlit}.blend
   remove     add and remove the fog on scenes with and without a user's compositor graph, with a save
              and reopen in between; prints snapshots (see ``snapshot``); and the Opacity that weights
              the passes of an opaque, a half-transparent and a texture-mixed transparent material
@@ -184,8 +185,9 @@ def strays(out):
     return {"samples": SPP}
 
 
-def passes_scene(out, engine):
-    """A grey plane lit by two lamps, rendered lit and unlit (see the module docstring)."""
+def passes_scene(out, engine, save=False):
+    """A grey plane lit by two lamps, rendered lit and unlit (see the module docstring); ``save``: saved as
+    OUT/passes_<engine>_{lit,unlit}.blend without the fog instead, for the command line to render."""
     res = {}
     for lit in (True, False):
         bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -219,8 +221,12 @@ def passes_scene(out, engine):
         scene.cycles.max_bounces = 0
         scene.eevee.taa_render_samples = 1
         scene.eevee.light_threshold = 1e-4
-        apply.apply_fog(scene, BETA, albedo=(0.9, 0.8, 0.7), with_passes=True)
         name = f"passes_{engine.lower()}_{'lit' if lit else 'unlit'}"
+        if save:
+            bpy.ops.wm.save_as_mainfile(filepath=str(out / f"{name}.blend"))
+            res[name] = {"blend": str(out / f"{name}.blend")}
+            continue
+        apply.apply_fog(scene, BETA, albedo=(0.9, 0.8, 0.7), with_passes=True)
         multilayer(scene, out / f"{name}.exr")
         res[name] = {"camera": list(cam.location), "rotation": [list(v) for v in cam.matrix_world.to_3x3()],
                      "lens": cam.data.lens, "sensor": cam.data.sensor_width,
@@ -428,6 +434,8 @@ def main(out, mode, *args):
         res = strays(out)
     elif mode == "passes":
         res = passes_scene(out, *args)
+    elif mode == "passes_blend":   # the same scenes saved without the fog (the command line renders them)
+        res = passes_scene(out, *args, save=True)
     elif mode == "remove":
         res = remove(out)
         res["opacity"] = opacity()
