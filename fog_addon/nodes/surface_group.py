@@ -5,7 +5,9 @@ import functools
 
 import bpy
 
-from ..precompute import rungs, shading, sunlight, surface
+from ..precompute.model import rungs, shading
+from ..precompute.physics.daylight import sunlight
+from ..precompute.physics.point import surface
 from . import closures, glass_tails, groups, light_bundles, light_groups, passes, preview as preview_
 from .groups import C, F, V
 from .sockets import NodeOps
@@ -189,8 +191,8 @@ def _times(m, emission, factor):
 def daylight_light(m, day, table, camera, direction, position, normal, reflectance, length, t_vp, sun_share=None,
                    surface_share=None):
     """The sun's and the sky's light in a fog layer on a camera ray that meets a surface, the layer's and the air's
-    albedo included (``precompute/sunlight.py``): the glow along the ray plus the fog light the surface reflects,
-    dimmed on its way (Sun et al. 2005 Eq. 19's L_a; the reflectance taken as Lambertian: the diffuse plus the
+    albedo included (``precompute/physics/daylight/sunlight.py``): the glow along the ray plus the fog light the surface
+    reflects, dimmed on its way (Sun et al. 2005 Eq. 19's L_a; the reflectance taken as Lambertian: the diffuse plus the
     specular albedo times the irradiance over pi).  The Compositor's per pixel (``comp_daylight.daylight``) and the
     Surface group's.  ``sun_share``: ``sunlight.ray_glow``'s, ``surface_share``: ``sunlight.fog_light``'s."""
     return sunlight.ray_glow(m, day, camera, direction, length, sun_share) + sunlight.times(

@@ -4,7 +4,9 @@ import functools
 
 import bpy
 
-from ..precompute import model, rungs, shading, sunlight
+from ..precompute.model import rungs, shading
+from ..precompute.physics.daylight import sunlight
+from ..precompute.physics.point import model
 from . import closures, drivers, groups, light_bundles, light_groups, passes, preview as preview_
 from .groups import C, F, V
 from .sockets import NodeOps
