@@ -49,7 +49,7 @@ def worker(order, n, n_lights):
     from fog_addon.nodes.material import wrap_material
     from fog_addon import methods
     from fog_addon.ops import build, plan
-    from fog_addon.precompute.spec import FogSpec
+    from fog_addon.precompute.core.spec import FogSpec
     from fog_addon.props import store_spec
 
     bpy.ops.wm.read_factory_settings(use_empty=True)

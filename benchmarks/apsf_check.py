@@ -1,6 +1,6 @@
 """The seed's own check (issue 28): Narasimhan et al.'s APSF series (Eq. 27, ``precompute/apsf.py``) against
-our Monte Carlo transport around a point source (``precompute/point_source_mc.py``), and how much of the glow
-is multiply scattered, over the issue's range (T 1.5-8, q 0.5-0.9, albedo 0.8-0.99).
+our Monte Carlo transport around a point source (``precompute/physics/point/point_source_mc.py``), and how much of the
+glow is multiply scattered, over the issue's range (T 1.5-8, q 0.5-0.9, albedo 0.8-0.99).
 
     .venv/bin/python benchmarks/apsf_check.py [--photons 200000]
 
@@ -20,7 +20,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 import smoke  # noqa: E402
 from tools.research import apsf  # noqa: E402
-from fog_addon.precompute import point_source_mc as mc  # noqa: E402
+from fog_addon.precompute.physics.point import point_source_mc as mc  # noqa: E402
 
 OUT = smoke.out(ROOT / "benchmarks" / "out")
 CASES = smoke.pick([(0.5, 0.8), (0.5, 0.99), (0.9, 0.8), (0.9, 0.99)], [(0.9, 0.8)])   # (q, albedo)

@@ -31,7 +31,7 @@ def worker(spec):
     from shafts_cost import hall
     from cycles_timing import cycles_cpu
     from fog_addon.ops import apply
-    from fog_addon.precompute.spec import FogSpec
+    from fog_addon.precompute.core.spec import FogSpec
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = hall(bpy.context.scene, spec["lights"])
     if spec["kind"] == "area":

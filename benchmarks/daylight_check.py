@@ -18,7 +18,7 @@ sys.path.insert(0, str(ROOT))
 
 import smoke                                       # noqa: E402
 
-from fog_addon.precompute import aerial, daylight as dl   # noqa: E402
+from fog_addon.precompute.physics.daylight import aerial, daylight as dl   # noqa: E402
 from tests import test_daylight as t               # noqa: E402
 from tools.shader_float32 import Float32Ops        # noqa: E402
 

@@ -24,7 +24,7 @@ Each (engine, method, case) runs in ONE worker process (this script with ``--wor
 * build the city; render without fog: a first render, then the minimum of ``repeats`` warm ones;
 * add the fog (``apply_*``: the whole call; inside it, timed by wrapping the add-on's functions: ``bake_*``
   ``daylight_tables.bake_fog_light``, the fog light's irradiance map (0 when the table cache,
-  ``precompute/table_cache.py``, holds it); ``probe_*`` ``sunsky.probe_sky``, the World's equirectangular probe
+  ``precompute/core/table_cache.py``, holds it); ``probe_*`` ``sunsky.probe_sky``, the World's equirectangular probe
   render; ``comp_group_*`` ``comp_fog.build_fog_group``; ``surface_group_*``
   ``surface_group.build_surface``);
 * render with fog: a first render, then the minimum of ``repeats`` warm ones;
@@ -134,8 +134,8 @@ def worker(spec):
     from fog_addon import sunsky
     from fog_addon.nodes import comp_fog, groups, surface_group
     from fog_addon.ops import apply
-    from fog_addon.precompute import daylight_tables
-    from fog_addon.precompute.spec import FogSpec
+    from fog_addon.precompute.physics.daylight import daylight_tables
+    from fog_addon.precompute.core.spec import FogSpec
     from fog_scenes import daylight as dl
 
     bpy.ops.wm.read_factory_settings(use_empty=True)

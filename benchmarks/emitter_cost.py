@@ -54,8 +54,8 @@ def worker(spec):
     from cycles_timing import cycles_cpu, timed_apply, warm
     from shafts_cost import hall
     from fog_addon.ops import apply
-    from fog_addon.precompute import emitter_glow
-    from fog_addon.precompute.spec import FogSpec
+    from fog_addon.precompute.physics.emitter import emitter_glow
+    from fog_addon.precompute.core.spec import FogSpec
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = hall(bpy.context.scene, LAMPS)
     add_signs(scene, spec["signs"])

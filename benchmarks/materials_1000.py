@@ -60,7 +60,7 @@ from demo_scenes import add_camera, add_point_light, render_settings, set_world 
 from fog_addon.nodes import (comp_bundles, comp_fog, compositor, groups, images, light_bundles, owned,  # noqa: E402
                              surface_group)
 from fog_addon.ops import apply  # noqa: E402
-from fog_addon.precompute import rungs  # noqa: E402
+from fog_addon.precompute.model import rungs  # noqa: E402
 
 OUT = smoke.out(ROOT / "benchmarks" / "out")
 DENSITY = 0.05

@@ -32,7 +32,7 @@ def worker(spec):
     from cycles_timing import cycles_cpu, timed_apply, warm
     from shafts_cost import hall
     from fog_addon.ops import apply
-    from fog_addon.precompute.spec import FogSpec
+    from fog_addon.precompute.core.spec import FogSpec
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = hall(bpy.context.scene, spec["lights"])
     kind = spec.get("kind", "point")

@@ -172,7 +172,7 @@ def worker(spec):
     from fog_addon import caveats, shadow_maps
     from fog_addon.nodes import comp_shafts
     from fog_addon.ops import apply
-    from fog_addon.precompute.spec import FogSpec
+    from fog_addon.precompute.core.spec import FogSpec
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = hall(bpy.context.scene, spec["lights"])

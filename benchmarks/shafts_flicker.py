@@ -38,7 +38,7 @@ def worker(spec):
     import numpy as np
     from fog_addon import imageio
     from fog_addon.ops import apply
-    from fog_addon.precompute.spec import FogSpec
+    from fog_addon.precompute.core.spec import FogSpec
     from fog_scenes import render_harness as h
 
     tmp = pathlib.Path(spec["tmp"])

@@ -7,8 +7,8 @@ does.  No NaN, no Inf, no black pixels").  Numpy only: no Blender.
 
 Figures and their reading: docs/measurements/2026-11-27-shafts-stability.md.
 
-The code under test is ``fog_addon/precompute/shafts.py``: ``lit_share`` with K = 24 nodes (Quality Final) on
-the numpy ops, a point light's 1024 x 512 map (``POINT_MAP``) baked here from closed-form ray casts against
+The code under test is ``fog_addon/precompute/physics/shafts/shafts.py``: ``lit_share`` with K = 24 nodes (Quality
+Final) on the numpy ops, a point light's 1024 x 512 map (``POINT_MAP``) baked here from closed-form ray casts against
 spheres and planes at the map's grid points (``point_map_directions``), stored float32 as the add-on's image.
 S_map is the mean of the 4 interleaved shares (shift (k + 0.5) / 4, k = 0..3: the 2 x 2 pattern of
 ``shafts.offset``), as the compositor's filter (``comp_shafts._interleave_mean``, SHAFT_TAPS) averages them.
@@ -80,9 +80,9 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import csv_rows  # noqa: E402
 import smoke  # noqa: E402
-from fog_addon.precompute import shaft_maps, shafts  # noqa: E402
-from fog_addon.precompute.ops import NumpyOps  # noqa: E402
-from fog_addon.precompute.tables import TableSpec  # noqa: E402
+from fog_addon.precompute.physics.shafts import shaft_maps, shafts  # noqa: E402
+from fog_addon.precompute.core.ops import NumpyOps  # noqa: E402
+from fog_addon.precompute.core.tables import TableSpec  # noqa: E402
 from fog_scenes.occluders import sphere_hit  # noqa: E402
 
 OUT = smoke.out(ROOT / "benchmarks" / "out")

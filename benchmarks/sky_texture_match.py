@@ -4,9 +4,9 @@ Renders Blender 5.0's Sky Texture World alone (Cycles CPU, one Blender process, 
 benchmarks/out/sky_texture/): an equirectangular panorama with the sun disc on and off (the horizon's radiance, the
 upper hemisphere's mean as ``sunsky.probe_sky`` takes it) and a narrow perspective view centred on the sun, disc
 on and off (the disc's irradiance on a surface facing the sun: the difference of the two, integrated over the
-view's pixels).  Then evaluates the add-on's daylight (``precompute/sunlight.py``, numpy) with that sun and sky at
-the same directions: the horizon colour ray_glow(d, UNBOUNDED), distant black and white surfaces, the sky pixel
-World(d) sky_seen(d) + ray_glow(d, UNBOUNDED) against the Sky Texture alone.
+view's pixels).  Then evaluates the add-on's daylight (``precompute/physics/daylight/sunlight.py``, numpy) with that sun
+and sky at the same directions: the horizon colour ray_glow(d, UNBOUNDED), distant black and white surfaces, the sky
+pixel World(d) sky_seen(d) + ray_glow(d, UNBOUNDED) against the Sky Texture alone.
 
     .venv/bin/python benchmarks/sky_texture_match.py [--figure]
 
@@ -224,7 +224,8 @@ def sky_texture_figures(cfg, read):
 # --- the add-on's daylight at the same directions -----------------------------------------------------------------
 
 def our_day(kind, sun_irradiance, sky_radiance):
-    from fog_addon.precompute import aerial, presets, sunlight
+    from fog_addon.precompute.core import presets
+    from fog_addon.precompute.physics.daylight import aerial, sunlight
     if kind == "air only":
         beta, top, falloff, g, albedo = 1e-9, 0.0, 1200.0, 0.76, 0.9
     else:
@@ -238,8 +239,8 @@ def our_day(kind, sun_irradiance, sky_radiance):
 def ground_sun_transmittance(day):
     """e^{-(C_layer + C_air)/mu_s} per channel at the ground: what the add-on takes off a Sun light's irradiance
     before it reaches the ground (the Daylight's sun_irradiance is the sun above the air)."""
-    from fog_addon.precompute import aerial, daylight
-    from fog_addon.precompute.ops import NumpyOps
+    from fog_addon.precompute.physics.daylight import aerial, daylight
+    from fog_addon.precompute.core.ops import NumpyOps
     m = NumpyOps()
     c_l = daylight.column_depth(m, 0.0, day.beta, day.top, day.falloff)
     c_a = aerial.air_column_depth(m, 0.0, 1.0, day.air_height)
@@ -263,8 +264,8 @@ def band_directions(elevations_deg, pitch_deg, azimuths, sub=8):
 def our_figures(day, st, height):
     """Ours at the Sky Texture's directions, per azimuth: the horizon colour (the band's mean), its sun and sky
     parts, black and white surfaces at DISTANCES, and the sky pixel at ELEVATIONS."""
-    from fog_addon.precompute import daylight, sunlight
-    from fog_addon.precompute.ops import NumpyOps
+    from fog_addon.precompute.physics.daylight import daylight, sunlight
+    from fog_addon.precompute.core.ops import NumpyOps
     m = NumpyOps()
     origin = np.array([0.0, 0.0, height])
 
@@ -302,7 +303,7 @@ def white_surface(m, day, origin, d, length):
     """A vertical face of albedo WHITE turned to the camera at ``length`` along ``d``: its Lambertian radiance under
     the sun and half the sky (the black ground below), both dimmed as the add-on dims them (``direct_dimming``),
     without the fog light, seen through view_transmittance, plus the glow in front of it."""
-    from fog_addon.precompute import sunlight
+    from fog_addon.precompute.physics.daylight import sunlight
     normal = -d * np.array([1.0, 1.0, 0.0])
     normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
     point = origin + d * length
@@ -393,7 +394,7 @@ def main():
         return
     render_missing()
     from fog_addon import imageio
-    from fog_addon.precompute import aerial
+    from fog_addon.precompute.physics.daylight import aerial
     read = imageio.read_rgb
     print(f"panorama mapping against the rendered direction map: max {check_mapping(read):.2f} pixel widths")
     bias = step_bias()

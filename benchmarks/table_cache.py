@@ -1,4 +1,4 @@
-"""Time of the table bakes with the on-disk table cache (``precompute/bakers.py``) cold, warm and off.
+"""Time of the table bakes with the on-disk table cache (``precompute/core/bakers.py``) cold, warm and off.
 
     .venv/bin/python benchmarks/table_cache.py [REPEATS]
 
@@ -31,7 +31,8 @@ _TABLES = r"""
 import json, sys, time
 sys.path.insert(0, sys.argv[1])
 t = time.perf_counter()
-from fog_addon.precompute import bakers, pixel, table_cache
+from fog_addon.precompute.core import bakers, table_cache
+from fog_addon.precompute.model import pixel
 g = float(sys.argv[2])
 t0 = time.perf_counter()
 bakers.numpy_tables(g)

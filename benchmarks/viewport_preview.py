@@ -39,7 +39,7 @@ import fog_addon
 from fog_addon import measure, methods
 from fog_addon.nodes import preview
 from fog_addon.ops import apply
-from fog_addon.precompute.spec import FogSpec
+from fog_addon.precompute.core.spec import FogSpec
 from fog_scenes import many_lights as ml
 fog_addon.register()
 comp = methods.get("compositor")

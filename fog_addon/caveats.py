@@ -1,8 +1,8 @@
 """What the fog does not model in a scene yet, said plainly (the panel, the operator's report, ``render``).
 
 * **Light shafts.** The Compositor method casts objects' shadows into the fog from shadow maps
-  (``precompute/shafts.py``); the node groups and OSL integrate every camera ray as if nothing stood between
-  the light and the fog (Dobashi et al. 2002 Eq. 2's H = 1).  ``shadowing_lights`` finds the lights with an
+  (``precompute/physics/shafts/shafts.py``); the node groups and OSL integrate every camera ray as if nothing stood
+  between the light and the fog (Dobashi et al. 2002 Eq. 2's H = 1).  ``shadowing_lights`` finds the lights with an
   object in their glow (an object whose bounding box comes within the distance at which the light's glow
   has fallen by e^-3: ``GLOW_OPTICAL_DEPTH`` / beta, at most the scene's size): only they get shadow maps,
   and ``shadow_notes`` says what their shafts don't do (or that there are none).
@@ -12,7 +12,8 @@
 """
 import numpy as np
 
-from .precompute import capabilities, footprint, shaft_maps
+from .precompute.model import capabilities, footprint
+from .precompute.physics.shafts import shaft_maps
 
 GLOW_OPTICAL_DEPTH = 3.0   # beta x distance within which a light's glow is worth a shadow (e^-3 = 5 %)
 _SEE_THROUGH = ("ShaderNodeBsdfTransparent", "ShaderNodeBsdfGlass", "ShaderNodeBsdfRefraction",

@@ -30,7 +30,7 @@ class UsageError(Exception):
 def _presets():
     """{name: density 1/m} of every preset: the visibility classes, then the fog layers (``presets.LAYERED``)."""
     try:
-        from .precompute.presets import LAYERED, PRESETS
+        from .precompute.core.presets import LAYERED, PRESETS
     except ImportError:
         LAYERED, PRESETS = {}, {k: 3.912 / v for k, v in
                                 {"haze": 8000.0, "mist": 2000.0, "fog": 500.0, "dense_fog": 150.0}.items()}
@@ -40,7 +40,7 @@ def _presets():
 def _layered():
     """The fog layer presets (``presets.LAYERED``): {name: {density, anisotropy, albedo, fog_top, ...}}."""
     try:
-        from .precompute.presets import LAYERED
+        from .precompute.core.presets import LAYERED
     except ImportError:
         return {}
     return LAYERED
@@ -71,7 +71,7 @@ def _non_negative_float(name):
 
 def _air(s):
     """``--air``: the clear air's density, a multiple of sea-level air in [0, spec.MAX_AIR]."""
-    from .precompute.spec import MAX_AIR
+    from .precompute.core.spec import MAX_AIR
     v = _non_negative_float("air")(s)
     if v > MAX_AIR:
         raise argparse.ArgumentTypeError(f"air must be at most {MAX_AIR:g} (times sea-level clear air; 1 is the "
@@ -283,7 +283,7 @@ def _resolve_density(args, required, layers=False):
                 args.color = tuple(layer["albedo"])
         elif args.anisotropy is None:
             try:
-                from .precompute.presets import ANISOTROPY
+                from .precompute.core.presets import ANISOTROPY
                 args.anisotropy = ANISOTROPY[args.preset]
             except ImportError:
                 pass
@@ -294,7 +294,7 @@ def _resolve_density(args, required, layers=False):
     if args.density < 0:
         raise UsageError(f"density must be >= 0 (1/m), got {args.density}")
     try:
-        from .precompute.presets import validate_density
+        from .precompute.core.presets import validate_density
     except ImportError:
         return
     try:
@@ -306,7 +306,7 @@ def _resolve_density(args, required, layers=False):
 def _validate_common(args, density_required, layers=False):
     _resolve_density(args, density_required, layers)
     if args.anisotropy is not None:
-        from .precompute.medium import validate_anisotropy
+        from .precompute.core.medium import validate_anisotropy
         try:
             args.anisotropy = validate_anisotropy(args.anisotropy)
         except ValueError as exc:

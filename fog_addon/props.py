@@ -1,7 +1,7 @@
 """The fog's settings: ``scene.analytic_fog`` and each light's ``light.analytic_fog``.
 
 These properties are the one store of the fog's settings: ``spec_of`` reads them as a validated
-``precompute.spec.FogSpec``, and everything that decides reads that.  Changing a setting while the fog is on
+``precompute.core.spec.FogSpec``, and everything that decides reads that.  Changing a setting while the fog is on
 schedules a sync (``schedule_sync``): the shared node groups follow (the viewport too); materials are never
 rebuilt for it.  A sync that fails keeps the fog as it was, and the panel says why.
 
@@ -14,8 +14,9 @@ import contextlib
 
 import bpy
 
-from .precompute import predict, presets, tables
-from .precompute.spec import FogSpec
+from .precompute.core import presets, tables
+from .precompute.model import predict
+from .precompute.core.spec import FogSpec
 
 
 _quiet = []   # non-empty while the add-on itself writes the settings (``quiet``): no sync for those writes

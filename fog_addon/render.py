@@ -15,8 +15,8 @@ import time
 
 from . import imageio, measure, props
 from .ops import apply, progress
-from .precompute import capabilities
-from .precompute.spec import FogSpec
+from .precompute.model import capabilities
+from .precompute.core.spec import FogSpec
 
 DEFAULT_SAMPLES = {"CYCLES": 16, "BLENDER_EEVEE": 16}
 EEVEE_LIGHT_THRESHOLD = 1e-4   # EEVEE's default 0.01 windows point lights (ratio 0.92 at 4.5 m for 100 W)

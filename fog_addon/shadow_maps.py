@@ -2,8 +2,8 @@
 
 For each such light (``caveats.shadowing_lights``: an object casting shadows within its glow's reach) the
 distance from the light to the first surface is ray cast in every direction of its map
-(``precompute/shafts.py``: a longitude-latitude grid for a point light, its rows thinned towards the poles to
-the equator's spacing, ``point_map_casts``; a square grid over the cone for a spot) against one BVH of the
+(``precompute/physics/shafts/shafts.py``: a longitude-latitude grid for a point light, its rows thinned towards the
+poles to the equator's spacing, ``point_map_casts``; a square grid over the cone for a spot) against one BVH of the
 scene's shadow casters (``mathutils.bvhtree``, evaluated meshes in world space: modifiers, instances and curves
 included), and stored as a packed float image (a ZIP-compressed OpenEXR, ``_pack``), so the saved file renders
 without the add-on (the compositor reads it with Map UV).  A map holds the light's pose and the geometry of the
@@ -39,8 +39,8 @@ from mathutils import Vector
 from mathutils.bvhtree import BVHTree
 
 from . import caveats, view
-from .precompute import shaft_maps
-from .precompute.tables import TableSpec
+from .precompute.physics.shafts import shaft_maps
+from .precompute.core.tables import TableSpec
 
 IMAGE_PREFIX = "AnalyticFog Shadow "   # a light's map: "<IMAGE_PREFIX><light name>" (``nodes/owned.PREFIX``)
 KEY = "analytic_fog_shadow_key"            # on the image: what the map was baked from (``ShadowMap.key``)

@@ -1,4 +1,5 @@
-"""The sun's shadow map: where the sun's shafts in a fog layer come from (``precompute/sun_shafts.py``).
+"""The sun's shadow map: where the sun's shafts in a fog layer come from
+(``precompute/physics/daylight/sun_shafts.py``).
 
 The map is a plane of parallel rays along the sunlight over the box of layer the camera sees (``region_of``:
 ``sunsky.shaft_region``), each grid point the distance to the first shadow caster (``shadow_maps.cast_parallel``),
@@ -27,8 +28,9 @@ import bpy
 import numpy as np
 
 from . import caveats, view
-from .precompute import footprint, sun_shafts
-from .precompute.tables import TableSpec
+from .precompute.model import footprint
+from .precompute.physics.daylight import sun_shafts
+from .precompute.core.tables import TableSpec
 from .shadow_maps import (ATLAS, KEY, LAYOUT, STALE, SUN_IMAGE, TILE_KEYS, Atlas, atlas_tiles, cast_parallel,
                           frames_of, map_image, pack_map, scene_bvh, store_atlas, write_tile)
 

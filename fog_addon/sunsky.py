@@ -1,4 +1,4 @@
-"""The sun and the sky of a scene, as a layered fog's daylight takes them (``precompute/sunlight.py``).
+"""The sun and the sky of a scene, as a layered fog's daylight takes them (``precompute/physics/daylight/sunlight.py``).
 
 A fog with a top (``FogSpec.fog_top``) lets the sun and the sky through: the sun is the scene's brightest Sun
 light (its direction and Strength x Color, W/m^2, followed by drivers), the sky the World's colour over the upper
@@ -15,7 +15,8 @@ import bpy
 import numpy as np
 
 from .nodes import comp_ops
-from .precompute import capabilities, daylight_tables, sunlight
+from .precompute.model import capabilities
+from .precompute.physics.daylight import daylight_tables, sunlight
 
 SUN_KEY_DIGITS = 4   # the sun's direction enters the built groups' signature at this precision (the map is baked)
 
@@ -347,8 +348,8 @@ def shaft_region(scene, spec):
     """(8, 3) world corners of the box of fog layer the camera sees, where the sun's shafts are mapped: over the
     ground, up to the lamps' glow top (``sunlight.lamp_glow_top``), and across the part of the view frustum's corner
     and centre rays in the layer (``sunlight.lamp_glow_span``), each at most SUN_REACH mean free paths long."""
-    from .precompute import daylight as daylight_, sun_shafts
-    from .precompute.ops import NumpyOps
+    from .precompute.physics.daylight import daylight as daylight_, sun_shafts
+    from .precompute.core.ops import NumpyOps
     top, falloff, ground = spec.layer_per_unit()
     top_z = sunlight.lamp_glow_top(top, falloff, ground)
     cam = scene.camera

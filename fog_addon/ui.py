@@ -4,7 +4,7 @@ import bpy
 from .methods.node_groups import MANY_LIGHTS
 from .ops import apply
 from .ops.operators import FOG_MT_presets
-from .precompute import capabilities, rungs
+from .precompute.model import capabilities, rungs
 
 ENGINE_NOTES = {
     "AUTO": "Auto: Node Groups or Compositor, per scene",

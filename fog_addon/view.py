@@ -17,7 +17,10 @@ import bpy
 import numpy as np
 from mathutils.bvhtree import BVHTree
 
-from .precompute import area, footprint, predict, surface, tables
+from .precompute.core import tables
+from .precompute.model import footprint, predict
+from .precompute.physics.area import area
+from .precompute.physics.point import surface
 
 MAX_SAMPLES = 160 * 90          # rays per frame at most: one per pixel centre up to this, else a coarser grid
 MAX_FRAMES = 8                  # an animation: at most this many frames, evenly spread over the range
@@ -319,7 +322,7 @@ def has_shape(light):
 
 
 def is_area(light):
-    """True for an area light object (its fog: ``precompute/area.py``)."""
+    """True for an area light object (its fog: ``precompute/physics/area/area.py``)."""
     return light.data.type == "AREA"
 
 
@@ -488,7 +491,7 @@ def full_windows(lights):
 
 
 def windows(scene, lights, frames=None, halos=False, *, fogged, opaque):
-    """The windows of the Compositor method (``precompute/footprint.py``): (the surfaces' window, [each
+    """The windows of the Compositor method (``precompute/model/footprint.py``): (the surfaces' window, [each
     light's glow window: a spot's, None for a point light]) holding ``frames`` (default: every frame of an
     animated scene's range, else the current one).  Full windows where they can't be bounded: border
     renders, animations over MAX_WINDOW_FRAMES frames or with motion blur.  ``halos``: the spots' glows have

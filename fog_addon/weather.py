@@ -9,8 +9,8 @@ and the light it sends into the fog comes back as a glow around it:
     K(T, theta) = Omega_px T^2 W0 [ I_1(T, theta) + I_{>=2}(T, theta) / W0 ],
 
 Omega_px the pixel's solid angle (sr), I_1 the single-scattering field of an endless ray (Sun et al. 2005 Eq. 12,
-the airlight table at extinction 1) and I_{>=2} the multiply scattered field (``precompute/multiple.py``), both per
-unit intensity: a patch of radiance L filling a pixel at depth z has intensity L Omega_px z^2, and the field at
+the airlight table at extinction 1) and I_{>=2} the multiply scattered field (``precompute/physics/point/multiple.py``),
+both per unit intensity: a patch of radiance L filling a pixel at depth z has intensity L Omega_px z^2, and the field at
 extinction beta scales as beta^2.  The sum is the depth-dependent convolution of §7.3: the picture is split into
 layers of T (each pixel shared between its two nearest layers, linearly in ``layer_coordinate``), and each layer
 convolved with its kernel by FFT.  Pixels at infinite depth (the sky: depth above SKY_DEPTH) send no glow and take
@@ -39,8 +39,10 @@ class WeatherError(ValueError):
 
 def _fields(g, albedo):
     """(single, multiple): functions (T, cos theta) -> I_1 and I_{>=2} / W0 per unit intensity (extinction 1)."""
-    from .precompute import bakers, emitter_glow, multiple
-    from .precompute.ops import NumpyOps
+    from .precompute.core import bakers
+    from .precompute.physics.emitter import emitter_glow
+    from .precompute.physics.point import multiple
+    from .precompute.core.ops import NumpyOps
     spec = multiple.table_spec(g, albedo)
     m = NumpyOps({spec.name: bakers.table_array(spec, g)})
     return emitter_glow.single_field(g, bakers.READER), (lambda t, c: multiple.field(m, spec, t, c))
@@ -72,13 +74,13 @@ def layer_coordinate(t):
     """The layers' coordinate of optical depth T: ln T + LAYER_SLOPE T (``emitter_glow.log_linear``).  The layers
     are even in it, geometric where T << 1 (the kernel's shape changes with ln T) and at most
     MAX_LAYER_STEP / LAYER_SLOPE apart in T where T >> 1 (the multiply scattered halo widens with T itself)."""
-    from .precompute import emitter_glow
+    from .precompute.physics.emitter import emitter_glow
     return emitter_glow.log_linear(t, LAYER_SLOPE)
 
 
 def layer_depths(lo, hi, count):
     """``count`` optical depths from ``lo`` to ``hi``, even in ``layer_coordinate``."""
-    from .precompute import emitter_glow
+    from .precompute.physics.emitter import emitter_glow
     return emitter_glow.log_linear_depths(lo, hi, count, LAYER_SLOPE)
 
 

@@ -12,7 +12,7 @@ The lights are kept out of the surfaces' direct lighting (Cycles: light ray
 visibility; EEVEE: diffuse and specular factors 0), the world is black and
 there are no bounces, so each pixel is exactly the fog's emission: the glow
 of every light plus the fog light each surface reflects (Sun et al. 2005
-Eq. 19).  The twin is ``precompute.shading`` run by numpy at each pixel
+Eq. 19).  The twin is ``precompute.model.shading`` run by numpy at each pixel
 centre's camera ray (ray-plane / ray-sphere), with each light's models as the
 add-on chose them (METHOD and its stored steps) -- as tests/scenes/shading_probe.py,
 for four surfaces and N lights.
@@ -39,9 +39,11 @@ import numpy as np
 from fog_addon import imageio, measure
 from fog_addon import view
 from fog_addon.ops import apply
-from fog_addon.precompute import bakers, model, predict, rungs, shading, surface
-from fog_addon.precompute.medium import Medium
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.core import bakers
+from fog_addon.precompute.model import predict, rungs, shading
+from fog_addon.precompute.physics.point import model, surface
+from fog_addon.precompute.core.medium import Medium
+from fog_addon.precompute.core.ops import NumpyOps
 from fog_scenes.probe_common import add_point_lights, camera_rays, look_at, tiny_render
 
 BETA = 0.1                      # 1/m: optical thickness ~1.2 to the spheres, ~2 to the far lights

@@ -1,5 +1,5 @@
-"""Aerial perspective kernels (fog_addon/precompute/daylight.py ``air_glow``, issue 29 item 4) against independent
-quadrature.
+"""Aerial perspective kernels (fog_addon/precompute/physics/daylight/daylight.py ``air_glow``, issue 29 item 4) against
+independent quadrature.
 
 The air (Rayleigh scattering, extinction beta_a e^{-z / 8 km} per colour channel) adds to the fog layer: the sun and
 the sky reach each point through both, and the camera sees through both.  The expected values are scipy's adaptive
@@ -28,8 +28,8 @@ for p in (ROOT, ROOT / "tests"):
     if str(p) not in sys.path:
         sys.path.insert(0, str(p))
 
-from fog_addon.precompute import aerial, daylight as dl   # noqa: E402
-from fog_addon.precompute.ops import NumpyOps      # noqa: E402
+from fog_addon.precompute.physics.daylight import aerial, daylight as dl   # noqa: E402
+from fog_addon.precompute.core.ops import NumpyOps      # noqa: E402
 from test_daylight import FAR, _points, ref_beta, ref_column, ref_tau   # noqa: E402
 from tools.shader_float32 import Float32Ops        # noqa: E402
 
@@ -266,7 +266,7 @@ def test_rayleigh_sky_source_against_quadrature():
 
 def test_air_transmittance_is_both_species():
     """e^{-tau} of a level segment: the layer's beta0 D plus the air's beta_a e^{-z/H} D."""
-    from fog_addon.precompute import sunlight
+    from fog_addon.precompute.physics.daylight import sunlight
     day = sunlight.Daylight(1e-4, 1000.0, 0.0, 0.0, np.array([0.0, 0.0, 1.0]), np.ones(3), np.ones(3), 0.0, 1.0,
                             (5.8e-6, 13.5e-6, 33.1e-6), HA)
     t = sunlight.view_transmittance(m, day, np.array([0.0, 2e4, 500.0]), np.array([0.0, -1.0, 0.0]), 2e4)
@@ -329,7 +329,7 @@ GLOW_CASES = [   # camera height (m), elevation of the ray (degrees), length (m)
 def _ray_glow_error(pz, elevation, length, layer, g):
     """``sunlight.ray_glow`` with air in numpy (a sun at 40 degrees, a uniform sky, albedo 0.9) against
     ``ref_pixel_glow``: the relative error per channel."""
-    from fog_addon.precompute import sunlight
+    from fog_addon.precompute.physics.daylight import sunlight
     sun = np.array([math.cos(math.radians(40)) * math.sin(math.radians(-50)),
                     math.cos(math.radians(40)) * math.cos(math.radians(-50)), math.sin(math.radians(40))])
     e = math.radians(elevation)

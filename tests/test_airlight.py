@@ -17,8 +17,10 @@ import numpy as np
 import pytest
 from scipy.special import exp1
 
-from fog_addon.precompute import airlight as al
-from fog_addon.precompute import model, rungs, tables
+from fog_addon.precompute.physics.point import airlight as al
+from fog_addon.precompute.core import tables
+from fog_addon.precompute.model import rungs
+from fog_addon.precompute.physics.point import model
 from tools import airlight_reference as ref
 from tools.shader_float32 import Float32Ops, airlight_float32  # float32 as the shaders
 

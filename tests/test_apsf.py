@@ -1,6 +1,6 @@
 """Multiple scattering around a point source (issue 28): the Monte Carlo transport that bakes the
-multiply-scattered field (``precompute/point_source_mc.py``) against independent closed forms and quadrature,
-and Narasimhan et al.'s APSF series (``precompute/apsf.py``, Eq. 24-27) against its own limits.
+multiply-scattered field (``precompute/physics/point/point_source_mc.py``) against independent closed forms and
+quadrature, and Narasimhan et al.'s APSF series (``precompute/apsf.py``, Eq. 24-27) against its own limits.
 
 Expected values: the single-scattering radiance at distance T from an isotropic point source, by scipy
 quadrature of its line integral (Sun et al. 2005 Eq. 5 written out, Henyey-Greenstein phase); the series'
@@ -15,7 +15,7 @@ from numpy.polynomial import legendre
 from scipy.integrate import quad
 
 from tools.research import apsf
-from fog_addon.precompute import point_source_mc as mc
+from fog_addon.precompute.physics.point import point_source_mc as mc
 
 
 def single_scattering_quadrature(T, theta, q, albedo):

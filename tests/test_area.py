@@ -1,4 +1,4 @@
-"""Area lights' glow (fog_addon/precompute/area.py) against quadrature over the emitter.
+"""Area lights' glow (fog_addon/precompute/physics/area/area.py) against quadrature over the emitter.
 
 The cache tests/data/area_reference.npz holds 2000 random rays (tools/area_reference.py, independent of
 fog_addon: Gauss-Legendre over the emitter's area graded towards the fog point's foot, scipy's adaptive
@@ -13,8 +13,10 @@ import sys
 import numpy as np
 import pytest
 
-from fog_addon.precompute import area, model, rungs
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.model import rungs
+from fog_addon.precompute.physics.area import area
+from fog_addon.precompute.physics.point import model
+from fog_addon.precompute.core.ops import NumpyOps
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tools"))
@@ -229,7 +231,7 @@ def _scatter_case(rng, m, g):
     (tests/test_spot_scatter.py's quadrature)."""
     import functools
     from test_spot_scatter import _hemisphere
-    from fog_addon.precompute import surface
+    from fog_addon.precompute.physics.point import surface
     beta = math.exp(rng.uniform(math.log(0.01), math.log(0.5)))
     dist = math.exp(rng.uniform(math.log(0.5), math.log(30.0)))
     psi, az = math.acos(rng.uniform(-1.0, 1.0)), rng.uniform(0.0, 2.0 * math.pi)
@@ -260,7 +262,7 @@ def test_area_diffuse_scatter_against_hemisphere_quadrature(g):
     """24 random points a g: the diffuse lobe within 0.12 of the point light's fog light (the spot's bound,
     tests/test_spot_scatter.py), and on the whole closer than Lambert's cosine at the point times the point
     light's (the light's direct weight, the simple model)."""
-    from fog_addon.precompute import bakers
+    from fog_addon.precompute.core import bakers
     m = NumpyOps(bakers.numpy_tables(g))
     rng = np.random.default_rng(31 + int(10 * g))
     ours, plain = [], []

@@ -12,7 +12,7 @@ from conftest import ROOT
 
 pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
 
-KOSCHMIEDER = -math.log(0.02)   # independent of fog_addon.precompute.presets
+KOSCHMIEDER = -math.log(0.02)   # independent of fog_addon.precompute.core.presets
 
 
 @pytest.fixture(scope="module")

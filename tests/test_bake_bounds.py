@@ -20,8 +20,10 @@ import numpy as np
 import pytest
 
 from fog_addon.ops import progress as progress_
-from fog_addon.precompute import bakers, emitter_glow, multiple, point_source_mc, table_cache
-from fog_addon.precompute import spot_multiple as sm, spot_walk
+from fog_addon.precompute.core import bakers, table_cache
+from fog_addon.precompute.physics.emitter import emitter_glow
+from fog_addon.precompute.physics.point import multiple, point_source_mc
+from fog_addon.precompute.physics.spot import spot_multiple as sm, spot_walk
 
 COS_HALF = math.cos(math.radians(22.5))   # a spot of 45 degrees
 BLEND = 0.15

@@ -1,4 +1,4 @@
-"""The table of capabilities (``precompute/capabilities.py``) is the one place that says what each method models.
+"""The table of capabilities (``precompute/model/capabilities.py``) is the one place that says what each method models.
 
 * The README's table "What each engine supports" is the table's ``readme_table`` (regenerate it from there).
 * Outside ``fog_addon/methods/`` and the table no code compares a method's name with a literal: what a method
@@ -12,13 +12,13 @@ import re
 import pytest
 
 from conftest import ROOT
-from fog_addon.precompute import capabilities as c, rungs
+from fog_addon.precompute.model import capabilities as c, rungs
 
 
 def test_readme_table_is_the_capabilities_table():
     readme = (ROOT / "README.md").read_text()
     assert c.readme_table() in readme, ("README's engine table is stale: paste "
-                                        "fog_addon.precompute.capabilities.readme_table() over it")
+                                        "fog_addon.precompute.model.capabilities.readme_table() over it")
 
 
 NAME_COMPARISON = re.compile(r"""(==|!=|\bin)\s*\(?\s*["'](nodes|osl|compositor)["']""")

@@ -1,4 +1,5 @@
-"""The composer of a pixel's fog (fog_addon/precompute/compose.py) against Sun et al. 2005 Eq. 19 and 12 written out.
+"""The composer of a pixel's fog (fog_addon/precompute/model/compose.py) against Sun et al. 2005 Eq. 19 and 12 written
+out.
 
 Every expected value is the pixel's radiance summed by hand, channel by channel, from the terms' values: where the
 pixel sees its surface (coverage c), L = T_render L_surface + (the glows to the surface) + T (the fog light the
@@ -11,10 +12,11 @@ import types
 import numpy as np
 import pytest
 
-from fog_addon.precompute import compose, sunlight
-from fog_addon.precompute.compose import (DAYLIGHT, DIMMING, EMITTERS, GLOW, LAMPS, LAYER_END, RAY, REFLECTED, RENDER,
-                                          SHARE, SKY, SURFACE, Pixel, Term)
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.model import compose
+from fog_addon.precompute.physics.daylight import sunlight
+from fog_addon.precompute.model.compose import (DAYLIGHT, DIMMING, EMITTERS, GLOW, LAMPS, LAYER_END, RAY, REFLECTED,
+                                                RENDER, SHARE, SKY, SURFACE, Pixel, Term)
+from fog_addon.precompute.core.ops import NumpyOps
 
 N = 5
 ALBEDO = np.array([0.9, 0.6, 0.3])

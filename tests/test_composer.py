@@ -1,4 +1,5 @@
-"""The one composer (precompute/shading.py) and the term descriptors its builders derive sockets from (rungs.OUTPUTS).
+"""The one composer (precompute/model/shading.py) and the term descriptors its builders derive sockets from
+(rungs.OUTPUTS).
 
 Expected values are Sun et al. 2005 Eq. 19 and 12 written out by hand; the socket names are the ones saved
 files and farms read (a hand list on purpose: renaming one breaks every saved file).
@@ -8,9 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from fog_addon.precompute import rungs, shading
-from fog_addon.precompute.medium import Medium
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.model import rungs, shading
+from fog_addon.precompute.core.medium import Medium
+from fog_addon.precompute.core.ops import NumpyOps
 
 
 def test_pixel_light_is_eq19_over_the_surface_and_eq12_over_the_sky():

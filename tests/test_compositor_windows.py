@@ -1,4 +1,4 @@
-"""The Compositor method's windows (``precompute/footprint.py``, ``nodes/comp_fog.py``) change no pixel:
+"""The Compositor method's windows (``precompute/model/footprint.py``, ``nodes/comp_fog.py``) change no pixel:
 tests/scenes/compositor_windows.py renders spots at hard cases (the camera inside a cone, a squashed cone
 aimed sideways, a 10-degree hard-edged cone, a 170-degree cone animated across the picture, a cone beside the
 ground's edge whose beam the ground hides in part) with and without windows, at frames 1 and 5, after a spot

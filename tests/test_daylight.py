@@ -1,4 +1,4 @@
-"""Daylight kernels (fog_addon/precompute/daylight.py, issue 29) against independent quadrature.
+"""Daylight kernels (fog_addon/precompute/physics/daylight/daylight.py, issue 29) against independent quadrature.
 
 Every expected value here comes from scipy: adaptive quadrature (QUADPACK) of the defining integrals,
 written afresh below in plain Python (``ref_*``: the medium, its column depth, the camera's optical
@@ -24,8 +24,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from fog_addon.precompute import aerial, daylight as dl   # noqa: E402
-from fog_addon.precompute.ops import NumpyOps      # noqa: E402
+from fog_addon.precompute.physics.daylight import aerial, daylight as dl   # noqa: E402
+from fog_addon.precompute.core.ops import NumpyOps      # noqa: E402
 from tools.shader_float32 import Float32Ops        # noqa: E402
 
 CACHE = ROOT / "tests" / "data" / "daylight_reference.npz"

@@ -9,8 +9,9 @@ term of those pixels' fog.  The values below are that render's (``ViewLayer.Dept
 import numpy as np
 import pytest
 
-from fog_addon.precompute import model, pixel
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.model import pixel
+from fog_addon.precompute.physics.point import model
+from fog_addon.precompute.core.ops import NumpyOps
 
 CAM = np.array([0.0, 0.0, 300.0])
 # the bottom-left pixel's ray at unit view depth (the valley's camera: 4 degrees down, 39.6 x 22.9 degree view)

@@ -1,5 +1,5 @@
-"""Glowing objects' glows (issue 28, item 3): ``precompute/emitter_glow.py`` (the point spread function of a
-depth as a ladder of Gaussian blurs) and the Compositor method's glow of an emissive sphere against Cycles.
+"""Glowing objects' glows (issue 28, item 3): ``precompute/physics/emitter/emitter_glow.py`` (the point spread function
+of a depth as a ladder of Gaussian blurs) and the Compositor method's glow of an emissive sphere against Cycles.
 
 The render compares ``fog_scenes/glowing_sphere.py``'s sphere (radius 0.15 m, radiance 100, 15 m away; fog
 beta 0.1, g 0.85, albedo 0.9, T 1.5) with the path-traced single scattering by annulus means, as
@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from fog_addon import imageio
-from fog_addon.precompute import bakers, emitter_glow as eg
+from fog_addon.precompute.core import bakers
+from fog_addon.precompute.physics.emitter import emitter_glow as eg
 
 G = 0.85
 PIXEL_ANGLE = math.radians(0.1)
@@ -76,7 +77,7 @@ def test_weights_table_is_finite_and_non_negative():
 def test_table_columns_are_the_optical_depths_of_its_coordinate():
     """The columns' T, inverted by Newton's method, map back to evenly spaced table X (``table_x``), from T_MIN to
     T_MAX."""
-    from fog_addon.precompute.ops import NumpyOps
+    from fog_addon.precompute.core.ops import NumpyOps
     t = eg.optical_depths(eg.T_COUNT)
     assert t[0] == pytest.approx(eg.T_MIN, rel=1e-9) and t[-1] == pytest.approx(eg.T_MAX, rel=1e-9)
     np.testing.assert_allclose(eg.table_x(NumpyOps(), t), np.linspace(0.0, 1.0, eg.T_COUNT), atol=1e-9)
@@ -91,7 +92,7 @@ def test_the_table_read_between_its_columns_holds_the_kernel(dense):
     walks, 4.3 % with the bounded ones, docs/measurements/2026-11-29-bake-time.md).  A linear read of
     the weights themselves over ln T (24 columns) was 13 % bright at T 4.5 and 3 % dark at T 1.6: a glowing
     object's single scattering read 1.12-1.15 of Cycles' at T 4.5."""
-    from fog_addon.precompute.ops import NumpyOps
+    from fog_addon.precompute.core.ops import NumpyOps
     field = eg.glow_field(G, bakers.READER, 0.9 if dense else None)
     spec = eg.table_spec(G, PIXEL_ANGLE, 0.9 if dense else None)
     m = NumpyOps({spec.name: eg.bake_weights(field, PIXEL_ANGLE, spec.width)})
@@ -169,7 +170,7 @@ def test_a_spheres_pixels_keep_its_glow(g):
     the isotropic sources' (the visible hemisphere, two-sided, has the sphere's intensity in every direction): within
     1 % (the limb's c < MIN_FACING is held; without that clamp within 0.1 %); a face-on flat emitter's factor is
     E(1) < 1."""
-    from fog_addon.precompute.ops import NumpyOps
+    from fog_addon.precompute.core.ops import NumpyOps
     m = NumpyOps()
     c = (np.arange(4000) + 0.5) / 4000   # over the disc dA = 2 pi c dc (r^2 = 1 - c^2): the mean is 2 int f c dc
     mean = eg.facing_mean(c, g)
@@ -317,8 +318,9 @@ def test_a_sign_cut_by_the_frame_glows_as_its_pixels_do(sign_renders):
     (``emitter_glow.facing_factor``; as isotropic sources of the light they show the camera, Narasimhan's 7.2, the
     sign glowed 1.64x too bright there), measured 1.066; the Blur nodes' edges kept black (Extend Bounds: without it
     Blender extends the edge pixels outwards and the glow was 5.5x)."""
-    from fog_addon.precompute import area, model
-    from fog_addon.precompute.ops import NumpyOps
+    from fog_addon.precompute.physics.area import area
+    from fog_addon.precompute.physics.point import model
+    from fog_addon.precompute.core.ops import NumpyOps
     out, _ = sign_renders
     cam, d, ground, sign = _sign_geometry(out["clear"].shape[:2])
     m = NumpyOps()

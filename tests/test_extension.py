@@ -133,7 +133,7 @@ def test_built_zip_contents(built_zip):
     assert "from .fog_addon import" in root_init, "the zip's root __init__.py does not hand on fog_addon"
     addon = _addon_files()
     assert {"fog_addon/__init__.py", "fog_addon/props.py", "fog_addon/ops/apply.py",
-            "fog_addon/precompute/model.py", "fog_addon/nodes/groups.py"} <= addon, sorted(addon)
+            "fog_addon/precompute/physics/point/model.py", "fog_addon/nodes/groups.py"} <= addon, sorted(addon)
     expected = {"__init__.py", "blender_manifest.toml"} | addon
     missing = sorted(expected - names)
     assert not missing, (f"add-on files missing from {built_zip.name}: {missing}; "

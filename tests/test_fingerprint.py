@@ -1,4 +1,4 @@
-"""The code version stamped on what the add-on builds covers all of its source (``precompute/fingerprint.py``).
+"""The code version stamped on what the add-on builds covers all of its source (``precompute/core/fingerprint.py``).
 
 Expected values come from the file system, not from the code under test: the set of files is what
 ``rglob("*.py")`` finds, and a one-byte edit of any of them (in a copy of the package) must change the
@@ -14,7 +14,7 @@ import sys
 import pytest
 
 from conftest import ROOT
-from fog_addon.precompute import fingerprint
+from fog_addon.precompute.core import fingerprint
 
 PACKAGE = ROOT / "fog_addon"
 
@@ -37,7 +37,7 @@ def copy(tmp_path):
 def test_covers_every_python_file_of_the_package(copy):
     files = fingerprint.source_files(copy)
     assert files == sorted(p.relative_to(copy).as_posix() for p in copy.rglob("*.py"))
-    assert {"nodes/comp_fog.py", "precompute/pixel.py", "nodes/groups.py", "__init__.py"} <= set(files)
+    assert {"nodes/comp_fog.py", "precompute/model/pixel.py", "nodes/groups.py", "__init__.py"} <= set(files)
     base = _fresh(copy)
     for rel in files:
         path = copy / rel
@@ -67,8 +67,8 @@ def test_independent_of_where_the_package_lies(copy, tmp_path):
     fingerprint: paths are relative to the package; bytecode and other files play no part."""
     other = tmp_path / "extensions" / "user_default" / "analytic_fog" / "fog_addon"
     shutil.copytree(copy, other)
-    (other / "precompute" / "__pycache__").mkdir(exist_ok=True)
-    (other / "precompute" / "__pycache__" / "pixel.cpython-311.pyc").write_bytes(b"\0" * 16)
+    (other / "precompute" / "model" / "__pycache__").mkdir(exist_ok=True)
+    (other / "precompute" / "model" / "__pycache__" / "pixel.cpython-311.pyc").write_bytes(b"\0" * 16)
     (other / "notes.txt").write_text("x")
     assert _fresh(other) == _fresh(copy)
     assert fingerprint.PACKAGE == PACKAGE.resolve() and fingerprint.PRECOMPUTE == PACKAGE.resolve() / "precompute"
@@ -78,7 +78,7 @@ def test_precompute_fingerprint_follows_precompute_only(copy):
     base = _fresh(copy / "precompute")
     (copy / "nodes" / "comp_fog.py").write_text("# edited\n", encoding="utf-8")
     assert _fresh(copy / "precompute") == base
-    with open(copy / "precompute" / "pixel.py", "a", encoding="utf-8") as f:
+    with open(copy / "precompute" / "model" / "pixel.py", "a", encoding="utf-8") as f:
         f.write("# edited\n")
     assert _fresh(copy / "precompute") != base
 
@@ -102,7 +102,8 @@ import json, pathlib, sys
 sys.path.insert(0, sys.argv[1])
 import bpy
 from fog_addon.nodes import groups, images, osl
-from fog_addon.precompute import fingerprint, rungs, tables
+from fog_addon.precompute.core import fingerprint, tables
+from fog_addon.precompute.model import rungs
 rung = next(r for r in rungs.RUNGS if "osl" in r.backends)
 out = {}
 for key, root in (("real", fingerprint.PACKAGE), ("copy", sys.argv[2]), ("edited", sys.argv[3])):

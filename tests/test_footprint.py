@@ -1,4 +1,4 @@
-"""The windows of the Compositor method (``precompute/footprint.py``) against brute force: every pixel whose
+"""The windows of the Compositor method (``precompute/model/footprint.py``) against brute force: every pixel whose
 centre ray meets a spot's cone, or sees a point of a box, lies in the pixels the window crops to.
 
 The brute force is independent of the module: rays through pixel centres, points along them (log-spaced out
@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from fog_addon.precompute import footprint
+from fog_addon.precompute.model import footprint
 
 W, H = 64, 36
 FRAME = (-0.6, 0.6, -0.3375, 0.3375)   # a 36 mm sensor at a 30 mm lens, 16:9

@@ -10,8 +10,8 @@ import math
 import numpy as np
 import pytest
 
-from fog_addon.precompute import aerial, daylight, daylight_tables, sunlight
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.physics.daylight import aerial, daylight, daylight_tables, sunlight
+from fog_addon.precompute.core.ops import NumpyOps
 
 SUN = np.array([0.3, math.cos(math.radians(40.0)), math.sin(math.radians(40.0))])
 SUN = SUN / np.linalg.norm(SUN)
@@ -91,8 +91,8 @@ import fog_addon
 from fog_addon import sunsky
 from fog_addon.nodes import comp_fog, images
 from fog_addon.ops import apply
-from fog_addon.precompute import daylight_tables, sunlight
-from fog_addon.precompute.spec import FogSpec
+from fog_addon.precompute.physics.daylight import daylight_tables, sunlight
+from fog_addon.precompute.core.spec import FogSpec
 
 bpy.ops.wm.read_factory_settings(use_empty=True)
 fog_addon.register()

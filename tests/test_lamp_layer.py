@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from fog_addon.precompute import daylight, sunlight
+from fog_addon.precompute.physics.daylight import daylight, sunlight
 from tools.research import segments
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.core.ops import NumpyOps
 
 FAR = daylight.UNBOUNDED
 

@@ -9,8 +9,8 @@ import types
 import pytest
 
 from fog_addon import cli
-from fog_addon.precompute import presets
-from fog_addon.precompute.spec import FogSpec
+from fog_addon.precompute.core import presets
+from fog_addon.precompute.core.spec import FogSpec
 from fog_scenes import render_harness as h
 
 KOSCHMIEDER = math.log(50.0)   # ln(1 / 0.02): contrast threshold 2 %, independent of presets.KOSCHMIEDER
@@ -211,8 +211,8 @@ import bpy
 import fog_addon
 from fog_addon import cli, render
 from fog_addon.ops.operators import FOG_OT_preset_add
-from fog_addon.precompute import presets
-from fog_addon.precompute.spec import FogSpec
+from fog_addon.precompute.core import presets
+from fog_addon.precompute.core.spec import FogSpec
 
 bpy.ops.wm.read_factory_settings(use_empty=True)
 fog_addon.register()

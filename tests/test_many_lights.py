@@ -10,7 +10,7 @@ the fog's emission) with a hard timeout, and
   line saying a shader is too big (Cycles: "out of SVM stack space, shader ...
   too big"), a uniform block is too big (EEVEE: "Uniform block node_tree too
   big"), a GPU shader error or a shader compile error fails the test;
-* checks the picture against the numpy twin (``fog_addon/precompute/shading.py``
+* checks the picture against the numpy twin (``fog_addon/precompute/model/shading.py``
   per pixel): on every object, and on the background, the median of render /
   twin is within 5 % of 1 (a material that renders black has 0, EEVEE's
   fallback for a shader that failed to link 3-4.5), and the relative RMSE

@@ -110,7 +110,7 @@ def test_specular_albedo_against_cycles_furnace(tmp_path):
     (measured 3-15 %, ours lower: Cycles' multiple-scattering GGX keeps energy single scattering loses).
     The hemispherical average it replaced (0.0857 at any angle) was 2.1x too high at normal incidence and
     5.6x too low at mu = 0.1 for roughness 0.2."""
-    from fog_addon.precompute import surface
+    from fog_addon.precompute.physics.point import surface
     proc = h.run([h.ROOT / "tests" / "scenes" / "specular_furnace_probe.py", tmp_path], timeout=600)
     line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("SPECULAR_FURNACE_JSON "))
     cycles = json.loads(line.split(" ", 1)[1])

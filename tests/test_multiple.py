@@ -1,5 +1,5 @@
-"""The multiply scattered glow of point lights (``precompute/multiple.py``, issue 28): its table against an
-independent Monte Carlo estimator, and the segment formula's limits.
+"""The multiply scattered glow of point lights (``precompute/physics/point/multiple.py``, issue 28): its table against
+an independent Monte Carlo estimator, and the segment formula's limits.
 
 Independent sources: ``point_source_mc.radiance`` (photons absorbed as they go, Russian roulette, its own seed)
 against the table baked from ``radiance_by_order`` (no absorption, orders weighted by W0^k afterwards);
@@ -11,10 +11,10 @@ import functools
 import numpy as np
 import pytest
 
-from fog_addon.precompute import multiple as mu
-from fog_addon.precompute import point_source_mc as mc
-from fog_addon.precompute import rungs
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.physics.point import multiple as mu
+from fog_addon.precompute.physics.point import point_source_mc as mc
+from fog_addon.precompute.model import rungs
+from fog_addon.precompute.core.ops import NumpyOps
 
 G, ALBEDO = 0.85, 0.9
 # annuli (deg); within 0.5 deg of the light both estimators hold too few crossings at these photon counts (the
@@ -77,7 +77,7 @@ def test_multiple_rungs_add_the_multiple_glow_to_the_single():
     air, bg = rungs.anisotropic_rungs(G)[:2]
     models = rungs.choose("nodes", 0, G, multiple_albedo=ALBEDO)
     assert spec in models.airlight.tables and spec in models.background.tables
-    from fog_addon.precompute import bakers
+    from fog_addon.precompute.core import bakers
     m = NumpyOps({**bakers.numpy_tables(G), spec.name: arr})
     args = (0.3, 15.0, 14.0, 5.0, 9.0)
     want = air.kernel(m, *args) + mu.multiple_airlight(m, spec, *args)
@@ -124,7 +124,8 @@ def single_scattering_log_table(g=G):
 def test_irradiance_of_the_single_scattering_field_is_sun_g0(g):
     """The irradiance bake (hemisphere quadrature of a field) fed the single-scattering field gives Sun et al.
     2005's G_0 (Eq. 17, the surface table, by its own quadrature), and its glossy lobe the field itself."""
-    from fog_addon.precompute import bakers, surface
+    from fog_addon.precompute.core import bakers
+    from fog_addon.precompute.physics.point import surface
     log_field = single_scattering_log_table(g)
     spec = mu.table_spec(g, 0.5)
     arr = np.concatenate([log_field, mu.irradiance_of_field(log_field)]).astype(np.float32)
@@ -143,7 +144,7 @@ def test_dense_fog_is_left_out_where_it_adds_nothing():
     degrees off it to the sky; the multiply scattered light's largest share of a sample's fog grows with the
     fog's optical distance, negligible in the thinnest fog (under 1e-3 at T 1.5e-4), most of the fog at T 4.5
     (the glow there is 12x the single's over the frame: issue 28)."""
-    from fog_addon.precompute import predict
+    from fog_addon.precompute.model import predict
     p = 40
     ang = np.radians(np.linspace(0.2, 60.0, p))
     d = np.stack([np.sin(ang), np.cos(ang), 0.0 * ang], -1)

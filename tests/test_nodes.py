@@ -48,7 +48,7 @@ def _shading_probe(tmp_path, engine, method, case, g=0.0, kind="point"):
 @pytest.mark.parametrize("method", ["nodes", "osl"])
 def test_cycles_whole_fog_matches_numpy_twin(tmp_path, method):
     """Glow of two coloured lights plus the diffuse and glossy fog light on a Principled plane, per pixel,
-    against precompute.shading run by numpy (every term of the shading of a point)."""
+    against precompute.model.shading run by numpy (every term of the shading of a point)."""
     s = _shading_probe(tmp_path, "CYCLES", method, "principled")
     assert s["surface_pixels"] > 1000 and s["background_pixels"] > 100 and s["glossy_pixels"] > 500, s
     assert abs(s["median"] - 1) < 2e-5 and s["max_dev"] < 5e-4, s

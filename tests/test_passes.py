@@ -31,7 +31,7 @@ import pytest
 
 from conftest import ROOT
 from fog_addon import imageio
-from fog_addon.precompute import airlight
+from fog_addon.precompute.physics.point import airlight
 
 pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
 

@@ -1,4 +1,4 @@
-"""The Compositor method's per-pixel formulas (fog_addon/precompute/pixel.py) against independent sources:
+"""The Compositor method's per-pixel formulas (fog_addon/precompute/model/pixel.py) against independent sources:
 the pixel-filter table against scipy's adaptive quadrature in Cartesian coordinates about the pixel (the
 baker integrates in polar coordinates about the light, by the midpoint rule), the filter-width scaling
 against the same quadrature at another width, and the picture position against a pinhole projection."""
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from fog_addon.precompute import pixel
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.model import pixel
+from fog_addon.precompute.core.ops import NumpyOps
 
 WIDTH = pixel.FILTER_WIDTH   # the table's filter support (px)
 

@@ -1,4 +1,4 @@
-"""The error predictor and the chooser of the Quality (fog_addon/precompute/predict.py), numpy only.
+"""The error predictor and the chooser of the Quality (fog_addon/precompute/model/predict.py), numpy only.
 
 The renders that prove the prediction are in tests/test_quality.py; here:
 the predictor's terms are the shaders' twin (``shading.shade_point``), the
@@ -8,9 +8,12 @@ sample, and bad Quality values are refused with a clear message.
 import numpy as np
 import pytest
 
-from fog_addon.precompute import airlight, predict, rungs, shading, spot, surface, tables
-from fog_addon.precompute.medium import Medium
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.core import tables
+from fog_addon.precompute.model import predict, rungs, shading
+from fog_addon.precompute.physics.point import airlight, surface
+from fog_addon.precompute.physics.spot import spot
+from fog_addon.precompute.core.medium import Medium
+from fog_addon.precompute.core.ops import NumpyOps
 
 
 

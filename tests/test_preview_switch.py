@@ -13,7 +13,7 @@ import bpy
 import fog_addon
 from fog_addon.nodes import preview
 from fog_addon.ops import apply
-from fog_addon.precompute.spec import FogSpec
+from fog_addon.precompute.core.spec import FogSpec
 bpy.ops.wm.read_factory_settings(use_empty=True)
 scene = bpy.context.scene
 scene.render.engine = "CYCLES"; scene.cycles.samples = 1

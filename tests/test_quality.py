@@ -21,7 +21,7 @@ import pytest
 from fog_scenes import render_harness as h
 from conftest import ROOT
 from fog_addon import imageio
-from fog_addon.precompute import predict
+from fog_addon.precompute.model import predict
 
 pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
 

@@ -19,9 +19,12 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from fog_addon.precompute import airlight, model, rungs, spot, tables
+from fog_addon.precompute.core import tables
+from fog_addon.precompute.model import rungs
+from fog_addon.precompute.physics.point import airlight, model
+from fog_addon.precompute.physics.spot import spot
 from tools.research import segments
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.core.ops import NumpyOps
 from tools import spot_reference as ref
 from tools.shader_float32 import Float32Ops
 

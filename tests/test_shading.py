@@ -1,4 +1,4 @@
-"""The shading of a point (precompute/shading.py) and the models as data (rungs.py), in numpy.
+"""The shading of a point (precompute/model/shading.py) and the models as data (rungs.py), in numpy.
 
 Expected values are independent of the code under test: the glow by scipy
 quadrature of Sun et al. 2005 Eq. 5 (tools/airlight_reference.py), the fog
@@ -13,9 +13,11 @@ import math
 import numpy as np
 import pytest
 
-from fog_addon.precompute import airlight, rungs, shading, surface, tables
-from fog_addon.precompute.medium import Medium, medium
-from fog_addon.precompute.ops import NumpyOps, ShaderOps
+from fog_addon.precompute.core import tables
+from fog_addon.precompute.model import rungs, shading
+from fog_addon.precompute.physics.point import airlight, surface
+from fog_addon.precompute.core.medium import Medium, medium
+from fog_addon.precompute.core.ops import NumpyOps, ShaderOps
 from tools import airlight_reference as ref
 
 AIRLIGHT_TOL = 2e-4    # the airlight table rung: 1.6e-4 measured (test_airlight.py)

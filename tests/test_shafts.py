@@ -1,4 +1,4 @@
-"""The lit share of a glow (precompute/shafts.py) against adaptive quadrature with exact visibility.
+"""The lit share of a glow (precompute/physics/shafts/shafts.py) against adaptive quadrature with exact visibility.
 
 Occluders are spheres and boxes whose shadows are known in closed form: the expected share is scipy's
 quad of the single-scattering integrand times the exact visibility over quad of the integrand (both
@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from fog_addon.precompute import shaft_maps, shafts
-from fog_addon.precompute.ops import NumpyOps
-from fog_addon.precompute.tables import TableSpec
+from fog_addon.precompute.physics.shafts import shaft_maps, shafts
+from fog_addon.precompute.core.ops import NumpyOps
+from fog_addon.precompute.core.tables import TableSpec
 from fog_scenes.occluders import sphere_hit
 
 

@@ -8,7 +8,7 @@ import pytest
 
 from conftest import ROOT
 from fog_addon.nodes import groups, osl
-from fog_addon.precompute import rungs
+from fog_addon.precompute.model import rungs
 
 pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
 

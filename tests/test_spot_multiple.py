@@ -1,4 +1,4 @@
-"""The multiply scattered glow of spot lights (``precompute/spot_multiple.py``, issue 28).
+"""The multiply scattered glow of spot lights (``precompute/physics/spot/spot_multiple.py``, issue 28).
 
 Independent sources:
 * the point light's table (``multiple.py``: photons tallied as they cross spheres, orders weighted by W0^k
@@ -21,9 +21,11 @@ import numpy as np
 import pytest
 
 from fog_addon import imageio
-from fog_addon.precompute import bakers, model, multiple, rungs
-from fog_addon.precompute import spot_multiple as sm, spot_walk
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.core import bakers
+from fog_addon.precompute.model import rungs
+from fog_addon.precompute.physics.point import model, multiple
+from fog_addon.precompute.physics.spot import spot_multiple as sm, spot_walk
+from fog_addon.precompute.core.ops import NumpyOps
 from fog_scenes import area_lights
 from fog_scenes import dense as dn
 from fog_scenes import dense_spot as ds

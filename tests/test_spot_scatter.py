@@ -13,8 +13,11 @@ import math
 import numpy as np
 import pytest
 
-from fog_addon.precompute import bakers, model, rungs, spot, surface
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.core import bakers
+from fog_addon.precompute.model import rungs
+from fog_addon.precompute.physics.point import model, surface
+from fog_addon.precompute.physics.spot import spot
+from fog_addon.precompute.core.ops import NumpyOps
 
 
 def _ops(g):

@@ -15,8 +15,10 @@ import pathlib
 import numpy as np
 import pytest
 
-from fog_addon.precompute import airlight, model, spot, tables
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.core import tables
+from fog_addon.precompute.physics.point import airlight, model
+from fog_addon.precompute.physics.spot import spot
+from fog_addon.precompute.core.ops import NumpyOps
 from tools import spot_reference
 
 CACHE = pathlib.Path(__file__).resolve().parent / "data" / "spot_reference.npz"

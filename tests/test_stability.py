@@ -27,9 +27,9 @@ import math
 import numpy as np
 import pytest
 
-from fog_addon.precompute import airlight as al
-from fog_addon.precompute import model
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.physics.point import airlight as al
+from fog_addon.precompute.physics.point import model
+from fog_addon.precompute.core.ops import NumpyOps
 from tools import airlight_reference as ref
 from tools import shader_float32 as f32
 from tools import stability_map as sm
@@ -285,7 +285,8 @@ def test_documented_bound_everywhere(grid, name):
 # does, and it fails (the documented failure, README "Stability map") where ours does not.
 
 from tools.research import phase_series as ps  # noqa: E402
-from fog_addon.precompute import rungs, tables  # noqa: E402
+from fog_addon.precompute.core import tables  # noqa: E402
+from fog_addon.precompute.model import rungs  # noqa: E402
 
 _HG_TABLES = {}
 

@@ -1,5 +1,5 @@
-"""The sun's shafts in a fog layer (precompute/shafts.py, "the sun") against adaptive quadrature with exact
-visibility: box occluders (buildings) whose shadows are known in closed form (``fog_scenes.occluders.box_hit``);
+"""The sun's shafts in a fog layer (precompute/physics/shafts/shafts.py, "the sun") against adaptive quadrature with
+exact visibility: box occluders (buildings) whose shadows are known in closed form (``fog_scenes.occluders.box_hit``);
 the expected share is scipy's quad of the layer's single-scattering integrand of the sun (its density, the camera
 segment's and the sun's optical depths, written out here) times the exact visibility, over the same without it.
 The map is baked by the same closed-form ray casts at its grid points."""
@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from fog_addon.precompute import sun_shafts
-from fog_addon.precompute.ops import NumpyOps
-from fog_addon.precompute.tables import TableSpec
+from fog_addon.precompute.physics.daylight import sun_shafts
+from fog_addon.precompute.core.ops import NumpyOps
+from fog_addon.precompute.core.tables import TableSpec
 from fog_scenes.occluders import NO_HIT, box_hit
 
 BETA = 0.02

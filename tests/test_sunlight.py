@@ -1,5 +1,5 @@
-"""The daylight composer (fog_addon/precompute/sunlight.py) and the kernels it added to daylight.py, against
-independent quadrature: scipy's adaptive quadrature of the defining integrals (the sky's anisotropic
+"""The daylight composer (fog_addon/precompute/physics/daylight/sunlight.py) and the kernels it added to daylight.py,
+against independent quadrature: scipy's adaptive quadrature of the defining integrals (the sky's anisotropic
 in-scattering, the sky's irradiance on tilted surfaces, the phase ring mean), and a fine numerical integration
 over the sphere of the layer's own (separately tested, tests/test_daylight.py) ray kernels for the fog light's
 irradiance map, whose spherical-harmonic and phase-peak approximations are what is tested here."""
@@ -16,8 +16,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from fog_addon.precompute import aerial, daylight as dl, daylight_tables, sunlight as sl   # noqa: E402
-from fog_addon.precompute.ops import NumpyOps                      # noqa: E402
+from fog_addon.precompute.physics.daylight import aerial, daylight as dl, daylight_tables, sunlight as sl   # noqa: E402
+from fog_addon.precompute.core.ops import NumpyOps                      # noqa: E402
 from tests.test_daylight import ref_beta, ref_column, ref_hg, ref_tau   # noqa: E402
 
 m = NumpyOps()

@@ -14,8 +14,10 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from fog_addon.precompute import rungs, surface, tables
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.core import tables
+from fog_addon.precompute.model import rungs
+from fog_addon.precompute.physics.point import surface
+from fog_addon.precompute.core.ops import NumpyOps
 
 # Measured (see surface.py / the report): table + level interpolation <= 0.43 % for T <= 20,
 # quadrature of the bake vs scipy <= 2e-6.

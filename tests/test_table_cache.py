@@ -1,4 +1,4 @@
-"""The on-disk cache of baked tables (``precompute/bakers.py``: ``cached_bake``) never changes a result.
+"""The on-disk cache of baked tables (``precompute/core/bakers.py``: ``cached_bake``) never changes a result.
 
 Expected values: a fresh bake by the baker itself.  A table read from the cache must be the same bits and
 dtype; a missing, truncated, bit-flipped, foreign or unreadable entry must be baked again and rewritten;
@@ -12,7 +12,8 @@ import shutil
 import numpy as np
 import pytest
 
-from fog_addon.precompute import bakers, fingerprint, pixel, table_cache, tables
+from fog_addon.precompute.core import bakers, fingerprint, table_cache, tables
+from fog_addon.precompute.model import pixel
 
 
 @pytest.fixture
@@ -126,7 +127,7 @@ def test_key_holds_precompute_source_and_spec(cache, tmp_path, monkeypatch):
         f.write("# edited\n")
     assert table_cache.cache_path(spec) == path
     monkeypatch.setattr(fingerprint, "PRECOMPUTE", copy / "precompute")
-    with open(copy / "precompute" / "pixel.py", "a", encoding="utf-8") as f:
+    with open(copy / "precompute" / "model" / "pixel.py", "a", encoding="utf-8") as f:
         f.write("# edited\n")
     assert table_cache.cache_path(spec) != path
 
@@ -179,7 +180,7 @@ def test_parallel_writers_leave_a_readable_entry(cache):
 def test_numpy_helpers_read_the_cache(cache, monkeypatch):
     """``surface.specular_table`` (the view's albedos at Add) and ``surface.surface_table`` bake through the
     cache too: a second process reads what the first baked."""
-    from fog_addon.precompute import surface
+    from fog_addon.precompute.physics.point import surface
     spec = tables.SPECULAR_ALBEDO
     monkeypatch.setattr(surface, "_TABLE_CACHE", {})
     first = surface.specular_table()

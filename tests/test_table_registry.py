@@ -1,4 +1,4 @@
-"""Every table the add-on makes belongs to exactly one registered kind (``precompute/registry.py``), found by the
+"""Every table the add-on makes belongs to exactly one registered kind (``precompute/core/registry.py``), found by the
 key its spec carries, never by its name."""
 import ast
 import math
@@ -7,15 +7,20 @@ import re
 
 import pytest
 
-from fog_addon.precompute import (bakers, daylight_tables, emitter_glow, emitter_table, multiple, pixel, registry,
-                                  spot_multiple, tables)
+from fog_addon.precompute.core import bakers, registry, tables
+from fog_addon.precompute.model import pixel
+from fog_addon.precompute.physics.daylight import daylight_tables
+from fog_addon.precompute.physics.emitter import emitter_glow, emitter_table
+from fog_addon.precompute.physics.point import multiple
+from fog_addon.precompute.physics.spot import spot_multiple
 
 PACKAGE = pathlib.Path(__file__).resolve().parent.parent / "fog_addon"
 
 # ``TableSpec(...)`` calls without a ``kind=``: the pixel filter's constants (``registry.PIXEL_FILTER.fixed``), the
 # scene's shadow maps (baked from the scene's geometry, not tables of the registry) and airlight's look-up of an
 # array it already holds
-UNKINDED_CALLS = {"precompute/pixel.py": 2, "shadow_maps.py": 3, "sun_maps.py": 3, "precompute/airlight.py": 1}
+UNKINDED_CALLS = {"precompute/model/pixel.py": 2, "shadow_maps.py": 3, "sun_maps.py": 3,
+                  "precompute/physics/point/airlight.py": 1}
 
 
 def _specs():

@@ -46,7 +46,7 @@ import bpy
 import fog_addon
 from fog_addon import measure, methods
 from fog_addon.ops import apply
-from fog_addon.precompute.spec import FogSpec
+from fog_addon.precompute.core.spec import FogSpec
 bpy.ops.wm.open_mainfile(filepath=sys.argv[1] if len(sys.argv) > 1 else BLEND)
 scene = bpy.context.scene
 measure.set_samples(scene, 4)

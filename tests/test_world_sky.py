@@ -1,6 +1,6 @@
-"""A World that is a sky seen through its own air (a Sky Texture) with Air on (precompute/sunlight.py, "a World that
-is a sky seen through its own air"): what "matches Blender's own Sky Texture" means, checked against closed forms
-that do not use the code under test.
+"""A World that is a sky seen through its own air (a Sky Texture) with Air on (precompute/physics/daylight/sunlight.py,
+"a World that is a sky seen through its own air"): what "matches Blender's own Sky Texture" means, checked against
+closed forms that do not use the code under test.
 
 * a pixel of sky is the World itself (its radiance, not dimmed and not glowing twice), with a vanishing layer;
 * a black surface far away takes the World's radiance just above it in its direction, times the air's opacity
@@ -13,9 +13,9 @@ import math
 import numpy as np
 import pytest
 
-from fog_addon.precompute import aerial, daylight as dl, daylight_tables, sunlight as sl
-from fog_addon.precompute.ops import NumpyOps
-from fog_addon.precompute.tables import TableSpec
+from fog_addon.precompute.physics.daylight import aerial, daylight as dl, daylight_tables, sunlight as sl
+from fog_addon.precompute.core.ops import NumpyOps
+from fog_addon.precompute.core.tables import TableSpec
 
 AIR = tuple(3.0 * b for b in aerial.RAYLEIGH_RGB)   # thicker than sea-level air: the opacities below are not tiny
 H = aerial.RAYLEIGH_HEIGHT

@@ -40,8 +40,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))   # a script run by path: the repository root
 
 from tools import airlight_reference as ref  # noqa: E402
-from fog_addon.precompute import airlight as al  # noqa: E402
-from fog_addon.precompute import tables  # noqa: E402
+from fog_addon.precompute.physics.point import airlight as al  # noqa: E402
+from fog_addon.precompute.core import tables  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "out"
 PNG = ROOT / "docs" / "figures" / "figure6.png"

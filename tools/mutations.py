@@ -14,7 +14,7 @@ name assigned at module or class level) looked up by ``ast`` across every
 is a dotted suffix of the definition's full name: ``shade_point``,
 ``NodeOps.place``, ``_quadrature.nodes`` (a def inside a def), or, when a bare
 name is defined in several places, ``shading.view_transmittance`` or the
-whole ``fog_addon.precompute.shading.view_transmittance``; it must match
+whole ``fog_addon.precompute.model.shading.view_transmittance``; it must match
 exactly one definition.  The old text must occur exactly once within that
 definition's lines (``ast``'s lineno to end_lineno, decorators included), or
 the tool refuses, naming the symbol and the lines it searched, so the list
@@ -47,7 +47,7 @@ tests/test_mutations.py, marker ``mutation``): one mutation of each kind of
 promise, each with a killer of seconds.  ``--rest`` runs the others (the slow
 tier); together they are every mutation, each once.
 
-A mutation of ``fog_addon/precompute/shading.py`` changes the shaders and
+A mutation of ``fog_addon/precompute/model/shading.py`` changes the shaders and
 their numpy twin alike, so a twin comparison (tests/test_nodes.py) cannot
 kill it: its killers have expected values of their own (quadrature of Sun et
 al. 2005's equations, Eq. 19 written out by hand, Cycles path tracing).  The
@@ -642,7 +642,7 @@ PACKAGE = "fog_addon"   # the symbols a mutation may name are defined under this
 
 class Symbol(NamedTuple):
     """One definition under ``PACKAGE``: a def, a class, or a constant (a name assigned at module or class level)."""
-    dotted: str   # module, then qualified name: fog_addon.precompute.shading.shade_point, fog_addon.x.Class.method
+    dotted: str   # module.qualified_name: fog_addon.precompute.model.shading.shade_point, fog_addon.x.Class.method
     kind: str     # "def", "class" or "constant"
     path: str     # file from the repository root
     first: int    # first line (decorators included), 1-based

@@ -13,8 +13,9 @@ vectors; tests/test_airlight.py::test_float32_from_vectors checks that path).
 """
 import numpy as np
 
-from fog_addon.precompute import model, tables
-from fog_addon.precompute.ops import NumpyOps
+from fog_addon.precompute.core import tables
+from fog_addon.precompute.physics.point import model
+from fog_addon.precompute.core.ops import NumpyOps
 
 
 class Float32Ops(NumpyOps):

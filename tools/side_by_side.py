@@ -55,7 +55,7 @@ sys.path.insert(0, str(ROOT))   # a script run by path: the repository root (fog
 
 from fog_scenes import render_harness as harness  # noqa: E402  (subprocess runner, scene builder)
 from fog_addon import compare, imageio  # noqa: E402  (numpy only)
-from fog_addon.precompute import presets  # noqa: E402  (Koschmieder visibility)
+from fog_addon.precompute.core import presets  # noqa: E402  (Koschmieder visibility)
 
 SCENES = ("street_lamps", "spheres")
 FIGURES = ROOT / "docs" / "figures"

@@ -2,7 +2,7 @@
 
     .venv/bin/python tools/stability_map.py [--regen] [--isotropic | --anisotropic] [--processes 2]
 
-Formulations (fog_addon/precompute/airlight.py, tools/shader_float32.py):
+Formulations (fog_addon/precompute/physics/point/airlight.py, tools/shader_float32.py):
   * ``sun_F64``: Sun et al.'s own F(u, v) table, 64 x 64 (as tools/figure6.py),
     Eq. 11 / 12 with two bilinear lookups (``airlight_sun``), float64;
   * ``table_f64`` / ``table_f32``: our N-table model as the node groups compute
@@ -92,10 +92,11 @@ sys.path.insert(0, str(ROOT))   # a script run by path: the repository root
 
 from tools import airlight_reference as ref  # noqa: E402
 from tools import shader_float32 as f32  # noqa: E402
-from fog_addon.precompute import airlight as al  # noqa: E402
-from fog_addon.precompute import model  # noqa: E402
+from fog_addon.precompute.physics.point import airlight as al  # noqa: E402
+from fog_addon.precompute.physics.point import model  # noqa: E402
 from tools.research import phase_series as ps  # noqa: E402
-from fog_addon.precompute import rungs, tables  # noqa: E402
+from fog_addon.precompute.core import tables  # noqa: E402
+from fog_addon.precompute.model import rungs  # noqa: E402
 
 CACHE = ROOT / "tests" / "data" / "stability_reference.npz"
 PNG = ROOT / "docs" / "figures" / "stability_map.png"

@@ -25,7 +25,7 @@ from fog_addon import measure  # noqa: E402
 from fog_addon.nodes import comp_fog, groups, images, passes  # noqa: E402
 from fog_addon import view  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
-from fog_addon.precompute import rungs  # noqa: E402
+from fog_addon.precompute.model import rungs  # noqa: E402
 from fog_scenes.probe_common import light_pixel  # noqa: E402,F401  (peaks.py reads it here)
 import smoke  # noqa: E402
 

@@ -30,7 +30,7 @@ def main(n, path):
     from fog_scenes import many_lights
     from fog_addon import measure
     from fog_addon.ops import apply
-    from fog_addon.precompute import pixel
+    from fog_addon.precompute.model import pixel
     scene, _ = many_lights.build_scene(n, direct_light=True)
     measure.set_resolution(scene, build.W, build.H)
     bpy.context.view_layer.update()

@@ -1,7 +1,7 @@
 """The fog's methods, each one unit behind ``base.Method``; ``resolve`` gives the one a spec asks for.
 
 Method Auto (the default) chooses per scene (``auto.py``).  Adding a method: subclass ``base.Method``,
-add an instance to ``METHODS_BY_NAME`` and its name to ``precompute.spec.METHODS``.
+add an instance to ``METHODS_BY_NAME`` and its name to ``precompute.core.spec.METHODS``.
 """
 from . import auto
 from .base import Method  # noqa: F401

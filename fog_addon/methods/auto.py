@@ -34,7 +34,7 @@ What the scene needs comes first:
 """
 from .. import caveats, sunsky, view
 from ..nodes import budgets
-from ..precompute import capabilities, rungs
+from ..precompute.model import capabilities, rungs
 from .compositor import glowing_objects, unfogged_layers
 
 SOFT_COST_LIMIT = 6.0   # a soft need keeps the node groups while they cost at most this (x the fog-free render)

@@ -2,7 +2,7 @@
 
 A method is one unit behind one interface (``Method``).  ``ops/`` runs every method the same way:
 
-    spec (``precompute/spec.FogSpec``) -> lights -> method (``methods.resolve``: Auto picks one) ->
+    spec (``precompute/core/spec.FogSpec``) -> lights -> method (``methods.resolve``: Auto picks one) ->
     ``method.check`` -> plan (``ops/plan.plan``: each light's models for the Quality within ``method.budget``)
     -> ``method.build`` -> ``method.passes`` (the view layers' AOVs) -> ``method.follow`` (the compositor)
 

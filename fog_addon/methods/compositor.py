@@ -3,8 +3,8 @@
 The materials keep only what depends on each sample's depth (the camera ray's extinction, and in EEVEE
 the lights' shared dimming of direct light: ``dimming_lights``); the compositor's group evaluates each
 light's glows and the fog light its pixel's surface reflects, within the light's window
-(``precompute/footprint.py``).  Limits: one surface point per pixel, perspective cameras.  The fog passes are
-the compositor's, written by a File Output node (``nodes/compositor.py``).
+(``precompute/model/footprint.py``).  Limits: one surface point per pixel, perspective cameras.  The fog passes
+are the compositor's, written by a File Output node (``nodes/compositor.py``).
 """
 import functools
 
@@ -13,7 +13,8 @@ import bpy
 from ..nodes import (budgets, comp_daylight, comp_fog, comp_shafts, compositor, graph, owned, passes, surface_group,
                      world_group)
 from .. import caveats, shadow_maps, sunsky, view
-from ..precompute import predict, rungs, shafts
+from ..precompute.model import predict, rungs
+from ..precompute.physics.shafts import shafts
 from .base import Method
 
 # The viewport's preview of the Compositor's fog (``nodes/preview.py``): each light's share of its budget by ladder

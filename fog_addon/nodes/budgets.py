@@ -5,7 +5,7 @@ uniform block of 64 KiB, and Cycles' OSL indexes a shader group's layers with a 
 a light adds, by its ladder step (``rungs.STEPS``), was measured for each (the comments at the constants);
 ``eevee_budget`` and ``osl_budget`` give them as a ``predict.Budget``, which the Quality's choice must fit.
 """
-from ..precompute import predict
+from ..precompute.model import predict
 
 # EEVEE keeps a material's node constants, its inlined groups' included, in one uniform block of at most
 # 64 KiB; beyond it the material fails to link ("Uniform block node_tree too big (78832/65536)") and

@@ -4,7 +4,7 @@ pass's running sum over them, and the Mix Shader that keeps the fog to the rays 
 Each shapes what Cycles compiles, whose limits a sum over many lights meets first: SVM's stack of 255 floats,
 OSL's closure stack of 16 entries, and the nodes SVM jumps over where a Mix Shader's factor is 0.
 """
-from ..precompute import shading
+from ..precompute.model import shading
 
 
 def closure_sum(m, sock, bl_idname, colours, gates=True):

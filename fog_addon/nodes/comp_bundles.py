@@ -1,7 +1,8 @@
 """The compositor's bundles: the scene's lights by ``BUNDLE_SIZE``, a group each in the fog group, holding each
 light's glow, scatter, shaft and halo groups with their inputs driven by the light, and the sums of their
 terms."""
-from ..precompute import rungs, shafts
+from ..precompute.model import rungs
+from ..precompute.physics.shafts import shafts
 from . import comp_halos, comp_lights, comp_ops, comp_shafts, drivers, groups, light_groups, owned
 from .comp_halos import HALO_STEP
 from .comp_lights import GLOW_OUTPUTS, GLOW_SHARED, SCATTER_OUTPUTS, SURFACE, SURFACE_IMAGES, SURFACE_SHARED

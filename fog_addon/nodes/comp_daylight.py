@@ -4,7 +4,8 @@
 import hashlib
 from typing import Any, NamedTuple
 
-from ..precompute import shafts, sun_shafts, sunlight
+from ..precompute.physics.daylight import sun_shafts, sunlight
+from ..precompute.physics.shafts import shafts
 from ..shadow_maps import SUN_IMAGE
 from . import comp_shafts
 from .comp_shafts import SHAFT_EDGE, SHAFT_GROUP, SHAFT_TAPS, SURFACE_EDGE, SURFACE_TAPS

@@ -1,9 +1,9 @@
-"""The glows of glowing objects in the compositor (``precompute/emitter_glow.py``): the Emission pass, undimmed
-and weighted per pixel, blurred by a ladder of Blur nodes, each rung stopped at the surfaces in front of its
+"""The glows of glowing objects in the compositor (``precompute/physics/emitter/emitter_glow.py``): the Emission pass,
+undimmed and weighted per pixel, blurred by a ladder of Blur nodes, each rung stopped at the surfaces in front of its
 sources."""
 import math
 
-from ..precompute import emitter_glow
+from ..precompute.physics.emitter import emitter_glow
 from . import comp_ops, images as images_
 
 EMITTERS = "Emission"   # the fog group's input of the emitters' light: the Render Layers' Emission pass
@@ -24,12 +24,12 @@ def emitter_table(g, pixel_angle, multiple_albedo=None):
 
 
 def glows(m, p, beta, d_vp, g, pixel_angle, multiple_albedo=None, cover=None, facing=None, lean=None):
-    """The glows of the glowing objects the camera sees (``precompute/emitter_glow.py``): the Emission pass made
-    undimmed (times e^{beta D_vp}) and weighted by its glow's total weight N(T) (``emitter_glow.source_weight``)
-    and, with ``facing`` (the |cos| of each pixel's surface to the camera), taken as the two-sided Lambertian
-    source its surface is (``emitter_glow.facing_factor``: a flat sign sends less light sideways than towards the
-    camera); then weighted per pixel by each rung's share a_j(T) / N(T), blurred by each Blur node of the ladder
-    and summed (per unit albedo).  Each rung's glow stops at the surfaces in front of its sources
+    """The glows of the glowing objects the camera sees (``precompute/physics/emitter/emitter_glow.py``): the Emission
+    pass made undimmed (times e^{beta D_vp}) and weighted by its glow's total weight N(T)
+    (``emitter_glow.source_weight``) and, with ``facing`` (the |cos| of each pixel's surface to the camera), taken as
+    the two-sided Lambertian source its surface is (``emitter_glow.facing_factor``: a flat sign sends less light
+    sideways than towards the camera); then weighted per pixel by each rung's share a_j(T) / N(T), blurred by each Blur
+    node of the ladder and summed (per unit albedo).  Each rung's glow stops at the surfaces in front of its sources
     (``emitter_glow.segment_share`` at the rung's angle, the sources' optical depth taken as the mean over what the
     rung blurs in: a second blur of the weights times T); where the pixel sees the sky (``cover`` 0) or a glowing
     surface it is whole.  With ``lean`` (the picture's unit direction (x, y, 0) of each pixel's normal, taken facing

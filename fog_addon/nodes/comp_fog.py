@@ -14,8 +14,8 @@ cost grows with lights x samples x materials (issue 8's overhead: 4x the fog-fre
   (``shading.glow_pair``) over the lights, built by ``CompOps`` (the same formulas and tables as the
   materials' groups, each node once), plus the peak factor of ``pixel.py`` where a light is seen in the
   picture; each light in two groups, its glows (``comp_lights.build_glow_group``) and the fog light its surface
-  reflects (``comp_lights.build_scatter_group``), each evaluated only in its window (``precompute/footprint.py``: a
-  spot's cone, the picture's surfaces) through Crop nodes, and put back in place by Translate nodes;
+  reflects (``comp_lights.build_scatter_group``), each evaluated only in its window (``precompute/model/footprint.py``:
+  a spot's cone, the picture's surfaces) through Crop nodes, and put back in place by Translate nodes;
 * the pixel's fog is composed in one place, ``compose.compose`` (Sun et al. 2005 Eq. 19 and 12): the builder hands
   it the lamps' sums over the bundles, a fog layer's sun and sky (``sunlight.pixel_terms``), the glowing objects'
   glows (``comp_emitters.glows``) and the layer's dimmings of the render's pixel as terms, and wires its output.
@@ -36,7 +36,10 @@ it writes (``compositor.py``): the view layers' own passes hold no fog light.
 """
 import bpy
 
-from ..precompute import compose, footprint, model, pixel, rungs, shafts, sun_shafts, sunlight, surface
+from ..precompute.model import compose, footprint, pixel, rungs
+from ..precompute.physics.daylight import sun_shafts, sunlight
+from ..precompute.physics.point import model, surface
+from ..precompute.physics.shafts import shafts
 from . import (budgets, comp_bundles, comp_daylight, comp_emitters, comp_halos, comp_lights, comp_ops, comp_shafts,
                compositor, groups, images as images_, owned, passes)
 from .comp_bundles import BUNDLE, BUNDLE_SIZE

@@ -1,7 +1,7 @@
 """The compositor's per-light groups, shared by every light with the same models: the light's glows along the
 pixel's ray (``build_glow_group``, times the pixel filter's peak where the light is seen in the picture) and the
 fog light the pixel's surface reflects (``build_scatter_group``); what each reads of the pixel."""
-from ..precompute import pixel, rungs, shading
+from ..precompute.model import pixel, rungs, shading
 from . import budgets, groups, light_groups, owned
 from .comp_ops import CompOps
 from .groups import F, V

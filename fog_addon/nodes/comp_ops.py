@@ -1,7 +1,7 @@
 """``CompOps``, the ops protocol (``sockets.NodeOps``) building into the compositor's trees, and the image
 operations the compositor's groups share: images moved, scaled, cropped to a window and put back in place, sums
 kept on their domain, Value and vector nodes driven from the scene, and groups built once for every light."""
-from ..precompute import footprint
+from ..precompute.model import footprint
 from . import drivers, groups, owned
 from .groups import V
 from .sockets import KERNEL_GROUP, NodeOps, Val

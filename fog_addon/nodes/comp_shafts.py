@@ -6,7 +6,8 @@ import dataclasses
 import hashlib
 import math
 
-from ..precompute import shaft_maps, shafts, spot as spot_
+from ..precompute.physics.shafts import shaft_maps, shafts
+from ..precompute.physics.spot import spot as spot_
 from . import comp_ops, groups, light_groups, owned
 from .comp_lights import LIGHT_GROUP, SURFACE
 from .comp_ops import CompOps

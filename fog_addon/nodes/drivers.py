@@ -1,7 +1,7 @@
 """Drivers that feed the fog's node groups from the scene: an object's location (TRANSFORMS variables) and simple
 expressions of single properties.  Neither needs Python to evaluate, so a saved file renders the same with
 auto-run off and without the add-on (a farm)."""
-from ..precompute import area
+from ..precompute.physics.area import area
 
 
 def _new_driver(sock):

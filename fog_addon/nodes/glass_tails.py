@@ -2,7 +2,7 @@
 sharp mirror, by differences of tails to infinity (``place_tails``), built only where the scene has them
 (``caveats.specular_paths``).  The Surface group's Glass Color and Glass IOR inputs (fed by ``material.py``)
 weight them."""
-from ..precompute import rungs, shading
+from ..precompute.model import rungs, shading
 from . import closures, groups, light_bundles, light_groups
 from .groups import C, F, V
 from .sockets import NodeOps

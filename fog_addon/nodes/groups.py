@@ -26,7 +26,8 @@ import re
 
 import bpy
 
-from ..precompute import fingerprint, rungs
+from ..precompute.core import fingerprint
+from ..precompute.model import rungs
 from . import owned, sockets
 
 PARAMS = "AnalyticFog Params"

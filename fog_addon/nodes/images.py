@@ -2,7 +2,7 @@
 import bpy
 import numpy as np
 
-from ..precompute import bakers, fingerprint, table_cache
+from ..precompute.core import bakers, fingerprint, table_cache
 from . import owned
 
 VERSION_KEY = "analytic_fog_table_version"   # on each image: the fingerprint of the code that baked it

@@ -4,8 +4,9 @@
 driven by its light (``light_instance``)."""
 import bpy
 
-from ..precompute import area, rungs, shading
-from ..precompute.medium import Medium
+from ..precompute.model import rungs, shading
+from ..precompute.physics.area import area
+from ..precompute.core.medium import Medium
 from . import drivers, groups, owned
 from .groups import C, F, V
 from .sockets import NodeOps

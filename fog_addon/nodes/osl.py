@@ -1,6 +1,6 @@
 """The OSL backend of the shader ops: ``model.py`` formulas printed as an OSL shader (Cycles only).
 
-``OslOps`` mirrors ``fog_addon.precompute.ops.NumpyOps`` function by function,
+``OslOps`` mirrors ``fog_addon.precompute.core.ops.NumpyOps`` function by function,
 but each operation appends a line of OSL instead of computing a value, so
 the shader is the very code the numpy model runs.  Loops (``fori``) print as
 ``for`` loops; tables are not available (OSL's ``texture()`` cannot read images
@@ -19,7 +19,8 @@ import sys
 
 import bpy
 
-from ..precompute import fingerprint, rungs
+from ..precompute.core import fingerprint
+from ..precompute.model import rungs
 from . import owned
 
 PREFIX = "AnalyticFog"

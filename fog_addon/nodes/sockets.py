@@ -1,6 +1,6 @@
 """The node backend of the shader ops: ``model.py`` formulas built as shader nodes.
 
-``NodeOps`` mirrors ``fog_addon.precompute.ops.NumpyOps`` function by function;
+``NodeOps`` mirrors ``fog_addon.precompute.core.ops.NumpyOps`` function by function;
 a ``Val`` wraps an output socket (or a Python constant, folded at build time)
 and overloads arithmetic so the formulas read the same in both.
 """
@@ -8,7 +8,7 @@ import math
 
 import bpy
 
-from ..precompute import fingerprint
+from ..precompute.core import fingerprint
 from . import owned
 
 COLUMN = 170.0

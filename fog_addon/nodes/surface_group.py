@@ -6,7 +6,9 @@ import functools
 
 import bpy
 
-from ..precompute import compose, rungs, shading, sunlight, surface
+from ..precompute.model import compose, rungs, shading
+from ..precompute.physics.daylight import sunlight
+from ..precompute.physics.point import surface
 from . import closures, glass_tails, groups, light_bundles, light_groups, passes, preview as preview_
 from .groups import C, F, V
 from .sockets import NodeOps

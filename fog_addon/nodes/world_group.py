@@ -4,7 +4,8 @@ import functools
 
 import bpy
 
-from ..precompute import compose, rungs, shading, sunlight
+from ..precompute.model import compose, rungs, shading
+from ..precompute.physics.daylight import sunlight
 from . import closures, drivers, groups, light_bundles, light_groups, passes, preview as preview_
 from .groups import C, F, V
 from .sockets import NodeOps

@@ -15,8 +15,8 @@ from ..nodes import comp_fog, compositor, dedupe, groups, images, osl, passes, p
 from ..nodes.light import unwrap_light
 from ..nodes.material import unwrap_material, wrap_material
 from ..nodes.world import unwrap_world, wrap_world
-from ..precompute import capabilities, predict
-from ..precompute.spec import FogSpec
+from ..precompute.model import capabilities, predict
+from ..precompute.core.spec import FogSpec
 from ..props import spec_of, store_spec
 from . import progress as progress_
 from .build import (AOV_KINDS, SPEC_KEY, TablesMissing, build_scene_groups, follow_compositor, missing_tables,
@@ -130,7 +130,7 @@ def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="no
     (g), ``method`` ("auto", "nodes", "osl", "compositor"; this function's default is the node groups, the
     panel's and the command line's is Auto), ``scene_scale`` (m per unit), ``with_passes``, ``error`` (the
     Quality: a preset name or a target error; None is Exact), ``world_light``, ``shafts``, ``multiple_scattering``
-    (Dense Fog).  See ``precompute/spec.py``."""
+    (Dense Fog).  See ``precompute/core/spec.py``."""
     spec = FogSpec(density=density, scene_scale=scene_scale, albedo=tuple(albedo), anisotropy=anisotropy,
                    method=method, quality=error, passes=with_passes, world_light=world_light, shafts=shafts,
                    multiple_scattering=multiple_scattering)

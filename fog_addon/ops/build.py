@@ -12,7 +12,9 @@ from .. import caveats, methods, sunsky
 from ..nodes import comp_fog, groups, images, passes
 from ..nodes.light import unwrap_light, wrap_light
 from ..nodes.owned import is_fogged
-from ..precompute import bakers, multiple, rungs
+from ..precompute.core import bakers
+from ..precompute.model import rungs
+from ..precompute.physics.point import multiple
 from . import progress as progress_
 from .plan import CHOICE_KEY, PREFERENCE_KEY, built_method, fog_lights, plan, resolve_method
 from .report import limit_text

@@ -13,7 +13,7 @@ from bl_operators.presets import AddPresetBase
 
 from . import apply, bake_job, progress
 from .. import props
-from ..precompute import presets
+from ..precompute.core import presets
 
 PRESET_SUBDIR = "analytic_fog"
 PRESET_TITLES = {k: k.replace("_", " ").title() for k in (*presets.VISIBILITY_M, *presets.LAYERED)}

@@ -13,7 +13,8 @@ import bpy
 
 from .. import methods, view
 from ..nodes import budgets, groups
-from ..precompute import predict, rungs, spot
+from ..precompute.model import predict, rungs
+from ..precompute.physics.spot import spot
 
 SUPPORTED_LIGHTS = ("POINT", "SPOT", "AREA")
 THIN_SHARE = 0.25   # Dense Fog is left out for a light whose multiply scattered light is at most this share of

@@ -9,7 +9,10 @@ import bpy
 
 from .. import caveats, methods, shadow_maps, sunsky, view
 from ..nodes import groups
-from ..precompute import capabilities, presets, rungs, shafts, sun_shafts
+from ..precompute.core import presets
+from ..precompute.model import capabilities, rungs
+from ..precompute.physics.daylight import sun_shafts
+from ..precompute.physics.shafts import shafts
 from .plan import stored_choice
 
 CAVEATS_KEY = "analytic_fog_caveats"   # on the Surface group: what the fog can't model in the scene (notes)

@@ -10,8 +10,8 @@ import bpy
 
 from .. import props
 from ..nodes import groups, preview
-from ..precompute import bakers
-from ..precompute.spec import FogSpec, validate_quality
+from ..precompute.core import bakers
+from ..precompute.core.spec import FogSpec, validate_quality
 from ..props import spec_of, store_spec
 from . import progress as progress_
 from .build import SPEC_KEY, TablesMissing, build_scene_groups, follow_compositor, rebuilt

@@ -1,5 +1,5 @@
 """Tiny render of airlight over a black plane and the background; prints per-pixel
-ratios to the numpy model (fog_addon.precompute.airlight.airlight) as JSON.
+ratios to the numpy model (fog_addon.precompute.physics.point.airlight.airlight) as JSON.
 
     python tests/scenes/airlight_probe.py OUT_DIR [ENGINE [METHOD]]
 
@@ -19,7 +19,7 @@ import numpy as np  # noqa: E402
 
 from fog_addon import imageio, measure  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
-from fog_addon.precompute import airlight  # noqa: E402
+from fog_addon.precompute.physics.point import airlight  # noqa: E402
 from fog_scenes import probe_common  # noqa: E402
 
 BETA, POWER, W, H = 0.2, 1000.0, 64, 48

@@ -73,7 +73,7 @@ def method_switch(scene):
     mats = snapshot()["materials"]
     scene.analytic_fog.method = "OSL"
     from fog_addon.nodes import groups
-    from fog_addon.precompute import rungs
+    from fog_addon.precompute.model import rungs
     osl = rungs.choose("osl")
     R["osl_script_nodes"] = sum(n.bl_idname == "ShaderNodeScript"
                                 for g in (groups.light_group_name(osl), groups.background_group_name(osl))
@@ -187,7 +187,7 @@ def selected_only(scene):
 def invisible_note():
     """A haze in a 10 m scene is invisible: the add warns (and still adds)."""
     from fog_addon.ops import apply
-    from fog_addon.precompute import presets
+    from fog_addon.precompute.core import presets
     scene = bpy.context.scene
     R["invisible_note"] = any("invisible" in why for _, why in
                               apply.apply_fog(scene, presets.PRESETS["haze"]))

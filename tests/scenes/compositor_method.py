@@ -30,7 +30,7 @@ import bpy  # noqa: E402
 
 from demo_scenes import spheres  # noqa: E402
 from fog_addon.nodes import budgets, comp_bundles, comp_fog, comp_ops, compositor, groups, images, owned  # noqa: E402
-from fog_addon.precompute import spot  # noqa: E402
+from fog_addon.precompute.physics.spot import spot  # noqa: E402
 from fog_addon.nodes.sockets import NodeOps  # noqa: E402
 from fog_addon.methods.compositor import dimming_lights  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402

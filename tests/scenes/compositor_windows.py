@@ -1,4 +1,4 @@
-"""The Compositor method's windows (``precompute/footprint.py``) change no pixel: renders with them against
+"""The Compositor method's windows (``precompute/model/footprint.py``) change no pixel: renders with them against
 renders without them (every term over the whole picture), the same scene, frame and settings.
 
     python tests/scenes/compositor_windows.py OUT_DIR [portrait]
@@ -33,7 +33,7 @@ from fog_addon.nodes import comp_fog  # noqa: E402
 from fog_addon import view  # noqa: E402
 from fog_addon.methods.compositor import has_fog_surface, lets_nothing_through  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
-from fog_addon.precompute import footprint  # noqa: E402
+from fog_addon.precompute.model import footprint  # noqa: E402
 
 BETA = 0.1
 PORTRAIT = "portrait" in sys.argv

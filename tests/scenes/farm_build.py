@@ -125,7 +125,7 @@ def daylight(outdir):
     of 1 m above it (the Compositor method): expectation, then daylight.blend (the fog light's map packed, the
     sun and the sky followed by simple-expression drivers)."""
     from fog_addon.ops import apply
-    from fog_addon.precompute.spec import FogSpec
+    from fog_addon.precompute.core.spec import FogSpec
     log = {}
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = build(bpy.context.scene)

@@ -374,7 +374,7 @@ def _ray(row, col):
 
 def model_airlight():
     """(A_tile, A_back) from the numpy twin of the node groups (EEVEE: saves two renders)."""
-    from fog_addon.precompute import airlight
+    from fog_addon.precompute.physics.point import airlight
     cam, lamp = np.array([0.0, CAM_Y, 0.0]), np.array(LAMP)
     to = lamp - cam
     rays = np.array([[_ray(r, c) for c in range(W)] for r in range(H)])

@@ -24,7 +24,7 @@ import numpy as np  # noqa: E402
 import fog_addon  # noqa: E402
 from demo_scenes import spheres  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
-from fog_addon.precompute.spec import FogSpec  # noqa: E402
+from fog_addon.precompute.core.spec import FogSpec  # noqa: E402
 
 WORLD_GREY = 0.08
 _registered = []

@@ -6,7 +6,7 @@ The lights are kept out of the surfaces' direct lighting (Cycles: light ray
 visibility; EEVEE: diffuse and specular factors 0) and the world is black, so
 each pixel is exactly the fog's emission: the glow of two lights of different
 colours plus the fog light the plane reflects (Sun et al. 2005 Eq. 19).  The
-twin is ``precompute.shading`` run by numpy at each pixel centre's camera
+twin is ``precompute.model.shading`` run by numpy at each pixel centre's camera
 ray, with the models METHOD chooses.  CASE "principled" is a diffuse-and-glossy dielectric; "mirror" is a
 smooth metal (roughness 0: only the glossy fog light, Phong n = 1024).  G: the fog's
 Henyey-Greenstein anisotropy (default 0), the twin's models and tables baked for it.  KIND "spot": the
@@ -31,9 +31,11 @@ from mathutils import Vector  # noqa: E402
 
 from fog_addon import imageio, measure  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
-from fog_addon.precompute import bakers, rungs, shading, surface  # noqa: E402
-from fog_addon.precompute.medium import Medium  # noqa: E402
-from fog_addon.precompute.ops import NumpyOps  # noqa: E402
+from fog_addon.precompute.core import bakers  # noqa: E402
+from fog_addon.precompute.model import rungs, shading  # noqa: E402
+from fog_addon.precompute.physics.point import surface  # noqa: E402
+from fog_addon.precompute.core.medium import Medium  # noqa: E402
+from fog_addon.precompute.core.ops import NumpyOps  # noqa: E402
 from fog_scenes import probe_common  # noqa: E402
 
 BETA, W, H = 0.2, 64, 48

@@ -11,7 +11,7 @@ import bpy  # noqa: E402
 
 from fog_addon import caveats  # noqa: E402
 from fog_addon.nodes import compositor, groups, images, light_bundles, osl, owned  # noqa: E402
-from fog_addon.precompute import rungs  # noqa: E402
+from fog_addon.precompute.model import rungs  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 
 PREFIX = "AnalyticFog"

@@ -36,7 +36,7 @@ import math
 import numpy as np
 from numpy.polynomial import legendre
 
-from fog_addon.precompute import tables
+from fog_addon.precompute.core import tables
 
 _GL8_X, _GL8_W = legendre.leggauss(8)
 

@@ -51,7 +51,8 @@ and as OSL (``quadrature=True``: OSL reads no tables), and runs in numpy.
 import functools
 from typing import Any, NamedTuple
 
-from fog_addon.precompute import model, spot
+from fog_addon.precompute.physics.point import model
+from fog_addon.precompute.physics.spot import spot
 
 
 class Segment(NamedTuple):

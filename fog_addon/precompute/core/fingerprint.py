@@ -4,12 +4,12 @@ Whatever the add-on builds into a .blend (node groups, compositor groups, kernel
 texts) carries the fingerprint of the code that built it (``package_fingerprint``); a saved file's copy made
 by other code is rebuilt instead of hiding behind a hand-bumped version number.
 
-**What it covers**: every ``*.py`` file under ``fog_addon/`` (this module's grandparent folder), found by
-walking the folder, hashed in the order of their relative paths (each path, its length and its bytes).  No
-list of modules is kept by hand, so a builder, kernel or table that a hand-kept list left out cannot hide
-behind an old copy; a new, renamed or removed module changes it too.  It is computed once per process
-(``tree_fingerprint`` is cached; a few milliseconds for the whole package) from the files beside this module,
-so it works the same from the source tree and from an installed extension (Blender unpacks the zip into
+**What it covers**: every ``*.py`` file under ``fog_addon/`` (the folder above ``precompute/``, whose ``core/``
+holds this module), found by walking the folder, hashed in the order of their relative paths (each path, its
+length and its bytes).  No list of modules is kept by hand, so a builder, kernel or table that a hand-kept list
+left out cannot hide behind an old copy; a new, renamed or removed module changes it too.  It is computed once
+per process (``tree_fingerprint`` is cached; a few milliseconds for the whole package) from the files around this
+module, so it works the same from the source tree and from an installed extension (Blender unpacks the zip into
 ``extensions/<repo>/analytic_fog``; the module name, e.g. ``bl_ext.user_default.analytic_fog``, plays no
 part).  A saved file rendered without the add-on (a render farm) computes no fingerprint: it renders what
 the file holds.
@@ -29,9 +29,9 @@ import hashlib
 import os
 import pathlib
 
-PRECOMPUTE = pathlib.Path(__file__).resolve().parent   # fog_addon/precompute
-PACKAGE = PRECOMPUTE.parent                             # fog_addon
-PRECOMPUTE_MODULE = __name__.rpartition(".")[0]          # "fog_addon.precompute" or "bl_ext....precompute"
+PRECOMPUTE = pathlib.Path(__file__).resolve().parent.parent   # fog_addon/precompute (this module is in core/)
+PACKAGE = PRECOMPUTE.parent                                    # fog_addon
+PRECOMPUTE_MODULE = __name__.rsplit(".", 2)[0]                  # "fog_addon.precompute" or "bl_ext....precompute"
 
 
 def source_files(root):

@@ -8,7 +8,7 @@ Convention for every table: a float32 array of shape (height, width); entry
 ``Y = j / (height - 1)``.  In a Blender image row ``j`` is the ``j``-th row from
 the bottom, so texel ``(i, j)`` sits at UV ``((i + .5) / width, (j + .5) / height)``.
 Lookups are bilinear in (X, Y) with clamping at the edges, identical in numpy
-(:func:`fog_addon.precompute.ops.NumpyOps.table`) and in the node tree.
+(:func:`fog_addon.precompute.core.ops.NumpyOps.table`) and in the node tree.
 
 Coordinate maps are written against an ``m`` ops namespace (numpy or node
 sockets, see ``ops.py``) so the same code runs in both.

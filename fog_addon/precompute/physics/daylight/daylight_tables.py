@@ -19,7 +19,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from . import aerial, daylight, tables
+from ...core import tables
+from . import aerial, daylight
 SKY_ROWS = 32            # elevations 0..90 degrees of the World's radiance table (``world_radiance``), row j at
                          # 90 ((j + 1/2) / SKY_ROWS)^2 degrees: dense at the horizon, where a sky changes fastest
 SKY_COLUMNS = 128        # azimuths, from -180 degrees (-Y through -X) to +180, 0 along +Y
@@ -287,5 +288,5 @@ def _bake_fog_light_air(beta, top, falloff, sun, g, b, h_air, albedo):
 
 
 def _numpy_ops():
-    from .ops import NumpyOps
+    from ...core.ops import NumpyOps
     return NumpyOps()

@@ -27,7 +27,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from . import aerial, compose, daylight, model
+from ...model import compose
+from ..point import model
+from . import aerial, daylight
 from .daylight_tables import GLOW_ELEVATIONS, SH_COUNT, TABLE_ROWS, glow_coordinates, sh_basis, table_height
 
 

@@ -38,7 +38,8 @@ import math
 
 import numpy as np
 
-from . import point_source_mc, tables
+from ...core import tables
+from . import point_source_mc
 
 T_MAX = 40.0           # optical distance of the table's last row (beyond: the last row, a bound noted in the docs)
 T_MIN = 0.02           # first row (below: clamped; the single scattering outweighs the rest there by far)
@@ -199,7 +200,7 @@ def bake_table(spec, orders=None, progress=None):
     """The two tables of ``spec`` (``table_spec``), float32 (2 ROWS, COLUMNS); ``orders``: ``bake_orders``'s
     array for spec.g (baked through the table cache if None, reporting to ``progress(done, total)``)."""
     if orders is None:
-        from .table_cache import cached_bake
+        from ...core.table_cache import cached_bake
         o_spec = orders_spec(spec.g)
         orders = cached_bake(o_spec, lambda: bake_orders(o_spec, progress))
     field = _merge_cap(field_of_orders(orders, albedo_of(spec)))

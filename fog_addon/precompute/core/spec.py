@@ -36,8 +36,9 @@ import dataclasses
 import json
 import math
 
-from . import medium, predict, presets
-from .aerial import RAYLEIGH_HEIGHT, RAYLEIGH_RGB
+from ..model import predict
+from . import medium, presets
+from ..physics.daylight.aerial import RAYLEIGH_HEIGHT, RAYLEIGH_RGB
 
 METHODS = ("nodes", "osl", "compositor")   # the methods a user can pick besides "auto" (``fog_addon/methods``)
 AUTO = "auto"

@@ -27,10 +27,12 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from . import bakers, model, rungs, shading
-from . import spot as spot_mod
-from .medium import Medium
-from .ops import NumpyOps
+from ..core import bakers
+from ..physics.point import model
+from . import rungs, shading
+from ..physics.spot import spot as spot_mod
+from ..core.medium import Medium
+from ..core.ops import NumpyOps
 
 FLOOR = 1e-3          # samples below this fraction of the peak fog are not judged (issue 8 §2)
 MIN_FOG = 1e-30       # fog light (W/m^2/sr) below which a sample is not judged: an opaque fog's far samples
@@ -128,7 +130,7 @@ def light_fog(samples, intensity, beta, g=0.0, multiple_albedo=None):
     """
     m = _numpy_ops(g)
     if multiple_albedo is not None:
-        from . import multiple
+        from ..physics.point import multiple
         spec = multiple.table_spec(g, multiple_albedo)
         m.tables[spec.name] = bakers.table_array(spec, g)
     view = _view(m, samples)

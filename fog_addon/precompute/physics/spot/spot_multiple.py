@@ -43,7 +43,8 @@ import math
 
 import numpy as np
 
-from . import spot, tables
+from ...core import tables
+from . import spot
 from .spot_walk import (PHI_NODES, PHOTONS, PSI_NODES, ROWS, SEED, T_MAX, T_MIN, THETA_NODES, collide,
                         row_distances, walk_counts)
 

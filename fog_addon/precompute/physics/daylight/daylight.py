@@ -34,7 +34,7 @@ import math
 
 import numpy as np
 
-from . import model
+from ..point import model
 
 UNBOUNDED = model.FAR       # m; the top of a layer without one (the infinite fog): beta0 everywhere
 EXP_CLAMP = 80.0            # exponents are clamped to [-80, 80] (e^-80 = 1.8e-35, a float32 normal number)

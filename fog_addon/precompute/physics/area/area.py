@@ -33,7 +33,8 @@ emitter's half sizes in metres (``half_sizes``).
 import functools
 import math
 
-from . import model, spot
+from ..point import model
+from ..spot import spot
 
 NODES = 8    # Gauss-Legendre points along the ray (tests/test_area.py: converged within 1e-3 of the glow)
 SPLIT = 2    # the emitter as SPLIT x SPLIT cells, each with its own centre's phase and extinction (tests/test_area.py)

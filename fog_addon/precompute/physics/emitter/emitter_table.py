@@ -6,7 +6,7 @@ a weights' table was made for, ``estimate_seconds`` how long its bake takes, ``n
 weights themselves, the field they are fitted to, the facing factor and the tables' ``TableKind`` records are
 ``emitter_glow``'s.
 """
-from . import tables
+from ...core import tables
 
 SIZES = tuple(2 ** k for k in range(0, 10))   # the Blur nodes' sizes, px (sigma = size / 3: 0.33 to 171 px)
 T_MIN, T_MAX = 1e-3, 30.0     # the weights' table's optical depths
@@ -42,7 +42,7 @@ def estimate_seconds(spec):
 
 def needs(spec):
     """The Dense Fog field's table the weights' bake reads (``emitter_glow.glow_field``), if any."""
-    from . import multiple
+    from ..point import multiple
     albedo = multiple_albedo_of(spec)
     return () if albedo is None else (multiple.table_spec(spec.g, albedo),)
 

@@ -30,7 +30,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from . import model, tables
+from ...core import tables
+from ..point import model
 
 RIM_NODES = 10    # Gauss-Legendre points per rim interval (tests/test_spot.py, 200 random spots per case: max
                   # 2.0e-3 of the whole glow with non-uniform scale and g = -0.5)

@@ -9,7 +9,12 @@ by the key its constructor gave it (``TableSpec.kind``), or for a constant spec 
 """
 import functools
 
-from . import airlight, daylight_tables, emitter_glow, multiple, pixel, spot, spot_multiple, surface, tables
+from ..model import pixel
+from ..physics.daylight import daylight_tables
+from ..physics.emitter import emitter_glow
+from ..physics.point import airlight, multiple, surface
+from ..physics.spot import spot, spot_multiple
+from . import tables
 
 
 def _bake_airlight(spec, progress=None):

@@ -36,7 +36,11 @@ from dataclasses import dataclass, replace
 import functools
 from typing import Callable, NamedTuple
 
-from . import area, capabilities, model, multiple, spot, spot_multiple, surface, tables
+from ..core import tables
+from ..physics.area import area
+from ..physics.point import model, multiple, surface
+from ..physics.spot import spot, spot_multiple
+from . import capabilities
 
 TERMS = ("airlight", "background", "scatter", "direct")
 BACKENDS = ("numpy", "nodes", "osl")

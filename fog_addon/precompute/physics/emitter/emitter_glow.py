@@ -27,11 +27,13 @@ import math
 
 import numpy as np
 
-from . import multiple, rungs, tables as tables_
+from ...core import tables as tables_
+from ...model import rungs
+from ..point import multiple
 from .emitter_table import SIZES, T_COUNT, T_COUNT_DENSE, T_MAX, T_MIN
 from .emitter_table import (FACING_COUNT, FACING_KIND_KEY, KIND_KEY, estimate_seconds, facing_spec,  # noqa: F401
                             needs, table_spec)
-from .ops import NumpyOps
+from ...core.ops import NumpyOps
 
 CORE_SUBSAMPLES = 8   # the kernel at a source's own pixel and its neighbours, averaged over 8 x 8 points
 CORE = 2              # px: the core's half-width

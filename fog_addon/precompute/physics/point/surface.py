@@ -60,9 +60,9 @@ import math
 
 import numpy as np
 
-from . import table_cache, tables
+from ...core import table_cache, tables
 from .airlight import k_inf
-from .ops import NumpyOps
+from ...core.ops import NumpyOps
 
 MIN_DISTANCE = 1e-6   # m; light-surface distances are clamped here (the scattered light grows as 1/D_sp)
 INV_2PI = 1.0 / (2.0 * math.pi)

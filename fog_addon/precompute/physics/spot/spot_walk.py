@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from . import point_source_mc
+from ..point import point_source_mc
 
 T_MIN = 0.005          # the first row's optical distance from the lamp (below: J T held, J ~ 1/T)
 T_MAX = 40.0           # the last row's (beyond: held; e^-40 of the light)

@@ -46,7 +46,11 @@ Units: positions and distances in m, beta in 1/m, light intensity I0 in W/sr
 import math
 from typing import Any, NamedTuple
 
-from . import area, compose, model, rungs, spot, tables
+from ..core import tables
+from ..physics.area import area
+from ..physics.point import model
+from ..physics.spot import spot
+from . import compose, rungs
 
 MIN_BETA = 1e-12   # 1/unit: a fog thinner than this is no fog (``shade_background``: the World seen and lighting)
 

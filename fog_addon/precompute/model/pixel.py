@@ -20,7 +20,8 @@ ops namespace (numpy or nodes, ``ops.py``), like ``shading.py``, plus the one ta
 """
 import numpy as np
 
-from . import model, tables
+from ..core import tables
+from ..physics.point import model
 
 FILTER_WIDTH = 3.0    # px: Cycles' default Blackman-Harris filter, width 1.5, which its filter table doubles
 FILTER_REACH = 6.0    # px: the filter table covers offsets |dx|, |dy| up to this

@@ -15,8 +15,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .shaft_maps import nearest_depth
-from .shafts import hemisphere_direction, hemisphere_sums
+from ..shafts.shaft_maps import nearest_depth
+from ..shafts.shafts import hemisphere_direction, hemisphere_sums
 # --- the sun: an orthographic map and the lit share of its glow in a fog layer ---------------------------
 
 SUN_MAP = 1024        # grid points along the longer side of the sun's map (its cells are square)

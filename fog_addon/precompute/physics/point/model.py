@@ -30,7 +30,7 @@ taken directly by Gauss-Legendre quadrature instead.
 """
 import math
 
-from . import tables
+from ...core import tables
 
 # Gauss-Legendre nodes on [0, 1] for short ray segments.
 _GL_X = (0.033765242898423975, 0.16939530676686776, 0.38069040695840156,

@@ -10,8 +10,8 @@ import math
 
 import numpy as np
 
-from . import tables
-from .ops import NumpyOps
+from ...core import tables
+from ...core.ops import NumpyOps
 from . import model
 
 _GL8_X, _GL8_W = np.polynomial.legendre.leggauss(8)
