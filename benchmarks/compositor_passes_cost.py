@@ -14,7 +14,6 @@ Writes benchmarks/out/compositor_passes_cost.csv (lights, seconds of each, the r
 """
 import json
 import pathlib
-import subprocess
 import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -22,6 +21,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import smoke  # noqa: E402
+import worker_result  # noqa: E402
 
 LIGHTS = smoke.pick((1, 25), (1,))   # (square numbers: the scene's grid)
 RES = smoke.pick((160, 90), (8, 6))
@@ -29,52 +29,46 @@ SAMPLES = smoke.pick(16, 1)
 REPEATS = smoke.pick(3, 1)
 OUT = smoke.out(ROOT / "benchmarks" / "out" / "compositor_passes_cost.csv")
 
-WORKER = r"""
-import json, sys, time
-sys.path.insert(0, ROOT)
-import bpy
-import fog_addon
-from fog_addon import measure
-from fog_addon.nodes import compositor
-from fog_addon.ops import apply
-from fog_addon.precompute.core.spec import FogSpec
-from fog_scenes import many_lights as ml
-fog_addon.register()
-n, (w, h), samples, repeats, out = N, RES, SAMPLES, REPEATS, OUTDIR
-times = {k: [] for k in ("nofog", "fog", "passes")}
-def setup(tag):
-    s, cam = ml.build_scene(n, direct_light=True)
-    s.render.engine = "CYCLES"; measure.set_cycles_cpu(s)
-    s.render.resolution_x, s.render.resolution_y = w, h
-    s.cycles.samples = samples; s.cycles.use_denoising = False
-    if tag != "nofog":
-        apply.apply(s, FogSpec(density=0.05, method="compositor", passes=tag == "passes"))
-        for node in compositor.passes_outputs(s):
-            node.directory = out + "/"
-    return s
-for r in range(repeats):
-    for tag in ("nofog", "fog", "passes"):
-        s = setup(tag)
-        t = time.perf_counter()
-        measure.render_to_file(s, f"{out}/passes_cost_{tag}_{n}.exr")
-        times[tag].append(time.perf_counter() - t)
-print("RESULT " + json.dumps({"lights": n, **{k: min(v) for k, v in times.items()}}))
-"""
+def worker(spec):
+    """One lamp count's three renders, alternating (the module docstring); emits the fastest of each."""
+    import time
+    import bpy  # noqa: F401 - (Blender first)
+    import fog_addon
+    from fog_addon import measure
+    from fog_addon.nodes import compositor
+    from fog_addon.ops import apply
+    from fog_addon.precompute.core.spec import FogSpec
+    from fog_scenes import many_lights as ml
+    fog_addon.register()
+    n, (w, h), out = spec["lights"], RES, str(OUT.parent)
+    times = {k: [] for k in ("nofog", "fog", "passes")}
 
+    def setup(tag):
+        s, _ = ml.build_scene(n, direct_light=True)
+        s.render.engine = "CYCLES"
+        measure.set_cycles_cpu(s)
+        s.render.resolution_x, s.render.resolution_y = w, h
+        s.cycles.samples, s.cycles.use_denoising = SAMPLES, False
+        if tag != "nofog":
+            apply.apply(s, FogSpec(density=0.05, method="compositor", passes=tag == "passes"))
+            for node in compositor.passes_outputs(s):
+                node.directory = out + "/"
+        return s
 
-def run(n):
-    code = (WORKER.replace("ROOT", repr(str(ROOT)), 1).replace("N, RES, SAMPLES, REPEATS, OUTDIR",
-                                                               repr((n, RES, SAMPLES, REPEATS, str(OUT.parent)))))
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
-    smoke.echo(proc.stdout[-3000:] + proc.stderr[-3000:])
-    line = next((ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")), None)
-    smoke.check(proc.returncode == 0 and line is not None, f"{n} lights: exit {proc.returncode}")
-    return json.loads(line.split(" ", 1)[1]) if line else None
+    for _ in range(REPEATS):
+        for tag in times:
+            s = setup(tag)
+            t = time.perf_counter()
+            measure.render_to_file(s, f"{out}/passes_cost_{tag}_{n}.exr")
+            times[tag].append(time.perf_counter() - t)
+    worker_result.emit({"lights": n, **{k: min(v) for k, v in times.items()}})
 
 
 def main():
+    if "--worker" in sys.argv:
+        return worker(json.loads(sys.argv[sys.argv.index("--worker") + 1]))
     OUT.parent.mkdir(parents=True, exist_ok=True)
-    rows = [r for r in (run(n) for n in LIGHTS) if r]
+    rows = [r for r in (worker_result.run(__file__, {"lights": n}) for n in LIGHTS) if r]
     with open(OUT, "w") as f:
         f.write("lights,nofog_s,fog_s,passes_s,fog_ratio,passes_ratio,passes_over_fog\n")
         for r in rows:
