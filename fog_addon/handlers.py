@@ -14,7 +14,7 @@ import bpy
 from bpy.app.handlers import persistent
 
 from .methods import compositor as compositor_method
-from .nodes import comp_fog, dedupe, preview
+from .nodes import comp_fog, compositor, dedupe, preview
 from . import sunsky, view
 from .ops import apply
 
@@ -100,12 +100,19 @@ def on_save_pre(*_):
     if settings is not None and settings.enabled:
         compositor_method.complete_shadows(scene, apply.usable_spec(scene))
     preview.before_save()   # a farm renders the file as F12 does: without the viewport's preview
+    if settings is not None and settings.enabled:   # (and writes the fog passes beside its output)
+        compositor.follow_passes_directory(scene)
 
 
 @persistent
-def on_render_pre(*_):
-    """A final render (each frame of an animation): the viewport's preview off (``nodes/preview.py``)."""
+def on_render_pre(scene=None, *_):
+    """A final render (each frame of an animation): the viewport's preview off (``nodes/preview.py``), the
+    Compositor method's fog passes written beside the render's output (``compositor.follow_passes_directory``)."""
     preview.before_render()
+    scene = scene if isinstance(scene, bpy.types.Scene) else bpy.context.scene
+    settings = getattr(scene, "analytic_fog", None)
+    if settings is not None and settings.enabled:
+        compositor.follow_passes_directory(scene)
 
 
 @persistent

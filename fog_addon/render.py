@@ -10,7 +10,6 @@ import dataclasses
 import os
 import subprocess
 import sys
-import tempfile
 import time
 
 from . import imageio, measure, props
@@ -90,33 +89,25 @@ def fog_settings(scene, args):
 
 @contextlib.contextmanager
 def compositor_passes(scene, out):
-    """With the Compositor method's fog passes (its File Output nodes, ``nodes/compositor.py``) and a multilayer
-    ``out``: they are written to a folder of their own during the render, then added to ``out`` as each view
-    layer's "Fog Light" and "Fog Transmittance" (``imageio.add_parts``, in a process that has not rendered), so
-    ``out`` holds them as it holds the node groups' passes.  The nodes' folder is the file's again after."""
+    """With the Compositor method's fog passes (its File Output nodes, ``nodes/compositor.py``, which write beside
+    the render's output) and a multilayer ``out``: after the render each view layer's file is added to ``out`` as
+    its "Fog Light" and "Fog Transmittance" (``imageio.add_parts``, in a process that has not rendered) and
+    removed, so ``out`` holds them as it holds the node groups' passes."""
+    import bpy
     from .nodes import compositor
     nodes = compositor.passes_outputs(scene) if out is not None else []
-    if not nodes:
-        yield
-        return
-    kept = [(n, n.directory) for n in nodes]
-    with tempfile.TemporaryDirectory(prefix="analytic_fog_passes_") as folder:
-        try:
-            for n, _ in kept:
-                n.directory = folder + os.sep
-            yield
-        finally:
-            for n, directory in kept:
-                n.directory = directory
-        for n, _ in kept:
-            layer = n.file_name.rpartition(f" {compositor.PASSES_SUFFIX}")[0]
-            stem = n.file_name.replace("####", f"{scene.frame_current:04d}")
-            path = next((os.path.join(folder, f) for f in sorted(os.listdir(folder)) if f.startswith(stem)), None)
-            if path is None:   # (the file's extension follows the render's Output File Extensions)
-                raise RuntimeError(f"the Compositor method's fog passes of {layer!r} were not written ({stem}: "
-                                   f"{os.listdir(folder)} in {folder})")
-            subprocess.run([sys.executable, imageio.__file__, "add-parts", os.path.abspath(os.fspath(out)), path,
-                            layer], check=True)
+    yield
+    for n in nodes:
+        layer = n.file_name.rpartition(f" {compositor.PASSES_SUFFIX}")[0]
+        folder = bpy.path.abspath(n.directory)
+        stem = n.file_name.replace("####", f"{scene.frame_current:04d}")
+        path = next((os.path.join(folder, f) for f in sorted(os.listdir(folder)) if f.startswith(stem)), None)
+        if path is None:   # (the file's extension follows the render's Output File Extensions)
+            raise RuntimeError(f"the Compositor method's fog passes of {layer!r} were not written ({stem} in "
+                               f"{folder})")
+        subprocess.run([sys.executable, imageio.__file__, "add-parts", os.path.abspath(os.fspath(out)), path, layer],
+                       check=True)
+        os.remove(path)
 
 
 def fog_passes():

@@ -419,3 +419,14 @@ def test_saved_file_renders_the_same_without_the_add_on(runs, scene):
     assert d <= 1e-5, d
     # it is the composite (the sphere denoised), not the raw render
     assert np.abs(got[..., :3] - scene["raw"])[scene["sphere"]].max() > 1e-2
+
+
+@pytest.mark.parametrize("output,folder", [("/tmp/", "/tmp/"), ("//render/shot_", "//render/"), ("//", "//"),
+                                           ("", "//"), ("/renders/frames/f_####", "/renders/frames/")])
+def test_compositor_passes_go_beside_the_render(output, folder):
+    """The Compositor method's fog passes are written in the folder of the scene's render output, as the user
+    wrote it, or beside the .blend when it names none (``compositor.passes_directory``)."""
+    import types
+    from fog_addon.nodes import compositor
+    scene = types.SimpleNamespace(render=types.SimpleNamespace(filepath=output))
+    assert compositor.passes_directory(scene) == folder

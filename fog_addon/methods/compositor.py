@@ -108,10 +108,10 @@ class Compositor(Method):
         n, kept = len(plan.in_groups), len(plan.shader_lights)
         layer_note += self.preview_notes(scene, plan)
         if spec.passes:
-            where = compositor.PASSES_DIRECTORY + compositor.passes_file_name("<view layer>").replace("####", "<frame>")
-            layer_note.append((scene.name, f"the fog passes are the compositor's: each render writes them to {where}.exr "
-                                           "(multilayer EXR: Fog Light, Fog Transmittance); the view layers' own "
-                                           "passes hold no fog light"))
+            name = compositor.passes_file_name("<view layer>").replace("####", "<frame>")
+            layer_note.append((scene.name, f"the fog passes are the compositor's: each render writes them beside its "
+                                           f"output, as {name}.exr (multilayer EXR: Fog Light, Fog Transmittance); "
+                                           "the view layers' own passes hold no fog light"))
         if scene.render.engine == budgets.EEVEE_ENGINE and kept < n:
             return layer_note + [(scene.render.engine, f"{n - kept} of {n} lights are not in the materials' shared "
                                   "dimming of direct light (EEVEE's uniform block): their direct light is dimmed as "

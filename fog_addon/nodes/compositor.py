@@ -43,7 +43,8 @@ Compositor Fog``, fed with the Image and the method's AOVs, which adds the fog's
 into a user's compositor the same way, for every view layer that renders, denoised or not, in Cycles and
 EEVEE (where the group also reads the Depth pass, switched on and restored like the passes below).  With the
 fog passes a File Output node of the fog's after it writes the group's Fog Light and Fog Transmittance
-(``PASSES_DIRECTORY``: a multilayer EXR per view layer and frame, ``passes_file_name``): the view layers' own
+(``passes_directory``: beside the render's output, a multilayer EXR per view layer and frame,
+``passes_file_name``): the view layers' own
 passes cannot take what the compositor computes.
 
 The settings changed (the scene's denoiser and Compositing flags, each view
@@ -51,6 +52,7 @@ layer's Emission, Environment, Denoising Data and Depth passes) are recorded by 
 exactly by ``teardown``; the scene's ``STATE`` names the tree the fog edited.
 """
 import json
+import os
 
 import bpy
 
@@ -63,7 +65,6 @@ STATE = "analytic_fog_compositor"   # on the scene: {"tree": the compositor tree
 LINKS = "links"   # in STATE: JSON [[Render Layers node, node, input identifier], ...], the user's links from each
 #                   spliced Render Layers' Image, which ``teardown`` gives back whatever became of the chain
 GROUP = "AnalyticFog Compositor"
-PASSES_DIRECTORY = "//fog_passes/"   # the Compositor method's fog passes: a multilayer EXR a view layer and frame
 PASSES_SUFFIX = "Fog Passes"
 _PREFILTER = {"NONE": "None", "FAST": "Fast", "ACCURATE": "Accurate"}
 _QUALITY = {"HIGH": "High", "BALANCED": "Balanced", "FAST": "Fast"}
@@ -193,7 +194,7 @@ def _chain(scene, tree, rl, k):
     return _sock(add.outputs, _MIX_OUT)
 
 
-def _fog_chain(tree, rl, k, fog):
+def _fog_chain(scene, tree, rl, k, fog):
     """The Compositor method's chain after Render Layers ``rl``: the ``fog`` group node, fed with the Image
     and the AOVs of the same names; returns its Image output."""
     rl.update()   # the view layer's AOVs become outputs
@@ -204,7 +205,7 @@ def _fog_chain(tree, rl, k, fog):
             tree.links.new(rl.outputs[sock.name], sock)
     if node.outputs.get(passes.TRANSMITTANCE) is not None:   # the fog passes: written beside the render
         out = owned.add(tree, "CompositorNodeOutputFile", f"Compositor {k} Fog Passes",
-                        (node.location.x + 300, node.location.y - 250), directory=PASSES_DIRECTORY,
+                        (node.location.x + 300, node.location.y - 250), directory=passes_directory(scene),
                         file_name=passes_file_name(rl.layer))
         out.file_output_items.clear()
         for name in (passes.FOG_LIGHT, passes.TRANSMITTANCE):
@@ -216,6 +217,23 @@ def _fog_chain(tree, rl, k, fog):
 def passes_file_name(layer):
     """The fog passes' file name (without the frame's digits and extension) of the view layer ``layer``."""
     return f"{layer} {PASSES_SUFFIX}_####"
+
+
+def passes_directory(scene):
+    """Where the fog passes are written: the folder of the scene's render output (Output Properties), as the user
+    wrote it ("//" relative to the .blend), or the .blend's folder when the output names none."""
+    folder = os.path.dirname(scene.render.filepath)
+    if not folder.strip("/\\"):   # "", "//" or "/"
+        return folder or "//"
+    return folder.rstrip("/\\") + "/"
+
+
+def follow_passes_directory(scene):
+    """The fog passes' File Output nodes write where the render does now (before a render, before saving)."""
+    for node in passes_outputs(scene):
+        folder = passes_directory(scene)
+        if node.directory != folder:
+            node.directory = folder
 
 
 def passes_outputs(scene):
@@ -247,7 +265,7 @@ def setup(scene, fog=None):
     """Build the set-up on ``scene`` (see the module), the Compositor method's with its ``fog`` group;
     returns [(name, note)] if it was left out."""
     tree = scene.compositing_node_group
-    chain = (lambda tree, rl, k: _fog_chain(tree, rl, k, fog)) if fog is not None else (
+    chain = (lambda tree, rl, k: _fog_chain(scene, tree, rl, k, fog)) if fog is not None else (
         lambda tree, rl, k: _chain(scene, tree, rl, k))
     needs = (lambda vl: vl is not None and vl.use) if fog is not None else (lambda vl: _denoised(scene, vl))
     spliced = None   # the user's links the chain took over ([Render Layers node, node, input identifier]), if spliced
