@@ -421,6 +421,27 @@ def test_saved_file_renders_the_same_without_the_add_on(runs, scene):
     assert np.abs(got[..., :3] - scene["raw"])[scene["sphere"]].max() > 1e-2
 
 
+def test_compositor_passes_on_a_farm(runs, compositor_passes, tmp_path):
+    """A saved file with the Compositor method's fog passes, rendered where the add-on is not installed
+    (tests/scenes/farm_render.py): its File Output writes them in the folder of the file's own render output, the
+    same Fog Light as the command line's render of that scene."""
+    out = tmp_path / "saved"
+    res = _run(out, "compositor_farm")
+    assert res["directories"] == [str(out / "frames") + "/"], res["directories"]
+    farm = tmp_path / "farm"
+    farm.mkdir()
+    _run(out / "compositor_passes.blend", farm, json.dumps([{"out": "farm_comp.exr"}]),
+         env=_farm_env(tmp_path / "farm_env"), cwd=farm, script=FARM_RENDER)
+    written = sorted((out / "frames").glob("ViewLayer Fog Passes_0001*"))
+    assert len(written) == 1, sorted(p.name for p in (out / "frames").glob("*"))
+    layers = imageio.read_layers(written[0])
+    cli = compositor_passes["passes_cycles_lit"]["ViewLayer.Fog Light"][..., :3]
+    farm_light = layers["Fog Light"][..., :3]
+    err = np.abs(farm_light - cli).max() / cli.max()
+    print(f"\nfarm's Fog Light against the command line's: {err:.1e}")
+    assert err <= 1e-5, err
+
+
 @pytest.mark.parametrize("output,folder", [("/tmp/", "/tmp/"), ("//render/shot_", "//render/"), ("//", "//"),
                                            ("", "//"), ("/renders/frames/f_####", "/renders/frames/")])
 def test_compositor_passes_go_beside_the_render(output, folder):

@@ -13,6 +13,8 @@ MODE
              with the lamps lighting no surface (Cycles: light ray visibility; EEVEE: diffuse and specular
              factors 0), so B's Combined is the fog's part alone: OUT/passes_<engine>_{lit,unlit}.exr
   passes_blend ENGINE: the same two scenes saved without the fog, OUT/passes_<engine>_{lit,unlit}.blend
+  compositor_farm  the lit Cycles scene with the Compositor method's fog and passes (its render output in
+             OUT/frames/), saved as OUT/compositor_passes.blend for a farm
   remove     add and remove the fog on scenes with and without a user's compositor graph, with a save
              and reopen in between; prints snapshots (see ``snapshot``); and the Opacity that weights
              the passes of an opaque, a half-transparent and a texture-mixed transparent material
@@ -436,6 +438,14 @@ def main(out, mode, *args):
         res = passes_scene(out, *args)
     elif mode == "passes_blend":   # the same scenes saved without the fog (the command line renders them)
         res = passes_scene(out, *args, save=True)
+    elif mode == "compositor_farm":   # the lit scene with the Compositor's fog and passes, saved for a farm
+        res = passes_scene(out, "CYCLES", save=True)
+        bpy.ops.wm.open_mainfile(filepath=res["renders"]["passes_cycles_lit"]["blend"])
+        scene = bpy.context.scene
+        scene.render.filepath = str(out / "frames") + "/"   # the passes go beside the render's output
+        apply.apply_fog(scene, BETA, albedo=(0.9, 0.8, 0.7), method="compositor", with_passes=True)
+        bpy.ops.wm.save_as_mainfile(filepath=str(out / "compositor_passes.blend"))
+        res["directories"] = [n.directory for n in compositor.passes_outputs(scene)]
     elif mode == "remove":
         res = remove(out)
         res["opacity"] = opacity()
