@@ -275,8 +275,10 @@ def write_layers(path, layers, half=False):
 def add_parts(dest, source, prefix):
     """Add every part of the multilayer EXR ``source`` to the multilayer EXR ``dest`` (rewritten), each named
     "<prefix>.<its name>": the Compositor method's fog passes ("Fog Light", written by a File Output node) into the
-    render's file ("ViewLayer.Fog Light", beside "ViewLayer.Combined").  Reads multi-part files: call it from a
-    process that has not rendered (``read_layers``)."""
+    render's file ("ViewLayer.Fog Light", beside "ViewLayer.Combined").  A part of ``dest`` of the same name is
+    replaced where it stands (the view layer's own Fog Transmittance AOV, the materials' alone, by the compositor's,
+    which holds the factor it puts on the render too).  Reads multi-part files: call it from a process that has not
+    rendered (``read_layers``)."""
     parts = {}
     for path, pre in ((dest, ""), (source, f"{prefix}.")):
         suffixes = {}
