@@ -99,9 +99,8 @@ def on_save_pre(*_):
         apply.refresh_lights(scene)
     if settings is not None and settings.enabled:
         compositor_method.complete_shadows(scene, apply.usable_spec(scene))
+        compositor.follow_passes_directory(scene)   # (and writes the fog passes beside its output)
     preview.before_save()   # a farm renders the file as F12 does: without the viewport's preview
-    if settings is not None and settings.enabled:   # (and writes the fog passes beside its output)
-        compositor.follow_passes_directory(scene)
 
 
 @persistent

@@ -315,7 +315,7 @@ def write(path, arr):
         raise ValueError(f"unsupported image extension {ext!r} (use .exr or .png)")
 
 
-if __name__ == "__main__":   # python imageio.py add-parts DEST SOURCE PREFIX (``render.compositor_passes``)
+if __name__ == "__main__":   # python imageio.py add-parts DEST SOURCE PREFIX (``render.add_compositor_passes``)
     if len(sys.argv) != 5 or sys.argv[1] != "add-parts":
         sys.exit("usage: python imageio.py add-parts DEST.exr SOURCE.exr PREFIX")
     add_parts(*sys.argv[2:])

@@ -5,7 +5,6 @@ colour, scene scale, method, anisotropy, the fog's top, Selected Only) and each 
 ``light.analytic_fog.use``, unless a command-line flag overrides it: without
 flags the file's fog is rendered as the artist left it.
 """
-import contextlib
 import dataclasses
 import os
 import subprocess
@@ -87,17 +86,14 @@ def fog_settings(scene, args):
     return spec, objects, {k: (v, source[f]) for k, (f, v) in shown.items()}, notes
 
 
-@contextlib.contextmanager
-def compositor_passes(scene, out):
-    """With the Compositor method's fog passes (its File Output nodes, ``nodes/compositor.py``, which write beside
-    the render's output) and a multilayer ``out``: after the render each view layer's file is added to ``out`` as
-    its "Fog Light" and "Fog Transmittance" (``imageio.add_parts``, in a process that has not rendered) and
-    removed, so ``out`` holds them as it holds the node groups' passes."""
+def add_compositor_passes(scene, out):
+    """After a render to the multilayer EXR ``out``, with the Compositor method's fog passes (its File Output nodes,
+    ``nodes/compositor.py``, which wrote them beside the render's output): each view layer's file is added to
+    ``out`` as its "Fog Light" and "Fog Transmittance" (``imageio.add_parts``, in a process that has not rendered)
+    and removed, so ``out`` holds them as it holds the node groups' passes."""
     import bpy
     from .nodes import compositor
-    nodes = compositor.passes_outputs(scene) if out is not None else []
-    yield
-    for n in nodes:
+    for n in compositor.passes_outputs(scene):
         layer = n.file_name.rpartition(f" {compositor.PASSES_SUFFIX}")[0]
         folder = bpy.path.abspath(n.directory)
         stem = n.file_name.replace("####", f"{scene.frame_current:04d}")
@@ -162,8 +158,9 @@ def apply_and_render(scene, args):
         with preview.forced():
             measure.render_to_file(scene, args.out, multilayer=multilayer)
     else:
-        with compositor_passes(scene, args.out if multilayer else None):
-            measure.render_to_file(scene, args.out, multilayer=multilayer)
+        measure.render_to_file(scene, args.out, multilayer=multilayer)
+        if multilayer:
+            add_compositor_passes(scene, args.out)
     if multilayer:
         print(f"passes: {args.out} is a multilayer EXR: the picture, the view layers' passes and the fog's "
               f"({', '.join(name for name, _ in fog_passes())})")

@@ -230,8 +230,8 @@ def passes_directory(scene):
 
 def follow_passes_directory(scene):
     """The fog passes' File Output nodes write where the render does now (before a render, before saving)."""
+    folder = passes_directory(scene)
     for node in passes_outputs(scene):
-        folder = passes_directory(scene)
         if node.directory != folder:
             node.directory = folder
 
