@@ -79,6 +79,20 @@ def test_eevee_dimming_holds_what_fits_brightest_first(res):
     assert d["cycles"] == 0
 
 
+def test_eevee_preview_takes_the_room_the_dimming_leaves(res):
+    """The viewport's preview in EEVEE (Compositor.preview_budget): with 200 lamps the dimming lights fill the
+    uniform block and the preview holds no light; with 20 it holds its own budget's two full lights or four glows."""
+    p = res["preview"]
+    assert p["crowded_off"] and not p["crowded_glow"], p
+    assert p["few_two_full"] and p["few_four_glows"] and not p["few_three_full"], p
+
+
+def test_eevee_viewport_compositor_is_said(res):
+    """EEVEE's viewport compositor, on in a 3D view, would add the fog over the preview: the notes say so."""
+    assert any("viewport compositor is on" in why for _, why in res["viewport_compositor"]), res["viewport_compositor"]
+    assert not any("viewport compositor" in why for _, why in res["viewport_compositor_off"])
+
+
 @pytest.mark.parametrize("case,words", [("workbench", "needs Cycles or EEVEE"), ("backscatter", "is below -0.8"),
                                         ("panoramic", "perspective camera")])
 def test_refused_changing_nothing(res, case, words):

@@ -17,22 +17,27 @@ from fog_scenes import render_harness as h
 
 pytestmark = pytest.mark.render
 
-FLAGS = ["--engine", "cycles", "--density", "0.15", "--resolution", "48x27", "--pixel-centre", "--samples", "4",
+FLAGS = ["--density", "0.15", "--resolution", "48x27", "--pixel-centre", "--samples", "4",
          "--no-interreflection", "--no-cast-shadows"]
 
 
-def _render(blend, out, *flags):
-    r = h.run(["-m", "fog_addon", "render", blend, *FLAGS, *flags, "--out", out], check=False)
+ENGINES = ["cycles", "eevee"]   # EEVEE: its materials share the uniform block with the lights they dim
+
+
+def _render(blend, out, engine, *flags):
+    r = h.run(["-m", "fog_addon", "render", blend, "--engine", engine, *FLAGS, *flags, "--out", out], check=False)
     assert r.returncode == 0, (r.stdout + r.stderr)[-2000:]
     return imageio.read_rgb(out).astype(np.float64), r.stdout
 
 
-def test_viewport_shows_the_node_groups_fog(tmp_path):
+@pytest.mark.parametrize("engine", ENGINES)
+def test_viewport_shows_the_node_groups_fog(tmp_path, engine):
     blend = h.scene_blend("spheres", tmp_path)
-    view, said = _render(blend, tmp_path / "view.exr", "--method", "compositor", "--viewport")
-    nodes, _ = _render(blend, tmp_path / "nodes.exr", "--method", "nodes")
-    final, _ = _render(blend, tmp_path / "final.exr", "--method", "compositor")
-    bare, _ = _render(blend, tmp_path / "bare.exr", "--method", "compositor", "--viewport", "--density", "1e-9")
+    view, said = _render(blend, tmp_path / "view.exr", engine, "--method", "compositor", "--viewport")
+    nodes, _ = _render(blend, tmp_path / "nodes.exr", engine, "--method", "nodes")
+    final, _ = _render(blend, tmp_path / "final.exr", engine, "--method", "compositor")
+    bare, _ = _render(blend, tmp_path / "bare.exr", engine, "--method", "compositor", "--viewport", "--density",
+                      "1e-9")
     assert np.isfinite(view).all()
     assert compare.metrics(view, nodes)["rel_rmse"] < 1e-4, compare.metrics(view, nodes)
     assert compare.metrics(view, final)["rel_rmse"] < 0.01   # the compositor's own fog: the same models per pixel
@@ -49,6 +54,7 @@ from fog_addon.ops import apply
 from fog_addon.precompute.core.spec import FogSpec
 bpy.ops.wm.open_mainfile(filepath=sys.argv[1] if len(sys.argv) > 1 else BLEND)
 scene = bpy.context.scene
+scene.render.engine = ENGINE
 measure.set_samples(scene, 4)
 scene.render.resolution_x, scene.render.resolution_y = 48, 27
 measure.set_pixel_centre_filter(scene)
@@ -66,9 +72,11 @@ print(json.dumps({"with": with_preview, "without": without}))
 """
 
 
-def test_final_renders_are_those_without_the_preview(tmp_path):
+@pytest.mark.parametrize("engine", ENGINES)
+def test_final_renders_are_those_without_the_preview(tmp_path, engine):
     blend = h.scene_blend("spheres", tmp_path)
-    out = h.bpy_flow(FLOW.replace("BLEND", repr(str(blend))), tmp_path)
+    out = h.bpy_flow(FLOW.replace("BLEND", repr(str(blend))).replace(
+        "ENGINE", repr({"cycles": "CYCLES", "eevee": "BLENDER_EEVEE"}[engine])), tmp_path)
     assert out == {"with": True, "without": False}, out
     a, b = (imageio.read_rgb(tmp_path / f"{k}.exr") for k in ("a", "b"))
     assert np.array_equal(a, b), float(np.abs(a - b).max())

@@ -9,6 +9,7 @@ are the compositor's, written by a File Output node (``nodes/compositor.py``).
 import functools
 
 import bpy
+import numpy as np
 
 from ..nodes import (budgets, comp_daylight, comp_fog, comp_shafts, compositor, graph, owned, passes, surface_group,
                      world_group)
@@ -43,9 +44,20 @@ class Compositor(Method):
         return dimming_lights(scene, spec, lights)
 
     def preview_budget(self, scene, spec, lights):
-        if scene.render.engine == budgets.EEVEE_ENGINE:   # (its uniform block is the dimming lights': no preview yet)
-            return None
-        return predict.Budget([PREVIEW_COST], [PREVIEW_LIMIT], "the viewport preview's budget")
+        preview = predict.Budget([PREVIEW_COST], [PREVIEW_LIMIT], "the viewport preview's budget")
+        if scene.render.engine != budgets.EEVEE_ENGINE:
+            return preview
+        # EEVEE: the preview's lights share the materials' uniform block with the lights whose direct light they
+        # dim (``dimming_lights``), which keep the room they have without a preview (the final render's)
+        dimmed, _ = dimming_lights(scene, spec, lights)
+        taken = budgets.eevee_budget(0.0, [view.has_shape(o) for o in dimmed], [view.is_area(o) for o in dimmed])
+        used = float(np.asarray(predict.joint([taken], len(dimmed)).cost)[0, :, rungs.OFF].sum()) if dimmed else 0.0
+        block = budgets.eevee_budget(spec.anisotropy, [view.has_shape(o) for o in lights],
+                                     [view.is_area(o) for o in lights], spec.multiple_albedo is not None,
+                                     allowance=budgets.EEVEE_USER_ALLOWANCE + used)
+        block = predict.joint([block], len(lights))
+        block.cost[:, :, rungs.OFF] = 0.0   # (a light off in the preview is not in it)
+        return predict.joint([preview, block], len(lights))
 
     def signature(self, scene, spec, shader_lights):
         c = scene.cycles
@@ -122,12 +134,15 @@ class Compositor(Method):
         """What the viewport's preview shows of the compositor's fog (``nodes/preview.py``)."""
         if plan.preview is None:
             return []
+        notes = [("Viewport", "the viewport compositor is on in a 3D view: it adds the compositor's fog over the "
+                              "viewport's preview of it (Shading popover > Compositor: Disabled)")
+                 ] if scene.render.engine == budgets.EEVEE_ENGINE and _viewport_compositor_on() else []
         shown, left = plan.preview[0], [o.name for o in plan.in_groups if o not in plan.preview[0]]
         if not left:
-            return []
-        return [("Viewport", f"the viewport's preview of the fog holds {len(shown)} of {len(plan.in_groups)} "
-                             f"lights, those that matter most to the picture; left out of it: {caveats.listed(left)} "
-                             "(final renders, F12, have every light)")]
+            return notes
+        return notes + [("Viewport", f"the viewport's preview of the fog holds {len(shown)} of {len(plan.in_groups)} "
+                                     f"lights, those that matter most to the picture; left out of it: "
+                                     f"{caveats.listed(left)} (final renders, F12, have every light)")]
 
     def frame_change(self, scene, spec, lights):
         if comp_fog.FOG_GROUP in bpy.data.node_groups:
@@ -145,6 +160,13 @@ class Compositor(Method):
         if old is not None and old.users == 0:
             bpy.data.node_groups.remove(old)
         shadow_maps.remove_unused()
+
+
+def _viewport_compositor_on():
+    """True if a 3D view of the open file runs the viewport compositor (EEVEE's: it would add the compositor's fog
+    over the materials' preview of it)."""
+    return any(space.type == "VIEW_3D" and space.shading.use_compositor != "DISABLED"
+               for screen in bpy.data.screens for area in screen.areas for space in area.spaces)
 
 
 def dimming_lights(scene, spec, lights):

@@ -34,6 +34,8 @@ from fog_addon.precompute.physics.spot import spot  # noqa: E402
 from fog_addon.nodes.sockets import NodeOps  # noqa: E402
 from fog_addon.methods.compositor import dimming_lights  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
+from fog_addon import methods  # noqa: E402
+from fog_addon.precompute.model import rungs  # noqa: E402
 
 BETA = 0.15
 DIMMING_LIGHTS = 200   # more than EEVEE's uniform block holds in the materials' shared dimming (about 170)
@@ -236,6 +238,15 @@ def main():
                      "light_x": value("Light 0 Location", 0), "lamp_x": lamp.matrix_world.translation.x,
                      "intensity": intensity, "want_intensity": lamp.data.energy * lamp.data.color[0] / (4 * math.pi)}
 
+    scene = fresh()   # EEVEE's viewport compositor on in a 3D view: it would add the fog over the preview
+    scene.render.engine = "BLENDER_EEVEE"
+    space = next(sp for sc in bpy.data.screens for a in sc.areas for sp in a.spaces if sp.type == "VIEW_3D")
+    space.shading.use_compositor = "CAMERA"
+    res["viewport_compositor"] = [n for n in apply.apply_fog(scene, BETA, method="compositor") if n[0] == "Viewport"]
+    space.shading.use_compositor = "DISABLED"
+    res["viewport_compositor_off"] = [n for n in apply.apply_fog(scene, BETA, method="compositor")
+                                      if n[0] == "Viewport"]
+
     scene = fresh()
     scene.render.engine = "BLENDER_EEVEE"
     for o in [o for o in scene.objects if o.type == "LIGHT"]:
@@ -257,6 +268,16 @@ def main():
                       "one_more_fits": budgets.eevee_budget(0.0).fits([2] * (len(kept) + 1)),
                       "brightest": min(score[o.name] for o in kept) >= max(
                           [score[o.name] for o in lamps if o not in kept], default=0.0)}
+    # the viewport's preview in EEVEE gets the uniform block's room the dimming lights leave (their own unchanged)
+    preview = methods.get("compositor").preview_budget
+    spec = apply.spec_of(scene)
+    full, glow, off = 0, 1, rungs.OFF   # (rungs.STEPS)
+    few = lamps[:20]
+    res["preview"] = {"crowded_off": preview(scene, spec, lamps).fits([off] * len(lamps)),
+                      "crowded_glow": preview(scene, spec, lamps).fits([glow] + [off] * (len(lamps) - 1)),
+                      "few_two_full": preview(scene, spec, few).fits([full, full] + [off] * 18),
+                      "few_three_full": preview(scene, spec, few).fits([full] * 3 + [off] * 17),
+                      "few_four_glows": preview(scene, spec, few).fits([glow] * 4 + [off] * 16)}
     scene.render.engine = "CYCLES"   # Cycles' lights dim their own direct light: none in the materials
     res["dimming"]["cycles"] = len(dimming_lights(scene, apply.spec_of(scene), lamps)[0])
     res["shared"] = shared()

@@ -54,7 +54,7 @@ FEATURES = (
          (False, "same"), (True, "✓ (blue)"), (False, "grey"), (True, "✓ (blue)")),
     _row("viewport", "live viewport", (True, "rendered view"), (True, "rendered view"),
          (True, "rendered view: a preview (the lights that matter most, no shafts)"),
-         (True, "material preview and rendered view"), (False, "with the viewport compositor on")),
+         (True, "material preview and rendered view"), (True, "both views: a preview (the same)")),
     _row("many_lights", "lights fully modelled per material",
          (True, "any (cost grows with the square of the lights)"), (True, "any"),
          (True, "any (cost grows with pixels × lights)"), (False, "about 20 in a saved file"), (True, "any")),

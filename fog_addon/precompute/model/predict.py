@@ -99,6 +99,17 @@ class Budget(NamedTuple):
         return bool((used.sum(axis=1) <= np.asarray(self.limit, float)).all())
 
 
+def joint(budgets, n):
+    """One Budget of ``n`` lights that fits where each of ``budgets`` fits (their resources side by side, each
+    cost as (K, N, STEPS))."""
+    costs, limits = [], []
+    for b in budgets:
+        cost = np.asarray(b.cost, float)
+        costs.append(cost if cost.ndim == 3 else np.repeat(cost[:, None, :], n, axis=1))
+        limits.extend(np.atleast_1d(np.asarray(b.limit, float)))
+    return Budget(np.concatenate(costs, axis=0), limits, " and ".join(b.name for b in budgets))
+
+
 def target_error(quality):
     """Target relative error from a Quality preset name or a number (None or "exact": no step taken)."""
     if quality is None:
