@@ -11,7 +11,8 @@ import functools
 import bpy
 import numpy as np
 
-from ..nodes import (budgets, comp_daylight, comp_fog, comp_shafts, compositor, graph, owned, passes, surface_group,
+from ..nodes import (budgets, comp_daylight, comp_fog, comp_shafts, compositor, graph, owned, passes,
+                     preview as preview_, surface_group,
                      world_group)
 from .. import caveats, shadow_maps, sunsky, view
 from ..precompute.model import predict, rungs
@@ -78,16 +79,16 @@ class Compositor(Method):
         table, table_images = sunsky.fog_light_table(scene, spec)   # (None: no daylight to glow)
         images = dict(images, **table_images)
         daylit = table is not None
-        preview = plan.preview[:2] if plan.preview and plan.preview[0] else None   # (the viewport's)
-        surface_group.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs,
-                                    tails=caveats.specular_paths(bpy.data.materials), day=day,
-                                    day_dims=dims and not daylit, day_exact=not daylit, preview=preview)
         shafted = shafted_lights(scene, spec, plan.in_groups) if spec.shafts else []
         # (a handler's rebuild does not step through the frames: the save completes the atlases)
         maps, shadow_images = shadow_maps.ensure(scene, shafted, lazy=plan.this_frame)
         sun_shadow, sun_images = sunsky.sun_shadow(scene, spec, lazy=plan.this_frame) if daylit else (None, {})
         shadow_maps.remove_unused(set(shadow_images) | set(sun_images))
         images = dict(images, **shadow_images, **sun_images)
+        preview = _preview(scene, spec, plan, maps)
+        surface_group.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs,
+                                    tails=caveats.specular_paths(bpy.data.materials), day=day,
+                                    day_dims=dims and not daylit, day_exact=not daylit, preview=preview)
         images = comp_fog.build_fog_group(scene, plan.in_groups, plan.grouped_models, images,
                                           view.full_windows(plan.in_groups) if plan.partial else plan.windows,
                                           plan.partial, (maps, shafts.samples_for(spec.quality, len(maps)),
@@ -160,6 +161,18 @@ class Compositor(Method):
         if old is not None and old.users == 0:
             bpy.data.node_groups.remove(old)
         shadow_maps.remove_unused()
+
+
+def _preview(scene, spec, plan, maps):
+    """``preview.Shown`` of the viewport's preview (``plan.preview``), or None: in Cycles its shafted lights' still
+    maps give it their shafts (``preview_shafts.py``; an animation's atlas does not, nor EEVEE, whose uniform
+    block the shares' constants would fill)."""
+    if not plan.preview or not plan.preview[0]:
+        return None
+    lights, models = plan.preview[:2]
+    shadows = {o.name: maps[o.name] for o in lights if o.name in maps and maps[o.name].atlas is None
+               } if scene.render.engine == "CYCLES" else {}
+    return preview_.Shown(lights, models, shadows or None, spec.anisotropy)
 
 
 def _viewport_compositor_on():

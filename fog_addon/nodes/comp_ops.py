@@ -38,6 +38,10 @@ class CompOps(NodeOps):
             self.feed(next(s for s in n.inputs if s.identifier == name), v)
         return Val(self, sock=next(s for s in n.outputs if s.identifier == "Result_Float"), col=col)
 
+    def _grid(self, spec, x, y, channel=0):
+        """A texel at a grid point: the bilinear Map UV there (``_table``; the compositor has no rounds to keep)."""
+        return self._table(spec, x, y, 0, None, channel)
+
     def _table(self, spec, x, y, row0=0, rows=None, channel=0):
         """``channel`` of one bilinear Map UV (the compositor's interpolation is exact bilinear between texel
         centres; the channels of a texel share it): x, y in [0, 1] span the texel centres of rows row0 ..

@@ -169,7 +169,7 @@ class OslOps:
         self.lines.append(pad + "}")
         return tuple(names)
 
-    def table(self, spec, x, y, row0=0, rows=None):
+    def table(self, spec, x, y, row0=0, rows=None, nearest=False):
         """Not available: OSL's texture() cannot read images packed into the .blend (and a farm file
         must not depend on files beside it), so OSL runs only table-free rungs."""
         raise NotImplementedError("OSL cannot read packed images: only table-free models run in OSL")

@@ -15,10 +15,19 @@ The value is 1 while an artist works with the add-on, and 0
 ``forced`` keeps it at 1 through a render: ``render --viewport`` renders what the rendered viewport shows.
 """
 import contextlib
+from typing import Any, NamedTuple
 
 import bpy
 
 from . import closures, groups
+
+class Shown(NamedTuple):
+    """What the preview holds (``ops/plan.preview_models``), as the Surface and World groups build it."""
+    lights: list
+    models: list               # their models (rungs.LightModels, the Node Groups method's)
+    shadows: Any = None        # {light name: shadow_maps.ShadowMap} of those whose shafts it shows (Cycles), or None
+    g: float = 0.0             # the fog's anisotropy (the shafts' phase weight)
+
 
 _forced = []   # non-empty while a render must show the preview (``forced``)
 _held = []     # non-empty while a final render runs (``before_render``)

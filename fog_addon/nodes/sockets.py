@@ -149,9 +149,21 @@ class NodeOps:
     def group(self, name, fn, *args):
         return self._once(("group", name, self._ids(args)), lambda: self._new_group(name, fn, *args))
 
-    def table(self, spec, x, y, row0=0, rows=None, channel=0):
+    def table(self, spec, x, y, row0=0, rows=None, channel=0, nearest=False):
+        if nearest:
+            return self._once(("grid", spec.name, channel, self._ids((x, y))), lambda: self._grid(spec, x, y, channel))
         return self._once(("table", spec.name, row0, rows, channel, self._ids((x, y))),
                           lambda: self._table(spec, x, y, row0, rows, channel))
+
+    def _grid(self, spec, x, y, channel=0):
+        """The texel of ``spec`` at the grid point (x, y) (each i / (n - 1), ``shaft_maps.nearest``): one Closest
+        tap at its centre.  Four taps, as ``_table`` reads, keep Cycles' SVM from compiling a quadrature node by
+        node: its image nodes are compiled in a later round (``closures.closure_sum`` on the rounds), so every
+        node's coordinates waited on the stack together, about 16 floats a node (a shadow map's 8 nodes: 130 of
+        SVM's 255); with one tap, about 5."""
+        u = self.math("MULTIPLY_ADD", x, (spec.width - 1.0) / spec.width, 0.5 / spec.width)
+        v = self.math("MULTIPLY_ADD", y, (spec.height - 1.0) / spec.height, 0.5 / spec.height)
+        return self._tap(spec, u, v, channel)
 
     def texel(self, spec, node, col, channel):
         """``spec``'s ``channel`` as read by ``node`` (an image-reading node in column ``col``): its Alpha output

@@ -9,7 +9,8 @@ import bpy
 from ..precompute.model import compose, rungs, shading
 from ..precompute.physics.daylight import sunlight
 from ..precompute.physics.point import surface
-from . import closures, glass_tails, groups, light_bundles, light_groups, passes, preview as preview_
+from . import (closures, glass_tails, groups, light_bundles, light_groups, passes, preview as preview_,
+               preview_shafts)
 from .groups import C, F, V
 from .sockets import NodeOps
 
@@ -17,9 +18,13 @@ _SURFACE_SHARED = (("Beta", F), ("Position", V), ("Incoming", V), ("View Distanc
                    ("Diffuse", C), ("Specular", C), ("Glossy Level", F))   # a light group's inputs but its own
 
 
-def build_surface_bundle(images, first, lights, models, with_passes, chained, prefix=groups.SURFACE_LIGHTS):
+def build_surface_bundle(images, first, lights, models, with_passes, chained, prefix=groups.SURFACE_LIGHTS,
+                         shadows=None, g_=0.0):
     """One bundle of the Surface group (``light_bundles.split``): ``shading.sum_lights`` over ``lights``
     (Sun et al. 2005 Eq. 19's L_a) from their per-light groups (``light_groups.build_light``).
+
+    ``shadows``: {light name: ShadowMap} of the lights whose glow and reflected fog light take their lit shares
+    (the viewport's preview: ``preview_shafts.py``, fog of anisotropy ``g_``), or None.
 
     Outputs: Fog (one Emission closure per lit light, times the Opacity input; a spot's or an area light's
     glow a closure of its own, ``closures.closure_sum``), Emission (their colours' sum), Weighted and Weight
@@ -36,11 +41,18 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained, pr
     ng, gin, gout = groups.new_group(name, inputs, outputs)
     m = NodeOps(ng, {})
     g = {s.name: s for s in gin.outputs if s.name}
-    terms = []
+    terms, jitter = [], None
     for k, (light, mod) in enumerate(zip(lights, models)):
+        shares = None
+        if shadows and light.name in shadows:   # the preview's shafts (``preview_shafts.py``)
+            jitter = jitter or preview_shafts.jitter(ng, g["Position"])
+            shares = _shares(m, ng, light, shadows[light.name], images, g, jitter, g_)
         node = light_groups.light_instance(ng, first + k, light, light_groups.build_light(mod, images).name,
                                            [(g[n], n) for n, _ in _SURFACE_SHARED])
         terms.append(light_groups.read(m, node, rungs.SURFACE_OUTPUTS, shading.LightTerms))
+        if shares is not None:
+            ng.links.new(node.inputs["Light"].links[0].from_socket, shares.inputs["Light"])
+            terms[-1] = _shafted(m, terms[-1], shares)
     sums = shading.sum_lights(m, terms, light_groups.medium(m, g["Beta"], g["Albedo"]),
                               m.wrap(g["View Transmittance"]), m.wrap(g["Is Camera"]))
     opacity = m.wrap(g[passes.OPACITY], vector=True)
@@ -77,7 +89,7 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     sky's glow and their fog light on the surface (``sunlight.surface_terms``, composed); ``day_dims`` False leaves the sun's and the
     sky's dimming to the compositor (``comp_fog.build_fog_group``: once per pixel), ``day_exact`` False dims the
     camera segment by ``sunlight.proxy_transmittance`` (the compositor puts the exact colour on every pixel).  The
-    lights sit in bundle groups (``light_bundles.split``, ``build_surface_bundle``).  ``preview``: (lights, models)
+    lights sit in bundle groups (``light_bundles.split``, ``build_surface_bundle``).  ``preview``: ``preview.Shown``
     of the viewport's preview of a fog added at render time: their fog light on camera rays, behind the Params
     group's Viewport Preview (``preview.behind_switch``), or None; it changes no other output.
 
@@ -140,8 +152,9 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     fogs = [node.outputs["Fog"] for node, mods in placed if any(_lit(mod) for mod in mods)]
     if preview:
         shown, preview_trees, _ = light_bundles.place_bundles(
-            ng, *preview, functools.partial(build_surface_bundle, images, prefix=groups.SURFACE_PREVIEW), shared,
-            False)
+            ng, preview.lights, preview.models, functools.partial(
+                build_surface_bundle, images, prefix=groups.SURFACE_PREVIEW, shadows=preview.shadows, g_=preview.g),
+            shared, False)
         fogs += [sock for sock in [preview_.behind_switch(ng, params, [node.outputs["Fog"] for node, mods in shown
                                                                        if any(_lit(mod) for mod in mods)])] if sock]
     fog = shading.surface_fog(m, sums, transmit)
@@ -174,6 +187,31 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     ng = groups.install(ng, groups.SURFACE)
     light_bundles.name_bundles(bundles + tails + (preview_trees if preview else []))
     return ng
+
+
+def _shares(m, ng, light, shadow, images, g, jitter, anisotropy):
+    """A node of ``light``'s preview shares (``preview_shafts.build_group``) on the bundle's camera ray, its Light
+    input left for the caller to link.  Built before the light's own group node: Cycles' SVM compiles a shader's
+    nodes in the order they were made, so the shares' quadrature runs first and only its two results stay on the
+    stack while the light's kernels run (the other way round: out of SVM stack space, the material black)."""
+    position, incoming = m.wrap(g["Position"], vector=True), m.wrap(g["Incoming"], vector=True)
+    length = m.wrap(g["View Distance"])
+    camera = position + m.scale(incoming, length)
+    group = preview_shafts.build_group(light, shadow, images, anisotropy)
+    return preview_shafts.instance(ng, light, group, {
+        "Beta": g["Beta"], "Camera": camera.sock, "Direction": m.scale(incoming, -1.0).sock, "Length": length.sock,
+        "Position": g["Position"], "Normal": g["Normal"], "Jitter": jitter})
+
+
+def _shafted(m, terms, shares):
+    """A light's ``terms`` (shading.LightTerms) with its glow along the camera ray times its lit share and the fog
+    light its surface reflects times the share its shadows leave (the ``shares`` node's outputs; Dobashi et al.
+    2002 Eq. 2's visibility).  The lit share is the glow's gate (``LightTerms.seen``, a spot's times it): the glow
+    is a closure of its own behind a Mix Shader of that factor (``closures.closure_sum``), so SVM computes the
+    share first and the light's glow after it, each with the stack to itself, and skips the glow in full shadow."""
+    share, visible = m.wrap(shares.outputs["Share"]), m.wrap(shares.outputs["Visible"])
+    scattered = None if terms.scattered is None else m.scale(m.wrap(terms.scattered, vector=True), visible)
+    return terms._replace(scattered=scattered, seen=share if terms.seen is None else m.wrap(terms.seen) * share)
 
 
 def _lit(models):

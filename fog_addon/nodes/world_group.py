@@ -6,13 +6,13 @@ import bpy
 
 from ..precompute.model import compose, rungs, shading
 from ..precompute.physics.daylight import sunlight
-from . import closures, drivers, groups, light_bundles, light_groups, passes, preview as preview_
+from . import closures, drivers, groups, light_bundles, light_groups, passes, preview as preview_, preview_shafts
 from .groups import C, F, V
 from .sockets import NodeOps
 
 
 def build_world_bundle(images, first, lights, models, with_passes, chained, scaled=False,
-                       prefix=groups.WORLD_LIGHTS):
+                       prefix=groups.WORLD_LIGHTS, shadows=None, g_=0.0):
     """One bundle of the World group (``light_bundles.split``): the lights' glows to infinity (Sun et al. 2005
     Eq. 12) from their per-light groups (``light_groups.build_background_light``).
 
@@ -20,6 +20,8 @@ def build_world_bundle(images, first, lights, models, with_passes, chained, scal
     Scale with ``scaled``) and Airlight (the glows' sum).  ``with_passes``: Running Sum out is Running Sum in (``chained``; else
     nothing) plus the glows read by the pass's own instances of the light groups
     (``_world_pass_instances``).  ``prefix``: the bundles' name (the viewport preview's have their own).
+    ``shadows``: {light name: ShadowMap} of the lights whose glows take their lit shares (the viewport's preview:
+    ``preview_shafts.py``, fog of anisotropy ``g_``), or None.
     """
     name = light_bundles.bundle_name(prefix, first, lights)
     inputs = [("Beta", F), ("Albedo", C), ("Camera", V), ("Direction", V), ("Is Camera", F)]
@@ -39,6 +41,9 @@ def build_world_bundle(images, first, lights, models, with_passes, chained, scal
                                            [(g[n], n) for n in ("Beta", "Camera", "Direction")])
         nodes.append(node)
         sky = light_groups.read(m, node, rungs.SKY_OUTPUTS, shading.SkyTerms)
+        if shadows and light.name in shadows:   # the preview's shafts along the ray to the sky
+            sky = sky._replace(background=m.scale(m.wrap(sky.background, vector=True), _sky_share(
+                m, ng, light, node, shadows[light.name], images, g, g_)))
         airlights.append(sky.background)
         colour = m.wrap(shading.shade_background(m, [airlights[-1]], medium, is_camera)[0], vector=True)
         if scaled:
@@ -56,6 +61,18 @@ def build_world_bundle(images, first, lights, models, with_passes, chained, scal
     return ng
 
 
+def _sky_share(m, ng, light, node, shadow, images, g, anisotropy):
+    """The lit share of ``light``'s glow (its group instance ``node``) along the ray to the sky
+    (``preview_shafts.build_group``), its nodes turned at each sample by a White Noise of the ray's direction."""
+    group = preview_shafts.build_group(light, shadow, images, anisotropy)
+    shares = preview_shafts.instance(ng, light, group, {
+        "Beta": g["Beta"], "Camera": g["Camera"], "Direction": g["Direction"],
+        "Light": node.inputs["Light"].links[0].from_socket, "Position": g["Camera"], "Normal": g["Direction"],
+        "Jitter": preview_shafts.jitter(ng, g["Direction"])})
+    shares.inputs["Length"].default_value = preview_shafts.SKY_LENGTH
+    return m.wrap(shares.outputs["Share"])
+
+
 def build_world(lights, models, camera, images, with_passes=False, day=None, day_table=None, day_dims=True,
                 preview=None):
     """Scene group for the World: ``shading.shade_background`` (Sun et al. 2005 Eq. 12) over ``lights``.
@@ -68,8 +85,8 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
     lights surfaces on every other ray (the materials dim it: ``sunlight.direct_dimming``), and with ``day_table``
     camera rays get the sun's and the sky's glow to infinity (``sunlight.ray_glow``); ``day_dims`` False leaves the
     World untouched on every ray (the compositor dims the sky it sees: ``comp_fog.build_fog_group``).  The lights
-    whose glow is on sit in bundle groups (``light_bundles.split``, ``build_world_bundle``).  ``preview``: (lights,
-    models) of the viewport's preview of a fog added at render time, their glows behind the Params group's Viewport
+    whose glow is on sit in bundle groups (``light_bundles.split``, ``build_world_bundle``).  ``preview``:
+    ``preview.Shown``, the viewport's preview of a fog added at render time, their glows behind the Params group's Viewport
     Preview (``preview.behind_switch``), or None; not where the World is left to the compositor (``day_dims``
     False: the sky through a daylit layer), whose glows on sky rays the preview then leaves out.
     """
@@ -118,8 +135,9 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
     fogs = [node.outputs["Fog"] for node, _ in placed]
     if preview:
         shown, preview_trees, _ = light_bundles.place_bundles(
-            ng, *preview, functools.partial(build_world_bundle, images, scaled=layer_scale is not None,
-                                            prefix=groups.WORLD_PREVIEW),
+            ng, preview.lights, preview.models, functools.partial(
+                build_world_bundle, images, scaled=layer_scale is not None, prefix=groups.WORLD_PREVIEW,
+                shadows=preview.shadows, g_=preview.g),
             {k: v for k, v in shared.items() if k != "Pass Direction"}, False)   # (the preview writes no pass)
         fogs += [sock for sock in [preview_.behind_switch(ng, params, [node.outputs["Fog"] for node, _ in shown])]
                  if sock]

@@ -52,7 +52,8 @@ class ShaderOps(Protocol):
     def scale(self, v, s) -> Any: ...
     def combine(self, x, y, z) -> Any: ...
     def fori(self, count: int, body: Callable, state: tuple, done: Callable = None) -> tuple: ...
-    def table(self, spec, x, y, row0: int = 0, rows: int = None, channel: int = 0) -> Any: ...
+    def table(self, spec, x, y, row0: int = 0, rows: int = None, channel: int = 0,
+              nearest: bool = False) -> Any: ...   # nearest: x, y on grid points (one texel read)
     def group(self, name, fn, *args) -> Any: ...   # fn(self, *args), shared as one sub-program (node group)
     def run(self, rung, *args) -> Any: ...    # a model's kernel on this backend (or one it delegates to)
 
@@ -171,8 +172,9 @@ class NumpyOps:
         return state
 
     # -- tables ---------------------------------------------------------------
-    def table(self, spec, x, y, row0=0, rows=None, channel=0):
-        """Bilinear lookup of table ``spec`` (its ``channel``) at grid coordinates x, y in [0, 1].
+    def table(self, spec, x, y, row0=0, rows=None, channel=0, nearest=False):
+        """Bilinear lookup of table ``spec`` (its ``channel``) at grid coordinates x, y in [0, 1] (``nearest``:
+        the caller put them on grid points, where the bilinear value is the texel's: the same value here).
 
         ``row0``/``rows`` select a horizontal band of the image (stacked tables).
         The same interpolation as the four Closest taps of the node version (a + t (b - a) here, a Multiply

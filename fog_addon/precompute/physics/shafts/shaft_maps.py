@@ -200,4 +200,4 @@ def map_depth(m, spec, spot, u):
 
 def nearest_depth(m, spec, x, y):
     """The map ``spec``'s distance at its grid point nearest to (x, y) in [0, 1] (``nearest``)."""
-    return m.table(spec, nearest(m, x, spec.width), nearest(m, y, spec.height))
+    return m.table(spec, nearest(m, x, spec.width), nearest(m, y, spec.height), nearest=True)

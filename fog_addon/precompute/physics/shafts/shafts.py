@@ -273,8 +273,9 @@ def _quadrature(m, start, width, count, shift, shadow, g, falloff, name, args):
 
     def nodes(mm, start_, width_, shift_, *args_):
         lit_sum, total = 0.0, 0.0
+        first = start_ + width_ * shift_   # the first node; the others a whole width apart
         for k in range(count):
-            theta = start_ + width_ * (k + shift_)
+            theta = first + width_ * k if k else first
             lit_weight, weight = mm.group(name, terms, theta, *args_) if name else terms(mm, theta, *args_)
             lit_sum = lit_sum + lit_weight
             total = total + weight

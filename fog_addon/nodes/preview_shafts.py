@@ -1,0 +1,84 @@
+"""Light shafts in the viewport's preview (Cycles): a shafted light's lit shares evaluated in the materials and the
+World, by the compositor's own kernels (``shafts.lit_share``, ``shafts.surface_share``) from the same shadow map.
+
+The compositor interleaves its quadrature nodes over a fixed pattern of pixels and filters them
+(``comp_shafts.py``): a shader sees one sample of one pixel and no neighbour.  What it has instead is the viewport's
+accumulation of samples: each sample turns the nodes by a random shift (a White Noise of the shading point, which a
+pixel filter moves at every sample), so the nodes of successive samples interleave in time and the viewport's mean
+converges to the shares of a finer quadrature, as the compositor's does over its pattern.  Few nodes a sample
+(``PREVIEW_SAMPLES``) keep the viewport quick; a still picture is noisy at first and settles as samples accumulate.
+"""
+import hashlib
+import math
+
+from ..precompute.physics.shafts import shafts
+from ..precompute.physics.spot import spot as spot_
+from . import groups, owned
+from .groups import F, V
+from .sockets import NodeOps
+
+PREVIEW_SAMPLES = shafts.Samples(view_nodes=8, surface_directions=2, surface_nodes=4)   # a sample's nodes
+PREVIEW_SHAFT = "AnalyticFog Preview Shaft"   # "<PREVIEW_SHAFT> <light name>"
+SKY_LENGTH = 1.0e6   # m: a ray to the sky's length (its far nodes weigh e^{-beta t})
+INPUTS = (("Beta", F), ("Camera", V), ("Direction", V), ("Length", F), ("Light", V), ("Position", V), ("Normal", V),
+          ("Jitter", F))
+OUTPUTS = (("Share", F), ("Visible", F))
+
+
+def group_name(light):
+    return f"{PREVIEW_SHAFT} {light.name}"
+
+
+def build_group(light, shadow, images, g):
+    """``light``'s preview shares (shader group): Share, the lit share of its glow along the ray from Camera along
+    Direction over Length m (``shafts.lit_share``); Visible, the share of the fog light a surface at Position with
+    Normal reflects that the shadows leave (``shafts.surface_share``); both with their nodes turned by Jitter in
+    [0, 1).  ``shadow``: the light's still map (``shadow_maps.ShadowMap``; its image is in ``images``), a spot's
+    frame and cone built in as the compositor's shaft group builds them (``comp_shafts.build_shaft_group``)."""
+    falloff, kind = None, f"point {shadow.spec.name}"
+    if shadow.spot is not None:
+        frame, half = shadow.spot
+        forward = frame[2]
+        cos_half = math.cos(0.5 * light.data.spot_size)
+        blend = float(light.data.spot_blend)
+        falloff = lambda m, u, d: spot_.spot_falloff(m, m.dot(u, forward) / d, cos_half, blend)
+        kind = "spot " + hashlib.sha1(repr((shadow.spec.name, shadow.spec.width, frame, half, cos_half, blend)
+                                           ).encode()).hexdigest()[:12]
+    ng, gin, gout = groups.new_group(group_name(light), list(INPUTS), list(OUTPUTS))
+    m = NodeOps(ng, dict(images))
+    v = {s.name: m.wrap(s, vector=s.type == "VECTOR") for s in gin.outputs if s.name}
+    node = f"Preview Shaft Node {kind} g {g:.6g}"   # one group for every quadrature node of this light
+    samples = PREVIEW_SAMPLES
+    share = shafts.lit_share(m, v["Camera"], v["Direction"], v["Length"], v["Light"], v["Beta"],
+                             (shadow.spec, shadow.spot), samples.view_nodes, shift=v["Jitter"], g=g,
+                             falloff=falloff, name=node)
+    m.feed(gout.inputs["Share"], share)
+    visible = shafts.surface_share(m, v["Position"], v["Normal"], v["Camera"], v["Light"], v["Beta"],
+                                   (shadow.spec, shadow.spot), shift=v["Jitter"], g=g, falloff=falloff, name=node,
+                                   directions=samples.surface_directions, nodes=samples.surface_nodes)
+    m.feed(gout.inputs["Visible"], visible)
+    ng[owned.BUILT] = groups.code_fingerprint()
+    m.place()
+    return groups.install(ng, group_name(light))
+
+
+def jitter(ng, position):
+    """A value in [0, 1) that changes at every sample: a White Noise of ``position`` (an output socket), which the
+    pixel filter moves a little at each sample (the noise hashes every bit of it)."""
+    noise = ng.nodes.new("ShaderNodeTexWhiteNoise")
+    noise.noise_dimensions = "3D"
+    noise.name = noise.label = "Preview Shaft Jitter"
+    ng.links.new(position, noise.inputs["Vector"])
+    return noise.outputs["Value"]
+
+
+def instance(ng, light, group, inputs):
+    """A node of ``light``'s preview shaft ``group`` in ``ng``, its inputs linked from ``inputs`` (name: socket or
+    None for a default)."""
+    node = ng.nodes.new("ShaderNodeGroup")
+    node.node_tree = group
+    node.name = node.label = f"Preview Shaft: {light.name}"
+    for name, sock in inputs.items():
+        if sock is not None:
+            ng.links.new(sock, node.inputs[name])
+    return node
