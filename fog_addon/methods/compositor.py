@@ -119,7 +119,7 @@ class Compositor(Method):
                                    "Groups method, or a compositor of yours with a Render Layers node per layer)")
                       ] if layers else []
         n, kept = len(plan.in_groups), len(plan.shader_lights)
-        layer_note += self.preview_notes(scene, plan)
+        layer_note += self.preview_notes(scene, spec, plan)
         if spec.passes:
             name = compositor.passes_file_name("<view layer>").replace("####", "<frame>")
             layer_note.append((scene.name, f"the fog passes are the compositor's: each render writes them beside its "
@@ -131,14 +131,23 @@ class Compositor(Method):
                                   "the nearer lights' is")]
         return layer_note
 
-    def preview_notes(self, scene, plan):
+    def preview_notes(self, scene, spec, plan):
         """What the viewport's preview shows of the compositor's fog (``nodes/preview.py``)."""
         if plan.preview is None:
             return []
+        eevee = scene.render.engine == budgets.EEVEE_ENGINE
         notes = [("Viewport", "the viewport compositor is on in a 3D view: it adds the compositor's fog over the "
                               "viewport's preview of it (Shading popover > Compositor: Disabled)")
-                 ] if scene.render.engine == budgets.EEVEE_ENGINE and _viewport_compositor_on() else []
+                 ] if eevee and _viewport_compositor_on() else []
         shown, left = plan.preview[0], [o.name for o in plan.in_groups if o not in plan.preview[0]]
+        shafted = shafted_lights(scene, spec, shown) if spec.shafts and shown else []
+        unshafted = shafted if eevee else (shadow_maps.moving_lights(scene, shafted)
+                                           if shadow_maps.frames_of(scene)[2] > 1 else [])
+        if unshafted:
+            why = "in EEVEE" if eevee else "while their shadows move over the animation"
+            names = caveats.listed([o.name for o in unshafted])
+            notes.append(("Viewport", f"the viewport's preview shows no light shafts of {names} {why} (final "
+                                      "renders, F12, have them)"))
         if not left:
             return notes
         return notes + [("Viewport", f"the viewport's preview of the fog holds {len(shown)} of {len(plan.in_groups)} "
