@@ -81,10 +81,10 @@ def test_eevee_dimming_holds_what_fits_brightest_first(res):
 
 def test_eevee_preview_takes_the_room_the_dimming_leaves(res):
     """The viewport's preview in EEVEE (Compositor.preview_budget): with 200 lamps the dimming lights fill the
-    uniform block and the preview holds no light; with 20 it holds its own budget's two full lights or four glows."""
+    uniform block and the preview holds no light; with 20 it holds its own budget's two lights."""
     p = res["preview"]
     assert p["crowded_off"] and not p["crowded_glow"], p
-    assert p["few_two_full"] and p["few_four_glows"] and not p["few_three_full"], p
+    assert p["few_two_full"] and p["few_two_glows"] and not p["few_three_full"] and not p["few_three_glows"], p
 
 
 def test_eevee_viewport_compositor_is_said(res):

@@ -5,9 +5,12 @@
   (the glows are there);
 * a final render is bit for bit the render of the same scene built without a preview (the preview's closures sit
   behind a Mix Shader of factor 0: Cycles' SVM jumps over them);
-* a scene with more lights than the preview's budget gets a note naming those it leaves out.
+* a scene with more lights than the preview's budget samples the other point lights (the boulevard's 45 lamps
+  against path tracing) and names the spot and area lights it leaves out;
+* the preview against path tracing where shadows cut the fog (its shafts).
 """
 import json
+import re
 
 import numpy as np
 import pytest
@@ -85,8 +88,9 @@ def test_final_renders_are_those_without_the_preview(tmp_path, engine):
 # The preview against Cycles' path tracing with cast shadows (fog_scenes/shafts.py: issue 27's scenes and their
 # references), 128 x 72, 16 spp, the shaft tests' lamp mask.  The issue's goals: 15 % on scenes with shadows, 10 % on
 # a street.  Measured (2026-11-29, docs/measurements/2026-11-29-viewport-preview.md): window room 11.5 % (180 %
-# without the preview's shafts), colonnade 2.65 % (19 %), street lamps 2.2 % (2.9 %); the bounds add a margin.
-PREVIEW_BOUND = {"window_room": 0.13, "colonnade": 0.035, "street_lamps": 0.03}
+# without the preview's shafts), colonnade 2.65 % (19 %), street lamps 4.2 % (its third lamp sampled, without
+# shafts, noisy at 16 spp; 2.9 % with no shafts and every lamp modelled); the bounds add a margin.
+PREVIEW_BOUND = {"window_room": 0.13, "colonnade": 0.035, "street_lamps": 0.05}
 PREVIEW_GOAL = {"window_room": 0.15, "colonnade": 0.15, "street_lamps": 0.10}
 
 
@@ -114,4 +118,35 @@ def test_eevee_preview_says_it_has_no_shafts(tmp_path):
                "--samples", "1", "--method", "compositor", "--shafts", "on", "--viewport",
                "--out", tmp_path / "e.exr"], check=False)
     assert r.returncode == 0, (r.stdout + r.stderr)[-2000:]
-    assert "preview shows no light shafts of Lamp 1, Lamp 2, Lamp 3 in EEVEE" in r.stdout, r.stdout[-2000:]
+    assert re.search(r"preview shows no light shafts of Lamp \d, Lamp \d in EEVEE", r.stdout), r.stdout[-2000:]
+
+
+# The boulevard (45 lamps, no shadows; the render tests' reference, 64 x 36): the preview models two lamps and
+# samples the other 43, one a sample (nodes/preview_sampled.py).  Measured (2026-11-29): 11.2 % at 64 spp, 6.0 % at
+# 256 (mean ratio 0.98; 35.8 % before the sampling, the 41 lamps out of the preview missing).  The issue's goal:
+# 10 % on a street of 25 lamps, at the viewport's samples (Cycles' default: 1024).
+BOULEVARD_SAMPLES = 256
+BOULEVARD_BOUND = 0.075
+
+
+@pytest.mark.slow
+def test_viewport_samples_the_other_lamps_of_a_boulevard(tmp_path):
+    ref = h.ensure_reference("boulevard", 0.015)
+    log = []
+    out = h.render_test("boulevard", 0.015, tmp_path / "boulevard.exr", engine="cycles", method="compositor",
+                        samples=BOULEVARD_SAMPLES, log=log, extra=["--viewport"])
+    assert not h.log_errors(log[0]), h.log_errors(log[0])
+    assert "preview samples 43 of the 45 lights" in log[0], log[0][-3000:]
+    m = h.assert_close(out, ref, name="viewport_boulevard", rel_rmse=BOULEVARD_BOUND, mean_ratio_tol=0.04)
+    print(f"boulevard: relative RMSE {m['rel_rmse']:.4f}, mean ratio {m['mean_ratio']:.4f}")
+
+
+def test_preview_names_the_spots_it_leaves_out(tmp_path):
+    """The concert stage's three spots: the preview models two, the third is not sampled (a point's glow is not a
+    spot's) and the notes name it."""
+    blend = h.scene_blend("concert_stage", tmp_path)
+    r = h.run(["-m", "fog_addon", "render", blend, "--engine", "cycles", "--density", "0.04", "--resolution",
+               "32x18", "--samples", "1", "--method", "compositor", "--viewport", "--out", tmp_path / "c.exr"],
+              check=False)
+    assert r.returncode == 0, (r.stdout + r.stderr)[-2000:]
+    assert "preview of the fog leaves out 1 of the 3 lights" in r.stdout, r.stdout[-2000:]

@@ -12,7 +12,7 @@ import bpy
 import numpy as np
 
 from ..nodes import (budgets, comp_daylight, comp_fog, comp_shafts, compositor, graph, owned, passes,
-                     preview as preview_, surface_group,
+                     preview as preview_, preview_sampled, surface_group,
                      world_group)
 from .. import caveats, shadow_maps, sunsky, view
 from ..precompute.model import predict, rungs
@@ -20,9 +20,10 @@ from ..precompute.physics.shafts import shafts
 from .base import Method
 
 # The viewport's preview of the Compositor's fog (``nodes/preview.py``): each light's share of its budget by ladder
-# step (rungs.STEPS: full, glow only, off, left out) and the budget, two fully modelled lights or four glows (a
-# first choice, not measured yet: the preview's cost in the viewport is to be charted against the lights it holds)
-PREVIEW_COST = (2.0, 1.0, 0.0, 0.0)
+# step (rungs.STEPS: full, glow only, off, left out) and the budget: two lights, each fully modelled or its glow
+# alone, with their shafts; the other point lights are sampled, fully modelled, one a sample (``preview_sampled``),
+# so a glow-only step would drop the reflected fog light the sampling would have given
+PREVIEW_COST = (2.0, 2.0, 0.0, 0.0)
 PREVIEW_LIMIT = 4.0
 
 
@@ -53,11 +54,15 @@ class Compositor(Method):
         dimmed, _ = dimming_lights(scene, spec, lights)
         taken = budgets.eevee_budget(0.0, [view.has_shape(o) for o in dimmed], [view.is_area(o) for o in dimmed])
         used = float(np.asarray(predict.joint([taken], len(dimmed)).cost)[0, :, rungs.OFF].sum()) if dimmed else 0.0
+        dense = spec.multiple_albedo is not None
+        sampler = float(np.max(np.asarray(predict.joint([budgets.eevee_budget(spec.anisotropy, dense=dense)], 1).cost)
+                               [:, 0, 0]))   # the sampled lights' group: one fully modelled point light
         block = budgets.eevee_budget(spec.anisotropy, [view.has_shape(o) for o in lights],
-                                     [view.is_area(o) for o in lights], spec.multiple_albedo is not None,
-                                     allowance=budgets.EEVEE_USER_ALLOWANCE + used)
+                                     [view.is_area(o) for o in lights], dense,
+                                     allowance=budgets.EEVEE_USER_ALLOWANCE + used + sampler)
         block = predict.joint([block], len(lights))
         block.cost[:, :, rungs.OFF] = 0.0   # (a light off in the preview is not in it)
+        block = block._replace(limit=np.maximum(block.limit, 0.0))   # (no room: no light in the preview)
         return predict.joint([preview, block], len(lights))
 
     def signature(self, scene, spec, shader_lights):
@@ -85,7 +90,8 @@ class Compositor(Method):
         sun_shadow, sun_images = sunsky.sun_shadow(scene, spec, lazy=plan.this_frame) if daylit else (None, {})
         shadow_maps.remove_unused(set(shadow_images) | set(sun_images))
         images = dict(images, **shadow_images, **sun_images)
-        preview = _preview(scene, spec, plan, maps)
+        preview, sampled_images = _preview(scene, spec, plan, maps)
+        images = dict(images, **sampled_images)
         surface_group.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs,
                                     tails=caveats.specular_paths(bpy.data.materials), day=day,
                                     day_dims=dims and not daylit, day_exact=not daylit, preview=preview)
@@ -107,6 +113,8 @@ class Compositor(Method):
     def update(self, scene, spec, plan):
         if plan.windows is not None:
             comp_fog.set_windows(plan.in_groups, plan.windows, grow=plan.partial)
+        if plan.preview and plan.preview[0]:   # the sampled lights as they are now (moved, dimmed, recoloured)
+            preview_sampled.write_table(scene, sampled_lights(plan), spec.beta_per_unit)
 
     def passes(self, scene, spec):   # (the fog passes: the materials' transmittance, the fog group's light)
         return comp_fog.aovs(scene.render.engine) + (((passes.TRANSMITTANCE, "VALUE"),) if spec.passes else ())
@@ -139,7 +147,12 @@ class Compositor(Method):
         notes = [("Viewport", "the viewport compositor is on in a 3D view: it adds the compositor's fog over the "
                               "viewport's preview of it (Shading popover > Compositor: Disabled)")
                  ] if eevee and _viewport_compositor_on() else []
-        shown, left = plan.preview[0], [o.name for o in plan.in_groups if o not in plan.preview[0]]
+        shown, sampled = plan.preview[0], (sampled_lights(plan) if plan.preview[0] else [])
+        left = [o.name for o in plan.in_groups if o not in shown and o not in sampled]
+        if sampled:
+            notes.append(("Viewport", f"the viewport's preview samples {len(sampled)} of the {len(plan.in_groups)} "
+                                      "lights, one a sample: their fog light is noisy at first and settles as the "
+                                      "viewport's samples add up"))
         shafted = shafted_lights(scene, spec, shown) if spec.shafts and shown else []
         unshafted = shafted if eevee else (shadow_maps.moving_lights(scene, shafted)
                                            if shadow_maps.frames_of(scene)[2] > 1 else [])
@@ -150,9 +163,9 @@ class Compositor(Method):
                                       "renders, F12, have them)"))
         if not left:
             return notes
-        return notes + [("Viewport", f"the viewport's preview of the fog holds {len(shown)} of {len(plan.in_groups)} "
-                                     f"lights, those that matter most to the picture; left out of it: "
-                                     f"{caveats.listed(left)} (final renders, F12, have every light)")]
+        return notes + [("Viewport", f"the viewport's preview of the fog leaves out {len(left)} of the "
+                                     f"{len(plan.in_groups)} lights (spot and area lights beyond its "
+                                     f"{len(shown)}): {caveats.listed(left)} (final renders, F12, have every light)")]
 
     def frame_change(self, scene, spec, lights):
         if comp_fog.FOG_GROUP in bpy.data.node_groups:
@@ -173,15 +186,26 @@ class Compositor(Method):
 
 
 def _preview(scene, spec, plan, maps):
-    """``preview.Shown`` of the viewport's preview (``plan.preview``), or None: in Cycles its shafted lights' still
-    maps give it their shafts (``preview_shafts.py``; an animation's atlas does not, nor EEVEE, whose uniform
-    block the shares' constants would fill)."""
+    """(``preview.Shown`` of the viewport's preview (``plan.preview``) or None, the images it reads): in Cycles its
+    shafted lights' still maps give it their shafts (``preview_shafts.py``; an animation's atlas does not, nor
+    EEVEE, whose uniform block the shares' constants would fill); the other point lights are sampled one a sample
+    (``preview_sampled.py``)."""
     if not plan.preview or not plan.preview[0]:
-        return None
+        preview_sampled.write_table(scene, [], spec.beta_per_unit)
+        return None, {}
     lights, models = plan.preview[:2]
     shadows = {o.name: maps[o.name] for o in lights if o.name in maps and maps[o.name].atlas is None
                } if scene.render.engine == "CYCLES" else {}
-    return preview_.Shown(lights, models, shadows or None, spec.anisotropy)
+    table, img = preview_sampled.write_table(scene, sampled_lights(plan), spec.beta_per_unit)
+    return (preview_.Shown(lights, models, shadows or None, spec.anisotropy, table),
+            {table.name: img} if table is not None else {})
+
+
+def sampled_lights(plan):
+    """The point lights of the fog the viewport's preview does not hold one by one: it samples them
+    (``preview_sampled.py``)."""
+    shown = set(plan.preview[0]) if plan.preview else set()
+    return preview_sampled.sampled([o for o in plan.in_groups if o not in shown])
 
 
 def _viewport_compositor_on():

@@ -40,6 +40,7 @@ WORLD_LIGHTS = WORLD + " Lights"
 SURFACE_TAILS = SURFACE + " Tails"     # bundles of the glows past glass and mirrors (``glass_tails.build_tail_bundle``)
 SURFACE_PREVIEW = SURFACE + " Preview Lights"   # bundles of the viewport's preview (``nodes/preview.py``)
 WORLD_PREVIEW = WORLD + " Preview Lights"
+PREVIEW_SHAFT = "AnalyticFog Preview Shaft"   # "<PREVIEW_SHAFT> <light name>" (``preview_shafts.py``)
 _BUNDLES = (SURFACE_LIGHTS, WORLD_LIGHTS, SURFACE_TAILS, SURFACE_PREVIEW, WORLD_PREVIEW)
 _BUNDLE_NAME = re.compile(rf"^({'|'.join(re.escape(p) for p in _BUNDLES)}) \d+-\d+$")
 
@@ -70,6 +71,10 @@ def all_group_names():
     names = sorted(base for ng in bpy.data.node_groups
                    if _BUNDLE_NAME.match(base := owned.base_name(ng.name)))
     names += [PARAMS, SURFACE, WORLD]
+    # the viewport preview's own groups (``preview_shafts``, ``preview_sampled``): the Surface, World and preview
+    # bundles use them
+    names += sorted(base for ng in bpy.data.node_groups if ng.get(FOG_PROP) and (base := owned.base_name(ng.name))
+                    .startswith((PREVIEW_SHAFT + " ", SURFACE + " Preview Sampled", WORLD + " Preview Sampled")))
     for pref in rungs.PREFERENCES:
         for kind in rungs.LIGHT_KINDS:
             models = rungs.choose(pref, kind=kind)

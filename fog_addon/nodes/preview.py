@@ -27,6 +27,7 @@ class Shown(NamedTuple):
     models: list               # their models (rungs.LightModels, the Node Groups method's)
     shadows: Any = None        # {light name: shadow_maps.ShadowMap} of those whose shafts it shows (Cycles), or None
     g: float = 0.0             # the fog's anisotropy (the shafts' phase weight)
+    sampled: Any = None        # the TableSpec of the other point lights, sampled one a sample (``preview_sampled``)
 
 
 _forced = []   # non-empty while a render must show the preview (``forced``)

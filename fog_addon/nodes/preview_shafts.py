@@ -18,7 +18,7 @@ from .groups import F, V
 from .sockets import NodeOps
 
 PREVIEW_SAMPLES = shafts.Samples(view_nodes=8, surface_directions=2, surface_nodes=4)   # a sample's nodes
-PREVIEW_SHAFT = "AnalyticFog Preview Shaft"   # "<PREVIEW_SHAFT> <light name>"
+PREVIEW_SHAFT = groups.PREVIEW_SHAFT   # "<PREVIEW_SHAFT> <light name>"
 SKY_LENGTH = 1.0e6   # m: a ray to the sky's length (its far nodes weigh e^{-beta t})
 INPUTS = (("Beta", F), ("Camera", V), ("Direction", V), ("Length", F), ("Light", V), ("Position", V), ("Normal", V),
           ("Jitter", F))

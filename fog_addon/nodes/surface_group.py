@@ -10,7 +10,7 @@ from ..precompute.model import compose, rungs, shading
 from ..precompute.physics.daylight import sunlight
 from ..precompute.physics.point import surface
 from . import (closures, glass_tails, groups, light_bundles, light_groups, passes, preview as preview_,
-               preview_shafts)
+               preview_sampled, preview_shafts)
 from .groups import C, F, V
 from .sockets import NodeOps
 
@@ -155,8 +155,11 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
             ng, preview.lights, preview.models, functools.partial(
                 build_surface_bundle, images, prefix=groups.SURFACE_PREVIEW, shadows=preview.shadows, g_=preview.g),
             shared, False)
-        fogs += [sock for sock in [preview_.behind_switch(ng, params, [node.outputs["Fog"] for node, mods in shown
-                                                                       if any(_lit(mod) for mod in mods)])] if sock]
+        shaders = [node.outputs["Fog"] for node, mods in shown if any(_lit(mod) for mod in mods)]
+        if preview.sampled is not None:   # the other point lights, one sampled a sample
+            shaders.append(preview_sampled.group_node(ng, preview_sampled.build_surface_group(
+                images, preview.sampled, preview.g), shared))
+        fogs += [sock for sock in [preview_.behind_switch(ng, params, shaders)] if sock]
     fog = shading.surface_fog(m, sums, transmit)
     if day is not None and day_table is not None:
         light = m.scale(compose.surface_light(m, sunlight.surface_terms(

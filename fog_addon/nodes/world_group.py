@@ -6,7 +6,8 @@ import bpy
 
 from ..precompute.model import compose, rungs, shading
 from ..precompute.physics.daylight import sunlight
-from . import closures, drivers, groups, light_bundles, light_groups, passes, preview as preview_, preview_shafts
+from . import (closures, drivers, groups, light_bundles, light_groups, passes, preview as preview_,
+               preview_sampled, preview_shafts)
 from .groups import C, F, V
 from .sockets import NodeOps
 
@@ -139,8 +140,11 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
                 build_world_bundle, images, scaled=layer_scale is not None, prefix=groups.WORLD_PREVIEW,
                 shadows=preview.shadows, g_=preview.g),
             {k: v for k, v in shared.items() if k != "Pass Direction"}, False)   # (the preview writes no pass)
-        fogs += [sock for sock in [preview_.behind_switch(ng, params, [node.outputs["Fog"] for node, _ in shown])]
-                 if sock]
+        shaders = [node.outputs["Fog"] for node, _ in shown]
+        if preview.sampled is not None and layer_scale is None:   # the other point lights, one sampled a sample
+            shaders.append(preview_sampled.group_node(ng, preview_sampled.build_world_group(
+                images, preview.sampled, preview.g), shared))
+        fogs += [sock for sock in [preview_.behind_switch(ng, params, shaders)] if sock]
     emission = shading.shade_background(
         m, [m.wrap(node.outputs["Airlight"], vector=True) for node, _ in placed], medium, is_camera)[0]
     if day_glow is not None:

@@ -11,7 +11,7 @@ import json
 import bpy
 
 from .. import methods, shadow_maps, sunsky
-from ..nodes import comp_fog, compositor, dedupe, groups, images, osl, passes, preview, surface_group
+from ..nodes import comp_fog, compositor, dedupe, groups, images, osl, passes, preview, preview_sampled, surface_group
 from ..nodes.light import unwrap_light
 from ..nodes.material import unwrap_material, wrap_material
 from ..nodes.world import unwrap_world, wrap_world
@@ -158,7 +158,7 @@ def remove_fog(scene, progress=progress_.silent):
         ng = bpy.data.node_groups.get(name)
         if ng is not None:
             bpy.data.node_groups.remove(ng)
-    for name in images.table_names():
+    for name in images.table_names() + [preview_sampled.TABLE]:
         img = bpy.data.images.get(name)
         if img is not None:
             bpy.data.images.remove(img)

@@ -277,7 +277,8 @@ def main():
                       "crowded_glow": preview(scene, spec, lamps).fits([glow] + [off] * (len(lamps) - 1)),
                       "few_two_full": preview(scene, spec, few).fits([full, full] + [off] * 18),
                       "few_three_full": preview(scene, spec, few).fits([full] * 3 + [off] * 17),
-                      "few_four_glows": preview(scene, spec, few).fits([glow] * 4 + [off] * 16)}
+                      "few_two_glows": preview(scene, spec, few).fits([glow] * 2 + [off] * 18),
+                      "few_three_glows": preview(scene, spec, few).fits([glow] * 3 + [off] * 17)}
     scene.render.engine = "CYCLES"   # Cycles' lights dim their own direct light: none in the materials
     res["dimming"]["cycles"] = len(dimming_lights(scene, apply.spec_of(scene), lamps)[0])
     res["shared"] = shared()

@@ -1,0 +1,173 @@
+"""The viewport preview's other lights (Cycles and EEVEE): the point lights the preview does not model one by one,
+their glows estimated by sampling one of them per sample.
+
+A shader has no loop over lights, and a group per light costs every sample its kernels (``preview.py``'s budget
+holds two fully modelled lights or four glows).  The viewport adds samples up, so each sample may instead pick one
+light j of the N others with probability p_j and add its glow times 1 / p_j: the sum's unbiased estimate, whose mean
+over the samples is the glow of all N (a Monte Carlo estimator; Cycles' many-lights sampling does the same for
+direct light).  The fog light is linear in the light's intensity, so the light group of one point light
+(``light_groups.build_light``: Sun et al. 2005 Eq. 11 and 17-18 at a surface, fully modelled;
+``build_background_light``: Eq. 12 to the sky) takes the intensity I_j / p_j.
+
+p_j is proportional to I_j e^{-beta d_j} / max(d_j, 1 m), d_j the light's distance to the camera (a glow's light
+over the picture falls as 1 / d, dimmed on its way); j is drawn by Walker's alias method (one uniform number picks a
+column, a second keeps it or takes its alias: two texel reads, no search).  The lights' positions, I_j / p_j and the
+alias table are an image (``TABLE``), written by ``write_table`` when the fog is built and each time the handlers
+follow the scene (``Compositor.update``): a light moved, recoloured or dimmed shows at the next depsgraph update.
+
+Spot and area lights are not sampled (a point's glow is not theirs): the notes name those the preview leaves out.
+"""
+import bpy
+import numpy as np
+
+from ..precompute.core.tables import TableSpec
+from ..precompute.model import sampling
+from ..precompute.model import rungs, shading
+from . import closures, groups, light_groups
+from .groups import C, F, V
+from .sockets import NodeOps
+
+TABLE = "AnalyticFog Preview Sampled Lights"   # ``sampling.table_rows``
+ROWS = sampling.ROWS
+SURFACE_GROUP = groups.SURFACE + " Preview Sampled"
+WORLD_GROUP = groups.WORLD + " Preview Sampled"
+
+
+def sampled(lights):
+    """The ``lights`` the sampling can take: point lights."""
+    return [o for o in lights if o.data.type == "POINT"]
+
+
+def table_spec(count):
+    return TableSpec(TABLE, max(count, 1), ROWS, channels=4)
+
+
+def write_table(scene, lights, beta):
+    """Write the table of ``lights`` (``sampled``'s, as they are now) into the image ``TABLE`` (made if missing or
+    of another size); returns (spec, image), or (None, None) without lights (the image removed)."""
+    img = bpy.data.images.get(TABLE)
+    if not lights:
+        if img is not None:
+            bpy.data.images.remove(img)
+        return None, None
+    from .. import view   # noqa: PLC0415 (view imports the nodes)
+    rows = sampling.table_rows([o.matrix_world.translation for o in lights], view.light_intensities(lights),
+                      scene.camera.matrix_world.translation, beta)
+    spec = table_spec(len(lights))
+    if img is not None and tuple(img.size) != (spec.width, spec.height):
+        bpy.data.images.remove(img)
+        img = None
+    if img is None:
+        img = bpy.data.images.new(TABLE, spec.width, spec.height, alpha=True, float_buffer=True, is_data=True)
+        img.colorspace_settings.name = "Non-Color"
+        img.alpha_mode = "CHANNEL_PACKED"
+        img.use_half_precision = False
+        img[groups.FOG_PROP] = True
+    flat = rows.ravel()
+    old = np.empty(len(flat), np.float32)
+    img.pixels.foreach_get(old)
+    if not np.array_equal(old, flat):   # (an image changed makes the viewport sync it again)
+        img.pixels.foreach_set(flat)
+        img.update()
+    return spec, img
+
+
+def _pick(m, spec, u1, u2):
+    """The column Walker's alias method takes for the uniform numbers ``u1``, ``u2`` in [0, 1), as a texture
+    coordinate (its centre)."""
+    n = float(spec.width)
+    column = m.minimum(m.floor(u1 * n), n - 1.0)
+    u = m.mul_add(column, 1.0 / n, 0.5 / n)
+    alias_row = (2.0 + 0.5) / spec.height
+    keep = m._tap(spec, u, alias_row, 0)
+    alias = m._tap(spec, u, alias_row, 1)
+    taken = m.select(m.less(u2, keep), column, alias)
+    return m.mul_add(taken, 1.0 / n, 0.5 / n)
+
+
+def _light(m, spec, u):
+    """(position, I / p) of the column at the texture coordinate ``u``."""
+    pos = m.combine(*(m._tap(spec, u, 0.5 / spec.height, c) for c in range(3)))
+    inten = m.combine(*(m._tap(spec, u, 1.5 / spec.height, c) for c in range(3)))
+    return pos, inten
+
+
+def _randoms(ng, source):
+    """Two uniform numbers that change at every sample: a White Noise of ``source`` (the pixel filter moves it)."""
+    noise = ng.nodes.new("ShaderNodeTexWhiteNoise")
+    noise.noise_dimensions = "4D"
+    noise.inputs["W"].default_value = 7.31   # (not the shafts' jitter: independent numbers)
+    noise.name = noise.label = "Preview Sampled Jitter"
+    ng.links.new(source, noise.inputs["Vector"])
+    sep = ng.nodes.new("ShaderNodeSeparateColor")
+    ng.links.new(noise.outputs["Color"], sep.inputs[0])
+    return sep.outputs[0], sep.outputs[1]
+
+
+def light_models(g, step=0):
+    """A point light's models at the ladder's ``step`` (``rungs.choose``): fully modelled for the surfaces (its glow
+    and the fog light they reflect), "glow only" for the sky."""
+    return rungs.choose("nodes", step, g, "point")
+
+
+def build_surface_group(images, spec, g):
+    """The Surface group's estimate of the other lights' fog light (shader group, output Fog: an Emission of the
+    sampled light's, fully modelled: Sun et al. 2005 Eq. 19's albedo x (glow + T x reflected fog light) on camera
+    rays, ``shading.sum_lights``; ``light_models``)."""
+    models = light_models(g)
+    ng, gin, gout = groups.new_group(SURFACE_GROUP, [
+        ("Beta", F), ("Albedo", C), ("Position", V), ("Incoming", V), ("View Distance", F), ("Normal", V),
+        ("Diffuse", C), ("Specular", C), ("Glossy Level", F), ("View Transmittance", F), ("Is Camera", F)],
+        [("Fog", "NodeSocketShader")])
+    m = NodeOps(ng, dict(images))
+    s = {x.name: x for x in gin.outputs if x.name}
+    u1, u2 = _randoms(ng, s["Position"])
+    position, intensity = _light(m, spec, _pick(m, spec, m.wrap(u1), m.wrap(u2)))
+    node = ng.nodes.new("ShaderNodeGroup")
+    node.node_tree = light_groups.build_light(models, images)
+    node.name = node.label = "Sampled Light"
+    m.feed(node.inputs["Light"], position)
+    m.feed(node.inputs["Intensity"], intensity)
+    for name in ("Beta", "Position", "Incoming", "View Distance", "Normal", "Diffuse", "Specular", "Glossy Level"):
+        ng.links.new(s[name], node.inputs[name])
+    terms = light_groups.read(m, node, rungs.SURFACE_OUTPUTS, shading.LightTerms)
+    sums = shading.sum_lights(m, [terms], light_groups.medium(m, s["Beta"], s["Albedo"]),
+                              m.wrap(s["View Transmittance"]), m.wrap(s["Is Camera"]))
+    closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", sums.emissions)
+    m.place()
+    return groups.install(ng, SURFACE_GROUP)
+
+
+def build_world_group(images, spec, g):
+    """The World group's estimate of the other lights' glows to the sky (shader group, output Fog: a Background of
+    albedo x the sampled light's glow to infinity x Is Camera)."""
+    models = light_models(g, 1)
+    ng, gin, gout = groups.new_group(WORLD_GROUP, [("Beta", F), ("Albedo", C), ("Camera", V), ("Direction", V),
+                                                   ("Is Camera", F)], [("Fog", "NodeSocketShader")])
+    m = NodeOps(ng, dict(images))
+    s = {x.name: x for x in gin.outputs if x.name}
+    u1, u2 = _randoms(ng, s["Direction"])
+    position, intensity = _light(m, spec, _pick(m, spec, m.wrap(u1), m.wrap(u2)))
+    node = ng.nodes.new("ShaderNodeGroup")
+    node.node_tree = light_groups.build_background_light(models, images)
+    node.name = node.label = "Sampled Light"
+    m.feed(node.inputs["Light"], position)
+    m.feed(node.inputs["Intensity"], intensity)
+    for name in ("Beta", "Camera", "Direction"):
+        ng.links.new(s[name], node.inputs[name])
+    sky = light_groups.read(m, node, rungs.SKY_OUTPUTS, shading.SkyTerms)
+    glow = m.scale(m.wrap(s["Albedo"], vector=True) * m.wrap(sky.background, vector=True), m.wrap(s["Is Camera"]))
+    closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeBackground", [glow])
+    m.place()
+    return groups.install(ng, WORLD_GROUP)
+
+
+def group_node(ng, tree, shared):
+    """A node of ``tree`` in ``ng``, its inputs linked from ``shared`` (name: output socket); its Fog output."""
+    node = ng.nodes.new("ShaderNodeGroup")
+    node.node_tree = tree
+    node.name = node.label = tree.name
+    for sock in node.inputs:
+        if sock.name in shared:
+            ng.links.new(shared[sock.name], sock)
+    return node.outputs["Fog"]

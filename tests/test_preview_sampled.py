@@ -1,0 +1,47 @@
+"""The viewport preview's sampled lights (``precompute/model/sampling.py``, read by ``nodes/preview_sampled.py``): Walker's alias table draws each light with
+the probability its importance asks, and the table's intensities over those probabilities make the one-light
+estimate unbiased: its mean over the draws is every light's sum.  Numpy only (the module's table maths)."""
+import numpy as np
+import pytest
+
+from fog_addon.precompute.model import sampling as ps
+
+
+def drawn(keep, alias):
+    """Each column's probability of coming out of the alias table: 1/N of its own keep plus 1/N of (1 - keep) of
+    every column whose alias it is."""
+    n = len(keep)
+    p = np.asarray(keep, float) / n
+    for j in range(n):
+        p[int(alias[j])] += (1.0 - keep[j]) / n
+    return p
+
+
+@pytest.mark.parametrize("weights", [[1.0], [1.0, 1.0], [5.0, 1.0, 0.0, 2.0], list(np.linspace(0.1, 9.0, 45)),
+                                     [1e-6, 1.0, 1e6]])
+def test_alias_table_draws_each_light_by_its_weight(weights):
+    p, keep, alias = ps.alias_table(weights)
+    w = np.asarray(weights) / np.sum(weights)
+    assert np.allclose(p, w) and np.allclose(drawn(keep, alias), w, atol=1e-12)
+    assert ((0.0 <= keep) & (keep <= 1.0 + 1e-12)).all()
+
+
+def test_one_sampled_light_estimates_the_sum_of_all():
+    """E[I_j / p_j] over j drawn from the table is sum I_j, for each colour (a Monte Carlo draw of 200 000 too)."""
+    rng = np.random.default_rng(3)
+    positions = rng.uniform(-50, 50, (30, 3))
+    intensities = rng.uniform(0.0, 200.0, (30, 3))
+    rows = ps.table_rows(positions, intensities, (0.0, 0.0, 1.7), 0.02)
+    keep, alias = rows[2, :, 0], rows[2, :, 1].astype(int)
+    p = drawn(keep, alias)
+    assert np.allclose((p[:, None] * rows[1, :, :3]).sum(axis=0), intensities.sum(axis=0), rtol=1e-5)
+    assert np.allclose(rows[0, :, :3], positions)
+    u1, u2 = rng.random(200_000), rng.random(200_000)
+    column = np.minimum(np.floor(u1 * len(p)), len(p) - 1).astype(int)
+    j = np.where(u2 < keep[column], column, alias[column])
+    assert np.allclose(rows[1, j, :3].mean(axis=0), intensities.sum(axis=0), rtol=0.02)
+
+
+def test_importance_favours_near_bright_lights_and_dims_far_ones():
+    w = ps.importance([(0, 2, 0), (0, 20, 0), (0, 0.1, 0)], [(1, 1, 1)] * 3, (0, 0, 0), 0.1)
+    assert w[0] > w[1] and w[2] == pytest.approx(w[0] * 2.0 * np.exp(0.2 - 0.01))   # (d < 1 m counts as 1 m)
