@@ -14,7 +14,7 @@ import bpy
 from bpy.app.handlers import persistent
 
 from .methods import compositor as compositor_method
-from .nodes import comp_fog, compositor, dedupe, preview
+from .nodes import comp_fog, compositor, dedupe, preview, preview_sampled
 from . import sunsky, view
 from .ops import apply
 
@@ -101,6 +101,7 @@ def on_save_pre(*_):
         compositor_method.complete_shadows(scene, apply.usable_spec(scene))
         compositor.follow_passes_directory(scene)   # (and writes the fog passes beside its output)
     preview.before_save()   # a farm renders the file as F12 does: without the viewport's preview
+    preview_sampled.pack_table()
 
 
 @persistent

@@ -150,3 +150,49 @@ def test_preview_names_the_spots_it_leaves_out(tmp_path):
               check=False)
     assert r.returncode == 0, (r.stdout + r.stderr)[-2000:]
     assert "preview of the fog leaves out 1 of the 3 lights" in r.stdout, r.stdout[-2000:]
+
+
+SAMPLED_FLOW = r"""
+import json, os, sys, time
+import numpy as np
+import bpy
+import fog_addon
+from fog_addon.nodes import preview_sampled
+from fog_addon.ops import apply
+from fog_addon.precompute.core.spec import FogSpec
+bpy.ops.wm.open_mainfile(filepath=BLEND)
+scene = bpy.context.scene
+fog_addon.register()
+apply.apply(scene, FogSpec(density=0.015, method="compositor"))
+img = bpy.data.images[preview_sampled.TABLE]
+def rows():
+    px = np.empty(len(img.pixels), np.float32); img.pixels.foreach_get(px)
+    return px.reshape(img.size[1], img.size[0], 4)
+before = rows()
+lamp = next(o for o in scene.objects if o.type == "LIGHT" and any(
+    np.allclose(before[0, j, :3], tuple(o.matrix_world.translation), atol=1e-4) for j in range(img.size[0])))
+lamp.location.x += 1.0
+lamp.data.energy *= 2.0
+bpy.context.view_layer.update()
+t = time.perf_counter()
+apply.refresh_lights(scene, this_frame=True)   # what the depsgraph handler calls
+took = time.perf_counter() - t
+after = rows()
+moved = [j for j in range(img.size[0]) if np.allclose(after[0, j, :3], tuple(lamp.matrix_world.translation), atol=1e-4)]
+bpy.ops.wm.save_as_mainfile(filepath=os.path.join(os.getcwd(), "saved.blend"))
+packed = bpy.data.images[preview_sampled.TABLE].packed_file is not None
+apply.remove_fog(scene)
+print(json.dumps({"moved": len(moved), "changed": bool(not np.array_equal(before, after)), "seconds": took,
+                  "packed": packed, "removed": preview_sampled.TABLE not in bpy.data.images,
+                  "groups_left": [g.name for g in bpy.data.node_groups if "Preview" in g.name]}))
+"""
+
+
+def test_sampled_lights_follow_the_scene(tmp_path):
+    """A sampled lamp moved and brightened reaches the table at the handlers' refresh (the boulevard's 43 sampled
+    lamps); the saved file keeps the table; removing the fog removes it and the preview's groups."""
+    blend = h.scene_blend("boulevard", tmp_path)
+    out = h.bpy_flow(SAMPLED_FLOW.replace("BLEND", repr(str(blend))), tmp_path)
+    assert out["moved"] == 1 and out["changed"], out
+    assert out["packed"] and out["removed"] and out["groups_left"] == [], out
+    print(f"the refresh took {out['seconds']:.3f} s")

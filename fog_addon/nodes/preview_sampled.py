@@ -72,6 +72,14 @@ def write_table(scene, lights, beta):
     return spec, img
 
 
+def pack_table():
+    """Keep the table in the saved file (Blender's packing of the float image, a few hundred bytes a light): a file
+    opened again shows the sampled lights before the handlers first write it (``write_table``)."""
+    img = bpy.data.images.get(TABLE)
+    if img is not None:
+        img.pack()
+
+
 def _pick(m, spec, u1, u2):
     """The column Walker's alias method takes for the uniform numbers ``u1``, ``u2`` in [0, 1), as a texture
     coordinate (its centre)."""
