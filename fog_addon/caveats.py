@@ -20,18 +20,20 @@ _SEE_THROUGH = ("ShaderNodeBsdfTransparent", "ShaderNodeBsdfGlass", "ShaderNodeB
                 "ShaderNodeBsdfTranslucent", "ShaderNodeBsdfHairPrincipled", "ShaderNodeBsdfHair")
 
 
-def see_through(materials, objects):
+def see_through(materials, objects, served=()):
     """Names of ``materials`` that let the camera see through them (Transparent, Glass, Refraction,
     Translucent or hair BSDFs, a Principled BSDF with transmission or alpha below 1) on ``objects`` the camera
-    sees, each once."""
+    sees, each once; ``served``: node types left out (what lies past them is shaded: a Glass BSDF in Cycles,
+    ``glass_tails.py``)."""
     seen = {slot.material for obj in objects if obj.visible_camera
             for slot in getattr(obj, "material_slots", ()) if slot.material is not None}
     names = []
     for mat in materials:
         if mat not in seen or mat.node_tree is None:
             continue
-        if any(not node.mute and (node.bl_idname in _SEE_THROUGH or (node.bl_idname == "ShaderNodeBsdfPrincipled"
-                                                                        and _principled_see_through(node)))
+        if any(not node.mute and node.bl_idname not in served and (
+                node.bl_idname in _SEE_THROUGH or (node.bl_idname == "ShaderNodeBsdfPrincipled"
+                                                   and _principled_see_through(node)))
                for node in mat.node_tree.nodes):
             names.append(mat.name)
     return names
@@ -218,10 +220,11 @@ def glass_note(materials, objects):
     if not names:
         return None
     shown = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
-    return (f"see-through materials ({shown}): in Cycles with the Node Groups method, the fog behind a Glass BSDF "
-            "(straight through the pane) and in sharp mirrors is shaded along the path (a mirror shows lamps "
-            "blurred by about 2 degrees); rough glass, Principled transmission, glass mixed with other shaders, "
-            "the OSL and Compositor methods and EEVEE show only the fog in front of the first surface")
+    return (f"see-through materials ({shown}): in Cycles with the Node Groups and Compositor methods, the fog "
+            "behind a Glass BSDF (straight through the pane) and in sharp mirrors is shaded along the path (a mirror "
+            "shows lamps blurred by about 2 degrees; with the Compositor, of the 8 brightest lights); rough glass, "
+            "Principled transmission, glass mixed with other shaders, the OSL method and EEVEE show only the fog in "
+            "front of the first surface")
 
 
 EEVEE_CLIP_RATIO = 1e7   # EEVEE's depth loses its way beyond this clip end / clip start (blender-facts.md)

@@ -28,33 +28,48 @@ SCENE = h.ROOT / "tests" / "scenes" / "glass_mirror.py"
 LIMITS = {"glass": (0.015, 0.015), "glass_box": (0.03, 0.03), "mirror": (0.12, 0.10)}
 
 
-def _render(case, mode, out, samples):
-    h.run([SCENE, case, mode, out, samples], timeout=1200)
+def _render(case, mode, out, samples, method="nodes"):
+    h.run([SCENE, case, mode, out, samples, method], timeout=1200)
     return imageio.read_rgb(out), np.load(out.with_suffix(".npz"))["pane"]
 
 
-def _errors(case, tmp_path):
-    ref, pane = _render(case, "reference", tmp_path / f"{case}_ref.exr", 2048)
-    fog, _ = _render(case, "fog", tmp_path / f"{case}_fog.exr", 64)
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """reference(case): the case's path-traced picture and pane mask, rendered once per module."""
+    cache, folder = {}, tmp_path_factory.mktemp("glass_references")
+
+    def get(case):
+        if case not in cache:
+            cache[case] = _render(case, "reference", folder / f"{case}_ref.exr", 2048)
+        return cache[case]
+    return get
+
+
+def _errors(case, tmp_path, reference, method="nodes"):
+    ref, pane = reference(case)
+    fog, _ = _render(case, "fog", tmp_path / f"{case}_fog.exr", 64, method)
     lum = ref[..., 0]
     r, c = np.unravel_index(np.argmax(lum), lum.shape)
     keep = np.ones(lum.shape, bool)
     keep[max(r - 1, 0):r + 2, max(c - 1, 0):c + 2] = False
     inside = compare.metrics(fog, ref, mask=pane & keep)
     frame = compare.metrics(fog, ref, mask=keep)
-    print(case, "pane", inside, "frame", frame)
+    print(case, method, "pane", inside, "frame", frame)
     return inside, frame
 
 
+@pytest.mark.parametrize("method", ["nodes", "compositor"])
 @pytest.mark.parametrize("case", [
     pytest.param("glass", marks=pytest.mark.slow(reason="the default tier's pane is the IOR 1.5 box, which refracts")),
     pytest.param("mirror", marks=pytest.mark.slow(reason="the default tier's glass box holds the specular paths' "
                                                        "contract; the mirror's 16 s go to the slow tier")),
     "glass_box"])
-def test_fog_past_glass_and_mirrors(case, tmp_path):
+def test_fog_past_glass_and_mirrors(case, method, tmp_path, reference):
     """Against Cycles' path-traced World volume: the fog behind the pane and in the mirror (its glow to the
-    wall and to the sky, the wall's extinction and fog light) within LIMITS; nothing non-finite."""
-    inside, frame = _errors(case, tmp_path)
+    wall and to the sky, the wall's extinction and fog light) within LIMITS; nothing non-finite.  With the
+    Compositor method the materials shade what lies past the pane (``methods.compositor._tails``): the same
+    figures as the Node Groups' (measured 2026-11-29: 0.36 %, 1.56 %, 8.7 %; 94.6 % in the glass box before)."""
+    inside, frame = _errors(case, tmp_path, reference, method)
     pane_limit, frame_limit = LIMITS[case]
     assert inside["n_nonfinite"] == 0 and frame["n_nonfinite"] == 0
     assert inside["rel_rmse"] <= pane_limit, inside

@@ -28,8 +28,8 @@ What the scene needs comes first:
   alone gives them a glow;
 * spot or area lights with Dense Fog: the compositor, which alone gives them their multiply scattered light
   (``rungs.spot_multiple_rungs``);
-* surfaces the compositor's one point per pixel would get wrong (transparent, glass or refracting
-  materials on objects the camera sees, depth of field, motion blur): the node groups, unless their
+* surfaces the compositor's one point per pixel would get wrong (transparent or refracting materials on
+  objects the camera sees, a Glass BSDF in EEVEE, depth of field, motion blur): the node groups, unless their
   predicted cost exceeds SOFT_COST_LIMIT; then the compositor, and the choice says what it gets wrong.
 """
 from .. import caveats, sunsky, view
@@ -95,7 +95,9 @@ def _soft_needs(scene, materials):
     layers = unfogged_layers(scene)
     if layers:
         needs.append(f"view layers the composite does not show ({caveats.listed(layers)})")
-    see = caveats.see_through(materials, scene.objects)
+    # (a Glass BSDF in Cycles: both methods shade what lies past it, ``compositor._tails``)
+    see = caveats.see_through(materials, scene.objects,
+                              served=("ShaderNodeBsdfGlass",) if scene.render.engine == "CYCLES" else ())
     if see:
         shown = ", ".join(see[:3]) + (f" and {len(see) - 3} more" if len(see) > 3 else "")
         needs.append(f"see-through materials ({shown})")

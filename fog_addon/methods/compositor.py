@@ -15,7 +15,7 @@ from ..nodes import (budgets, comp_daylight, comp_fog, comp_shafts, compositor, 
                      preview as preview_, preview_sampled, surface_group,
                      world_group)
 from .. import caveats, shadow_maps, sunsky, view
-from ..precompute.model import predict, rungs
+from ..precompute.model import predict, rungs, sampling
 from ..precompute.physics.shafts import shafts
 from .base import Method
 
@@ -93,7 +93,7 @@ class Compositor(Method):
         preview, sampled_images = _preview(scene, spec, plan, maps)
         images = dict(images, **sampled_images)
         surface_group.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs,
-                                    tails=caveats.specular_paths(bpy.data.materials), day=day,
+                                    tails=_tails(scene, spec, plan), day=day,
                                     day_dims=dims and not daylit, day_exact=not daylit, preview=preview)
         images = comp_fog.build_fog_group(scene, plan.in_groups, plan.grouped_models, images,
                                           view.full_windows(plan.in_groups) if plan.partial else plan.windows,
@@ -199,6 +199,23 @@ def _preview(scene, spec, plan, maps):
     table, img = preview_sampled.write_table(scene, sampled_lights(plan), spec.beta_per_unit)
     return (preview_.Shown(lights, models, shadows or None, spec.anisotropy, table),
             {table.name: img} if table is not None else {})
+
+
+TAIL_LIGHTS = 8   # the lights whose glows the materials shade past glass and mirrors (the most important first)
+
+
+def _tails(scene, spec, plan):
+    """(lights, models) of the fog past glass and sharp mirrors (``glass_tails.place_tails``, Cycles: the compositor
+    sees only a pixel's first surface): the glows along the segments and the fog light the surfaces there reflect,
+    of the TAIL_LIGHTS lights of most importance (``sampling.importance``) with the Node Groups method's full
+    models, or False where the scene has no such path or in EEVEE."""
+    if scene.render.engine != "CYCLES" or not plan.in_groups or not caveats.specular_paths(bpy.data.materials):
+        return False
+    weight = sampling.importance([o.matrix_world.translation for o in plan.in_groups],
+                                 view.light_intensities(plan.in_groups), scene.camera.matrix_world.translation,
+                                 spec.beta_per_unit)
+    kept = [plan.in_groups[i] for i in np.argsort(-weight, kind="stable")[:TAIL_LIGHTS]]
+    return kept, [rungs.choose("nodes", 0, spec.anisotropy, view.light_kind(o)) for o in kept]
 
 
 def sampled_lights(plan):

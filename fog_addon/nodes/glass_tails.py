@@ -22,7 +22,7 @@ def specular_segment(m, path):
     return (1.0 - m.wrap(path.outputs["Is Camera Ray"])) * singular * first
 
 
-def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp, shared, below):
+def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp, shared, below, extra=()):
     """The Surface group's See Through shader (Cycles only: ``material.py`` adds it to the Cycles output):
     the glows of the segments past a glass pane or a mirror, by differences of tails.
 
@@ -43,7 +43,9 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
     * a mirror (Principled, roughness 0): its glossy fog light (``shading.shade_point``'s Phong lobe of
       the highest exponent, which is a blurred tail to infinity) already is.
 
-    ``below``: the Surface group's light bundles placed (their rows).  Returns the bundle groups built.
+    ``below``: the Surface group's light bundles placed (their rows).  ``extra``: more shader outputs summed into See
+    Through (the fog light the surfaces past glass reflect, where the materials hold no lights: the Compositor
+    method's, ``surface_group.build_surface``).  Returns the bundle groups built.
     """
     kept = [(light, mod) for light, mod in zip(lights, models)
             if any(o.computed(mod) for o in rungs.SKY_OUTPUTS if o.colour)]
@@ -72,7 +74,7 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
                                         -300 * (below + len(fogs)), [(src, n) for n, src in inputs.items()])
         fogs.append(node.outputs["Fog"])
     out = next(n for n in ng.nodes if n.bl_idname == "NodeGroupOutput").inputs[SEE_THROUGH]
-    closures.shader_tree(ng, out, fogs)
+    closures.shader_tree(ng, out, fogs + list(extra))
     # only on a specular segment, or on a camera ray that meets glass: a factor of exactly 0 elsewhere, where
     # Cycles' SVM jumps over the tails (``closures.camera_rays_only``)
     has_glass = m.less(0.0, m.dot(glass, m.combine(1.0, 1.0, 1.0)))

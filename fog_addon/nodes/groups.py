@@ -40,8 +40,9 @@ WORLD_LIGHTS = WORLD + " Lights"
 SURFACE_TAILS = SURFACE + " Tails"     # bundles of the glows past glass and mirrors (``glass_tails.build_tail_bundle``)
 SURFACE_PREVIEW = SURFACE + " Preview Lights"   # bundles of the viewport's preview (``nodes/preview.py``)
 WORLD_PREVIEW = WORLD + " Preview Lights"
+SURFACE_SEGMENT = SURFACE + " Segment Lights"   # the fog light a surface reflects on a segment past glass (Compositor)
 PREVIEW_SHAFT = "AnalyticFog Preview Shaft"   # "<PREVIEW_SHAFT> <light name>" (``preview_shafts.py``)
-_BUNDLES = (SURFACE_LIGHTS, WORLD_LIGHTS, SURFACE_TAILS, SURFACE_PREVIEW, WORLD_PREVIEW)
+_BUNDLES = (SURFACE_LIGHTS, WORLD_LIGHTS, SURFACE_TAILS, SURFACE_PREVIEW, WORLD_PREVIEW, SURFACE_SEGMENT)
 _BUNDLE_NAME = re.compile(rf"^({'|'.join(re.escape(p) for p in _BUNDLES)}) \d+-\d+$")
 
 FOG_PROP = "analytic_fog"   # custom-property key marking data the fog made or changed

@@ -82,7 +82,8 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     fog passes (``passes.py``), weighted by the Opacity input (white: opaque).  ``extra(group)``: adds
     nodes of its own (the Compositor method's AOVs, ``comp_fog.add_surface_aovs``).  ``tails``: the glows
     past glass and mirrors (See Through, ``glass_tails.place_tails``), only where the scene has them
-    (``caveats.specular_paths``).  ``day(m, beta)``: the fog layer's ``sunlight.Daylight`` in this tree
+    (``caveats.specular_paths``): of ``lights`` with ``models``, or of the (lights, models) ``tails`` gives (the
+    Compositor method's, whose materials hold no lights).  ``day(m, beta)``: the fog layer's ``sunlight.Daylight`` in this tree
     (``sunsky.daylight``), or None for fog that fills all space: the camera segment's transmittance is then the
     layer's, and the user's shader on every ray takes the sun's and the sky's dimming (``sunlight.direct_dimming``);
     with ``day_table`` (the fog light's TableSpec, its image in ``images``) camera rays also get the sun's and the
@@ -181,9 +182,18 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
                            light_weighted=True)
     else:
         closures.camera_rays_only(ng, gout.inputs["Fog"], fogged.sock)
-    tails = glass_tails.place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
+    tail_lights, tail_models = tails if isinstance(tails, tuple) else (lights, models)
+    segment_lights, segment_trees = [], []
+    if isinstance(tails, tuple):   # the materials hold no lights: the fog light surfaces past glass reflect
+        placed_segment, segment_trees, _ = light_bundles.place_bundles(
+            ng, tail_lights, tail_models, functools.partial(build_surface_bundle, images,
+                                                            prefix=groups.SURFACE_SEGMENT),
+            dict(shared, **{"Is Camera": segment.sock}), False)
+        segment_lights = [node.outputs["Fog"] for node, _ in placed_segment]
+    tails = glass_tails.place_tails(m, ng, tail_lights, tail_models, images, geo, g, segment, is_camera, t_vp,
                                     {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"],
-                                     "Position": geo.outputs["Position"]}, len(placed)) if tails else []
+                                     "Position": geo.outputs["Position"]}, len(placed),
+                                    extra=segment_lights) + segment_trees if tails else []
     if extra is not None:   # before it replaces the group the materials use: adding a node there costs more
         extra(ng)
     m.place()

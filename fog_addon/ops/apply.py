@@ -75,6 +75,7 @@ def apply(scene, spec, objects=None, progress=progress_.silent):
     """
     spec = spec.validated()
     check_camera(scene.camera)
+    _evaluate(scene)
     lights, notes = fog_lights(scene)
     method, reason = methods.resolve(scene, spec, lights, scene_materials(scene, objects))
     check_method(scene, spec, method)
@@ -121,6 +122,13 @@ def apply(scene, spec, objects=None, progress=progress_.silent):
     surface = bpy.data.node_groups[groups.SURFACE]
     surface[CAVEATS_KEY] = json.dumps(notes)
     return skipped + [(scene.name, n) for n in notes]
+
+
+def _evaluate(scene):
+    """Bring the objects' world matrices up to date (a script that made or moved objects and adds fog at once: the
+    lights' positions and the camera's are read from them, not from drivers)."""
+    layer = bpy.context.view_layer if bpy.context.scene == scene else scene.view_layers[0]
+    layer.update()
 
 
 def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="nodes", objects=None,

@@ -48,6 +48,13 @@ def glass(scene):
     bpy.data.objects["glossy"].material_slots[0].material = mat
 
 
+def curtain(scene):
+    """A see-through material neither method shades past but the node groups see through (alpha 0.5)."""
+    mat = bpy.data.materials.new("Net Curtain")
+    mat.node_tree.nodes["Principled BSDF"].inputs["Alpha"].default_value = 0.5
+    bpy.data.objects["glossy"].material_slots[0].material = mat
+
+
 def main():
     fog_addon.register()
     scene = scene_with(1)
@@ -69,11 +76,15 @@ def main():
     glass(scene)
     RES["cycles_1_glass"] = choice(scene, shafts=False)
     RES["cycles_1_glass_shafts"] = choice(scene)
+    curtain(scene)
+    RES["cycles_1_curtain"] = choice(scene, shafts=False)
 
     scene = scene_with(25)
     RES["cycles_25"] = choice(scene, shafts=False)
     glass(scene)
     RES["cycles_25_glass"] = choice(scene, shafts=False)
+    curtain(scene)
+    RES["cycles_25_curtain"] = choice(scene, shafts=False)
 
     scene = scene_with(64, "BLENDER_EEVEE")
     RES["eevee_64"] = choice(scene)

@@ -1,11 +1,11 @@
-"""Lamps seen through a glass pane and in a mirror, fogged (Node Groups, Cycles) or path-traced.
+"""Lamps seen through a glass pane and in a mirror, fogged (Node Groups or Compositor, Cycles) or path-traced.
 
-    python tests/scenes/glass_mirror.py CASE MODE OUT.exr [SAMPLES]
+    python tests/scenes/glass_mirror.py CASE MODE OUT.exr [SAMPLES] [METHOD]
 
 CASE: ``glass`` (a Glass BSDF plane of IOR 1.0), ``glass_box`` (a Glass BSDF box 2 cm thick, IOR 1.5) or
 ``mirror`` (a Principled BSDF, metallic 1, roughness 0, white).  MODE: ``reference`` (Cycles' World volume,
 Volume Scatter white of density BETA, single scattering), ``fog`` (the add-on's fog, Method Node Groups) or
-``none`` (no fog at all).  Writes OUT.exr and OUT.npz (``pane``: the pixels whose centre ray meets the pane or
+``none`` (no fog at all).  METHOD: the fog's method (default ``nodes``; ``compositor``).  Writes OUT.exr and OUT.npz (``pane``: the pixels whose centre ray meets the pane or
 the mirror, by ray-plane intersection in numpy).
 
 Camera at the origin looking along +y, 96x54 px, 35 mm.  The pane (1.6 x 1.2 m) stands 3 m away, left of
@@ -145,7 +145,7 @@ def configure(scene, samples):
     measure.set_samples(scene, samples)
 
 
-def main(case, mode, out, samples=None):
+def main(case, mode, out, samples=None, method="nodes"):
     out = pathlib.Path(out)
     scene, cam, plane = build(case)
     if mode == "reference":
@@ -155,10 +155,12 @@ def main(case, mode, out, samples=None):
         measure.set_cycles_cpu(scene)
         measure.set_pixel_centre_filter(scene)
         scene.cycles.use_denoising = False
-        if mode == "fog":
-            from fog_addon.ops import apply
-            apply.apply_fog(scene, BETA, method="nodes")
-    configure(scene, int(samples or (2048 if mode == "reference" else 64)))
+    configure(scene, int(samples or (2048 if mode == "reference" else 64)))   # (first: the casters as rendered)
+    if mode == "fog":
+        import fog_addon
+        from fog_addon.ops import apply
+        fog_addon.register()
+        apply.apply_fog(scene, BETA, method=method)
     measure.render_to_file(scene, str(out))
     np.savez(out.with_suffix(".npz"), pane=pane_mask(cam, plane))
 
