@@ -53,7 +53,8 @@ def specular_paths(materials):
         for node in mat.node_tree.nodes:
             if node.mute:
                 continue
-            if node.bl_idname == "ShaderNodeBsdfGlass":
+            if node.bl_idname == "ShaderNodeBsdfGlass" or (node.bl_idname == "ShaderNodeBsdfPrincipled"
+                                                           and sharp_transmission(node)):
                 return True
             rough = node.inputs.get("Roughness")
             if rough is None or rough.is_linked or rough.default_value > SHARP:
@@ -64,6 +65,14 @@ def specular_paths(materials):
                     and (metal.is_linked or metal.default_value > 0.0)):
                 return True
     return False
+
+
+def sharp_transmission(node):
+    """True for a Principled BSDF that lets light through (Transmission Weight linked or above 0) with a roughness
+    of at most SHARP, unlinked: glass the fog shades past (``glass_tails.py``)."""
+    weight, rough = node.inputs.get("Transmission Weight"), node.inputs.get("Roughness")
+    return (weight is not None and (weight.is_linked or weight.default_value > 0.0) and rough is not None
+            and not rough.is_linked and rough.default_value <= SHARP)
 
 
 def _principled_see_through(node):
@@ -221,10 +230,10 @@ def glass_note(materials, objects):
         return None
     shown = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
     return (f"see-through materials ({shown}): in Cycles with the Node Groups and Compositor methods, the fog "
-            "behind a Glass BSDF (straight through the pane) and in sharp mirrors is shaded along the path (a mirror "
-            "shows lamps blurred by about 2 degrees; with the Compositor, of the 8 brightest lights); rough glass, "
-            "Principled transmission, glass mixed with other shaders, the OSL method and EEVEE show only the fog in "
-            "front of the first surface")
+            "behind a Glass BSDF or a Principled BSDF of roughness 0 that lets light through (straight through the "
+            "pane) and in sharp mirrors is shaded along the path (a mirror shows lamps blurred by about 2 degrees; "
+            "with the Compositor, of the 8 brightest lights); rough glass, glass mixed with other shaders, the OSL "
+            "method and EEVEE show only the fog in front of the first surface")
 
 
 EEVEE_CLIP_RATIO = 1e7   # EEVEE's depth loses its way beyond this clip end / clip start (blender-facts.md)

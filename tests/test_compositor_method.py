@@ -12,7 +12,7 @@ from fog_scenes import render_harness as h
 pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
 
 FOG_AOVS = ["Fog Coverage", "Fog Position", "Fog Normal", "Fog Base Color", "Fog Metallic", "Fog Roughness",
-            "Fog Specular IOR Level"]
+            "Fog Specular IOR Level", "Fog Transmission Weight"]
 
 
 @pytest.fixture(scope="module")

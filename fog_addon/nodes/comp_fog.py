@@ -55,14 +55,14 @@ from .sockets import NodeOps
 FOG_GROUP = f"{owned.PREFIX} Compositor Fog"     # the compositor group that adds the fog's light
 AOVS = (("Fog Coverage", "VALUE"), ("Fog Position", "COLOR"), ("Fog Normal", "COLOR"),
         ("Fog Base Color", "COLOR"), ("Fog Metallic", "VALUE"), ("Fog Roughness", "VALUE"),
-        ("Fog Specular IOR Level", "VALUE"))
+        ("Fog Specular IOR Level", "VALUE"), ("Fog Transmission Weight", "VALUE"))
 # EEVEE writes AOVs as half floats accumulated with a loss (a constant 37.123 read back 37.03-37.09 at 16
 # samples, README "The Compositor method") and clamps negatives: its surface point is the Depth pass's (float32,
 # the sample nearest the pixel's centre) along the pixel's ray, with the mean View Z Depth where they disagree
 # (``pixel.depth_surface``)
 EEVEE_AOVS = tuple(("Fog Depth", "VALUE") if name == "Fog Position" else (name, kind) for name, kind in AOVS)
 AOV_ROLE = "Compositor AOV"   # the Surface group's AOV Output nodes: "<AOV_ROLE> <AOV name>"
-PRINCIPLED = ("Base Color", "Metallic", "Roughness", "Specular IOR Level")
+PRINCIPLED = ("Base Color", "Metallic", "Roughness", "Specular IOR Level", "Transmission Weight")
 
 
 def aovs(engine):
@@ -252,7 +252,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     pix = uv * size if peak is not None else m.wrap((0.0, 0.0, 0.0))
     diffuse, specular, level = surface.principled_to_phong(
         m, m.scale(p["Fog Base Color"], inv), p["Fog Metallic"] * inv, p["Fog Roughness"] * inv,
-        p["Fog Specular IOR Level"] * inv, m.dot(incoming, normal))
+        p["Fog Specular IOR Level"] * inv, m.dot(incoming, normal), transmission=p["Fog Transmission Weight"] * inv)
     shared = {"Beta": beta, "Camera": cam, "Incoming": incoming, "View Distance": d_vp, "Direction": direction,
               "Pixel": pix, "Corner": corner, "Across": across, "Up": up, "Size": size, "Glow Origin": cam,
               "Glow Length": d_vp}

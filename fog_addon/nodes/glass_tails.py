@@ -7,7 +7,10 @@ from . import closures, groups, light_bundles, light_groups
 from .groups import C, F, V
 from .sockets import NodeOps
 
-GLASS_COLOR, GLASS_IOR = "Glass Color", "Glass IOR"   # the Surface group's inputs for a Glass BSDF (material.py)
+GLASS_COLOR, GLASS_IOR = "Glass Color", "Glass IOR"   # the Surface group's inputs for glass (material.py)
+GLASS_WEIGHT = "Glass Weight"       # the share that passes (a Principled BSDF's Transmission Weight; 1 for a Glass BSDF)
+GLASS_MIRRORED = "Glass Mirrored"   # 1: the tails take the mirrored segment (a Glass BSDF); 0: the material's own
+#                                     glossy fog light is its reflection (a Principled BSDF)
 SEE_THROUGH = "See Through"   # its output: the glows past glass and mirrors (Cycles; ``place_tails``)
 
 
@@ -40,6 +43,9 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
       (the segment's direction through a thin pane, exact for IOR 1 and for a parallel slab up to its
       thickness) and colour x F about the mirrored direction, F the dielectric Fresnel factor (Fresnel
       node, as Cycles' glass);
+    * a Principled BSDF of roughness 0 with transmission (Blender's usual glass; ``GLASS_WEIGHT`` its Transmission
+      Weight, ``GLASS_MIRRORED`` 0): colour x weight x (1 - F) straight on; its reflection is its own glossy fog
+      light, as a mirror's;
     * a mirror (Principled, roughness 0): its glossy fog light (``shading.shade_point``'s Phong lobe of
       the highest exponent, which is a blurred tail to infinity) already is.
 
@@ -55,7 +61,7 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
     fresnel.location = (-600, 600)
     ng.links.new(g[GLASS_IOR], fresnel.inputs["IOR"])
     f = m.wrap(fresnel.outputs[0])
-    glass = m.wrap(g[GLASS_COLOR], vector=True)
+    glass = m.scale(m.wrap(g[GLASS_COLOR], vector=True), m.wrap(g[GLASS_WEIGHT]))
     incoming = m.wrap(geo.outputs["Incoming"], vector=True)
     seg3 = m.combine(segment, segment, segment)
     # the tails' own copy of Position (the same value): the light groups' nodes that read Position would
@@ -65,7 +71,8 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
     inputs = dict(shared, **{"Position": position.sock, "Straight": m.scale(incoming, -1.0).sock,
                              "Mirrored": shading.mirror(m, incoming, m.wrap(geo.outputs["Normal"], vector=True)).sock,
                              "Straight Weight": (m.scale(glass, 1.0 - f) - seg3).sock,
-                             "Mirrored Weight": m.scale(glass, f).sock, "Transmittance": t_vp.sock})
+                             "Mirrored Weight": m.scale(glass, f * m.wrap(g[GLASS_MIRRORED])).sock,
+                             "Transmittance": t_vp.sock})
     fogs, trees = [], []
     for first, some, mods in light_bundles.split([light for light, _ in kept], [mod for _, mod in kept]):
         tree = build_tail_bundle(images, first, some, mods)

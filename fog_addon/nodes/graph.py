@@ -30,7 +30,7 @@ from . import groups, owned
 TARGETS = ("CYCLES", "EEVEE")
 WHITE = (1.0, 1.0, 1.0)
 BLACK = (0.0, 0.0, 0.0)
-_PRINCIPLED_INPUTS = ("Base Color", "Metallic", "Roughness", "Specular IOR Level")
+_PRINCIPLED_INPUTS = ("Base Color", "Metallic", "Roughness", "Specular IOR Level", "Transmission Weight")
 EMITTERS = ("ShaderNodeEmission", "ShaderNodeBackground")
 _OUTPUT_TYPES = ("ShaderNodeOutputMaterial", "ShaderNodeOutputWorld")
 _PASS_THROUGH = ("ShaderNodeBsdfTransparent", "ShaderNodeHoldout")

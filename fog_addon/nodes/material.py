@@ -72,6 +72,7 @@ The weights, the opacity o and the emission given back are built by
 """
 import bpy
 
+from .. import caveats
 from . import glass_tails, graph, groups, overrides, owned, passes
 from .graph import BLACK, TARGETS, WHITE
 from .sockets import NodeOps, Val
@@ -300,14 +301,26 @@ def _build(tree, anchor, outs, srcs, kinds, copies):
 
 
 def _glass_copies(srcs):
-    """[(Surface group input, value or source socket)] for a Glass BSDF that is a material's shader (its
-    Color and IOR: ``glass_tails.place_tails`` adds the glow past it in Cycles), else []."""
+    """[(Surface group input, value or source socket)] for glass that is a material's shader: a Glass BSDF (its
+    Color and IOR), or a Principled BSDF of roughness 0 that lets light through (its Base Color, IOR and
+    Transmission Weight; its reflection is its own glossy fog light): ``glass_tails.place_tails`` adds the fog past
+    it in Cycles.  Else []."""
+    def value(sock):
+        v = graph.source(sock)
+        return v if v is not None else (tuple(sock.default_value)[:3] if sock.type == "RGBA" else
+                                         float(sock.default_value))
     for src in srcs.values():
-        if src is not None and src.node.bl_idname == "ShaderNodeBsdfGlass":
-            node = src.node
-            colour = graph.source(node.inputs["Color"]) or tuple(node.inputs["Color"].default_value)[:3]
-            ior = graph.source(node.inputs["IOR"]) or float(node.inputs["IOR"].default_value)
-            return [(glass_tails.GLASS_COLOR, colour), (glass_tails.GLASS_IOR, ior)]
+        if src is None:
+            continue
+        node = src.node
+        if node.bl_idname == "ShaderNodeBsdfGlass":
+            return [(glass_tails.GLASS_COLOR, value(node.inputs["Color"])),
+                    (glass_tails.GLASS_IOR, value(node.inputs["IOR"]))]
+        if node.bl_idname == "ShaderNodeBsdfPrincipled" and caveats.sharp_transmission(node):
+            return [(glass_tails.GLASS_COLOR, value(node.inputs["Base Color"])),
+                    (glass_tails.GLASS_IOR, value(node.inputs["IOR"])),
+                    (glass_tails.GLASS_WEIGHT, value(node.inputs["Transmission Weight"])),
+                    (glass_tails.GLASS_MIRRORED, 0.0)]
     return []
 
 

@@ -102,13 +102,16 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     """
     ng, gin, gout = groups.new_group(groups.SURFACE, [
         ("Base Color", C), ("Metallic", F), ("Roughness", F), ("Specular IOR Level", F), (passes.OPACITY, C),
-        (glass_tails.GLASS_COLOR, C), (glass_tails.GLASS_IOR, F),
+        (glass_tails.GLASS_COLOR, C), (glass_tails.GLASS_IOR, F), (glass_tails.GLASS_WEIGHT, F),
+        (glass_tails.GLASS_MIRRORED, F), ("Transmission Weight", F),
     ], [("Fog", "NodeSocketShader"), ("Emission", C), ("Transmittance", F), ("Direct Attenuation", F),
         ("Cycles Mix Factor", F), ("EEVEE Mix Factor", F), (glass_tails.SEE_THROUGH, "NodeSocketShader")])
     items = {i.name: i for i in ng.interface.items_tree if i.item_type == "SOCKET" and i.in_out == "INPUT"}
     items[passes.OPACITY].default_value = (1.0, 1.0, 1.0, 1.0)
     items[glass_tails.GLASS_COLOR].default_value = (0.0, 0.0, 0.0, 1.0)
     items[glass_tails.GLASS_IOR].default_value = 1.5
+    items[glass_tails.GLASS_WEIGHT].default_value = 1.0
+    items[glass_tails.GLASS_MIRRORED].default_value = 1.0
     m = NodeOps(ng, images)
     params = ng.nodes.new("ShaderNodeGroup")
     params.node_tree = bpy.data.node_groups[groups.PARAMS]
@@ -119,7 +122,8 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     diffuse, specular, level = surface.principled_to_phong(
         m, m.wrap(g["Base Color"], vector=True), m.wrap(g["Metallic"]), m.wrap(g["Roughness"]),
         m.wrap(g["Specular IOR Level"]), m.dot(m.wrap(geo.outputs["Incoming"], vector=True),
-                                               m.wrap(geo.outputs["Normal"], vector=True)))
+                                               m.wrap(geo.outputs["Normal"], vector=True)),
+        transmission=m.wrap(g["Transmission Weight"]))
     is_camera = m.wrap(path.outputs["Is Camera Ray"])
     segment = glass_tails.specular_segment(m, path)
     fogged = is_camera + segment   # the rays the fog shades: 0 or 1

@@ -2,7 +2,8 @@
 
     python tests/scenes/glass_mirror.py CASE MODE OUT.exr [SAMPLES] [METHOD]
 
-CASE: ``glass`` (a Glass BSDF plane of IOR 1.0), ``glass_box`` (a Glass BSDF box 2 cm thick, IOR 1.5) or
+CASE: ``glass`` (a Glass BSDF plane of IOR 1.0), ``glass_box`` (a Glass BSDF box 2 cm thick, IOR 1.5),
+``principled_box`` (the same box of a Principled BSDF, Transmission 1, roughness 0) or
 ``mirror`` (a Principled BSDF, metallic 1, roughness 0, white).  MODE: ``reference`` (Cycles' World volume,
 Volume Scatter white of density BETA, single scattering), ``fog`` (the add-on's fog, Method Node Groups) or
 ``none`` (no fog at all).  METHOD: the fog's method (default ``nodes``; ``compositor``).  Writes OUT.exr and OUT.npz (``pane``: the pixels whose centre ray meets the pane or
@@ -74,6 +75,12 @@ def _material(name, kind):
     if kind == "wall":
         bsdf = nt.nodes.new("ShaderNodeBsdfDiffuse")
         bsdf.inputs["Color"].default_value = (0.5, 0.5, 0.5, 1.0)
+    elif kind == "principled_box":   # Blender's usual glass: a Principled BSDF of Transmission 1
+        bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
+        bsdf.inputs["Base Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+        bsdf.inputs["Transmission Weight"].default_value = 1.0
+        bsdf.inputs["Roughness"].default_value = 0.0
+        bsdf.inputs["IOR"].default_value = 1.5
     elif kind.startswith("glass"):
         bsdf = nt.nodes.new("ShaderNodeBsdfGlass")
         bsdf.distribution = "SHARP" if "SHARP" in [i.identifier for i in bsdf.bl_rna.properties["distribution"]
@@ -102,7 +109,7 @@ def build(case):
     wall = _material("Wall", "wall")
     pane_mat = _material("Pane", case)
     turn = MIRROR_TURN if case == "mirror" else 0.0
-    if case == "glass_box":
+    if case in ("glass_box", "principled_box"):
         _mesh(scene, "Pane", *_box(*PANE_SIZE, THICKNESS), pane_mat, PANE_CENTRE)
         front = (PANE_CENTRE[0], PANE_CENTRE[1] - THICKNESS / 2, PANE_CENTRE[2])
     else:

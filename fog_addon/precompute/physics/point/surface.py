@@ -352,7 +352,7 @@ def dielectric_albedo(m, f0, roughness, cos_view):
     return m.minimum(m.table(tables.SPECULAR_ALBEDO, x, y + 2.0 * step) * (f0 * (1.0 / f0_table)), 1.0)
 
 
-def principled_to_phong(m, base_color, metallic, roughness, specular_ior_level, cos_view, ior=1.5):
+def principled_to_phong(m, base_color, metallic, roughness, specular_ior_level, cos_view, ior=1.5, transmission=0.0):
     """(rho_d, rho_s, level) of a Principled BSDF for the reflected airlight, against ``m``.
 
     base_color: vector (RGB); metallic, roughness, specular_ior_level: scalars; cos_view: the cosine
@@ -369,17 +369,20 @@ def principled_to_phong(m, base_color, metallic, roughness, specular_ior_level, 
     * dielectric F0 = ((ior - 1) / (ior + 1))^2 * 2 * specular_ior_level
       (Blender 4+: IOR Level 0.5 keeps the IOR's F0, 0.04 at IOR 1.5);
       metal F0 = base colour; F0 = mix(F0_dielectric, base_color, metallic).
-    * rho_d = base_color (1 - metallic) (1 - E_dielectric(mu)): the diffuse base receives what the
-      dielectric specular layer does not reflect.
+    * rho_d = base_color (1 - metallic) (1 - transmission) (1 - E_dielectric(mu)): the diffuse base receives
+      what the dielectric specular layer does not reflect, where the surface does not let it through (Blender's
+      Principled BSDF mixes its transmission lobe in for the diffuse one by Transmission Weight).
     * level from roughness r: GGX alpha = r^2 ~ Blinn-Phong exponent 2/alpha^2 - 2 about the half vector
       (Walter et al. 2007); the reflected-direction lobe is twice as wide in angle, so
       n = (1/alpha^2 - 1) / 2 (see ``phong_exponent_from_roughness``).
 
-    Ignored: transmission, coat, sheen, subsurface, diffuse roughness, anisotropy.
+    Ignored: coat, sheen, subsurface, diffuse roughness, anisotropy; what is transmitted is the segments' past the
+    surface (``nodes/glass_tails.py``).
     """
     f0_d = m.minimum(specular_ior_level * (2.0 * ((ior - 1.0) / (ior + 1.0)) ** 2), 1.0)
     e_d = dielectric_albedo(m, f0_d, roughness, cos_view)
-    rho_d = m.scale(base_color, (1.0 - metallic) * (1.0 - e_d))
+    through = 1.0 if isinstance(transmission, (int, float)) and transmission == 0.0 else 1.0 - transmission
+    rho_d = m.scale(base_color, (1.0 - metallic) * (1.0 - e_d) * through)
     grey = (1.0 - metallic) * e_d
     rho_s = m.scale(metal_albedo(m, base_color, roughness, cos_view), metallic) + m.combine(grey, grey, grey)
     return rho_d, rho_s, phong_level(m, roughness)
