@@ -70,12 +70,8 @@ def build_shaft_group(light, shadow, images, samples, g):
         kind = f"moving {shadow.spec.width}x{shadow.spec.height} " + hashlib.sha1(
             repr(shadow.spot).encode()).hexdigest()[:12]
     elif shadow.spot is not None:
-        frame, half = shadow.spot
-        forward = frame[2]
-        cos_half = math.cos(0.5 * light.data.spot_size)
-        blend = float(light.data.spot_blend)
-        falloff = lambda m, u, d: spot_.spot_falloff(m, m.dot(u, forward) / d, cos_half, blend)
-        kind = "spot " + hashlib.sha1(repr((shadow.spec.width, frame, half, cos_half, blend)).encode()).hexdigest()[:12]
+        falloff, key = still_spot_falloff(light, shadow.spot)
+        kind = "spot " + hashlib.sha1(repr((shadow.spec.width, *key)).encode()).hexdigest()[:12]
     spec = dataclasses.replace(shadow.spec, name=f"{SHAFT_MAP} {kind}")   # read from the Map input
     m = CompOps(ng, dict(images))
     m.images[spec.name] = m.wrap(gin.outputs[SHAFT_MAP], vector=True)
@@ -110,6 +106,17 @@ def build_shaft_group(light, shadow, images, samples, g):
     ng[owned.BUILT] = groups.code_fingerprint()
     m.place()
     return groups.install(ng, name)
+
+
+def still_spot_falloff(light, spot):
+    """(falloff(m, u, d), key) of a spot whose map is baked at its pose (``spot``: the map's (frame, half_width)):
+    its cone's factor at the ray point light + u, d = |u| (``spot_.spot_falloff``), and what it is built from."""
+    frame, half = spot
+    forward = frame[2]
+    cos_half = math.cos(0.5 * light.data.spot_size)
+    blend = float(light.data.spot_blend)
+    return (lambda m, u, d: spot_.spot_falloff(m, m.dot(u, forward) / d, cos_half, blend)), (frame, half, cos_half,
+                                                                                              blend)
 
 
 def atlas_tile(m, image, label):

@@ -118,26 +118,34 @@ def light_models(g, step=0):
     return rungs.choose("nodes", step, g, "point")
 
 
+def _sampled_group(name, inputs, images, spec, light_group, shared, jitter_from):
+    """(tree, its output node, its NodeOps, its inputs by name, the light group's node) of a group ``name`` with ``inputs``: one
+    light drawn from the table ``spec`` per sample (``_pick``, its randoms from the input ``jitter_from``) feeds
+    ``light_group``'s Light and Intensity, the group's ``shared`` inputs its own."""
+    ng, gin, gout = groups.new_group(name, inputs, [("Fog", "NodeSocketShader")])
+    m = NodeOps(ng, dict(images))
+    s = {x.name: x for x in gin.outputs if x.name}
+    u1, u2 = _randoms(ng, s[jitter_from])
+    position, intensity = _light(m, spec, _pick(m, spec, m.wrap(u1), m.wrap(u2)))
+    node = ng.nodes.new("ShaderNodeGroup")
+    node.node_tree = light_group
+    node.name = node.label = "Sampled Light"
+    m.feed(node.inputs["Light"], position)
+    m.feed(node.inputs["Intensity"], intensity)
+    for sock in shared:
+        ng.links.new(s[sock], node.inputs[sock])
+    return ng, gout, m, s, node
+
+
 def build_surface_group(images, spec, g):
     """The Surface group's estimate of the other lights' fog light (shader group, output Fog: an Emission of the
     sampled light's, fully modelled: Sun et al. 2005 Eq. 19's albedo x (glow + T x reflected fog light) on camera
     rays, ``shading.sum_lights``; ``light_models``)."""
-    models = light_models(g)
-    ng, gin, gout = groups.new_group(SURFACE_GROUP, [
+    shared = ("Beta", "Position", "Incoming", "View Distance", "Normal", "Diffuse", "Specular", "Glossy Level")
+    ng, gout, m, s, node = _sampled_group(SURFACE_GROUP, [
         ("Beta", F), ("Albedo", C), ("Position", V), ("Incoming", V), ("View Distance", F), ("Normal", V),
         ("Diffuse", C), ("Specular", C), ("Glossy Level", F), ("View Transmittance", F), ("Is Camera", F)],
-        [("Fog", "NodeSocketShader")])
-    m = NodeOps(ng, dict(images))
-    s = {x.name: x for x in gin.outputs if x.name}
-    u1, u2 = _randoms(ng, s["Position"])
-    position, intensity = _light(m, spec, _pick(m, spec, m.wrap(u1), m.wrap(u2)))
-    node = ng.nodes.new("ShaderNodeGroup")
-    node.node_tree = light_groups.build_light(models, images)
-    node.name = node.label = "Sampled Light"
-    m.feed(node.inputs["Light"], position)
-    m.feed(node.inputs["Intensity"], intensity)
-    for name in ("Beta", "Position", "Incoming", "View Distance", "Normal", "Diffuse", "Specular", "Glossy Level"):
-        ng.links.new(s[name], node.inputs[name])
+        images, spec, light_groups.build_light(light_models(g), images), shared, "Position")
     terms = light_groups.read(m, node, rungs.SURFACE_OUTPUTS, shading.LightTerms)
     sums = shading.sum_lights(m, [terms], light_groups.medium(m, s["Beta"], s["Albedo"]),
                               m.wrap(s["View Transmittance"]), m.wrap(s["Is Camera"]))
@@ -149,20 +157,9 @@ def build_surface_group(images, spec, g):
 def build_world_group(images, spec, g):
     """The World group's estimate of the other lights' glows to the sky (shader group, output Fog: a Background of
     albedo x the sampled light's glow to infinity x Is Camera)."""
-    models = light_models(g, 1)
-    ng, gin, gout = groups.new_group(WORLD_GROUP, [("Beta", F), ("Albedo", C), ("Camera", V), ("Direction", V),
-                                                   ("Is Camera", F)], [("Fog", "NodeSocketShader")])
-    m = NodeOps(ng, dict(images))
-    s = {x.name: x for x in gin.outputs if x.name}
-    u1, u2 = _randoms(ng, s["Direction"])
-    position, intensity = _light(m, spec, _pick(m, spec, m.wrap(u1), m.wrap(u2)))
-    node = ng.nodes.new("ShaderNodeGroup")
-    node.node_tree = light_groups.build_background_light(models, images)
-    node.name = node.label = "Sampled Light"
-    m.feed(node.inputs["Light"], position)
-    m.feed(node.inputs["Intensity"], intensity)
-    for name in ("Beta", "Camera", "Direction"):
-        ng.links.new(s[name], node.inputs[name])
+    ng, gout, m, s, node = _sampled_group(
+        WORLD_GROUP, [("Beta", F), ("Albedo", C), ("Camera", V), ("Direction", V), ("Is Camera", F)], images, spec,
+        light_groups.build_background_light(light_models(g, 1), images), ("Beta", "Camera", "Direction"), "Direction")
     sky = light_groups.read(m, node, rungs.SKY_OUTPUTS, shading.SkyTerms)
     glow = m.scale(m.wrap(s["Albedo"], vector=True) * m.wrap(sky.background, vector=True), m.wrap(s["Is Camera"]))
     closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeBackground", [glow])

@@ -9,11 +9,9 @@ converges to the shares of a finer quadrature, as the compositor's does over its
 (``PREVIEW_SAMPLES``) keep the viewport quick; a still picture is noisy at first and settles as samples accumulate.
 """
 import hashlib
-import math
 
 from ..precompute.physics.shafts import shafts
-from ..precompute.physics.spot import spot as spot_
-from . import groups, owned
+from . import comp_shafts, groups, owned
 from .groups import F, V
 from .sockets import NodeOps
 
@@ -37,13 +35,8 @@ def build_group(light, shadow, images, g):
     frame and cone built in as the compositor's shaft group builds them (``comp_shafts.build_shaft_group``)."""
     falloff, kind = None, f"point {shadow.spec.name}"
     if shadow.spot is not None:
-        frame, half = shadow.spot
-        forward = frame[2]
-        cos_half = math.cos(0.5 * light.data.spot_size)
-        blend = float(light.data.spot_blend)
-        falloff = lambda m, u, d: spot_.spot_falloff(m, m.dot(u, forward) / d, cos_half, blend)
-        kind = "spot " + hashlib.sha1(repr((shadow.spec.name, shadow.spec.width, frame, half, cos_half, blend)
-                                           ).encode()).hexdigest()[:12]
+        falloff, key = comp_shafts.still_spot_falloff(light, shadow.spot)
+        kind = "spot " + hashlib.sha1(repr((shadow.spec.name, shadow.spec.width, *key)).encode()).hexdigest()[:12]
     ng, gin, gout = groups.new_group(group_name(light), list(INPUTS), list(OUTPUTS))
     m = NodeOps(ng, dict(images))
     v = {s.name: m.wrap(s, vector=s.type == "VECTOR") for s in gin.outputs if s.name}
