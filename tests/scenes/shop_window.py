@@ -145,7 +145,7 @@ def _first_hit(scene, origin, direction, max_dist=1e4):
 
 
 def masks(scene, cam):
-    """(pane, lamps): boolean (HEIGHT, WIDTH) masks of the module docstring, and [(lamp name, row, col)]."""
+    """(pane, lamps, seen): the boolean (HEIGHT, WIDTH) masks of the module docstring, and [(lamp name, row, col)]."""
     bpy.context.view_layer.update()
     eye, d = probe_common.camera_rays(cam, WIDTH, HEIGHT)
     pane = np.zeros((HEIGHT, WIDTH), bool)
