@@ -11,7 +11,7 @@ import functools
 import bpy
 import numpy as np
 
-from ..nodes import (budgets, comp_daylight, comp_fog, comp_shafts, compositor, graph, owned, passes,
+from ..nodes import (budgets, comp_daylight, comp_fog, comp_shafts, compositor, glass_tails, graph, owned, passes,
                      preview as preview_, preview_sampled, surface_group,
                      world_group)
 from .. import caveats, shadow_maps, sunsky, view
@@ -93,7 +93,7 @@ class Compositor(Method):
         preview, sampled_images = _preview(scene, spec, plan, maps)
         images = dict(images, **sampled_images)
         surface_group.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs,
-                                    tails=_tails(scene, spec, plan), day=day,
+                                    tails=_tails(scene, spec, plan, maps), day=day,
                                     day_dims=dims and not daylit, day_exact=not daylit, preview=preview)
         images = comp_fog.build_fog_group(scene, plan.in_groups, plan.grouped_models, images,
                                           view.full_windows(plan.in_groups) if plan.partial else plan.windows,
@@ -204,18 +204,21 @@ def _preview(scene, spec, plan, maps):
 TAIL_LIGHTS = 8   # the lights whose glows the materials shade past glass and mirrors (the most important first)
 
 
-def _tails(scene, spec, plan):
+def _tails(scene, spec, plan, maps):
     """(lights, models) of the fog past glass and sharp mirrors (``glass_tails.place_tails``, Cycles: the compositor
     sees only a pixel's first surface): the glows along the segments and the fog light the surfaces there reflect,
     of the TAIL_LIGHTS lights of most importance (``sampling.importance``) with the Node Groups method's full
-    models, or False where the scene has no such path or in EEVEE."""
+    models, each in its shadows where it has a still map (``maps``: the shafts', ``glass_tails.build_tail_bundle``),
+    or False where the scene has no such path or in EEVEE."""
     if scene.render.engine != "CYCLES" or not plan.in_groups or not caveats.specular_paths(bpy.data.materials):
         return False
     weight = sampling.importance([o.matrix_world.translation for o in plan.in_groups],
                                  view.light_intensities(plan.in_groups), scene.camera.matrix_world.translation,
                                  spec.beta_per_unit)
     kept = [plan.in_groups[i] for i in np.argsort(-weight, kind="stable")[:TAIL_LIGHTS]]
-    return kept, [rungs.choose("nodes", 0, spec.anisotropy, view.light_kind(o)) for o in kept]
+    shadows = {o.name: maps[o.name] for o in kept if o.name in maps and maps[o.name].atlas is None}
+    return glass_tails.Tails(kept, [rungs.choose("nodes", 0, spec.anisotropy, view.light_kind(o)) for o in kept],
+                             shadows or None, spec.anisotropy)
 
 
 def sampled_lights(plan):

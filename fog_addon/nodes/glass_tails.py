@@ -2,8 +2,10 @@
 sharp mirror, by differences of tails to infinity (``place_tails``), built only where the scene has them
 (``caveats.specular_paths``).  The Surface group's Glass Color and Glass IOR inputs (fed by ``material.py``)
 weight them."""
+from typing import Any, NamedTuple
+
 from ..precompute.model import rungs, shading
-from . import closures, groups, light_bundles, light_groups
+from . import closures, groups, light_bundles, light_groups, preview_shafts
 from .groups import C, F, V
 from .sockets import NodeOps
 
@@ -25,7 +27,17 @@ def specular_segment(m, path):
     return (1.0 - m.wrap(path.outputs["Is Camera Ray"])) * singular * first
 
 
-def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp, shared, below, extra=()):
+class Tails(NamedTuple):
+    """The lights whose fog past glass and mirrors the Surface group shades, where they are not its own lights
+    (the Compositor method's: ``methods.compositor._tails``)."""
+    lights: list
+    models: list
+    shadows: Any = None   # {light name: ShadowMap} of those whose glows and fog light there take their shadows
+    g: float = 0.0        # the fog's anisotropy (the shares' phase weight)
+
+
+def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp, shared, below, extra=(),
+                shadows=None, g_=0.0):
     """The Surface group's See Through shader (Cycles only: ``material.py`` adds it to the Cycles output):
     the glows of the segments past a glass pane or a mirror, by differences of tails.
 
@@ -51,7 +63,8 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
 
     ``below``: the Surface group's light bundles placed (their rows).  ``extra``: more shader outputs summed into See
     Through (the fog light the surfaces past glass reflect, where the materials hold no lights: the Compositor
-    method's, ``surface_group.build_surface``).  Returns the bundle groups built.
+    method's, ``surface_group.build_surface``).  ``shadows``, ``g_``: the lights' shadow maps and the fog's
+    anisotropy (``build_tail_bundle``).  Returns the bundle groups built.
     """
     kept = [(light, mod) for light, mod in zip(lights, models)
             if any(o.computed(mod) for o in rungs.SKY_OUTPUTS if o.colour)]
@@ -75,7 +88,7 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
                              "Transmittance": t_vp.sock})
     fogs, trees = [], []
     for first, some, mods in light_bundles.split([light for light, _ in kept], [mod for _, mod in kept]):
-        tree = build_tail_bundle(images, first, some, mods)
+        tree = build_tail_bundle(images, first, some, mods, shadows, g_)
         trees.append(tree)
         node = light_bundles.group_node(ng, tree, tree.name.removesuffix(groups.BUILDING), -300,
                                         -300 * (below + len(fogs)), [(src, n) for n, src in inputs.items()])
@@ -90,12 +103,17 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
     return trees
 
 
-def build_tail_bundle(images, first, lights, models):
+def build_tail_bundle(images, first, lights, models, shadows=None, g_=0.0):
     """One bundle of the Surface group's See Through shader (``place_tails``): for each light, the albedo
     times Transmittance times Straight Weight x its glow to infinity from Position along Straight, and the
     same with Mirrored Weight along Mirrored, from two instances of its World group
     (``light_groups.build_background_light``), each tail an Emission closure of its own (its colour may be
-    negative: Cycles passes negative emission through)."""
+    negative: Cycles passes negative emission through).
+
+    ``shadows``: {light name: ShadowMap} of the lights whose tails take their lit shares (fog of anisotropy
+    ``g_``).  A tail to infinity times its own lit share is the glow of that ray's lit part (``shafts.lit_share``,
+    Dobashi et al. 2002 Eq. 2), so the difference of two such tails is still the segment's lit glow: each vertex
+    needs only its own ray.  The shares' quadrature is turned at every sample (``preview_shafts.py``)."""
     name = light_bundles.bundle_name(groups.SURFACE_TAILS, first, lights)
     ng, gin, gout = groups.new_group(name, [("Beta", F), ("Albedo", C), ("Position", V), ("Straight", V),
                                             ("Mirrored", V), ("Straight Weight", C), ("Mirrored Weight", C),
@@ -104,11 +122,22 @@ def build_tail_bundle(images, first, lights, models):
     g = {s.name: s for s in gin.outputs if s.name}
     albedo = m.wrap(g["Albedo"], vector=True)
     scale = m.scale(albedo, m.wrap(g["Transmittance"]))
-    colours = []
+    colours, jitter = [], None
     for k, (light, mod) in enumerate(zip(lights, models)):
+        shares = []
+        if shadows and light.name in shadows:   # first: SVM compiles them before the light's kernels
+            jitter = jitter or preview_shafts.jitter(ng, g["Position"])
+            shaft = preview_shafts.build_group(light, shadows[light.name], images, g_)
+            shares = [preview_shafts.instance(ng, light, shaft, {
+                "Beta": g["Beta"], "Camera": g["Position"], "Direction": g[way], "Position": g["Position"],
+                "Normal": g[way], "Jitter": jitter}) for way in ("Straight", "Mirrored")]
+            for node in shares:
+                node.inputs["Length"].default_value = preview_shafts.SKY_LENGTH
         group = light_groups.build_background_light(mod, images).name
         straight = light_groups.light_instance(ng, first + k, light, group, [
             (g["Beta"], "Beta"), (g["Position"], "Camera"), (g["Straight"], "Direction")])
+        for node in shares:
+            ng.links.new(straight.inputs["Light"].links[0].from_socket, node.inputs["Light"])
         mirrored = ng.nodes.new("ShaderNodeGroup")
         mirrored.node_tree = straight.node_tree
         mirrored.name = mirrored.label = f"{straight.name} (mirrored)"
@@ -121,9 +150,9 @@ def build_tail_bundle(images, first, lights, models):
         # two closures, never one of their sum (``closures.closure_sum`` says why): SVM compiles a closure's
         # inputs' nodes together, so one Emission of straight + mirrored had both tails' kernels on its stack
         # at once (a spot at the full step: 255 floats, out of SVM stack space, the glass black; 178 as two)
-        for node, weight in ((straight, g["Straight Weight"]), (mirrored, g["Mirrored Weight"])):
-            colours.append(m.wrap(node.outputs[rungs.BACKGROUND_OUT.name], vector=True) * m.wrap(weight, vector=True)
-                           * scale)
+        for j, (node, weight) in enumerate(((straight, g["Straight Weight"]), (mirrored, g["Mirrored Weight"]))):
+            colour = m.wrap(node.outputs[rungs.BACKGROUND_OUT.name], vector=True) * m.wrap(weight, vector=True) * scale
+            colours.append(m.scale(colour, m.wrap(shares[j].outputs["Share"])) if shares else colour)
     closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", colours)
     m.place()
     return ng

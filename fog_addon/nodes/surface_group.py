@@ -186,18 +186,21 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
                            light_weighted=True)
     else:
         closures.camera_rays_only(ng, gout.inputs["Fog"], fogged.sock)
-    tail_lights, tail_models = tails if isinstance(tails, tuple) else (lights, models)
+    own = not isinstance(tails, glass_tails.Tails)
+    tail_lights, tail_models = (lights, models) if own else (tails.lights, tails.models)
+    shadows, anisotropy = (None, 0.0) if own else (tails.shadows, tails.g)
     segment_lights, segment_trees = [], []
-    if isinstance(tails, tuple):   # the materials hold no lights: the fog light surfaces past glass reflect
+    if not own:   # the materials hold no lights: the fog light surfaces past glass reflect
         placed_segment, segment_trees, _ = light_bundles.place_bundles(
             ng, tail_lights, tail_models, functools.partial(build_surface_bundle, images,
-                                                            prefix=groups.SURFACE_SEGMENT),
+                                                            prefix=groups.SURFACE_SEGMENT, shadows=shadows,
+                                                            g_=anisotropy),
             dict(shared, **{"Is Camera": segment.sock}), False)
         segment_lights = [node.outputs["Fog"] for node, _ in placed_segment]
     tails = glass_tails.place_tails(m, ng, tail_lights, tail_models, images, geo, g, segment, is_camera, t_vp,
                                     {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"],
                                      "Position": geo.outputs["Position"]}, len(placed),
-                                    extra=segment_lights) + segment_trees if tails else []
+                                    extra=segment_lights, shadows=shadows, g_=anisotropy) + segment_trees if tails else []
     if extra is not None:   # before it replaces the group the materials use: adding a node there costs more
         extra(ng)
     m.place()
