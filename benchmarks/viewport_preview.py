@@ -12,7 +12,7 @@ Blender process, alternating, each the fastest of REPEATS renders:
 
 Writes benchmarks/out/viewport_preview.csv (lights, shown, seconds of each, the ratios to ``nofog``).
 
-    .venv/bin/python benchmarks/viewport_preview.py          (about 3 minutes on 2 cores)
+    .venv/bin/python benchmarks/viewport_preview.py          (about 9 minutes on 2 cores)
 """
 import json
 import pathlib
@@ -26,8 +26,8 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 import smoke  # noqa: E402
 
 LIGHTS = smoke.pick((1, 25, 100), (1,))   # (square numbers: the scene's grid)
-RES = smoke.pick((160, 90), (8, 6))
-SAMPLES = smoke.pick(16, 1)
+RES = smoke.pick((320, 180), (8, 6))
+SAMPLES = smoke.pick(64, 1)
 REPEATS = smoke.pick(3, 1)
 OUT = smoke.out(ROOT / "benchmarks" / "out" / "viewport_preview.csv")
 

@@ -123,11 +123,12 @@ def build_tail_bundle(images, first, lights, models, shadows=None, g_=0.0):
     albedo = m.wrap(g["Albedo"], vector=True)
     scale = m.scale(albedo, m.wrap(g["Transmittance"]))
     colours, jitter = [], None
+    mirrored_gate = m.less(0.0, m.dot(m.wrap(g["Mirrored Weight"], vector=True), m.combine(1.0, 1.0, 1.0)))
     for k, (light, mod) in enumerate(zip(lights, models)):
         shares = []
         if shadows and light.name in shadows:   # first: SVM compiles them before the light's kernels
             jitter = jitter or preview_shafts.jitter(ng, g["Position"])
-            shaft = preview_shafts.build_group(light, shadows[light.name], images, g_)
+            shaft = preview_shafts.build_group(light, shadows[light.name], images, g_, preview_shafts.FINAL_SAMPLES)
             shares = [preview_shafts.instance(ng, light, shaft, {
                 "Beta": g["Beta"], "Camera": g["Position"], "Direction": g[way], "Position": g["Position"],
                 "Normal": g[way], "Jitter": jitter}) for way in ("Straight", "Mirrored")]
@@ -152,7 +153,10 @@ def build_tail_bundle(images, first, lights, models, shadows=None, g_=0.0):
         # at once (a spot at the full step: 255 floats, out of SVM stack space, the glass black; 178 as two)
         for j, (node, weight) in enumerate(((straight, g["Straight Weight"]), (mirrored, g["Mirrored Weight"]))):
             colour = m.wrap(node.outputs[rungs.BACKGROUND_OUT.name], vector=True) * m.wrap(weight, vector=True) * scale
-            colours.append(m.scale(colour, m.wrap(shares[j].outputs["Share"])) if shares else colour)
+            colour = m.scale(colour, m.wrap(shares[j].outputs["Share"])) if shares else colour
+            # the mirrored tail behind a gate: 0 where nothing is mirrored (a Principled glass, whose reflection is
+            # its own glossy fog light), where SVM jumps over its kernels and its share
+            colours.append(shading.Gated(mirrored_gate, colour, None) if j else colour)
     closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", colours)
     m.place()
     return ng

@@ -16,32 +16,41 @@ from .groups import F, V
 from .sockets import NodeOps
 
 PREVIEW_SAMPLES = shafts.Samples(view_nodes=8, surface_directions=2, surface_nodes=4)   # a sample's nodes
+# the segments past glass in final renders (``glass_tails.build_tail_bundle``): fewer nodes a sample, a final render
+# has many samples (the shop window's pane: 5.9 % with PREVIEW_SAMPLES, the fog's cost with glass 5.9x the fog-free)
+FINAL_SAMPLES = shafts.Samples(view_nodes=4, surface_directions=1, surface_nodes=4)
 PREVIEW_SHAFT = groups.PREVIEW_SHAFT   # "<PREVIEW_SHAFT> <light name>"
 SKY_LENGTH = 1.0e6   # m: a ray to the sky's length (its far nodes weigh e^{-beta t})
 INPUTS = (("Beta", F), ("Camera", V), ("Direction", V), ("Length", F), ("Light", V), ("Position", V), ("Normal", V),
           ("Jitter", F))
 OUTPUTS = (("Share", F), ("Visible", F))
+KEY = "analytic_fog_shaft_key"   # on a group: what it was built for (the map, a spot's frame, g)
 
 
-def group_name(light):
-    return f"{PREVIEW_SHAFT} {light.name}"
+def group_name(light, samples=PREVIEW_SAMPLES):
+    tag = "" if samples == PREVIEW_SAMPLES else f" K{samples.view_nodes}"
+    return f"{PREVIEW_SHAFT} {light.name}{tag}"
 
 
-def build_group(light, shadow, images, g):
+def build_group(light, shadow, images, g, samples=PREVIEW_SAMPLES):
     """``light``'s preview shares (shader group): Share, the lit share of its glow along the ray from Camera along
     Direction over Length m (``shafts.lit_share``); Visible, the share of the fog light a surface at Position with
     Normal reflects that the shadows leave (``shafts.surface_share``); both with their nodes turned by Jitter in
     [0, 1).  ``shadow``: the light's still map (``shadow_maps.ShadowMap``; its image is in ``images``), a spot's
-    frame and cone built in as the compositor's shaft group builds them (``comp_shafts.build_shaft_group``)."""
+    frame and cone built in as the compositor's shaft group builds them (``comp_shafts.build_shaft_group``).
+    ``samples``: the nodes a sample evaluates (``shafts.Samples``).  Built once per rebuild of the fog (a group of
+    this code's, ``groups.up_to_date``, is taken as it is)."""
+    name = group_name(light, samples)
+    if (ng := groups.up_to_date(name)) is not None and ng.get(KEY) == repr((shadow.spec.name, shadow.spot, g)):
+        return ng
     falloff, kind = None, f"point {shadow.spec.name}"
     if shadow.spot is not None:
         falloff, key = comp_shafts.still_spot_falloff(light, shadow.spot)
         kind = "spot " + hashlib.sha1(repr((shadow.spec.name, shadow.spec.width, *key)).encode()).hexdigest()[:12]
-    ng, gin, gout = groups.new_group(group_name(light), list(INPUTS), list(OUTPUTS))
+    ng, gin, gout = groups.new_group(name, list(INPUTS), list(OUTPUTS))
     m = NodeOps(ng, dict(images))
     v = {s.name: m.wrap(s, vector=s.type == "VECTOR") for s in gin.outputs if s.name}
     node = f"Preview Shaft Node {kind} g {g:.6g}"   # one group for every quadrature node of this light
-    samples = PREVIEW_SAMPLES
     share = shafts.lit_share(m, v["Camera"], v["Direction"], v["Length"], v["Light"], v["Beta"],
                              (shadow.spec, shadow.spot), samples.view_nodes, shift=v["Jitter"], g=g,
                              falloff=falloff, name=node)
@@ -51,8 +60,9 @@ def build_group(light, shadow, images, g):
                                    directions=samples.surface_directions, nodes=samples.surface_nodes)
     m.feed(gout.inputs["Visible"], visible)
     ng[owned.BUILT] = groups.code_fingerprint()
+    ng[KEY] = repr((shadow.spec.name, shadow.spot, g))
     m.place()
-    return groups.install(ng, group_name(light))
+    return groups.install(ng, name)
 
 
 def jitter(ng, position):

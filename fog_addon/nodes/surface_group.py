@@ -19,12 +19,12 @@ _SURFACE_SHARED = (("Beta", F), ("Position", V), ("Incoming", V), ("View Distanc
 
 
 def build_surface_bundle(images, first, lights, models, with_passes, chained, prefix=groups.SURFACE_LIGHTS,
-                         shadows=None, g_=0.0):
+                         shadows=None, g_=0.0, samples=None):
     """One bundle of the Surface group (``light_bundles.split``): ``shading.sum_lights`` over ``lights``
     (Sun et al. 2005 Eq. 19's L_a) from their per-light groups (``light_groups.build_light``).
 
     ``shadows``: {light name: ShadowMap} of the lights whose glow and reflected fog light take their lit shares
-    (the viewport's preview: ``preview_shafts.py``, fog of anisotropy ``g_``), or None.
+    (the viewport's preview: ``preview_shafts.py``, fog of anisotropy ``g_``, ``samples`` nodes a sample), or None.
 
     Outputs: Fog (one Emission closure per lit light, times the Opacity input; a spot's or an area light's
     glow a closure of its own, ``closures.closure_sum``), Emission (their colours' sum), Weighted and Weight
@@ -46,7 +46,7 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained, pr
         shares = None
         if shadows and light.name in shadows:   # the preview's shafts (``preview_shafts.py``)
             jitter = jitter or preview_shafts.jitter(ng, g["Position"])
-            shares = _shares(m, ng, light, shadows[light.name], images, g, jitter, g_)
+            shares = _shares(m, ng, light, shadows[light.name], images, g, jitter, g_, samples)
         node = light_groups.light_instance(ng, first + k, light, light_groups.build_light(mod, images).name,
                                            [(g[n], n) for n, _ in _SURFACE_SHARED])
         terms.append(light_groups.read(m, node, rungs.SURFACE_OUTPUTS, shading.LightTerms))
@@ -194,7 +194,7 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
         placed_segment, segment_trees, _ = light_bundles.place_bundles(
             ng, tail_lights, tail_models, functools.partial(build_surface_bundle, images,
                                                             prefix=groups.SURFACE_SEGMENT, shadows=shadows,
-                                                            g_=anisotropy),
+                                                            g_=anisotropy, samples=preview_shafts.FINAL_SAMPLES),
             dict(shared, **{"Is Camera": segment.sock}), False)
         segment_lights = [node.outputs["Fog"] for node, _ in placed_segment]
     tails = glass_tails.place_tails(m, ng, tail_lights, tail_models, images, geo, g, segment, is_camera, t_vp,
@@ -209,7 +209,7 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     return ng
 
 
-def _shares(m, ng, light, shadow, images, g, jitter, anisotropy):
+def _shares(m, ng, light, shadow, images, g, jitter, anisotropy, samples=None):
     """A node of ``light``'s preview shares (``preview_shafts.build_group``) on the bundle's camera ray, its Light
     input left for the caller to link.  Built before the light's own group node: Cycles' SVM compiles a shader's
     nodes in the order they were made, so the shares' quadrature runs first and only its two results stay on the
@@ -217,7 +217,7 @@ def _shares(m, ng, light, shadow, images, g, jitter, anisotropy):
     position, incoming = m.wrap(g["Position"], vector=True), m.wrap(g["Incoming"], vector=True)
     length = m.wrap(g["View Distance"])
     camera = position + m.scale(incoming, length)
-    group = preview_shafts.build_group(light, shadow, images, anisotropy)
+    group = preview_shafts.build_group(light, shadow, images, anisotropy, samples or preview_shafts.PREVIEW_SAMPLES)
     return preview_shafts.instance(ng, light, group, {
         "Beta": g["Beta"], "Camera": camera.sock, "Direction": m.scale(incoming, -1.0).sock, "Length": length.sock,
         "Position": g["Position"], "Normal": g["Normal"], "Jitter": jitter})
