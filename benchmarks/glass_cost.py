@@ -10,16 +10,16 @@ render's cost with glass over without (the issue's goal: at most 1.3).
 
     .venv/bin/python benchmarks/glass_cost.py          (about 2 minutes on 2 cores)
 """
-import json
 import pathlib
-import subprocess
 import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+import csv_rows  # noqa: E402
 import smoke  # noqa: E402
+import worker_result  # noqa: E402
 
 RES = smoke.pick((320, 180), (8, 6))
 SAMPLES = smoke.pick(32, 1)
@@ -62,19 +62,12 @@ def main():
     OUT.parent.mkdir(parents=True, exist_ok=True)
     code = WORKER.replace("ROOT", repr(str(ROOT))).replace("RES, SAMPLES, REPEATS, OUTDIR",
                                                              repr((RES, SAMPLES, REPEATS, str(OUT.parent))))
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
-    smoke.echo(proc.stdout[-3000:] + proc.stderr[-3000:])
-    line = next((ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")), None)
-    smoke.check(proc.returncode == 0 and line is not None, f"exit {proc.returncode}")
-    if line is None:
+    r = worker_result.run_code(code, "the shop window")
+    if r is None:
         return
-    r = json.loads(line.split(" ", 1)[1])
-    with open(OUT, "w") as f:
-        f.write("glass_nofog_s,glass_fog_s,opaque_nofog_s,opaque_fog_s,glass_ratio,opaque_ratio,fog_glass_over_opaque\n")
-        f.write(f"{r['glass_nofog']:.3f},{r['glass_fog']:.3f},{r['opaque_nofog']:.3f},{r['opaque_fog']:.3f},"
-                f"{r['glass_fog'] / r['glass_nofog']:.2f},{r['opaque_fog'] / r['opaque_nofog']:.2f},"
-                f"{(r['glass_fog'] / r['glass_nofog']) / (r['opaque_fog'] / r['opaque_nofog']):.2f}\n")
-    print(open(OUT).read())
+    glass, opaque = r["glass_fog"] / r["glass_nofog"], r["opaque_fog"] / r["opaque_nofog"]
+    csv_rows.write(OUT, [{**{f"{k}_s": round(v, 3) for k, v in r.items()}, "glass_ratio": round(glass, 2),
+                          "opaque_ratio": round(opaque, 2), "fog_glass_over_opaque": round(glass / opaque, 2)}])
 
 
 if __name__ == "__main__":

@@ -14,9 +14,7 @@ Writes benchmarks/out/viewport_preview.csv (lights, shown, seconds of each, the 
 
     .venv/bin/python benchmarks/viewport_preview.py          (about 9 minutes on 2 cores)
 """
-import json
 import pathlib
-import subprocess
 import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -24,6 +22,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import smoke  # noqa: E402
+import worker_result  # noqa: E402
 
 LIGHTS = smoke.pick((1, 25, 100), (1,))   # (square numbers: the scene's grid)
 RES = smoke.pick((320, 180), (8, 6))
@@ -79,11 +78,7 @@ print("RESULT " + json.dumps({"lights": n, "shown": shown, **{k: min(v) for k, v
 def run(n):
     code = (WORKER.replace("ROOT", repr(str(ROOT)), 1).replace("N, RES, SAMPLES, REPEATS, OUTDIR",
                                                                repr((n, RES, SAMPLES, REPEATS, str(OUT.parent)))))
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
-    smoke.echo(proc.stdout[-3000:] + proc.stderr[-3000:])
-    line = next((ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")), None)
-    smoke.check(proc.returncode == 0 and line is not None, f"{n} lights: exit {proc.returncode}")
-    return json.loads(line.split(" ", 1)[1]) if line else None
+    return worker_result.run_code(code, f"{n} lights")
 
 
 def main():

@@ -28,3 +28,13 @@ def run(script, spec):
         print(proc.stdout[-2000:], proc.stderr[-2000:])
         return None
     return json.loads(lines[-1].split(" ", 1)[1])
+
+
+def run_code(code, what):
+    """``python -c code`` in a fresh process from the repository root (a worker written inline): its RESULT dict,
+    or None (``what`` names it in a smoke run's failure)."""
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=str(ROOT))
+    smoke.echo(proc.stdout[-3000:] + proc.stderr[-3000:])
+    line = next((ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")), None)
+    smoke.check(proc.returncode == 0 and line is not None, f"{what}: exit {proc.returncode}")
+    return json.loads(line.split(" ", 1)[1]) if line else None

@@ -117,3 +117,60 @@ def glass_material(name="Glass"):
     out = next(node for node in nt.nodes if node.bl_idname == "ShaderNodeOutputMaterial")
     nt.links.new(glass.outputs[0], out.inputs["Surface"])
     return mat
+
+
+def set_up_mode(scene, mode, beta, samples, configure):
+    """A probe's scene for ``mode``: ``reference`` (Cycles' World volume of ``beta``, ``fog_addon.reference``) or
+    ``fog`` / ``none`` (Cycles on the CPU, pixel centres, no denoiser); then ``configure(scene, samples)`` (its bounces
+    and visibility: before the fog, which reads the casters as they render).  Returns the samples used."""
+    from fog_addon import reference   # noqa: PLC0415
+    samples = int(samples or (2048 if mode == "reference" else 64))
+    if mode == "reference":
+        reference.configure_reference(scene, beta, samples=samples)
+    else:
+        scene.render.engine = "CYCLES"
+        measure.set_cycles_cpu(scene)
+        measure.set_pixel_centre_filter(scene)
+        scene.cycles.use_denoising = False
+    configure(scene, samples)
+    return samples
+
+
+def add_fog(scene, beta, method):
+    """The add-on registered and its fog added (``apply.apply_fog``); returns its notes."""
+    import fog_addon   # noqa: PLC0415
+    from fog_addon.ops import apply   # noqa: PLC0415
+    fog_addon.register()
+    return apply.apply_fog(scene, beta, method=method)
+
+
+PRINCIPLED_GLASS = {"Base Color": (1.0, 1.0, 1.0, 1.0), "Transmission Weight": 1.0, "Roughness": 0.0, "IOR": 1.5}
+#                    Blender's usual glass: a Principled BSDF of Transmission 1, roughness 0
+
+
+def bsdf_material(name, bl_idname, **inputs):
+    """A material of one BSDF node ``bl_idname`` into its output, its ``inputs`` (name: value) set."""
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nt = mat.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    bsdf = nt.nodes.new(bl_idname)
+    for key, value in inputs.items():
+        bsdf.inputs[key].default_value = value
+    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def see_through_bounces(scene, width, height):
+    """A glass probe's resolution and bounces (single scattering: volume 0; one diffuse bounce, the fog's light
+    on a wall; glossy 2 and transmission 4 for the paths through a pane; max_bounces caps every kind: their sum),
+    its meshes hidden from diffuse rays (no light from surface to surface, as in the model)."""
+    measure.set_resolution(scene, width, height)
+    c = scene.cycles
+    c.volume_bounces, c.diffuse_bounces, c.glossy_bounces, c.transmission_bounces = 0, 1, 2, 4
+    c.max_bounces = 7
+    c.transparent_max_bounces = 8
+    for ob in scene.objects:
+        if ob.type == "MESH":
+            ob.visible_diffuse = False

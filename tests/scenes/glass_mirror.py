@@ -67,34 +67,19 @@ def _box(w, h, t):
 
 
 def _material(name, kind):
-    mat = bpy.data.materials.new(name)
-    mat.use_nodes = True
-    nt = mat.node_tree
-    nt.nodes.clear()
-    out = nt.nodes.new("ShaderNodeOutputMaterial")
     if kind == "wall":
-        bsdf = nt.nodes.new("ShaderNodeBsdfDiffuse")
-        bsdf.inputs["Color"].default_value = (0.5, 0.5, 0.5, 1.0)
-    elif kind == "principled_box":   # Blender's usual glass: a Principled BSDF of Transmission 1
-        bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
-        bsdf.inputs["Base Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-        bsdf.inputs["Transmission Weight"].default_value = 1.0
-        bsdf.inputs["Roughness"].default_value = 0.0
-        bsdf.inputs["IOR"].default_value = 1.5
-    elif kind.startswith("glass"):
-        bsdf = nt.nodes.new("ShaderNodeBsdfGlass")
+        return probe_common.bsdf_material(name, "ShaderNodeBsdfDiffuse", Color=(0.5, 0.5, 0.5, 1.0))
+    if kind == "principled_box":   # Blender's usual glass: a Principled BSDF of Transmission 1
+        return probe_common.bsdf_material(name, "ShaderNodeBsdfPrincipled", **probe_common.PRINCIPLED_GLASS)
+    if kind.startswith("glass"):
+        mat = probe_common.bsdf_material(name, "ShaderNodeBsdfGlass", Roughness=0.0, Color=(1.0, 1.0, 1.0, 1.0),
+                                         IOR=1.0 if kind == "glass" else 1.5)
+        bsdf = mat.node_tree.nodes["Glass BSDF"]
         bsdf.distribution = "SHARP" if "SHARP" in [i.identifier for i in bsdf.bl_rna.properties["distribution"]
                                                    .enum_items] else bsdf.distribution
-        bsdf.inputs["Roughness"].default_value = 0.0
-        bsdf.inputs["IOR"].default_value = 1.0 if kind == "glass" else 1.5
-        bsdf.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    else:
-        bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
-        bsdf.inputs["Base Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-        bsdf.inputs["Metallic"].default_value = 1.0
-        bsdf.inputs["Roughness"].default_value = 0.0
-    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
-    return mat
+        return mat
+    return probe_common.bsdf_material(name, "ShaderNodeBsdfPrincipled", **{"Base Color": (1.0, 1.0, 1.0, 1.0),
+                                                                           "Metallic": 1.0, "Roughness": 0.0})
 
 
 def build(case):
@@ -140,34 +125,17 @@ def pane_mask(cam, plane):
 
 def configure(scene, samples):
     """The bounces and visibility of the module docstring, on the scene as built."""
-    measure.set_resolution(scene, WIDTH, HEIGHT)
-    c = scene.cycles
-    c.volume_bounces, c.diffuse_bounces, c.glossy_bounces, c.transmission_bounces = 0, 1, 2, 4
-    c.max_bounces = 7
-    c.transparent_max_bounces = 8
+    probe_common.see_through_bounces(scene, WIDTH, HEIGHT)
     reference.disable_cast_shadows(scene)
-    for ob in scene.objects:
-        if ob.type == "MESH":
-            ob.visible_diffuse = False
     measure.set_samples(scene, samples)
 
 
 def main(case, mode, out, samples=None, method="nodes"):
     out = pathlib.Path(out)
     scene, cam, plane = build(case)
-    if mode == "reference":
-        reference.configure_reference(scene, BETA, samples=int(samples or 2048))
-    else:
-        scene.render.engine = "CYCLES"
-        measure.set_cycles_cpu(scene)
-        measure.set_pixel_centre_filter(scene)
-        scene.cycles.use_denoising = False
-    configure(scene, int(samples or (2048 if mode == "reference" else 64)))   # (first: the casters as rendered)
+    probe_common.set_up_mode(scene, mode, BETA, samples, configure)   # (first: the casters as rendered)
     if mode == "fog":
-        import fog_addon
-        from fog_addon.ops import apply
-        fog_addon.register()
-        apply.apply_fog(scene, BETA, method=method)
+        probe_common.add_fog(scene, BETA, method)
     measure.render_to_file(scene, str(out))
     np.savez(out.with_suffix(".npz"), pane=pane_mask(cam, plane))
 

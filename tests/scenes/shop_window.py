@@ -48,7 +48,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 from mathutils import Vector  # noqa: E402
 
-from fog_addon import measure, reference  # noqa: E402
+from fog_addon import measure  # noqa: E402
 from fog_scenes import probe_common  # noqa: E402
 
 BETA = 0.1               # 1/m, isotropic, albedo 1
@@ -84,26 +84,12 @@ def _box(x0, x1, y0, y1, z0, z1, inward=False):
 
 
 def _material(name, kind, colour=(0.5, 0.5, 0.5)):
-    mat = bpy.data.materials.new(name)
-    mat.use_nodes = True
-    nt = mat.node_tree
-    nt.nodes.clear()
-    out = nt.nodes.new("ShaderNodeOutputMaterial")
     if kind == "diffuse":
-        bsdf = nt.nodes.new("ShaderNodeBsdfDiffuse")
-        bsdf.inputs["Color"].default_value = (*colour, 1.0)
-    elif kind == "street":
-        bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
-        bsdf.inputs["Base Color"].default_value = (*colour, 1.0)
-        bsdf.inputs["Roughness"].default_value = 0.9
-    else:   # the pane: Blender's usual glass
-        bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
-        bsdf.inputs["Base Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-        bsdf.inputs["Transmission Weight"].default_value = 1.0
-        bsdf.inputs["Roughness"].default_value = 0.0
-        bsdf.inputs["IOR"].default_value = 1.5
-    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
-    return mat
+        return probe_common.bsdf_material(name, "ShaderNodeBsdfDiffuse", Color=(*colour, 1.0))
+    if kind == "street":
+        return probe_common.bsdf_material(name, "ShaderNodeBsdfPrincipled", **{"Base Color": (*colour, 1.0),
+                                                                               "Roughness": 0.9})
+    return probe_common.bsdf_material(name, "ShaderNodeBsdfPrincipled", **probe_common.PRINCIPLED_GLASS)   # the pane
 
 
 def build():
@@ -173,14 +159,7 @@ def masks(scene, cam):
 
 def configure(scene, samples):
     """The bounces and visibility of the module docstring, on the scene as built (cast shadows kept)."""
-    measure.set_resolution(scene, WIDTH, HEIGHT)
-    c = scene.cycles
-    c.volume_bounces, c.diffuse_bounces, c.glossy_bounces, c.transmission_bounces = 0, 1, 2, 4
-    c.max_bounces = 7
-    c.transparent_max_bounces = 8
-    for ob in scene.objects:
-        if ob.type == "MESH":
-            ob.visible_diffuse = False
+    probe_common.see_through_bounces(scene, WIDTH, HEIGHT)
     scene.objects["Pane"].visible_shadow = False
     measure.set_samples(scene, samples)
 
@@ -190,22 +169,12 @@ def main(mode, out, samples=None, method="compositor"):
         raise SystemExit(f"MODE must be reference, fog or none, not {mode!r}")
     out = pathlib.Path(out)
     scene, cam = build()
-    if mode == "reference":
-        reference.configure_reference(scene, BETA, samples=int(samples or 2048))
-    else:
-        scene.render.engine = "CYCLES"
-        measure.set_cycles_cpu(scene)
-        measure.set_pixel_centre_filter(scene)
-        scene.cycles.use_denoising = False
-    configure(scene, int(samples or (2048 if mode == "reference" else 64)))   # (first: the casters as rendered)
+    probe_common.set_up_mode(scene, mode, BETA, samples, configure)
     pane, lamps, seen = masks(scene, cam)
     for name, row, col in seen:
         print(f"LAMP {name} row {row} col {col}")
     if mode == "fog":
-        import fog_addon
-        from fog_addon.ops import apply
-        fog_addon.register()
-        for what, note in apply.apply_fog(scene, BETA, method=method):
+        for what, note in probe_common.add_fog(scene, BETA, method):
             print(f"NOTE {what}: {note}")
     measure.render_to_file(scene, str(out))
     np.savez(out.with_suffix(".npz"), pane=pane, lamps=lamps)
