@@ -194,8 +194,7 @@ def _preview(scene, spec, plan, maps):
         preview_sampled.write_table(scene, [], spec.beta_per_unit)
         return None, {}
     lights, models = plan.preview[:2]
-    shadows = {o.name: maps[o.name] for o in lights if o.name in maps and maps[o.name].atlas is None
-               } if scene.render.engine == "CYCLES" else {}
+    shadows = _still_maps(lights, maps) if scene.render.engine == "CYCLES" else {}
     table, img = preview_sampled.write_table(scene, sampled_lights(plan), spec.beta_per_unit)
     return (preview_.Shown(lights, models, shadows or None, spec.anisotropy, table),
             {table.name: img} if table is not None else {})
@@ -216,9 +215,15 @@ def _tails(scene, spec, plan, maps):
                                  view.light_intensities(plan.in_groups), scene.camera.matrix_world.translation,
                                  spec.beta_per_unit)
     kept = [plan.in_groups[i] for i in np.argsort(-weight, kind="stable")[:TAIL_LIGHTS]]
-    shadows = {o.name: maps[o.name] for o in kept if o.name in maps and maps[o.name].atlas is None}
+    shadows = _still_maps(kept, maps)
     return glass_tails.Tails(kept, [rungs.choose("nodes", 0, spec.anisotropy, view.light_kind(o)) for o in kept],
                              shadows or None, spec.anisotropy)
+
+
+def _still_maps(lights, maps):
+    """{name: ShadowMap} of the ``lights`` whose shafts' map (``maps``) is a still one (an animation's atlas is read
+    by frame, which the shaders' shares do not)."""
+    return {o.name: maps[o.name] for o in lights if o.name in maps and maps[o.name].atlas is None}
 
 
 def sampled_lights(plan):

@@ -128,12 +128,10 @@ def build_tail_bundle(images, first, lights, models, shadows=None, g_=0.0):
         shares = []
         if shadows and light.name in shadows:   # first: SVM compiles them before the light's kernels
             jitter = jitter or preview_shafts.jitter(ng, g["Position"])
-            shaft = preview_shafts.build_group(light, shadows[light.name], images, g_, preview_shafts.FINAL_SAMPLES)
-            shares = [preview_shafts.instance(ng, light, shaft, {
-                "Beta": g["Beta"], "Camera": g["Position"], "Direction": g[way], "Position": g["Position"],
-                "Normal": g[way], "Jitter": jitter}) for way in ("Straight", "Mirrored")]
-            for node in shares:
-                node.inputs["Length"].default_value = preview_shafts.SKY_LENGTH
+            shares = [preview_shafts.shares(ng, light, shadows[light.name], images, g_, {
+                "Beta": g["Beta"], "Camera": g["Position"], "Direction": g[way], "Length": preview_shafts.SKY_LENGTH,
+                "Position": g["Position"], "Normal": g[way], "Jitter": jitter}, preview_shafts.FINAL_SAMPLES)
+                for way in ("Straight", "Mirrored")]
         group = light_groups.build_background_light(mod, images).name
         straight = light_groups.light_instance(ng, first + k, light, group, [
             (g["Beta"], "Beta"), (g["Position"], "Camera"), (g["Straight"], "Direction")])

@@ -244,17 +244,17 @@ def _mirrored(sock, ctx):
     """(value or source socket for the fog's copy of input ``sock``, True if it could be followed)."""
     src = source(sock)
     if src is None:
-        return _own(sock), True
+        return own_value(sock), True
     if src.node.bl_idname == "NodeGroupInput" and ctx:
         outer = next((i for i in ctx[-1].inputs if i.identifier == src.identifier), None)
         if outer is not None:
             return _mirrored(outer, ctx[:-1])
     if ctx:   # computed inside a group: not reachable from the material's tree
-        return _own(sock), False
+        return own_value(sock), False
     return src, True
 
 
-def _own(sock):
+def own_value(sock):
     """Input ``sock``'s own value: a float or a tuple."""
     return tuple(sock.default_value) if hasattr(sock.default_value, "__len__") else sock.default_value
 

@@ -306,9 +306,7 @@ def _glass_copies(srcs):
     Transmission Weight; its reflection is its own glossy fog light): ``glass_tails.place_tails`` adds the fog past
     it in Cycles.  Else []."""
     def value(sock):
-        v = graph.source(sock)
-        return v if v is not None else (tuple(sock.default_value)[:3] if sock.type == "RGBA" else
-                                         float(sock.default_value))
+        return graph.source(sock) or graph.own_value(sock)
     for src in srcs.values():
         if src is None:
             continue

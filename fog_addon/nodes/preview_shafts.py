@@ -75,13 +75,16 @@ def jitter(ng, position):
     return noise.outputs["Value"]
 
 
-def instance(ng, light, group, inputs):
-    """A node of ``light``'s preview shaft ``group`` in ``ng``, its inputs linked from ``inputs`` (name: socket or
-    None for a default)."""
+def shares(ng, light, shadow, images, g, inputs, samples=PREVIEW_SAMPLES):
+    """A node in ``ng`` of ``light``'s shares (``build_group`` of its ``shadow`` map, fog of anisotropy ``g``,
+    ``samples`` nodes a sample), its inputs from ``inputs`` (name: an output socket to link, or a number: Length
+    SKY_LENGTH on a ray to the sky; Light is left for the caller where it is not given yet)."""
     node = ng.nodes.new("ShaderNodeGroup")
-    node.node_tree = group
+    node.node_tree = build_group(light, shadow, images, g, samples)
     node.name = node.label = f"Preview Shaft: {light.name}"
-    for name, sock in inputs.items():
-        if sock is not None:
-            ng.links.new(sock, node.inputs[name])
+    for name, value in inputs.items():
+        if isinstance(value, (int, float)):
+            node.inputs[name].default_value = value
+        else:
+            ng.links.new(value, node.inputs[name])
     return node

@@ -210,17 +210,16 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
 
 
 def _shares(m, ng, light, shadow, images, g, jitter, anisotropy, samples=None):
-    """A node of ``light``'s preview shares (``preview_shafts.build_group``) on the bundle's camera ray, its Light
-    input left for the caller to link.  Built before the light's own group node: Cycles' SVM compiles a shader's
+    """A node of ``light``'s shares (``preview_shafts.shares``) on the bundle's camera ray, its Light input left for
+    the caller to link.  Built before the light's own group node: Cycles' SVM compiles a shader's
     nodes in the order they were made, so the shares' quadrature runs first and only its two results stay on the
     stack while the light's kernels run (the other way round: out of SVM stack space, the material black)."""
     position, incoming = m.wrap(g["Position"], vector=True), m.wrap(g["Incoming"], vector=True)
     length = m.wrap(g["View Distance"])
     camera = position + m.scale(incoming, length)
-    group = preview_shafts.build_group(light, shadow, images, anisotropy, samples or preview_shafts.PREVIEW_SAMPLES)
-    return preview_shafts.instance(ng, light, group, {
+    return preview_shafts.shares(ng, light, shadow, images, anisotropy, {
         "Beta": g["Beta"], "Camera": camera.sock, "Direction": m.scale(incoming, -1.0).sock, "Length": length.sock,
-        "Position": g["Position"], "Normal": g["Normal"], "Jitter": jitter})
+        "Position": g["Position"], "Normal": g["Normal"], "Jitter": jitter}, samples or preview_shafts.PREVIEW_SAMPLES)
 
 
 def _shafted(m, terms, shares):

@@ -35,7 +35,7 @@ def build_world_bundle(images, first, lights, models, with_passes, chained, scal
     m = NodeOps(ng, {})
     g = {s.name: s for s in gin.outputs if s.name}
     medium, is_camera = light_groups.medium(m, g["Beta"], g["Albedo"]), m.wrap(g["Is Camera"])
-    nodes, airlights, colours = [], [], []
+    nodes, airlights, colours, jitter = [], [], [], None
     for k, (light, mod) in enumerate(zip(lights, models)):
         group = light_groups.build_background_light(mod, images).name
         node = light_groups.light_instance(ng, first + k, light, group,
@@ -43,8 +43,9 @@ def build_world_bundle(images, first, lights, models, with_passes, chained, scal
         nodes.append(node)
         sky = light_groups.read(m, node, rungs.SKY_OUTPUTS, shading.SkyTerms)
         if shadows and light.name in shadows:   # the preview's shafts along the ray to the sky
+            jitter = jitter or preview_shafts.jitter(ng, g["Direction"])
             sky = sky._replace(background=m.scale(m.wrap(sky.background, vector=True), _sky_share(
-                m, ng, light, node, shadows[light.name], images, g, g_)))
+                m, ng, light, node, shadows[light.name], images, g, g_, jitter)))
         airlights.append(sky.background)
         colour = m.wrap(shading.shade_background(m, [airlights[-1]], medium, is_camera)[0], vector=True)
         if scaled:
@@ -62,15 +63,13 @@ def build_world_bundle(images, first, lights, models, with_passes, chained, scal
     return ng
 
 
-def _sky_share(m, ng, light, node, shadow, images, g, anisotropy):
+def _sky_share(m, ng, light, node, shadow, images, g, anisotropy, jitter):
     """The lit share of ``light``'s glow (its group instance ``node``) along the ray to the sky
-    (``preview_shafts.build_group``), its nodes turned at each sample by a White Noise of the ray's direction."""
-    group = preview_shafts.build_group(light, shadow, images, anisotropy)
-    shares = preview_shafts.instance(ng, light, group, {
-        "Beta": g["Beta"], "Camera": g["Camera"], "Direction": g["Direction"],
+    (``preview_shafts.shares``), its nodes turned at each sample by ``jitter``."""
+    shares = preview_shafts.shares(ng, light, shadow, images, anisotropy, {
+        "Beta": g["Beta"], "Camera": g["Camera"], "Direction": g["Direction"], "Length": preview_shafts.SKY_LENGTH,
         "Light": node.inputs["Light"].links[0].from_socket, "Position": g["Camera"], "Normal": g["Direction"],
-        "Jitter": preview_shafts.jitter(ng, g["Direction"])})
-    shares.inputs["Length"].default_value = preview_shafts.SKY_LENGTH
+        "Jitter": jitter})
     return m.wrap(shares.outputs["Share"])
 
 
