@@ -220,3 +220,24 @@ def test_daylight_on_a_surface_ray_and_a_sky_ray(monkeypatch):
     sky = compose.source_light(m, 0.0, sunlight.sky_terms(m, day, None, None))
     np.testing.assert_allclose(sky, glow(m, day, None, None, 1e15), rtol=1e-12)
     assert scaled == [], scaled
+
+
+@pytest.mark.parametrize("shared", [False, True])
+def test_a_segment_past_glass_is_its_glow_passed_on_and_dimmed(shared):
+    """A light's glow along a segment past a pane (``shading.segment_terms``): albedo x weight x lit share x tail,
+    dimmed by the camera segment's transmittance (Eq. 19's T on the light the pane sends on), and nothing else of
+    the pixel's; the segments' light adds to the lamps' (the composition is linear)."""
+    from fog_addon.precompute.model import shading
+    v = _values(7)
+    rng = np.random.default_rng(8)
+    tail, weight, share = rng.uniform(0.1, 2.0, (N, 3)), rng.uniform(0.0, 1.0, (N, 3)), rng.uniform(0.0, 1.0, N)
+    m = NumpyOps({})
+    terms = shading.segment_terms(m, tail, weight, v.t_vp, share if shared else None)
+    out = compose.compose(m, Pixel(1.0, ALBEDO), terms)
+    lit = share[:, None] if shared else 1.0
+    expected = ALBEDO * tail * weight * lit * v.t_vp[:, None]
+    assert out.factor is None
+    np.testing.assert_allclose(out.light, expected, rtol=1e-12)
+    both = compose.compose(m, Pixel(1.0, ALBEDO), terms + _lamp_terms(v)).light
+    lamps = ALBEDO * (v.air + v.t_vp[:, None] * v.scattered)
+    np.testing.assert_allclose(both, expected + lamps, rtol=1e-12)

@@ -4,7 +4,7 @@ sharp mirror, by differences of tails to infinity (``place_tails``), built only 
 weight them."""
 from typing import Any, NamedTuple
 
-from ..precompute.model import rungs, shading
+from ..precompute.model import compose, rungs, shading
 from . import closures, groups, light_bundles, light_groups, preview_shafts
 from .groups import C, F, V
 from .sockets import NodeOps
@@ -104,9 +104,9 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
 
 
 def build_tail_bundle(images, first, lights, models, shadows=None, g_=0.0):
-    """One bundle of the Surface group's See Through shader (``place_tails``): for each light, the albedo
-    times Transmittance times Straight Weight x its glow to infinity from Position along Straight, and the
-    same with Mirrored Weight along Mirrored, from two instances of its World group
+    """One bundle of the Surface group's See Through shader (``place_tails``): for each light, its glow to infinity
+    from Position along Straight times Straight Weight, and the same along Mirrored times Mirrored Weight, composed
+    (``shading.segment_terms``: times the albedo and Transmittance), from two instances of its World group
     (``light_groups.build_background_light``), each tail an Emission closure of its own (its colour may be
     negative: Cycles passes negative emission through).
 
@@ -120,8 +120,7 @@ def build_tail_bundle(images, first, lights, models, shadows=None, g_=0.0):
                                             ("Transmittance", F)], [("Fog", "NodeSocketShader")])
     m = NodeOps(ng, {})
     g = {s.name: s for s in gin.outputs if s.name}
-    albedo = m.wrap(g["Albedo"], vector=True)
-    scale = m.scale(albedo, m.wrap(g["Transmittance"]))
+    pixel = compose.Pixel(1.0, m.wrap(g["Albedo"], vector=True))
     colours, jitter = [], None
     mirrored_gate = m.less(0.0, m.dot(m.wrap(g["Mirrored Weight"], vector=True), m.combine(1.0, 1.0, 1.0)))
     for k, (light, mod) in enumerate(zip(lights, models)):
@@ -150,8 +149,10 @@ def build_tail_bundle(images, first, lights, models, shadows=None, g_=0.0):
         # inputs' nodes together, so one Emission of straight + mirrored had both tails' kernels on its stack
         # at once (a spot at the full step: 255 floats, out of SVM stack space, the glass black; 178 as two)
         for j, (node, weight) in enumerate(((straight, g["Straight Weight"]), (mirrored, g["Mirrored Weight"]))):
-            colour = m.wrap(node.outputs[rungs.BACKGROUND_OUT.name], vector=True) * m.wrap(weight, vector=True) * scale
-            colour = m.scale(colour, m.wrap(shares[j].outputs["Share"])) if shares else colour
+            colour = compose.compose(m, pixel, shading.segment_terms(
+                m, m.wrap(node.outputs[rungs.BACKGROUND_OUT.name], vector=True), m.wrap(weight, vector=True),
+                m.wrap(g["Transmittance"]),
+                m.wrap(shares[j].outputs["Share"]) if shares else None)).light
             # the mirrored tail behind a gate: 0 where nothing is mirrored (a Principled glass, whose reflection is
             # its own glossy fog light), where SVM jumps over its kernels and its share
             colours.append(shading.Gated(mirrored_gate, colour, None) if j else colour)

@@ -18,7 +18,8 @@ terms (``Term``): what a value is (its kind), where along the pixel's ray it is 
 * a GLOW at SURFACE (Eq. 11, the glow up to D_vp) counts where the pixel sees its surface, a GLOW at SKY (Eq. 12)
   where it sees the sky, a GLOW along the RAY (its kernel chose where the ray ends: a daylight glow with air, the
   emitters' blurred glows) over the whole pixel;
-* REFLECTED fog light (Eq. 17-18, leaving the surface) is dimmed by its source's DIMMING at SURFACE (Eq. 19's T);
+* REFLECTED fog light (Eq. 17-18, leaving the surface; the fog light of a segment past glass or a mirror, which the
+  pane or the mirror sends on to the camera) is dimmed by its source's DIMMING at SURFACE (Eq. 19's T);
 * a SHARE (a shaft's lit share; a 0/1 gate) multiplies its source's glows where it is taken;
 * a LAYER_END (1 where the ray leaves a fog layer before any surface) makes the glow to the sky the glow along the
   ray, which the kernel ended at the layer's top (``sunlight.lamp_glow_span``); a SHARE at SKY then keeps it to the
@@ -46,7 +47,8 @@ from . import rungs
 
 # What a term's value is (``Term.kind``); the first three are the lamps' ``rungs.OUTPUTS`` kinds
 GLOW = rungs.GLOW             # RGB radiance gathered along the ray, W/(m^2 sr): added as it is
-REFLECTED = rungs.REFLECTED   # RGB radiance leaving the surface point: dimmed on its way by its source's DIMMING
+REFLECTED = rungs.REFLECTED   # RGB radiance leaving the surface point (reflected, or passed on by glass or a
+#                               mirror): dimmed on its way by its source's DIMMING
 DIMMING = rungs.DIMMING       # grey or RGB factor on the light its source leaves the surface (or the sky) with
 SHARE = "share"               # grey factor in [0, 1] on its source's glows taken at the same place
 LAYER_END = "layer end"       # grey 0/1: 1 where the ray leaves a fog layer: the glow to the sky ends there
@@ -68,6 +70,8 @@ class Source(NamedTuple):
 LAMPS = Source("lamps", True)               # point, spot and area lights (``shading.shade_point``, ``glow_pair``)
 DAYLIGHT = Source("sun and sky", False)     # a fog layer's sun and sky (``sunlight.pixel_terms``)
 EMITTERS = Source("glowing objects", True)  # the emitters' glows (``emitter_glow.py``)
+SEGMENTS = Source("segments past glass", True)   # the glows of the segments past glass panes and sharp mirrors
+#                                                  (``shading.segment_terms``, ``nodes/glass_tails.py``)
 RENDER = Source("render", False)            # the render's own pixel: only DIMMINGs, the factor ``compose`` returns
 
 

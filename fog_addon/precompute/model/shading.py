@@ -270,6 +270,20 @@ def _lamp_terms(values, t_vp):
                                                                        compose.LAMPS, t_vp)]
 
 
+def segment_terms(m, tail, weight, t_vp, share=None):
+    """The composer's terms (source ``compose.SEGMENTS``) of one light's glow along a segment past a glass pane or
+    a sharp mirror, per unit albedo: ``tail`` (RGB, W/(m^2 sr)) the segment's glow by a difference of tails to
+    infinity (Sun et al. 2005 Eq. 12; ``nodes/glass_tails.place_tails``), ``weight`` (RGB) the share the pane or
+    the mirror passes on to the camera, ``share`` (grey, or None) the segment's lit share (Dobashi et al. 2002
+    Eq. 2), ``t_vp`` (grey) the camera segment's transmittance before it (Eq. 19's T).  The pane sends the
+    segment's glow on as light leaving its surface: REFLECTED at SURFACE, dimmed by T."""
+    light = tail * weight
+    if share is not None:
+        light = m.scale(light, share)
+    return [compose.Term(compose.REFLECTED, compose.SURFACE, compose.SEGMENTS, light),
+            compose.Term(compose.DIMMING, compose.SURFACE, compose.SEGMENTS, t_vp)]
+
+
 def sum_lights(m, terms, medium, t_vp, is_camera):
     """LightSums of the lights' ``terms`` (LightTerms, at least one): each light's fog light on camera rays
     (Eq. 19's L_a: albedo * (airlight + e^{-beta D_vp} * reflected fog light), ``surface_light``) and EEVEE's
