@@ -42,7 +42,7 @@ def test_no_method_name_is_compared_outside_methods():
     ("emitters", c.CYCLES, ["compositor"]), ("dense_shaped", c.EEVEE, ["compositor"]),
     ("dense_point", c.CYCLES, ["nodes", "compositor"]), ("passes", c.CYCLES, ["nodes", "compositor"]),
     ("passes", c.EEVEE, ["nodes", "compositor"]), ("glass", c.CYCLES, ["nodes", "compositor"]), ("glass", c.EEVEE, []),
-    ("panoramic", c.CYCLES, ["nodes", "osl"]), ("strong_backscatter", c.CYCLES, ["osl"]),
+    ("panoramic", c.CYCLES, ["nodes", "osl", "compositor"]), ("panoramic", c.EEVEE, ["nodes"]), ("strong_backscatter", c.CYCLES, ["osl"]),
 ])
 def test_who_models_what(feature, engine, expected):
     assert c.methods_with(feature, engine) == expected

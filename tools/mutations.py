@@ -206,7 +206,7 @@ MUTATIONS = [
              "    ng.links.new(params.outputs[groups.PREVIEW], mix.inputs[0])",
              "    mix.inputs[0].default_value = 1.0",
              ("tests/test_viewport_preview.py::test_final_renders_are_those_without_the_preview",)),
-    Mutation("auto_needs_before_cost", "Method Auto ignores what the scene needs (a panoramic camera): the "
+    Mutation("auto_needs_before_cost", "Method Auto ignores what the scene needs (a panoramic camera in EEVEE): the "
              "compositor by cost alone", "auto.choose",
              "    if hard is not None:\n",
              "    if False:\n",
@@ -600,6 +600,11 @@ MUTATIONS = [
              "1.0 if isinstance(transmission, (int, float)) and transmission == 0.0 else 1.0 - transmission",
              "1.0",
              ("tests/test_glass_mirror.py::test_fog_past_glass_and_mirrors[principled_box-compositor]",)),
+    Mutation("compositor_panoramic_rays", "panoramic camera, Compositor: the pixels' rays from a perspective frame",
+             "build_fog_group",
+             "        ray = p[DIRECTION_AOV[0]]\n",
+             "        pass\n",
+             ("tests/test_panoramic.py::test_panoramic_camera_against_path_tracing[compositor]",)),
     Mutation("glass_tails_unshadowed", "glass, Compositor: the glows past a pane without their lights' shadows",
              "build_tail_bundle",
              '''                m.wrap(shares[j].outputs["Share"]) if shares else None)).light''',

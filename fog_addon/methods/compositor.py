@@ -37,9 +37,10 @@ class Compositor(Method):
         if why is not None:
             return why
         camera = scene.camera
-        if camera is not None and camera.data.type != "PERSP":
-            return (f"the Compositor method needs a perspective camera ({camera.name!r} is "
-                    f"{camera.data.type.lower()}): use the Node Groups method")
+        eevee = scene.render.engine == budgets.EEVEE_ENGINE
+        if camera is not None and camera.data.type != "PERSP" and (eevee or camera.data.type != "PANO"):
+            return (f"the Compositor method needs a perspective camera{'' if eevee else ' or a panoramic one'} "
+                    f"({camera.name!r} is {camera.data.type.lower()}): use the Node Groups method")
         return None
 
     def shader_lights(self, scene, spec, lights, models):
@@ -68,7 +69,7 @@ class Compositor(Method):
     def signature(self, scene, spec, shader_lights):
         c = scene.cycles
         return (f"compositor:{scene.render.engine}:{c.pixel_filter_type}:{comp_fog.horizontal_fit(scene)}:"
-                f"{scene.camera.data.sensor_fit}|shafts:{spec.shafts}{_moving(scene) if spec.shafts else ''}"
+                f"{scene.camera.data.sensor_fit}:{scene.camera.data.type}|shafts:{spec.shafts}{_moving(scene) if spec.shafts else ''}"
                 f"|glow:{bool(glowing_objects(scene))}|dimming:" + ",".join(o.name_full for o in shader_lights))
 
     def windows(self, scene, lights, partial):
@@ -79,7 +80,8 @@ class Compositor(Method):
         return bpy.data.node_groups.get(comp_fog.FOG_GROUP) is not None
 
     def build(self, scene, spec, plan, images):
-        aovs = functools.partial(comp_fog.add_surface_aovs, engine=scene.render.engine)
+        pano = comp_fog.panoramic(scene) and scene.render.engine != budgets.EEVEE_ENGINE
+        aovs = functools.partial(comp_fog.add_surface_aovs, engine=scene.render.engine, panoramic=pano)
         day, dims = sunsky.builder(scene, spec), sunsky.dims_surfaces(scene, plan.in_groups)
         table, table_images = sunsky.fog_light_table(scene, spec)   # (None: no daylight to glow)
         images = dict(images, **table_images)
@@ -99,15 +101,15 @@ class Compositor(Method):
                                           view.full_windows(plan.in_groups) if plan.partial else plan.windows,
                                           plan.partial, (maps, shafts.samples_for(spec.quality, len(maps)),
                                                          spec.anisotropy),
-                                          emitters=((spec.anisotropy, spec.multiple_albedo) if glowing_objects(scene)
-                                                    else None),
+                                          emitters=((spec.anisotropy, spec.multiple_albedo)
+                                                    if glowing_objects(scene) and not pano else None),
                                           day=(comp_daylight.Day(day, table, dims, sun_shadow,
                                                                  shafts.samples_for(spec.quality).view_nodes)
                                                if daylit else None),
                                           layer=spec.layer_per_unit() if spec.layered else None,
                                           with_passes=spec.passes)
         world_group.build_world([], [], scene.camera, images, spec.passes, day=day, day_dims=not daylit,
-                                preview=preview)
+                                preview=preview, extra=comp_fog.add_world_aovs if pano else None)
         return images
 
     def update(self, scene, spec, plan):
@@ -117,7 +119,8 @@ class Compositor(Method):
             preview_sampled.write_table(scene, sampled_lights(plan), spec.beta_per_unit)
 
     def passes(self, scene, spec):   # (the fog passes: the materials' transmittance, the fog group's light)
-        return comp_fog.aovs(scene.render.engine) + (((passes.TRANSMITTANCE, "VALUE"),) if spec.passes else ())
+        return (comp_fog.aovs(scene.render.engine, comp_fog.panoramic(scene))
+                + (((passes.TRANSMITTANCE, "VALUE"),) if spec.passes else ()))
 
     def notes(self, scene, spec, plan):
         layers = unfogged_layers(scene)
@@ -128,6 +131,10 @@ class Compositor(Method):
                       ] if layers else []
         n, kept = len(plan.in_groups), len(plan.shader_lights)
         layer_note += self.preview_notes(scene, spec, plan)
+        glowing = glowing_objects(scene)
+        if glowing and comp_fog.panoramic(scene):
+            layer_note.append((scene.camera.name, f"is panoramic: the glowing objects ({caveats.listed([o.name for o in glowing])}) "
+                                                  "get no glow (the compositor blurs a perspective picture)"))
         if spec.passes:
             name = compositor.passes_file_name("<view layer>").replace("####", "<frame>")
             layer_note.append((scene.name, f"the fog passes are the compositor's: each render writes them beside its "

@@ -65,15 +65,31 @@ AOV_ROLE = "Compositor AOV"   # the Surface group's AOV Output nodes: "<AOV_ROLE
 PRINCIPLED = ("Base Color", "Metallic", "Roughness", "Specular IOR Level", "Transmission Weight")
 
 
-def aovs(engine):
-    """The AOVs (name, kind) the Compositor method reads in ``engine`` (a ``render.engine``)."""
-    return EEVEE_AOVS if engine == budgets.EEVEE_ENGINE else AOVS
+DIRECTION_AOV = ("Fog Direction", "COLOR")   # a panoramic camera's rays (Cycles): each sample's, the pixel's mean
 
 
-def add_surface_aovs(surface_group, engine="CYCLES"):
-    """AOV Output nodes in the Surface group: the compositor's inputs per sample (``aovs(engine)``), the
-    normal as (1 + n) / 2 (EEVEE clamps negatives), the Principled inputs as the fog reads them
-    (``surface.principled_to_phong`` runs in the compositor)."""
+def panoramic(scene):
+    """True if ``scene``'s camera is panoramic: the compositor reads its pixels' rays from the Fog Direction AOV
+    (the materials' and the World's) instead of a perspective image plane (``camera_frame``)."""
+    return scene.camera is not None and scene.camera.data.type == "PANO"
+
+
+def aovs(engine, panoramic=False):
+    """The AOVs (name, kind) the Compositor method reads in ``engine`` (a ``render.engine``), with a panoramic
+    camera's ray directions (Cycles)."""
+    return EEVEE_AOVS if engine == budgets.EEVEE_ENGINE else AOVS + ((DIRECTION_AOV,) if panoramic else ())
+
+
+def _aov_node(tree, m, name, kind, k, value):
+    node = owned.add(tree, "ShaderNodeOutputAOV", f"{AOV_ROLE} {name}", (4000, -300 - 150 * k))
+    node.aov_name = name
+    m.feed(node.inputs["Color" if kind == "COLOR" else "Value"], value)
+
+
+def add_surface_aovs(surface_group, engine="CYCLES", panoramic=False):
+    """AOV Output nodes in the Surface group: the compositor's inputs per sample (``aovs(engine, panoramic)``),
+    the normal as (1 + n) / 2 (EEVEE clamps negatives), the Principled inputs as the fog reads them
+    (``surface.principled_to_phong`` runs in the compositor), a panoramic camera's ray direction (-Incoming)."""
     m = NodeOps(surface_group)
     gin = next(n for n in surface_group.nodes if n.bl_idname == "NodeGroupInput")
     geo = surface_group.nodes.new("ShaderNodeNewGeometry")
@@ -81,11 +97,19 @@ def add_surface_aovs(surface_group, engine="CYCLES"):
     normal = m.wrap(geo.outputs["Normal"], vector=True)
     values = {"Fog Coverage": m.wrap(1.0), "Fog Position": m.wrap(geo.outputs["Position"], vector=True),
               "Fog Depth": m.wrap(cam.outputs["View Z Depth"]), "Fog Normal": m.scale(normal, 0.5) + (0.5, 0.5, 0.5),
+              DIRECTION_AOV[0]: m.scale(m.wrap(geo.outputs["Incoming"], vector=True), -1.0),
               **{f"Fog {k}": m.wrap(gin.outputs[k], vector=k == "Base Color") for k in PRINCIPLED}}
-    for k, (name, kind) in enumerate(aovs(engine)):
-        node = owned.add(surface_group, "ShaderNodeOutputAOV", f"{AOV_ROLE} {name}", (4000, -300 - 150 * k))
-        node.aov_name = name
-        m.feed(node.inputs["Color" if kind == "COLOR" else "Value"], values[name])
+    for k, (name, kind) in enumerate(aovs(engine, panoramic)):
+        _aov_node(surface_group, m, name, kind, k, values[name])
+    m.place()
+
+
+def add_world_aovs(world_group):
+    """The World group's Fog Direction AOV (a panoramic camera's, Cycles): the ray's direction, which the World
+    reads as its Position.  With the materials' it is every sample's ray, whose mean the compositor normalises."""
+    m = NodeOps(world_group)
+    geo = world_group.nodes.new("ShaderNodeNewGeometry")
+    _aov_node(world_group, m, *DIRECTION_AOV, 0, m.vmath("NORMALIZE", m.wrap(geo.outputs["Position"], vector=True)))
     m.place()
 
 
@@ -198,7 +222,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     units (``FogSpec.layer_per_unit``), where the lights' glows end (``sunlight.lamp_glow_span``), or None for fog
     that fills all space.  Rebuilt in place, so the scene's compositor keeps its group node.  Returns the table
     images it reads (``images`` and the pixel filter's and the emitters' weights)."""
-    filt, peak = comp_lights.pixel_filter(scene), None
+    filt, peak = None if panoramic(scene) else comp_lights.pixel_filter(scene), None
     if filt is not None:
         peak, baker = pixel.filter_table(filt[0])
         images = dict(images, **{peak.name: images_.table_image(peak, baker)})
@@ -206,7 +230,9 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
         images = dict(images, **comp_emitters.emitter_table(*emitters[:1], comp_emitters.emitter_pixel_angle(scene),
                                                             emitters[1]))
     eevee = scene.render.engine == budgets.EEVEE_ENGINE
-    inputs = ((("Image", "COLOR"),) + aovs(scene.render.engine) + (((compositor.DEPTH, "VALUE"),) if eevee else ())
+    pano = panoramic(scene) and not eevee
+    inputs = ((("Image", "COLOR"),) + aovs(scene.render.engine, pano)
+              + (((compositor.DEPTH, "VALUE"),) if eevee else ())
               + (((EMITTERS, "COLOR"),) if emitters is not None else ())
               + (((passes.TRANSMITTANCE, "VALUE"),) if with_passes else ()))
     outputs = ("Image", passes.FOG_LIGHT) + ((passes.TRANSMITTANCE,) if with_passes else ())
@@ -238,7 +264,11 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     uv = m.wrap(coords.outputs["Normalized"], vector=True)
     corner, across, up = camera_frame(m, scene)
     ray = corner + m.scale(across, m.dot(uv, (1.0, 0.0, 0.0))) + m.scale(up, m.dot(uv, (0.0, 1.0, 0.0)))
-    direction = m.scale(ray, 1.0 / m.length(ray))
+    if pano:   # the pixel's mean ray, as the camera traced it (``add_world_aovs``)
+        ray = p[DIRECTION_AOV[0]]
+        direction = m.scale(ray, 1.0 / m.maximum(m.length(ray), 1e-9))
+    else:
+        direction = m.scale(ray, 1.0 / m.length(ray))
     if eevee:   # ray is the pixel's ray at unit view depth
         pos = pixel.depth_surface(m, cam, ray, p[compositor.DEPTH], p["Fog Depth"] * inv)
     else:

@@ -74,7 +74,7 @@ def _sky_share(m, ng, light, node, shadow, images, g, anisotropy, jitter):
 
 
 def build_world(lights, models, camera, images, with_passes=False, day=None, day_table=None, day_dims=True,
-                preview=None):
+                preview=None, extra=None):
     """Scene group for the World: ``shading.shade_background`` (Sun et al. 2005 Eq. 12) over ``lights``.
 
     Camera position by TRANSFORMS drivers on ``camera`` (no node gives it in a
@@ -88,7 +88,8 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
     whose glow is on sit in bundle groups (``light_bundles.split``, ``build_world_bundle``).  ``preview``:
     ``preview.Shown``, the viewport's preview of a fog added at render time, their glows behind the Params group's Viewport
     Preview (``preview.behind_switch``), or None; not where the World is left to the compositor (``day_dims``
-    False: the sky through a daylit layer), whose glows on sky rays the preview then leaves out.
+    False: the sky through a daylit layer), whose glows on sky rays the preview then leaves out.  ``extra(group)``:
+    adds nodes of its own (the Compositor method's AOVs with a panoramic camera, ``comp_fog.add_world_aovs``).
     """
     ng, gin, gout = groups.new_group(groups.WORLD, [],
                                      [("Fog", "NodeSocketShader"), ("Emission", C), ("Transmittance", F)])
@@ -159,6 +160,8 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
                                             is_camera)
         passes.write_group(m, ng, m.wrap(light, vector=True), m.wrap(transmittance))
     m.place()
+    if extra is not None:
+        extra(ng)
     ng = groups.install(ng, groups.WORLD)
     light_bundles.name_bundles(bundles + (preview_trees if preview else []))
     return ng

@@ -23,7 +23,7 @@ OSL_WAS = "analytic_fog_osl_was"   # scene custom property: Cycles' OSL switch b
 LIGHTS_KEY = "analytic_fog_lights"  # on the Surface group: the lights, their models and the camera it was built for
 SPEC_KEY = "analytic_fog_spec"   # on the Surface group: a copy of the FogSpec it was built with (for farms and
 #                                  people reading the file; the add-on reads the scene's settings, never this)
-AOV_KINDS = dict(passes.AOVS + comp_fog.AOVS + comp_fog.EEVEE_AOVS)   # every AOV the fog adds to view layers
+AOV_KINDS = dict(passes.AOVS + comp_fog.AOVS + comp_fog.EEVEE_AOVS + (comp_fog.DIRECTION_AOV,))   # every AOV the fog adds to view layers
 
 
 def use_osl(scene, on):

@@ -66,6 +66,9 @@ def main():
     RES["cycles_1_g_below_tables"] = choice(scene, anisotropy=-0.9)
     scene.camera.data.type = "PANO"
     RES["cycles_1_panoramic"] = choice(scene)
+    scene.render.engine = "BLENDER_EEVEE"
+    RES["eevee_1_panoramic"] = choice(scene)
+    scene.render.engine = "CYCLES"
     scene.camera.data.type = "PERSP"
     scene.cycles.samples = 1
     RES["cycles_1_one_sample"] = choice(scene, shafts=False)

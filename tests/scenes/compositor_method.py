@@ -206,7 +206,8 @@ def main():
             scene.render.engine = "BLENDER_WORKBENCH"
         elif case == "backscatter":
             kwargs["anisotropy"] = -0.9
-        else:
+        else:   # (EEVEE: Cycles' panoramic rays reach the compositor by an AOV, EEVEE has none)
+            scene.render.engine = "BLENDER_EEVEE"
             scene.camera.data.type = "PANO"
         try:
             apply.apply_fog(scene, BETA, method="compositor", **kwargs)
