@@ -92,7 +92,7 @@ class Compositor(Method):
         sun_shadow, sun_images = sunsky.sun_shadow(scene, spec, lazy=plan.this_frame) if daylit else (None, {})
         shadow_maps.remove_unused(set(shadow_images) | set(sun_images))
         images = dict(images, **shadow_images, **sun_images)
-        preview, sampled_images = _preview(scene, spec, plan, maps)
+        preview, sampled_images = _preview(scene, spec, plan, maps, table, dims)
         images = dict(images, **sampled_images)
         surface_group.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs,
                                     tails=_tails(scene, spec, plan, maps), day=day,
@@ -168,6 +168,13 @@ class Compositor(Method):
             names = caveats.listed([o.name for o in unshafted])
             notes.append(("Viewport", f"the viewport's preview shows no light shafts of {names} {why} (final "
                                       "renders, F12, have them)"))
+        glowing = glowing_objects(scene)
+        if glowing:
+            notes.append(("Viewport", f"the viewport's preview shows no glow of the glowing objects "
+                                      f"({caveats.listed([o.name for o in glowing])}): final renders, F12, have it"))
+        if spec.layered and shown:
+            notes.append(("Viewport", "the viewport's preview takes the lamps' glows through the fog layer's density "
+                                      "everywhere, also above its top (final renders, F12, end them there)"))
         if not left:
             return notes
         return notes + [("Viewport", f"the viewport's preview of the fog leaves out {len(left)} of the "
@@ -192,18 +199,19 @@ class Compositor(Method):
         shadow_maps.remove_unused()
 
 
-def _preview(scene, spec, plan, maps):
+def _preview(scene, spec, plan, maps, day_table=None, day_dims=True):
     """(``preview.Shown`` of the viewport's preview (``plan.preview``) or None, the images it reads): in Cycles its
     shafted lights' still maps give it their shafts (``preview_shafts.py``; an animation's atlas does not, nor
     EEVEE, whose uniform block the shares' constants would fill); the other point lights are sampled one a sample
-    (``preview_sampled.py``)."""
-    if not plan.preview or not plan.preview[0]:
+    (``preview_sampled.py``); a fog layer's sun and sky (``day_table``: the fog light's TableSpec, or None) as the
+    node groups give them, their dimming of the surfaces' direct light where ``day_dims``."""
+    lights, models = plan.preview[:2] if plan.preview else ([], [])
+    if not lights and day_table is None:
         preview_sampled.write_table(scene, [], spec.beta_per_unit)
         return None, {}
-    lights, models = plan.preview[:2]
     shadows = _still_maps(lights, maps) if scene.render.engine == "CYCLES" else {}
-    table, img = preview_sampled.write_table(scene, sampled_lights(plan), spec.beta_per_unit)
-    return (preview_.Shown(lights, models, shadows or None, spec.anisotropy, table),
+    table, img = preview_sampled.write_table(scene, sampled_lights(plan) if lights else [], spec.beta_per_unit)
+    return (preview_.Shown(lights, models, shadows or None, spec.anisotropy, table, day_table, day_dims),
             {table.name: img} if table is not None else {})
 
 

@@ -28,6 +28,22 @@ class Shown(NamedTuple):
     shadows: Any = None        # {light name: shadow_maps.ShadowMap} of those whose shafts it shows (Cycles), or None
     g: float = 0.0             # the fog's anisotropy (the shafts' phase weight)
     sampled: Any = None        # the TableSpec of the other point lights, sampled one a sample (``preview_sampled``)
+    day_table: Any = None      # the fog layer's fog light TableSpec where the compositor adds the daylight: the
+    #                            preview's sun and sky, their glow, fog light and dimming, or None
+    day_dims: bool = True      # the preview dims the surfaces' direct light by the sun's and the sky's dimming
+    #                            (``sunsky.dims_surfaces``)
+
+
+def factor(m, params):
+    """The Viewport Preview value of the Params group node ``params`` as a value of ``m``."""
+    return m.wrap(params.outputs[groups.PREVIEW])
+
+
+def blend(m, final, previewed, shown):
+    """``final`` where the preview is off, ``previewed`` where it shows (``shown``: ``factor``): final + shown x
+    (previewed - final).  At 0 Cycles folds it to ``final`` when it compiles the shader (x 0 and + 0 fold away), so
+    a final render runs none of ``previewed``'s nodes; elsewhere (EEVEE) it is final + 0, the same number."""
+    return final + shown * (previewed - final)
 
 
 _forced = []   # non-empty while a render must show the preview (``forced``)

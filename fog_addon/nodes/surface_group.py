@@ -132,16 +132,25 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     # pane or mirror on a specular segment (Ray Length: the point is P + Incoming x Ray Length's end)
     length = m.select(segment, m.wrap(path.outputs["Ray Length"]), view)
     t_vp, transmit = shading.view_transmittance(m, m.wrap(params.outputs["Beta"]), length, fogged)
+    # the viewport's preview of a daylight the compositor adds (``preview.Shown.day_table``): the exact grey
+    # transmittance, the sun's and the sky's dimming and their light, where the preview shows (``preview.blend``)
+    day_preview = preview.day_table if preview and day is not None else None
+    shown = preview_.factor(m, params) if day_preview is not None else None
     if day is not None:
         daylight = day(m, m.wrap(params.outputs["Beta"]), m.wrap(params.outputs["Albedo"], vector=True))
         position, incoming = m.wrap(geo.outputs["Position"], vector=True), m.wrap(geo.outputs["Incoming"], vector=True)
         # a shader's factor is one number: with air, the mean of its colour (the Compositor takes the colour)
-        t_vp = (sunlight.grey(m, sunlight.view_transmittance(m, daylight, position, incoming, length)) if day_exact
-                else sunlight.proxy_transmittance(m, daylight, length))
+        exact = (lambda: sunlight.grey(m, sunlight.view_transmittance(m, daylight, position, incoming, length)))
+        t_vp = exact() if day_exact else sunlight.proxy_transmittance(m, daylight, length)
+        if shown is not None and not day_exact:
+            t_vp = preview_.blend(m, t_vp, exact(), shown)
         transmit = 1.0 + fogged * (t_vp - 1.0)
+        dimming = (lambda: sunlight.grey(m, sunlight.direct_dimming(
+            m, daylight, position, m.wrap(geo.outputs["Normal"], vector=True))))
         if day_dims:
-            transmit = transmit * sunlight.grey(m, sunlight.direct_dimming(
-                m, daylight, position, m.wrap(geo.outputs["Normal"], vector=True)))
+            transmit = transmit * dimming()
+        elif shown is not None and preview.day_dims:
+            transmit = transmit * preview_.blend(m, 1.0, dimming(), shown)
     glow_length = view * (1.0 - segment)   # a specular segment's glow is the tails' (``glass_tails``)
     shared = {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"], "Position": geo.outputs["Position"],
               "Incoming": geo.outputs["Incoming"], "View Distance": glow_length.sock,
@@ -164,16 +173,15 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
         if preview.sampled is not None:   # the other point lights, one sampled a sample
             shaders.append(preview_sampled.group_node(ng, preview_sampled.build_surface_group(
                 images, preview.sampled, preview.g), shared))
+        if day_preview is not None:   # the sun's and the sky's glow and fog light, as the node groups give them
+            shaders.append(_day_light(m, ng, daylight, day_preview, geo, incoming, length, diffuse + specular, t_vp,
+                                      is_camera)[0])
         fogs += [sock for sock in [preview_.behind_switch(ng, params, shaders)] if sock]
     fog = shading.surface_fog(m, sums, transmit)
     if day is not None and day_table is not None:
-        light = m.scale(compose.surface_light(m, sunlight.surface_terms(
-            m, daylight, day_table, position + m.scale(incoming, length), m.scale(incoming, -1.0), position,
-            m.wrap(geo.outputs["Normal"], vector=True), diffuse + specular, length, t_vp)), is_camera)
-        emit = ng.nodes.new("ShaderNodeEmission")
-        emit.location = (3000, -600)
-        m.feed(emit.inputs["Color"], light)
-        fogs.append(emit.outputs["Emission"])
+        emission, light = _day_light(m, ng, daylight, day_table, geo, incoming, length, diffuse + specular, t_vp,
+                                     is_camera)
+        fogs.append(emission)
         fog = fog._replace(emission=fog.emission + light)
     closures.shader_tree(ng, gout.inputs["Fog"], fogs)
     for sock, v in (("Emission", fog.emission), ("Transmittance", fog.transmittance),
@@ -207,6 +215,20 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     ng = groups.install(ng, groups.SURFACE)
     light_bundles.name_bundles(bundles + tails + (preview_trees if preview else []))
     return ng
+
+
+def _day_light(m, ng, daylight, table, geo, incoming, length, reflectance, t_vp, is_camera):
+    """(an Emission's output, its colour) of a fog layer's sun and sky on camera rays (``sunlight.surface_terms``,
+    composed: Sun et al. 2005 Eq. 19): the glow along the ray to the surface and the fog light it reflects, from the
+    fog light's ``table``."""
+    position = m.wrap(geo.outputs["Position"], vector=True)
+    light = m.scale(compose.surface_light(m, sunlight.surface_terms(
+        m, daylight, table, position + m.scale(incoming, length), m.scale(incoming, -1.0), position,
+        m.wrap(geo.outputs["Normal"], vector=True), reflectance, length, t_vp)), is_camera)
+    emit = ng.nodes.new("ShaderNodeEmission")
+    emit.location = (3000, -600)
+    m.feed(emit.inputs["Color"], light)
+    return emit.outputs["Emission"], light
 
 
 def _shares(m, ng, light, shadow, images, g, jitter, anisotropy, samples=None):

@@ -111,15 +111,19 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
     medium = light_groups.medium(m, params.outputs["Beta"], params.outputs["Albedo"])
     is_camera = m.wrap(path.outputs["Is Camera Ray"])
     transmittance = shading.shade_background(m, [], medium, is_camera, m.wrap(params.outputs[groups.WORLD_LIGHT]))[1]
-    day_glow, layer_scale = None, None
-    preview = preview if day is None or day_dims else None   # (a World the compositor dims: its Fog is not shown)
+    day_glow, layer_scale, day_preview = None, None, None
+    if day is not None and not day_dims:   # a World the compositor dims: the preview dims it, or shows nothing
+        preview = preview if preview and preview.day_table is not None else None
+        day_preview = preview.day_table if preview else None
     if day is not None:   # (``in_world``: no driver reads the World from its own group: a dependency cycle)
         daylight = day(m, m.wrap(params.outputs["Beta"]), m.wrap(params.outputs["Albedo"], vector=True),
                        in_world=True)
         camera_at = m.wrap(cam.outputs[0], vector=True)
         seen = sunlight.grey(m, sunlight.sky_seen(m, daylight, camera_at, direction))
         transmittance = 1.0 + is_camera * (seen - 1.0) if day_dims else m.const(1.0)
-        if day_table is not None:
+        if day_preview is not None:   # the sky through the layer where the preview shows (``preview.blend``)
+            transmittance = preview_.blend(m, 1.0, 1.0 + is_camera * (seen - 1.0), preview_.factor(m, params))
+        if day_table is not None or day_preview is not None:
             day_glow = m.scale(compose.source_light(m, 0.0, sunlight.sky_terms(m, daylight, camera_at, direction)),
                                is_camera)
         if kept or day_table is not None or preview:   # (the compositor's World: no glow, the sky dimmed per pixel)
@@ -144,10 +148,14 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
         if preview.sampled is not None and layer_scale is None:   # the other point lights, one sampled a sample
             shaders.append(preview_sampled.group_node(ng, preview_sampled.build_world_group(
                 images, preview.sampled, preview.g), shared))
+        if day_preview is not None:   # the sun's and the sky's glow to the sky
+            emit = ng.nodes.new("ShaderNodeEmission")
+            m.feed(emit.inputs["Color"], m.scale(day_glow, layer_scale))
+            shaders.append(emit.outputs["Emission"])
         fogs += [sock for sock in [preview_.behind_switch(ng, params, shaders)] if sock]
     emission = shading.shade_background(
         m, [m.wrap(node.outputs["Airlight"], vector=True) for node, _ in placed], medium, is_camera)[0]
-    if day_glow is not None:
+    if day_glow is not None and day_preview is None:
         emission = m.wrap(emission, vector=True) + day_glow
         emit = ng.nodes.new("ShaderNodeEmission")
         m.feed(emit.inputs["Color"], m.scale(day_glow, layer_scale))
