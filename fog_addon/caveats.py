@@ -231,9 +231,9 @@ def glass_note(materials, objects):
     shown = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
     return (f"see-through materials ({shown}): in Cycles with the Node Groups and Compositor methods, the fog "
             "behind a Glass BSDF or a Principled BSDF of roughness 0 that lets light through (straight through the "
-            "pane) and in sharp mirrors is shaded along the path (a mirror shows lamps blurred by about 2 degrees; "
-            "with the Compositor, of the 8 brightest lights); rough glass, glass mixed with other shaders, the OSL "
-            "method and EEVEE show only the fog in front of the first surface")
+            "pane; on its own or in a Mix or Add Shader) and in sharp mirrors is shaded along the path (a mirror "
+            "shows lamps blurred by about 2 degrees; with the Compositor, of the 8 brightest lights); rough glass, "
+            "glass inside a node group, the OSL method and EEVEE show only the fog in front of the first surface")
 
 
 EEVEE_CLIP_RATIO = 1e7   # EEVEE's depth loses its way beyond this clip end / clip start (blender-facts.md)

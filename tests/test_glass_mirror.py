@@ -25,7 +25,8 @@ pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a su
 SCENE = h.ROOT / "tests" / "scenes" / "glass_mirror.py"
 # relative RMSE bounds: about twice what was measured (the fog's render noise through the IOR 1.5 pane's
 # Fresnel choice, and the reference's), and the mirror's blur
-LIMITS = {"glass": (0.015, 0.015), "glass_box": (0.03, 0.03), "principled_box": (0.03, 0.03), "mirror": (0.12, 0.10)}
+LIMITS = {"glass": (0.015, 0.015), "glass_box": (0.03, 0.03), "principled_box": (0.03, 0.03), "mirror": (0.12, 0.10),
+          "mixed_box": (0.09, 0.09)}
 
 
 def _render(case, mode, out, samples, method="nodes"):
@@ -69,14 +70,18 @@ SLOW_MIRROR = pytest.mark.slow(reason="the default tier's boxes hold the specula
     ("glass_box", "nodes"), ("glass_box", "compositor"),
     pytest.param("principled_box", "nodes", marks=pytest.mark.slow(reason="the default tier's Principled glass is "
                                                                             "the default method's")),
-    ("principled_box", "compositor")])
+    ("principled_box", "compositor"),
+    pytest.param("mixed_box", "nodes", marks=pytest.mark.slow(reason="glass in a mix: the boxes hold the contract"))])
 def test_fog_past_glass_and_mirrors(case, method, tmp_path, reference):
     """Against Cycles' path-traced World volume: the fog behind the pane and in the mirror (its glow to the
     wall and to the sky, the wall's extinction and fog light) within LIMITS; nothing non-finite.  With the
     Compositor method the materials shade what lies past the pane (``methods.compositor._tails``): the same
     figures as the Node Groups' (measured 2026-11-29: 0.36 %, 1.56 %, 8.7 %; 94.6 % in the glass box before).  A
     Principled BSDF of Transmission 1 (Blender's usual glass): 1.55 % with either method (78.8 % and 85.9 %
-    before: no fog past it, and its surface lit as an opaque white one)."""
+    before: no fog past it, and its surface lit as an opaque white one).  Glass in a Mix Shader with a Transparent
+    BSDF (0.6 glass): 4.6 % with the Node Groups (140 % before: the mix's glass had no tails, and what the
+    Transparent BSDF let through on a segment was taken away at the next vertex but never added); the Compositor
+    16.6 % (its one surface per pixel, wrong with any transparency: Auto's caveat)."""
     inside, frame = _errors(case, tmp_path, reference, method)
     pane_limit, frame_limit = LIMITS[case]
     assert inside["n_nonfinite"] == 0 and frame["n_nonfinite"] == 0

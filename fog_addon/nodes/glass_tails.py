@@ -5,7 +5,7 @@ weight them."""
 from typing import Any, NamedTuple
 
 from ..precompute.model import compose, rungs, shading
-from . import closures, groups, light_bundles, light_groups, preview_shafts
+from . import closures, groups, light_bundles, light_groups, passes, preview_shafts
 from .groups import C, F, V
 from .sockets import NodeOps
 
@@ -77,13 +77,17 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
     glass = m.scale(m.wrap(g[GLASS_COLOR], vector=True), m.wrap(g[GLASS_WEIGHT]))
     incoming = m.wrap(geo.outputs["Incoming"], vector=True)
     seg3 = m.combine(segment, segment, segment)
+    # what a specular segment's vertex lets straight through (a Transparent BSDF, Alpha, beside glass in a mix): its
+    # ray goes on as the same kind of segment, which the next vertex ends by taking away the tail past itself
+    through = m.scale(m.maximum(m.combine(1.0, 1.0, 1.0) - m.wrap(g[passes.OPACITY], vector=True),
+                                m.combine(0.0, 0.0, 0.0)), segment)
     # the tails' own copy of Position (the same value): the light groups' nodes that read Position would
     # otherwise be one node in Cycles' graph (its deduplication) with the Surface bundles' and, read by both
     # sides of the closure tree, stay on SVM's stack for both: 4 floats a light (199 floats at 24 lights)
     position = m.wrap(shared["Position"], vector=True) + closures.exact_zero(m, incoming)
     inputs = dict(shared, **{"Position": position.sock, "Straight": m.scale(incoming, -1.0).sock,
                              "Mirrored": shading.mirror(m, incoming, m.wrap(geo.outputs["Normal"], vector=True)).sock,
-                             "Straight Weight": (m.scale(glass, 1.0 - f) - seg3).sock,
+                             "Straight Weight": (m.scale(glass, 1.0 - f) - seg3 + through).sock,
                              "Mirrored Weight": m.scale(glass, f * m.wrap(g[GLASS_MIRRORED])).sock,
                              "Transmittance": t_vp.sock})
     fogs, trees = [], []

@@ -25,6 +25,7 @@ import json
 
 import bpy
 
+from .. import caveats
 from . import groups, owned
 
 TARGETS = ("CYCLES", "EEVEE")
@@ -125,13 +126,14 @@ class Kinds:
     ``reads``: the first Principled / Diffuse BSDF, with the group nodes it sits in;
     ``opaque``: some part does not let light through (every shader but Transparent BSDF and Holdout);
     ``unread``: labels of reflecting shaders the fog does not read; ``hidden``: names of
-    node groups with transparency or holdouts inside.
+    node groups with transparency or holdouts inside; ``glass``: (weight, node) of the first glass in the mix, not
+    inside a group (a Glass BSDF, or a Principled BSDF that lets light through, ``GLASS_KINDS``), or None.
     Colours are sockets or 3-tuples, strengths sockets or floats, weights tuples of factors.
     """
 
     def __init__(self):
         self.passes, self.emitters, self.unread, self.hidden = [], [], [], []
-        self.reads, self.opaque = None, False
+        self.reads, self.opaque, self.glass = None, False, None
 
     def constant_passes(self):
         """True if every pass-through weight and colour is a constant."""
@@ -176,6 +178,8 @@ def _analyse(sock, weight, ctx, kinds, depth=0):
         kinds.opaque = True
         if kinds.reads is None:
             kinds.reads = (node, ctx)
+        if top and kinds.glass is None and is_glass(node):
+            kinds.glass = (weight, node)
         alpha = _fraction(node.inputs["Alpha"])
         if alpha != 1.0:
             if top:
@@ -192,11 +196,25 @@ def _analyse(sock, weight, ctx, kinds, depth=0):
             kinds.emitters.append((weight, c, s))
     else:
         kinds.opaque = True
+        if top and kinds.glass is None and is_glass(node):
+            kinds.glass = (weight, node)
         if kind == "ShaderNodeBsdfDiffuse":
             if kinds.reads is None:
                 kinds.reads = (node, ctx)
         else:
             kinds.unread.append(node.bl_label)
+
+
+def is_glass(node):
+    """True for a shader the fog shades past in Cycles (``glass_tails.py``): a Glass BSDF, or a Principled BSDF of
+    roughness 0 that lets light through (``caveats.sharp_transmission``)."""
+    return node.bl_idname == "ShaderNodeBsdfGlass" or (node.bl_idname == "ShaderNodeBsdfPrincipled"
+                                                       and caveats.sharp_transmission(node))
+
+
+def weight_key(weight):
+    """A weight (a tuple of factors) as plain data: a stamp's (``stamp``) and a memo's key."""
+    return tuple(f if isinstance(f, float) else (skey(f[0]), f[1]) for f in weight)
 
 
 def skey(sock):

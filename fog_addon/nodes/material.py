@@ -72,7 +72,6 @@ The weights, the opacity o and the emission given back are built by
 """
 import bpy
 
-from .. import caveats
 from . import glass_tails, graph, groups, overrides, owned, passes
 from .graph import BLACK, TARGETS, WHITE
 from .sockets import NodeOps, Val
@@ -196,8 +195,9 @@ def wrap_material(mat):
     lost = [name for name, _, ok in copies if not ok]
     built = graph.built_from(outs, srcs, kinds, copies)
     built["passes"] = passes.VERSION   # a material fogged before the fog passes is rebuilt once
-    glass = _glass_copies(srcs)
+    glass, glass_weight = _glass_copies(kinds, srcs)
     built["glass"] = [(name, graph.skey(v) if isinstance(v, bpy.types.NodeSocket) else v) for name, v in glass]
+    built["glass weight"] = None if glass_weight is None else graph.weight_key(glass_weight)
     fog = owned.find(tree, "Surface")
     if (fog is not None and fog.bl_idname == "ShaderNodeGroup"
             and fog.node_tree == bpy.data.node_groups.get(groups.SURFACE)
@@ -206,7 +206,7 @@ def wrap_material(mat):
     # rebuild from the user's current nodes (the sockets found above are all the user's), in the same place
     anchor = tuple(fog.location) if fog is not None else None
     unwrap_material(mat)
-    fog = _build(tree, anchor, outs, srcs, kinds, copies + [(name, v, True) for name, v in glass])
+    fog = _build(tree, anchor, outs, srcs, kinds, copies + [(name, v, True) for name, v in glass], glass_weight)
     fog[STAMP] = graph.stamp(built, tree)
     if not any(k.emitters for k in kinds.values()):
         # the fog's emission is for camera rays only: as a light it would only steal light samples
@@ -236,8 +236,9 @@ def _dim_emitted_light(ops, tree, emitting, last, location):
     return add.outputs[0]
 
 
-def _build(tree, anchor, outs, srcs, kinds, copies):
-    """Make the fog's nodes in ``tree`` (at ``anchor``, or beside the user's nodes); returns its Surface node."""
+def _build(tree, anchor, outs, srcs, kinds, copies, glass_weight=None):
+    """Make the fog's nodes in ``tree`` (at ``anchor``, or beside the user's nodes); returns its Surface node.
+    ``glass_weight``: the weight of the glass in its mix (``_glass_copies``), or None."""
     x0, y0 = anchor or (max((n.location.x for n in tree.nodes), default=0) + 300,
                         min((n.location.y for n in tree.nodes), default=0) - 300)
     ops = _Terms(tree, x0 - 400, y0 - 900)
@@ -245,6 +246,11 @@ def _build(tree, anchor, outs, srcs, kinds, copies):
     fog.node_tree = bpy.data.node_groups[groups.SURFACE]
     for name, v, _ in copies:
         _set_copy(tree, fog.inputs[name], v)
+    if glass_weight:   # glass in a mix: the share of the light that passes, times its own (Transmission Weight)
+        own = fog.inputs[glass_tails.GLASS_WEIGHT]
+        factor = (_scalar(ops, own.links[0].from_socket) if own.is_linked
+                  else ops.const(float(own.default_value)))
+        ops.feed(own, _weight(ops, glass_weight, ops.memo) * factor)
     transmittance = _scalar(ops, fog.outputs["Transmittance"])
     shared = {}   # per shader source: (the fog light as a shader, pass-through shader or None)
     for k, target in enumerate(TARGETS):
@@ -300,26 +306,29 @@ def _build(tree, anchor, outs, srcs, kinds, copies):
     return fog
 
 
-def _glass_copies(srcs):
-    """[(Surface group input, value or source socket)] for glass that is a material's shader: a Glass BSDF (its
-    Color and IOR), or a Principled BSDF of roughness 0 that lets light through (its Base Color, IOR and
-    Transmission Weight; its reflection is its own glossy fog light): ``glass_tails.place_tails`` adds the fog past
-    it in Cycles.  Else []."""
+def _glass_copies(kinds, srcs):
+    """([(Surface group input, value or source socket)], the glass's weight in its mix or None) for the glass in a
+    material's shader (``graph.Kinds.glass``: the first, not inside a group): a Glass BSDF (its Color and IOR), or a
+    Principled BSDF of roughness 0 that lets light through (its Base Color, IOR and Transmission Weight; its
+    reflection is its own glossy fog light), on its own or in a Mix or Add Shader (Cycles weighs the glass's paths by
+    its weight there; ``_build`` multiplies Glass Weight by it): ``glass_tails.place_tails`` adds the fog past it in
+    Cycles.  ([], None) without glass."""
     def value(sock):
         return graph.source(sock) or graph.own_value(sock)
     for src in srcs.values():
-        if src is None:
+        glass = None if src is None else kinds[graph.skey(src)].glass
+        if glass is None:
             continue
-        node = src.node
+        weight, node = glass
+        weight = weight or None   # (the shader itself: its weight is 1)
         if node.bl_idname == "ShaderNodeBsdfGlass":
             return [(glass_tails.GLASS_COLOR, value(node.inputs["Color"])),
-                    (glass_tails.GLASS_IOR, value(node.inputs["IOR"]))]
-        if node.bl_idname == "ShaderNodeBsdfPrincipled" and caveats.sharp_transmission(node):
-            return [(glass_tails.GLASS_COLOR, value(node.inputs["Base Color"])),
-                    (glass_tails.GLASS_IOR, value(node.inputs["IOR"])),
-                    (glass_tails.GLASS_WEIGHT, value(node.inputs["Transmission Weight"])),
-                    (glass_tails.GLASS_MIRRORED, 0.0)]
-    return []
+                    (glass_tails.GLASS_IOR, value(node.inputs["IOR"]))], weight
+        return [(glass_tails.GLASS_COLOR, value(node.inputs["Base Color"])),
+                (glass_tails.GLASS_IOR, value(node.inputs["IOR"])),
+                (glass_tails.GLASS_WEIGHT, value(node.inputs["Transmission Weight"])),
+                (glass_tails.GLASS_MIRRORED, 0.0)], weight
+    return [], None
 
 
 def _fog_light(ops, tree, kd, fog, n, origin):

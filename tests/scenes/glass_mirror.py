@@ -3,7 +3,8 @@
     python tests/scenes/glass_mirror.py CASE MODE OUT.exr [SAMPLES] [METHOD]
 
 CASE: ``glass`` (a Glass BSDF plane of IOR 1.0), ``glass_box`` (a Glass BSDF box 2 cm thick, IOR 1.5),
-``principled_box`` (the same box of a Principled BSDF, Transmission 1, roughness 0) or
+``principled_box`` (the same box of a Principled BSDF, Transmission 1, roughness 0), ``mixed_box`` (the box of a
+Mix Shader: MIXED_GLASS of the Glass BSDF, the rest a Transparent BSDF) or
 ``mirror`` (a Principled BSDF, metallic 1, roughness 0, white).  MODE: ``reference`` (Cycles' World volume,
 Volume Scatter white of density BETA, single scattering), ``fog`` (the add-on's fog, Method Node Groups) or
 ``none`` (no fog at all).  METHOD: the fog's method (default ``nodes``; ``compositor``).  Writes OUT.exr and OUT.npz (``pane``: the pixels whose centre ray meets the pane or
@@ -42,6 +43,7 @@ PANE_SIZE = (1.6, 1.2)   # m, width x height
 THICKNESS = 0.02         # m, the glass box
 LAMP_GLASS = (-0.3, 5.0, 0.1)
 LAMP_MIRROR = (2.0, 3.2, 0.1)
+MIXED_GLASS = 0.6   # the Glass BSDF's share in ``mixed_box``'s Mix Shader (the rest a Transparent BSDF)
 MIRROR_TURN = math.pi / 4   # about z: the mirror's normal is (sin, -cos, 0) x ... reflecting +y rays to +x
 
 
@@ -71,6 +73,16 @@ def _material(name, kind):
         return probe_common.bsdf_material(name, "ShaderNodeBsdfDiffuse", Color=(0.5, 0.5, 0.5, 1.0))
     if kind == "principled_box":   # Blender's usual glass: a Principled BSDF of Transmission 1
         return probe_common.bsdf_material(name, "ShaderNodeBsdfPrincipled", **probe_common.PRINCIPLED_GLASS)
+    if kind == "mixed_box":   # dirty glass: a Glass BSDF mixed with a Transparent BSDF (MIXED_GLASS of it glass)
+        mat = _material(name, "glass_box")
+        nt = mat.node_tree
+        glass, out = nt.nodes["Glass BSDF"], nt.nodes["Material Output"]
+        clear, mix = nt.nodes.new("ShaderNodeBsdfTransparent"), nt.nodes.new("ShaderNodeMixShader")
+        mix.inputs["Fac"].default_value = MIXED_GLASS
+        nt.links.new(clear.outputs[0], mix.inputs[1])
+        nt.links.new(glass.outputs[0], mix.inputs[2])
+        nt.links.new(mix.outputs[0], out.inputs["Surface"])
+        return mat
     if kind.startswith("glass"):
         mat = probe_common.bsdf_material(name, "ShaderNodeBsdfGlass", Roughness=0.0, Color=(1.0, 1.0, 1.0, 1.0),
                                          IOR=1.0 if kind == "glass" else 1.5)
@@ -94,7 +106,7 @@ def build(case):
     wall = _material("Wall", "wall")
     pane_mat = _material("Pane", case)
     turn = MIRROR_TURN if case == "mirror" else 0.0
-    if case in ("glass_box", "principled_box"):
+    if case in ("glass_box", "principled_box", "mixed_box"):
         _mesh(scene, "Pane", *_box(*PANE_SIZE, THICKNESS), pane_mat, PANE_CENTRE)
         front = (PANE_CENTRE[0], PANE_CENTRE[1] - THICKNESS / 2, PANE_CENTRE[2])
     else:
