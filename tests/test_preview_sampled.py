@@ -45,3 +45,21 @@ def test_one_sampled_light_estimates_the_sum_of_all():
 def test_importance_favours_near_bright_lights_and_dims_far_ones():
     w = ps.importance([(0, 2, 0), (0, 20, 0), (0, 0.1, 0)], [(1, 1, 1)] * 3, (0, 0, 0), 0.1)
     assert w[0] > w[1] and w[2] == pytest.approx(w[0] * 2.0 * np.exp(0.2 - 0.01))   # (d < 1 m counts as 1 m)
+
+
+@pytest.mark.parametrize("weight", [[1.0, 1.0], [5.0, 1.0, 0.0, 2.0], [1e-9, 3.0, 1e3], list(np.linspace(0.1, 9.0, 8))])
+def test_a_sample_takes_one_tail_light_and_its_mean_is_every_light(weight):
+    """The glass tails' draw (``sampling.picked``, ``mixed_chances``): every pick in [0, 1) takes exactly one light,
+    light k with probability p_k (the length of its stretch), and gate x 1 / p_k has mean 1 for each light (the
+    estimate is unbiased); half the probability is shared evenly, so no light is starved."""
+    from fog_addon.precompute.core.ops import NumpyOps
+    chances = ps.mixed_chances(weight)
+    assert chances is not None and abs(sum(chances) - 1.0) < 1e-12 and min(chances) >= 0.5 / len(weight) - 1e-15
+    m = NumpyOps({})
+    pick = (np.arange(200_000) + 0.5) / 200_000   # stratified: the mean over [0, 1) to 1e-5
+    taken = np.array([ps.picked(m, pick, chances, k)[0] for k in range(len(chances))])
+    weights = np.array([ps.picked(m, pick, chances, k)[1] for k in range(len(chances))])
+    assert np.array_equal(taken.sum(axis=0), np.ones(len(pick)))   # one light a sample, never two, never none
+    np.testing.assert_allclose(taken.mean(axis=1), chances, atol=1e-5)
+    np.testing.assert_allclose((taken * weights[:, None]).mean(axis=1), 1.0, rtol=1e-4)
+    assert ps.mixed_chances([2.0]) is None   # one light: taken on every sample

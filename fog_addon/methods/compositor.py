@@ -229,10 +229,12 @@ def _tails(scene, spec, plan, maps):
     weight = sampling.importance([o.matrix_world.translation for o in plan.in_groups],
                                  view.light_intensities(plan.in_groups), scene.camera.matrix_world.translation,
                                  spec.beta_per_unit)
-    kept = [plan.in_groups[i] for i in np.argsort(-weight, kind="stable")[:TAIL_LIGHTS]]
+    order = np.argsort(-weight, kind="stable")[:TAIL_LIGHTS]
+    kept = [plan.in_groups[i] for i in order]
     shadows = _still_maps(kept, maps)
     return glass_tails.Tails(kept, [rungs.choose("nodes", 0, spec.anisotropy, view.light_kind(o)) for o in kept],
-                             shadows or None, spec.anisotropy)
+                             shadows or None, spec.anisotropy, sampling.mixed_chances(weight[order]))
+
 
 
 def _still_maps(lights, maps):

@@ -11,7 +11,8 @@ def closure_sum(m, sock, bl_idname, colours, gates=True):
     """Link into ``sock`` the sum of one ``bl_idname`` closure (Emission, Background) per colour
     (``shader_tree``).  A ``shading.Gated`` colour gets two: its rest (if any), and its glow behind a Mix
     Shader of factor gate, whose nodes Cycles' SVM jumps over where the gate is 0 (a spot's glow where the
-    ray misses its cone: most of the view for a narrow beam).
+    ray misses its cone: most of the view for a narrow beam); a glow that is a Gated itself gets its gate within
+    (a cheap gate outside a dear one: SVM computes a gate before it jumps).
 
     ``gates`` False (the Surface group with the fog passes): the glow gets a closure of its own without the
     Mix Shader.  An AOV reads the glow's colour there (``chained_closure_sum``), so SVM computes its nodes
@@ -32,21 +33,26 @@ def closure_sum(m, sock, bl_idname, colours, gates=True):
         m.feed(node.inputs["Color"], m.wrap(colour, vector=True))
         return node
 
-    for k, colour in enumerate(colours):
+    def parts(k, colour, part=""):   # a Gated's glow may be a Gated itself: a gate within a gate
         if not isinstance(colour, shading.Gated):
-            leaves.append(closure(k, colour).outputs[0])
-            continue
-        if not gates:
-            leaves.append(closure(k, colour.glow, " Glow").outputs[0])
-        else:
+            return [closure(k, colour, part).outputs[0]]
+        inner = parts(k, colour.glow, part + " Glow")
+        if gates:
+            if len(inner) > 1:
+                add = ng.nodes.new("ShaderNodeAddShader")
+                ng.links.new(inner[0], add.inputs[0])
+                ng.links.new(inner[1], add.inputs[1])
+                inner = [add.outputs[0]]
             mix = ng.nodes.new("ShaderNodeMixShader")
-            mix.name = mix.label = f"Light {k} Glow Gate"
+            mix.name = mix.label = f"Light {k}{part} Glow Gate"
             mix.location = (3800, -300 * k)
             m.feed(mix.inputs[0], m.wrap(colour.gate))
-            ng.links.new(closure(k, colour.glow, " Glow").outputs[0], mix.inputs[2])   # input 1 empty: no closure
-            leaves.append(mix.outputs[0])
-        if colour.rest is not None:
-            leaves.append(closure(k, colour.rest).outputs[0])
+            ng.links.new(inner[0], mix.inputs[2])   # input 1 empty: no closure
+            inner = [mix.outputs[0]]
+        return inner + ([] if colour.rest is None else parts(k, colour.rest, part))
+
+    for k, colour in enumerate(colours):
+        leaves += parts(k, colour)
     shader_tree(ng, sock, leaves)
 
 

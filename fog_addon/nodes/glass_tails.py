@@ -4,7 +4,7 @@ sharp mirror, by differences of tails to infinity (``place_tails``), built only 
 weight them."""
 from typing import Any, NamedTuple
 
-from ..precompute.model import compose, rungs, shading
+from ..precompute.model import compose, rungs, sampling, shading
 from . import closures, groups, light_bundles, light_groups, passes, preview_shafts
 from .groups import C, F, V
 from .sockets import NodeOps
@@ -34,10 +34,33 @@ class Tails(NamedTuple):
     models: list
     shadows: Any = None   # {light name: ShadowMap} of those whose glows and fog light there take their shadows
     g: float = 0.0        # the fog's anisotropy (the shares' phase weight)
+    chances: Any = None   # each light's probability of being the one whose glows a sample takes (``sampling.picked``), or
+    #                       None: every light on every sample
+
+
+def pick_noise(ng, position):
+    """A uniform number in [0, 1) a sample, its own (not the shares' jitter): a White Noise of ``position`` (an output
+    socket), which the pixel filter moves at every sample; its output socket."""
+    noise = ng.nodes.new("ShaderNodeTexWhiteNoise")
+    noise.noise_dimensions, noise.name, noise.label = "4D", "Tail Pick", "Tail Pick"
+    noise.inputs["W"].default_value = 3.17
+    ng.links.new(position, noise.inputs["Vector"])
+    return noise.outputs["Value"]
+
+
+def sampled(m, colour, pick, chances, k):
+    """Light ``k``'s colour (a colour or ``shading.Gated``) on the samples that take it (``sampling.picked``): a
+    ``shading.Gated`` of that gate, times 1 / p_k; a Gated colour's own gate (a lit share: a quadrature) within it,
+    so that SVM computes it only on those samples."""
+    taken, weight = sampling.picked(m, pick, chances, k)
+    times = lambda c: None if c is None else m.scale(m.wrap(c, vector=True), weight)
+    if isinstance(colour, shading.Gated):
+        return shading.Gated(taken, shading.Gated(colour.gate, times(colour.glow), times(colour.rest)), None)
+    return shading.Gated(taken, times(colour), None)
 
 
 def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp, shared, below, extra=(),
-                shadows=None, g_=0.0):
+                shadows=None, g_=0.0, chances=None, pick=None):
     """The Surface group's See Through shader (Cycles only: ``material.py`` adds it to the Cycles output):
     the glows of the segments past a glass pane or a mirror, by differences of tails.
 
@@ -64,10 +87,15 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
     ``below``: the Surface group's light bundles placed (their rows).  ``extra``: more shader outputs summed into See
     Through (the fog light the surfaces past glass reflect, where the materials hold no lights: the Compositor
     method's, ``surface_group.build_surface``).  ``shadows``, ``g_``: the lights' shadow maps and the fog's
-    anisotropy (``build_tail_bundle``).  Returns the bundle groups built.
+    anisotropy (``build_tail_bundle``).  ``chances``: each light's probability of being a sample's one (``sampling.picked``),
+    drawn by ``pick`` (an output socket: ``pick_noise``), or None.  Returns the bundle groups built.
     """
-    kept = [(light, mod) for light, mod in zip(lights, models)
+    kept = [(light, mod, p) for light, mod, p in zip(lights, models, chances or [None] * len(lights))
             if any(o.computed(mod) for o in rungs.SKY_OUTPUTS if o.colour)]
+    if chances is not None and kept:
+        total = sum(p for _, _, p in kept)
+        chances = [p / total for _, _, p in kept]
+    kept = [(light, mod) for light, mod, _ in kept]
     if not kept:
         return []
     fresnel = ng.nodes.new("ShaderNodeFresnel")
@@ -90,9 +118,11 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
                              "Straight Weight": (m.scale(glass, 1.0 - f) - seg3 + through).sock,
                              "Mirrored Weight": m.scale(glass, f * m.wrap(g[GLASS_MIRRORED])).sock,
                              "Transmittance": t_vp.sock})
+    if chances is not None:
+        inputs["Pick"] = pick
     fogs, trees = [], []
     for first, some, mods in light_bundles.split([light for light, _ in kept], [mod for _, mod in kept]):
-        tree = build_tail_bundle(images, first, some, mods, shadows, g_)
+        tree = build_tail_bundle(images, first, some, mods, shadows, g_, chances)
         trees.append(tree)
         node = light_bundles.group_node(ng, tree, tree.name.removesuffix(groups.BUILDING), -300,
                                         -300 * (below + len(fogs)), [(src, n) for n, src in inputs.items()])
@@ -107,7 +137,7 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
     return trees
 
 
-def build_tail_bundle(images, first, lights, models, shadows=None, g_=0.0):
+def build_tail_bundle(images, first, lights, models, shadows=None, g_=0.0, chances=None):
     """One bundle of the Surface group's See Through shader (``place_tails``): for each light, its glow to infinity
     from Position along Straight times Straight Weight, and the same along Mirrored times Mirrored Weight, composed
     (``shading.segment_terms``: times the albedo and Transmittance), from two instances of its World group
@@ -117,11 +147,15 @@ def build_tail_bundle(images, first, lights, models, shadows=None, g_=0.0):
     ``shadows``: {light name: ShadowMap} of the lights whose tails take their lit shares (fog of anisotropy
     ``g_``).  A tail to infinity times its own lit share is the glow of that ray's lit part (``shafts.lit_share``,
     Dobashi et al. 2002 Eq. 2), so the difference of two such tails is still the segment's lit glow: each vertex
-    needs only its own ray.  The shares' quadrature is turned at every sample (``preview_shafts.py``)."""
+    needs only its own ray.  The shares' quadrature is turned at every sample (``preview_shafts.py``).
+
+    ``chances`` (every tail light's, in the order of the bundles): a sample takes one light's tails, drawn by the
+    Pick input (``sampling.picked``), or None: every light's."""
     name = light_bundles.bundle_name(groups.SURFACE_TAILS, first, lights)
     ng, gin, gout = groups.new_group(name, [("Beta", F), ("Albedo", C), ("Position", V), ("Straight", V),
                                             ("Mirrored", V), ("Straight Weight", C), ("Mirrored Weight", C),
-                                            ("Transmittance", F)], [("Fog", "NodeSocketShader")])
+                                            ("Transmittance", F)] + ([("Pick", F)] if chances is not None else []),
+                                     [("Fog", "NodeSocketShader")])
     m = NodeOps(ng, {})
     g = {s.name: s for s in gin.outputs if s.name}
     pixel = compose.Pixel(1.0, m.wrap(g["Albedo"], vector=True))
@@ -159,7 +193,10 @@ def build_tail_bundle(images, first, lights, models, shadows=None, g_=0.0):
                 m.wrap(shares[j].outputs["Share"]) if shares else None)).light
             # the mirrored tail behind a gate: 0 where nothing is mirrored (a Principled glass, whose reflection is
             # its own glossy fog light), where SVM jumps over its kernels and its share
-            colours.append(shading.Gated(mirrored_gate, colour, None) if j else colour)
+            colour = shading.Gated(mirrored_gate, colour, None) if j else colour
+            if chances is not None:   # only on the samples that take this light (``sampling.picked``)
+                colour = sampled(m, colour, m.wrap(g["Pick"]), chances, first + k)
+            colours.append(colour)
     closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", colours)
     m.place()
     return ng

@@ -19,12 +19,14 @@ _SURFACE_SHARED = (("Beta", F), ("Position", V), ("Incoming", V), ("View Distanc
 
 
 def build_surface_bundle(images, first, lights, models, with_passes, chained, prefix=groups.SURFACE_LIGHTS,
-                         shadows=None, g_=0.0, samples=None):
+                         shadows=None, g_=0.0, samples=None, chances=None):
     """One bundle of the Surface group (``light_bundles.split``): ``shading.sum_lights`` over ``lights``
     (Sun et al. 2005 Eq. 19's L_a) from their per-light groups (``light_groups.build_light``).
 
     ``shadows``: {light name: ShadowMap} of the lights whose glow and reflected fog light take their lit shares
     (the viewport's preview: ``preview_shafts.py``, fog of anisotropy ``g_``, ``samples`` nodes a sample), or None.
+    ``chances``: every light's probability of being the one a sample takes (``glass_tails.picked``, by the Pick
+    input; the surfaces past glass), or None: every light on every sample.
 
     Outputs: Fog (one Emission closure per lit light, times the Opacity input; a spot's or an area light's
     glow a closure of its own, ``closures.closure_sum``), Emission (their colours' sum), Weighted and Weight
@@ -35,6 +37,7 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained, pr
     """
     name = light_bundles.bundle_name(prefix, first, lights)   # (``prefix``: the viewport preview's have their own)
     inputs = [*_SURFACE_SHARED, ("Albedo", C), ("View Transmittance", F), ("Is Camera", F), (passes.OPACITY, C)]
+    inputs += [("Pick", F)] if chances is not None else []
     outputs = [("Fog", "NodeSocketShader"), ("Emission", C), ("Weighted", F), ("Weight", F)]
     if with_passes:
         inputs, outputs = inputs + [(light_bundles.RUNNING, C)], outputs + [(light_bundles.RUNNING, C)]
@@ -56,8 +59,10 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained, pr
     sums = shading.sum_lights(m, terms, light_groups.medium(m, g["Beta"], g["Albedo"]),
                               m.wrap(g["View Transmittance"]), m.wrap(g["Is Camera"]))
     opacity = m.wrap(g[passes.OPACITY], vector=True)
-    closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", [_times(m, e, opacity)
-                                                                        for e, mod in zip(sums.emissions, models)
+    colours = [_times(m, e, opacity) for e in sums.emissions]
+    if chances is not None:
+        colours = [glass_tails.sampled(m, c, m.wrap(g["Pick"]), chances, first + k) for k, c in enumerate(colours)]
+    closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", [c for c, mod in zip(colours, models)
                                                                         if _lit(mod)], gates=not with_passes)
     for sock, v in (("Emission", sums.emission), ("Weighted", sums.weighted), ("Weight", sums.weight)):
         m.feed(gout.inputs[sock], m.wrap(v))
@@ -196,19 +201,22 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
         closures.camera_rays_only(ng, gout.inputs["Fog"], fogged.sock)
     own = not isinstance(tails, glass_tails.Tails)
     tail_lights, tail_models = (lights, models) if own else (tails.lights, tails.models)
-    shadows, anisotropy = (None, 0.0) if own else (tails.shadows, tails.g)
+    shadows, anisotropy, chances = (None, 0.0, None) if own else (tails.shadows, tails.g, tails.chances)
+    pick = glass_tails.pick_noise(ng, geo.outputs["Position"]) if chances is not None and tails else None
     segment_lights, segment_trees = [], []
     if not own:   # the materials hold no lights: the fog light surfaces past glass reflect
         placed_segment, segment_trees, _ = light_bundles.place_bundles(
             ng, tail_lights, tail_models, functools.partial(build_surface_bundle, images,
                                                             prefix=groups.SURFACE_SEGMENT, shadows=shadows,
-                                                            g_=anisotropy, samples=preview_shafts.FINAL_SAMPLES),
-            dict(shared, **{"Is Camera": segment.sock}), False)
+                                                            g_=anisotropy, samples=preview_shafts.FINAL_SAMPLES,
+                                                            chances=chances),
+            dict(shared, **{"Is Camera": segment.sock}, **({"Pick": pick} if pick is not None else {})), False)
         segment_lights = [node.outputs["Fog"] for node, _ in placed_segment]
     tails = glass_tails.place_tails(m, ng, tail_lights, tail_models, images, geo, g, segment, is_camera, t_vp,
                                     {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"],
                                      "Position": geo.outputs["Position"]}, len(placed),
-                                    extra=segment_lights, shadows=shadows, g_=anisotropy) + segment_trees if tails else []
+                                    extra=segment_lights, shadows=shadows, g_=anisotropy,
+                                    chances=chances, pick=pick) + segment_trees if tails else []
     if extra is not None:   # before it replaces the group the materials use: adding a node there costs more
         extra(ng)
     m.place()

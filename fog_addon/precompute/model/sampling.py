@@ -1,5 +1,6 @@
-"""Sampling one light of many per sample (the viewport preview's other lights, ``nodes/preview_sampled.py``): each
-light's importance, Walker's alias table that draws it, and the table the shaders read.
+"""Sampling one light of many per sample (the viewport preview's other lights, ``nodes/preview_sampled.py``; the
+lights whose fog past glass a sample takes, ``nodes/glass_tails.py``): each light's importance, Walker's alias table
+that draws it and the table the shaders read, and a draw among a few lights by stretches of [0, 1) (``picked``).
 
 A pixel's fog light is a sum over the lights; a shader that takes one light j per sample, drawn with probability
 p_j, and adds its light times 1 / p_j estimates that sum without bias (its mean over the draws is the sum), and the
@@ -50,3 +51,26 @@ def table_rows(positions, intensities, camera, beta):
     rows[1, :, :3] = intensities / np.maximum(p, 1e-30)[:, None]
     rows[2, :, 0], rows[2, :, 1] = keep, alias
     return rows
+
+
+def picked(m, pick, chances, k):
+    """(0 or 1, 1 / p_k): whether light ``k`` is the one a sample takes, for ``pick`` uniform in [0, 1) and the
+    lights' probabilities ``chances`` (Python floats summing to 1): light k where pick falls in its stretch of
+    [0, 1).  A light's glows times 1 / p_k on the samples that take it have the mean of its glows on every sample
+    (a Monte Carlo estimate, as Cycles samples one light of many for direct light), at the cost of one light's
+    kernels a sample: Cycles' SVM jumps over the closures of the others (a gate of 0)."""
+    lo = sum(chances[:k])
+    hi = 1.0 if k == len(chances) - 1 else sum(chances[:k + 1])
+    gate = m.less(pick, hi) if lo <= 0.0 else m.less(pick, hi) * (1.0 - m.less(pick, lo))
+    return gate, 1.0 / chances[k]
+
+
+def mixed_chances(weight):
+    """Each light's probability of being the one a sample takes (``picked``), from its importance ``weight``
+    (``importance``), half of it shared evenly (a light the importance underrates keeps its share of the samples);
+    None for one light (it is taken on every sample)."""
+    w = np.nan_to_num(np.maximum(np.asarray(weight, float), 0.0))
+    if len(w) < 2:
+        return None
+    share = w / w.sum() if w.sum() > 0 else np.full(len(w), 1.0 / len(w))
+    return [float(p) for p in 0.5 * share + 0.5 / len(w)]
