@@ -2,9 +2,10 @@
 pass's running sum over them, and the Mix Shader that keeps the fog to the rays it is for.
 
 Each shapes what Cycles compiles, whose limits a sum over many lights meets first: SVM's stack of 255 floats,
-OSL's closure stack of 16 entries, and the nodes SVM jumps over where a Mix Shader's factor is 0.
+OSL's closure stack of 16 entries, and the nodes SVM jumps over where a Mix Shader's factor is 0, which also lets a
+sample take one light of several (``drawn``).
 """
-from ..precompute.model import shading
+from ..precompute.model import sampling, shading
 
 
 def closure_sum(m, sock, bl_idname, colours, gates=True):
@@ -152,3 +153,24 @@ def chained_closure_sum(m, sock, total=None):
             one = m.math("MAXIMUM", m.math("MINIMUM", m.wrap(total.sock), 0.0), 1.0)
             m.feed(node.inputs["Strength"], one)
     return total if total is not None else m.wrap((0.0, 0.0, 0.0))
+
+
+def pick_noise(ng, position, w=3.17, label="Tail Pick"):
+    """A uniform number in [0, 1) a sample, its own (not the shares' jitter): a White Noise of ``position`` (an output
+    socket), which the pixel filter moves at every sample; its output socket."""
+    noise = ng.nodes.new("ShaderNodeTexWhiteNoise")
+    noise.noise_dimensions, noise.name, noise.label = "4D", label, label
+    noise.inputs["W"].default_value = w   # (another W: numbers independent of another draw's)
+    ng.links.new(position, noise.inputs["Vector"])
+    return noise.outputs["Value"]
+
+
+def drawn(m, colour, pick, chances, k):
+    """Light ``k``'s colour (a colour or ``shading.Gated``) on the samples that take it (``sampling.picked``): a
+    ``shading.Gated`` of that gate, times 1 / p_k; a Gated colour's own gate (a lit share: a quadrature) within it,
+    so that SVM computes it only on those samples."""
+    taken, weight = sampling.picked(m, pick, chances, k)
+    times = lambda c: None if c is None else m.scale(m.wrap(c, vector=True), weight)
+    if isinstance(colour, shading.Gated):
+        return shading.Gated(taken, shading.Gated(colour.gate, times(colour.glow), times(colour.rest)), None)
+    return shading.Gated(taken, times(colour), None)

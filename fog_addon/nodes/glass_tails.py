@@ -4,7 +4,7 @@ sharp mirror, by differences of tails to infinity (``place_tails``), built only 
 weight them."""
 from typing import Any, NamedTuple
 
-from ..precompute.model import compose, rungs, sampling, shading
+from ..precompute.model import compose, rungs, shading
 from . import closures, groups, light_bundles, light_groups, passes, preview_shafts
 from .groups import C, F, V
 from .sockets import NodeOps
@@ -36,27 +36,6 @@ class Tails(NamedTuple):
     g: float = 0.0        # the fog's anisotropy (the shares' phase weight)
     chances: Any = None   # each light's probability of being the one whose glows a sample takes (``sampling.picked``), or
     #                       None: every light on every sample
-
-
-def pick_noise(ng, position):
-    """A uniform number in [0, 1) a sample, its own (not the shares' jitter): a White Noise of ``position`` (an output
-    socket), which the pixel filter moves at every sample; its output socket."""
-    noise = ng.nodes.new("ShaderNodeTexWhiteNoise")
-    noise.noise_dimensions, noise.name, noise.label = "4D", "Tail Pick", "Tail Pick"
-    noise.inputs["W"].default_value = 3.17
-    ng.links.new(position, noise.inputs["Vector"])
-    return noise.outputs["Value"]
-
-
-def sampled(m, colour, pick, chances, k):
-    """Light ``k``'s colour (a colour or ``shading.Gated``) on the samples that take it (``sampling.picked``): a
-    ``shading.Gated`` of that gate, times 1 / p_k; a Gated colour's own gate (a lit share: a quadrature) within it,
-    so that SVM computes it only on those samples."""
-    taken, weight = sampling.picked(m, pick, chances, k)
-    times = lambda c: None if c is None else m.scale(m.wrap(c, vector=True), weight)
-    if isinstance(colour, shading.Gated):
-        return shading.Gated(taken, shading.Gated(colour.gate, times(colour.glow), times(colour.rest)), None)
-    return shading.Gated(taken, times(colour), None)
 
 
 def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp, shared, below, extra=(),
@@ -195,7 +174,7 @@ def build_tail_bundle(images, first, lights, models, shadows=None, g_=0.0, chanc
             # its own glossy fog light), where SVM jumps over its kernels and its share
             colour = shading.Gated(mirrored_gate, colour, None) if j else colour
             if chances is not None:   # only on the samples that take this light (``sampling.picked``)
-                colour = sampled(m, colour, m.wrap(g["Pick"]), chances, first + k)
+                colour = closures.drawn(m, colour, m.wrap(g["Pick"]), chances, first + k)
             colours.append(colour)
     closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", colours)
     m.place()

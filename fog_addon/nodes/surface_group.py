@@ -61,7 +61,7 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained, pr
     opacity = m.wrap(g[passes.OPACITY], vector=True)
     colours = [_times(m, e, opacity) for e in sums.emissions]
     if chances is not None:
-        colours = [glass_tails.sampled(m, c, m.wrap(g["Pick"]), chances, first + k) for k, c in enumerate(colours)]
+        colours = [closures.drawn(m, c, m.wrap(g["Pick"]), chances, first + k) for k, c in enumerate(colours)]
     closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", [c for c, mod in zip(colours, models)
                                                                         if _lit(mod)], gates=not with_passes)
     for sock, v in (("Emission", sums.emission), ("Weighted", sums.weighted), ("Weight", sums.weight)):
@@ -202,7 +202,7 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     own = not isinstance(tails, glass_tails.Tails)
     tail_lights, tail_models = (lights, models) if own else (tails.lights, tails.models)
     shadows, anisotropy, chances = (None, 0.0, None) if own else (tails.shadows, tails.g, tails.chances)
-    pick = glass_tails.pick_noise(ng, geo.outputs["Position"]) if chances is not None and tails else None
+    pick = closures.pick_noise(ng, geo.outputs["Position"]) if chances is not None and tails else None
     segment_lights, segment_trees = [], []
     if not own:   # the materials hold no lights: the fog light surfaces past glass reflect
         placed_segment, segment_trees, _ = light_bundles.place_bundles(
