@@ -20,18 +20,18 @@ _SEE_THROUGH = ("ShaderNodeBsdfTransparent", "ShaderNodeBsdfGlass", "ShaderNodeB
                 "ShaderNodeBsdfTranslucent", "ShaderNodeBsdfHairPrincipled", "ShaderNodeBsdfHair")
 
 
-def see_through(materials, objects, served=()):
+def see_through(materials, objects, served=None):
     """Names of ``materials`` that let the camera see through them (Transparent, Glass, Refraction,
     Translucent or hair BSDFs, a Principled BSDF with transmission or alpha below 1) on ``objects`` the camera
-    sees, each once; ``served``: node types left out (what lies past them is shaded: a Glass BSDF in Cycles,
-    ``glass_tails.py``)."""
+    sees, each once; ``served(node)``: True for a node left out (what lies past it is shaded: glass in Cycles,
+    ``served_glass``)."""
     seen = {slot.material for obj in objects if obj.visible_camera
             for slot in getattr(obj, "material_slots", ()) if slot.material is not None}
     names = []
     for mat in materials:
         if mat not in seen or mat.node_tree is None:
             continue
-        if any(not node.mute and node.bl_idname not in served and (
+        if any(not node.mute and not (served and served(node)) and (
                 node.bl_idname in _SEE_THROUGH or (node.bl_idname == "ShaderNodeBsdfPrincipled"
                                                    and _principled_see_through(node)))
                for node in mat.node_tree.nodes):
@@ -43,8 +43,8 @@ SHARP = 1e-3   # a roughness at or below which a glossy or metallic surface is a
 
 
 def specular_paths(materials):
-    """True if some of ``materials`` starts a path of sharp bounces the fog shades segment by segment in
-    Cycles (``glass_tails.place_tails``): a Glass BSDF, or a mirror (a Glossy BSDF, or a Principled BSDF with
+    """True if some of ``materials`` starts a path the fog shades segment by segment in Cycles
+    (``glass_tails.place_tails``): glass (``is_glass``), or a mirror (a Glossy BSDF, or a Principled BSDF with
     metallic above 0, of roughness at most SHARP, unlinked).  Without one the Surface group holds no tails:
     they cost SVM stack in every material (out of stack space with 16 spots)."""
     for mat in materials:
@@ -53,8 +53,7 @@ def specular_paths(materials):
         for node in mat.node_tree.nodes:
             if node.mute:
                 continue
-            if node.bl_idname == "ShaderNodeBsdfGlass" or (node.bl_idname == "ShaderNodeBsdfPrincipled"
-                                                           and sharp_transmission(node)):
+            if is_glass(node):
                 return True
             rough = node.inputs.get("Roughness")
             if rough is None or rough.is_linked or rough.default_value > SHARP:
@@ -67,12 +66,24 @@ def specular_paths(materials):
     return False
 
 
-def sharp_transmission(node):
-    """True for a Principled BSDF that lets light through (Transmission Weight linked or above 0) with a roughness
-    of at most SHARP, unlinked: glass the fog shades past (``glass_tails.py``)."""
-    weight, rough = node.inputs.get("Transmission Weight"), node.inputs.get("Roughness")
-    return (weight is not None and (weight.is_linked or weight.default_value > 0.0) and rough is not None
-            and not rough.is_linked and rough.default_value <= SHARP)
+GLASS_NODES = ("ShaderNodeBsdfGlass", "ShaderNodeBsdfRefraction")
+
+
+def served_glass(node):
+    """True for glass whose far side both methods shade in Cycles (``is_glass``; a Principled BSDF fully opaque in
+    its Alpha, which the compositor's one surface a pixel would not see through)."""
+    alpha = node.inputs.get("Alpha") if node.bl_idname == "ShaderNodeBsdfPrincipled" else None
+    return is_glass(node) and (alpha is None or (not alpha.is_linked and alpha.default_value >= 1.0))
+
+
+def is_glass(node):
+    """True for a shader whose transmitted rays the fog shades as segments past it in Cycles (``glass_tails.py``): a
+    Glass or Refraction BSDF, or a Principled BSDF that lets light through (Transmission Weight linked or above 0),
+    at any roughness (a rough one's segments are blurred by its lobe: ``glass_tails.specular_segment``)."""
+    if node.bl_idname in GLASS_NODES:
+        return True
+    weight = node.inputs.get("Transmission Weight") if node.bl_idname == "ShaderNodeBsdfPrincipled" else None
+    return weight is not None and (weight.is_linked or weight.default_value > 0.0)
 
 
 def _principled_see_through(node):
@@ -230,10 +241,11 @@ def glass_note(materials, objects):
         return None
     shown = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
     return (f"see-through materials ({shown}): in Cycles with the Node Groups and Compositor methods, the fog "
-            "behind a Glass BSDF or a Principled BSDF of roughness 0 that lets light through (straight through the "
-            "pane; on its own or in a Mix or Add Shader) and in sharp mirrors is shaded along the path (a mirror "
-            "shows lamps blurred by about 2 degrees; with the Compositor, of the 8 brightest lights); rough glass, "
-            "glass inside a node group, the OSL method and EEVEE show only the fog in front of the first surface")
+            "behind glass (a Glass or Refraction BSDF, a Principled BSDF that lets light through; on its own or in a "
+            "Mix or Add Shader) and in sharp mirrors is shaded along the path (taken straight through the pane: "
+            "frosted glass does not blur a lamp's glow seen through it; a mirror shows lamps blurred by about 2 "
+            "degrees; with the Compositor, of the 8 brightest lights); glass inside a node group, the OSL method and "
+            "EEVEE show only the fog in front of the first surface")
 
 
 EEVEE_CLIP_RATIO = 1e7   # EEVEE's depth loses its way beyond this clip end / clip start (blender-facts.md)

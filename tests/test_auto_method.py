@@ -54,13 +54,15 @@ def test_what_only_the_node_groups_have(res):
 
 
 def test_see_through_materials(res):
-    """A Glass BSDF in Cycles: both methods shade what lies past it (the compositor through its materials'
+    """Glass in Cycles (a Glass BSDF, a frosted Principled glass): both methods shade what lies past it (the compositor through its materials'
     tails), so Auto chooses by cost and names no caveat.  A transparent material (alpha 0.5): the compositor's one
     surface point per pixel is wrong there; the node groups while they cost little (1 lamp), else the compositor
     with the caveat said."""
     for case in ("cycles_1_glass", "cycles_25_glass"):
         name, reason = res[case]
         assert name == "compositor" and "Window Glass" not in reason and "predicted" in reason, res[case]
+    name, reason = res["cycles_1_frosted"]   # frosted Principled glass: served alike (``caveats.served_glass``)
+    assert name == res["cycles_1_glass"][0] and "Frosted Glass" not in reason, res["cycles_1_frosted"]
     name, reason = res["cycles_1_curtain"]
     assert name == "nodes" and "Net Curtain" in reason, res["cycles_1_curtain"]
     name, reason = res["cycles_25_curtain"]

@@ -26,7 +26,10 @@ SCENE = h.ROOT / "tests" / "scenes" / "glass_mirror.py"
 # relative RMSE bounds: about twice what was measured (the fog's render noise through the IOR 1.5 pane's
 # Fresnel choice, and the reference's), and the mirror's blur
 LIMITS = {"glass": (0.015, 0.015), "glass_box": (0.03, 0.03), "principled_box": (0.03, 0.03), "mirror": (0.12, 0.10),
-          "mixed_box": (0.09, 0.09)}
+          "mixed_box": (0.09, 0.09), "rough_box": (0.09, 0.08)}
+# pixels left out about the lamp's image: its own 3 x 3, or through frosted glass the blurred image of the lamp (the
+# straight-through tails do not blur the lamp's glow there: glass_tails.specular_segment)
+LAMP_RADIUS = {"rough_box": 10}
 
 
 def _render(case, mode, out, samples, method="nodes"):
@@ -52,7 +55,8 @@ def _errors(case, tmp_path, reference, method="nodes"):
     lum = ref[..., 0]
     r, c = np.unravel_index(np.argmax(lum), lum.shape)
     keep = np.ones(lum.shape, bool)
-    keep[max(r - 1, 0):r + 2, max(c - 1, 0):c + 2] = False
+    k = LAMP_RADIUS.get(case, 1)
+    keep[max(r - k, 0):r + k + 1, max(c - k, 0):c + k + 1] = False
     inside = compare.metrics(fog, ref, mask=pane & keep)
     frame = compare.metrics(fog, ref, mask=keep)
     print(case, method, "pane", inside, "frame", frame)
@@ -71,7 +75,8 @@ SLOW_MIRROR = pytest.mark.slow(reason="the default tier's boxes hold the specula
     pytest.param("principled_box", "nodes", marks=pytest.mark.slow(reason="the default tier's Principled glass is "
                                                                             "the default method's")),
     ("principled_box", "compositor"),
-    pytest.param("mixed_box", "nodes", marks=pytest.mark.slow(reason="glass in a mix: the boxes hold the contract"))])
+    pytest.param("mixed_box", "nodes", marks=pytest.mark.slow(reason="glass in a mix: the boxes hold the contract")),
+    pytest.param("rough_box", "nodes", marks=pytest.mark.slow(reason="frosted glass: the boxes hold the contract"))])
 def test_fog_past_glass_and_mirrors(case, method, tmp_path, reference):
     """Against Cycles' path-traced World volume: the fog behind the pane and in the mirror (its glow to the
     wall and to the sky, the wall's extinction and fog light) within LIMITS; nothing non-finite.  With the
@@ -81,7 +86,9 @@ def test_fog_past_glass_and_mirrors(case, method, tmp_path, reference):
     before: no fog past it, and its surface lit as an opaque white one).  Glass in a Mix Shader with a Transparent
     BSDF (0.6 glass): 4.6 % with the Node Groups (140 % before: the mix's glass had no tails, and what the
     Transparent BSDF let through on a segment was taken away at the next vertex but never added); the Compositor
-    16.6 % (its one surface per pixel, wrong with any transparency: Auto's caveat)."""
+    16.6 % (its one surface per pixel, wrong with any transparency: Auto's caveat).  Frosted glass (a Glass BSDF of
+    roughness 0.1), the lamp's blurred image left out: 5.0 % (12.3 % before, 10 % too bright: the tails added at the
+    pane and never taken away at the wall, whose rough-refracted ray was no segment)."""
     inside, frame = _errors(case, tmp_path, reference, method)
     pane_limit, frame_limit = LIMITS[case]
     assert inside["n_nonfinite"] == 0 and frame["n_nonfinite"] == 0

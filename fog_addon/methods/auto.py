@@ -95,9 +95,9 @@ def _soft_needs(scene, materials):
     layers = unfogged_layers(scene)
     if layers:
         needs.append(f"view layers the composite does not show ({caveats.listed(layers)})")
-    # (a Glass BSDF in Cycles: both methods shade what lies past it, ``compositor._tails``)
+    # (glass in Cycles: both methods shade what lies past it, ``compositor._tails``)
     see = caveats.see_through(materials, scene.objects,
-                              served=("ShaderNodeBsdfGlass",) if scene.render.engine == "CYCLES" else ())
+                              served=caveats.served_glass if scene.render.engine == "CYCLES" else None)
     if see:
         shown = ", ".join(see[:3]) + (f" and {len(see) - 3} more" if len(see) > 3 else "")
         needs.append(f"see-through materials ({shown})")

@@ -17,14 +17,18 @@ SEE_THROUGH = "See Through"   # its output: the glows past glass and mirrors (Cy
 
 
 def specular_segment(m, path):
-    """1 on a ray that leaves a glass pane or a mirror on a path of sharp bounces from the camera (Cycles'
-    Light Path: not a camera ray, Is Singular Ray, Diffuse Depth 0), else 0.  Such a ray is a segment of
-    its own: it starts at P + Incoming x Ray Length (Ray Length is the segment's length on every ray but
-    the camera's, which Cycles measures from the near clip plane).  EEVEE traces no such rays (its Is
-    Singular Ray is 0): what it refracts or reflects is its picture or its probes."""
+    """1 on a ray that leaves a glass pane or a mirror on a path of sharp bounces from the camera, or that a rough
+    glass let through (Cycles' Light Path: not a camera ray, Is Singular Ray or Is Transmission Ray, Diffuse Depth
+    0), else 0.  Such a ray is a segment of its own: it starts at P + Incoming x Ray Length (Ray Length is the
+    segment's length on every ray but the camera's, which Cycles measures from the near clip plane).  A rough
+    glass's vertex adds the tail straight through it (``place_tails``): the rays its lobe spreads take away their
+    own tails, so the segments' glows are right on average and their ends blurred by the lobe's spread of
+    directions about the straight one (frosted glass: roughness 0.1, a few degrees).  EEVEE traces no such rays
+    (its Is Singular Ray is 0): what it refracts or reflects is its picture or its probes."""
     singular = m.wrap(path.outputs["Is Singular Ray"])
+    through = m.maximum(singular, m.wrap(path.outputs["Is Transmission Ray"]))
     first = m.less(m.wrap(path.outputs["Diffuse Depth"]), 0.5)
-    return (1.0 - m.wrap(path.outputs["Is Camera Ray"])) * singular * first
+    return (1.0 - m.wrap(path.outputs["Is Camera Ray"])) * through * first
 
 
 class Tails(NamedTuple):

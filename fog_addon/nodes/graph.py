@@ -127,7 +127,7 @@ class Kinds:
     ``opaque``: some part does not let light through (every shader but Transparent BSDF and Holdout);
     ``unread``: labels of reflecting shaders the fog does not read; ``hidden``: names of
     node groups with transparency or holdouts inside; ``glass``: (weight, node) of the first glass in the mix, not
-    inside a group (a Glass BSDF, or a Principled BSDF that lets light through, ``GLASS_KINDS``), or None.
+    inside a group (``caveats.is_glass``), or None.
     Colours are sockets or 3-tuples, strengths sockets or floats, weights tuples of factors.
     """
 
@@ -178,7 +178,7 @@ def _analyse(sock, weight, ctx, kinds, depth=0):
         kinds.opaque = True
         if kinds.reads is None:
             kinds.reads = (node, ctx)
-        if top and kinds.glass is None and is_glass(node):
+        if top and kinds.glass is None and caveats.is_glass(node):
             kinds.glass = (weight, node)
         alpha = _fraction(node.inputs["Alpha"])
         if alpha != 1.0:
@@ -196,7 +196,7 @@ def _analyse(sock, weight, ctx, kinds, depth=0):
             kinds.emitters.append((weight, c, s))
     else:
         kinds.opaque = True
-        if top and kinds.glass is None and is_glass(node):
+        if top and kinds.glass is None and caveats.is_glass(node):
             kinds.glass = (weight, node)
         if kind == "ShaderNodeBsdfDiffuse":
             if kinds.reads is None:
@@ -204,12 +204,6 @@ def _analyse(sock, weight, ctx, kinds, depth=0):
         else:
             kinds.unread.append(node.bl_label)
 
-
-def is_glass(node):
-    """True for a shader the fog shades past in Cycles (``glass_tails.py``): a Glass BSDF, or a Principled BSDF of
-    roughness 0 that lets light through (``caveats.sharp_transmission``)."""
-    return node.bl_idname == "ShaderNodeBsdfGlass" or (node.bl_idname == "ShaderNodeBsdfPrincipled"
-                                                       and caveats.sharp_transmission(node))
 
 
 def weight_key(weight):

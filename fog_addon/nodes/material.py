@@ -308,9 +308,9 @@ def _build(tree, anchor, outs, srcs, kinds, copies, glass_weight=None):
 
 def _glass_copies(kinds, srcs):
     """([(Surface group input, value or source socket)], the glass's weight in its mix or None) for the glass in a
-    material's shader (``graph.Kinds.glass``: the first, not inside a group): a Glass BSDF (its Color and IOR), or a
-    Principled BSDF of roughness 0 that lets light through (its Base Color, IOR and Transmission Weight; its
-    reflection is its own glossy fog light), on its own or in a Mix or Add Shader (Cycles weighs the glass's paths by
+    material's shader (``graph.Kinds.glass``: the first, not inside a group): a Glass BSDF (its Color and IOR), a
+    Refraction BSDF (its Color), or a Principled BSDF that lets light through (its Base Color, IOR and Transmission
+    Weight; its reflection is its own glossy fog light), rough or not, on its own or in a Mix or Add Shader (Cycles weighs the glass's paths by
     its weight there; ``_build`` multiplies Glass Weight by it): ``glass_tails.place_tails`` adds the fog past it in
     Cycles.  ([], None) without glass."""
     def value(sock):
@@ -324,6 +324,9 @@ def _glass_copies(kinds, srcs):
         if node.bl_idname == "ShaderNodeBsdfGlass":
             return [(glass_tails.GLASS_COLOR, value(node.inputs["Color"])),
                     (glass_tails.GLASS_IOR, value(node.inputs["IOR"]))], weight
+        if node.bl_idname == "ShaderNodeBsdfRefraction":   # all its light passes: no Fresnel (IOR 1), no reflection
+            return [(glass_tails.GLASS_COLOR, value(node.inputs["Color"])), (glass_tails.GLASS_IOR, 1.0),
+                    (glass_tails.GLASS_MIRRORED, 0.0)], weight
         return [(glass_tails.GLASS_COLOR, value(node.inputs["Base Color"])),
                 (glass_tails.GLASS_IOR, value(node.inputs["IOR"])),
                 (glass_tails.GLASS_WEIGHT, value(node.inputs["Transmission Weight"])),

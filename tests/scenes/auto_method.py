@@ -48,6 +48,14 @@ def glass(scene):
     bpy.data.objects["glossy"].material_slots[0].material = mat
 
 
+def frosted(scene):
+    """Blender's usual glass, frosted: a Principled BSDF of Transmission 1, roughness 0.2."""
+    mat = bpy.data.materials.new("Frosted Glass")
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Transmission Weight"].default_value, bsdf.inputs["Roughness"].default_value = 1.0, 0.2
+    bpy.data.objects["glossy"].material_slots[0].material = mat
+
+
 def curtain(scene):
     """A see-through material neither method shades past but the node groups see through (alpha 0.5)."""
     mat = bpy.data.materials.new("Net Curtain")
@@ -79,6 +87,8 @@ def main():
     glass(scene)
     RES["cycles_1_glass"] = choice(scene, shafts=False)
     RES["cycles_1_glass_shafts"] = choice(scene)
+    frosted(scene)
+    RES["cycles_1_frosted"] = choice(scene, shafts=False)
     curtain(scene)
     RES["cycles_1_curtain"] = choice(scene, shafts=False)
 

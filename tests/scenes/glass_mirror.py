@@ -4,7 +4,8 @@
 
 CASE: ``glass`` (a Glass BSDF plane of IOR 1.0), ``glass_box`` (a Glass BSDF box 2 cm thick, IOR 1.5),
 ``principled_box`` (the same box of a Principled BSDF, Transmission 1, roughness 0), ``mixed_box`` (the box of a
-Mix Shader: MIXED_GLASS of the Glass BSDF, the rest a Transparent BSDF) or
+Mix Shader: MIXED_GLASS of the Glass BSDF, the rest a Transparent BSDF), ``rough_box`` (the box of a Glass BSDF
+of roughness ROUGH_GLASS) or
 ``mirror`` (a Principled BSDF, metallic 1, roughness 0, white).  MODE: ``reference`` (Cycles' World volume,
 Volume Scatter white of density BETA, single scattering), ``fog`` (the add-on's fog, Method Node Groups) or
 ``none`` (no fog at all).  METHOD: the fog's method (default ``nodes``; ``compositor``).  Writes OUT.exr and OUT.npz (``pane``: the pixels whose centre ray meets the pane or
@@ -43,6 +44,7 @@ PANE_SIZE = (1.6, 1.2)   # m, width x height
 THICKNESS = 0.02         # m, the glass box
 LAMP_GLASS = (-0.3, 5.0, 0.1)
 LAMP_MIRROR = (2.0, 3.2, 0.1)
+ROUGH_GLASS = 0.1   # ``rough_box``'s roughness
 MIXED_GLASS = 0.6   # the Glass BSDF's share in ``mixed_box``'s Mix Shader (the rest a Transparent BSDF)
 MIRROR_TURN = math.pi / 4   # about z: the mirror's normal is (sin, -cos, 0) x ... reflecting +y rays to +x
 
@@ -83,6 +85,9 @@ def _material(name, kind):
         nt.links.new(glass.outputs[0], mix.inputs[2])
         nt.links.new(mix.outputs[0], out.inputs["Surface"])
         return mat
+    if kind == "rough_box":   # frosted glass: a Glass BSDF of roughness ROUGH_GLASS (GGX)
+        return probe_common.bsdf_material(name, "ShaderNodeBsdfGlass", Roughness=ROUGH_GLASS,
+                                          Color=(1.0, 1.0, 1.0, 1.0), IOR=1.5)
     if kind.startswith("glass"):
         mat = probe_common.bsdf_material(name, "ShaderNodeBsdfGlass", Roughness=0.0, Color=(1.0, 1.0, 1.0, 1.0),
                                          IOR=1.0 if kind == "glass" else 1.5)
@@ -106,7 +111,7 @@ def build(case):
     wall = _material("Wall", "wall")
     pane_mat = _material("Pane", case)
     turn = MIRROR_TURN if case == "mirror" else 0.0
-    if case in ("glass_box", "principled_box", "mixed_box"):
+    if case in ("glass_box", "principled_box", "mixed_box", "rough_box"):
         _mesh(scene, "Pane", *_box(*PANE_SIZE, THICKNESS), pane_mat, PANE_CENTRE)
         front = (PANE_CENTRE[0], PANE_CENTRE[1] - THICKNESS / 2, PANE_CENTRE[2])
     else:
