@@ -31,7 +31,8 @@ _TABLES = r"""
 import json, sys, time
 sys.path.insert(0, sys.argv[1])
 t = time.perf_counter()
-from fog_addon.precompute.core import bakers, table_cache
+from fog_addon.precompute.core import table_cache
+from fog_addon.precompute.model import bakers
 from fog_addon.precompute.model import pixel
 g = float(sys.argv[2])
 t0 = time.perf_counter()

@@ -15,7 +15,7 @@ import contextlib
 import bpy
 
 from .precompute.core import presets, tables
-from .precompute.model import predict
+from .precompute.core import spec as spec_
 from .precompute.core.spec import FogSpec
 
 
@@ -172,10 +172,10 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
         description="Preference for the fog's models: each light gets, per term, the model this preference "
                     "chooses (shown below)")
     quality: bpy.props.EnumProperty(
-        name="Quality", default=predict.DEFAULT_QUALITY.upper(), update=_quality_changed,
+        name="Quality", default=spec_.DEFAULT_QUALITY.upper(), update=_quality_changed,
         items=[("DRAFT", "Draft", f"Each light gets the cheapest models that keep the fog within "
-                                  f"{predict.QUALITY['draft']:.0%} of exact in every pixel the camera sees"),
-               ("FINAL", "Final", f"The fog within {predict.QUALITY['final']:.0%} of exact in every pixel"),
+                                  f"{spec_.QUALITY['draft']:.0%} of exact in every pixel the camera sees"),
+               ("FINAL", "Final", f"The fog within {spec_.QUALITY['final']:.0%} of exact in every pixel"),
                ("EXACT", "Exact", "Every light fully modelled"),
                ("CUSTOM", "Custom", "Your own target error (Target Error)")],
         description="Model no more than the picture needs: leave out the fog light a light adds where the "

@@ -39,7 +39,7 @@ class WeatherError(ValueError):
 
 def _fields(g, albedo):
     """(single, multiple): functions (T, cos theta) -> I_1 and I_{>=2} / W0 per unit intensity (extinction 1)."""
-    from .precompute.core import bakers
+    from .precompute.model import bakers
     from .precompute.physics.emitter import emitter_glow
     from .precompute.physics.point import multiple
     from .precompute.core.ops import NumpyOps

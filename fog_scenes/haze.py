@@ -28,7 +28,7 @@ ground, no face coplanar with it) to 60 km, whose volume shader adds two species
   3 (1 + cos^2)/(16 pi), density 33.1e-6 e^{-max(z, 0)/8000} /m and Color (5.8/33.1, 13.5/33.1, 1): Volume
   Scatter's Color scales its density per channel (extinction and scattering alike, for the Rayleigh phase as
   for Henyey-Greenstein), so the scattering coefficients at the ground are (5.8, 13.5, 33.1) x 1e-6 /m, the
-  add-on's ``--air 1`` (Bruneton & Neyret 2008 Sec. 2.1; ``fog_addon.precompute.physics.daylight.aerial.RAYLEIGH_RGB``
+  add-on's ``--air 1`` (Bruneton & Neyret 2008 Sec. 2.1; ``fog_addon.precompute.core.medium.RAYLEIGH_RGB``
   and ``RAYLEIGH_HEIGHT``), a pure scatterer.
 
 Both densities come from Geometry Position z through Math nodes (a heterogeneous volume).  Left out above 60 km:

@@ -39,7 +39,7 @@ import numpy as np
 from fog_addon import imageio, measure
 from fog_addon import view
 from fog_addon.ops import apply
-from fog_addon.precompute.core import bakers
+from fog_addon.precompute.model import bakers
 from fog_addon.precompute.model import predict, rungs, shading
 from fog_addon.precompute.physics.point import model, surface
 from fog_addon.precompute.core.medium import Medium

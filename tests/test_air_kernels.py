@@ -28,6 +28,7 @@ for p in (ROOT, ROOT / "tests"):
     if str(p) not in sys.path:
         sys.path.insert(0, str(p))
 
+from fog_addon.precompute.core import medium
 from fog_addon.precompute.physics.daylight import aerial, daylight as dl   # noqa: E402
 from fog_addon.precompute.core.ops import NumpyOps      # noqa: E402
 from test_daylight import FAR, _points, ref_beta, ref_column, ref_tau   # noqa: E402
@@ -335,7 +336,7 @@ def _ray_glow_error(pz, elevation, length, layer, g):
     e = math.radians(elevation)
     d = np.array([0.0, math.cos(e), math.sin(e)])
     b, h0, hh = layer
-    air = aerial.RAYLEIGH_RGB
+    air = medium.RAYLEIGH_RGB
     e_sun, l_sky = np.array([3.0, 3.0, 3.0]), np.array([0.35, 0.5, 0.8])
     day = sunlight.Daylight(b, h0, hh, 0.0, sun, e_sun, l_sky, g, 0.9, tuple(air), HA)
     got = sunlight.ray_glow(m, day, np.array([0.0, 0.0, pz]), d, length)

@@ -262,7 +262,7 @@ def test_area_diffuse_scatter_against_hemisphere_quadrature(g):
     """24 random points a g: the diffuse lobe within 0.12 of the point light's fog light (the spot's bound,
     tests/test_spot_scatter.py), and on the whole closer than Lambert's cosine at the point times the point
     light's (the light's direct weight, the simple model)."""
-    from fog_addon.precompute.core import bakers
+    from fog_addon.precompute.model import bakers
     m = NumpyOps(bakers.numpy_tables(g))
     rng = np.random.default_rng(31 + int(10 * g))
     ours, plain = [], []

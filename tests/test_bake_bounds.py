@@ -20,7 +20,8 @@ import numpy as np
 import pytest
 
 from fog_addon.ops import progress as progress_
-from fog_addon.precompute.core import bakers, table_cache
+from fog_addon.precompute.core import table_cache
+from fog_addon.precompute.model import bakers
 from fog_addon.precompute.physics.emitter import emitter_glow
 from fog_addon.precompute.physics.point import multiple, point_source_mc
 from fog_addon.precompute.physics.spot import spot_multiple as sm, spot_walk

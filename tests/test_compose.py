@@ -12,7 +12,7 @@ import types
 import numpy as np
 import pytest
 
-from fog_addon.precompute.model import compose
+from fog_addon.precompute.model import compose, daylight_terms
 from fog_addon.precompute.physics.daylight import sunlight
 from fog_addon.precompute.model.compose import (DAYLIGHT, DIMMING, EMITTERS, GLOW, LAMPS, LAYER_END, RAY, REFLECTED,
                                                 RENDER, SHARE, SKY, SURFACE, Pixel, Term)
@@ -169,7 +169,7 @@ def test_a_term_out_of_place_is_refused(term):
 
 @pytest.mark.parametrize("air", [False, True], ids=["no_air", "air"])
 def test_daylight_terms_are_the_sun_and_the_sky_at_a_pixel(monkeypatch, air):
-    """``sunlight.pixel_terms`` composed, with its kernels as stand-ins: without air coverage times the glow to the
+    """``daylight_terms.pixel_terms`` composed, with its kernels as stand-ins: without air coverage times the glow to the
     surface plus the reflected fog light dimmed by T, plus 1 - coverage times the glow to the sky; with air the glow
     to the surface where coverage is above one half, to the sky elsewhere, plus coverage times T times the fog
     light (T RGB)."""
@@ -187,7 +187,7 @@ def test_daylight_terms_are_the_sun_and_the_sky_at_a_pixel(monkeypatch, air):
     cover = np.array([0.0, 0.3, 0.6, 1.0, 0.5])
     rho = np.array([0.5, 0.4, 0.3])
     sun_share, surface_share = v.seen, v.dims
-    terms = sunlight.pixel_terms(m, day, None, None, None, None, None, rho, length, t, cover, sun_share, surface_share)
+    terms = daylight_terms.pixel_terms(m, day, None, None, None, None, None, rho, length, t, cover, sun_share, surface_share)
     light = compose.compose(m, Pixel(cover, ALBEDO), terms).light
     c, tt = _col(cover), (t if air else _col(t))
     reflected = rho * v.day_reflected * _col(surface_share)
@@ -200,8 +200,8 @@ def test_daylight_terms_are_the_sun_and_the_sky_at_a_pixel(monkeypatch, air):
 
 
 def test_daylight_on_a_surface_ray_and_a_sky_ray(monkeypatch):
-    """The Surface group's daylight (``sunlight.surface_terms`` composed by ``compose.surface_light``): the glow to
-    the surface plus the reflected fog light dimmed by T; the World's (``sunlight.sky_terms`` composed at coverage
+    """The Surface group's daylight (``daylight_terms.surface_terms`` composed by ``compose.surface_light``): the glow to
+    the surface plus the reflected fog light dimmed by T; the World's (``daylight_terms.sky_terms`` composed at coverage
     0): the glow to the sky, taken as it is (a Python coverage of 0 or 1 weighs nothing by a node)."""
     m, v = NumpyOps(), _values(9)
     length = np.array([3.0, 20.0, 50.0, 7.0, 1.0])
@@ -212,12 +212,12 @@ def test_daylight_on_a_surface_ray_and_a_sky_ray(monkeypatch):
     monkeypatch.setattr(sunlight, "fog_light", fog)
     day = types.SimpleNamespace(air=None)
     rho = np.array([0.5, 0.4, 0.3])
-    terms = sunlight.surface_terms(m, day, None, None, None, None, None, rho, length, v.t_day)
+    terms = daylight_terms.surface_terms(m, day, None, None, None, None, None, rho, length, v.t_day)
     want = glow(m, day, None, None, length) + _col(v.t_day) * rho * v.day_reflected
     np.testing.assert_allclose(compose.surface_light(m, terms), want, rtol=1e-12)
     scaled = []
     monkeypatch.setattr(m, "scale", lambda a, b: scaled.append(b) or a * b, raising=False)
-    sky = compose.source_light(m, 0.0, sunlight.sky_terms(m, day, None, None))
+    sky = compose.source_light(m, 0.0, daylight_terms.sky_terms(m, day, None, None))
     np.testing.assert_allclose(sky, glow(m, day, None, None, 1e15), rtol=1e-12)
     assert scaled == [], scaled
 

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from fog_addon import imageio
-from fog_addon.precompute.core import bakers
+from fog_addon.precompute.model import bakers
 from fog_addon.precompute.physics.emitter import emitter_glow as eg
 
 G = 0.85

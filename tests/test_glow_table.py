@@ -10,12 +10,13 @@ import math
 import numpy as np
 import pytest
 
-from fog_addon.precompute.physics.daylight import aerial, daylight, daylight_tables, sunlight
+from fog_addon.precompute.core import medium
+from fog_addon.precompute.physics.daylight import daylight, daylight_tables, sunlight
 from fog_addon.precompute.core.ops import NumpyOps
 
 SUN = np.array([0.3, math.cos(math.radians(40.0)), math.sin(math.radians(40.0))])
 SUN = SUN / np.linalg.norm(SUN)
-AIR = tuple(aerial.RAYLEIGH_RGB)
+AIR = tuple(medium.RAYLEIGH_RGB)
 
 # name: (beta 1/m, top m, H m, g, albedo, air, camera height m, nearest and farthest surface m)
 LAYERS = {
@@ -41,7 +42,7 @@ def _rays(pz, near, far, n=4000, seed=0):
 def _day(beta, top, falloff, g, albedo, air):
     return sunlight.Daylight(beta, top, falloff, 0.0, SUN, np.array([3.0, 2.9, 2.7]), np.array([0.3, 0.5, 0.9]), g,
                              np.array(albedo) if isinstance(albedo, tuple) else albedo, air,
-                             aerial.RAYLEIGH_HEIGHT if air else 0.0)
+                             medium.RAYLEIGH_HEIGHT if air else 0.0)
 
 
 @pytest.mark.parametrize("name", list(LAYERS))
@@ -66,7 +67,7 @@ def test_table_glow_against_the_kernels(name):
 def test_sun_below_the_horizon_gives_no_sun_glow():
     """A sun at or below the horizon lights no fog: the table's sun texels are 0 (the sky's are not)."""
     for air in (None, AIR):
-        baked = daylight_tables.bake_glow_table(0.01, 100.0, 0.0, -0.1, 0.5, 1.6, air, aerial.RAYLEIGH_HEIGHT)
+        baked = daylight_tables.bake_glow_table(0.01, 100.0, 0.0, -0.1, 0.5, 1.6, air, medium.RAYLEIGH_HEIGHT)
         blocks = baked.reshape(-1, daylight_tables.GLOW_ELEVATIONS, daylight_tables.GLOW_DISTANCES, 4)
         assert np.all(blocks[..., 0] == 0.0) and blocks[..., 1 if air is None else 2].max() > 0.0
         if air is not None:

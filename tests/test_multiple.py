@@ -77,7 +77,7 @@ def test_multiple_rungs_add_the_multiple_glow_to_the_single():
     air, bg = rungs.anisotropic_rungs(G)[:2]
     models = rungs.choose("nodes", 0, G, multiple_albedo=ALBEDO)
     assert spec in models.airlight.tables and spec in models.background.tables
-    from fog_addon.precompute.core import bakers
+    from fog_addon.precompute.model import bakers
     m = NumpyOps({**bakers.numpy_tables(G), spec.name: arr})
     args = (0.3, 15.0, 14.0, 5.0, 9.0)
     want = air.kernel(m, *args) + mu.multiple_airlight(m, spec, *args)
@@ -124,7 +124,7 @@ def single_scattering_log_table(g=G):
 def test_irradiance_of_the_single_scattering_field_is_sun_g0(g):
     """The irradiance bake (hemisphere quadrature of a field) fed the single-scattering field gives Sun et al.
     2005's G_0 (Eq. 17, the surface table, by its own quadrature), and its glossy lobe the field itself."""
-    from fog_addon.precompute.core import bakers
+    from fog_addon.precompute.model import bakers
     from fog_addon.precompute.physics.point import surface
     log_field = single_scattering_log_table(g)
     spec = mu.table_spec(g, 0.5)

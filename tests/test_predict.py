@@ -8,6 +8,7 @@ sample, and bad Quality values are refused with a clear message.
 import numpy as np
 import pytest
 
+from fog_addon.precompute.core import spec as spec_
 from fog_addon.precompute.core import tables
 from fog_addon.precompute.model import predict, rungs, shading
 from fog_addon.precompute.physics.point import airlight, surface
@@ -119,13 +120,13 @@ def test_rims_take_the_fewest_points_their_deviation_allows():
 @pytest.mark.parametrize("bad", [0.0, -0.1, 1.0, float("nan"), float("inf"), "best", "1 %"])
 def test_bad_quality_is_refused(bad):
     with pytest.raises(ValueError, match="quality|target error"):
-        predict.target_error(bad)
+        spec_.target_error(bad)
 
 
 def test_quality_presets():
-    assert predict.target_error("Draft") == 0.05 and predict.target_error("final") == 0.01
-    assert predict.target_error("exact") is None and predict.target_error(None) is None
-    assert predict.target_error(0.02) == 0.02
+    assert spec_.target_error("Draft") == 0.05 and spec_.target_error("final") == 0.01
+    assert spec_.target_error("exact") is None and spec_.target_error(None) is None
+    assert spec_.target_error(0.02) == 0.02
 
 
 def test_a_budget_steps_lights_down_beyond_the_target_least_error_first():

@@ -21,6 +21,7 @@ import pytest
 from fog_scenes import render_harness as h
 from conftest import ROOT
 from fog_addon import imageio
+from fog_addon.precompute.core import spec as spec_
 from fog_addon.precompute.model import predict
 
 pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a subprocess
@@ -77,7 +78,7 @@ SLOW = pytest.mark.slow(reason="the default tier checks the prediction on FAST_C
                          ids=[f"{s}-{q}" for s, q in CASES])
 def test_measured_error_within_prediction(results, scene, quality):
     info = results(scene, quality)
-    target = predict.target_error(quality)
+    target = spec_.target_error(quality)
     print(f"{scene} {quality}: {info['lights']} lights, steps {sorted(info['steps'].values())}, "
           f"rims {sorted(info['rims'].values())}, predicted {info['predicted']:.4f}, measured {info['measured']:.4f}")
     assert info["predicted"] <= target + 1e-12

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from fog_addon import imageio
-from fog_addon.precompute.core import bakers
+from fog_addon.precompute.model import bakers
 from fog_addon.precompute.model import rungs
 from fog_addon.precompute.physics.point import model, multiple
 from fog_addon.precompute.physics.spot import spot_multiple as sm, spot_walk

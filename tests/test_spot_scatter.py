@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from fog_addon.precompute.core import bakers
+from fog_addon.precompute.model import bakers
 from fog_addon.precompute.model import rungs
 from fog_addon.precompute.physics.point import model, surface
 from fog_addon.precompute.physics.spot import spot

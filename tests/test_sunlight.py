@@ -16,7 +16,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from fog_addon.precompute.physics.daylight import aerial, daylight as dl, daylight_tables, sunlight as sl   # noqa: E402
+from fog_addon.precompute.core import medium
+from fog_addon.precompute.physics.daylight import daylight as dl, daylight_tables, sunlight as sl   # noqa: E402
 from fog_addon.precompute.core.ops import NumpyOps                      # noqa: E402
 from tests.test_daylight import ref_beta, ref_column, ref_hg, ref_tau   # noqa: E402
 
@@ -208,10 +209,10 @@ def test_fog_light_with_air_against_sphere_quadrature():
     the albedos in it) against the sphere's quadrature of ``ray_glow`` with air itself: within 1 % of the fog light
     at that height in the haze (0 and 300 m), 5 % at 3 km (a bright lower hemisphere under a darker sky: order 2
     smooths the edge, as for the layer alone above its top)."""
-    beta, top, falloff, g, b = 9.78e-5, 0.0, 1200.0, 0.76, aerial.RAYLEIGH_RGB[2]
-    spec = daylight_tables.table_spec(beta, top, falloff, SUN, g, (b, aerial.RAYLEIGH_HEIGHT, 0.9))
+    beta, top, falloff, g, b = 9.78e-5, 0.0, 1200.0, 0.76, medium.RAYLEIGH_RGB[2]
+    spec = daylight_tables.table_spec(beta, top, falloff, SUN, g, (b, medium.RAYLEIGH_HEIGHT, 0.9))
     mm = NumpyOps({spec.name: daylight_tables.bake_fog_light(beta, top, falloff, SUN, g,
-                                                             (b, aerial.RAYLEIGH_HEIGHT, 0.9))})
+                                                             (b, medium.RAYLEIGH_HEIGHT, 0.9))})
     x, w = np.polynomial.legendre.leggauss(96)
     mu = np.concatenate([0.5 * (x - 1), 0.5 * (x + 1)])
     wm = np.concatenate([0.5 * w, 0.5 * w])
@@ -226,7 +227,7 @@ def test_fog_light_with_air_against_sphere_quadrature():
         fields = []
         for e_sun, l_sky in ((1.0, 0.0), (0.0, 1.0)):
             day = sl.Daylight(beta, top, falloff, 0.0, SUN, np.full(3, e_sun), np.full(3, l_sky), g, 0.9, (b, b, b),
-                              aerial.RAYLEIGH_HEIGHT)
+                              medium.RAYLEIGH_HEIGHT)
             fields.append(sl.ray_glow(m, day, np.array([0.0, 0.0, z]), d, length)[..., 2] * dw)
         errors, scale = [], 0.0
         for n in NORMALS:
@@ -236,7 +237,7 @@ def test_fog_light_with_air_against_sphere_quadrature():
             got = []
             for e_sun, l_sky in ((1.0, 0.0), (0.0, 1.0)):
                 day = sl.Daylight(beta, top, falloff, 0.0, SUN, np.full(3, e_sun), np.full(3, l_sky), g, 0.9, (b, b, b),
-                                  aerial.RAYLEIGH_HEIGHT)
+                                  medium.RAYLEIGH_HEIGHT)
                 got.append(float(sl.fog_light(mm, (spec,) * 3, day, np.array([0.0, 0.0, z]), n)[2]))
             errors.append(abs(got[0] - sun) + abs(got[1] - sky))
             scale = max(scale, sun + sky)

@@ -12,7 +12,8 @@ import shutil
 import numpy as np
 import pytest
 
-from fog_addon.precompute.core import bakers, fingerprint, table_cache, tables
+from fog_addon.precompute.core import fingerprint, table_cache, tables
+from fog_addon.precompute.model import bakers
 from fog_addon.precompute.model import pixel
 
 

@@ -7,7 +7,8 @@ import re
 
 import pytest
 
-from fog_addon.precompute.core import bakers, registry, tables
+from fog_addon.precompute.core import tables
+from fog_addon.precompute.model import bakers, registry
 from fog_addon.precompute.model import pixel
 from fog_addon.precompute.physics.daylight import daylight_tables
 from fog_addon.precompute.physics.emitter import emitter_glow, emitter_table

@@ -13,12 +13,13 @@ import math
 import numpy as np
 import pytest
 
-from fog_addon.precompute.physics.daylight import aerial, daylight as dl, daylight_tables, sunlight as sl
+from fog_addon.precompute.core import medium
+from fog_addon.precompute.physics.daylight import daylight as dl, daylight_tables, sunlight as sl
 from fog_addon.precompute.core.ops import NumpyOps
 from fog_addon.precompute.core.tables import TableSpec
 
-AIR = tuple(3.0 * b for b in aerial.RAYLEIGH_RGB)   # thicker than sea-level air: the opacities below are not tiny
-H = aerial.RAYLEIGH_HEIGHT
+AIR = tuple(3.0 * b for b in medium.RAYLEIGH_RGB)   # thicker than sea-level air: the opacities below are not tiny
+H = medium.RAYLEIGH_HEIGHT
 SPEC = TableSpec(daylight_tables.SKY_TABLE, daylight_tables.SKY_COLUMNS, daylight_tables.SKY_ROWS, channels=4)
 SUN = np.array([0.0, math.cos(math.radians(30.0)), math.sin(math.radians(30.0))])
 

@@ -1,5 +1,5 @@
 """A fog layer's daylight in the compositor, per pixel: what the fog group takes of it (``Day``; its terms:
-``sunlight.pixel_terms``, composed by ``compose.compose``) and the lit shares of the sun's shafts from its map
+``daylight_terms.pixel_terms``, composed by ``compose.compose``) and the lit shares of the sun's shafts from its map
 (``sun_shares``)."""
 import hashlib
 from typing import Any, NamedTuple

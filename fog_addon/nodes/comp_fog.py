@@ -17,7 +17,7 @@ cost grows with lights x samples x materials (issue 8's overhead: 4x the fog-fre
   reflects (``comp_lights.build_scatter_group``), each evaluated only in its window (``precompute/model/footprint.py``:
   a spot's cone, the picture's surfaces) through Crop nodes, and put back in place by Translate nodes;
 * the pixel's fog is composed in one place, ``compose.compose`` (Sun et al. 2005 Eq. 19 and 12): the builder hands
-  it the lamps' sums over the bundles, a fog layer's sun and sky (``sunlight.pixel_terms``), the glowing objects'
+  it the lamps' sums over the bundles, a fog layer's sun and sky (``daylight_terms.pixel_terms``), the glowing objects'
   glows (``comp_emitters.glows``) and the layer's dimmings of the render's pixel as terms, and wires its output.
 
 Everything the graph reads from the scene reaches it by simple-expression drivers (the camera's matrix,
@@ -36,7 +36,7 @@ it writes (``compositor.py``): the view layers' own passes hold no fog light.
 """
 import bpy
 
-from ..precompute.model import compose, footprint, pixel, rungs
+from ..precompute.model import compose, daylight_terms, footprint, pixel, rungs
 from ..precompute.physics.daylight import sun_shafts, sunlight
 from ..precompute.physics.point import model, surface
 from ..precompute.physics.shafts import shafts
@@ -217,7 +217,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     they do not hold the animation's range (``PARTIAL``); ``shafted``: ``comp_bundles.build_bundle``'s;
     ``emitters``: (the fog's g, Dense Fog's albedo or None) if glowing objects get their glows
     (``comp_emitters.glows``: an Emission input), else None; ``day``: a ``comp_daylight.Day`` for a fog layer with
-    a sun or a sky (``sunlight.pixel_terms``; the render's surfaces take the sun's and the sky's dimming here, once
+    a sun or a sky (``daylight_terms.pixel_terms``; the render's surfaces take the sun's and the sky's dimming here, once
     per pixel, and the sky seen its transmittance), else None; ``layer``: a fog layer's (top, falloff, ground) in
     units (``FogSpec.layer_per_unit``), where the lights' glows end (``sunlight.lamp_glow_span``), or None for fog
     that fills all space.  Rebuilt in place, so the scene's compositor keeps its group node.  Returns the table
@@ -342,7 +342,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
                 m, day.sun_shadow, day.sun_nodes, daylight, cam, direction, layer,
                 m.select(m.less(0.5, cover), d_vp, model.FAR), beta, pos, normal,
                 (shared["Shaft Offset"], surface_offset), shared["Shaft Length"])
-        terms += sunlight.pixel_terms(m, daylight, day.table, cam, direction, pos, normal, diffuse + specular, d_vp,
+        terms += daylight_terms.pixel_terms(m, daylight, day.table, cam, direction, pos, normal, diffuse + specular, d_vp,
                                       t_day, cover, sun_share, surface_share)
     if emitters is not None:
         facing_normal = m.scale(normal, m.select(m.less(m.dot(normal, incoming), 0.0), -1.0, 1.0))

@@ -2,7 +2,8 @@
 import bpy
 import numpy as np
 
-from ..precompute.core import bakers, fingerprint, table_cache
+from ..precompute.core import fingerprint, table_cache
+from ..precompute.model import bakers
 from . import owned
 
 VERSION_KEY = "analytic_fog_table_version"   # on each image: the fingerprint of the code that baked it

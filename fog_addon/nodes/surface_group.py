@@ -1,12 +1,12 @@
 """The Surface group, ``AnalyticFog Surface``, which every fogged material uses: ``shading.shade_surface`` (Sun et
 al. 2005 Eq. 19) over the scene's fog lights in bundles (``build_surface_bundle``), with a fog layer's daylight
-(``sunlight.surface_terms``, composed by ``compose.surface_light``) and the glows past glass and mirrors
+(``daylight_terms.surface_terms``, composed by ``compose.surface_light``) and the glows past glass and mirrors
 (``glass_tails.py``)."""
 import functools
 
 import bpy
 
-from ..precompute.model import compose, rungs, shading
+from ..precompute.model import compose, daylight_terms, rungs, shading
 from ..precompute.physics.daylight import sunlight
 from ..precompute.physics.point import surface
 from . import (closures, glass_tails, groups, light_bundles, light_groups, passes, preview as preview_,
@@ -92,7 +92,7 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     (``sunsky.daylight``), or None for fog that fills all space: the camera segment's transmittance is then the
     layer's, and the user's shader on every ray takes the sun's and the sky's dimming (``sunlight.direct_dimming``);
     with ``day_table`` (the fog light's TableSpec, its image in ``images``) camera rays also get the sun's and the
-    sky's glow and their fog light on the surface (``sunlight.surface_terms``, composed); ``day_dims`` False leaves the sun's and the
+    sky's glow and their fog light on the surface (``daylight_terms.surface_terms``, composed); ``day_dims`` False leaves the sun's and the
     sky's dimming to the compositor (``comp_fog.build_fog_group``: once per pixel), ``day_exact`` False dims the
     camera segment by ``sunlight.proxy_transmittance`` (the compositor puts the exact colour on every pixel).  The
     lights sit in bundle groups (``light_bundles.split``, ``build_surface_bundle``).  ``preview``: ``preview.Shown``
@@ -226,11 +226,11 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
 
 
 def _day_light(m, ng, daylight, table, geo, incoming, length, reflectance, t_vp, is_camera):
-    """(an Emission's output, its colour) of a fog layer's sun and sky on camera rays (``sunlight.surface_terms``,
+    """(an Emission's output, its colour) of a fog layer's sun and sky on camera rays (``daylight_terms.surface_terms``,
     composed: Sun et al. 2005 Eq. 19): the glow along the ray to the surface and the fog light it reflects, from the
     fog light's ``table``."""
     position = m.wrap(geo.outputs["Position"], vector=True)
-    light = m.scale(compose.surface_light(m, sunlight.surface_terms(
+    light = m.scale(compose.surface_light(m, daylight_terms.surface_terms(
         m, daylight, table, position + m.scale(incoming, length), m.scale(incoming, -1.0), position,
         m.wrap(geo.outputs["Normal"], vector=True), reflectance, length, t_vp)), is_camera)
     emit = ng.nodes.new("ShaderNodeEmission")

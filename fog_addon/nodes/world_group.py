@@ -4,7 +4,7 @@ import functools
 
 import bpy
 
-from ..precompute.model import compose, rungs, shading
+from ..precompute.model import compose, daylight_terms, rungs, shading
 from ..precompute.physics.daylight import sunlight
 from . import (closures, drivers, groups, light_bundles, light_groups, passes, preview as preview_,
                preview_sampled, preview_shafts)
@@ -124,7 +124,7 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
         if day_preview is not None:   # the sky through the layer where the preview shows (``preview.blend``)
             transmittance = preview_.blend(m, 1.0, 1.0 + is_camera * (seen - 1.0), preview_.factor(m, params))
         if day_table is not None or day_preview is not None:
-            day_glow = m.scale(compose.source_light(m, 0.0, sunlight.sky_terms(m, daylight, camera_at, direction)),
+            day_glow = m.scale(compose.source_light(m, 0.0, daylight_terms.sky_terms(m, daylight, camera_at, direction)),
                                is_camera)
         if kept or day_table is not None or preview:   # (the compositor's World: no glow, the sky dimmed per pixel)
             # The fogged World mixes the Fog closure by 1 - Transmittance (world.py), right where the sky is not

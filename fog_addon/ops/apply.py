@@ -15,7 +15,8 @@ from ..nodes import comp_fog, compositor, dedupe, groups, images, osl, passes, p
 from ..nodes.light import unwrap_light
 from ..nodes.material import unwrap_material, wrap_material
 from ..nodes.world import unwrap_world, wrap_world
-from ..precompute.model import capabilities, predict
+from ..precompute.model import capabilities
+from ..precompute.core import spec as spec_
 from ..precompute.core.spec import FogSpec
 from ..props import spec_of, store_spec
 from . import progress as progress_
@@ -132,7 +133,7 @@ def _evaluate(scene):
 
 
 def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="nodes", objects=None,
-              scene_scale=1.0, with_passes=False, error=predict.DEFAULT_QUALITY, world_light=False, shafts=True,
+              scene_scale=1.0, with_passes=False, error=spec_.DEFAULT_QUALITY, world_light=False, shafts=True,
               multiple_scattering=False, progress=progress_.silent):
     """``apply`` with the spec's fields as arguments, for scripts: ``density`` (1/m), ``albedo``, ``anisotropy``
     (g), ``method`` ("auto", "nodes", "osl", "compositor"; this function's default is the node groups, the

@@ -3,14 +3,14 @@
 The operators (``FOG_OT_add``'s invoke, ``FOG_OT_bake_tables``) hand a ``BakeJob`` the tables a build is
 missing (``apply.missing_tables``: each with its estimate), poll it from a modal timer and show its
 ``status()`` in the status bar and on the progress cursor.  The bakes themselves are numpy only
-(``precompute.core.bakers``): nothing of Blender's data is touched off the main thread.  ``cancel()`` makes the bake's
+(``precompute.model.bakers``): nothing of Blender's data is touched off the main thread.  ``cancel()`` makes the bake's
 progress callback raise ``BakeCancelled`` at its next call (a fraction of a second: the bakes report often);
 nothing half-baked is cached, and the scene is not changed.
 """
 import threading
 import time
 
-from ..precompute.core import bakers
+from ..precompute.model import bakers
 from ..precompute.core.table_cache import BakeCancelled
 
 

@@ -12,7 +12,7 @@ from .. import caveats, methods, sunsky
 from ..nodes import comp_fog, groups, images, passes
 from ..nodes.light import unwrap_light, wrap_light
 from ..nodes.owned import is_fogged
-from ..precompute.core import bakers
+from ..precompute.model import bakers
 from ..precompute.model import rungs
 from ..precompute.physics.point import multiple
 from . import progress as progress_

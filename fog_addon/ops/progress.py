@@ -5,7 +5,7 @@ go: ``stage`` one of STAGES, ``done`` of ``total`` items of that stage.  Two
 reporters: Blender's progress cursor for the operators (``window_progress``)
 and a line per stage for the command line (``ConsoleProgress``).
 
-A table's bake (``precompute.core.bakers``: ``missing`` lists the tables not yet
+A table's bake (``precompute.model.bakers``: ``missing`` lists the tables not yet
 cached with the seconds each is estimated to take) reports ``progress(done,
 total)`` of its own; ``bake_progress`` makes one from an operation's reporter:
 ConsoleProgress announces the bake with its estimate and prints a line every

@@ -10,7 +10,7 @@ import bpy
 
 from .. import props
 from ..nodes import groups, preview
-from ..precompute.core import bakers
+from ..precompute.model import bakers
 from ..precompute.core.spec import FogSpec, validate_quality
 from ..props import spec_of, store_spec
 from . import progress as progress_

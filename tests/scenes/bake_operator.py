@@ -20,7 +20,7 @@ from demo_scenes import spheres  # noqa: E402
 from fog_addon import props  # noqa: E402
 from fog_addon.nodes import groups  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
-from fog_addon.precompute.core import bakers  # noqa: E402
+from fog_addon.precompute.model import bakers  # noqa: E402
 
 bpy.ops.wm.read_factory_settings(use_empty=True)
 fog_addon.register()

@@ -269,7 +269,11 @@ def run(seed, steps, render_every, allow_dense, spots=True):
     lamps = Lamps() if spots else Lamps(("POINT",))
     for step in range(1, steps + 1):
         try:
-            what = change(scene, rng, lamps, allow_dense)
+            if step == steps // 2:   # the node groups once, whatever the draws (the walk must visit both methods)
+                scene.analytic_fog.method = "NODES"
+                what = "method NODES (the walk's visit)"
+            else:
+                what = change(scene, rng, lamps, allow_dense)
         except Exception:   # noqa: BLE001 - the run reports it as the failure
             result["failure"] = {"step": step, "change": "(raised)", "what": traceback.format_exc()[-1500:]}
             return result

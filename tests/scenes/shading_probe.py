@@ -31,7 +31,7 @@ from mathutils import Vector  # noqa: E402
 
 from fog_addon import imageio, measure  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
-from fog_addon.precompute.core import bakers  # noqa: E402
+from fog_addon.precompute.model import bakers  # noqa: E402
 from fog_addon.precompute.model import rungs, shading  # noqa: E402
 from fog_addon.precompute.physics.point import surface  # noqa: E402
 from fog_addon.precompute.core.medium import Medium  # noqa: E402

@@ -13,6 +13,12 @@ from typing import Any, NamedTuple
 from . import presets, tables
 
 
+# Clear air (Bruneton & Neyret 2008 section 2.1; Dobashi et al. 2002 appendix A.1): Rayleigh scattering at sea
+# level for lambda = 680, 550, 440 nm and its scale height; the air's kernels are ``physics/daylight/aerial.py``'s
+RAYLEIGH_RGB = (5.8e-6, 13.5e-6, 33.1e-6)   # 1/m
+RAYLEIGH_HEIGHT = 8000.0                     # m (Dobashi et al. 2002 appendix A.1: 7994 m)
+
+
 class Medium(NamedTuple):
     beta: Any                       # extinction = scattering coefficient, 1/m
     albedo: Any = (1.0, 1.0, 1.0)   # single-scattering albedo (RGB, dimensionless)

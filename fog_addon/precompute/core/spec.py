@@ -16,7 +16,7 @@ Units, stated once:
 * ``anisotropy``: the Henyey-Greenstein g of the phase function, in [-MAX_ANISOTROPY, MAX_ANISOTROPY].
 * ``method``: "auto" (``fog_addon/methods/auto.py`` picks per scene), or a method of
   ``METHODS``: "nodes", "osl", "compositor".
-* ``quality``: a Quality preset name of ``predict.QUALITY`` ("draft", "final", "exact") or a target
+* ``quality``: a Quality preset name of ``QUALITY`` ("draft", "final", "exact") or a target
   relative error in (0, 1).
 * ``passes``: write the Fog Light and Fog Transmittance render passes.
 * ``world_light``: the World keeps lighting surfaces through the fog (an artistic ambient).
@@ -36,9 +36,8 @@ import dataclasses
 import json
 import math
 
-from ..model import predict
 from . import medium, presets
-from ..physics.daylight.aerial import RAYLEIGH_HEIGHT, RAYLEIGH_RGB
+from .medium import RAYLEIGH_HEIGHT, RAYLEIGH_RGB
 
 METHODS = ("nodes", "osl", "compositor")   # the methods a user can pick besides "auto" (``fog_addon/methods``)
 AUTO = "auto"
@@ -100,11 +99,30 @@ def validate_quality(quality):
         return "exact"
     if isinstance(quality, str):
         q = quality.strip().lower()
-        predict.target_error(q)
+        target_error(q)
         return q
-    predict.target_error(quality)
+    target_error(quality)
     return float(quality)
 
+
+QUALITY = {"draft": 0.05, "final": 0.01, "exact": None}   # Quality presets: target relative error (None: no step)
+DEFAULT_QUALITY = "final"
+
+
+def target_error(quality):
+    """Target relative error from a Quality preset name or a number (None or "exact": no step taken)."""
+    if quality is None:
+        return None
+    if isinstance(quality, str):
+        key = quality.strip().lower()
+        if key not in QUALITY:
+            raise ValueError(f"unknown quality {quality!r}: use {', '.join(QUALITY)} or a relative error "
+                             "such as 0.01")
+        return QUALITY[key]
+    value = float(quality)
+    if not (math.isfinite(value) and 0.0 < value < 1.0):
+        raise ValueError(f"the target error must be a fraction in (0, 1), such as 0.01 for 1 %, got {quality!r}")
+    return value
 
 @dataclasses.dataclass(frozen=True)
 class FogSpec:
@@ -114,7 +132,7 @@ class FogSpec:
     albedo: tuple = (1.0, 1.0, 1.0)
     anisotropy: float = 0.0
     method: str = DEFAULT_METHOD
-    quality: object = predict.DEFAULT_QUALITY
+    quality: object = DEFAULT_QUALITY
     passes: bool = False
     world_light: bool = False
     shafts: bool = True
@@ -163,8 +181,8 @@ class FogSpec:
 
     @property
     def target_error(self):
-        """The Quality as a target relative error, None for Exact (``predict.target_error``)."""
-        return predict.target_error(self.quality)
+        """The Quality as a target relative error, None for Exact (``target_error``)."""
+        return target_error(self.quality)
 
     def validated(self):
         """This spec with every field checked and normalised; raises ValueError with a message a user understands."""

@@ -68,7 +68,7 @@ class Source(NamedTuple):
 
 
 LAMPS = Source("lamps", True)               # point, spot and area lights (``shading.shade_point``, ``glow_pair``)
-DAYLIGHT = Source("sun and sky", False)     # a fog layer's sun and sky (``sunlight.pixel_terms``)
+DAYLIGHT = Source("sun and sky", False)     # a fog layer's sun and sky (``daylight_terms.pixel_terms``)
 EMITTERS = Source("glowing objects", True)  # the emitters' glows (``emitter_glow.py``)
 SEGMENTS = Source("segments past glass", True)   # the glows of the segments past glass panes and sharp mirrors
 #                                                  (``shading.segment_terms``, ``nodes/glass_tails.py``)

@@ -27,7 +27,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..core import bakers
+from ..core import spec
+from . import bakers
 from ..physics.point import model
 from . import rungs, shading
 from ..physics.spot import spot as spot_mod
@@ -37,8 +38,6 @@ from ..core.ops import NumpyOps
 FLOOR = 1e-3          # samples below this fraction of the peak fog are not judged (issue 8 §2)
 MIN_FOG = 1e-30       # fog light (W/m^2/sr) below which a sample is not judged: an opaque fog's far samples
 RIM_SAFETY = 2.0      # a cheaper rim's deviation at the samples counts twice: between them it can peak higher
-QUALITY = {"draft": 0.05, "final": 0.01, "exact": None}   # Quality presets: target relative error (None: no step)
-DEFAULT_QUALITY = "final"
 
 
 class ViewSamples(NamedTuple):
@@ -108,22 +107,6 @@ def joint(budgets, n):
         costs.append(cost if cost.ndim == 3 else np.repeat(cost[:, None, :], n, axis=1))
         limits.extend(np.atleast_1d(np.asarray(b.limit, float)))
     return Budget(np.concatenate(costs, axis=0), limits, " and ".join(b.name for b in budgets))
-
-
-def target_error(quality):
-    """Target relative error from a Quality preset name or a number (None or "exact": no step taken)."""
-    if quality is None:
-        return None
-    if isinstance(quality, str):
-        key = quality.strip().lower()
-        if key not in QUALITY:
-            raise ValueError(f"unknown quality {quality!r}: use {', '.join(QUALITY)} or a relative error "
-                             "such as 0.01")
-        return QUALITY[key]
-    value = float(quality)
-    if not (np.isfinite(value) and 0.0 < value < 1.0):
-        raise ValueError(f"the target error must be a fraction in (0, 1), such as 0.01 for 1 %, got {quality!r}")
-    return value
 
 
 def _numpy_ops(g):
@@ -339,5 +322,5 @@ def choose_steps(glow, scatter, target, budget=None, rim_dev=None):
 def predict(samples, intensity, beta, quality, budget=None, g=0.0):
     """The choice for a view at a Quality (preset name, number or None): :class:`Prediction`."""
     glow, scatter = light_fog(samples, intensity, beta, g)
-    return choose_steps(glow, scatter, target_error(quality), budget,
+    return choose_steps(glow, scatter, spec.target_error(quality), budget,
                         rim_deviation(samples, intensity, beta, glow, g))._replace(fog=(glow, scatter))

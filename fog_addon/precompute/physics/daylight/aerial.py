@@ -10,14 +10,13 @@ both, by panels in which the exponent is linear in each species' optical depth.
 """
 import math
 
+from ...core.medium import RAYLEIGH_HEIGHT
 from .daylight import (EXP_CLAMP, MIN_FALLOFF, MIN_MU, MIN_SPAN, UNBOUNDED, column_depth, exp_neg, expint2, expint3,
                        extinction, gauss_legendre01, hg_ring_mean, optical_depth, phi1, sky_airlight, sun_integral)
 
 # Distance haze: the clear-sky atmosphere of Bruneton & Neyret 2008 section 2.1 (Eq. 1-4): Rayleigh
 # scattering at sea level for lambda = 680, 550, 440 nm, its scale height; aerosols of scale height
 # 1.2 km whose extinction is scattering / 0.9; Cornette-Shanks g.
-RAYLEIGH_RGB = (5.8e-6, 13.5e-6, 33.1e-6)   # 1/m
-RAYLEIGH_HEIGHT = 8000.0                     # m (Dobashi et al. 2002 appendix A.1: 7994 m)
 MIE_HEIGHT = 1200.0                          # m (Dobashi et al. 2002 appendix A.1: 1.2 km)
 MIE_SCATTERING = 2.0e-5                      # 1/m, a hazy day; a parameter of the kernel
 MIE_ALBEDO = 0.9                             # aerosol scattering / extinction

@@ -19,7 +19,7 @@ A pixel gets, besides its surface's own shading:
   spherical-harmonic irradiance map per height (``daylight_tables.bake_fog_light``).
 
 The sun's and the sky's scattering take the fog's Henyey-Greenstein g (the sky's by its ring means,
-``daylight.hg_ring_mean``).  ``pixel_terms`` hands a pixel's glow and fog light to the composer (``compose.py``),
+``daylight.hg_ring_mean``).  ``model/daylight_terms.py`` hands a pixel's glow and fog light to the composer (``compose.py``),
 which weighs them by the pixel's coverage with the other sources' light.
 """
 import math
@@ -27,8 +27,6 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ...model import compose
-from ..point import model
 from . import aerial, daylight
 from .daylight_tables import GLOW_ELEVATIONS, SH_COUNT, TABLE_ROWS, glow_coordinates, sh_basis, table_height
 
@@ -390,47 +388,3 @@ def fog_light(m, spec, day, point, normal, sun_share=None):
                            + l * _irradiance(m, c, x, basis, normal, day, 1) for c, e, l in zip(spec, sun_e, sky_l)))
     return _albedo(m, day, m.scale(day.sun_irradiance, _shared(_irradiance(m, spec, x, basis, normal, day), sun_share))
                    + m.scale(day.sky_radiance, _irradiance(m, spec, x, basis, normal, day, 1)))
-
-
-def pixel_terms(m, day, table, camera, direction, position, normal, reflectance, length, t_vp, cover, sun_share=None,
-                surface_share=None):
-    """The sun's and the sky's light at a pixel as the composer's terms (``compose.Term``, source ``compose.DAYLIGHT``,
-    the layer's and the air's albedos in them): along the ray to the surface at ``length`` the glow (``ray_glow``)
-    and the fog light the surface reflects (``fog_light`` times its ``reflectance``, taken as Lambertian: the diffuse
-    plus the specular albedo), dimmed on its way by ``t_vp`` (``view_transmittance``), and the glow to the sky; the
-    composer weighs them by the pixel's coverage (Sun et al. 2005 Eq. 19 and 12).  With air the glow is evaluated
-    once, along the RAY: to the surface where ``cover`` is above one half, to the sky elsewhere (without the glow's
-    table its kernel is the costliest part of the picture: a pixel on a silhouette takes one side's glow).
-    ``sun_share``: ``ray_glow``'s lit share of the sun's glow, ``surface_share``: ``fog_light``'s (``sun_shafts``)."""
-    if day.air is None:
-        return (surface_terms(m, day, table, camera, direction, position, normal, reflectance, length, t_vp,
-                              sun_share, surface_share) + sky_terms(m, day, camera, direction, sun_share))
-    to = m.select(m.less(0.5, cover), length, model.FAR)
-    return [_term(compose.GLOW, compose.RAY, ray_glow(m, day, camera, direction, to, sun_share)),
-            *_reflected_terms(m, day, table, position, normal, reflectance, t_vp, surface_share)]
-
-
-def surface_terms(m, day, table, camera, direction, position, normal, reflectance, length, t_vp, sun_share=None,
-                  surface_share=None):
-    """The sun's and the sky's light on a camera ray that meets a surface at ``length``, as the composer's terms
-    (source ``compose.DAYLIGHT``; ``compose.surface_light`` sums them: Sun et al. 2005 Eq. 19): the glow along the
-    ray (``ray_glow``) and the fog light the surface reflects (``fog_light`` times its ``reflectance``), dimmed on
-    its way by ``t_vp``.  The Surface group's (its camera rays), and a pixel's without air (``pixel_terms``)."""
-    return [_term(compose.GLOW, compose.SURFACE, ray_glow(m, day, camera, direction, length, sun_share)),
-            *_reflected_terms(m, day, table, position, normal, reflectance, t_vp, surface_share)]
-
-
-def sky_terms(m, day, camera, direction, sun_share=None):
-    """The sun's and the sky's glow along a camera ray that meets no surface, to where it leaves the layer and its
-    air (Eq. 12), as the composer's term at SKY: the World's camera rays, and a pixel's without air."""
-    return [_term(compose.GLOW, compose.SKY, ray_glow(m, day, camera, direction, model.FAR, sun_share))]
-
-
-def _reflected_terms(m, day, table, position, normal, reflectance, t_vp, surface_share):
-    return [_term(compose.REFLECTED, compose.SURFACE,
-                  reflectance * fog_light(m, table, day, position, normal, surface_share)),
-            _term(compose.DIMMING, compose.SURFACE, t_vp)]
-
-
-def _term(kind, at, value):
-    return compose.Term(kind, at, compose.DAYLIGHT, value)

@@ -28,8 +28,7 @@ import math
 import numpy as np
 
 from ...core import tables as tables_
-from ...model import rungs
-from ..point import multiple
+from ..point import model, multiple
 from .emitter_table import SIZES, T_COUNT, T_COUNT_DENSE, T_MAX, T_MIN
 from .emitter_table import (FACING_COUNT, FACING_KIND_KEY, KIND_KEY, estimate_seconds, facing_spec,  # noqa: F401
                             needs, table_spec)
@@ -56,12 +55,12 @@ def single_field(g, tables):
     """I_1(T, cos gamma): the single-scattering field of an endless ray at extinction 1 per unit intensity (Sun et
     al. 2005 Eq. 12, the background rung of anisotropy g on numpy), T the distance to the source; ``tables``: a
     ``TableReader``."""
-    background = rungs.anisotropic_rungs(g)[1]
+    g = float(g)
     m = NumpyOps(tables.per_g(g))
 
-    def single(t, c):
+    def single(t, c):   # (the background table rung's kernel: ``rungs.anisotropic_rungs(g)[1]``)
         with np.errstate(all="ignore"):
-            v = background.kernel(m, 1.0, t, t * c, t * np.sqrt(np.maximum(1.0 - c * c, 0.0)))
+            v = model.airlight_background(m, 1.0, t, t * c, t * np.sqrt(np.maximum(1.0 - c * c, 0.0)), g=g)
         return np.nan_to_num(v, nan=0.0, posinf=0.0)
 
     return single

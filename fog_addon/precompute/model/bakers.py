@@ -12,8 +12,9 @@ their bakers take ``progress(done, total)``, which may raise ``BakeCancelled`` t
 """
 import functools
 
-from . import registry, table_cache, tables
-from .table_cache import BakeCancelled, cached_bake, is_cached  # noqa: F401 - BakeCancelled: the callers'
+from ..core import table_cache, tables
+from ..core.table_cache import BakeCancelled, cached_bake, is_cached  # noqa: F401 - BakeCancelled: the callers'
+from . import registry
 
 
 

@@ -9,12 +9,12 @@ by the key its constructor gave it (``TableSpec.kind``), or for a constant spec 
 """
 import functools
 
-from ..model import pixel
 from ..physics.daylight import daylight_tables
 from ..physics.emitter import emitter_glow
 from ..physics.point import airlight, multiple, surface
 from ..physics.spot import spot, spot_multiple
-from . import tables
+from ..core import tables
+from . import pixel
 
 
 def _bake_airlight(spec, progress=None):
