@@ -9,7 +9,6 @@
   against path tracing) and names the spot and area lights it leaves out;
 * the preview against path tracing where shadows cut the fog (its shafts).
 """
-import json
 import re
 
 import numpy as np
@@ -53,36 +52,49 @@ import numpy as np
 import bpy
 import fog_addon
 from fog_addon import measure, methods
+from fog_addon.methods import compositor
 from fog_addon.ops import apply
 from fog_addon.precompute.core.spec import FogSpec
-bpy.ops.wm.open_mainfile(filepath=sys.argv[1] if len(sys.argv) > 1 else BLEND)
+bpy.ops.wm.open_mainfile(filepath=BLEND)
 scene = bpy.context.scene
 scene.render.engine = ENGINE
 measure.set_samples(scene, 4)
-scene.render.resolution_x, scene.render.resolution_y = 48, 27
+scene.render.resolution_x, scene.render.resolution_y = SIZE
 measure.set_pixel_centre_filter(scene)
 fog_addon.register()
-spec = FogSpec(density=0.15, method="compositor")
+spec = SPEC
+def previewed():
+    return bool(bpy.data.node_groups[GROUP].nodes.get("Viewport Preview"))
 apply.apply(scene, spec)
-with_preview = bool(bpy.data.node_groups["AnalyticFog Surface"].nodes.get("Viewport Preview"))
+with_preview = previewed()
 measure.render_to_file(scene, os.path.join(os.getcwd(), "a.exr"))
-methods.get("compositor").preview_budget = lambda *a: None   # the same scene built without a preview
+WITHOUT   # the same scene built without a preview
 apply.remove_fog(scene)
 apply.apply(scene, spec)
-without = bool(bpy.data.node_groups["AnalyticFog Surface"].nodes.get("Viewport Preview"))
+without = previewed()
 measure.render_to_file(scene, os.path.join(os.getcwd(), "b.exr"))
 print(json.dumps({"with": with_preview, "without": without}))
 """
 
 
-@pytest.mark.parametrize("engine", ENGINES)
-def test_final_renders_are_those_without_the_preview(tmp_path, engine):
-    blend = h.scene_blend("spheres", tmp_path)
-    out = h.bpy_flow(FLOW.replace("BLEND", repr(str(blend))).replace(
-        "ENGINE", repr({"cycles": "CYCLES", "eevee": "BLENDER_EEVEE"}[engine])), tmp_path)
+def _final_against_unpreviewed(tmp_path, engine, blend, spec, without, group="AnalyticFog Surface", size=(48, 27)):
+    """Render ``blend`` built by ``spec`` (a FogSpec expression) with its preview and built without it (``without``:
+    the line that keeps the preview out); both final renders, bit for bit the same."""
+    code = FLOW
+    for key, value in (("BLEND", repr(str(blend))), ("ENGINE", repr({"cycles": "CYCLES", "eevee": "BLENDER_EEVEE"}[engine])),
+                       ("SIZE", repr(size)), ("SPEC", spec), ("WITHOUT", without), ("GROUP", repr(group))):
+        code = code.replace(key, value)
+    out = h.bpy_flow(code, tmp_path)
     assert out == {"with": True, "without": False}, out
     a, b = (imageio.read_rgb(tmp_path / f"{k}.exr") for k in ("a", "b"))
     assert np.array_equal(a, b), float(np.abs(a - b).max())
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_final_renders_are_those_without_the_preview(tmp_path, engine):
+    _final_against_unpreviewed(tmp_path, engine, h.scene_blend("spheres", tmp_path),
+                               'FogSpec(density=0.15, method="compositor")',
+                               'methods.get("compositor").preview_budget = lambda *a: None')
 
 
 # The preview against Cycles' path tracing with cast shadows (fog_scenes/shafts.py: issue 27's scenes and their
@@ -254,36 +266,6 @@ def test_viewport_shows_the_daylight(tmp_path, engine):
     assert abs(m["mean_ratio"] - 1.0) < DAY_BOUND[engine], m
 
 
-DAY_FLOW = r"""
-import json, os, sys
-import numpy as np
-import bpy
-import fog_addon
-from fog_addon import measure
-from fog_addon.methods import compositor
-from fog_addon.ops import apply
-from fog_addon.precompute.core.spec import FogSpec
-bpy.ops.wm.open_mainfile(filepath=BLEND)
-scene = bpy.context.scene
-scene.render.engine = ENGINE
-measure.set_samples(scene, 4)
-scene.render.resolution_x, scene.render.resolution_y = 64, 36
-measure.set_pixel_centre_filter(scene)
-fog_addon.register()
-spec = FogSpec(density=BETA, method="compositor", fog_top=TOP)
-apply.apply(scene, spec)
-world = bpy.data.node_groups["AnalyticFog World"]
-with_preview = any(n.name == "Viewport Preview" for n in world.nodes)
-measure.render_to_file(scene, os.path.join(os.getcwd(), "a.exr"))
-compositor._preview = lambda *a, **k: (None, {})   # the same scene built without a preview
-apply.remove_fog(scene)
-apply.apply(scene, spec)
-without = any(n.name == "Viewport Preview" for n in bpy.data.node_groups["AnalyticFog World"].nodes)
-measure.render_to_file(scene, os.path.join(os.getcwd(), "b.exr"))
-print(json.dumps({"with": with_preview, "without": without}))
-"""
-
-
 @pytest.mark.parametrize("engine", ["cycles", pytest.param("eevee", marks=pytest.mark.slow)])
 def test_daylight_final_renders_are_those_without_the_preview(tmp_path, engine):
     """The daylight's preview takes the surfaces' and the World's factors through ``preview.blend``: at a Viewport
@@ -294,9 +276,7 @@ def test_daylight_final_renders_are_those_without_the_preview(tmp_path, engine):
     blend = tmp_path / "city.blend"
     dl.build_scene(str(blend), case, with_fog=False)
     f = dl.layer(case)
-    out = h.bpy_flow(DAY_FLOW.replace("BLEND", repr(str(blend))).replace("BETA", repr(f["beta0"])).replace(
-        "TOP", repr(f["h0"])).replace("ENGINE", repr({"cycles": "CYCLES", "eevee": "BLENDER_EEVEE"}[engine])),
-        tmp_path)
-    assert out == {"with": True, "without": False}, out
-    a, b = (imageio.read_rgb(tmp_path / f"{k}.exr") for k in ("a", "b"))
-    assert np.array_equal(a, b), float(np.abs(a - b).max())
+    _final_against_unpreviewed(tmp_path, engine, blend,
+                               f'FogSpec(density={f["beta0"]!r}, method="compositor", fog_top={f["h0"]!r})',
+                               "compositor._preview = lambda *a, **k: (None, {})", group="AnalyticFog World",
+                               size=(64, 36))
