@@ -18,6 +18,7 @@ sys.path.insert(0, str(ROOT))
 
 import smoke                                       # noqa: E402
 
+from fog_addon.precompute.core import medium   # noqa: E402
 from fog_addon.precompute.physics.daylight import aerial, daylight as dl   # noqa: E402
 from tests import test_daylight as t               # noqa: E402
 from tools.shader_float32 import Float32Ops        # noqa: E402
@@ -58,7 +59,7 @@ def main():
         h32 = t.k_haze(haze, Float32Ops({}))
     print(f"haze_airlight float32: {stats(t._rel(h32, href))}; finite {np.all(np.isfinite(h32))}")
     for d in (5e3, 1e4, 2e4, 5e4, 1e5):
-        print(f"flat Earth at {d / 1e3:5.0f} km: Rayleigh {aerial.flat_earth_error(d, aerial.RAYLEIGH_HEIGHT):.3g}, "
+        print(f"flat Earth at {d / 1e3:5.0f} km: Rayleigh {aerial.flat_earth_error(d, medium.RAYLEIGH_HEIGHT):.3g}, "
               f"Mie {aerial.flat_earth_error(d, aerial.MIE_HEIGHT):.3g}")
     if a.figure:
         import matplotlib

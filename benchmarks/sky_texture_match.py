@@ -224,16 +224,16 @@ def sky_texture_figures(cfg, read):
 # --- the add-on's daylight at the same directions -----------------------------------------------------------------
 
 def our_day(kind, sun_irradiance, sky_radiance):
-    from fog_addon.precompute.core import presets
-    from fog_addon.precompute.physics.daylight import aerial, sunlight
+    from fog_addon.precompute.core import medium, presets
+    from fog_addon.precompute.physics.daylight import sunlight
     if kind == "air only":
         beta, top, falloff, g, albedo = 1e-9, 0.0, 1200.0, 0.76, 0.9
     else:
         p = presets.LAYERED[kind]
         beta, top, falloff, g, albedo = p["density"], p["fog_top"], p["height_falloff"], p["anisotropy"], p["albedo"][0]
     return sunlight.Daylight(beta, top, falloff, 0.0, sun_vector(), np.asarray(sun_irradiance, float),
-                             np.asarray(sky_radiance, float), g, albedo, tuple(aerial.RAYLEIGH_RGB),
-                             aerial.RAYLEIGH_HEIGHT)
+                             np.asarray(sky_radiance, float), g, albedo, tuple(medium.RAYLEIGH_RGB),
+                             medium.RAYLEIGH_HEIGHT)
 
 
 def ground_sun_transmittance(day):
@@ -394,7 +394,7 @@ def main():
         return
     render_missing()
     from fog_addon import imageio
-    from fog_addon.precompute.physics.daylight import aerial
+    from fog_addon.precompute.core import medium
     read = imageio.read_rgb
     print(f"panorama mapping against the rendered direction map: max {check_mapping(read):.2f} pixel widths")
     bias = step_bias()
@@ -472,7 +472,7 @@ def main():
         cw.writerows([r[:5] + [f"{x:.5g}" for x in r[5:]] for r in rows_sky])
     with open(DATA / f"sky_texture_renders_{DATE}.json", "w") as fh:
         json.dump({"sun_elevation_deg": SUN_ELEVATION, "pano": PANO, "pano_spp": PANO_SPP, "zoom": ZOOM,
-                   "zoom_fov_deg": ZOOM_FOV, "zoom_spp": ZOOM_SPP, "rayleigh_rgb": aerial.RAYLEIGH_RGB,
+                   "zoom_fov_deg": ZOOM_FOV, "zoom_spp": ZOOM_SPP, "rayleigh_rgb": medium.RAYLEIGH_RGB,
                    "sky_textures": summary}, fh, indent=1)
     print("\n== horizon (0-2.1 deg) ours / Sky Texture, R / G / B: as set | sun above the air | that, no sky glow"
           " | that over a converged single-scattering Sky Texture | as set, the sky's mean probed with the disc on")

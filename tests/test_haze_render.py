@@ -22,9 +22,9 @@ SAMPLES = 64
 
 def test_haze_scene_is_the_addons_air():
     """The scene's clear air is what the add-on calls ``--air 1``, and no pixel sees the sky."""
-    from fog_addon.precompute.physics.daylight import aerial
-    assert np.allclose(haze.AIR["rgb"], aerial.RAYLEIGH_RGB, rtol=0, atol=1e-12)
-    assert haze.AIR["H"] == aerial.RAYLEIGH_HEIGHT
+    from fog_addon.precompute.core import medium
+    assert np.allclose(haze.AIR["rgb"], medium.RAYLEIGH_RGB, rtol=0, atol=1e-12)
+    assert haze.AIR["H"] == medium.RAYLEIGH_HEIGHT
     assert (haze.pixel_hits()["kind"] >= 0).all()
 
 

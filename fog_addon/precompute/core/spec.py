@@ -26,8 +26,8 @@ Units, stated once:
 * ``height_falloff``: above the top the density falls as e^{-(h - top) / H}, H in real metres; 0 is a hard top.
 * ``ground_level``: the ground's z in Blender units (heights are measured from it).
 * ``air``: the density of clear air (molecular Rayleigh scattering) as a multiple of sea-level clear air, in
-  [0, MAX_AIR]: 1 is the standard atmosphere (Bruneton & Neyret 2008 section 2.1: beta_R = ``aerial.RAYLEIGH_RGB``
-  1/m at 680, 550, 440 nm at the ground, falling with the scale height ``aerial.RAYLEIGH_HEIGHT`` = 8 km), which
+  [0, MAX_AIR]: 1 is the standard atmosphere (Bruneton & Neyret 2008 section 2.1: beta_R = ``medium.RAYLEIGH_RGB``
+  1/m at 680, 550, 440 nm at the ground, falling with the scale height ``medium.RAYLEIGH_HEIGHT`` = 8 km), which
   blues and greys the distance of a daylight scene; 0 is none.  It acts only in a layered fog (with a top):
   ``air_per_unit`` is None without one.
 
