@@ -19,6 +19,9 @@ PREVIEW_SAMPLES = shafts.Samples(view_nodes=8, surface_directions=2, surface_nod
 # the segments past glass in final renders (``glass_tails.build_tail_bundle``): fewer nodes a sample, a final render
 # has many samples (the shop window's pane: 5.9 % with PREVIEW_SAMPLES, the fog's cost with glass 5.9x the fog-free)
 FINAL_SAMPLES = shafts.Samples(view_nodes=4, surface_directions=1, surface_nodes=4)
+# the surfaces past glass (``surface_group.build_surface``'s segment bundles): their glow is the tails', so the share
+# along their ray (of length 0 there) needs no more than a node; the shadows' share of their fog light keeps its own
+SEGMENT_SAMPLES = FINAL_SAMPLES._replace(view_nodes=1)
 PREVIEW_SHAFT = groups.PREVIEW_SHAFT   # "<PREVIEW_SHAFT> <light name>"
 SKY_LENGTH = 1.0e6   # m: a ray to the sky's length (its far nodes weigh e^{-beta t})
 INPUTS = (("Beta", F), ("Camera", V), ("Direction", V), ("Length", F), ("Light", V), ("Position", V), ("Normal", V),

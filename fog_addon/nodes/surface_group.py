@@ -208,7 +208,7 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
         placed_segment, segment_trees, _ = light_bundles.place_bundles(
             ng, tail_lights, tail_models, functools.partial(build_surface_bundle, images,
                                                             prefix=groups.SURFACE_SEGMENT, shadows=shadows,
-                                                            g_=anisotropy, samples=preview_shafts.FINAL_SAMPLES,
+                                                            g_=anisotropy, samples=preview_shafts.SEGMENT_SAMPLES,
                                                             chances=chances),
             dict(shared, **{"Is Camera": segment.sock}, **({"Pick": pick} if pick is not None else {})), False)
         segment_lights = [node.outputs["Fog"] for node, _ in placed_segment]
