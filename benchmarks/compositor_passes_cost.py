@@ -31,7 +31,6 @@ OUT = smoke.out(ROOT / "benchmarks" / "out" / "compositor_passes_cost.csv")
 
 def worker(spec):
     """One lamp count's three renders, alternating (the module docstring); emits the fastest of each."""
-    import time
     import bpy  # noqa: F401 - (Blender first)
     import fog_addon
     from fog_addon import measure
@@ -41,7 +40,6 @@ def worker(spec):
     from fog_scenes import many_lights as ml
     fog_addon.register()
     n, (w, h), out = spec["lights"], RES, str(OUT.parent)
-    times = {k: [] for k in ("nofog", "fog", "passes")}
 
     def setup(tag):
         s, _ = ml.build_scene(n, direct_light=True)
@@ -55,13 +53,8 @@ def worker(spec):
                 node.directory = out + "/"
         return s
 
-    for _ in range(REPEATS):
-        for tag in times:
-            s = setup(tag)
-            t = time.perf_counter()
-            measure.render_to_file(s, f"{out}/passes_cost_{tag}_{n}.exr")
-            times[tag].append(time.perf_counter() - t)
-    worker_result.emit({"lights": n, **{k: min(v) for k, v in times.items()}})
+    worker_result.emit({"lights": n, **worker_result.fastest_renders(
+        setup, ("nofog", "fog", "passes"), REPEATS, lambda tag: f"{out}/passes_cost_{tag}_{n}.exr")})
 
 
 def main():

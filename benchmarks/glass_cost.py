@@ -27,16 +27,16 @@ REPEATS = smoke.pick(3, 1)
 OUT = smoke.out(ROOT / "benchmarks" / "out" / "glass_cost.csv")
 
 WORKER = r"""
-import json, sys, time
-sys.path.insert(0, ROOT); sys.path.insert(0, ROOT + "/tests/scenes")
+import sys
+sys.path.insert(0, ROOT); sys.path.insert(0, ROOT + "/tests/scenes"); sys.path.insert(0, ROOT + "/benchmarks")
 import bpy
 import fog_addon
 from fog_addon import measure
 from fog_addon.ops import apply
 import shop_window as sw
 fog_addon.register()
+import worker_result
 (w, h), samples, repeats, out = RES, SAMPLES, REPEATS, OUTDIR
-times = {k: [] for k in ("glass_nofog", "glass_fog", "opaque_nofog", "opaque_fog")}
 def setup(tag):
     scene, cam = sw.build()
     scene.render.engine = "CYCLES"; measure.set_cycles_cpu(scene)
@@ -48,13 +48,8 @@ def setup(tag):
     if tag.endswith("_fog"):
         apply.apply_fog(scene, sw.BETA, method="compositor")
     return scene
-for r in range(repeats):
-    for tag in times:
-        s = setup(tag)
-        t = time.perf_counter()
-        measure.render_to_file(s, f"{out}/{tag}.exr")
-        times[tag].append(time.perf_counter() - t)
-print("RESULT " + json.dumps({k: min(v) for k, v in times.items()}))
+worker_result.emit(worker_result.fastest_renders(setup, ("glass_nofog", "glass_fog", "opaque_nofog", "opaque_fog"),
+                                                 repeats, lambda tag: f"{out}/{tag}.exr"))
 """
 
 

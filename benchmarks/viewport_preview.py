@@ -31,8 +31,8 @@ REPEATS = smoke.pick(3, 1)
 OUT = smoke.out(ROOT / "benchmarks" / "out" / "viewport_preview.csv")
 
 WORKER = r"""
-import json, sys, time
-sys.path.insert(0, ROOT)
+import sys
+sys.path.insert(0, ROOT); sys.path.insert(0, ROOT + "/benchmarks")
 import bpy
 import fog_addon
 from fog_addon import measure, methods
@@ -40,43 +40,39 @@ from fog_addon.nodes import preview
 from fog_addon.ops import apply
 from fog_addon.precompute.core.spec import FogSpec
 from fog_scenes import many_lights as ml
+import worker_result
 fog_addon.register()
 comp = methods.get("compositor")
 budget = comp.preview_budget
 n, (w, h), samples, repeats, out = N, RES, SAMPLES, REPEATS, OUTDIR
-scenes = {}
-times = {k: [] for k in ("nofog", "bare", "final", "viewport")}
+shown = {}   # the lights the preview holds (the final build's)
 def setup(tag):
     s, cam = ml.build_scene(n, direct_light=True)
     s.render.engine = "CYCLES"; measure.set_cycles_cpu(s)
     s.render.resolution_x, s.render.resolution_y = w, h
     s.cycles.samples = samples; s.cycles.use_denoising = False
-    shown = None
     if tag != "nofog":
         comp.preview_budget = (lambda *a: None) if tag == "bare" else budget
         apply.apply(s, FogSpec(density=0.05, method="compositor"))
-        shown = sum(1 for v in (((apply.stored_choice() or {}).get("preview") or {}).get("lights") or {}).values()
-                    if v[0] < 2)
+        if tag == "final":
+            shown["lights"] = sum(1 for v in (((apply.stored_choice() or {}).get("preview") or {}).get("lights")
+                                              or {}).values() if v[0] < 2)
     s.render.use_compositing = False
-    return s, shown
-shown = None
-for r in range(repeats):
-    for tag in ("nofog", "bare", "final", "viewport"):
-        s, k = setup(tag)
-        shown = k if tag == "final" else shown
-        t = time.perf_counter()
-        if tag == "viewport":
-            with preview.forced():
-                measure.render_to_file(s, f"{out}/{tag}_{n}.exr")
-        else:
-            measure.render_to_file(s, f"{out}/{tag}_{n}.exr")
-        times[tag].append(time.perf_counter() - t)
-print("RESULT " + json.dumps({"lights": n, "shown": shown, **{k: min(v) for k, v in times.items()}}))
+    return s
+def render(tag, s, path):
+    if tag == "viewport":
+        with preview.forced():
+            measure.render_to_file(s, path)
+    else:
+        measure.render_to_file(s, path)
+times = worker_result.fastest_renders(setup, ("nofog", "bare", "final", "viewport"), repeats,
+                                      lambda tag: f"{out}/{tag}_{n}.exr", render)
+worker_result.emit({"lights": n, "shown": shown.get("lights"), **times})
 """
 
 
 def run(n):
-    code = (WORKER.replace("ROOT", repr(str(ROOT)), 1).replace("N, RES, SAMPLES, REPEATS, OUTDIR",
+    code = (WORKER.replace("ROOT", repr(str(ROOT))).replace("N, RES, SAMPLES, REPEATS, OUTDIR",
                                                                repr((n, RES, SAMPLES, REPEATS, str(OUT.parent)))))
     return worker_result.run_code(code, f"{n} lights")
 

@@ -5,6 +5,7 @@ import json
 import pathlib
 import subprocess
 import sys
+import time
 
 import smoke
 
@@ -38,3 +39,19 @@ def run_code(code, what):
     line = next((ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")), None)
     smoke.check(proc.returncode == 0 and line is not None, f"{what}: exit {proc.returncode}")
     return json.loads(line.split(" ", 1)[1]) if line else None
+
+
+def fastest_renders(setup, tags, repeats, out, render=None):
+    """{tag: the fastest of ``repeats`` render times, s} of the scenes ``setup(tag)`` builds (not timed), rendered
+    by turns (every tag once, then again: a machine's drift touches all alike) to the file ``out(tag)``;
+    ``render(tag, scene, path)`` renders one (default: ``measure.render_to_file``).  Runs inside Blender."""
+    from fog_addon import measure   # noqa: PLC0415 (Blender's, in the worker)
+    render = render or (lambda tag, scene, path: measure.render_to_file(scene, path))
+    times = {tag: [] for tag in tags}
+    for _ in range(repeats):
+        for tag in tags:
+            scene = setup(tag)
+            t = time.perf_counter()
+            render(tag, scene, out(tag))
+            times[tag].append(time.perf_counter() - t)
+    return {tag: min(v) for tag, v in times.items()}
