@@ -80,7 +80,7 @@ class Compositor(Method):
         return bpy.data.node_groups.get(comp_fog.FOG_GROUP) is not None
 
     def build(self, scene, spec, plan, images):
-        pano = comp_fog.panoramic(scene) and scene.render.engine != budgets.EEVEE_ENGINE
+        pano = comp_fog.panoramic(scene)
         aovs = functools.partial(comp_fog.add_surface_aovs, engine=scene.render.engine, panoramic=pano)
         day, dims = sunsky.builder(scene, spec), sunsky.dims_surfaces(scene, plan.in_groups)
         table, table_images = sunsky.fog_light_table(scene, spec)   # (None: no daylight to glow)
@@ -219,11 +219,11 @@ TAIL_LIGHTS = 8   # the lights whose glows the materials shade past glass and mi
 
 
 def _tails(scene, spec, plan, maps):
-    """(lights, models) of the fog past glass and sharp mirrors (``glass_tails.place_tails``, Cycles: the compositor
-    sees only a pixel's first surface): the glows along the segments and the fog light the surfaces there reflect,
-    of the TAIL_LIGHTS lights of most importance (``sampling.importance``) with the Node Groups method's full
+    """``glass_tails.Tails`` of the fog past glass and sharp mirrors (``glass_tails.place_tails``, Cycles: the
+    compositor sees only a pixel's first surface): the glows along the segments and the fog light the surfaces there
+    reflect, of the TAIL_LIGHTS lights of most importance (``sampling.importance``) with the Node Groups method's full
     models, each in its shadows where it has a still map (``maps``: the shafts', ``glass_tails.build_tail_bundle``),
-    or False where the scene has no such path or in EEVEE."""
+    one of them a sample (``sampling.mixed_chances``); False where the scene has no such path or in EEVEE."""
     if scene.render.engine != "CYCLES" or not plan.in_groups or not caveats.specular_paths(bpy.data.materials):
         return False
     weight = sampling.importance([o.matrix_world.translation for o in plan.in_groups],
@@ -234,7 +234,6 @@ def _tails(scene, spec, plan, maps):
     shadows = _still_maps(kept, maps)
     return glass_tails.Tails(kept, [rungs.choose("nodes", 0, spec.anisotropy, view.light_kind(o)) for o in kept],
                              shadows or None, spec.anisotropy, sampling.mixed_chances(weight[order]))
-
 
 
 def _still_maps(lights, maps):

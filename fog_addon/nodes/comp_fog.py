@@ -69,9 +69,11 @@ DIRECTION_AOV = ("Fog Direction", "COLOR")   # a panoramic camera's rays (Cycles
 
 
 def panoramic(scene):
-    """True if ``scene``'s camera is panoramic: the compositor reads its pixels' rays from the Fog Direction AOV
-    (the materials' and the World's) instead of a perspective image plane (``camera_frame``)."""
-    return scene.camera is not None and scene.camera.data.type == "PANO"
+    """True if ``scene``'s camera is panoramic in Cycles: the compositor reads its pixels' rays from the Fog Direction
+    AOV (the materials' and the World's) instead of a perspective image plane (``camera_frame``).  EEVEE renders no
+    panoramic camera (the method refuses one there)."""
+    return (scene.camera is not None and scene.camera.data.type == "PANO"
+            and scene.render.engine != budgets.EEVEE_ENGINE)
 
 
 def aovs(engine, panoramic=False):
@@ -230,7 +232,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
         images = dict(images, **comp_emitters.emitter_table(*emitters[:1], comp_emitters.emitter_pixel_angle(scene),
                                                             emitters[1]))
     eevee = scene.render.engine == budgets.EEVEE_ENGINE
-    pano = panoramic(scene) and not eevee
+    pano = panoramic(scene)
     inputs = ((("Image", "COLOR"),) + aovs(scene.render.engine, pano)
               + (((compositor.DEPTH, "VALUE"),) if eevee else ())
               + (((EMITTERS, "COLOR"),) if emitters is not None else ())

@@ -61,9 +61,11 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
       (the segment's direction through a thin pane, exact for IOR 1 and for a parallel slab up to its
       thickness) and colour x F about the mirrored direction, F the dielectric Fresnel factor (Fresnel
       node, as Cycles' glass);
-    * a Principled BSDF of roughness 0 with transmission (Blender's usual glass; ``GLASS_WEIGHT`` its Transmission
-      Weight, ``GLASS_MIRRORED`` 0): colour x weight x (1 - F) straight on; its reflection is its own glossy fog
-      light, as a mirror's;
+    * a Principled BSDF with transmission (Blender's usual glass, sharp or frosted; ``GLASS_WEIGHT`` its
+      Transmission Weight, ``GLASS_MIRRORED`` 0), a Refraction BSDF (IOR 1: no Fresnel, no reflection): colour x
+      weight x (1 - F) straight on; a Principled BSDF's reflection is its own glossy fog light, as a mirror's;
+    * glass in a Mix or Add Shader: ``GLASS_WEIGHT`` times its share there (``material._build``); what the vertex
+      of a segment lets straight through beside it (1 - the Opacity input) takes the straight tail too;
     * a mirror (Principled, roughness 0): its glossy fog light (``shading.shade_point``'s Phong lobe of
       the highest exponent, which is a blurred tail to infinity) already is.
 

@@ -205,7 +205,6 @@ def _analyse(sock, weight, ctx, kinds, depth=0):
             kinds.unread.append(node.bl_label)
 
 
-
 def weight_key(weight):
     """A weight (a tuple of factors) as plain data: a stamp's (``stamp``) and a memo's key."""
     return tuple(f if isinstance(f, float) else (skey(f[0]), f[1]) for f in weight)

@@ -118,9 +118,9 @@ def _factor(ops, f, memo):
 
 def _weight(ops, weight, memo):
     """``weight`` (a tuple of factors) as a Val, the product taken left to right; ``memo`` shares nodes."""
-    w, key = ops.const(1.0), ("weight",)
-    for f in weight:
-        key += (f if isinstance(f, float) else (graph.skey(f[0]), f[1]),)
+    w, keys = ops.const(1.0), graph.weight_key(weight)
+    for i, f in enumerate(weight):
+        key = ("weight",) + keys[:i + 1]
         if key not in memo:
             memo[key] = w * _factor(ops, f, memo)
         w = memo[key]
@@ -310,9 +310,9 @@ def _glass_copies(kinds, srcs):
     """([(Surface group input, value or source socket)], the glass's weight in its mix or None) for the glass in a
     material's shader (``graph.Kinds.glass``: the first, not inside a group): a Glass BSDF (its Color and IOR), a
     Refraction BSDF (its Color), or a Principled BSDF that lets light through (its Base Color, IOR and Transmission
-    Weight; its reflection is its own glossy fog light), rough or not, on its own or in a Mix or Add Shader (Cycles weighs the glass's paths by
-    its weight there; ``_build`` multiplies Glass Weight by it): ``glass_tails.place_tails`` adds the fog past it in
-    Cycles.  ([], None) without glass."""
+    Weight; its reflection is its own glossy fog light), rough or not, on its own or in a Mix or Add Shader
+    (Cycles weighs the glass's paths by its weight there; ``_build`` multiplies Glass Weight by it):
+    ``glass_tails.place_tails`` adds the fog past it in Cycles.  ([], None) without glass."""
     def value(sock):
         return graph.source(sock) or graph.own_value(sock)
     for src in srcs.values():

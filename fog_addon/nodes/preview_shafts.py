@@ -31,7 +31,7 @@ KEY = "analytic_fog_shaft_key"   # on a group: what it was built for (the map, a
 
 
 def group_name(light, samples=PREVIEW_SAMPLES):
-    tag = "" if samples == PREVIEW_SAMPLES else f" K{samples.view_nodes}"
+    tag = "" if samples == PREVIEW_SAMPLES else " K{}.{}.{}".format(*samples)   # (a group per set of samples)
     return f"{PREVIEW_SHAFT} {light.name}{tag}"
 
 

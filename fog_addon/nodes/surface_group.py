@@ -25,7 +25,7 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained, pr
 
     ``shadows``: {light name: ShadowMap} of the lights whose glow and reflected fog light take their lit shares
     (the viewport's preview: ``preview_shafts.py``, fog of anisotropy ``g_``, ``samples`` nodes a sample), or None.
-    ``chances``: every light's probability of being the one a sample takes (``glass_tails.picked``, by the Pick
+    ``chances``: every light's probability of being the one a sample takes (``closures.drawn``, by the Pick
     input; the surfaces past glass), or None: every light on every sample.
 
     Outputs: Fog (one Emission closure per lit light, times the Opacity input; a spot's or an area light's

@@ -87,8 +87,9 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
     World untouched on every ray (the compositor dims the sky it sees: ``comp_fog.build_fog_group``).  The lights
     whose glow is on sit in bundle groups (``light_bundles.split``, ``build_world_bundle``).  ``preview``:
     ``preview.Shown``, the viewport's preview of a fog added at render time, their glows behind the Params group's Viewport
-    Preview (``preview.behind_switch``), or None; not where the World is left to the compositor (``day_dims``
-    False: the sky through a daylit layer), whose glows on sky rays the preview then leaves out.  ``extra(group)``:
+    Preview (``preview.behind_switch``), or None; where the World is left to the compositor (``day_dims`` False:
+    the sky through a daylit layer) the preview also dims the sky and adds the sun's and the sky's glow
+    (``preview.Shown.day_table``; ``preview.blend``), or shows nothing without it.  ``extra(group)``:
     adds nodes of its own (the Compositor method's AOVs with a panoramic camera, ``comp_fog.add_world_aovs``).
     """
     ng, gin, gout = groups.new_group(groups.WORLD, [],
@@ -149,17 +150,13 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
             shaders.append(preview_sampled.group_node(ng, preview_sampled.build_world_group(
                 images, preview.sampled, preview.g), shared))
         if day_preview is not None:   # the sun's and the sky's glow to the sky
-            emit = ng.nodes.new("ShaderNodeEmission")
-            m.feed(emit.inputs["Color"], m.scale(day_glow, layer_scale))
-            shaders.append(emit.outputs["Emission"])
+            shaders.append(_emission(m, ng, m.scale(day_glow, layer_scale)))
         fogs += [sock for sock in [preview_.behind_switch(ng, params, shaders)] if sock]
     emission = shading.shade_background(
         m, [m.wrap(node.outputs["Airlight"], vector=True) for node, _ in placed], medium, is_camera)[0]
     if day_glow is not None and day_preview is None:
         emission = m.wrap(emission, vector=True) + day_glow
-        emit = ng.nodes.new("ShaderNodeEmission")
-        m.feed(emit.inputs["Color"], m.scale(day_glow, layer_scale))
-        fogs.append(emit.outputs["Emission"])
+        fogs.append(_emission(m, ng, m.scale(day_glow, layer_scale)))
     m.feed(gout.inputs["Emission"], m.wrap(emission))
     closures.shader_tree(ng, gout.inputs["Fog"], fogs)
     m.feed(gout.inputs["Transmittance"], m.wrap(transmittance))
@@ -173,6 +170,13 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
     ng = groups.install(ng, groups.WORLD)
     light_bundles.name_bundles(bundles + (preview_trees if preview else []))
     return ng
+
+
+def _emission(m, ng, colour):
+    """An Emission node of ``colour`` in ``ng``: its output."""
+    emit = ng.nodes.new("ShaderNodeEmission")
+    m.feed(emit.inputs["Color"], colour)
+    return emit.outputs["Emission"]
 
 
 def _world_pass_instances(m, ng, nodes, direction, total):
