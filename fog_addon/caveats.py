@@ -172,31 +172,31 @@ def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None):
     return notes
 
 
-DENSE_T = 1.0   # optical distance camera to light from which the multiply scattered glow is large
-#                (docs/measurements/2026-11-27-apsf.md: it outweighs the single a few degrees out from T ~ 2)
+NOTE_SHARE = 0.01   # the share of a pixel's fog from which what is left out gets a note of its own
 
 
-def multiple_notes(lights, multiple, method_name, is_spot, optical_distance=None, engine=capabilities.CYCLES):
-    """Notes on the multiply scattered light (Dense Fog): what it leaves out with it on (spot and area lights
-    with a method other than the compositor; the OSL method); with it off, the lights seen through dense fog
-    (``optical_distance(light)``: beta times the camera's distance to it, at least DENSE_T), whose wide halo is
-    then missing.  ``is_spot``: a spot or an area light."""
-    if not multiple:
-        dense = [o.name for o in lights if optical_distance is not None and optical_distance(o) >= DENSE_T]
-        if not dense:
-            return []
-        return [f"the fog is dense around {len(dense)} light(s) ({listed(dense)}; optical distance up to "
-                f"{max(optical_distance(o) for o in lights):.1f} from the camera) and multiple scattering is "
-                "off: their glow lacks its wide halo; turn on Dense Fog"]
+def multiple_notes(dense, method_name, is_spot, lights, engine=capabilities.CYCLES):
+    """Notes on the multiply scattered light (Dense Fog) the picture lacks, each with its predicted effect:
+    ``dense`` is ``ops/plan.dense_fog``'s account ({"left_out": {light name: share}, "missing": their share
+    together, "why": "off" or the method's name}; the largest share of a pixel's fog at the view's samples).  Dense
+    Fog off: the lights whose glow then lacks its wide halo; on, with a method that does not model it: which
+    method does (the OSL method: none of it; the node groups: spot and area lights').  No note under NOTE_SHARE.
+    ``is_spot``: a spot or an area light; ``lights``: the lights taking part (their order)."""
+    left = (dense or {}).get("left_out") or {}
+    missing = (dense or {}).get("missing", 0.0)
+    names = [o.name for o in lights if left.get(o.name, 0.0) > 0.0]
+    if not names or not missing >= NOTE_SHARE:
+        return []
+    effect = f"up to {missing:.0%} of a pixel's fog (predicted)"
+    if dense.get("why") == "off":
+        return [f"multiple scattering is off (Dense Fog): the glows of {len(names)} light(s) ({listed(names)}) and "
+                f"the fog light on surfaces lack their multiply scattered light, {effect}; turn on Dense Fog"]
     if not capabilities.can(method_name, "dense_point", engine):
         return [f"multiple scattering is not modelled by Method {capabilities.LABELS[method_name]} (its glow is "
-                f"quadrature, the dense fog's a table): use {capabilities.suggestion('dense_point', engine)}"]
-    shaped = [] if capabilities.can(method_name, "dense_shaped", engine) else [o.name for o in lights if is_spot(o)]
-    if shaped:
-        return [f"the multiply scattered light of {len(shaped)} spot or area light(s) ({listed(shaped)}) is "
-                f"modelled by {capabilities.suggestion('dense_shaped', engine)}: with this method it is single "
-                "scattering"]
-    return []
+                f"quadrature, the dense fog's a table), {effect}: use {capabilities.suggestion('dense_point', engine)}"]
+    shaped = [o.name for o in lights if o.name in names and is_spot(o)]
+    return [f"the multiply scattered light of {len(shaped)} spot or area light(s) ({listed(shaped)}) is modelled by "
+            f"{capabilities.suggestion('dense_shaped', engine)}: with this method it is single scattering, {effect}"]
 
 
 def glow_notes(glowing, method_name, engine="CYCLES"):

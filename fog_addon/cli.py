@@ -171,8 +171,9 @@ def build_parser():
     r.add_argument("--shafts", choices=["on", "off"], default=None,
                    help="light shafts: objects cast shadows into the fog (default: the file's setting, on)")
     r.add_argument("--multiple-scattering", choices=["on", "off"], default=None,
-                   help="dense fog: add the light scattered more than once around point lights (default: the "
-                        "file's setting, off)")
+                   help="dense fog: the light scattered more than once, modelled wherever it changes a pixel by "
+                        "more than the Quality's target; off leaves it out (single scattering) and the predicted "
+                        "error counts it (default: the file's setting, on)")
     r.add_argument("--method", choices=["auto", "nodes", "osl", "compositor"], default=None,
                    help="auto (node groups or compositor, whichever the scene is predicted to render faster with, "
                         "unless it needs one: --explain says which and why), node groups (Cycles, EEVEE), OSL "

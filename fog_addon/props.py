@@ -198,10 +198,12 @@ class AnalyticFogSettings(bpy.types.PropertyGroup):
                     "above a lamp's hood. Only lights with an object near them get a shadow map (Compositor "
                     "method: Cycles and EEVEE)")
     use_multiple_scattering: bpy.props.BoolProperty(
-        name="Dense Fog (Multiple Scattering)", default=False, update=_rebuild,
-        description="Add the light scattered more than once around point lights: the wide halo of thick fog "
-                    "(optical distance to a lamp above about 1). The first use of an anisotropy bakes its "
-                    "tables (3-15 s each, then cached): the status bar shows the bake, and Esc cancels it")
+        name="Dense Fog (Multiple Scattering)", default=True, update=_rebuild,
+        description="Model the light scattered more than once (the wide halo of thick fog, the fog light it "
+                    "adds on surfaces) wherever it changes a pixel by more than the Quality's target: thin fog "
+                    "pays nothing. Off: single scattering only, a stylised look; the predicted error and a note "
+                    "then say what it leaves out. The first use of an anisotropy bakes its tables (8-20 s each, "
+                    "then cached): the status bar shows the bake, and Esc cancels it")
     use_passes: bpy.props.BoolProperty(
         name="Fog Passes", default=False, update=_rebuild,
         description="Write the render passes Fog Light (the light the fog adds) and Fog Transmittance "

@@ -234,6 +234,7 @@ def test_compositor_spots_and_area_lights_take_it():
 
 
 def test_notes():
+    """The notes on what Dense Fog leaves out carry its predicted share and name the method that models it."""
     from fog_addon import caveats
 
     class Light:
@@ -242,9 +243,19 @@ def test_notes():
 
     lights = [Light("Spot", "SPOT"), Light("Panel", "AREA"), Light("Lamp", "POINT")]
     shaped = lambda o: o.kind in ("SPOT", "AREA")   # noqa: E731
-    assert caveats.multiple_notes(lights, True, "compositor", shaped) == []
-    nodes = caveats.multiple_notes(lights, True, "nodes", shaped)
-    assert len(nodes) == 1 and "Spot" in nodes[0] and "Panel" in nodes[0] and "Compositor" in nodes[0]
+    assert caveats.multiple_notes({"left_out": {}, "missing": 0.0, "why": "compositor"}, "compositor", shaped,
+                                  lights) == []
+    left = {"left_out": {"Spot": 0.2, "Panel": 0.1}, "missing": 0.25, "why": "nodes"}
+    nodes = caveats.multiple_notes(left, "nodes", shaped, lights)
+    assert len(nodes) == 1 and "Spot" in nodes[0] and "Panel" in nodes[0] and "Compositor" in nodes[0], nodes
+    assert "25%" in nodes[0] and "Lamp" not in nodes[0], nodes
+    off = caveats.multiple_notes(dict(left, left_out={"Lamp": 0.4, "Spot": 0.2}, missing=0.5, why="off"), "nodes",
+                                 shaped, lights)
+    assert len(off) == 1 and off[0].startswith("multiple scattering is off") and "50%" in off[0], off
+    osl = caveats.multiple_notes(dict(left, why="osl"), "osl", shaped, lights)
+    assert len(osl) == 1 and "not modelled by Method OSL" in osl[0] and "25%" in osl[0], osl
+    # a share below the note's threshold: no note (the predicted error still counts it)
+    assert caveats.multiple_notes(dict(left, missing=0.5 * caveats.NOTE_SHARE), "nodes", shaped, lights) == []
 
 
 @pytest.mark.render

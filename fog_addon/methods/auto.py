@@ -34,7 +34,7 @@ What the scene needs comes first:
 """
 from .. import caveats, sunsky, view
 from ..nodes import budgets
-from ..precompute.model import capabilities, rungs
+from ..precompute.model import capabilities, predict, rungs
 from .compositor import glowing_objects, unfogged_layers
 
 SOFT_COST_LIMIT = 6.0   # a soft need keeps the node groups while they cost at most this (x the fog-free render)
@@ -119,10 +119,25 @@ def _needs(scene, spec, lights):
     glowing = glowing_objects(scene)
     if glowing:
         needs.append(("emitters", f"glowing objects ({caveats.listed([o.name for o in glowing])})"))
-    shaped = [o.name for o in lights if o.data.type in ("SPOT", "AREA")] if spec.multiple_scattering else []
+    shaped = _dense_shaped(scene, spec, lights)
     if shaped:
         needs.append(("dense_shaped", f"Dense Fog with spot or area lights ({caveats.listed(shaped)})"))
     return needs
+
+
+THIN_GRID = (40, 23)   # the view's samples Auto judges Dense Fog's share with (a coarse grid: a choice of method)
+
+
+def _dense_shaped(scene, spec, lights):
+    """The spot and area lights whose multiply scattered light Dense Fog models (the Quality's, ``ops/plan.dense_fog``:
+    more than THIN_SHARE of the target at some view sample; every one with Quality Exact), by name."""
+    shaped = [o for o in lights if view.has_shape(o)] if spec.multiple_scattering else []
+    target = spec.target_error
+    if not shaped or target is None or scene.camera is None:
+        return [o.name for o in shaped]
+    grid = tuple(min(a, b) for a, b in zip(view.sample_grid(scene), THIN_GRID))
+    share = view.multiple_parts(scene, spec, shaped, grid=grid).max(axis=0, initial=0.0)
+    return [o.name for o, v in zip(shaped, share) if v > predict.THIN_SHARE * target]
 
 
 def choose(scene, spec, lights, materials, methods):

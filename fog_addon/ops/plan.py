@@ -13,12 +13,10 @@ import bpy
 
 from .. import methods, view
 from ..nodes import budgets, groups
-from ..precompute.model import predict, rungs
+from ..precompute.model import capabilities, predict, rungs
 from ..precompute.physics.spot import spot
 
 SUPPORTED_LIGHTS = ("POINT", "SPOT", "AREA")
-THIN_SHARE = 0.25   # Dense Fog is left out for a light whose multiply scattered light is at most this share of
-#                     the Quality's target at every judged view sample (``predict.multiple_share``)
 PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method it was built with (methods.get)
 CHOICE_KEY = "analytic_fog_choice"   # on the Surface group: the Quality, {light: [step, predicted error]}, the total,
 #                                      the method and why (Auto)
@@ -83,39 +81,76 @@ def choose_models(scene, spec, method, lights, budget=None):
     The view is sampled by ray casts (``view.py``) and every light's step down
     the ladder chosen by the predicted error (``predict.py``).  Where the method has a budget
     (``method.budget``: EEVEE's uniform block, Cycles OSL's shader group layers), lights
-    step down beyond the target, least error first, until they fit.  Returns
-    (models, choice) with choice = {"lights": {name: [step, error]}, "rims": {name: point count} of the spots
-    whose glow's rim takes fewer than spot.RIM_NODES points, "error": total, "target": t, "engine": the render
-    engine chosen for, "limited": what forced steps beyond the target, or None, and with Dense Fog "thin":
-    {name: share} of the lights whose multiply scattered light is at most THIN_SHARE of the target
-    (``predict.multiple_share``): they are left without it, at no cost}.  ``budget``: this budget instead of the
-    method's (the viewport's preview: ``preview_models``).
+    step down beyond the target, least error first, until they fit.  Dense Fog is chosen per light as well
+    (``dense_fog``).  Returns (models, choice) with choice = {"lights": {name: [step, error]}, "rims": {name: point
+    count} of the spots whose glow's rim takes fewer than spot.RIM_NODES points, "error": total, "target": t,
+    "engine": the render engine chosen for, "limited": what forced steps beyond the target, or None, and
+    ``dense_fog``'s "thin", "dense": its account of the multiply scattered light left out}.  ``budget``: this budget
+    instead of the method's (the viewport's preview: ``preview_models``).
     """
     target = spec.target_error
     engine = scene.render.engine
     budget = method.budget(scene, spec, lights) if budget is None else budget
     steps = [0] * len(lights)
     choice = {"target": target, "error": 0.0, "lights": {}, "rims": {}, "engine": engine, "limited": None}
+    samples, single = None, None
     if lights and (target is not None or (budget is not None and not budget.fits(steps))):
         samples = view.view_samples(scene, lights)
         pred = predict.predict(samples, view.light_intensities(lights), spec.beta_per_unit, target, budget,
                                spec.anisotropy)
         steps = [int(k) for k in pred.steps]
+        single = pred.fog
         choice["error"] = pred.error
         choice["lights"] = {o.name: [int(k), float(e)] for o, k, e in zip(lights, pred.steps, pred.light_error)}
         choice["rims"] = {o.name: int(n) for o, n in zip(lights, pred.rims)   # (a light off keeps RIM_NODES)
                           if view.is_spot(o) and n != spot.RIM_NODES}
         if pred.limited or not pred.fits:
             choice["limited"] = budget.name + ("" if pred.fits else ": too many lights even with every light off")
-        if spec.multiple_scattering and target is not None:
-            share = predict.multiple_share(samples, view.light_intensities(lights), spec.beta_per_unit,
-                                           spec.anisotropy, spec.multiple_albedo, pred.fog)
-            choice["thin"] = {o.name: float(v) for o, v in zip(lights, share)
-                              if not view.has_shape(o) and v <= THIN_SHARE * target}
-            choice["error"] += max(choice["thin"].values(), default=0.0)
     else:
         choice["lights"] = {o.name: [0, 0.0] for o in lights}
-    return _models(spec, method, lights, steps, choice["rims"], set(choice.get("thin", ()))), choice
+    choice.update(dense_fog(scene, spec, method, lights, samples, single))
+    choice["error"] += choice["dense"]["missing"]
+    return _models(spec, method, lights, steps, choice["rims"], set(choice["thin"])), choice
+
+
+def dense_served(spec, method, engine):
+    """light -> whether ``method`` models its multiply scattered light (Dense Fog on and the capability its
+    kind needs, ``capabilities`` "dense_point" or "dense_shaped", in ``engine``)."""
+    name = getattr(method, "name", method)
+    point, shaped = (spec.multiple_scattering and capabilities.can(name, key, engine)
+                     for key in ("dense_point", "dense_shaped"))
+    return lambda o: shaped if view.has_shape(o) else point
+
+
+def dense_fog(scene, spec, method, lights, samples=None, single=None):
+    """Dense Fog by the Quality: which ``lights`` get their multiply scattered light, and what the picture misses
+    without it (``predict.multiple_parts``, at the view's samples: ``samples``, else sampled here where needed).
+
+    A light the method models it for (``dense_served``) gets it unless it is at most THIN_SHARE of the Quality's
+    target at every judged sample ("thin": left out at no cost; with Quality Exact no light is thin).  A light it is
+    not modelled for (Dense Fog off: a stylised look; a method without it) is "left out", with its share.  Returns
+    {"thin": {name: share}, "dense": {"left_out": {name: share}, "missing": the share of a judged sample's fog
+    that the thin and the left-out lights miss together, at the sample where it is largest, "why": "off" or the
+    method's name}}."""
+    target, engine = spec.target_error, scene.render.engine
+    served = dense_served(spec, method, engine)
+    need = [o for o in lights if not served(o)] + ([o for o in lights if served(o)] if target is not None else [])
+    out = {"thin": {}, "dense": {"left_out": {}, "missing": 0.0,
+                                 "why": "off" if not spec.multiple_scattering else getattr(method, "name", method)}}
+    if not need or scene.camera is None:
+        return out
+    parts = view.multiple_parts(scene, spec, lights, samples, single)
+    share = parts.max(axis=0, initial=0.0)
+    missed = []
+    for k, o in enumerate(lights):
+        if not served(o):
+            out["dense"]["left_out"][o.name] = float(share[k])
+            missed.append(k)
+        elif target is not None and share[k] <= predict.THIN_SHARE * target:
+            out["thin"][o.name] = float(share[k])
+            missed.append(k)
+    out["dense"]["missing"] = predict.missing_share(parts, missed)
+    return out
 
 
 def _models(spec, method, lights, steps, rims, thin=frozenset()):

@@ -31,11 +31,25 @@ def method_line(choice):
 def quality_head(choice):
     """One line: the Quality of ``choice`` (see choose_models) and the error it is predicted to make."""
     target = choice["target"]
-    if target is None and not choice.get("limited"):
+    if target is None and not choice.get("limited") and not choice["error"] > 0.0:
         return "Quality Exact: every light fully modelled"
     if target is None:
         return f"Quality Exact: predicted error {choice['error']:.2%}"
     return f"Quality {target:.3g}: predicted error {choice['error']:.2%} (target {target:.2%})"
+
+
+def dense_line(choice):
+    """One line: the multiply scattered light the picture lacks where Dense Fog is off or the method does not model
+    it (``plan.dense_fog``), with its predicted share; None where nothing is left out."""
+    dense = choice.get("dense") or {}
+    left = dense.get("left_out") or {}
+    if not left:
+        return None
+    names = sorted(left, key=left.get, reverse=True)
+    why = "Dense Fog is off" if dense.get("why") == "off" else f"Method {methods.get(dense['why']).label} lacks it"
+    return (f"multiple scattering left out of {len(left)} light(s) ({', '.join(names[:3])}"
+            f"{' and more' if len(names) > 3 else ''}; {why}): up to {dense.get('missing', 0.0):.2%} of a pixel's "
+            "fog, in the predicted error")
 
 
 def limit_text(choice):
@@ -63,6 +77,8 @@ def explain(choice=None):
         lines.append(f"  Dense Fog left out for {len(thin)} light(s) ({', '.join(sorted(thin)[:3])}"
                      f"{' and more' if len(thin) > 3 else ''}): their multiply scattered light is at most "
                      f"{max(thin.values()):.2%} of the fog")
+    if (line := dense_line(choice)) is not None:
+        lines.append("  " + line)
     shafted = sorted(i.name.removeprefix(shadow_maps.IMAGE_PREFIX) for i in bpy.data.images
                      if i.name.startswith(shadow_maps.IMAGE_PREFIX))
     if shafted:
@@ -164,15 +180,6 @@ def scene_notes(scene, spec):
     return notes
 
 
-def _optical_distance(scene, spec):
-    """light -> beta x its distance to the scene's camera (None without a camera)."""
-    camera = scene.camera
-    if camera is None:
-        return None
-    origin = camera.matrix_world.translation
-    return lambda o: spec.beta_per_unit * (o.matrix_world.translation - origin).length
-
-
 def not_modelled(scene, spec, lights, materials, method=None):
     """What the fog can't model in ``scene`` (``caveats.py``: light shafts where ``method`` (a method name)
     has none or they are off, their limits where it has them; glass and mirrors), as notes."""
@@ -182,8 +189,7 @@ def not_modelled(scene, spec, lights, materials, method=None):
                                    None if spec.shafts else "Light Shafts is off"),
              caveats.glass_note(materials, scene.objects),
              caveats.clip_note(scene, name),
-             *caveats.multiple_notes(lights, spec.multiple_scattering, name, view.has_shape,
-                                     _optical_distance(scene, spec), engine),
+             *caveats.multiple_notes((stored_choice() or {}).get("dense"), name, view.has_shape, lights, engine),
              *caveats.glow_notes(methods.compositor.glowing_objects(scene), name, engine),
              *(f"{what}: {why}" for what, why in sunsky.notes(scene, spec, name, lights))]
     return [n for n in notes if n]

@@ -136,7 +136,7 @@ class FogSpec:
     passes: bool = False
     world_light: bool = False
     shafts: bool = True
-    multiple_scattering: bool = False
+    multiple_scattering: bool = True
     fog_top: object = None
     height_falloff: float = 0.0
     ground_level: float = 0.0
@@ -216,7 +216,7 @@ class FogSpec:
                    anisotropy=settings.anisotropy, method=settings.method.lower(), quality=quality,
                    passes=settings.use_passes, world_light=settings.world_light,
                    shafts=getattr(settings, "use_shafts", True),
-                   multiple_scattering=getattr(settings, "use_multiple_scattering", False),
+                   multiple_scattering=getattr(settings, "use_multiple_scattering", True),
                    fog_top=settings.fog_top if getattr(settings, "use_fog_top", False) else None,
                    height_falloff=getattr(settings, "height_falloff", 0.0),
                    ground_level=getattr(settings, "ground_level", 0.0),

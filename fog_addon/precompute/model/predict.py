@@ -37,6 +37,8 @@ from ..core.ops import NumpyOps
 
 FLOOR = 1e-3          # samples below this fraction of the peak fog are not judged (issue 8 §2)
 MIN_FOG = 1e-30       # fog light (W/m^2/sr) below which a sample is not judged: an opaque fog's far samples
+THIN_SHARE = 0.25     # Dense Fog is left out for a light whose multiply scattered light is at most this share of
+#                       the Quality's target at every judged view sample (``multiple_parts``; ``ops/plan.dense_fog``)
 RIM_SAFETY = 2.0      # a cheaper rim's deviation at the samples counts twice: between them it can peak higher
 
 
@@ -197,22 +199,40 @@ def _models(g, light, rim_nodes=spot_mod.RIM_NODES, multiple_albedo=None):
     return rungs.choose(_preference(g), 0, g, kind, rim_nodes, multiple_albedo=multiple_albedo)
 
 
-def multiple_share(samples, intensity, beta, g, albedo, single=None):
-    """(N,) the largest share of a judged sample's fog (single plus multiple scattering, as ``choose_steps``
-    judges) that each light's multiply scattered light makes (Dense Fog, ``multiple.py``; 0 for the lights it
-    does not model): where it is a small part of the Quality's target, Dense Fog is left out for the light and
-    costs nothing (``ops.apply.choose_models``).  ``single``: ``light_fog``'s (glow, scatter) without it if
-    already computed (``Prediction.fog``)."""
+def multiple_parts(samples, intensity, beta, g, albedo, single=None):
+    """(P, N): at each judged sample, each light's multiply scattered light (Dense Fog, ``multiple.py``) as a share
+    of the sample's fog with it (single plus multiple scattering, as ``choose_steps`` judges), the largest over the
+    channels; 0 at samples not judged (below FLOOR of the peak).  Spot and area lights are judged as the point
+    lights at their positions (the shapes set aside: the predictor's numpy twin has Dense Fog for point lights
+    only), an estimate of their share.  ``single``: ``light_fog``'s (glow, scatter) without it if already computed
+    for the same samples (``Prediction.fog``; not reused when the samples have shapes)."""
+    if samples.shapes is not None:
+        samples, single = samples._replace(shapes=None), None
     glow, scatter = single if single is not None else light_fog(samples, intensity, beta, g)
     glow_m, scatter_m = light_fog(samples, intensity, beta, g, multiple_albedo=albedo)
     extra = np.abs((glow_m + scatter_m) - (glow + scatter))             # (P, N, 3)
     fog = (glow_m + scatter_m).sum(axis=1)                              # (P, 3)
     peak = fog.max() if fog.size else 0.0
     if not peak > MIN_FOG:
-        return np.zeros(glow.shape[1])
+        return np.zeros(glow.shape[:2])
     judged = (fog >= FLOOR * peak) & (fog > MIN_FOG)
     inv = np.where(judged, 1.0 / np.where(judged, fog, 1.0), 0.0)
-    return (extra * inv[:, None, :]).max(axis=(0, 2))
+    return (extra * inv[:, None, :]).max(axis=2)
+
+
+def multiple_share(samples, intensity, beta, g, albedo, single=None):
+    """(N,) the largest share of a judged sample's fog that each light's multiply scattered light makes
+    (``multiple_parts``): where it is a small part of the Quality's target, Dense Fog is left out for the light
+    and costs nothing (``ops/plan.choose_models``)."""
+    return multiple_parts(samples, intensity, beta, g, albedo, single).max(axis=0, initial=0.0)
+
+
+def missing_share(parts, left_out):
+    """The largest share of a judged sample's fog that the lights ``left_out`` (indices) miss together when their
+    multiply scattered light is not modelled: the sum of their ``multiple_parts`` at a sample, its largest over the
+    samples (each light's share is taken at its own largest channel, so this bounds the sum's)."""
+    k = np.asarray(list(left_out), int)
+    return float(parts[:, k].sum(axis=1).max(initial=0.0)) if len(k) else 0.0
 
 
 def _finite(v):
