@@ -300,14 +300,15 @@ def view_samples(scene, lights, frames=None, grid=None):
                                shapes if any(k is not None for k in kinds) else None)
 
 
-def multiple_parts(scene, spec, lights, samples=None, single=None, grid=None):
+def multiple_parts(scene, spec, lights, samples=None, single=None, dense=None, grid=None):
     """``predict.multiple_parts`` of ``lights`` in the fog of ``spec`` (a ``FogSpec``) at the view's samples
     (``samples``, else sampled here on ``grid``, default ``sample_grid``'s): (P, N) each light's multiply scattered
-    light as a share of a sample's fog.  ``single``: the samples' single-scattering (glow, scatter) if computed."""
+    light as a share of a sample's fog.  ``single``, ``dense``: the samples' (glow, scatter) without and with it,
+    if computed."""
     if samples is None:
-        samples, single = view_samples(scene, lights, grid=grid), None
+        samples, single, dense = view_samples(scene, lights, grid=grid), None, None
     return predict.multiple_parts(samples, light_intensities(lights), spec.beta_per_unit, spec.anisotropy,
-                                  spec.grey_albedo, single)
+                                  spec.grey_albedo, single, dense)
 
 
 def is_spot(light):

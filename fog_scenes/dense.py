@@ -253,10 +253,9 @@ def render_ours(distance, density, anisotropy, albedo, out, power=LAMP_POWER_W, 
     ``multiple_scattering``: "off" (single scattering), "on" (the Dense Fog model) or None (the file's)."""
     blend = blend or blend_path(distance, power, lamp_radius)
     args = ["--anisotropy", repr(float(anisotropy)), "--color", ",".join([repr(float(albedo))] * 3)]
-    if multiple_scattering is not None:
-        args += ["--multiple-scattering", multiple_scattering]
     return h.render_test("dense", density, out, engine="cycles", method=method, resolution=resolution,
-                         blend=blend, extra=tuple(args) + tuple(extra), log=log)
+                         blend=blend, extra=tuple(args) + tuple(extra), log=log,
+                         multiple_scattering=multiple_scattering)
 
 
 # -- the annulus profile (numpy) ------------------------------------------------------------------------------

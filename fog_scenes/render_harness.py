@@ -202,9 +202,11 @@ def ensure_reference(scene, density, regen=False, **kw):
 
 def render_test(scene, density, out, engine="cycles", method=None, samples=None,
                 resolution=TEST_RESOLUTION, extra=(), blend=None, cast_shadows=False,
-                interreflection=False, log=None, timeout=600):
+                interreflection=False, log=None, timeout=600, multiple_scattering="off"):
     """Render demo ``scene`` with the analytic fog via ``python -m fog_addon render``
-    (pixel-centre sampling, cast shadows and interreflection off like the references).
+    (pixel-centre sampling, cast shadows and interreflection off like the references, and single scattering
+    like theirs, 0 volume bounces: ``multiple_scattering`` "off"; "on", or None for the file's setting, Dense
+    Fog by the Quality by default; a ``--multiple-scattering`` in ``extra`` wins).
     ``log``: a list to which the process's stdout + stderr is appended."""
     blend = blend or scene_blend(scene)
     args = ["-m", "fog_addon", "render", blend, "--engine", engine, "--density", repr(float(density)),
@@ -217,6 +219,8 @@ def render_test(scene, density, out, engine="cycles", method=None, samples=None,
         args += ["--samples", int(samples)]
     if not cast_shadows:
         args.append("--no-cast-shadows")
+    if multiple_scattering is not None and "--multiple-scattering" not in extra:
+        args += ["--multiple-scattering", multiple_scattering]
     args += list(extra)
     proc = run(args, timeout=timeout)
     if log is not None:

@@ -33,7 +33,8 @@ def test_driven_image_plane_matches_view_frame(res):
 
 def test_spliced_into_a_users_compositor_and_taken_out(res):
     s = res["splice"]
-    assert [n for n in s["notes"] if "light shafts are not modelled" not in n[1]] == []   # (the spheres: a caveat)
+    assert [n for n in s["notes"] if "light shafts are not modelled" not in n[1]   # (the spheres: a caveat)
+            and "multiple scattering is off" not in n[1]] == []                    # (apply_fog's single scattering)
     assert s["fog_nodes"] == ["CompositorNodeGroup"] and s["group"] == "AnalyticFog Compositor Fog"
     assert s["feeds"] == ["Glare", "Viewer"], "both of the Image's users read the fogged picture"
     assert s["rl_feeds"] == ["AnalyticFog Compositor 0 Fog"]

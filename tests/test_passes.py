@@ -264,6 +264,7 @@ def compositor_passes(runs):
             r = subprocess.run([sys.executable, "-m", "fog_addon", "render", info["blend"], "--engine", flag,
                                 "--method", "compositor", "--passes", "--density", str(runs["cycles"]["beta"]),
                                 "--color", "0.9,0.8,0.7", "--samples", "1", "--resolution", size, "--pixel-centre",
+                                "--multiple-scattering", "off",   # (the node groups' probe: single scattering)
                                 "--out", str(exr)], capture_output=True, text=True, timeout=600, cwd=ROOT)
             assert r.returncode == 0, r.stderr[-3000:] + r.stdout[-2000:]
             out[name] = imageio.read_layers(exr)

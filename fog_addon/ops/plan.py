@@ -93,13 +93,15 @@ def choose_models(scene, spec, method, lights, budget=None):
     budget = method.budget(scene, spec, lights) if budget is None else budget
     steps = [0] * len(lights)
     choice = {"target": target, "error": 0.0, "lights": {}, "rims": {}, "engine": engine, "limited": None}
-    samples, single = None, None
+    samples, fog = None, {}
+    served = dense_served(spec, method, engine)
+    dense = any(served(o) and not view.has_shape(o) for o in lights)   # (the predictor's Dense Fog: point lights)
     if lights and (target is not None or (budget is not None and not budget.fits(steps))):
         samples = view.view_samples(scene, lights)
         pred = predict.predict(samples, view.light_intensities(lights), spec.beta_per_unit, target, budget,
-                               spec.anisotropy)
+                               spec.anisotropy, spec.grey_albedo if dense else None)
         steps = [int(k) for k in pred.steps]
-        single = pred.fog
+        fog = {"dense" if dense else "single": pred.fog}
         choice["error"] = pred.error
         choice["lights"] = {o.name: [int(k), float(e)] for o, k, e in zip(lights, pred.steps, pred.light_error)}
         choice["rims"] = {o.name: int(n) for o, n in zip(lights, pred.rims)   # (a light off keeps RIM_NODES)
@@ -108,7 +110,7 @@ def choose_models(scene, spec, method, lights, budget=None):
             choice["limited"] = budget.name + ("" if pred.fits else ": too many lights even with every light off")
     else:
         choice["lights"] = {o.name: [0, 0.0] for o in lights}
-    choice.update(dense_fog(scene, spec, method, lights, samples, single))
+    choice.update(dense_fog(scene, spec, method, lights, samples, choice["error"], **fog))
     choice["error"] += choice["dense"]["missing"]
     return _models(spec, method, lights, steps, choice["rims"], set(choice["thin"])), choice
 
@@ -122,12 +124,15 @@ def dense_served(spec, method, engine):
     return lambda o: shaped if view.has_shape(o) else point
 
 
-def dense_fog(scene, spec, method, lights, samples=None, single=None):
+def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None, dense=None):
     """Dense Fog by the Quality: which ``lights`` get their multiply scattered light, and what the picture misses
-    without it (``predict.multiple_parts``, at the view's samples: ``samples``, else sampled here where needed).
+    without it (``predict.multiple_parts``, at the view's samples: ``samples``, else sampled here where needed;
+    ``single``, ``dense``: their (glow, scatter) without and with it, where computed).
 
     A light the method models it for (``dense_served``) gets it unless it is at most THIN_SHARE of the Quality's
-    target at every judged sample ("thin": left out at no cost; with Quality Exact no light is thin).  A light it is
+    target at every judged sample and what all such lights and the left-out ones miss together keeps the predicted
+    error (``error`` before Dense Fog) within the target ("thin": left out at no cost, the thinnest first; with
+    Quality Exact no light is thin).  A light it is
     not modelled for (Dense Fog off: a stylised look; a method without it) is "left out", with its share.  Returns
     {"thin": {name: share}, "dense": {"left_out": {name: share}, "missing": the share of a judged sample's fog
     that the thin and the left-out lights miss together, at the sample where it is largest, "why": "off" or the
@@ -139,16 +144,18 @@ def dense_fog(scene, spec, method, lights, samples=None, single=None):
                                  "why": "off" if not spec.multiple_scattering else getattr(method, "name", method)}}
     if not need or scene.camera is None:
         return out
-    parts = view.multiple_parts(scene, spec, lights, samples, single)
+    parts = view.multiple_parts(scene, spec, lights, samples, single, dense)
     share = parts.max(axis=0, initial=0.0)
-    missed = []
-    for k, o in enumerate(lights):
-        if not served(o):
-            out["dense"]["left_out"][o.name] = float(share[k])
+    missed = [k for k, o in enumerate(lights) if not served(o)]
+    out["dense"]["left_out"] = {lights[k].name: float(share[k]) for k in missed}
+    if target is not None:   # the thinnest first, while the picture stays within the target
+        room, acc = target - error, parts[:, missed].sum(axis=1)
+        for k in sorted((k for k, o in enumerate(lights) if served(o)), key=lambda k: share[k]):
+            if share[k] > predict.THIN_SHARE * target or (acc + parts[:, k]).max(initial=0.0) > room:
+                break
+            acc = acc + parts[:, k]
             missed.append(k)
-        elif target is not None and share[k] <= predict.THIN_SHARE * target:
-            out["thin"][o.name] = float(share[k])
-            missed.append(k)
+            out["thin"][lights[k].name] = float(share[k])
     out["dense"]["missing"] = predict.missing_share(parts, missed)
     return out
 

@@ -104,10 +104,10 @@ def main(out, name, quality, method="nodes", width=128, height=72):
     fog_only(scene)
     tiny_render(scene, "CYCLES", width, height)
     quality = None if quality == "exact" else (float(quality) if quality[0].isdigit() else quality)
-    apply.apply_fog(scene, beta, anisotropy=g, error=quality, method=method, shafts=False)
+    apply.apply_fog(scene, beta, anisotropy=g, error=quality, method=method, shafts=False, multiple_scattering=True)
     choice = apply.stored_choice()
     render(scene, out / "auto.exr")
-    apply.apply_fog(scene, beta, anisotropy=g, error=None, method=method, shafts=False)
+    apply.apply_fog(scene, beta, anisotropy=g, error=None, method=method, shafts=False, multiple_scattering=True)
     render(scene, out / "exact.exr")
     print(json.dumps({"scene": name, "beta": beta, "quality": quality, "predicted": choice["error"],
                       "steps": {k: v[0] for k, v in choice["lights"].items()},

@@ -199,17 +199,17 @@ def _models(g, light, rim_nodes=spot_mod.RIM_NODES, multiple_albedo=None):
     return rungs.choose(_preference(g), 0, g, kind, rim_nodes, multiple_albedo=multiple_albedo)
 
 
-def multiple_parts(samples, intensity, beta, g, albedo, single=None):
+def multiple_parts(samples, intensity, beta, g, albedo, single=None, dense=None):
     """(P, N): at each judged sample, each light's multiply scattered light (Dense Fog, ``multiple.py``) as a share
     of the sample's fog with it (single plus multiple scattering, as ``choose_steps`` judges), the largest over the
     channels; 0 at samples not judged (below FLOOR of the peak).  Spot and area lights are judged as the point
     lights at their positions (the shapes set aside: the predictor's numpy twin has Dense Fog for point lights
-    only), an estimate of their share.  ``single``: ``light_fog``'s (glow, scatter) without it if already computed
-    for the same samples (``Prediction.fog``; not reused when the samples have shapes)."""
+    only), an estimate of their share.  ``single``, ``dense``: ``light_fog``'s (glow, scatter) without it and with
+    it if already computed for the same samples (``Prediction.fog``; not reused when the samples have shapes)."""
     if samples.shapes is not None:
-        samples, single = samples._replace(shapes=None), None
+        samples, single, dense = samples._replace(shapes=None), None, None
     glow, scatter = single if single is not None else light_fog(samples, intensity, beta, g)
-    glow_m, scatter_m = light_fog(samples, intensity, beta, g, multiple_albedo=albedo)
+    glow_m, scatter_m = dense if dense is not None else light_fog(samples, intensity, beta, g, multiple_albedo=albedo)
     extra = np.abs((glow_m + scatter_m) - (glow + scatter))             # (P, N, 3)
     fog = (glow_m + scatter_m).sum(axis=1)                              # (P, 3)
     peak = fog.max() if fog.size else 0.0
@@ -339,8 +339,10 @@ def choose_steps(glow, scatter, target, budget=None, rim_dev=None):
     return Prediction(steps, light_error, error, int(judged.any(axis=1).sum()), limited, fits, rims)
 
 
-def predict(samples, intensity, beta, quality, budget=None, g=0.0):
-    """The choice for a view at a Quality (preset name, number or None): :class:`Prediction`."""
-    glow, scatter = light_fog(samples, intensity, beta, g)
+def predict(samples, intensity, beta, quality, budget=None, g=0.0, multiple_albedo=None):
+    """The choice for a view at a Quality (preset name, number or None): :class:`Prediction`.
+    ``multiple_albedo``: the point lights' terms judged with Dense Fog's multiply scattered light of that grey
+    albedo (a step that drops a term drops its multiply scattered part too), else None."""
+    glow, scatter = light_fog(samples, intensity, beta, g, multiple_albedo=multiple_albedo)
     return choose_steps(glow, scatter, spec.target_error(quality), budget,
                         rim_deviation(samples, intensity, beta, glow, g))._replace(fog=(glow, scatter))
