@@ -155,3 +155,28 @@ def test_dense_fog_is_left_out_where_it_adds_nothing():
               for beta in (1e-5, 1e-3, 0.01, 0.3)]
     assert shares[0] < 1e-3 and shares[-1] > 0.5, shares
     assert all(a < b for a, b in zip(shares, shares[1:])), shares
+
+
+def test_left_out_lights_counted_together_and_shaped_lights_judged():
+    """What Dense Fog leaves out of several lights (``predict.missing_share``) is their multiply scattered light
+    summed at a sample, at the sample where it is largest: at least the largest light's share and at most the sum
+    of their shares; a spot light is judged as the point light at its place (the predictor's Dense Fog is the point
+    lights'), not taken as adding nothing."""
+    from fog_addon.precompute.model import predict
+    p = 40
+    ang = np.radians(np.linspace(-50.0, 50.0, p))
+    d = np.stack([np.sin(ang), np.cos(ang), 0.0 * ang], -1)
+    lights = np.tile(np.array([[[-4.0, 12.0, 0.0], [5.0, 15.0, 0.0]]]), (p, 1, 1))
+    samples = predict.ViewSamples(np.zeros((p, 3)), d, np.full(p, np.inf), np.tile([0.0, -1.0, 0.0], (p, 1)),
+                                  np.full((p, 3), 0.5), np.zeros((p, 3)), np.zeros(p), lights)
+    intensity = np.array([[100.0] * 3, [60.0] * 3])
+    parts = predict.multiple_parts(samples, intensity, 0.1, G, ALBEDO)
+    share = parts.max(axis=0)
+    both = predict.missing_share(parts, [0, 1])
+    assert share.min() > 0.01 and max(share) <= both <= share.sum() + 1e-12, (share, both)
+    assert predict.missing_share(parts, []) == 0.0
+    np.testing.assert_allclose(predict.multiple_share(samples, intensity, 0.1, G, ALBEDO), share)
+    cone = predict.Cone(np.cos(np.radians(30.0)), 0.2)
+    eye = np.tile(np.eye(3), (p, 2, 1, 1))
+    spotted = samples._replace(shapes=predict.LightShapes([cone, None], eye))
+    np.testing.assert_allclose(predict.multiple_parts(spotted, intensity, 0.1, G, ALBEDO), parts)

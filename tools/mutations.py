@@ -651,6 +651,21 @@ MUTATIONS = [
              "compose.dimmed(m, m.combine(t, t, t), factor)",
              "compose.dimmed(m, m.combine(1.0, 1.0, 1.0), factor)",
              ("tests/test_passes.py::test_compositor_passes_are_the_fogs_part",)),
+    Mutation("dense_fog_uncounted", "Dense Fog off: what the multiply scattered light leaves out is not in the "
+             "predicted error", "choose_models",
+             '    choice["error"] += choice["dense"]["missing"]\n',
+             "    pass\n",
+             ("tests/test_multiple_render.py::test_dense_fog_off_is_the_single_scattering",)),
+    Mutation("dense_fog_not_default", "Dense Fog off by default: a lamp in dense fog renders single scattering",
+             "FogSpec",
+             "    multiple_scattering: bool = True\n",
+             "    multiple_scattering: bool = False\n",
+             ("tests/test_multiple_render.py::test_dense_fog_glow_against_64_bounces[4.5-cycles-compositor]",)),
+    Mutation("dense_steps_single", "the ladder's steps judged without the multiply scattered terms Dense Fog adds",
+             "choose_models",
+             "spec.anisotropy, spec.grey_albedo if dense else None)",
+             "spec.anisotropy, None)",
+             ("tests/test_quality.py::test_measured_error_within_prediction[boulevard-final]",)),
 ]
 
 
