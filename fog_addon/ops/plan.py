@@ -17,6 +17,8 @@ from ..precompute.model import capabilities, predict, rungs
 from ..precompute.physics.spot import spot
 
 SUPPORTED_LIGHTS = ("POINT", "SPOT", "AREA")
+MULTIPLE_ENTRIES = 1_000_000   # samples x lights at most for Dense Fog's shares (``dense_fog``): every nth sample
+#                                beyond (the choice's time stays that of the ladder's alone)
 PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method it was built with (methods.get)
 CHOICE_KEY = "analytic_fog_choice"   # on the Surface group: the Quality, {light: [step, predicted error]}, the total,
 #                                      the method and why (Auto)
@@ -144,6 +146,12 @@ def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None,
                                  "why": "off" if not spec.multiple_scattering else getattr(method, "name", method)}}
     if not need or scene.camera is None:
         return out
+    if samples is None:
+        samples = view.view_samples(scene, lights)
+    if len(samples.distance) * len(lights) > MULTIPLE_ENTRIES:   # (every nth sample)
+        n = math.ceil(len(samples.distance) * len(lights) / MULTIPLE_ENTRIES)
+        samples = predict.every_nth(samples, n)
+        single, dense = (None if f is None else tuple(a[::n] for a in f) for f in (single, dense))
     parts = view.multiple_parts(scene, spec, lights, samples, single, dense)
     share = parts.max(axis=0, initial=0.0)
     missed = [k for k, o in enumerate(lights) if not served(o)]

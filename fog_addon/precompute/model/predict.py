@@ -220,6 +220,16 @@ def multiple_parts(samples, intensity, beta, g, albedo, single=None, dense=None)
     return (extra * inv[:, None, :]).max(axis=2)
 
 
+def every_nth(samples, n):
+    """Every ``n``th of the view ``samples`` (a ``ViewSamples``, its shapes' rows too)."""
+    if n <= 1:
+        return samples
+    cut = lambda a: None if a is None else np.asarray(a)[::n]   # noqa: E731
+    shapes = samples.shapes
+    return samples._replace(**{f: cut(getattr(samples, f)) for f in ViewSamples._fields if f != "shapes"},
+                            shapes=None if shapes is None else shapes._replace(rows=cut(shapes.rows)))
+
+
 def multiple_share(samples, intensity, beta, g, albedo, single=None):
     """(N,) the largest share of a judged sample's fog that each light's multiply scattered light makes
     (``multiple_parts``): where it is a small part of the Quality's target, Dense Fog is left out for the light
