@@ -139,11 +139,20 @@ def listed(names):
     return ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
 
 
-def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None):
+def _effect(shares):
+    """", up to X % of a pixel's fog (predicted)" for an account of what is left out (``ops/plan.shadow_fog``,
+    ``dense_fog``: its "missing" share), or "" without one."""
+    missing = (shares or {}).get("missing")
+    return "" if missing is None or not (shares or {}).get("left_out") else \
+        f", up to {missing:.0%} of a pixel's fog (predicted)"
+
+
+def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None, shares=None):
     """Notes on the shadows of ``lights`` in the fog: with ``shafts`` (the Compositor method casts them from
     shadow maps), what the maps don't do (soft shadows; moving lights or objects over more frames than an atlas
     holds, ``shadow_maps.ensure``); without, that the objects near the lights cast no shadow into the fog
-    (``why_off``: why, else the method has none)."""
+    (``why_off``: why, else the method has none), with its predicted effect (``shares``: ``ops/plan.shadow_fog``'s
+    account, or None)."""
     found = shadowing_lights(scene, lights, beta, reach_m)
     if not found:
         return []
@@ -152,12 +161,12 @@ def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None):
                           "casts them")
         return [f"light shafts are not modelled ({why}): objects cast no shadow into the fog, so the glow of "
                 f"{len(found)} light(s) ({listed(found)}) passes through the objects near them (a lamp's hood, "
-                "a wall, a window frame)"]
+                f"a wall, a window frame){_effect(shares)}"]
     notes = []
     areas = [o.name for o in lights if o.name in found and o.data.type == "AREA"]
     if areas:
         notes.append(f"area lights cast no shafts yet: the glow of {listed(areas)} passes through the objects "
-                     "near them")
+                     f"near them{_effect(shares)}")
     shafted = [o for o in lights if o.name in found and o.data.type != "AREA"]
     soft = [o.name for o in shafted if getattr(o.data, "shadow_soft_size", 0.0) > 0.0]
     if soft:

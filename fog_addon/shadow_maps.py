@@ -39,8 +39,10 @@ from mathutils import Vector
 from mathutils.bvhtree import BVHTree
 
 from . import caveats, view
-from .precompute.physics.shafts import shaft_maps
+from .precompute.core.ops import NumpyOps
 from .precompute.core.tables import TableSpec
+from .precompute.model import bakers, predict, sampling
+from .precompute.physics.shafts import shaft_maps, shafts
 
 IMAGE_PREFIX = "AnalyticFog Shadow "   # a light's map: "<IMAGE_PREFIX><light name>" (``nodes/owned.PREFIX``)
 KEY = "analytic_fog_shadow_key"            # on the image: what the map was baked from (``ShadowMap.key``)
@@ -524,3 +526,53 @@ def remove_unused(keep=()):
     for img in list(bpy.data.images):
         if (img.name.startswith(IMAGE_PREFIX) or img.name == SUN_IMAGE) and img.name not in keep:
             bpy.data.images.remove(img)
+
+
+SHADOW_GRID = (48, 27)     # the view's samples the shadows' share is judged at (``shadowed_parts``)
+SHARE_MAP = (128, 64)      # longitude x latitude points of the coarse point maps it casts (2.8 degrees apart)
+SHARE_NODES = 16           # quadrature nodes along each ray (``shafts.lit_share``)
+SHARE_LIGHTS = 16          # the lights it judges at most: the most important (``sampling.importance``)
+
+
+def shadowed_parts(scene, spec, lights, grid=SHADOW_GRID):
+    """Where the fog has no shafts: (names of the judged lights, (P, N') each one's fog light that its shadows
+    would take away, as a share of the sample's fog with them), at the view's samples on ``grid``, judged lights
+    only (at most SHARE_LIGHTS of ``lights``, the most important to the picture), or None without a camera.
+
+    Each light's glow along a ray is split by its lit share S (``shafts.lit_share``: the equiangular nodes of
+    the compositor's shafts, SHARE_NODES of them) read from a coarse point map of the light (SHARE_MAP, ray cast
+    here; a spot or an area light is mapped as a point), and the glow without shafts, G, overestimates the fog
+    by G (1 - S); the denominator is the fog with the shadows, sum G S + the fog light on surfaces (unshadowed:
+    the fog light's own shadows are left out of the estimate).  The predicted error's share of what Light
+    Shafts off or a method without them leaves out (``ops/plan.shadow_fog``)."""
+    if scene.camera is None or not lights:
+        return None
+    eye = np.array(scene.camera.matrix_world.translation)
+    weight = sampling.importance([o.matrix_world.translation for o in lights], view.light_intensities(lights), eye,
+                                 spec.beta_per_unit)
+    judged = [lights[k] for k in sorted(np.argsort(-weight, kind="stable")[:SHARE_LIGHTS])]
+    samples = view.view_samples(scene, judged, frames=[scene.frame_current], grid=grid)
+    samples = samples._replace(shapes=None)   # (each light a point: an estimate)
+    glow, scatter = predict.light_fog(samples, view.light_intensities(judged), spec.beta_per_unit, spec.anisotropy)
+    geometry = scene_bvh(scene)
+    directions, fill = shaft_maps.point_map_casts(*SHARE_MAP)
+    vectors = _vectors(directions)
+    m = NumpyOps(bakers.numpy_tables(spec.anisotropy))
+    length = np.where(np.isfinite(samples.distance), samples.distance, 1.0e6)
+    lit = np.ones(glow.shape[:2])
+    for k, light in enumerate(judged):
+        origin = tuple(light.matrix_world.translation)
+        spec_k = TableSpec(f"share map {k}", SHARE_MAP[0], SHARE_MAP[1])
+        m.tables[spec_k.name] = cast(geometry.bvh, origin, vectors)[fill].astype(float)
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            share = shafts.lit_share(m, samples.camera, samples.direction, length, np.array(origin),
+                                     spec.beta_per_unit, (spec_k, None), SHARE_NODES, g=spec.anisotropy)
+        lit[:, k] = np.nan_to_num(np.asarray(share, float), nan=1.0).clip(0.0, 1.0)
+    lost = glow * (1.0 - lit)[..., None]                                  # (P, N', 3)
+    fog = (glow * lit[..., None] + scatter).sum(axis=1)                   # (P, 3)
+    peak = fog.max() if fog.size else 0.0
+    if not peak > predict.MIN_FOG:
+        return [o.name for o in judged], np.zeros(lit.shape)
+    ok = (fog >= predict.FLOOR * peak) & (fog > predict.MIN_FOG)
+    inv = np.where(ok, 1.0 / np.where(ok, fog, 1.0), 0.0)
+    return [o.name for o in judged], (lost * inv[:, None, :]).max(axis=2)

@@ -666,6 +666,14 @@ MUTATIONS = [
              "spec.anisotropy, spec.grey_albedo if dense else None)",
              "spec.anisotropy, None)",
              ("tests/test_quality.py::test_measured_error_within_prediction[boulevard-final]",)),
+    Mutation("shadows_uncounted", "Light Shafts off: the shadows the fog lacks are not in the predicted error",
+             "plan.plan", '        choice["error"] += choice["shadows"]["missing"]\n', "        pass\n",
+             ("tests/test_shaft_scenes.py::test_shafts_off_predicts_what_the_shadows_take[window_room]",)),
+    Mutation("shadow_share_lit", "the shadows' predicted share: every quadrature node taken as lit",
+             "shadowed_parts",
+             "        lit[:, k] = np.nan_to_num(np.asarray(share, float), nan=1.0).clip(0.0, 1.0)\n",
+             "        lit[:, k] = 1.0\n",
+             ("tests/test_shaft_scenes.py::test_shafts_off_predicts_what_the_shadows_take[window_room]",)),
 ]
 
 

@@ -11,7 +11,7 @@ from typing import Any, NamedTuple
 
 import bpy
 
-from .. import methods, view
+from .. import caveats, methods, shadow_maps, view
 from ..nodes import budgets, groups
 from ..precompute.model import capabilities, predict, rungs
 from ..precompute.physics.spot import spot
@@ -115,6 +115,26 @@ def choose_models(scene, spec, method, lights, budget=None):
     choice.update(dense_fog(scene, spec, method, lights, samples, choice["error"], **fog))
     choice["error"] += choice["dense"]["missing"]
     return _models(spec, method, lights, steps, choice["rims"], set(choice["thin"])), choice
+
+
+def shadow_fog(scene, spec, method, lights):
+    """What the shadows would take from the fog where it has none: the lights with objects near them
+    (``caveats.shadowing_lights``) whose shafts the picture lacks (Light Shafts off, a method without them, area
+    lights), judged at the view's samples (``shadow_maps.shadowed_parts``).  Returns {"shadows": {"left_out":
+    {name: share}, "missing": their share of a judged sample's fog together, at the sample where it is largest,
+    "why": "off", the method's name or "area"}}."""
+    name, engine = getattr(method, "name", method), scene.render.engine
+    casting = spec.shafts and capabilities.can(name, "shafts", engine)
+    out = {"left_out": {}, "missing": 0.0, "why": "off" if not spec.shafts else name if not casting else "area"}
+    found = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(view.scene_size(scene), 1e-6)) \
+        if lights and spec.beta_per_unit > 0.0 else {}
+    unshafted = [o for o in lights if o.name in found and (not casting or o.data.type == "AREA")]
+    judged = shadow_maps.shadowed_parts(scene, spec, unshafted) if unshafted else None
+    if judged is not None:
+        names, parts = judged
+        out["left_out"] = {n: float(parts[:, k].max(initial=0.0)) for k, n in enumerate(names)}
+        out["missing"] = float(parts.sum(axis=1).max(initial=0.0))
+    return {"shadows": out}
 
 
 def dense_served(spec, method, engine):
@@ -266,6 +286,8 @@ def plan(scene, spec, method, lights, reason=None, rechoose=True, this_frame=Fal
             kept = None
     if kept is None:
         models, choice = choose_models(scene, spec, method, lights)
+        choice.update(shadow_fog(scene, spec, method, lights))
+        choice["error"] += choice["shadows"]["missing"]
     else:
         rims = {o.name: old["rims"][o.name] for o in lights if o.name in old.get("rims", {})}
         models = _models(spec, method, lights, kept, rims, set(old.get("thin", ())))

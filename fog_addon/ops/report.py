@@ -52,6 +52,22 @@ def dense_line(choice):
             "fog, in the predicted error")
 
 
+def shadows_line(choice):
+    """One line: the shadows the fog lacks where it has no shafts (``plan.shadow_fog``), with their predicted
+    share; None where none are left out."""
+    shadows = choice.get("shadows") or {}
+    left = shadows.get("left_out") or {}
+    if not left:
+        return None
+    why = shadows.get("why")
+    why = ("Light Shafts is off" if why == "off" else "area lights cast none" if why == "area"
+           else f"Method {methods.get(why).label} has none")
+    names = sorted(left, key=left.get, reverse=True)
+    return (f"shadows in the fog left out of {len(left)} light(s) ({', '.join(names[:3])}"
+            f"{' and more' if len(names) > 3 else ''}; {why}): up to {shadows.get('missing', 0.0):.2%} of a "
+            "pixel's fog, in the predicted error")
+
+
 def limit_text(choice):
     """What limited ``choice`` beyond its target (EEVEE's uniform block, OSL's group size), as a phrase, or None."""
     return f"limited by {choice['limited']}: lights step down beyond the target" if choice.get("limited") else None
@@ -78,6 +94,8 @@ def explain(choice=None):
                      f"{' and more' if len(thin) > 3 else ''}): their multiply scattered light is at most "
                      f"{max(thin.values()):.2%} of the fog")
     if (line := dense_line(choice)) is not None:
+        lines.append("  " + line)
+    if (line := shadows_line(choice)) is not None:
         lines.append("  " + line)
     shafted = sorted(i.name.removeprefix(shadow_maps.IMAGE_PREFIX) for i in bpy.data.images
                      if i.name.startswith(shadow_maps.IMAGE_PREFIX))
@@ -185,11 +203,12 @@ def not_modelled(scene, spec, lights, materials, method=None):
     has none or they are off, their limits where it has them; glass and mirrors), as notes."""
     name, engine = getattr(method, "name", method), scene.render.engine
     casting = bool(spec.shafts and capabilities.can(name, "shafts", engine))
+    choice = stored_choice() or {}
     notes = [*caveats.shadow_notes(scene, lights, spec.beta_per_unit, max(view.scene_size(scene), 1e-6), casting,
-                                   None if spec.shafts else "Light Shafts is off"),
+                                   None if spec.shafts else "Light Shafts is off", choice.get("shadows")),
              caveats.glass_note(materials, scene.objects),
              caveats.clip_note(scene, name),
-             *caveats.multiple_notes((stored_choice() or {}).get("dense"), name, view.has_shape, lights, engine),
+             *caveats.multiple_notes(choice.get("dense"), name, view.has_shape, lights, engine),
              *caveats.glow_notes(methods.compositor.glowing_objects(scene), name, engine),
              *(f"{what}: {why}" for what, why in sunsky.notes(scene, spec, name, lights))]
     return [n for n in notes if n]
