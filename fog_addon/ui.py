@@ -38,8 +38,12 @@ def _draw_models(layout, settings):
     box.label(text=apply.quality_head(choice))
     if (limit := apply.limit_text(choice)) is not None:   # EEVEE's uniform block: a warning of its own
         box.label(text=limit[0].upper() + limit[1:], icon="ERROR")
+    left_out = apply.left_out_lines(choice)
+    for line in left_out:   # what the picture lacks, the largest first
+        box.label(text=line, icon="INFO")
     lines = apply.explain(choice)
-    cheaper = [line for line in lines[1:] if not line.endswith(": full") and not line.strip().startswith("Method")]
+    cheaper = [line for line in lines[1:] if not line.endswith(": full") and not line.strip().startswith("Method")
+               and line.strip() not in left_out]
     for line in cheaper[:MAX_LISTED]:
         box.label(text=line.strip(), icon="DOT")
     if len(cheaper) > MAX_LISTED:

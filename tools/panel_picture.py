@@ -74,8 +74,9 @@ class Recorder:
         self._put("label", f"{mark} {text}".strip())
 
 
-def record():
-    """The rows the panel draws for the spheres demo with the fog added (Method Auto, Quality default)."""
+def record(**settings):
+    """The rows the panel draws for the spheres demo with the fog added (Method Auto, Quality default), the scene's
+    fog ``settings`` (``scene.analytic_fog`` properties) set before."""
     import bpy
     import fog_addon
     from demo_scenes import spheres
@@ -85,6 +86,8 @@ def record():
     scene = bpy.context.scene
     spheres.build(scene)
     scene.render.engine = "CYCLES"
+    for key, value in settings.items():
+        setattr(scene.analytic_fog, key, value)
     bpy.ops.fog.add(preset="MIST")
     rows = []
     context = type("Context", (), {"scene": scene})()

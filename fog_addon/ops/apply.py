@@ -24,8 +24,8 @@ from .build import (AOV_KINDS, SPEC_KEY, TablesMissing, build_scene_groups, foll
                     rebuilt, use_osl)
 from .plan import (SUPPORTED_LIGHTS, built_method, check_method, choose_models, fog_lights, scene_materials,
                    stored_choice)
-from .report import (CAVEATS_KEY, explain, limit_text, method_line, not_modelled, panel_notes, quality_head,
-                     scene_changed, scene_notes, stored_caveats)
+from .report import (CAVEATS_KEY, explain, left_out_lines, limit_text, method_line, not_modelled, panel_notes,
+                     quality_head, scene_changed, scene_notes, stored_caveats)
 from .sync import (accept_bake, bake_declined, decline_bake, grow_windows, refresh_lights, set_anisotropy,
                    set_method, set_passes, set_quality, settings_error, sync, sync_error, update_params, usable_spec)
 
@@ -36,7 +36,7 @@ __all__ = [   # the entry points
     "use_osl",
     "SUPPORTED_LIGHTS", "built_method", "check_method", "choose_models", "fog_lights", "scene_materials",
     "stored_choice",
-    "CAVEATS_KEY", "explain", "limit_text", "method_line", "not_modelled", "quality_head", "scene_notes",
+    "CAVEATS_KEY", "explain", "left_out_lines", "limit_text", "method_line", "not_modelled", "quality_head", "scene_notes",
     "stored_caveats", "panel_notes", "scene_changed",
     "accept_bake", "bake_declined", "decline_bake", "grow_windows", "refresh_lights", "set_anisotropy", "set_method",
     "set_passes", "set_quality", "settings_error", "sync", "sync_error", "update_params", "usable_spec",

@@ -68,6 +68,14 @@ def shadows_line(choice):
             "pixel's fog, in the predicted error")
 
 
+def left_out_lines(choice):
+    """The lines of what the picture lacks and the predicted error counts (``dense_line``, ``shadows_line``), the
+    largest share first (the panel lists them above the lights)."""
+    left_out = [(choice.get(key, {}).get("missing", 0.0), line) for key, line in
+                (("dense", dense_line(choice)), ("shadows", shadows_line(choice))) if line is not None]
+    return [line for _, line in sorted(left_out, key=lambda x: -x[0])]
+
+
 def limit_text(choice):
     """What limited ``choice`` beyond its target (EEVEE's uniform block, OSL's group size), as a phrase, or None."""
     return f"limited by {choice['limited']}: lights step down beyond the target" if choice.get("limited") else None
@@ -93,10 +101,7 @@ def explain(choice=None):
         lines.append(f"  Dense Fog left out for {len(thin)} light(s) ({', '.join(sorted(thin)[:3])}"
                      f"{' and more' if len(thin) > 3 else ''}): their multiply scattered light is at most "
                      f"{max(thin.values()):.2%} of the fog")
-    if (line := dense_line(choice)) is not None:
-        lines.append("  " + line)
-    if (line := shadows_line(choice)) is not None:
-        lines.append("  " + line)
+    lines += ["  " + line for line in left_out_lines(choice)]
     shafted = sorted(i.name.removeprefix(shadow_maps.IMAGE_PREFIX) for i in bpy.data.images
                      if i.name.startswith(shadow_maps.IMAGE_PREFIX))
     if shafted:
