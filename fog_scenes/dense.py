@@ -245,6 +245,14 @@ def render_ms_reference(distance, density, anisotropy, albedo, volume_bounces=64
     return h.mean_of_seeds(path, render_seed, seeds, regen, times, keep_seeds)
 
 
+# The lamp at optical distances T 1.5, 4.5 and 8 (tests/test_multiple_render.py, tools/prediction_chart.py): the
+# cases' settings, and the seeds of their 64-bounce references (2 048 spp each)
+GLOW_CASES = {1.5: dict(distance=15.0, density=0.1, anisotropy=0.85, albedo=0.9),
+              4.5: dict(distance=15.0, density=0.3, anisotropy=0.85, albedo=0.9),
+              8.0: dict(distance=20.0, density=0.4, anisotropy=0.85, albedo=0.9)}
+GLOW_SEEDS = {1.5: 2, 4.5: 4, 8.0: 4}
+
+
 def render_ours(distance, density, anisotropy, albedo, out, power=LAMP_POWER_W, lamp_radius=0.0,
                 resolution=RESOLUTION, method="compositor", multiple_scattering="off", extra=(), log=None,
                 blend=None):

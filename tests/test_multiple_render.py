@@ -18,9 +18,8 @@ from fog_scenes import render_harness as h
 
 pytestmark = pytest.mark.render
 
-CASE = dict(distance=15.0, density=0.3, anisotropy=0.85, albedo=0.9)   # T 4.5, the issue's
-CASES = {1.5: dict(CASE, density=0.1), 4.5: CASE, 8.0: dict(CASE, distance=20.0, density=0.4)}
-SEEDS = {1.5: 2, 4.5: 4, 8.0: 4}
+CASES, SEEDS = dn.GLOW_CASES, dn.GLOW_SEEDS
+CASE = CASES[4.5]   # the issue's
 BOUND = 0.07   # |ours / reference - 1| in every annulus (goal 0.10)
 
 
