@@ -37,10 +37,14 @@ def test_light_shafts_pick_the_compositor(res):
 
 def test_few_samples_keep_the_node_groups(res):
     """The compositor's cost is per pixel and frame, the render's per sample: at 1 sample the node groups win,
-    unless Dense Fog has a spot light to glow, which only the compositor does."""
+    unless Dense Fog has a spot light to glow (where its multiply scattered light matters), which only the
+    compositor does."""
     assert res["cycles_1_one_sample"][0] == "nodes", res["cycles_1_one_sample"]
     name, reason = res["cycles_1_one_sample_dense_spot"]
     assert name == "compositor" and "spot" in reason, res["cycles_1_one_sample_dense_spot"]
+    # in fog so thin that its multiply scattered light is far below the Quality's target, Dense Fog leaves the spot
+    # out (the Quality's ``plan.dense_fog``), so it asks nothing of the method
+    assert res["cycles_1_one_sample_thin_spot"][0] == "nodes", res["cycles_1_one_sample_thin_spot"]
 
 
 def test_what_only_the_node_groups_have(res):

@@ -674,6 +674,11 @@ MUTATIONS = [
              "        lit[:, k] = np.nan_to_num(np.asarray(share, float), nan=1.0).clip(0.0, 1.0)\n",
              "        lit[:, k] = 1.0\n",
              ("tests/test_shaft_scenes.py::test_shafts_off_predicts_what_the_shadows_take[window_room]",)),
+    Mutation("auto_dense_thin_ignored", "Auto: a spot's Dense Fog asks for the compositor even where the Quality "
+             "leaves it out (thin fog)", "_dense_shaped",
+             "    return [o.name for o, v in zip(shaped, share) if v > predict.THIN_SHARE * target]\n",
+             "    return [o.name for o in shaped]\n",
+             ("tests/test_auto_method.py::test_few_samples_keep_the_node_groups",)),
 ]
 
 

@@ -82,6 +82,7 @@ def main():
     RES["cycles_1_one_sample"] = choice(scene, shafts=False)
     bpy.data.objects["L000"].data.type = "SPOT"
     RES["cycles_1_one_sample_dense_spot"] = choice(scene, shafts=False, multiple_scattering=True)
+    RES["cycles_1_one_sample_thin_spot"] = choice(scene, shafts=False, multiple_scattering=True, density=1e-6)
     bpy.data.objects["L000"].data.type = "POINT"
     scene.cycles.samples = 16
     glass(scene)
