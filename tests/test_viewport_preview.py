@@ -162,6 +162,9 @@ def test_preview_names_the_spots_it_leaves_out(tmp_path):
               check=False)
     assert r.returncode == 0, (r.stdout + r.stderr)[-2000:]
     assert "preview of the fog leaves out 1 of the 3 lights" in r.stdout, r.stdout[-2000:]
+    share = re.search(r"preview of the fog leaves out 1 of the 3 lights .*, up to ([0-9]+)% of a pixel's fog "
+                      r"\(predicted", r.stdout)
+    assert share and int(share.group(1)) > 0, r.stdout[-2000:]   # (its share, from the preview's prediction)
 
 
 NOTES_FLOW = r"""

@@ -177,9 +177,12 @@ class Compositor(Method):
                                       "everywhere, also above its top (final renders, F12, end them there)"))
         if not left:
             return notes
+        errors = (plan.preview[2] or {}).get("lights", {})   # each light's own share of a pixel's fog (``predict``)
+        share = sum(errors.get(name, [0, 0.0])[1] for name in left)
         return notes + [("Viewport", f"the viewport's preview of the fog leaves out {len(left)} of the "
                                      f"{len(plan.in_groups)} lights (spot and area lights beyond its "
-                                     f"{len(shown)}): {caveats.listed(left)} (final renders, F12, have every light)")]
+                                     f"{len(shown)}): {caveats.listed(left)}, up to {share:.0%} of a pixel's fog "
+                                     "(predicted; final renders, F12, have every light)")]
 
     def frame_change(self, scene, spec, lights):
         if comp_fog.FOG_GROUP in bpy.data.node_groups:
