@@ -7,6 +7,7 @@ Goal: within 10 % in every annulus.  Measured (docs/measurements/2026-11-27-mult
 the same to 0.1 %).  The bound keeps a margin over that and the references' noise (T 8's inner ring: 5.9 %);
 with Dense Fog off the render is the single-scattering reference's to 0.1 %.
 """
+import json
 import re
 
 import numpy as np
@@ -94,3 +95,42 @@ def test_dense_fog_off_is_the_single_scattering(tmp_path):
     predicted = _predicted(log[0])
     print(f"Dense Fog off: predicted {predicted:.1%}, measured against 64 bounces {measured:.1%}")
     assert predicted >= 0.5 * measured, (predicted, measured)
+
+
+THIN_FLOW = r"""
+import json, sys
+import bpy
+sys.path.insert(0, ROOT)
+import fog_addon
+from demo_scenes import street_lamps
+from fog_addon.ops import apply
+from fog_addon.precompute.core.spec import FogSpec
+bpy.ops.wm.read_factory_settings(use_empty=True)
+fog_addon.register()
+scene = bpy.context.scene
+street_lamps.build(scene)
+out = {}
+def read_tables():   # the Dense Fog tables a node of the fog reads (any tree: materials, World, compositor)
+    trees = [ng for ng in bpy.data.node_groups] + [m.node_tree for m in bpy.data.materials if m.node_tree]
+    return sorted({n.image.name for t in trees for n in t.nodes
+                   if getattr(n, "image", None) is not None and n.image.name.startswith("AnalyticFog Multiple")})
+for density in (1e-7, 0.05):
+    notes = apply.apply(scene, FogSpec(density=density, method="compositor"))
+    choice = apply.stored_choice()
+    out[str(density)] = {"thin": sorted(choice["thin"]), "lights": sorted(choice["lights"]),
+                         "tables": read_tables(), "error": choice["error"], "target": choice["target"]}
+print("THIN " + json.dumps(out))
+"""
+
+
+def test_thin_fog_pays_nothing_and_dense_fog_models_the_rest():
+    """With the defaults (Dense Fog by the Quality) the street's lamps in fog far too thin to scatter twice
+    are left without Dense Fog: no node reads a table of it (no cost), the prediction within the target; at its usual
+    density every lamp gets it (its table is read)."""
+    proc = h.run_bpy_code(THIN_FLOW.replace("ROOT", repr(str(h.ROOT))))
+    assert not h.log_errors(proc.stdout + proc.stderr), h.log_errors(proc.stdout + proc.stderr)
+    res = json.loads(next(ln for ln in proc.stdout.splitlines() if ln.startswith("THIN ")).split(" ", 1)[1])
+    thin, usual = res["1e-07"], res["0.05"]
+    assert thin["thin"] == thin["lights"] and len(thin["lights"]) == 3 and thin["tables"] == [], thin
+    assert thin["error"] <= thin["target"], thin
+    assert usual["thin"] == [] and len(usual["tables"]) == 1, usual

@@ -112,7 +112,9 @@ def choose_models(scene, spec, method, lights, budget=None):
             choice["limited"] = budget.name + ("" if pred.fits else ": too many lights even with every light off")
     else:
         choice["lights"] = {o.name: [0, 0.0] for o in lights}
-    choice.update(dense_fog(scene, spec, method, lights, samples, choice["error"], **fog))
+    # (where a budget forced steps beyond the target, thin lights are judged against the target alone)
+    choice.update(dense_fog(scene, spec, method, lights, samples, 0.0 if choice["limited"] else choice["error"],
+                            **fog))
     choice["error"] += choice["dense"]["missing"]
     return _models(spec, method, lights, steps, choice["rims"], set(choice["thin"])), choice
 
