@@ -292,12 +292,12 @@ def view_samples(scene, lights, frames=None, grid=None):
     n_lights = len(lights)
     kinds = [predict.Rectangle(*area_half_sizes(o)) if is_area(o) else predict.Cone(*spot_cone(o)) if is_spot(o)
              else None for o in lights]
-    shapes = predict.LightShapes(kinds, np.array(invs).reshape(-1, n_lights, 3, 3))
+    shapes = (predict.LightShapes(kinds, np.array(invs).reshape(-1, n_lights, 3, 3))
+              if any(k is not None for k in kinds) else None)
     return predict.ViewSamples(np.array(cams).reshape(-1, 3), np.array(dirs).reshape(-1, 3), np.array(dists, float),
                                np.array(normals).reshape(-1, 3), np.array(rds).reshape(-1, 3),
                                np.array(rss).reshape(-1, 3), np.array(levels, float),
-                               np.array(lps).reshape(-1, n_lights, 3), np.array(fr),
-                               shapes if any(k is not None for k in kinds) else None)
+                               np.array(lps).reshape(len(dists), n_lights, 3), np.array(fr), shapes)
 
 
 def multiple_parts(scene, spec, lights, samples=None, single=None, dense=None, grid=None):

@@ -109,6 +109,13 @@ bpy.ops.wm.read_factory_settings(use_empty=True)
 fog_addon.register()
 scene = bpy.context.scene
 street_lamps.build(scene)
+bpy.ops.mesh.primitive_cube_add(size=0.3, location=(0.0, 8.0, 2.0))   # a glowing object in view
+glow = bpy.data.materials.new("Sign")
+glow.use_nodes = True
+bsdf = glow.node_tree.nodes["Principled BSDF"]
+bsdf.inputs["Emission Color"].default_value = (1.0, 0.2, 0.6, 1.0)
+bsdf.inputs["Emission Strength"].default_value = 20.0
+bpy.context.object.data.materials.append(glow)
 out = {}
 def read_tables():   # the Dense Fog tables a node of the fog reads (any tree: materials, World, compositor)
     trees = [ng for ng in bpy.data.node_groups] + [m.node_tree for m in bpy.data.materials if m.node_tree]
@@ -118,19 +125,20 @@ for density in (1e-7, 0.05):
     notes = apply.apply(scene, FogSpec(density=density, method="compositor"))
     choice = apply.stored_choice()
     out[str(density)] = {"thin": sorted(choice["thin"]), "lights": sorted(choice["lights"]),
-                         "tables": read_tables(), "error": choice["error"], "target": choice["target"]}
+                         "tables": read_tables(), "error": choice["error"], "target": choice["target"],
+                         "emitters": choice["dense"]["emitters"]}
 print("THIN " + json.dumps(out))
 """
 
 
 def test_thin_fog_pays_nothing_and_dense_fog_models_the_rest():
     """With the defaults (Dense Fog by the Quality) the street's lamps in fog far too thin to scatter twice
-    are left without Dense Fog: no node reads a table of it (no cost), the prediction within the target; at its usual
-    density every lamp gets it (its table is read)."""
+    are left without Dense Fog, and so is a glowing object's glow: no node reads a table of it (no cost), the
+    prediction within the target; at its usual density every lamp and the glowing object get it."""
     proc = h.run_bpy_code(THIN_FLOW.replace("ROOT", repr(str(h.ROOT))))
     assert not h.log_errors(proc.stdout + proc.stderr), h.log_errors(proc.stdout + proc.stderr)
     res = json.loads(next(ln for ln in proc.stdout.splitlines() if ln.startswith("THIN ")).split(" ", 1)[1])
     thin, usual = res["1e-07"], res["0.05"]
     assert thin["thin"] == thin["lights"] and len(thin["lights"]) == 3 and thin["tables"] == [], thin
-    assert thin["error"] <= thin["target"], thin
-    assert usual["thin"] == [] and len(usual["tables"]) == 1, usual
+    assert thin["error"] <= thin["target"] and not thin["emitters"], thin
+    assert usual["thin"] == [] and len(usual["tables"]) >= 1 and usual["emitters"], usual

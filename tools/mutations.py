@@ -679,6 +679,10 @@ MUTATIONS = [
              "    return [o.name for o, v in zip(shaped, share) if v > predict.THIN_SHARE * target]\n",
              "    return [o.name for o in shaped]\n",
              ("tests/test_auto_method.py::test_few_samples_keep_the_node_groups",)),
+    Mutation("emitters_dense_always", "glowing objects take Dense Fog's kernel even in fog too thin for it (and "
+             "lose the flat emitters' facing term)", "emitters_dense",
+             "    return bool(parts.max(initial=0.0) > predict.THIN_SHARE * target)\n", "    return True\n",
+             ("tests/test_multiple_render.py::test_thin_fog_pays_nothing_and_dense_fog_models_the_rest",)),
 ]
 
 

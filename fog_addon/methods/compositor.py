@@ -101,7 +101,9 @@ class Compositor(Method):
                                           view.full_windows(plan.in_groups) if plan.partial else plan.windows,
                                           plan.partial, (maps, shafts.samples_for(spec.quality, len(maps)),
                                                          spec.anisotropy),
-                                          emitters=((spec.anisotropy, spec.multiple_albedo)
+                                          emitters=((spec.anisotropy, spec.multiple_albedo
+                                                     if (plan.choice.get("dense") or {}).get("emitters", True)
+                                                     else None)
                                                     if glowing_objects(scene) and not pano else None),
                                           day=(comp_daylight.Day(day, table, dims, sun_shadow,
                                                                  shafts.samples_for(spec.quality).view_nodes)

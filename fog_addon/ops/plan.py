@@ -10,6 +10,8 @@ import math
 from typing import Any, NamedTuple
 
 import bpy
+import numpy as np
+from mathutils import Vector
 
 from .. import caveats, methods, shadow_maps, view
 from ..nodes import budgets, groups
@@ -137,6 +139,28 @@ def shadow_fog(scene, spec, method, lights):
         out["left_out"] = {n: float(parts[:, k].max(initial=0.0)) for k, n in enumerate(names)}
         out["missing"] = float(parts.sum(axis=1).max(initial=0.0))
     return {"shadows": out}
+
+
+EMITTER_GRID = (40, 23)   # the view's samples the glowing objects' Dense Fog is judged at (``emitters_dense``)
+
+
+def emitters_dense(scene, spec):
+    """Whether the glowing objects' glows get Dense Fog's multiply scattered light (the Compositor's
+    ``comp_emitters.glows``): Dense Fog on and, at the Quality, more than THIN_SHARE of the target at some view
+    sample for a point source at some glowing object's centre (``predict.multiple_parts``; every one with Quality
+    Exact).  Where it adds nothing they keep the single-scattering kernel, whose flat emitters' facing term Dense
+    Fog's lacks."""
+    glowing = methods.compositor.glowing_objects(scene) if spec.multiple_scattering else []
+    target = spec.target_error
+    if not glowing or target is None or scene.camera is None:
+        return bool(glowing)
+    grid = tuple(min(a, b) for a, b in zip(view.sample_grid(scene), EMITTER_GRID))
+    samples = view.view_samples(scene, [], frames=[scene.frame_current], grid=grid)
+    centres = np.array([np.mean([o.matrix_world @ Vector(c) for c in o.bound_box], axis=0) for o in glowing])
+    samples = samples._replace(lights=np.broadcast_to(centres, (len(samples.distance),) + centres.shape).copy())
+    parts = predict.multiple_parts(samples, np.ones((len(glowing), 3)), spec.beta_per_unit, spec.anisotropy,
+                                   spec.grey_albedo)
+    return bool(parts.max(initial=0.0) > predict.THIN_SHARE * target)
 
 
 def dense_served(spec, method, engine):
@@ -290,6 +314,7 @@ def plan(scene, spec, method, lights, reason=None, rechoose=True, this_frame=Fal
         models, choice = choose_models(scene, spec, method, lights)
         choice.update(shadow_fog(scene, spec, method, lights))
         choice["error"] += choice["shadows"]["missing"]
+        choice["dense"]["emitters"] = emitters_dense(scene, spec)
     else:
         rims = {o.name: old["rims"][o.name] for o in lights if o.name in old.get("rims", {})}
         models = _models(spec, method, lights, kept, rims, set(old.get("thin", ())))
