@@ -140,7 +140,7 @@ def listed(names):
 
 
 def _effect(shares):
-    """", up to X % of a pixel's fog (predicted)" for an account of what is left out (``ops/plan.shadow_fog``,
+    """", up to X % of a pixel's fog (predicted)" for an account of what is left out (``ops/left_out.shadow_fog``,
     ``dense_fog``: its "missing" share), or "" without one."""
     missing = (shares or {}).get("missing")
     return "" if missing is None or not (shares or {}).get("left_out") else \
@@ -151,7 +151,7 @@ def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None, shares=None
     """Notes on the shadows of ``lights`` in the fog: with ``shafts`` (the Compositor method casts them from
     shadow maps), what the maps don't do (soft shadows; moving lights or objects over more frames than an atlas
     holds, ``shadow_maps.ensure``); without, that the objects near the lights cast no shadow into the fog
-    (``why_off``: why, else the method has none), with its predicted effect (``shares``: ``ops/plan.shadow_fog``'s
+    (``why_off``: why, else the method has none), with its predicted effect (``shares``: ``ops/left_out.shadow_fog``'s
     account, or None)."""
     found = shadowing_lights(scene, lights, beta, reach_m)
     if not found:
@@ -186,7 +186,7 @@ NOTE_SHARE = 0.01   # the share of a pixel's fog from which what is left out get
 
 def multiple_notes(dense, method_name, is_spot, lights, engine=capabilities.CYCLES):
     """Notes on the multiply scattered light (Dense Fog) the picture lacks, each with its predicted effect:
-    ``dense`` is ``ops/plan.dense_fog``'s account ({"left_out": {light name: share}, "missing": their share
+    ``dense`` is ``ops/left_out.dense_fog``'s account ({"left_out": {light name: share}, "missing": their share
     together, "why": "off" or the method's name}; the largest share of a pixel's fog at the view's samples).  Dense
     Fog off: the lights whose glow then lacks its wide halo; on, with a method that does not model it: which
     method does (the OSL method: none of it; the node groups: spot and area lights').  No note under NOTE_SHARE.

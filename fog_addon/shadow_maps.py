@@ -544,7 +544,7 @@ def shadowed_parts(scene, spec, lights, grid=SHADOW_GRID):
     here; a spot or an area light is mapped as a point), and the glow without shafts, G, overestimates the fog
     by G (1 - S); the denominator is the fog with the shadows, sum G S + the fog light on surfaces (unshadowed:
     the fog light's own shadows are left out of the estimate).  The predicted error's share of what Light
-    Shafts off or a method without them leaves out (``ops/plan.shadow_fog``)."""
+    Shafts off or a method without them leaves out (``ops/left_out.shadow_fog``)."""
     if scene.camera is None or not lights:
         return None
     eye = np.array(scene.camera.matrix_world.translation)

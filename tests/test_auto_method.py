@@ -43,7 +43,7 @@ def test_few_samples_keep_the_node_groups(res):
     name, reason = res["cycles_1_one_sample_dense_spot"]
     assert name == "compositor" and "spot" in reason, res["cycles_1_one_sample_dense_spot"]
     # in fog so thin that its multiply scattered light is far below the Quality's target, Dense Fog leaves the spot
-    # out (the Quality's ``plan.dense_fog``), so it asks nothing of the method
+    # out (the Quality's ``left_out.dense_fog``), so it asks nothing of the method
     assert res["cycles_1_one_sample_thin_spot"][0] == "nodes", res["cycles_1_one_sample_thin_spot"]
 
 

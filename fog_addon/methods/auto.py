@@ -129,7 +129,7 @@ THIN_GRID = (40, 23)   # the view's samples Auto judges Dense Fog's share with (
 
 
 def _dense_shaped(scene, spec, lights):
-    """The spot and area lights whose multiply scattered light Dense Fog models (the Quality's, ``ops/plan.dense_fog``:
+    """The spot and area lights whose multiply scattered light Dense Fog models (the Quality's, ``ops/left_out.dense_fog``:
     more than THIN_SHARE of the target at some view sample; every one with Quality Exact), by name."""
     shaped = [o for o in lights if view.has_shape(o)] if spec.multiple_scattering else []
     target = spec.target_error

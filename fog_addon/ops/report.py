@@ -40,7 +40,7 @@ def quality_head(choice):
 
 def dense_line(choice):
     """One line: the multiply scattered light the picture lacks where Dense Fog is off or the method does not model
-    it (``plan.dense_fog``), with its predicted share; None where nothing is left out."""
+    it (``left_out.dense_fog``), with its predicted share; None where nothing is left out."""
     dense = choice.get("dense") or {}
     left = dense.get("left_out") or {}
     if not left:
@@ -53,7 +53,7 @@ def dense_line(choice):
 
 
 def shadows_line(choice):
-    """One line: the shadows the fog lacks where it has no shafts (``plan.shadow_fog``), with their predicted
+    """One line: the shadows the fog lacks where it has no shafts (``left_out.shadow_fog``), with their predicted
     share; None where none are left out."""
     shadows = choice.get("shadows") or {}
     left = shadows.get("left_out") or {}

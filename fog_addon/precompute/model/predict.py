@@ -38,7 +38,7 @@ from ..core.ops import NumpyOps
 FLOOR = 1e-3          # samples below this fraction of the peak fog are not judged (issue 8 §2)
 MIN_FOG = 1e-30       # fog light (W/m^2/sr) below which a sample is not judged: an opaque fog's far samples
 THIN_SHARE = 0.25     # Dense Fog is left out for a light whose multiply scattered light is at most this share of
-#                       the Quality's target at every judged view sample (``multiple_parts``; ``ops/plan.dense_fog``)
+#                       the Quality's target at every judged view sample (``multiple_parts``; ``ops/left_out.dense_fog``)
 RIM_SAFETY = 2.0      # a cheaper rim's deviation at the samples counts twice: between them it can peak higher
 
 

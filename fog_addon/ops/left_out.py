@@ -1,0 +1,108 @@
+"""What a build leaves out of the picture, and Dense Fog by the Quality (``plan.plan``'s accounts, issue 46): the
+multiply scattered light each light gets or lacks (``dense_fog``; the glowing objects', ``emitters_dense``) and the
+shadows a scene without shafts lacks (``shadow_fog``), each as the largest share of a judged view sample's fog that
+it leaves out: in the predicted error, the notes (``caveats``) and the panel (``report.left_out_lines``).
+"""
+import math
+
+import numpy as np
+from mathutils import Vector
+
+from .. import caveats, methods, shadow_maps, view
+from ..precompute.model import capabilities, predict
+
+MULTIPLE_ENTRIES = 1_000_000   # samples x lights at most for Dense Fog's shares (``dense_fog``): every nth sample
+#                                beyond (the choice's time stays that of the ladder's alone)
+
+
+def shadow_fog(scene, spec, method, lights):
+    """What the shadows would take from the fog where it has none: the lights with objects near them
+    (``caveats.shadowing_lights``) whose shafts the picture lacks (Light Shafts off, a method without them, area
+    lights), judged at the view's samples (``shadow_maps.shadowed_parts``).  Returns {"shadows": {"left_out":
+    {name: share}, "missing": their share of a judged sample's fog together, at the sample where it is largest,
+    "why": "off", the method's name or "area"}}."""
+    name, engine = getattr(method, "name", method), scene.render.engine
+    casting = spec.shafts and capabilities.can(name, "shafts", engine)
+    out = {"left_out": {}, "missing": 0.0, "why": "off" if not spec.shafts else name if not casting else "area"}
+    found = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(view.scene_size(scene), 1e-6)) \
+        if lights and spec.beta_per_unit > 0.0 else {}
+    unshafted = [o for o in lights if o.name in found and (not casting or o.data.type == "AREA")]
+    judged = shadow_maps.shadowed_parts(scene, spec, unshafted) if unshafted else None
+    if judged is not None:
+        names, parts = judged
+        out["left_out"] = {n: float(parts[:, k].max(initial=0.0)) for k, n in enumerate(names)}
+        out["missing"] = float(parts.sum(axis=1).max(initial=0.0))
+    return {"shadows": out}
+
+
+EMITTER_GRID = (40, 23)   # the view's samples the glowing objects' Dense Fog is judged at (``emitters_dense``)
+
+
+def emitters_dense(scene, spec):
+    """Whether the glowing objects' glows get Dense Fog's multiply scattered light (the Compositor's
+    ``comp_emitters.glows``): Dense Fog on and, at the Quality, more than THIN_SHARE of the target at some view
+    sample for a point source at some glowing object's centre (``predict.multiple_parts``; every one with Quality
+    Exact).  Where it adds nothing they keep the single-scattering kernel, whose flat emitters' facing term Dense
+    Fog's lacks."""
+    glowing = methods.compositor.glowing_objects(scene) if spec.multiple_scattering else []
+    target = spec.target_error
+    if not glowing or target is None or scene.camera is None:
+        return bool(glowing)
+    grid = tuple(min(a, b) for a, b in zip(view.sample_grid(scene), EMITTER_GRID))
+    samples = view.view_samples(scene, [], frames=[scene.frame_current], grid=grid)
+    centres = np.array([np.mean([o.matrix_world @ Vector(c) for c in o.bound_box], axis=0) for o in glowing])
+    samples = samples._replace(lights=np.broadcast_to(centres, (len(samples.distance),) + centres.shape).copy())
+    parts = predict.multiple_parts(samples, np.ones((len(glowing), 3)), spec.beta_per_unit, spec.anisotropy,
+                                   spec.grey_albedo)
+    return bool(parts.max(initial=0.0) > predict.THIN_SHARE * target)
+
+
+def dense_served(spec, method, engine):
+    """light -> whether ``method`` models its multiply scattered light (Dense Fog on and the capability its
+    kind needs, ``capabilities`` "dense_point" or "dense_shaped", in ``engine``)."""
+    name = getattr(method, "name", method)
+    point, shaped = (spec.multiple_scattering and capabilities.can(name, key, engine)
+                     for key in ("dense_point", "dense_shaped"))
+    return lambda o: shaped if view.has_shape(o) else point
+
+
+def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None, dense=None):
+    """Dense Fog by the Quality: which ``lights`` get their multiply scattered light, and what the picture misses
+    without it (``predict.multiple_parts``, at the view's samples: ``samples``, else sampled here where needed;
+    ``single``, ``dense``: their (glow, scatter) without and with it, where computed).
+
+    A light the method models it for (``dense_served``) gets it unless it is at most THIN_SHARE of the Quality's
+    target at every judged sample and what all such lights and the left-out ones miss together keeps the predicted
+    error (``error`` before Dense Fog) within the target ("thin": left out at no cost, the thinnest first; with
+    Quality Exact no light is thin).  A light it is
+    not modelled for (Dense Fog off: a stylised look; a method without it) is "left out", with its share.  Returns
+    {"thin": {name: share}, "dense": {"left_out": {name: share}, "missing": the share of a judged sample's fog
+    that the thin and the left-out lights miss together, at the sample where it is largest, "why": "off" or the
+    method's name}}."""
+    target, engine = spec.target_error, scene.render.engine
+    served = dense_served(spec, method, engine)
+    need = [o for o in lights if not served(o)] + ([o for o in lights if served(o)] if target is not None else [])
+    out = {"thin": {}, "dense": {"left_out": {}, "missing": 0.0,
+                                 "why": "off" if not spec.multiple_scattering else getattr(method, "name", method)}}
+    if not need or scene.camera is None:
+        return out
+    if samples is None:
+        samples = view.view_samples(scene, lights)
+    if len(samples.distance) * len(lights) > MULTIPLE_ENTRIES:   # (every nth sample)
+        n = math.ceil(len(samples.distance) * len(lights) / MULTIPLE_ENTRIES)
+        samples = predict.every_nth(samples, n)
+        single, dense = (None if f is None else tuple(a[::n] for a in f) for f in (single, dense))
+    parts = view.multiple_parts(scene, spec, lights, samples, single, dense)
+    share = parts.max(axis=0, initial=0.0)
+    missed = [k for k, o in enumerate(lights) if not served(o)]
+    out["dense"]["left_out"] = {lights[k].name: float(share[k]) for k in missed}
+    if target is not None:   # the thinnest first, while the picture stays within the target
+        room, acc = target - error, parts[:, missed].sum(axis=1)
+        for k in sorted((k for k, o in enumerate(lights) if served(o)), key=lambda k: share[k]):
+            if share[k] > predict.THIN_SHARE * target or (acc + parts[:, k]).max(initial=0.0) > room:
+                break
+            acc = acc + parts[:, k]
+            missed.append(k)
+            out["thin"][lights[k].name] = float(share[k])
+    out["dense"]["missing"] = predict.missing_share(parts, missed)
+    return out
