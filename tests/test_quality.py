@@ -81,7 +81,9 @@ def test_measured_error_within_prediction(results, scene, quality):
     target = spec_.target_error(quality)
     print(f"{scene} {quality}: {info['lights']} lights, steps {sorted(info['steps'].values())}, "
           f"rims {sorted(info['rims'].values())}, predicted {info['predicted']:.4f}, measured {info['measured']:.4f}")
-    assert info["predicted"] <= target + 1e-12
+    # the ladder's choice within the target; what the settings leave out (the shadows, shafts being off here, and
+    # Dense Fog in the spots' scenes) is counted on top
+    assert info["predicted"] - info["left_out"] <= target + 1e-12
     assert info["measured"] <= info["predicted"] * (1 + 1e-3) + 2e-5, info["explain"]
 
 

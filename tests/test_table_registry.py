@@ -20,7 +20,7 @@ PACKAGE = pathlib.Path(__file__).resolve().parent.parent / "fog_addon"
 # ``TableSpec(...)`` calls without a ``kind=``: the pixel filter's constants (``registry.PIXEL_FILTER.fixed``), the
 # scene's shadow maps (baked from the scene's geometry, not tables of the registry), the viewport preview's sampled
 # lights (the scene's lamps, written by the handlers) and airlight's look-up of an array it already holds
-UNKINDED_CALLS = {"precompute/model/pixel.py": 2, "shadow_maps.py": 3, "sun_maps.py": 3,
+UNKINDED_CALLS = {"precompute/model/pixel.py": 2, "shadow_maps.py": 4, "sun_maps.py": 3,
                   "precompute/physics/point/airlight.py": 1, "nodes/preview_sampled.py": 1}
 
 
