@@ -12,6 +12,7 @@ import bpy  # noqa: E402
 from fog_addon import caveats  # noqa: E402
 from fog_addon.nodes import compositor, groups, images, light_bundles, osl, owned  # noqa: E402
 from fog_addon.precompute.model import rungs  # noqa: E402
+from fog_addon.precompute.physics.point import multiple  # noqa: E402
 from fog_addon.ops import apply  # noqa: E402
 
 PREFIX = "AnalyticFog"
@@ -45,9 +46,17 @@ def expected_names(method, scene=None, texts_of=None):
     table (apply_fog bakes both) and the OSL texts of the models that run in OSL (or of ``texts_of``'s
     models: a text stays when the method switches back); and ``scene``'s own compositor group where
     the fog set one up (``nodes/compositor.py``: Cycles with its denoiser on)."""
-    models = rungs.choose(method)
+    # Dense Fog by the Quality (on by default): the lights' groups hold its rungs where a light got it
+    choice = apply.stored_choice() if scene is not None else None
+    spec = apply.spec_of(scene) if scene is not None else None
+    dense = (spec is not None and choice is not None and spec.multiple_scattering
+             and len(choice.get("thin", {})) < len(choice["lights"]))
+    albedo = spec.multiple_albedo if dense else None
+    models = rungs.choose(method, multiple_albedo=albedo)
     names = [groups.PARAMS, groups.SURFACE, groups.WORLD,
              groups.light_group_name(models), groups.background_group_name(models)]
+    if albedo is not None and method != "osl":   # (its table: OSL has no Dense Fog)
+        names.append(multiple.table_spec(spec.anisotropy, albedo).name)
     if scene is not None:   # the lights' bundles: every light full (these files' Quality keeps them all)
         n = len(apply.fog_lights(scene)[0])
         names += [f"{prefix} {k + 1}-{min(k + light_bundles.BUNDLE, n)}"
