@@ -262,6 +262,8 @@ def run(seed, steps, render_every, allow_dense, spots=True):
     before_links = before_user[1]
     before = snapshot(scene)
     scene.analytic_fog.density = 0.1
+    if not allow_dense:   # (Dense Fog is on by default: --no-dense turns it off, and no anisotropy bakes its tables)
+        scene.analytic_fog.use_multiple_scattering = False
     result = {"seed": seed, "steps": 0, "failure": None, "refused": 0, "renders": 0, "methods": {}}
     if bpy.ops.fog.add() != {"FINISHED"}:
         result["failure"] = {"step": 0, "change": "Add Fog", "what": "fog.add did not finish"}
