@@ -568,11 +568,5 @@ def shadowed_parts(scene, spec, lights, grid=SHADOW_GRID):
             share = shafts.lit_share(m, samples.camera, samples.direction, length, np.array(origin),
                                      spec.beta_per_unit, (spec_k, None), SHARE_NODES, g=spec.anisotropy)
         lit[:, k] = np.nan_to_num(np.asarray(share, float), nan=1.0).clip(0.0, 1.0)
-    lost = glow * (1.0 - lit)[..., None]                                  # (P, N', 3)
-    fog = (glow * lit[..., None] + scatter).sum(axis=1)                   # (P, 3)
-    peak = fog.max() if fog.size else 0.0
-    if not peak > predict.MIN_FOG:
-        return [o.name for o in judged], np.zeros(lit.shape)
-    ok = (fog >= predict.FLOOR * peak) & (fog > predict.MIN_FOG)
-    inv = np.where(ok, 1.0 / np.where(ok, fog, 1.0), 0.0)
-    return [o.name for o in judged], (lost * inv[:, None, :]).max(axis=2)
+    return [o.name for o in judged], predict.judged_shares(glow * (1.0 - lit)[..., None],
+                                                           (glow * lit[..., None] + scatter).sum(axis=1))

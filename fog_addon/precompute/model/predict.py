@@ -210,14 +210,18 @@ def multiple_parts(samples, intensity, beta, g, albedo, single=None, dense=None)
         samples, single, dense = samples._replace(shapes=None), None, None
     glow, scatter = single if single is not None else light_fog(samples, intensity, beta, g)
     glow_m, scatter_m = dense if dense is not None else light_fog(samples, intensity, beta, g, multiple_albedo=albedo)
-    extra = np.abs((glow_m + scatter_m) - (glow + scatter))             # (P, N, 3)
-    fog = (glow_m + scatter_m).sum(axis=1)                              # (P, 3)
+    return judged_shares(np.abs((glow_m + scatter_m) - (glow + scatter)), (glow_m + scatter_m).sum(axis=1))
+
+
+def judged_shares(part, fog):
+    """(P, N): each light's ``part`` (P, N, 3) as a share of the sample's ``fog`` (P, 3), the largest over the
+    channels, at the judged samples (fog at least FLOOR of the peak), 0 elsewhere (and everywhere without fog)."""
     peak = fog.max() if fog.size else 0.0
     if not peak > MIN_FOG:
-        return np.zeros(glow.shape[:2])
+        return np.zeros(part.shape[:2])
     judged = (fog >= FLOOR * peak) & (fog > MIN_FOG)
     inv = np.where(judged, 1.0 / np.where(judged, fog, 1.0), 0.0)
-    return (extra * inv[:, None, :]).max(axis=2)
+    return (part * inv[:, None, :]).max(axis=2)
 
 
 def every_nth(samples, n):
