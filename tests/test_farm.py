@@ -28,7 +28,8 @@ intensities equal the objects' own at each frame, and (a canary driver that need
 that Python drivers really cannot run in B.
 
 The World uses a 64 MANUAL importance map (see farm_build.build: with Cycles' AUTOMATIC map the
-fog's World shader costs about 37 s per render here).  The lanes (A then B) run side by side.
+fog's World shader costs about 37 s per render here).  The lanes (A then B) run side by side; the default tier runs
+all but SLOW_LANES, the slow tier those too.
 """
 import concurrent.futures
 import json
@@ -159,17 +160,44 @@ def _lane(name, base):
     return {"a": a, "b": b, "dir": out}
 
 
-@pytest.fixture(scope="module")
-def farm(tmp_path_factory):
+# lanes only the slow tier runs (their contracts are the default tier's other lanes' in another engine or method:
+# the OSL script's bytecode, the Compositor in EEVEE, the Compositor's animation); the default runs the rest
+SLOW_LANES = ("osl", "compositor_eevee", "anim_compositor")
+
+
+def _lanes(tmp_path_factory, names):
+    """Both processes of each lane in ``names``, the lanes side by side."""
     base = tmp_path_factory.mktemp("farm")
     t = time.perf_counter()
-    with concurrent.futures.ThreadPoolExecutor(max_workers=len(LANES)) as ex:
-        futures = {name: ex.submit(_lane, name, base) for name in LANES}
+    with concurrent.futures.ThreadPoolExecutor(max_workers=len(names)) as ex:
+        futures = {name: ex.submit(_lane, name, base) for name in names}
         res = {name: f.result() for name, f in futures.items()}
     print(f"\nfarm lanes: {time.perf_counter() - t:.1f} s wall; "
           + "; ".join(f"{n}: A {r['a']['wall_s']} s {r['a']['render_s']}, B {r['b']['wall_s']} s "
                       f"{[j['render_s'] for j in r['b']['jobs']]}" for n, r in res.items()))
     return res
+
+
+@pytest.fixture(scope="module")
+def farm(tmp_path_factory):
+    return _lanes(tmp_path_factory, [n for n in LANES if n not in SLOW_LANES])
+
+
+@pytest.fixture(scope="module")
+def farm_slow(tmp_path_factory):
+    return _lanes(tmp_path_factory, list(SLOW_LANES))
+
+
+def _farm(request, lane):
+    """The reports of ``lane`` from the fixture that builds it."""
+    return request.getfixturevalue("farm_slow" if lane in SLOW_LANES else "farm")[lane]
+
+
+def _lane_params(items):
+    """pytest params of ``items`` ((lane, ...) tuples or lane names), the slow lanes' marked slow."""
+    return [pytest.param(*(i if isinstance(i, tuple) else (i,)),
+                         marks=[pytest.mark.slow] if (i[0] if isinstance(i, tuple) else i) in SLOW_LANES else [])
+            for i in items]
 
 
 def _read(path):
@@ -194,9 +222,9 @@ def _assert_same(test, expect, name):
     return a
 
 
-@pytest.mark.parametrize("lane", list(LANES))
-def test_add_on_absent_in_farm_process(farm, lane):
-    _assert_absent(farm[lane]["b"])
+@pytest.mark.parametrize("lane", _lane_params(LANES))
+def test_add_on_absent_in_farm_process(request, lane):
+    _assert_absent(_farm(request, lane)["b"])
 
 
 def _assert_absent(b):
@@ -215,9 +243,9 @@ def _assert_absent(b):
     assert not c["valid"] and c["autoexec_fail"], f"a Python driver ran in the farm process (auto-run on?): {c}"
 
 
-@pytest.mark.parametrize("lane", list(LANES))
-def test_saved_file_is_self_contained(farm, lane):
-    a, b = farm[lane]["a"], farm[lane]["b"]
+@pytest.mark.parametrize("lane", _lane_params(LANES))
+def test_saved_file_is_self_contained(request, lane):
+    a, b = _farm(request, lane)["a"], _farm(request, lane)["b"]
     tables = LANE_TABLES.get(lane, TABLES)
 
     def named(images, prefix):   # the image called ``prefix``, or else the one whose name starts with it
@@ -240,8 +268,9 @@ def test_saved_file_is_self_contained(farm, lane):
         == (engine, 4, 0, False, False, "GAUSSIAN"), s
 
 
-def test_osl_script_is_internal_and_compiled(farm):
-    b = farm["osl"]["b"]
+@pytest.mark.slow
+def test_osl_script_is_internal_and_compiled(farm_slow):
+    b = farm_slow["osl"]["b"]
     assert b["settings"]["osl"], "Cycles' OSL is off in the saved OSL file"
     assert b["scripts"], "no Script node in the saved OSL file"
     for s in b["scripts"]:
@@ -250,9 +279,10 @@ def test_osl_script_is_internal_and_compiled(farm):
         assert text is not None and text["filepath"] == "" and text["chars"] > 0, (s, b["texts"])
 
 
-@pytest.mark.parametrize("lane,job", [(lane, j["out"]) for lane, (_, jobs) in LANES.items() for j in jobs])
-def test_farm_render_matches(farm, lane, job):
-    r = farm[lane]
+@pytest.mark.parametrize("lane,job", _lane_params([(lane, j["out"]) for lane, (_, jobs) in LANES.items()
+                                                   for j in jobs]))
+def test_farm_render_matches(request, lane, job):
+    r = _farm(request, lane)
     spec = next(j for j in LANES[lane][1] if j["out"] == job)
     img = _assert_same(r["dir"] / job, r["dir"] / spec["expect"], job[:-4])
     if not lane.startswith("anim") and "engine" not in spec:   # the fog is there: not the fog-free picture
@@ -280,10 +310,11 @@ def test_animation_follows_light_and_camera(farm):
     _frames_change(r["dir"], "farm_anim")
 
 
-def test_compositor_animation_changes(farm):
+@pytest.mark.slow
+def test_compositor_animation_changes(farm_slow):
     """The Compositor method's farm frames (each matching its static expectation: test_farm_render_matches)
     differ from frame to frame."""
-    _frames_change(farm["anim_compositor"]["dir"], "farm_anim_compositor")
+    _frames_change(farm_slow["anim_compositor"]["dir"], "farm_anim_compositor")
 
 
 def _frames_change(folder, prefix):

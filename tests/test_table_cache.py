@@ -120,6 +120,11 @@ def test_key_holds_precompute_source_and_spec(cache, tmp_path, monkeypatch):
     path = table_cache.cache_path(spec)
     assert path.parent.parent == cache and fingerprint.precompute_fingerprint() in path.parent.name
     assert table_cache.cache_path(tables.anisotropic(spec, 0.85)) != path
+    # Blender's float32 0.85 (0.8500000238...) is the same table as Python's 0.85: one entry, one bake
+    assert table_cache.cache_path(tables.anisotropic(spec, float(np.float32(0.85)))) == table_cache.cache_path(
+        tables.anisotropic(spec, 0.85))
+    assert table_cache.cache_path(tables.anisotropic(spec, 0.851)) != table_cache.cache_path(
+        tables.anisotropic(spec, 0.85))
     assert table_cache.cache_path(tables.TableSpec(spec.name, spec.width, spec.height + 1)) != path
     copy = tmp_path / "fog_addon"
     shutil.copytree(fingerprint.PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))

@@ -25,6 +25,7 @@ import math
 from typing import Any, Callable, NamedTuple, Optional
 
 HALF_PI = 0.5 * math.pi
+G_DECIMALS = 6   # a table's anisotropy g is kept to this many decimals (``TableSpec``)
 
 
 @dataclass(frozen=True)
@@ -36,6 +37,11 @@ class TableSpec:
     channels: int = 1  # values per texel, as RGBA; a one-channel table holds its value in all four
     kind: str = field(default="", compare=False, repr=False)   # its TableKind's key ("": not a registry table)
     args: tuple = field(default=(), compare=False, repr=False)  # what its kind's constructor made it from
+
+    def __post_init__(self):
+        # g to 6 decimals: Blender's float32 properties give 0.8500000238 for 0.85, which would otherwise be
+        # another cache key and another bake of the same table (``table_cache.cache_path`` hashes the spec)
+        object.__setattr__(self, "g", round(float(self.g), G_DECIMALS))
 
 
 def _no_needs(spec):
