@@ -20,8 +20,9 @@ from fog_scenes import shafts as fs
 
 pytestmark = pytest.mark.render
 
-# measured (2026-11-26): window room 5.00 %, colonnade 1.97 %, hooded lamp 2.73 %, fence 1.49 %, street 0.62 %
-BOUND = {"window_room": 0.056, "colonnade": 0.025, "hooded_lamp": 0.032, "fence": 0.018, "street_lamps": 0.008}
+# measured (2026-11-30, a spot's nodes within its cone): window room 4.38 %, colonnade 1.22 %, hooded lamp 2.47 %,
+# fence 1.51 % (2026-11-26: 5.00, 1.97, 2.73, 1.49 %), street 0.62 %
+BOUND = {"window_room": 0.049, "colonnade": 0.015, "hooded_lamp": 0.029, "fence": 0.018, "street_lamps": 0.008}
 GOAL = {"street_lamps": 0.03}   # the open street: 3 %; the shadowed scenes: 5 %
 DEFAULT_TIER = {"window_room"}
 CASES = [c if c[0] in DEFAULT_TIER else pytest.param(*c, marks=pytest.mark.slow)
@@ -119,3 +120,32 @@ def test_shares_at_half_resolution_against_path_tracing(tmp_path, regen, scene, 
     print(f"{scene} at {resolution}: relative RMSE {m['rel_rmse']:.4f} on {mask.mean():.0%} of the pixels")
     assert m["rel_rmse"] <= HALF_BOUND[scene]
     assert HALF_BOUND[scene] <= 0.05   # the goal
+
+
+# The fog over the hooded lamp's hood (the rows above the wall: sky, fog lit only by the spot behind the wall, whose
+# beam through the hole reaches the camera), by 4 x 4 block means against path tracing.  Measured (2026-11-30):
+# 0.962-1.042; with the spot's nodes spread over the whole ray instead of its cone, 0.765-1.159 (a dark blob above
+# the lamp and bright wedges beside it: one node held a third of a ray's glow).
+HOOD_ROWS = 24
+HOOD_BLOCKS = (0.93, 1.07)
+
+
+def test_fog_over_a_hood_has_no_blobs(tmp_path, regen):
+    scene, density, anisotropy = next(c for c in fs.SHAFT_CASES if c[0] == "hooded_lamp")
+    ref = imageio.read_rgb(fs.ensure_shaft_reference(scene, density, regen=regen, anisotropy=anisotropy))
+    log = []
+    out = h.render_test(scene, density, tmp_path / f"{scene}.exr", engine="cycles", method="compositor",
+                        samples=16, resolution=fs.SHAFT_RESOLUTION, cast_shadows=True, log=log,
+                        extra=["--shafts", "on"])
+    assert not h.log_errors(log[0]), h.log_errors(log[0])
+    img = imageio.read_rgb(out)
+
+    def blocks(a):
+        y = a[:HOOD_ROWS].mean(axis=2)
+        return y.reshape(HOOD_ROWS // 4, 4, y.shape[1] // 4, 4).mean(axis=(1, 3))
+    ratio = blocks(img) / blocks(ref)
+    print(f"fog over the hood: block ratios {ratio.min():.3f}-{ratio.max():.3f}")
+    if not (HOOD_BLOCKS[0] <= ratio.min() and ratio.max() <= HOOD_BLOCKS[1]):
+        h.FAILURES.mkdir(parents=True, exist_ok=True)
+        compare.write_diff(img, ref, h.FAILURES / "shafts_fog_over_a_hood_diff.png", max_rel=0.2)
+    assert HOOD_BLOCKS[0] <= ratio.min() and ratio.max() <= HOOD_BLOCKS[1], (ratio.min(), ratio.max())

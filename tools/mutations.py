@@ -226,6 +226,13 @@ MUTATIONS = [
              "        weight = weight * _hg_of_sine(m, g, sin)\n",
              "        weight = weight * _hg(m, g, sin)\n",
              ("tests/test_shafts.py::test_sphere_shadow_matches_quadrature",)),
+    Mutation("shaft_spot_unclipped", "light shafts: a spot's nodes spread over the whole ray, not its part inside "
+             "the cone (one node held a third of a ray's glow: blobs above a hooded lamp)",
+             "lit_share",
+             "    if clip is not None:   # each segment cut to the cone",
+             "    if False:   # each segment cut to the cone",
+             ("tests/test_shafts.py::test_spot_beam_towards_the_camera_matches_quadrature",
+              "tests/test_shaft_scenes.py::test_fog_over_a_hood_has_no_blobs")),
     Mutation("surface_share_hemisphere", "light shafts: a surface's fog light sees the fog within 30 degrees of its "
              "normal only (Sun 2005 Eq. 17's G_0 is over the whole hemisphere, cos-weighted)",
              "hemisphere_angles",

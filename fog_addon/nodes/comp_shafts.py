@@ -65,12 +65,13 @@ def build_shaft_group(light, shadow, images, samples, g):
                                             ("Surface Normal", V), ("Surface Offset", F), (SHAFT_MAP, C), *cone],
                                      [("Share", F), ("Share Far", F), ("Visible", V)],
                                      tree_type="CompositorNodeTree")
-    falloff, kind = None, f"point {shadow.spec.width}x{shadow.spec.height}"
+    falloff, clip, kind = None, None, f"point {shadow.spec.width}x{shadow.spec.height}"
     if shadow.cone:   # the cone of the light's pose at the frame (in its space: ``spot_.light_space``)
         kind = f"moving {shadow.spec.width}x{shadow.spec.height} " + hashlib.sha1(
             repr(shadow.spot).encode()).hexdigest()[:12]
     elif shadow.spot is not None:
         falloff, key = still_spot_falloff(light, shadow.spot)
+        clip = still_spot_clip(light, shadow.spot)
         kind = "spot " + hashlib.sha1(repr((shadow.spec.width, *key)).encode()).hexdigest()[:12]
     spec = dataclasses.replace(shadow.spec, name=f"{SHAFT_MAP} {kind}")   # read from the Map input
     m = CompOps(ng, dict(images))
@@ -88,19 +89,20 @@ def build_shaft_group(light, shadow, images, samples, g):
             return spot_.spot_falloff(mm, -1.0 * z / mm.maximum(mm.sqrt(x * x + y * y + z * z), 1e-30), cone_[9],
                                       cone_[10])
         falloff = driven_falloff
+        clip = driven_clip
     node = f"Shaft Node {kind} g {g:.6g}"   # one group for every quadrature node
     share, far = shafts.lit_share(m, g_["Camera"], g_["Direction"], g_["Shaft Length"], g_["Light"], g_["Beta"],
                                   (spec, shadow.spot), samples.view_nodes, shift=g_["Shaft Offset"], g=g,
                                   falloff=falloff, name=node,
                                   tail_nodes=max(samples.view_nodes // shafts.TAIL_SHARE, 2), far=SKY_LENGTH,
-                                  cone=cone_args)
+                                  cone=cone_args, clip=clip)
     m.feed(gout.inputs["Share"], share)
     m.feed(gout.inputs["Share Far"], far)
     lit_sum, total = shafts.surface_share(m, g_["Surface Position"], g_["Surface Normal"], g_["Camera"],
                                           g_["Light"], g_["Beta"], (spec, shadow.spot),
                                           shift=g_["Surface Offset"], g=g, falloff=falloff, name=node, parts=True,
                                           directions=samples.surface_directions, nodes=samples.surface_nodes,
-                                          cone=cone_args)
+                                          cone=cone_args, clip=clip)
     # their ratio after the mean (``comp_bundles.build_bundle``)
     m.feed(gout.inputs["Visible"], m.combine(lit_sum, total, 1.0))
     ng[owned.BUILT] = groups.code_fingerprint()
@@ -117,6 +119,21 @@ def still_spot_falloff(light, spot):
     blend = float(light.data.spot_blend)
     return (lambda m, u, d: spot_.spot_falloff(m, m.dot(u, forward) / d, cos_half, blend)), (frame, half, cos_half,
                                                                                               blend)
+
+
+def still_spot_clip(light, spot):
+    """``shafts.lit_share``'s clip of a spot whose map is baked at its pose: the light's space of its map's frame
+    (right, up, -forward) and cos(size / 2), constants."""
+    (right, up, forward), _ = spot
+    rows = (tuple(right), tuple(up), tuple(-c for c in forward))
+    cos_half = math.cos(0.5 * light.data.spot_size)
+    return lambda m, *cone: (rows, cos_half)
+
+
+def driven_clip(m, *cone):
+    """``shafts.lit_share``'s clip of a moving spot: its driven rows and cos(size / 2) (``build_shaft_group``'s
+    cone arguments, inside the node groups their inputs)."""
+    return [m.combine(*cone[3 * i:3 * i + 3]) for i in range(3)], cone[9]
 
 
 def atlas_tile(m, image, label):

@@ -46,9 +46,10 @@ def build_group(light, shadow, images, g, samples=PREVIEW_SAMPLES):
     name = group_name(light, samples)
     if (ng := groups.up_to_date(name)) is not None and ng.get(KEY) == repr((shadow.spec.name, shadow.spot, g)):
         return ng
-    falloff, kind = None, f"point {shadow.spec.name}"
+    falloff, clip, kind = None, None, f"point {shadow.spec.name}"
     if shadow.spot is not None:
         falloff, key = comp_shafts.still_spot_falloff(light, shadow.spot)
+        clip = comp_shafts.still_spot_clip(light, shadow.spot)
         kind = "spot " + hashlib.sha1(repr((shadow.spec.name, shadow.spec.width, *key)).encode()).hexdigest()[:12]
     ng, gin, gout = groups.new_group(name, list(INPUTS), list(OUTPUTS))
     m = NodeOps(ng, dict(images))
@@ -56,11 +57,11 @@ def build_group(light, shadow, images, g, samples=PREVIEW_SAMPLES):
     node = f"Preview Shaft Node {kind} g {g:.6g}"   # one group for every quadrature node of this light
     share = shafts.lit_share(m, v["Camera"], v["Direction"], v["Length"], v["Light"], v["Beta"],
                              (shadow.spec, shadow.spot), samples.view_nodes, shift=v["Jitter"], g=g,
-                             falloff=falloff, name=node)
+                             falloff=falloff, name=node, clip=clip)
     m.feed(gout.inputs["Share"], share)
     visible = shafts.surface_share(m, v["Position"], v["Normal"], v["Camera"], v["Light"], v["Beta"],
                                    (shadow.spec, shadow.spot), shift=v["Jitter"], g=g, falloff=falloff, name=node,
-                                   directions=samples.surface_directions, nodes=samples.surface_nodes)
+                                   directions=samples.surface_directions, nodes=samples.surface_nodes, clip=clip)
     m.feed(gout.inputs["Visible"], visible)
     ng[owned.BUILT] = groups.code_fingerprint()
     ng[KEY] = repr((shadow.spec.name, shadow.spot, g))

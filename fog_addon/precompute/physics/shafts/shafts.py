@@ -38,6 +38,8 @@ Every function takes an ops namespace ``m`` first (``ops.py``): numpy, the compo
 import math
 from typing import NamedTuple
 
+from ..point.model import FAR
+from ..spot import spot as spot_
 from .shaft_maps import lit, map_depth, nearest_depth, point_map_xy_of
 
 
@@ -112,7 +114,7 @@ def hemisphere_direction(m, normal, r2, phi):
 
 def surface_share(m, point, normal, viewer, light, beta, shadow, shift=0.5, g=0.0, falloff=None, name=None,
                   directions=DEFAULT_SAMPLES.surface_directions, nodes=DEFAULT_SAMPLES.surface_nodes, parts=False,
-                  cone=()):
+                  cone=(), clip=None):
     """The share of the fog light a diffuse surface ``point`` receives (Sun et al. 2005 Eq. 17's G_0: the
     airlight of every direction over it, weighted cos / pi) that the light's shadows leave:
 
@@ -128,14 +130,14 @@ def surface_share(m, point, normal, viewer, light, beta, shadow, shift=0.5, g=0.
     face ``viewer`` (the camera).  ``g``, ``falloff``, ``name``: as ``lit_share``.  ``parts``: return the two
     integrals' sums (numerator, denominator), which neighbouring pixels' interleaved sets average before the
     division (a mean of ratios would weigh a set that misses the bright directions as much as one that
-    holds them).  ``cone``: as ``lit_share``'s."""
+    holds them).  ``cone``, ``clip``: as ``lit_share``'s."""
     facing = m.select(m.less(m.dot(normal, viewer - point), 0.0), -1.0, 1.0)
     normal = m.scale(normal, facing)
 
     def ray(mm, px, py, pz, nx, ny, nz, lx, ly, lz, beta_, r2, phi, shift_, *cone_):   # one direction's integrals
         u = hemisphere_direction(mm, mm.combine(nx, ny, nz), r2, phi)
         return ray_integrals(mm, mm.combine(px, py, pz), u, mm.combine(lx, ly, lz), beta_, shadow, nodes, shift_, g,
-                             falloff, name, cone_)
+                             falloff, name, cone_, clip)
     lit_sum, total = hemisphere_sums(m, ray, (point, normal, light), beta, directions, shift,
                                      name and f"{name} Hemisphere Ray {nodes}", tuple(cone))
     return (lit_sum, total) if parts else share_of(lit_sum, total)
@@ -203,7 +205,7 @@ def bayer_rank_surface(i, j, levels=None):
 
 
 def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.5, g=0.0, falloff=None,
-              name=None, tail_nodes=0, far=1.0e6, cone=()):
+              name=None, tail_nodes=0, far=1.0e6, cone=(), clip=None):
     """S in [0, 1], the share of the glow along the segment [0, ``length``] m of the ray from ``camera``
     along the unit ``direction`` that the light at ``light`` (world, m) reaches (module docstring).
 
@@ -219,6 +221,10 @@ def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.
 
     ``cone``: scalars the falloff takes after (m, u, d) (a moving spot's driven cone,
     ``comp_shafts.build_shaft_group``), passed into the node groups as their inputs.
+
+    ``clip``: clip(m, *cone) gives a spot's (rows, cos_half) (``cone_interval``): the nodes then cover only the
+    part of the ray inside its cone, where its factor is not 0.  A ray that leaves the cone a few metres from the camera (a spot shining
+    towards it) holds all its glow there; spread over the whole ray, one node of K would hold a third of it.
     """
     t_c, h, args = _ray_frame(m, camera, direction, light, beta)
     args = args + tuple(cone)
@@ -227,26 +233,52 @@ def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.
     # a segment that ends more than h / 1e-3 before the light lies within MAX_ANGLE of -pi/2: its nodes sit at
     # its end (width 0, S = H there), not between its end and the light
     theta0 = m.minimum(m.maximum(m.atan2(-1.0 * t_c, h), -MAX_ANGLE), theta1)
-    step = (theta1 - theta0) * (1.0 / nodes)
+    start, end, tail_start, tail_end = theta0, theta1, theta1, theta_far
+    if clip is not None:   # each segment cut to the cone (width 0 where it misses it: its glow is 0 there)
+        inside, outside = (m.atan2(t - t_c, h) for t in cone_interval(m, camera, direction, light,
+                                                                      *clip(m, *cone), far))
+        start, end = _clipped(m, theta0, theta1, inside, outside)
+        tail_start, tail_end = _clipped(m, theta1, theta_far, inside, outside)
+    step = (end - start) * (1.0 / nodes)
     quad = (shadow, g, falloff, name, args)
-    lit_sum, total = _quadrature(m, theta0, step, nodes, shift, *quad)
+    lit_sum, total = _quadrature(m, start, step, nodes, shift, *quad)
     share = share_of(lit_sum, total)
     if not tail_nodes:
         return share
-    tail_step = (theta_far - theta1) * (1.0 / tail_nodes)
-    lit_tail, total_tail = _quadrature(m, theta1, tail_step, tail_nodes, shift, *quad)
+    tail_step = (tail_end - tail_start) * (1.0 / tail_nodes)
+    lit_tail, total_tail = _quadrature(m, tail_start, tail_step, tail_nodes, shift, *quad)
     return share, share_of(lit_sum * step + lit_tail * tail_step, total * step + total_tail * tail_step)
 
 
+def _clipped(m, start, end, inside, outside):
+    """The angles [start, end] cut to [inside, outside] (rad), of width 0 at ``start`` or ``end`` if they miss it."""
+    first = m.minimum(m.maximum(start, inside), end)
+    return first, m.maximum(m.minimum(end, outside), first)
+
+
+def cone_interval(m, origin, direction, light, rows, cos_half, t_end):
+    """[t_in, t_out] (m, t_in = t_out where it misses it) of the ray origin + t ``direction``, t in [0, ``t_end``],
+    inside a spot's cone (``spot.cone_interval``, in the light's space that ``rows`` give: ``spot.light_space``;
+    half angle acos(``cos_half``))."""
+    p0 = spot_.light_space(m, rows, origin - light)
+    d = spot_.light_space(m, rows, direction)
+    return spot_.cone_interval(m, p0, d, cos_half, t_end)
+
+
 def ray_integrals(m, origin, direction, light, beta, shadow, nodes, shift=0.5, g=0.0, falloff=None, name=None,
-                  cone=()):
+                  cone=(), clip=None):
     """(G_H, G) along the whole ray from ``origin`` along the unit ``direction`` (module docstring, to
     infinity), each over beta I0 / 4 pi, in 1/m: (1 / h) int e^{-beta (t + d)} w f (H) d theta by ``nodes``
-    equiangular nodes (``lit_share``'s; ``cone`` too)."""
+    equiangular nodes (``lit_share``'s; ``cone`` and ``clip`` too)."""
     t_c, h, args = _ray_frame(m, origin, direction, light, beta)
     args = args + tuple(cone)
     theta0 = m.maximum(m.atan2(-1.0 * t_c, h), -MAX_ANGLE)
-    step = (MAX_ANGLE - theta0) * (1.0 / nodes)
+    end = MAX_ANGLE
+    if clip is not None:
+        inside, outside = (m.atan2(t - t_c, h) for t in cone_interval(m, origin, direction, light,
+                                                                      *clip(m, *cone), FAR))
+        theta0, end = _clipped(m, theta0, end, inside, outside)
+    step = (end - theta0) * (1.0 / nodes)
     lit_sum, total = _quadrature(m, theta0, step, nodes, shift, shadow, g, falloff, name, args)
     scale = step / h
     return lit_sum * scale, total * scale
