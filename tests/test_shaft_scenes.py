@@ -21,8 +21,9 @@ from fog_scenes import shafts as fs
 pytestmark = pytest.mark.render
 
 # measured (2026-11-30, a spot's nodes within its cone): window room 4.38 %, colonnade 1.22 %, hooded lamp 2.47 %,
-# fence 1.51 % (2026-11-26: 5.00, 1.97, 2.73, 1.49 %), street 0.62 %
-BOUND = {"window_room": 0.049, "colonnade": 0.015, "hooded_lamp": 0.029, "fence": 0.018, "street_lamps": 0.008}
+# fence 1.51 % (2026-11-26: 5.00, 1.97, 2.73, 1.49 %), street 0.62 %, pergola 1.51 % (before the cone: 1.75 %)
+BOUND = {"window_room": 0.049, "colonnade": 0.015, "hooded_lamp": 0.029, "fence": 0.018, "street_lamps": 0.008,
+         "pergola": 0.018}
 GOAL = {"street_lamps": 0.03}   # the open street: 3 %; the shadowed scenes: 5 %
 DEFAULT_TIER = {"window_room"}
 CASES = [c if c[0] in DEFAULT_TIER else pytest.param(*c, marks=pytest.mark.slow)
