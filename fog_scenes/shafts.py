@@ -2,7 +2,8 @@
 
 The cases are demo scenes whose fog is cut by shadows: windows (``window_room``), columns (``colonnade``), a hood
 and a hole in a wall (``hooded_lamp``), a picket fence and a thin pole (``fence``), a pergola's slats under a low
-spot (``pergola``, built after the shafts were tuned on the others), plus the open street
+spot and a stairwell with a shaded pendant (``pergola``, ``stairwell``: built after the shafts were tuned on the
+others), plus the open street
 (``street_lamps``), where the lamp posts' shadows are all there is to model.  Each reference is Cycles'
 path-traced World volume with single scattering and interreflection off, as the other references
 (fog_addon/reference.py), but with every object casting shadows into the fog and onto the surfaces: that is what
@@ -33,7 +34,8 @@ SHAFT_CASES = [
     ("colonnade", 0.08, 0.0),
     ("hooded_lamp", 0.08, 0.0),
     ("fence", 0.05, 0.0),
-    ("pergola", 0.08, 0.0),   # (issue 46: a scene the shafts were not tuned on)
+    ("pergola", 0.08, 0.0),   # (issue 46: scenes the shafts were not tuned on)
+    ("stairwell", 0.1, 0.0),
 ]
 # The open street, its posts casting shadows, stored apart from the shadowless street_lamps_0.08.exr.
 OPEN_CASES = [("street_lamps", 0.08, 0.0)]
@@ -50,8 +52,9 @@ SHAFT_SAMPLES = {
     "fence": 4096,
     "street_lamps": 4096,
     "pergola": 4096,
+    "stairwell": 4096,
 }
-SHAFT_SEEDS = {"window_room": 2, "colonnade": 4, "pergola": 2}
+SHAFT_SEEDS = {"window_room": 2, "colonnade": 4, "pergola": 2, "stairwell": 2}
 
 # Measured noise of ONE cached reference (all its seeds averaged), lamps' 3x3 pixels left out, as (relative RMSE,
 # p95 per-pixel relative error, max per-pixel relative error).  With one seed: from a second render with seed 1
@@ -65,6 +68,7 @@ SHAFT_REFERENCE_NOISE = {
     ("fence", 0.05): (0.0037, 0.016, 0.42),
     ("street_lamps", 0.08): (0.0032, 0.012, 0.16),
     ("pergola", 0.08): (0.0017, 0.054, 0.71),   # (2026-11-30: 31 s and 35 s a seed)
+    ("stairwell", 0.1): (0.0024, 0.018, 0.25),   # (2026-11-30: 52 s a seed)
 }
 
 SHADOWS_SUFFIX = "_shadows"

@@ -233,6 +233,12 @@ MUTATIONS = [
              "    if False:   # each segment cut to the cone",
              ("tests/test_shafts.py::test_spot_beam_towards_the_camera_matches_quadrature",
               "tests/test_shaft_scenes.py::test_fog_over_a_hood_has_no_blobs")),
+    Mutation("surface_ray_nearest", "light shafts: a surface's hemisphere ray weighed at its own distance from the "
+             "light however near (one ray passing a lamp outweighed a hundred: 5 x 5 blobs on a stairwell's walls)",
+             "ray_integrals",
+             "    scale = step / m.maximum(h, m.length(light - origin) * NEAREST_RAY)\n",
+             "    scale = step / h\n",
+             ("tests/test_shaft_scenes.py::test_walls_by_a_shaded_pendant_have_no_blobs",)),
     Mutation("surface_share_hemisphere", "light shafts: a surface's fog light sees the fog within 30 degrees of its "
              "normal only (Sun 2005 Eq. 17's G_0 is over the whole hemisphere, cos-weighted)",
              "hemisphere_angles",
