@@ -2,9 +2,9 @@
 
 The cases are demo scenes whose fog is cut by shadows: windows (``window_room``), columns (``colonnade``), a hood
 and a hole in a wall (``hooded_lamp``), a picket fence and a thin pole (``fence``), a pergola's slats under a low
-spot and a stairwell with a shaded pendant (``pergola``, ``stairwell``: built after the shafts were tuned on the
-others), plus the open street
-(``street_lamps``), where the lamp posts' shadows are all there is to model.  Each reference is Cycles'
+spot, a stairwell with a shaded pendant, a lantern among thin trunks, a lit bus shelter by a street lamp
+(``pergola``, ``stairwell``, ``forest``, ``bus_shelter``: built after the shafts were tuned on the others), plus
+the open street (``street_lamps``), where the lamp posts' shadows are all there is to model.  Each reference is Cycles'
 path-traced World volume with single scattering and interreflection off, as the other references
 (fog_addon/reference.py), but with every object casting shadows into the fog and onto the surfaces: that is what
 the shafts must reproduce.  The lamps' own pixels and their 8 neighbours may be left out of comparisons
@@ -36,6 +36,8 @@ SHAFT_CASES = [
     ("fence", 0.05, 0.0),
     ("pergola", 0.08, 0.0),   # (issue 46: scenes the shafts were not tuned on)
     ("stairwell", 0.1, 0.0),
+    ("forest", 0.06, 0.0),
+    ("bus_shelter", 0.07, 0.0),
 ]
 # The open street, its posts casting shadows, stored apart from the shadowless street_lamps_0.08.exr.
 OPEN_CASES = [("street_lamps", 0.08, 0.0)]
@@ -53,8 +55,10 @@ SHAFT_SAMPLES = {
     "street_lamps": 4096,
     "pergola": 4096,
     "stairwell": 4096,
+    "forest": 4096,
+    "bus_shelter": 4096,
 }
-SHAFT_SEEDS = {"window_room": 2, "colonnade": 4, "pergola": 2, "stairwell": 2}
+SHAFT_SEEDS = {"window_room": 2, "colonnade": 4, "pergola": 2, "stairwell": 2, "forest": 2, "bus_shelter": 2}
 
 # Measured noise of ONE cached reference (all its seeds averaged), lamps' 3x3 pixels left out, as (relative RMSE,
 # p95 per-pixel relative error, max per-pixel relative error).  With one seed: from a second render with seed 1
@@ -69,6 +73,8 @@ SHAFT_REFERENCE_NOISE = {
     ("street_lamps", 0.08): (0.0032, 0.012, 0.16),
     ("pergola", 0.08): (0.0017, 0.054, 0.71),   # (2026-11-30: 31 s and 35 s a seed)
     ("stairwell", 0.1): (0.0024, 0.018, 0.25),   # (2026-11-30: 52 s a seed)
+    ("forest", 0.06): (0.0019, 0.005, 0.09),   # (37 s a seed)
+    ("bus_shelter", 0.07): (0.0031, 0.013, 0.31),   # (42 s a seed)
 }
 
 SHADOWS_SUFFIX = "_shadows"
