@@ -185,12 +185,30 @@ NOTE_SHARE = 0.01   # the share of a pixel's fog from which what is left out get
 
 
 def multiple_notes(dense, method_name, is_spot, lights, engine=capabilities.CYCLES):
-    """Notes on the multiply scattered light (Dense Fog) the picture lacks, each with its predicted effect:
-    ``dense`` is ``ops/left_out.dense_fog``'s account ({"left_out": {light name: share}, "missing": their share
-    together, "why": "off" or the method's name}; the largest share of a pixel's fog at the view's samples).  Dense
+    """Notes on the multiply scattered light (Dense Fog) the picture lacks or overstates, each with its predicted
+    effect: ``dense`` is ``ops/left_out.dense_fog``'s account ({"left_out": {light name: share}, "missing": their
+    share together, "why": "off" or the method's name, "surplus", "surplus_missing": ``surplus_notes``}; the
+    largest share of a pixel's fog at the view's samples).  Dense
     Fog off: the lights whose glow then lacks its wide halo; on, with a method that does not model it: which
     method does (the OSL method: none of it; the node groups: spot and area lights').  No note under NOTE_SHARE.
     ``is_spot``: a spot or an area light; ``lights``: the lights taking part (their order)."""
+    return surplus_notes(dense, lights) + _left_out_notes(dense, method_name, is_spot, lights, engine)
+
+
+def surplus_notes(dense, lights):
+    """The note on Dense Fog's unbounded field where surfaces stop part of a light's power before it scatters
+    (``ops/left_out.dense_surplus``), with its predicted effect; none under NOTE_SHARE."""
+    surplus = (dense or {}).get("surplus") or {}
+    share = (dense or {}).get("surplus_missing", 0.0)
+    names = [o.name for o in lights if surplus.get(o.name, 0.0) > 0.0]
+    if not names or not share >= NOTE_SHARE:
+        return []
+    return [f"Dense Fog models fog without surfaces: a hood, a wall or the ground near {len(names)} light(s) "
+            f"({listed(names)}) stops part of their light before it scatters, so their multiply scattered light is "
+            f"too bright, up to {share:.0%} of a pixel's fog (predicted)"]
+
+
+def _left_out_notes(dense, method_name, is_spot, lights, engine):
     left = (dense or {}).get("left_out") or {}
     missing = (dense or {}).get("missing", 0.0)
     names = [o.name for o in lights if left.get(o.name, 0.0) > 0.0]

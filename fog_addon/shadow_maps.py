@@ -570,3 +570,39 @@ def shadowed_parts(scene, spec, lights, grid=SHADOW_GRID):
         lit[:, k] = np.nan_to_num(np.asarray(share, float), nan=1.0).clip(0.0, 1.0)
     return [o.name for o in judged], predict.judged_shares(glow * (1.0 - lit)[..., None],
                                                            (glow * lit[..., None] + scatter).sum(axis=1))
+
+
+def escape_fractions(scene, spec, lights):
+    """{light name: f in [0, 1]} for at most SHARE_LIGHTS of ``lights`` (the most important to the picture): the
+    share of the light's emitted power that scatters in the fog before it meets a surface, over that share in
+    unbounded fog (1):
+
+        f = int w(u) (1 - e^{-beta D(u)}) du / int w(u) du,
+
+    D(u) the distance to the first surface in direction u (a coarse point map, SHARE_MAP, ray cast here; NO_HIT
+    where none), w the light's emission (1 for a point light, a spot's cone, an area light's cos towards its
+    normal).  Dense Fog's multiply scattered field is that of unbounded fog (``multiple.py``): light a hood or
+    the ground stops before it scatters never feeds it, so the field overestimates by about 1 - f of itself
+    (``ops/left_out.dense_fog``).  Lights not judged are left out of the result."""
+    if not lights or spec.beta_per_unit <= 0.0:
+        return {}
+    eye = np.array(scene.camera.matrix_world.translation) if scene.camera is not None else np.zeros(3)
+    weight = sampling.importance([o.matrix_world.translation for o in lights], view.light_intensities(lights), eye,
+                                 spec.beta_per_unit)
+    judged = [lights[k] for k in sorted(np.argsort(-weight, kind="stable")[:SHARE_LIGHTS])]
+    geometry = scene_bvh(scene)
+    directions, _ = shaft_maps.point_map_casts(*SHARE_MAP)   # rows thinned towards the poles: about equal areas
+    vectors = _vectors(directions)
+    out = {}
+    for light in judged:
+        depth = cast(geometry.bvh, tuple(light.matrix_world.translation), vectors).astype(float)
+        axis = -np.asarray(light.matrix_world.to_3x3().col[2], float)
+        axis /= max(float(np.linalg.norm(axis)), 1e-30)
+        w = np.ones(len(directions))
+        if _is_spot(light):
+            w = (directions @ axis >= math.cos(0.5 * light.data.spot_size)).astype(float)
+        elif light.data.type == "AREA":
+            w = np.maximum(directions @ axis, 0.0)
+        scattered = 1.0 - np.exp(-spec.beta_per_unit * np.minimum(depth, 1e12))
+        out[light.name] = float((w * scattered).sum() / max(w.sum(), 1e-30))
+    return out

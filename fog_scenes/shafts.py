@@ -195,3 +195,32 @@ def lamp_pixel_mask(scene, resolution=SHAFT_RESOLUTION, blend=None):
     for _, r, c in lamp_pixels(scene, resolution, blend):
         mask[max(r - 1, 0):r + 2, max(c - 1, 0):c + 2] = False
     return mask
+
+
+_MS_REFERENCE_CODE = r'''
+import sys, bpy
+sys.path.insert(0, sys.argv[1])
+bpy.ops.wm.open_mainfile(filepath=sys.argv[2])
+from fog_addon import reference
+scene = bpy.context.scene
+scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = (int(sys.argv[6]),
+                                                                                            int(sys.argv[7]), 100)
+reference.configure_reference(scene, float(sys.argv[4]), samples=int(sys.argv[5]), single_scattering=False)
+c = scene.cycles
+c.volume_bounces = int(sys.argv[8])
+c.max_bounces, c.diffuse_bounces, c.glossy_bounces, c.transmission_bounces = c.volume_bounces + 1, 1, 1, 0
+reference.disable_interreflection(scene)   # (objects stay visible to volume-scatter rays: in the fog's way)
+scene.render.image_settings.file_format, scene.render.image_settings.color_depth = "OPEN_EXR", "32"
+scene.render.filepath = sys.argv[3]
+bpy.ops.render.render(write_still=True)
+'''
+
+
+def render_ms_reference(scene, density, out, samples, volume_bounces=32, resolution=SHAFT_RESOLUTION, blend=None):
+    """A cast-shadow reference of demo ``scene`` with ``volume_bounces`` volume bounces and every object in the way
+    of the scattered light (the multiply scattered field of the scene, not of unbounded fog; white fog, albedo 1):
+    what Dense Fog's surplus near surfaces is measured against (``tests/test_dense_surplus.py``)."""
+    blend = blend or h.scene_blend(scene)
+    h.run_bpy_code(_MS_REFERENCE_CODE, h.ROOT, blend, out, float(density), int(samples), resolution[0], resolution[1],
+                   int(volume_bounces), timeout=7200)
+    return pathlib.Path(out)

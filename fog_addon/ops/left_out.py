@@ -105,4 +105,24 @@ def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None,
             missed.append(k)
             out["thin"][lights[k].name] = float(share[k])
     out["dense"]["missing"] = predict.missing_share(parts, missed)
+    out["dense"].update(dense_surplus(scene, spec, [o for k, o in enumerate(lights) if k not in missed],
+                                      parts[:, [k for k in range(len(lights)) if k not in missed]]))
     return out
+
+
+def dense_surplus(scene, spec, lights, parts):
+    """What Dense Fog's unbounded field adds beyond the scene's (``shadow_maps.escape_fractions``: a hood, a wall
+    or the ground stops part of a light's power before it scatters): each of ``lights`` (those that get Dense Fog;
+    ``parts``, their multiply scattered shares of the judged samples' fog) overestimates its share by about
+    1 - f of it.  Measured against Cycles with 32 volume bounces and the objects in the fog's way: the open
+    street's multiply scattered light 0.86 of ours (f 0.80), the hooded lamp's 0.46 (f 0.25 and 0.30), so 1 - f
+    errs on the side of a larger predicted error.  Returns {"surplus": {name: share}, "surplus_missing": their
+    share together at the sample where it is largest}."""
+    if not lights or scene.camera is None:
+        return {"surplus": {}, "surplus_missing": 0.0}
+    f = shadow_maps.escape_fractions(scene, spec, lights)
+    over = np.array([1.0 - f.get(o.name, 1.0) for o in lights])
+    extra = parts * over[None, :]
+    share = extra.max(axis=0, initial=0.0)
+    return {"surplus": {o.name: float(share[k]) for k, o in enumerate(lights) if share[k] > 0.0},
+            "surplus_missing": float(extra.sum(axis=1).max(initial=0.0))}

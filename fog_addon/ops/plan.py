@@ -114,7 +114,7 @@ def choose_models(scene, spec, method, lights, budget=None):
     # (where a budget forced steps beyond the target, thin lights are judged against the target alone)
     choice.update(dense_fog(scene, spec, method, lights, samples, 0.0 if choice["limited"] else choice["error"],
                             **fog))
-    choice["error"] += choice["dense"]["missing"]
+    choice["error"] += choice["dense"]["missing"] + choice["dense"].get("surplus_missing", 0.0)
     return _models(spec, method, lights, steps, choice["rims"], set(choice["thin"])), choice
 
 

@@ -68,11 +68,25 @@ def shadows_line(choice):
             "pixel's fog, in the predicted error")
 
 
+def surplus_line(choice):
+    """One line: the multiply scattered light Dense Fog's unbounded field adds beyond what the scene's surfaces
+    let scatter (``left_out.dense_surplus``), with its predicted share; None where it adds none."""
+    dense = choice.get("dense") or {}
+    surplus = dense.get("surplus") or {}
+    if not surplus or not dense.get("surplus_missing", 0.0) > 0.0:
+        return None
+    names = sorted(surplus, key=surplus.get, reverse=True)
+    return (f"multiple scattering too bright near surfaces for {len(surplus)} light(s) ({', '.join(names[:3])}"
+            f"{' and more' if len(names) > 3 else ''}; Dense Fog's fog has none): up to "
+            f"{dense['surplus_missing']:.2%} of a pixel's fog, in the predicted error")
+
+
 def left_out_lines(choice):
-    """The lines of what the picture lacks and the predicted error counts (``dense_line``, ``shadows_line``), the
-    largest share first (the panel lists them above the lights)."""
-    left_out = [(choice.get(key, {}).get("missing", 0.0), line) for key, line in
-                (("dense", dense_line(choice)), ("shadows", shadows_line(choice))) if line is not None]
+    """The lines of what the picture lacks or overstates and the predicted error counts (``dense_line``,
+    ``surplus_line``, ``shadows_line``), the largest share first (the panel lists them above the lights)."""
+    left_out = [(choice.get(key, {}).get(share, 0.0), line) for key, share, line in
+                (("dense", "missing", dense_line(choice)), ("dense", "surplus_missing", surplus_line(choice)),
+                 ("shadows", "missing", shadows_line(choice))) if line is not None]
     return [line for _, line in sorted(left_out, key=lambda x: -x[0])]
 
 

@@ -114,7 +114,10 @@ def main(out, name, quality, method="nodes", width=128, height=72):
     render(scene, out / "exact.exr")
     print(json.dumps({"scene": name, "beta": beta, "quality": quality, "predicted": choice["error"],
                       "left_out": (choice["dense"]["missing"] if dense is False else 0.0)
-                      + choice.get("shadows", {}).get("missing", 0.0),   # (shafts off: the shadows' share)
+                      + choice.get("shadows", {}).get("missing", 0.0)   # (shafts off: the shadows' share)
+                      + choice["dense"].get("surplus_missing", 0.0),
+                      # (Dense Fog's unbounded field beyond the scene's surfaces: both renders have it)
+                      "surplus": choice["dense"].get("surplus_missing", 0.0),
                       "steps": {k: v[0] for k, v in choice["lights"].items()},
                       "light_error": {k: v[1] for k, v in choice["lights"].items()},
                       "rims": choice.get("rims", {}), "lights": len(choice["lights"]),
