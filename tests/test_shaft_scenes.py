@@ -125,6 +125,18 @@ def test_shares_at_half_resolution_against_path_tracing(tmp_path, regen, scene, 
     assert HALF_BOUND[scene] <= 0.05   # the issue's goal
 
 
+def rendered_case(tmp_path, regen, scene):
+    """(ours, the reference) of the shaft case ``scene``: the render tests' settings, Blender's log clean."""
+    scene, density, anisotropy = next(c for c in fs.SHAFT_CASES if c[0] == scene)
+    ref = imageio.read_rgb(fs.ensure_shaft_reference(scene, density, regen=regen, anisotropy=anisotropy))
+    log = []
+    out = h.render_test(scene, density, tmp_path / f"{scene}.exr", engine="cycles", method="compositor",
+                        samples=16, resolution=fs.SHAFT_RESOLUTION, cast_shadows=True, log=log,
+                        extra=["--shafts", "on"])
+    assert not h.log_errors(log[0]), h.log_errors(log[0])
+    return imageio.read_rgb(out), ref
+
+
 # The fog over the hooded lamp's hood (the rows above the wall: sky, fog lit only by the spot behind the wall, whose
 # beam through the hole reaches the camera), by 4 x 4 block means against path tracing.  Measured (2026-11-30):
 # 0.962-1.042; with the spot's nodes spread over the whole ray instead of its cone, 0.765-1.159 (a dark blob above
@@ -134,14 +146,7 @@ HOOD_BLOCKS = (0.93, 1.07)
 
 
 def test_fog_over_a_hood_has_no_blobs(tmp_path, regen):
-    scene, density, anisotropy = next(c for c in fs.SHAFT_CASES if c[0] == "hooded_lamp")
-    ref = imageio.read_rgb(fs.ensure_shaft_reference(scene, density, regen=regen, anisotropy=anisotropy))
-    log = []
-    out = h.render_test(scene, density, tmp_path / f"{scene}.exr", engine="cycles", method="compositor",
-                        samples=16, resolution=fs.SHAFT_RESOLUTION, cast_shadows=True, log=log,
-                        extra=["--shafts", "on"])
-    assert not h.log_errors(log[0]), h.log_errors(log[0])
-    img = imageio.read_rgb(out)
+    img, ref = rendered_case(tmp_path, regen, "hooded_lamp")
 
     def blocks(a):
         y = a[:HOOD_ROWS].mean(axis=2)
@@ -164,14 +169,8 @@ BLOB_BOUND = 0.018
 
 
 def test_walls_by_a_shaded_pendant_have_no_blobs(tmp_path, regen):
-    scene, density, anisotropy = next(c for c in fs.SHAFT_CASES if c[0] == "stairwell")
-    ref = imageio.read_rgb(fs.ensure_shaft_reference(scene, density, regen=regen, anisotropy=anisotropy))
-    log = []
-    out = h.render_test(scene, density, tmp_path / f"{scene}.exr", engine="cycles", method="compositor",
-                        samples=16, resolution=fs.SHAFT_RESOLUTION, cast_shadows=True, log=log,
-                        extra=["--shafts", "on"])
-    assert not h.log_errors(log[0]), h.log_errors(log[0])
-    img = imageio.read_rgb(out)
+    img, ref = rendered_case(tmp_path, regen, "stairwell")
+    scene = "stairwell"
     y = ref.mean(axis=2)
     mask = (fs.lamp_pixel_mask(scene, fs.SHAFT_RESOLUTION) & smooth_pixels(ref)
             & (y > np.percentile(y, BLOB_FLOOR)))

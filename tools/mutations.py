@@ -672,8 +672,8 @@ MUTATIONS = [
              ("tests/test_passes.py::test_compositor_passes_are_the_fogs_part",)),
     Mutation("dense_fog_uncounted", "Dense Fog off: what the multiply scattered light leaves out is not in the "
              "predicted error", "choose_models",
-             '    choice["error"] += choice["dense"]["missing"]\n',
-             "    pass\n",
+             '    choice["error"] += choice["dense"]["missing"] + choice["dense"].get("surplus_missing", 0.0)\n',
+             '    choice["error"] += choice["dense"].get("surplus_missing", 0.0)\n',
              ("tests/test_multiple_render.py::test_dense_fog_off_is_the_single_scattering",)),
     Mutation("dense_fog_not_default", "Dense Fog off by default: a lamp in dense fog renders single scattering",
              "AnalyticFogSettings",
