@@ -139,7 +139,8 @@ def force_step(step):
 
     def forced(scene, spec, method, lights):
         choice = {"target": spec.target_error, "error": 0.0, "rims": {}, "engine": scene.render.engine,
-                  "limited": None, "lights": {o.name: [step, 0.0] for o in lights}}
+                  "limited": None, "lights": {o.name: [step, 0.0] for o in lights}, "thin": {},
+                  "dense": {"left_out": {}, "missing": 0.0, "why": method.name}}
         return home._models(spec, method, lights, [step] * len(lights), {}, frozenset()), choice
     for m in mods:
         if hasattr(m, "choose_models"):
