@@ -534,6 +534,15 @@ SHARE_NODES = 16           # quadrature nodes along each ray (``shafts.lit_share
 SHARE_LIGHTS = 16          # the lights it judges at most: the most important (``sampling.importance``)
 
 
+def _judged_lights(scene, spec, lights):
+    """At most SHARE_LIGHTS of ``lights``, the most important to the picture seen from the camera
+    (``sampling.importance``; from the origin without one), in their order."""
+    eye = np.array(scene.camera.matrix_world.translation) if scene.camera is not None else np.zeros(3)
+    weight = sampling.importance([o.matrix_world.translation for o in lights], view.light_intensities(lights), eye,
+                                 spec.beta_per_unit)
+    return [lights[k] for k in sorted(np.argsort(-weight, kind="stable")[:SHARE_LIGHTS])]
+
+
 def shadowed_parts(scene, spec, lights, grid=SHADOW_GRID):
     """Where the fog has no shafts: (names of the judged lights, (P, N') each one's fog light that its shadows
     would take away, as a share of the sample's fog with them), at the view's samples on ``grid``, judged lights
@@ -547,16 +556,12 @@ def shadowed_parts(scene, spec, lights, grid=SHADOW_GRID):
     Shafts off or a method without them leaves out (``ops/left_out.shadow_fog``)."""
     if scene.camera is None or not lights:
         return None
-    eye = np.array(scene.camera.matrix_world.translation)
-    weight = sampling.importance([o.matrix_world.translation for o in lights], view.light_intensities(lights), eye,
-                                 spec.beta_per_unit)
-    judged = [lights[k] for k in sorted(np.argsort(-weight, kind="stable")[:SHARE_LIGHTS])]
+    judged = _judged_lights(scene, spec, lights)
     samples = view.view_samples(scene, judged, frames=[scene.frame_current], grid=grid)
     samples = samples._replace(shapes=None)   # (each light a point: an estimate)
     glow, scatter = predict.light_fog(samples, view.light_intensities(judged), spec.beta_per_unit, spec.anisotropy)
     geometry = scene_bvh(scene)
-    directions, fill = shaft_maps.point_map_casts(*SHARE_MAP)
-    vectors = _vectors(directions)
+    vectors, fill = _point_casts(*SHARE_MAP)
     m = NumpyOps(bakers.numpy_tables(spec.anisotropy))
     length = np.where(np.isfinite(samples.distance), samples.distance, 1.0e6)
     lit = np.ones(glow.shape[:2])
@@ -586,15 +591,11 @@ def escape_fractions(scene, spec, lights):
     (``ops/left_out.dense_fog``).  Lights not judged are left out of the result."""
     if not lights or spec.beta_per_unit <= 0.0:
         return {}
-    eye = np.array(scene.camera.matrix_world.translation) if scene.camera is not None else np.zeros(3)
-    weight = sampling.importance([o.matrix_world.translation for o in lights], view.light_intensities(lights), eye,
-                                 spec.beta_per_unit)
-    judged = [lights[k] for k in sorted(np.argsort(-weight, kind="stable")[:SHARE_LIGHTS])]
     geometry = scene_bvh(scene)
     directions, _ = shaft_maps.point_map_casts(*SHARE_MAP)   # rows thinned towards the poles: about equal areas
-    vectors = _vectors(directions)
+    vectors, _ = _point_casts(*SHARE_MAP)
     out = {}
-    for light in judged:
+    for light in _judged_lights(scene, spec, lights):
         depth = cast(geometry.bvh, tuple(light.matrix_world.translation), vectors).astype(float)
         axis = -np.asarray(light.matrix_world.to_3x3().col[2], float)
         axis /= max(float(np.linalg.norm(axis)), 1e-30)

@@ -105,8 +105,8 @@ def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None,
             missed.append(k)
             out["thin"][lights[k].name] = float(share[k])
     out["dense"]["missing"] = predict.missing_share(parts, missed)
-    out["dense"].update(dense_surplus(scene, spec, [o for k, o in enumerate(lights) if k not in missed],
-                                      parts[:, [k for k in range(len(lights)) if k not in missed]]))
+    served_lights = [k for k in range(len(lights)) if k not in missed]   # (those that get Dense Fog)
+    out["dense"].update(dense_surplus(scene, spec, [lights[k] for k in served_lights], parts[:, served_lights]))
     return out
 
 

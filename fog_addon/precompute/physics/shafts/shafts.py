@@ -225,8 +225,9 @@ def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.
     ``comp_shafts.build_shaft_group``), passed into the node groups as their inputs.
 
     ``clip``: clip(m, *cone) gives a spot's (rows, cos_half) (``cone_interval``): the nodes then cover only the
-    part of the ray inside its cone, where its factor is not 0.  A ray that leaves the cone a few metres from the camera (a spot shining
-    towards it) holds all its glow there; spread over the whole ray, one node of K would hold a third of it.
+    part of the ray inside its cone, where its factor is not 0.  A ray that leaves the cone a few metres from the
+    camera (a spot shining towards it) holds all its glow there; spread over the whole ray, one node of K would
+    hold a third of it.
     """
     t_c, h, args = _ray_frame(m, camera, direction, light, beta)
     args = args + tuple(cone)
@@ -237,8 +238,7 @@ def lit_share(m, camera, direction, length, light, beta, shadow, nodes, shift=0.
     theta0 = m.minimum(m.maximum(m.atan2(-1.0 * t_c, h), -MAX_ANGLE), theta1)
     start, end, tail_start, tail_end = theta0, theta1, theta1, theta_far
     if clip is not None:   # each segment cut to the cone (width 0 where it misses it: its glow is 0 there)
-        inside, outside = (m.atan2(t - t_c, h) for t in cone_interval(m, camera, direction, light,
-                                                                      *clip(m, *cone), far))
+        inside, outside = _cone_angles(m, camera, direction, light, t_c, h, clip(m, *cone), far)
         start, end = _clipped(m, theta0, theta1, inside, outside)
         tail_start, tail_end = _clipped(m, theta1, theta_far, inside, outside)
     step = (end - start) * (1.0 / nodes)
@@ -256,6 +256,12 @@ def _clipped(m, start, end, inside, outside):
     """The angles [start, end] cut to [inside, outside] (rad), of width 0 at ``start`` or ``end`` if they miss it."""
     first = m.minimum(m.maximum(start, inside), end)
     return first, m.maximum(m.minimum(end, outside), first)
+
+
+def _cone_angles(m, origin, direction, light, t_c, h, cone, t_end):
+    """The angles around the light (rad, ``lit_share``'s theta) where the ray enters and leaves a spot's
+    ``cone`` = (rows, cos_half) within [0, ``t_end``] (``cone_interval``)."""
+    return tuple(m.atan2(t - t_c, h) for t in cone_interval(m, origin, direction, light, *cone, t_end))
 
 
 def cone_interval(m, origin, direction, light, rows, cos_half, t_end):
@@ -285,8 +291,7 @@ def ray_integrals(m, origin, direction, light, beta, shadow, nodes, shift=0.5, g
     theta0 = m.maximum(m.atan2(-1.0 * t_c, h), -MAX_ANGLE)
     end = MAX_ANGLE
     if clip is not None:
-        inside, outside = (m.atan2(t - t_c, h) for t in cone_interval(m, origin, direction, light,
-                                                                      *clip(m, *cone), FAR))
+        inside, outside = _cone_angles(m, origin, direction, light, t_c, h, clip(m, *cone), FAR)
         theta0, end = _clipped(m, theta0, end, inside, outside)
     step = (end - theta0) * (1.0 / nodes)
     lit_sum, total = _quadrature(m, theta0, step, nodes, shift, shadow, g, falloff, name, args)
