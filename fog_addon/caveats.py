@@ -196,16 +196,17 @@ def multiple_notes(dense, method_name, is_spot, lights, engine=capabilities.CYCL
 
 
 def surplus_notes(dense, lights):
-    """The note on Dense Fog's unbounded field where surfaces stop part of a light's power before it scatters
-    (``ops/left_out.dense_surplus``), with its predicted effect; none under NOTE_SHARE."""
+    """The note on Dense Fog's field where surfaces stop part of a light's power before it scatters: scaled by the
+    share they leave (``escape.field_scales``), with what the scale may miss (``ops/left_out.scale_error``);
+    none under NOTE_SHARE."""
     surplus = (dense or {}).get("surplus") or {}
     share = (dense or {}).get("surplus_missing", 0.0)
     names = [o.name for o in lights if surplus.get(o.name, 0.0) > 0.0]
     if not names or not share >= NOTE_SHARE:
         return []
-    return [f"Dense Fog models fog without surfaces: a hood, a wall or the ground near {len(names)} light(s) "
-            f"({listed(names)}) stops part of their light before it scatters, so their multiply scattered light is "
-            f"too bright, up to {share:.0%} of a pixel's fog (predicted)"]
+    return [f"Dense Fog near surfaces: a hood, a wall or the ground near {len(names)} light(s) ({listed(names)}) "
+            f"stops part of their light before it scatters; their multiply scattered light is scaled down for it, "
+            f"an estimate that may miss up to {share:.0%} of a pixel's fog (predicted)"]
 
 
 def _left_out_notes(dense, method_name, is_spot, lights, engine):

@@ -191,3 +191,31 @@ def disable_interreflection(scene):
             ob.visible_diffuse = False
             ob.visible_glossy = False
             ob.visible_transmission = False
+
+
+def absorb_scattered_rays(scene):
+    """Every surface black to rays that left the fog (Light Path's Is Camera Ray off): a multiply scattered
+    reference keeps its surfaces in the scattered light's way, absorbing it, without the light they would reflect
+    into the fog (their interreflection, which the model leaves out as :func:`disable_interreflection` does; the
+    surfaces are hidden from diffuse and glossy rays, so no other ray meets them).  Camera rays see each material
+    as it was.  Each material is changed in place (a reference's scene only)."""
+    done = set()
+    for ob in scene.objects:
+        for slot in getattr(ob, "material_slots", ()):
+            mat = slot.material
+            if mat is None or mat.name in done or not mat.use_nodes:
+                continue
+            done.add(mat.name)
+            tree = mat.node_tree
+            out = next((n for n in tree.nodes if n.type == "OUTPUT_MATERIAL" and n.is_active_output), None)
+            if out is None or not out.inputs["Surface"].links:
+                continue
+            source = out.inputs["Surface"].links[0].from_socket
+            path = tree.nodes.new("ShaderNodeLightPath")
+            black = tree.nodes.new("ShaderNodeBsdfDiffuse")
+            black.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+            mix = tree.nodes.new("ShaderNodeMixShader")
+            tree.links.new(path.outputs["Is Camera Ray"], mix.inputs["Fac"])
+            tree.links.new(black.outputs[0], mix.inputs[1])
+            tree.links.new(source, mix.inputs[2])
+            tree.links.new(mix.outputs[0], out.inputs["Surface"])

@@ -127,7 +127,7 @@ def scene_bvh(scene, depsgraph=None, objects=None):
 
 
 @functools.lru_cache(maxsize=2)
-def _point_casts(width=shaft_maps.POINT_MAP[0], height=shaft_maps.POINT_MAP[1]):
+def point_casts(width=shaft_maps.POINT_MAP[0], height=shaft_maps.POINT_MAP[1]):
     """(the rays of a point light's map as mathutils Vectors, the ray each grid point takes):
     ``shaft_maps.point_map_casts`` (every point light's map of this grid shares them)."""
     directions, fill = shaft_maps.point_map_casts(width, height)
@@ -185,7 +185,7 @@ def bake(light, geometry):
         dirs = shaft_maps.spot_map_directions(*spot)
         depth = cast(geometry.bvh, origin, dirs.reshape(-1, 3)).reshape(dirs.shape[:2])
     else:
-        vectors, fill = _point_casts()
+        vectors, fill = point_casts()
         depth = cast(geometry.bvh, origin, vectors)[fill]
     spec = TableSpec(IMAGE_PREFIX + light.name, depth.shape[1], depth.shape[0])
     return ShadowMap(spec, spot), depth
@@ -428,7 +428,7 @@ def _bake_tile(light, geometry, union, size):
     if union is not None:
         dirs = shaft_maps.spot_map_directions(*union, size=size[0])
         return cast(geometry.bvh, origin, dirs.reshape(-1, 3)).reshape(dirs.shape[:2])
-    vectors, fill = _point_casts(*size)
+    vectors, fill = point_casts(*size)
     return cast(geometry.bvh, origin, vectors)[fill]
 
 
@@ -534,7 +534,7 @@ SHARE_NODES = 16           # quadrature nodes along each ray (``shafts.lit_share
 SHARE_LIGHTS = 16          # the lights it judges at most: the most important (``sampling.importance``)
 
 
-def _judged_lights(scene, spec, lights):
+def judged_lights(scene, spec, lights):
     """At most SHARE_LIGHTS of ``lights``, the most important to the picture seen from the camera
     (``sampling.importance``; from the origin without one), in their order."""
     eye = np.array(scene.camera.matrix_world.translation) if scene.camera is not None else np.zeros(3)
@@ -556,12 +556,12 @@ def shadowed_parts(scene, spec, lights, grid=SHADOW_GRID):
     Shafts off or a method without them leaves out (``ops/left_out.shadow_fog``)."""
     if scene.camera is None or not lights:
         return None
-    judged = _judged_lights(scene, spec, lights)
+    judged = judged_lights(scene, spec, lights)
     samples = view.view_samples(scene, judged, frames=[scene.frame_current], grid=grid)
     samples = samples._replace(shapes=None)   # (each light a point: an estimate)
     glow, scatter = predict.light_fog(samples, view.light_intensities(judged), spec.beta_per_unit, spec.anisotropy)
     geometry = scene_bvh(scene)
-    vectors, fill = _point_casts(*SHARE_MAP)
+    vectors, fill = point_casts(*SHARE_MAP)
     m = NumpyOps(bakers.numpy_tables(spec.anisotropy))
     length = np.where(np.isfinite(samples.distance), samples.distance, 1.0e6)
     lit = np.ones(glow.shape[:2])
@@ -575,35 +575,3 @@ def shadowed_parts(scene, spec, lights, grid=SHADOW_GRID):
         lit[:, k] = np.nan_to_num(np.asarray(share, float), nan=1.0).clip(0.0, 1.0)
     return [o.name for o in judged], predict.judged_shares(glow * (1.0 - lit)[..., None],
                                                            (glow * lit[..., None] + scatter).sum(axis=1))
-
-
-def escape_fractions(scene, spec, lights):
-    """{light name: f in [0, 1]} for at most SHARE_LIGHTS of ``lights`` (the most important to the picture): the
-    share of the light's emitted power that scatters in the fog before it meets a surface, over that share in
-    unbounded fog (1):
-
-        f = int w(u) (1 - e^{-beta D(u)}) du / int w(u) du,
-
-    D(u) the distance to the first surface in direction u (a coarse point map, SHARE_MAP, ray cast here; NO_HIT
-    where none), w the light's emission (1 for a point light, a spot's cone, an area light's cos towards its
-    normal).  Dense Fog's multiply scattered field is that of unbounded fog (``multiple.py``): light a hood or
-    the ground stops before it scatters never feeds it, so the field overestimates by about 1 - f of itself
-    (``ops/left_out.dense_fog``).  Lights not judged are left out of the result."""
-    if not lights or spec.beta_per_unit <= 0.0:
-        return {}
-    geometry = scene_bvh(scene)
-    directions, _ = shaft_maps.point_map_casts(*SHARE_MAP)   # rows thinned towards the poles: about equal areas
-    vectors, _ = _point_casts(*SHARE_MAP)
-    out = {}
-    for light in _judged_lights(scene, spec, lights):
-        depth = cast(geometry.bvh, tuple(light.matrix_world.translation), vectors).astype(float)
-        axis = -np.asarray(light.matrix_world.to_3x3().col[2], float)
-        axis /= max(float(np.linalg.norm(axis)), 1e-30)
-        w = np.ones(len(directions))
-        if _is_spot(light):
-            w = (directions @ axis >= math.cos(0.5 * light.data.spot_size)).astype(float)
-        elif light.data.type == "AREA":
-            w = np.maximum(directions @ axis, 0.0)
-        scattered = 1.0 - np.exp(-spec.beta_per_unit * np.minimum(depth, 1e12))
-        out[light.name] = float((w * scattered).sum() / max(w.sum(), 1e-30))
-    return out

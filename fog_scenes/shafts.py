@@ -210,6 +210,7 @@ c = scene.cycles
 c.volume_bounces = int(sys.argv[8])
 c.max_bounces, c.diffuse_bounces, c.glossy_bounces, c.transmission_bounces = c.volume_bounces + 1, 1, 1, 0
 reference.disable_interreflection(scene)   # (objects stay visible to volume-scatter rays: in the fog's way)
+reference.absorb_scattered_rays(scene)     # (black to them: no light reflected into the fog)
 scene.render.image_settings.file_format, scene.render.image_settings.color_depth = "OPEN_EXR", "32"
 scene.render.filepath = sys.argv[3]
 bpy.ops.render.render(write_still=True)
@@ -218,7 +219,8 @@ bpy.ops.render.render(write_still=True)
 
 def render_ms_reference(scene, density, out, samples, volume_bounces=32, resolution=SHAFT_RESOLUTION, blend=None):
     """A cast-shadow reference of demo ``scene`` with ``volume_bounces`` volume bounces and every object in the way
-    of the scattered light (the multiply scattered field of the scene, not of unbounded fog; white fog, albedo 1):
+    of the scattered light, black to it (the multiply scattered field of the scene, not of unbounded fog, without the
+    light its surfaces would reflect into the fog; white fog, albedo 1):
     what Dense Fog's surplus near surfaces is measured against (``tests/test_dense_surplus.py``)."""
     blend = blend or h.scene_blend(scene)
     h.run_bpy_code(_MS_REFERENCE_CODE, h.ROOT, blend, out, float(density), int(samples), resolution[0], resolution[1],

@@ -38,7 +38,7 @@ def test_render_explains_the_models(tmp_path):
     # beyond the ground's (the lamps stand over it), then their posts' shafts (the street's posts shadow the glows)
     assert all(": " in line for line in lines[2:5]), lines
     rest = lines[5:]
-    optional = ("models:   multiple scattering too bright near surfaces ", "models:   Dense Fog left out for ")
+    optional = ("models:   multiple scattering scaled for the surfaces near ", "models:   Dense Fog left out for ")
     rest = [line for line in rest if not line.startswith(optional)]
     assert len(rest) == 1 and rest[0].startswith("models:   Light shafts of "), lines
     assert "quality 0.5 (flag)" in text

@@ -86,6 +86,13 @@ def test_multiple_rungs_add_the_multiple_glow_to_the_single():
     assert abs(models.background.kernel(m, *args[:4]) - want_bg) <= 1e-12 * abs(want_bg)
     assert rungs.choose("nodes", 0, G, kind="spot", multiple_albedo=ALBEDO).airlight.tables == \
         rungs.choose("nodes", 0, G, kind="spot").airlight.tables   # spots: not modelled (yet)
+    # beside surfaces (``escape.field_scales``): the multiply scattered part alone scaled, the single kept
+    half = rungs.choose("nodes", 0, G, multiple_albedo=ALBEDO, multiple_scale=0.5)
+    want = air.kernel(m, *args) + 0.5 * mu.multiple_airlight(m, spec, *args)
+    assert abs(half.airlight.kernel(m, *args) - want) <= 1e-12 * abs(want)
+    want_bg = bg.kernel(m, *args[:4]) + 0.5 * mu.multiple_background(m, spec, *args[:4])
+    assert abs(half.background.kernel(m, *args[:4]) - want_bg) <= 1e-12 * abs(want_bg)
+    assert half.airlight.name != models.airlight.name   # (groups of different scales are not shared)
 
 
 def test_segment_formula_on_the_single_scattering_field():

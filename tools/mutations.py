@@ -239,12 +239,25 @@ MUTATIONS = [
              "    scale = step / m.maximum(h, m.length(light - origin) * NEAREST_RAY)\n",
              "    scale = step / h\n",
              ("tests/test_shaft_scenes.py::test_walls_by_a_shaded_pendant_have_no_blobs",)),
-    Mutation("dense_surplus_uncounted", "the predicted error: Dense Fog's unbounded field near surfaces counted as "
-             "if nothing stopped a light's power before it scattered (a hooded lamp predicted 0 %, measured 49 %)",
-             "escape_fractions",
-             "        scattered = 1.0 - np.exp(-spec.beta_per_unit * np.minimum(depth, 1e12))\n",
-             "        scattered = 1.0 - np.exp(-spec.beta_per_unit * 1e12 + 0.0 * depth)\n",
-             ("tests/test_dense_surplus.py::test_escape_fraction_of_a_lamp_between_planes",)),
+    Mutation("dense_escape_unblocked", "Dense Fog beside surfaces: the escape fraction counts every direction as "
+             "if nothing stopped a light's power before it scattered",
+             "escape_fraction",
+             "    scattered = -np.expm1(-beta * np.minimum(np.asarray(depth, float), 1e12))\n",
+             "    scattered = -np.expm1(-beta * 1e12 + 0.0 * np.asarray(depth, float))\n",
+             ("tests/test_escape.py::test_escape_fraction_over_a_floor_against_its_closed_form",)),
+    Mutation("dense_scale_unoccluded", "Dense Fog beside surfaces: the second order's sources all lit (a hood, a wall "
+             "or the ground stops none of a light's power: its field that of unbounded fog)",
+             "second_order_share",
+             "    lit = r[None, :] < np.asarray(depth, float)[:, None]",
+             "    lit = r[None, :] < np.inf + 0.0 * np.asarray(depth, float)[:, None]",
+             ("tests/test_escape.py::test_second_order_share_over_a_floor_against_quadrature",)),
+    Mutation("dense_scale_unapplied", "Dense Fog beside surfaces: the lights' multiply scattered terms keep the "
+             "unbounded field whatever their scale (the hooded lamp's fog 49 % off path tracing)",
+             "_scaled",
+             "    if scale == 1.0:\n",
+             "    if True:\n",
+             ("tests/test_multiple.py::test_multiple_rungs_add_the_multiple_glow_to_the_single",
+              "tests/test_dense_surplus.py::test_dense_fog_beside_surfaces_against_path_tracing")),
     Mutation("surface_share_hemisphere", "light shafts: a surface's fog light sees the fog within 30 degrees of its "
              "normal only (Sun 2005 Eq. 17's G_0 is over the whole hemisphere, cos-weighted)",
              "hemisphere_angles",

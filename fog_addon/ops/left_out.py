@@ -8,7 +8,7 @@ import math
 import numpy as np
 from mathutils import Vector
 
-from .. import caveats, methods, shadow_maps, view
+from .. import caveats, escape, methods, shadow_maps, view
 from ..precompute.model import capabilities, predict
 
 MULTIPLE_ENTRIES = 1_000_000   # samples x lights at most for Dense Fog's shares (``dense_fog``): every nth sample
@@ -67,24 +67,30 @@ def dense_served(spec, method, engine):
 
 
 def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None, dense=None):
-    """Dense Fog by the Quality: which ``lights`` get their multiply scattered light, and what the picture misses
-    without it (``predict.multiple_parts``, at the view's samples: ``samples``, else sampled here where needed;
-    ``single``, ``dense``: their (glow, scatter) without and with it, where computed).
+    """Dense Fog by the Quality: which ``lights`` get their multiply scattered light, at which scale, and what the
+    picture misses without it (``predict.multiple_parts``, at the view's samples: ``samples``, else sampled here
+    where needed; ``single``, ``dense``: their (glow, scatter) without and with it, where computed).
 
-    A light the method models it for (``dense_served``) gets it unless it is at most THIN_SHARE of the Quality's
-    target at every judged sample and what all such lights and the left-out ones miss together keeps the predicted
-    error (``error`` before Dense Fog) within the target ("thin": left out at no cost, the thinnest first; with
-    Quality Exact no light is thin).  A light it is
-    not modelled for (Dense Fog off: a stylised look; a method without it) is "left out", with its share.  Returns
-    {"thin": {name: share}, "dense": {"left_out": {name: share}, "missing": the share of a judged sample's fog
-    that the thin and the left-out lights miss together, at the sample where it is largest, "why": "off" or the
-    method's name}}."""
+    Each served light's field is scaled by the share the scene's surfaces leave of it (``escape.field_scales``:
+    a hood, a wall or the ground stops part of the light's power before it scatters), and judged so.  A light the
+    method models it for (``dense_served``) gets it unless it is at most THIN_SHARE of the Quality's target at
+    every judged sample and what all such lights and the left-out ones miss together keeps the predicted error
+    (``error`` before Dense Fog) within the target ("thin": left out at no cost, the thinnest first; with Quality
+    Exact no light is thin).  A light it is not modelled for (Dense Fog off: a stylised look; a method without
+    it) is "left out", with its share.  Returns {"thin": {name: share}, "dense": {"left_out": {name: share},
+    "missing": the share of a judged sample's fog that the thin and the left-out lights miss together, at the
+    sample where it is largest, "why": "off" or the method's name, "scales": {name: scale below 1}, and
+    ``scale_error``'s}}."""
     target, engine = spec.target_error, scene.render.engine
     served = dense_served(spec, method, engine)
     need = [o for o in lights if not served(o)] + ([o for o in lights if served(o)] if target is not None else [])
-    out = {"thin": {}, "dense": {"left_out": {}, "missing": 0.0,
+    out = {"thin": {}, "dense": {"left_out": {}, "missing": 0.0, "scales": {},
                                  "why": "off" if not spec.multiple_scattering else getattr(method, "name", method)}}
-    if not need or scene.camera is None:
+    if scene.camera is None:
+        return out
+    scales = escape.field_scales(scene, spec, [o for o in lights if served(o)])
+    if not need:
+        out["dense"].update(scales={n: k for n, k in scales.items() if k < 1.0}, scales_at=scales_key(spec))
         return out
     if samples is None:
         samples = view.view_samples(scene, lights)
@@ -92,7 +98,8 @@ def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None,
         n = math.ceil(len(samples.distance) * len(lights) / MULTIPLE_ENTRIES)
         samples = predict.every_nth(samples, n)
         single, dense = (None if f is None else tuple(a[::n] for a in f) for f in (single, dense))
-    parts = view.multiple_parts(scene, spec, lights, samples, single, dense)
+    scale = np.array([scales.get(o.name, 1.0) for o in lights])
+    parts = view.multiple_parts(scene, spec, lights, samples, single, dense) * scale[None, :]
     share = parts.max(axis=0, initial=0.0)
     missed = [k for k, o in enumerate(lights) if not served(o)]
     out["dense"]["left_out"] = {lights[k].name: float(share[k]) for k in missed}
@@ -105,24 +112,40 @@ def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None,
             missed.append(k)
             out["thin"][lights[k].name] = float(share[k])
     out["dense"]["missing"] = predict.missing_share(parts, missed)
-    served_lights = [k for k in range(len(lights)) if k not in missed]   # (those that get Dense Fog)
-    out["dense"].update(dense_surplus(scene, spec, [lights[k] for k in served_lights], parts[:, served_lights]))
+    kept = [k for k in range(len(lights)) if k not in missed]   # (those that get Dense Fog)
+    out["dense"]["scales"] = {lights[k].name: float(scale[k]) for k in kept if scale[k] < 1.0}
+    out["dense"]["scales_at"] = scales_key(spec)
+    out["dense"].update(scale_error([lights[k].name for k in kept], scale[kept], parts[:, kept]))
     return out
 
 
-def dense_surplus(scene, spec, lights, parts):
-    """What Dense Fog's unbounded field adds beyond the scene's (``shadow_maps.escape_fractions``: a hood, a wall
-    or the ground stops part of a light's power before it scatters): each of ``lights`` (those that get Dense Fog;
-    ``parts``, their multiply scattered shares of the judged samples' fog) overestimates its share by about
-    1 - f of it.  Measured against Cycles with 32 volume bounces and the objects in the fog's way: the open
-    street's multiply scattered light 0.86 of ours (f 0.80), the hooded lamp's 0.46 (f 0.25 and 0.30), so 1 - f
-    errs on the side of a larger predicted error.  Returns {"surplus": {name: share}, "surplus_missing": their
-    share together at the sample where it is largest}."""
-    if not lights or scene.camera is None:
+def scales_key(spec):
+    """What Dense Fog's scales beside surfaces were judged with (the fog's density and anisotropy)."""
+    return [round(spec.beta_per_unit, 9), round(spec.anisotropy, 6)]
+
+
+def kept_scales(scene, spec, method, lights, dense):
+    """The scales of a stored Dense Fog account ``dense`` (``dense_fog``'s, the handlers' cheap path that keeps the
+    lights' steps), judged again where the density or the anisotropy changed since (``escape.field_scales``);
+    ``dense`` is updated in place.  Returns {name: scale}."""
+    if dense.get("scales_at") != scales_key(spec):
+        served = dense_served(spec, method, scene.render.engine)
+        scales = escape.field_scales(scene, spec, [o for o in lights if served(o)])
+        dense.update(scales={n: k for n, k in scales.items() if k < 1.0}, scales_at=scales_key(spec))
+    return dense.get("scales") or {}
+
+
+SCALE_ERROR = 1.0   # the scale's error as a share of 1 - scale (measured: docs/measurements/2026-11-30-dense-walls.md)
+
+
+def scale_error(names, scale, parts):
+    """What the scale of Dense Fog's field beside surfaces may still miss (``escape.field_scales``, a second
+    order's share; the higher orders spread farther and the surfaces absorb scattered light it leaves out): each
+    light's scaled multiply scattered share ``parts`` times SCALE_ERROR (1 - scale) / scale.  Returns
+    {"surplus": {name: share}, "surplus_missing": their share together at the sample where it is largest}."""
+    if not names:
         return {"surplus": {}, "surplus_missing": 0.0}
-    f = shadow_maps.escape_fractions(scene, spec, lights)
-    over = np.array([1.0 - f.get(o.name, 1.0) for o in lights])
-    extra = parts * over[None, :]
+    extra = parts * (SCALE_ERROR * (1.0 - scale) / np.maximum(scale, 1e-3))[None, :]
     share = extra.max(axis=0, initial=0.0)
-    return {"surplus": {o.name: float(share[k]) for k, o in enumerate(lights) if share[k] > 0.0},
+    return {"surplus": {n: float(share[k]) for k, n in enumerate(names) if share[k] > 0.0},
             "surplus_missing": float(extra.sum(axis=1).max(initial=0.0))}

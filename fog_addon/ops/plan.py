@@ -15,7 +15,7 @@ from .. import methods, view
 from ..nodes import budgets, groups
 from ..precompute.model import predict, rungs
 from ..precompute.physics.spot import spot
-from .left_out import dense_fog, dense_served, emitters_dense, shadow_fog
+from .left_out import dense_fog, dense_served, emitters_dense, kept_scales, shadow_fog
 
 SUPPORTED_LIGHTS = ("POINT", "SPOT", "AREA")
 PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method it was built with (methods.get)
@@ -115,14 +115,16 @@ def choose_models(scene, spec, method, lights, budget=None):
     choice.update(dense_fog(scene, spec, method, lights, samples, 0.0 if choice["limited"] else choice["error"],
                             **fog))
     choice["error"] += choice["dense"]["missing"] + choice["dense"].get("surplus_missing", 0.0)
-    return _models(spec, method, lights, steps, choice["rims"], set(choice["thin"])), choice
+    return _models(spec, method, lights, steps, choice["rims"], set(choice["thin"]), choice["dense"]["scales"]), choice
 
 
-def _models(spec, method, lights, steps, rims, thin=frozenset()):
+def _models(spec, method, lights, steps, rims, thin=frozenset(), scales=None):
     """Each light's models at its step, a spot's glow with its rim's point count (``rims``: by name), Dense Fog
-    left out for the lights ``thin`` names."""
+    left out for the lights ``thin`` names and its field scaled by ``scales`` (by name; 1 for the others)."""
+    scales = scales or {}
     return [rungs.choose(method.preference, k, spec.anisotropy, view.light_kind(o), rims.get(o.name, spot.RIM_NODES),
                          multiple_albedo=None if o.name in thin else spec.multiple_albedo,
+                         multiple_scale=scales.get(o.name, 1.0),
                          cone=view.spot_cone(o) if view.is_spot(o) else None)
             for o, k in zip(lights, steps)]
 
@@ -221,8 +223,11 @@ def plan(scene, spec, method, lights, reason=None, rechoose=True, this_frame=Fal
         choice["dense"]["emitters"] = emitters_dense(scene, spec)
     else:
         rims = {o.name: old["rims"][o.name] for o in lights if o.name in old.get("rims", {})}
-        models = _models(spec, method, lights, kept, rims, set(old.get("thin", ())))
-        choice = dict(old, lights={o.name: old["lights"].get(o.name, [0, 0.0]) for o in lights}, rims=rims)
+        dense = dict(old.get("dense") or {})
+        models = _models(spec, method, lights, kept, rims, set(old.get("thin", ())),
+                         kept_scales(scene, spec, method, lights, dense))
+        choice = dict(old, lights={o.name: old["lights"].get(o.name, [0, 0.0]) for o in lights}, rims=rims,
+                      dense=dense)
     choice.update(quality=quality, method=method.name, method_reason=reason)
     # lights stepped out of the groups to fit a budget (rungs.LEFT_OUT) keep their own dimming (wrap_light)
     in_groups = lights_in_groups(lights, choice)
@@ -236,7 +241,8 @@ def plan(scene, spec, method, lights, reason=None, rechoose=True, this_frame=Fal
             steps = [old_preview["lights"].get(o.name, [rungs.OFF])[0] for o in in_groups]
             shown = [(o, k) for o, k in zip(in_groups, steps) if k < rungs.OFF]
             preview = ([o for o, _ in shown], _models(spec, methods.get("nodes"), [o for o, _ in shown],
-                                                      [k for _, k in shown], {}), old_preview)
+                                                      [k for _, k in shown], {}, frozenset(),
+                                                      choice["dense"].get("scales")), old_preview)
         else:
             preview = preview_models(scene, spec, in_groups, preview_budget)
         choice["preview"] = {"lights": preview[2]["lights"], "error": preview[2]["error"]} if preview else None

@@ -69,15 +69,17 @@ def shadows_line(choice):
 
 
 def surplus_line(choice):
-    """One line: the multiply scattered light Dense Fog's unbounded field adds beyond what the scene's surfaces
-    let scatter (``left_out.dense_surplus``), with its predicted share; None where it adds none."""
+    """One line: what Dense Fog's field may still miss beside surfaces after its scale (``left_out.scale_error``),
+    with its predicted share; None where nothing stops a light's power."""
     dense = choice.get("dense") or {}
     surplus = dense.get("surplus") or {}
     if not surplus or not dense.get("surplus_missing", 0.0) > 0.0:
         return None
     names = sorted(surplus, key=surplus.get, reverse=True)
-    return (f"multiple scattering too bright near surfaces for {len(surplus)} light(s) ({', '.join(names[:3])}"
-            f"{' and more' if len(names) > 3 else ''}; Dense Fog's fog has none): up to "
+    scales = dense.get("scales") or {}
+    shown = ", ".join(f"{n} x{scales.get(n, 1.0):.2f}" for n in names[:3])
+    return (f"multiple scattering scaled for the surfaces near {len(surplus)} light(s) ({shown}"
+            f"{' and more' if len(names) > 3 else ''}): the scale may miss up to "
             f"{dense['surplus_missing']:.2%} of a pixel's fog, in the predicted error")
 
 

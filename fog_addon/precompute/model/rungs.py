@@ -337,22 +337,35 @@ def area_rungs(scatter, g):
 MULTIPLE_ERROR = 0.07   # the multiply scattered glow against Cycles with 64 bounces: 3.3 % measured, tests bound 7 %
 
 
-def _with_multiple(base, extra, spec, m, *args):
-    """A single-scattering kernel's value plus its multiply scattered twin's (``multiple.py``), same arguments."""
-    return base(m, *args) + extra(m, spec, *args)
+def _scaled(value, scale):
+    """``value`` (a kernel's: one value or a tuple) times ``scale``; itself for 1 (no node)."""
+    if scale == 1.0:
+        return value
+    return tuple(v * scale for v in value) if isinstance(value, tuple) else value * scale
 
 
-def multiple_rungs(air, background, scatter, g, albedo):
+def _scale_tag(scale):
+    return "" if scale == 1.0 else f" x{scale:.2f}"
+
+
+def _with_multiple(base, extra, spec, m, *args, scale=1.0):
+    """A single-scattering kernel's value plus its multiply scattered twin's (``multiple.py``) times ``scale``,
+    same arguments."""
+    return base(m, *args) + _scaled(extra(m, spec, *args), scale)
+
+
+def multiple_rungs(air, background, scatter, g, albedo, scale=1.0):
     """(airlight, background, scatter) rungs of a point light with the multiply scattered light
     (``multiple.py``: the field's table for anisotropy ``g`` and grey albedo ``albedo``) added to the single
-    scattering of ``air``, ``background`` and ``scatter``.  They run where the table does (numpy, nodes)."""
+    scattering of ``air``, ``background`` and ``scatter``.  They run where the table does (numpy, nodes).
+    ``scale``: the share of unbounded fog's field that the scene's surfaces leave (``escape.field_scales``)."""
     spec = multiple.table_spec(g, albedo)
-    tag = spec.name.split("(", 1)[1].rstrip(")")
+    tag = spec.name.split("(", 1)[1].rstrip(")") + _scale_tag(scale)
     out = []
     for rung, extra in ((air, multiple.multiple_airlight), (background, multiple.multiple_background),
                         (scatter, multiple.multiple_scatter)):
         out.append(replace(rung, name=f"{rung.name} + multiple {tag}",
-                           kernel=functools.partial(_with_multiple, rung.kernel, extra, spec),
+                           kernel=functools.partial(_with_multiple, rung.kernel, extra, spec, scale=scale),
                            backends=rung.backends & {"numpy", "nodes"}, tables=rung.tables + (spec,),
                            max_error=max(rung.max_error, MULTIPLE_ERROR),
                            evidence="tests/test_multiple.py; docs/measurements/2026-11-27-apsf.md"))
@@ -370,20 +383,21 @@ def _edge(edge, shape0):
     return shape0 if edge is None else edge
 
 
-def _halo_air(spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, s0, s1, *, edge=None):
-    """The multiply scattered glow alone of a spot (or an area light) along a ray to a surface."""
-    return spot_multiple.airlight(m, spec, beta, d_vp, px, py, pz, dx, dy, dz, _edge(edge, s0))
+def _halo_air(spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, s0, s1, *, edge=None, scale=1.0):
+    """The multiply scattered glow alone of a spot (or an area light) along a ray to a surface, times
+    ``scale``."""
+    return _scaled(spot_multiple.airlight(m, spec, beta, d_vp, px, py, pz, dx, dy, dz, _edge(edge, s0)), scale)
 
 
-def _halo_background(spec, m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, s0, s1, *, edge=None):
-    """The multiply scattered glow alone of a spot (or an area light) along a ray to the sky."""
-    return spot_multiple.airlight(m, spec, beta, model.FAR, px, py, pz, dx, dy, dz, _edge(edge, s0))
+def _halo_background(spec, m, beta, d_sv, along, h, px, py, pz, dx, dy, dz, s0, s1, *, edge=None, scale=1.0):
+    """The multiply scattered glow alone of a spot (or an area light) along a ray to the sky, times ``scale``."""
+    return _scaled(spot_multiple.airlight(m, spec, beta, model.FAR, px, py, pz, dx, dy, dz, _edge(edge, s0)), scale)
 
 
-def _halo_pair(spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, s0, s1, *, edge=None):
+def _halo_pair(spec, m, beta, d_sv, along, h, d_vp, px, py, pz, dx, dy, dz, s0, s1, *, edge=None, scale=1.0):
     ray = (px, py, pz, dx, dy, dz)
-    return (spot_multiple.airlight(m, spec, beta, d_vp, *ray, _edge(edge, s0)),
-            spot_multiple.airlight(m, spec, beta, model.FAR, *ray, _edge(edge, s0)))
+    return _scaled((spot_multiple.airlight(m, spec, beta, d_vp, *ray, _edge(edge, s0)),
+                    spot_multiple.airlight(m, spec, beta, model.FAR, *ray, _edge(edge, s0))), scale)
 
 
 def _plus(single, halo, m, *args):
@@ -397,25 +411,25 @@ def _plus_pair(single, halo, m, *args):
 
 
 def _spot_scatter_multiple(scatter, spec, m, beta, d_sp, cos_n, cos_r, level, c_axis, s0, s1, cos_n_axis,
-                           cos_r_axis):
-    """A spot's (diffuse, glossy) fog light on a surface (``scatter``) plus the multiply scattered light: the
-    irradiance over pi of a surface facing the normal, and for the glossy lobe facing the mirrored view vector
-    (the field is broad: its radiance from a direction is about the irradiance facing it over pi)."""
+                           cos_r_axis, *, scale=1.0):
+    """A spot's (diffuse, glossy) fog light on a surface (``scatter``) plus the multiply scattered light times
+    ``scale``: the irradiance over pi of a surface facing the normal, and for the glossy lobe facing the mirrored
+    view vector (the field is broad: its radiance from a direction is about the irradiance facing it over pi)."""
     diffuse, glossy = scatter(m, beta, d_sp, cos_n, cos_r, level, c_axis, s0, s1, cos_n_axis, cos_r_axis)
-    return (diffuse + spot_multiple.scatter(m, spec, beta, d_sp, cos_n, c_axis, cos_n_axis),
-            glossy + spot_multiple.scatter(m, spec, beta, d_sp, cos_r, c_axis, cos_r_axis))
+    return (diffuse + _scaled(spot_multiple.scatter(m, spec, beta, d_sp, cos_n, c_axis, cos_n_axis), scale),
+            glossy + _scaled(spot_multiple.scatter(m, spec, beta, d_sp, cos_r, c_axis, cos_r_axis), scale))
 
 
-def spot_multiple_rungs(air, background, scatter, g, albedo, cone):
+def spot_multiple_rungs(air, background, scatter, g, albedo, cone, scale=1.0):
     """(airlight, background, scatter) rungs of a spot light with its multiply scattered light
     (``spot_multiple``: the table of anisotropy ``g``, grey albedo ``albedo`` and ``cone`` = (cos_half, blend);
     ``cone`` None: an area light's, Lambert's cosine about its normal) added to the rungs ``air``,
     ``background`` and ``scatter``.  The compositor and numpy run them: a ray's quadrature in every material
-    would cost the node groups far more."""
+    would cost the node groups far more.  ``scale``: as ``multiple_rungs``'."""
     spec = (spot_multiple.table_spec(g, albedo, *cone) if cone is not None
             else spot_multiple.lambert_table_spec(g, albedo))
-    edge = {} if cone is not None else {"edge": 0.0}
-    tag = spec.name.split("(", 1)[1].rstrip(")")
+    edge = ({} if cone is not None else {"edge": 0.0}) | {"scale": scale}
+    tag = spec.name.split("(", 1)[1].rstrip(")") + _scale_tag(scale)
     common = dict(backends=air.backends & {"numpy", "nodes"}, max_error=max(air.max_error, SPOT_MULTIPLE_ERROR),
                   evidence="tests/test_spot_multiple.py; docs/measurements/2026-11-28-spot-multiple.md")
     halo_air = replace(air, name=f"halo {tag}", tables=(spec,), kernel=functools.partial(_halo_air, spec, **edge),
@@ -429,7 +443,7 @@ def spot_multiple_rungs(air, background, scatter, g, albedo, cone):
                     kernel=functools.partial(_plus, background.kernel, halo_background.kernel),
                     halo=halo_background, single=background, **common),
             replace(scatter, name=f"{scatter.name} + multiple {tag}", tables=scatter.tables + (spec,),
-                    kernel=functools.partial(_spot_scatter_multiple, scatter.kernel, spec),
+                    kernel=functools.partial(_spot_scatter_multiple, scatter.kernel, spec, scale=scale),
                     backends=scatter.backends & {"numpy", "nodes"},
                     max_error=max(scatter.max_error, SPOT_MULTIPLE_ERROR),
                     evidence="tests/test_spot_multiple.py (a 360-degree cone against the point light's irradiance)"))
@@ -449,7 +463,7 @@ def _dense_fog(preference, kind, step, multiple_albedo, cone):
 
 
 def choose(preference="nodes", step=0, g=0.0, kind="point", rim_nodes=spot.RIM_NODES, multiple_albedo=None,
-           cone=None):
+           cone=None, multiple_scale=1.0):
     """The models for one light's terms, honouring the user's ``preference`` (PREFERENCES), ``step``
     (index into STEPS) rungs down the ladder, for Henyey-Greenstein anisotropy ``g``; ``kind`` (LIGHT_KINDS):
     a point light, a spot light (``spot_rungs``, DIRECT_SPOT) whose glow's rim takes ``rim_nodes`` points
@@ -463,7 +477,8 @@ def choose(preference="nodes", step=0, g=0.0, kind="point", rim_nodes=spot.RIM_N
     serves (tables below MIN_TABLE_ANISOTROPY).  ``multiple_albedo``: a grey albedo to add a point light's
     multiply scattered glow with (``multiple_rungs``; the node groups' tables, not OSL's quadrature), or None;
     a spot light's with the compositor when its ``cone`` = (cos_half, blend) is given, an area light's with the
-    compositor (``spot_multiple_rungs``).
+    compositor (``spot_multiple_rungs``).  ``multiple_scale``: the share of that field the scene's surfaces
+    leave (``escape.field_scales``; 1: unbounded fog).
     """
     if preference not in PREFERENCES:
         raise ValueError(f"unknown method {preference!r}; use one of {', '.join(PREFERENCES)}")
@@ -485,9 +500,11 @@ def choose(preference="nodes", step=0, g=0.0, kind="point", rim_nodes=spot.RIM_N
         models = models._replace(direct=DIRECT_SPOT, scatter=spot_scatter_rung(models.scatter, g))._replace(
             **dict(zip(("airlight", "background"), spot_rungs(models.airlight, models.background, g, rim_nodes))))
     if _dense_fog(preference, kind, step, multiple_albedo, cone):
-        dense = (multiple_rungs(models.airlight, models.background, models.scatter, g, multiple_albedo)
+        dense = (multiple_rungs(models.airlight, models.background, models.scatter, g, multiple_albedo,
+                                multiple_scale)
                  if kind == "point" else spot_multiple_rungs(models.airlight, models.background, models.scatter, g,
-                                                             multiple_albedo, cone if kind == "spot" else None))
+                                                             multiple_albedo, cone if kind == "spot" else None,
+                                                             multiple_scale))
         models = models._replace(**dict(zip(("airlight", "background", "scatter"), dense)))
     if step >= 1:
         models = models._replace(scatter=SCATTER_OFF)
