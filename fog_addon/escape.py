@@ -7,8 +7,9 @@ of ``precompute/physics/point/escape.py`` evaluated:
 
 * ``escape_fractions``: each light's escape fraction f (the share of its power that scatters at all);
 * ``field_scales``: each light's second-order share at the points the camera sees (the nearest point of each
-  sampled camera ray to the light, and the surface it meets), the scale Dense Fog's field of that light takes
-  in every method (``rungs.choose``'s ``multiple_scale``).
+  sampled camera ray to the light, and the surface it meets), both flights stopped by the surfaces, the scale
+  Dense Fog's field of that light takes in every method (``rungs.choose``'s ``multiple_scale``).  The later
+  flights' losses are left out; ``ops/left_out.scale_error`` counts them in the predicted error.
 
 Both judge at most ``shadow_maps.SHARE_LIGHTS`` lights, the most important to the picture (a city's other lamps
 take the judged lamps' median scale).
@@ -75,7 +76,7 @@ def field_scales(scene, spec, lights, grid=ESCAPE_GRID):
     """{light name: scale in [0, 1]}: Dense Fog's field of each judged light times this is the field with the
     scene's surfaces in the way (``escape.second_order_share`` at the view's samples on ``grid``), its mean over
     an animation's sampled frames (``view.sample_frames``: every frame renders the same groups), rounded to
-    SCALE_STEP; the lights not judged take the judged lights' median.  Empty without a camera or fog."""
+    SCALE_STEP (at least SCALE_STEP); the lights not judged take the judged lights' median.  Empty without a camera or fog."""
     if not lights or scene.camera is None or spec.beta_per_unit <= 0.0:
         return {}
     judged = shadow_maps.judged_lights(scene, spec, lights)
@@ -88,7 +89,8 @@ def field_scales(scene, spec, lights, grid=ESCAPE_GRID):
                                  for f in ("camera", "direction", "distance", "lights")})
         for k, light in enumerate(judged):
             shares[light.name].append(_share(geometry, light, at, k, spec))
-    out = {name: min(1.0, SCALE_STEP * round(float(np.mean(v)) / SCALE_STEP)) for name, v in shares.items()}
+    out = {name: min(1.0, max(SCALE_STEP, SCALE_STEP * round(float(np.mean(v)) / SCALE_STEP)))
+           for name, v in shares.items()}
     if len(judged) < len(lights):   # (the others, less important to the picture: as the judged are)
         rest = SCALE_STEP * round(float(np.median(list(out.values()))) / SCALE_STEP)
         out.update({o.name: rest for o in lights if o.name not in out})
@@ -96,10 +98,38 @@ def field_scales(scene, spec, lights, grid=ESCAPE_GRID):
 
 
 def _share(geometry, light, samples, k, spec):
-    """Light ``k``'s second-order share at ``samples`` (one frame's) with the surfaces of ``geometry``."""
+    """Light ``k``'s second-order share at ``samples`` (one frame's) with the surfaces of ``geometry``: the first
+    flight's by ``escape.second_order_share`` over every direction, the second's (from a first scattering to a
+    receiver) by ray casts from FLIGHT_POINTS first scatterings drawn by what they feed."""
     directions, depth = _depths(geometry, light, ESCAPE_MAP)
     emission = _emission(light, directions)
     if escape.escape_fraction(spec.beta_per_unit, depth, emission) >= 1.0 - 0.5 * SCALE_STEP:
         return 1.0   # (nothing stops the light's power before it scatters: no second order to judge)
-    return escape.second_order_share(np.asarray(light.matrix_world.translation), directions, emission, depth,
-                                     _receivers(samples, k), spec.beta_per_unit, spec.anisotropy)
+    origin = np.asarray(light.matrix_world.translation)
+    receivers = _receivers(samples, k)
+    share, points, feeds = escape.second_order_share(origin, directions, emission, depth, receivers,
+                                                     spec.beta_per_unit, spec.anisotropy, with_sources=True)
+    if feeds.sum() <= 0.0:
+        return share
+    return share * _second_flight_seen(geometry, origin, points, feeds, receivers, spec)
+
+
+FLIGHT_POINTS = 48          # first scatterings the second flight is judged from
+
+
+def _second_flight_seen(geometry, origin, points, feeds, receivers, spec):
+    """The share of the second order that reaches the receivers past the surfaces: at FLIGHT_POINTS first
+    scatterings drawn by what they feed (quantiles of ``feeds``), the kernel-weighted share of the receivers each
+    sees (ray casts), averaged."""
+    at = np.searchsorted(np.cumsum(feeds) / feeds.sum(), (np.arange(FLIGHT_POINTS) + 0.5) / FLIGHT_POINTS)
+    at = np.minimum(at, len(feeds) - 1)
+    sources = points[at]
+    kernel = escape.second_order_kernel(origin, sources, receivers, spec.beta_per_unit, spec.anisotropy)
+    seen = np.zeros(kernel.shape)
+    for s, y in enumerate(sources):
+        v = receivers - y
+        d = np.linalg.norm(v, axis=1)
+        hit = shadow_maps.cast(geometry.bvh, tuple(y), v / np.maximum(d, 1e-12)[:, None])
+        seen[:, s] = hit >= d * (1.0 - 1e-4) - 1e-4   # (a receiver on a surface: its own surface)
+    per_source = (kernel * seen).sum(axis=0) / np.maximum(kernel.sum(axis=0), 1e-30)
+    return float(per_source.mean())

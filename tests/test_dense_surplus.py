@@ -57,8 +57,8 @@ def test_escape_fraction_and_scale_of_a_lamp_between_planes():
 
 # (scene, density, reference, its samples, bound on the block means' relative RMSE): ``--regen-references`` renders
 # them again (``shafts.render_ms_reference``)
-MS_CASES = [("hooded_lamp", 0.08, "hooded_lamp_0.08_ms32.exr", 2048, 0.20),
-            ("street_lamps", 0.08, "street_lamps_0.08_shadows_ms32.exr", 1024, 0.07)]
+MS_CASES = [("hooded_lamp", 0.08, "hooded_lamp_0.08_ms32.exr", 2048, 0.10),
+            ("street_lamps", 0.08, "street_lamps_0.08_shadows_ms32.exr", 1024, 0.20)]
 
 
 @pytest.mark.slow

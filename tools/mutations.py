@@ -251,6 +251,13 @@ MUTATIONS = [
              "    lit = r[None, :] < np.asarray(depth, float)[:, None]",
              "    lit = r[None, :] < np.inf + 0.0 * np.asarray(depth, float)[:, None]",
              ("tests/test_escape.py::test_second_order_share_over_a_floor_against_quadrature",)),
+    Mutation("dense_second_flight_unseen", "Dense Fog beside surfaces: the second order's flight from a first "
+             "scattering to the camera's fog never stopped by a surface (a room lit through its windows scaled 0.5, "
+             "its fog 38 % off path tracing)",
+             "_second_flight_seen",
+             "    return float(per_source.mean())\n",
+             "    return 1.0 + 0.0 * float(per_source.mean())\n",
+             ("tests/test_dense_surplus.py::test_dense_fog_beside_surfaces_against_path_tracing",)),
     Mutation("dense_scale_unapplied", "Dense Fog beside surfaces: the lights' multiply scattered terms keep the "
              "unbounded field whatever their scale (the hooded lamp's fog 49 % off path tracing)",
              "_scaled",

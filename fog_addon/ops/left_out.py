@@ -99,7 +99,8 @@ def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None,
         samples = predict.every_nth(samples, n)
         single, dense = (None if f is None else tuple(a[::n] for a in f) for f in (single, dense))
     scale = np.array([scales.get(o.name, 1.0) for o in lights])
-    parts = view.multiple_parts(scene, spec, lights, samples, single, dense) * scale[None, :]
+    unscaled = view.multiple_parts(scene, spec, lights, samples, single, dense)
+    parts = unscaled * scale[None, :]
     share = parts.max(axis=0, initial=0.0)
     missed = [k for k, o in enumerate(lights) if not served(o)]
     out["dense"]["left_out"] = {lights[k].name: float(share[k]) for k in missed}
@@ -115,7 +116,10 @@ def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None,
     kept = [k for k in range(len(lights)) if k not in missed]   # (those that get Dense Fog)
     out["dense"]["scales"] = {lights[k].name: float(scale[k]) for k in kept if scale[k] < 1.0}
     out["dense"]["scales_at"] = scales_key(spec)
-    out["dense"].update(scale_error([lights[k].name for k in kept], scale[kept], parts[:, kept]))
+    scaled = [k for k, o in enumerate(lights) if served(o)]   # (kept and thin: a thin light's miss is scaled too)
+    escapes = escape.escape_fractions(scene, spec, [lights[k] for k in scaled])
+    out["dense"].update(scale_error([lights[k].name for k in scaled], scale[scaled],
+                                    np.array([escapes.get(lights[k].name, 1.0) for k in scaled]), unscaled[:, scaled]))
     return out
 
 
@@ -135,17 +139,20 @@ def kept_scales(scene, spec, method, lights, dense):
     return dense.get("scales") or {}
 
 
-SCALE_ERROR = 1.0   # the scale's error as a share of 1 - scale (measured: docs/measurements/2026-11-30-dense-walls.md)
-
-
-def scale_error(names, scale, parts):
-    """What the scale of Dense Fog's field beside surfaces may still miss (``escape.field_scales``, a second
-    order's share; the higher orders spread farther and the surfaces absorb scattered light it leaves out): each
-    light's scaled multiply scattered share ``parts`` times SCALE_ERROR (1 - scale) / scale.  Returns
-    {"surplus": {name: share}, "surplus_missing": their share together at the sample where it is largest}."""
+def scale_error(names, scales, escapes, parts):
+    """What the scale of Dense Fog's field beside surfaces may miss (``escape.field_scales``: the second order's
+    share, which leaves out the scattered light the surfaces stop between later scatterings, and the light that
+    reaches the camera's fog around them): each light's unbounded multiply scattered share ``parts`` times the
+    larger of k (1 - f), its scaled field too bright by the later flights' losses (f its escape fraction,
+    ``escapes``: the share of a flight from the light that scatters before a surface), and (1 - k) / 2, its field
+    scaled down too far (k its scale, ``scales``).  Measured against Cycles with surfaces that absorb the
+    scattered light (docs/measurements/2026-11-30-dense-walls.md): the true share 0.65 beside an open street's
+    ground where k is 0.92, 0.17 in a room lit through its windows where k is 0.05.  Returns {"surplus":
+    {name: share}, "surplus_missing": their share together at the sample where it is largest}."""
     if not names:
         return {"surplus": {}, "surplus_missing": 0.0}
-    extra = parts * (SCALE_ERROR * (1.0 - scale) / np.maximum(scale, 1e-3))[None, :]
+    k, f = np.asarray(scales, float), np.asarray(escapes, float)
+    extra = parts * np.maximum(k * (1.0 - f), 0.5 * (1.0 - k))[None, :]
     share = extra.max(axis=0, initial=0.0)
-    return {"surplus": {n: float(share[k]) for k, n in enumerate(names) if share[k] > 0.0},
+    return {"surplus": {n: float(share[j]) for j, n in enumerate(names) if share[j] > 0.0},
             "surplus_missing": float(extra.sum(axis=1).max(initial=0.0))}

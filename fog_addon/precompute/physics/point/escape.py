@@ -20,8 +20,9 @@ light's power meets the surface before it scatters and never feeds the field.  T
   point kernel; Narasimhan et al. ``002`` §2 start from the same source).  Summed over the visible points
   ``receivers`` it weighs the sources near what the camera sees: under a hood the fog the camera sees is fed by
   the light going down, and the light stopped above counts less than its share of the power.  Higher orders
-  spread farther, towards f; the second order dominates below an optical thickness of about 2.  The surfaces'
-  own shadows on the path from y to x are left out (a ray cast per pair would cost 10^6 casts).
+  spread farther, towards f; the second order dominates below an optical thickness of about 2.  The second
+  flight, from y to x, is judged by ray casts from a few first scatterings (``fog_addon/escape.py``, with
+  ``second_order_kernel``): a ray cast per pair would cost 10^6 casts.
 
 Units: positions and distances in m, beta in 1/m; results dimensionless in [0, 1].
 """
@@ -41,6 +42,21 @@ def escape_fraction(beta, depth, weight):
     return float((weight * scattered).sum() / max(weight.sum(), 1e-30))
 
 
+def second_order_kernel(light, sources, receivers, beta, g):
+    """(K, S): what a first scattering at each of ``sources`` (S, 3) m, of light from ``light`` (3,), adds to the
+    fluence at each of ``receivers`` (K, 3) m, as ``second_order_share`` weighs it."""
+    light, sources = np.asarray(light, float), np.asarray(sources, float)
+    receivers = np.asarray(receivers, float).reshape(-1, 3)
+    u = sources - light
+    u /= np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-12)
+    v = receivers[:, None, :] - sources[None]
+    d2 = np.einsum("ksi,ksi->ks", v, v)
+    d = np.sqrt(d2)
+    cos = np.einsum("ksi,si->ks", v, u) / np.maximum(d, 1e-12)
+    near = NEAR_FRACTION * np.linalg.norm(receivers - light, axis=1)
+    return hg_phase(g, cos) * np.exp(-beta * d) / np.maximum(d2, (near * near)[:, None])
+
+
 def hg_phase(g, cos_theta):
     """Henyey-Greenstein's phase function, 1/sr."""
     return (1.0 - g * g) / (4.0 * np.pi * (1.0 + g * g - 2.0 * g * cos_theta) ** 1.5)
@@ -52,17 +68,19 @@ def source_distances(beta, nodes=SOURCE_NODES):
     return -np.log1p(-(np.arange(nodes) + 0.5) / nodes) / beta
 
 
-def second_order_share(light, directions, weight, depth, receivers, beta, g, nodes=SOURCE_NODES):
+def second_order_share(light, directions, weight, depth, receivers, beta, g, nodes=SOURCE_NODES, with_sources=False):
     """The second order of the field summed over ``receivers`` ((K, 3) m) with the first scattering stopped at
     ``depth`` ((J,) m along the unit ``directions`` (J, 3) from ``light`` (3,), inf: no surface), over the same
     without surfaces.  ``directions`` are about equal solid angles, ``weight`` (J,) the light's emission each way,
-    ``g`` the fog's anisotropy.  1 with nothing in the way."""
+    ``g`` the fog's anisotropy.  1 with nothing in the way.  ``with_sources``: (share, the first scatterings'
+    points (S, 3) m, what each feeds the receivers' second order (S,), 0 where a surface stopped the light)."""
     light = np.asarray(light, float)
     directions, weight = np.asarray(directions, float), np.asarray(weight, float)
     r = source_distances(beta, nodes)
     lit = r[None, :] < np.asarray(depth, float)[:, None]                        # (J, n)
     sources = light + r[None, :, None] * directions[:, None, :]                  # (J, n, 3)
     occluded = unbounded = 0.0
+    feeds = np.zeros(lit.shape)
     receivers = np.asarray(receivers, float).reshape(-1, 3)
     for start in range(0, len(receivers), RECEIVER_CHUNK):
         x = receivers[start:start + RECEIVER_CHUNK]
@@ -75,4 +93,6 @@ def second_order_share(light, directions, weight, depth, receivers, beta, g, nod
         kernel *= weight[None, :, None]
         unbounded += float(kernel.sum())
         occluded += float((kernel * lit[None]).sum())
-    return occluded / unbounded if unbounded > 0.0 else 1.0
+        feeds += (kernel * lit[None]).sum(axis=0)
+    share = occluded / unbounded if unbounded > 0.0 else 1.0
+    return (share, sources.reshape(-1, 3), feeds.ravel()) if with_sources else share
