@@ -72,11 +72,14 @@ def _receivers(samples, k):
     return np.concatenate([nearest, surface])
 
 
-def field_scales(scene, spec, lights, grid=ESCAPE_GRID):
+def field_scales(scene, spec, lights, grid=ESCAPE_GRID, previous=None):
     """{light name: scale in [0, 1]}: Dense Fog's field of each judged light times this is the field with the
     scene's surfaces in the way (``escape.second_order_share`` at the view's samples on ``grid``), its mean over
     an animation's sampled frames (``view.sample_frames``: every frame renders the same groups), rounded to
-    SCALE_STEP (at least SCALE_STEP); the lights not judged take the judged lights' median.  Empty without a camera or fog."""
+    SCALE_STEP (at least SCALE_STEP); the lights not judged take the judged lights' median.  A light keeps its
+    scale in ``previous`` ({name: scale}, a stored choice's; lights without one there: 1) while its new share is
+    within SCALE_STEP of it, so that an edit elsewhere does not swap its groups for a share on a rounding edge.
+    Empty without a camera or fog."""
     if not lights or scene.camera is None or spec.beta_per_unit <= 0.0:
         return {}
     judged = shadow_maps.judged_lights(scene, spec, lights)
@@ -89,12 +92,19 @@ def field_scales(scene, spec, lights, grid=ESCAPE_GRID):
                                  for f in ("camera", "direction", "distance", "lights")})
         for k, light in enumerate(judged):
             shares[light.name].append(_share(geometry, light, at, k, spec))
-    out = {name: min(1.0, max(SCALE_STEP, SCALE_STEP * round(float(np.mean(v)) / SCALE_STEP)))
+    out = {name: _rounded(float(np.mean(v)), None if previous is None else previous.get(name, 1.0))
            for name, v in shares.items()}
     if len(judged) < len(lights):   # (the others, less important to the picture: as the judged are)
         rest = SCALE_STEP * round(float(np.median(list(out.values()))) / SCALE_STEP)
         out.update({o.name: rest for o in lights if o.name not in out})
     return out
+
+
+def _rounded(share, kept=None):
+    """``share`` rounded to SCALE_STEP, within [SCALE_STEP, 1]; ``kept`` instead while within SCALE_STEP of it."""
+    if kept is not None and abs(share - kept) < SCALE_STEP:
+        return kept
+    return min(1.0, max(SCALE_STEP, SCALE_STEP * round(share / SCALE_STEP)))
 
 
 def _share(geometry, light, samples, k, spec):

@@ -18,9 +18,11 @@ References (Cycles World volume, path traced), as ``fog_scenes/dense.py``'s but 
   2005 Sec. 4); N = 64 adds the multiply scattered field's irradiance (0.9^64 = 1e-3 left out);
 * the add-on's test conventions, as ``python -m fog_addon reference --no-cast-shadows --no-interreflection``:
   objects hidden from shadow rays (no cast shadows; the lamp keeps its shadows, which carry the fog's
-  extinction) and from diffuse/glossy rays (no surface-to-surface light, the fog hemisphere unoccluded), and
-  here also from volume-scatter rays, so that the multiply scattered field is the unbounded medium's, as our
-  model assumes (no light reflected by the ground back into the fog, no fog cut off below the ground);
+  extinction) and from diffuse/glossy rays (no surface-to-surface light, the fog hemisphere unoccluded); to
+  volume-scatter rays they are black (``reference.absorb_scattered_rays``): the ground and the wall stop the
+  scattered light, as Dense Fog's scale beside surfaces models (``fog_addon/escape.py``), and reflect none of
+  it back into the fog, which the model leaves out (the references before 2026-11-30 hid them from those rays:
+  the unbounded medium's field, file names without ABSORBING_TAG);
 * clip start 1 mm, pixel-centre filter, no denoising or clamping (``reference.configure_reference``);
 * the mean of ``seeds`` renders with Cycles seeds 0, 1, ...
 
@@ -135,7 +137,7 @@ reference.configure_reference(scene, beta * albedo, anisotropy=g, samples=a["sam
 reference.add_black_absorption(scene, beta * (1.0 - albedo))
 reference.disable_cast_shadows(scene)
 reference.disable_interreflection(scene)
-reference.hide_from_volume_scatter(scene)
+reference.absorb_scattered_rays(scene)
 c = scene.cycles
 c.volume_bounces = n
 c.diffuse_bounces = c.glossy_bounces = 1
@@ -150,12 +152,16 @@ print("RENDER_SECONDS %.2f" % (time.perf_counter() - t0))
 '''
 
 
+ABSORBING_TAG = "_absorbing"   # a multiple-scattering reference whose surfaces absorb the scattered light
+
+
 def reference_name(volume_bounces, samples, seeds, density=DENSITY, anisotropy=ANISOTROPY, albedo=ALBEDO,
                    resolution=RESOLUTION, spot=False):
     """File name of a cached reference, its parameters in it (``spot``: SPOT_TAG after NAME)."""
     w, hh = resolution
+    walls = ABSORBING_TAG if volume_bounces > 0 else ""
     return (f"{NAME}{_tag(spot)}_beta{float(density):g}_g{float(anisotropy):g}_a{float(albedo):g}"
-            f"_vb{int(volume_bounces)}_{w}x{hh}_{int(samples)}spp_x{int(seeds)}.exr")
+            f"_vb{int(volume_bounces)}{walls}_{w}x{hh}_{int(samples)}spp_x{int(seeds)}.exr")
 
 
 def render_reference(volume_bounces, samples, seeds, density=DENSITY, anisotropy=ANISOTROPY, albedo=ALBEDO,

@@ -76,7 +76,7 @@ def scene_materials(scene, objects=None):
     return mats
 
 
-def choose_models(scene, spec, method, lights, budget=None):
+def choose_models(scene, spec, method, lights, budget=None, previous=None):
     """Each light's models (rungs.LightModels) at the spec's Quality with ``method``, and the choice for reports.
 
     The view is sampled by ray casts (``view.py``) and every light's step down
@@ -87,7 +87,8 @@ def choose_models(scene, spec, method, lights, budget=None):
     count} of the spots whose glow's rim takes fewer than spot.RIM_NODES points, "error": total, "target": t,
     "engine": the render engine chosen for, "limited": what forced steps beyond the target, or None, and
     ``dense_fog``'s "thin", "dense": its account of the multiply scattered light left out}.  ``budget``: this budget
-    instead of the method's (the viewport's preview: ``preview_models``).
+    instead of the method's (the viewport's preview: ``preview_models``).  ``previous``: the stored choice, whose
+    Dense Fog scales a light keeps while its new one is within a step of it (``left_out.dense_fog``).
     """
     target = spec.target_error
     engine = scene.render.engine
@@ -113,7 +114,7 @@ def choose_models(scene, spec, method, lights, budget=None):
         choice["lights"] = {o.name: [0, 0.0] for o in lights}
     # (where a budget forced steps beyond the target, thin lights are judged against the target alone)
     choice.update(dense_fog(scene, spec, method, lights, samples, 0.0 if choice["limited"] else choice["error"],
-                            **fog))
+                            **fog, previous=((previous or {}).get("dense") or {}).get("scales")))
     choice["error"] += choice["dense"]["missing"] + choice["dense"].get("surplus_missing", 0.0)
     return _models(spec, method, lights, steps, choice["rims"], set(choice["thin"]), choice["dense"]["scales"]), choice
 
@@ -217,7 +218,7 @@ def plan(scene, spec, method, lights, reason=None, rechoose=True, this_frame=Fal
         if budget is not None and not budget.fits(kept):   # e.g. the method switched to OSL: choose again
             kept = None
     if kept is None:
-        models, choice = choose_models(scene, spec, method, lights)
+        models, choice = choose_models(scene, spec, method, lights, previous=old)
         choice.update(shadow_fog(scene, spec, method, lights))
         choice["error"] += choice["shadows"]["missing"]
         choice["dense"]["emitters"] = emitters_dense(scene, spec)
