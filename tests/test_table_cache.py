@@ -201,3 +201,24 @@ def test_numpy_helpers_read_the_cache(cache, monkeypatch):
     monkeypatch.setattr(surface, "_TABLE_CACHE", {})
     surface.surface_table()
     assert table_cache.cache_path(tables.SURFACE).is_file()
+
+
+def test_a_missing_table_is_baked_once_by_parallel_bakers(cache):
+    """Four bakers that miss the same table at once (a farm's processes, the tests' workers): one bakes it, the
+    others wait for its lock and read it (the bake is slow enough that without the lock all four would bake)."""
+    import threading
+    import time
+    spec, bake = tables.LOBE_RESPONSE, bakers.bakers()[tables.LOBE_RESPONSE.name][1]
+
+    def slow():
+        time.sleep(0.3)
+        return bake()
+    counting = Counting(spec, slow)
+    counting.__module__ = bake.__module__
+    out = []
+    threads = [threading.Thread(target=lambda: out.append(table_cache.cached_bake(spec, counting))) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert counting.calls == 1 and len(out) == 4 and all(_same(a, out[0]) for a in out)

@@ -8,12 +8,14 @@ table's ``TableSpec`` (name, size, anisotropy g, channels).  An array read from 
 the baker returned (same dtype and bits); an entry that is missing, unreadable or corrupt (each file is a
 ``.npz`` whose zip CRC is checked on reading, holding the spec it was baked for) is baked again and
 rewritten, never an error.  Entries are written to a temporary file and renamed into place, so processes
-running in parallel never see half a file.
+running in parallel never see half a file, and a table missing in several processes at once is baked by one of
+them while the others wait for it (``_baking``).
 
 Where: ``$ANALYTIC_FOG_CACHE`` if set (an empty value or ``off`` turns the cache off), else
 ``$XDG_CACHE_HOME/analytic_fog``, else ``~/.cache/analytic_fog``; one subfolder per precompute fingerprint
 and numpy version, of which the KEEP most recently used are kept.
 """
+import contextlib
 import hashlib
 import os
 import pathlib
@@ -77,9 +79,35 @@ def cached_bake(spec, bake):
         return bake()
     arr = _load(path, spec)
     if arr is None:
-        arr = bake()
-        _store(path, spec, arr)
+        with _baking(path):
+            arr = _load(path, spec)   # (another process may have baked it while this one waited)
+            if arr is None:
+                arr = bake()
+                _store(path, spec, arr)
     return arr
+
+
+@contextlib.contextmanager
+def _baking(path):
+    """Hold ``path``'s bake lock (an exclusive ``flock`` on "<path>.lock"): processes that need the same missing
+    table at once (a farm's, the tests' workers) bake it once, the others wait and read it.  Without ``fcntl``
+    (Windows) or a writable folder, no lock: each bakes, as before.  The system releases a lock whose process
+    died."""
+    try:
+        import fcntl
+        new = not path.parent.is_dir()
+        path.parent.mkdir(parents=True, exist_ok=True)
+        lock = open(f"{path}.lock", "a")
+    except (ImportError, OSError):
+        yield
+        return
+    if new:
+        _prune(path.parent.parent)
+    try:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        yield
+    finally:
+        lock.close()   # (closing releases the lock)
 
 
 def _load(path, spec):
