@@ -244,6 +244,7 @@ def anim_shafts(outdir):
     fog_addon.register()
     scene.analytic_fog.method = "COMPOSITOR"
     scene.analytic_fog.use_shafts = True
+    scene.analytic_fog.use_multiple_scattering = False   # (one Dense Fog scale per animation: see ``anim``)
     scene.frame_set(1)
     t = time.perf_counter()
     assert bpy.ops.fog.add(density=DENSITY) == {"FINISHED"}
@@ -303,6 +304,7 @@ def anim_sun_shafts(outdir):
     settings = scene.analytic_fog
     settings.method, settings.use_fog_top, settings.fog_top, settings.height_falloff = "COMPOSITOR", True, 3.0, 1.0
     settings.color = (0.9, 0.9, 0.9)
+    settings.use_multiple_scattering = False   # (one Dense Fog scale per animation: see ``anim``)
     t = time.perf_counter()
     assert bpy.ops.fog.add(density=DENSITY) == {"FINISHED"}
     log["add_s"] = round(time.perf_counter() - t, 2)

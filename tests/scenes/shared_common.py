@@ -52,9 +52,13 @@ def expected_names(method, scene=None, texts_of=None):
     dense = (spec is not None and choice is not None and spec.multiple_scattering
              and len(choice.get("thin", {})) < len(choice["lights"]))
     albedo = spec.multiple_albedo if dense else None
-    models = rungs.choose(method, multiple_albedo=albedo)
-    names = [groups.PARAMS, groups.SURFACE, groups.WORLD,
-             groups.light_group_name(models), groups.background_group_name(models)]
+    # (beside surfaces each light's Dense Fog takes its scale: ``escape.field_scales``; one group per scale)
+    scales = ((choice or {}).get("dense") or {}).get("scales") or {}
+    lights = apply.fog_lights(scene)[0] if scene is not None else []
+    names = [groups.PARAMS, groups.SURFACE, groups.WORLD]
+    for scale in sorted({scales.get(o.name, 1.0) for o in lights} if albedo is not None and lights else {1.0}):
+        models = rungs.choose(method, multiple_albedo=albedo, multiple_scale=scale)
+        names += [groups.light_group_name(models), groups.background_group_name(models)]
     if albedo is not None and method != "osl":   # (its table: OSL has no Dense Fog)
         names.append(multiple.table_spec(spec.anisotropy, albedo).name)
     if scene is not None:   # the lights' bundles: every light full (these files' Quality keeps them all)
