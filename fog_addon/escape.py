@@ -95,7 +95,7 @@ def field_scales(scene, spec, lights, grid=ESCAPE_GRID, previous=None):
     out = {name: _rounded(float(np.mean(v)), None if previous is None else previous.get(name, 1.0))
            for name, v in shares.items()}
     if len(judged) < len(lights):   # (the others, less important to the picture: as the judged are)
-        rest = SCALE_STEP * round(float(np.median(list(out.values()))) / SCALE_STEP)
+        rest = _rounded(float(np.median(list(out.values()))))
         out.update({o.name: rest for o in lights if o.name not in out})
     return out
 

@@ -248,8 +248,8 @@ MUTATIONS = [
     Mutation("dense_scale_unoccluded", "Dense Fog beside surfaces: the second order's sources all lit (a hood, a wall "
              "or the ground stops none of a light's power: its field that of unbounded fog)",
              "second_order_share",
-             "    lit = r[None, :] < np.asarray(depth, float)[:, None]",
-             "    lit = r[None, :] < np.inf + 0.0 * np.asarray(depth, float)[:, None]",
+             "    lit = (r[None, :] < np.asarray(depth, float)[:, None]).ravel()",
+             "    lit = (r[None, :] < np.inf + 0.0 * np.asarray(depth, float)[:, None]).ravel()",
              ("tests/test_escape.py::test_second_order_share_over_a_floor_against_quadrature",)),
     Mutation("dense_second_flight_unseen", "Dense Fog beside surfaces: the second order's flight from a first "
              "scattering to the camera's fog never stopped by a surface (a room lit through its windows scaled 0.5, "

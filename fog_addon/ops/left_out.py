@@ -91,7 +91,7 @@ def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None,
         return out
     scales = escape.field_scales(scene, spec, [o for o in lights if served(o)], previous=previous)
     if not need:
-        out["dense"].update(scales={n: k for n, k in scales.items() if k < 1.0}, scales_at=scales_key(spec))
+        out["dense"].update(_scales_account(scales, spec))
         return out
     if samples is None:
         samples = view.view_samples(scene, lights)
@@ -115,8 +115,7 @@ def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None,
             out["thin"][lights[k].name] = float(share[k])
     out["dense"]["missing"] = predict.missing_share(parts, missed)
     kept = [k for k in range(len(lights)) if k not in missed]   # (those that get Dense Fog)
-    out["dense"]["scales"] = {lights[k].name: float(scale[k]) for k in kept if scale[k] < 1.0}
-    out["dense"]["scales_at"] = scales_key(spec)
+    out["dense"].update(_scales_account({lights[k].name: float(scale[k]) for k in kept}, spec))
     scaled = [k for k, o in enumerate(lights) if served(o)]   # (kept and thin: a thin light's miss is scaled too)
     escapes = escape.escape_fractions(scene, spec, [lights[k] for k in scaled])
     out["dense"].update(scale_error([lights[k].name for k in scaled], scale[scaled],
@@ -129,14 +128,18 @@ def scales_key(spec):
     return [round(spec.beta_per_unit, 9), round(spec.anisotropy, 6)]
 
 
+def _scales_account(scales, spec):
+    """A Dense Fog account's "scales" (those of ``scales`` below 1) and "scales_at" (``scales_key``)."""
+    return {"scales": {n: k for n, k in scales.items() if k < 1.0}, "scales_at": scales_key(spec)}
+
+
 def kept_scales(scene, spec, method, lights, dense):
     """The scales of a stored Dense Fog account ``dense`` (``dense_fog``'s, the handlers' cheap path that keeps the
     lights' steps), judged again where the density or the anisotropy changed since (``escape.field_scales``);
     ``dense`` is updated in place.  Returns {name: scale}."""
     if dense.get("scales_at") != scales_key(spec):
         served = dense_served(spec, method, scene.render.engine)
-        scales = escape.field_scales(scene, spec, [o for o in lights if served(o)])
-        dense.update(scales={n: k for n, k in scales.items() if k < 1.0}, scales_at=scales_key(spec))
+        dense.update(_scales_account(escape.field_scales(scene, spec, [o for o in lights if served(o)]), spec))
     return dense.get("scales") or {}
 
 

@@ -42,13 +42,17 @@ def escape_fraction(beta, depth, weight):
     return float((weight * scattered).sum() / max(weight.sum(), 1e-30))
 
 
-def second_order_kernel(light, sources, receivers, beta, g):
+def second_order_kernel(light, sources, receivers, beta, g, toward=None):
     """(K, S): what a first scattering at each of ``sources`` (S, 3) m, of light from ``light`` (3,), adds to the
-    fluence at each of ``receivers`` (K, 3) m, as ``second_order_share`` weighs it."""
+    fluence at each of ``receivers`` (K, 3) m (the module docstring's kernel, a source nearer a receiver than
+    NEAR_FRACTION of the receiver's distance from the light taken that far).  ``toward``: the sources' unit
+    directions from the light (S, 3), if known."""
     light, sources = np.asarray(light, float), np.asarray(sources, float)
     receivers = np.asarray(receivers, float).reshape(-1, 3)
-    u = sources - light
-    u /= np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-12)
+    if toward is None:
+        toward = sources - light
+        toward = toward / np.maximum(np.linalg.norm(toward, axis=1, keepdims=True), 1e-12)
+    u = toward
     v = receivers[:, None, :] - sources[None]
     d2 = np.einsum("ksi,ksi->ks", v, v)
     d = np.sqrt(d2)
@@ -77,22 +81,17 @@ def second_order_share(light, directions, weight, depth, receivers, beta, g, nod
     light = np.asarray(light, float)
     directions, weight = np.asarray(directions, float), np.asarray(weight, float)
     r = source_distances(beta, nodes)
-    lit = r[None, :] < np.asarray(depth, float)[:, None]                        # (J, n)
-    sources = light + r[None, :, None] * directions[:, None, :]                  # (J, n, 3)
-    occluded = unbounded = 0.0
-    feeds = np.zeros(lit.shape)
+    lit = (r[None, :] < np.asarray(depth, float)[:, None]).ravel()                # (J n,)
+    sources = (light + r[None, :, None] * directions[:, None, :]).reshape(-1, 3)   # (J n, 3)
+    toward, emitted = np.repeat(directions, nodes, axis=0), np.repeat(weight, nodes)
+    unbounded = 0.0
+    feeds = np.zeros(len(sources))
     receivers = np.asarray(receivers, float).reshape(-1, 3)
     for start in range(0, len(receivers), RECEIVER_CHUNK):
-        x = receivers[start:start + RECEIVER_CHUNK]
-        near = NEAR_FRACTION * np.linalg.norm(x - light, axis=1)                 # (K,)
-        v = x[:, None, None, :] - sources[None]                                  # (K, J, n, 3)
-        d2 = np.einsum("kjni,kjni->kjn", v, v)
-        d = np.sqrt(d2)
-        cos = np.einsum("kjni,ji->kjn", v, directions) / np.maximum(d, 1e-12)
-        kernel = hg_phase(g, cos) * np.exp(-beta * d) / np.maximum(d2, (near * near)[:, None, None])
-        kernel *= weight[None, :, None]
+        kernel = second_order_kernel(light, sources, receivers[start:start + RECEIVER_CHUNK], beta, g, toward)
+        kernel *= emitted[None, :]
         unbounded += float(kernel.sum())
-        occluded += float((kernel * lit[None]).sum())
         feeds += (kernel * lit[None]).sum(axis=0)
+    occluded = float(feeds.sum())
     share = occluded / unbounded if unbounded > 0.0 else 1.0
-    return (share, sources.reshape(-1, 3), feeds.ravel()) if with_sources else share
+    return (share, sources, feeds) if with_sources else share
