@@ -18,7 +18,7 @@ it is, or else bakes this frame's still map and marks the image STALE.  A frame 
 the atlas again where the casters changed since (``follow_frame``: the animation was edited; STALE too), and the
 file's save rebuilds the fog where an atlas is due (``atlas_due``), so the saved file holds every frame's map.
 
-An animated sun keeps one map, as its daylight keeps one direction (``sunsky.notes`` says so).
+An animated sun keeps one map, as its daylight keeps one direction (``report.daylight_notes`` says so).
 """
 import hashlib
 import json

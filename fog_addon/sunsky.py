@@ -15,7 +15,8 @@ import bpy
 import numpy as np
 
 from .nodes import comp_ops
-from .precompute.model import capabilities
+from .precompute.core.ops import NumpyOps
+from .precompute.model import bakers, daylight_terms
 from .precompute.physics.daylight import daylight_tables, sunlight
 
 SUN_KEY_DIGITS = 4   # the sun's direction enters the built groups' signature at this precision (the map is baked)
@@ -268,22 +269,46 @@ def fog_light_table(scene, spec):
     sun (straight up without one: its irradiance is 0 then) and the spec's layer (with air a tuple of three, one
     per colour channel); (None, {}) where the layer has no daylight (``is_daylit``)."""
     from .nodes import images as images_
-    if not is_daylit(scene, spec):
+    table = fog_light_spec(scene, spec)
+    if table is None:
         return None, {}
+    images = dict(glow_table(scene, spec)[1])        # (the glow's table with the maps: ``daylight`` reads it)
+    images.update(world_sky_table(scene, spec)[1])   # (and the World's own sky, where it holds its air)
+    images.update({t.name: images_.table_image(t)    # (their kind's baker, through the disk cache)
+                   for t in (table if isinstance(table, tuple) else (table,))})
+    return table, images
+
+
+def fog_light_spec(scene, spec):
+    """``fog_light_table``'s TableSpec (with air a tuple of three, one map per colour channel, both species' light
+    and the albedos in it), or None where the layer has no daylight."""
+    if not is_daylit(scene, spec):
+        return None
     top, falloff, _ = spec.layer_per_unit()
     suns = scene_suns(scene)
-    direction = sun_direction(suns[0]) if suns else (0.0, 0.0, 1.0)
-    direction = tuple(round(c, SUN_KEY_DIGITS) for c in direction)
-    beta = spec.beta_per_unit
+    direction = tuple(round(c, SUN_KEY_DIGITS) for c in (sun_direction(suns[0]) if suns else (0.0, 0.0, 1.0)))
     air = spec.air_per_unit()
     channels = [None] if air is None else [(b, air[1], a) for b, a in zip(air[0], spec.albedo)]
-    tables_, images = [], dict(glow_table(scene, spec)[1])   # (the glow's table with the maps: ``daylight`` reads it)
-    images.update(world_sky_table(scene, spec)[1])            # (and the World's own sky, where it holds its air)
-    for channel in channels:   # with air one map per colour channel, both species' light, the albedos in it
-        table = daylight_tables.table_spec(beta, top, falloff, direction, spec.anisotropy, channel)
-        images[table.name] = images_.table_image(table)   # (its kind's baker, through the disk cache)
-        tables_.append(table)
-    return (tables_[0] if air is None else tuple(tables_)), images
+    tables_ = [daylight_tables.table_spec(spec.beta_per_unit, top, falloff, direction, spec.anisotropy, c)
+               for c in channels]
+    return tables_[0] if air is None else tuple(tables_)
+
+
+def sampled_fog(scene, spec, samples):
+    """(P, 3) W/(m^2 sr): the fog layer's sun and sky fog light at the view ``samples`` (``predict.ViewSamples``)
+    before the fog's albedo, as a pixel composes it (``daylight_terms.sampled_light``; the sun unshadowed, the World
+    taken as the light above the air), or None where nothing shines through a layer (``is_daylit``): the part of
+    each sample's fog the lamps' ladder never leaves out (``ViewSamples.other``)."""
+    table = fog_light_spec(scene, spec)
+    if table is None:
+        return None
+    m = NumpyOps({t.name: bakers.table_array(t) for t in (table if isinstance(table, tuple) else (table,))})
+    day = daylight(m, scene, spec, spec.beta_per_unit)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        light = daylight_terms.sampled_light(m, day, table, samples.camera,
+                                             samples.direction, samples.distance, samples.normal,
+                                             np.asarray(samples.rho_d) + np.asarray(samples.rho_s))
+    return np.nan_to_num(np.asarray(light, float), nan=0.0, posinf=0.0)
 
 
 def uses_glow_table(scene, spec):
@@ -399,26 +424,6 @@ def sun_atlas_due(scene, spec):
     return spec is not None and sun_maps.atlas_due(scene, sun_casts_shafts(scene, spec))
 
 
-def _shaft_note(scene, spec, method_name):
-    """What the sun's shadows do in the fog with ``method_name``."""
-    from . import caveats
-    if not spec.shafts:
-        return "Light Shafts are off: no shafts in the fog"
-    if sun_casts_shafts(scene, spec) is None:
-        return "it casts no shadows: no shafts in the fog"
-    casters = caveats.shadow_casters(scene)
-    if not casters:
-        return "nothing casts a shadow: no shafts in the fog"
-    if not capabilities.can(method_name, "shafts", scene.render.engine):
-        return (f"with {method_name} its shadows fall on surfaces but cast no shafts into the fog: "
-                f"{capabilities.suggestion('shafts', scene.render.engine)} casts them")
-    said = ("its shafts in the fog come from a map of the scene's shadows baked at Update Fog around the camera's "
-            "view; the sky's light in the fog and on surfaces is not shadowed by the buildings, nor the air's glow")
-    if caveats.is_animated(sun_casts_shafts(scene, spec)):
-        said += "; the sun moves: its shadow map is that of the frame the fog was last updated at"
-    return said
-
-
 def builder(scene, spec):
     """The groups' ``day`` argument: ``daylight`` of this scene and spec as a function of (m, beta, albedo,
     in_world), or None for fog that fills all space (``in_world``: the tree is the World's group)."""
@@ -508,6 +513,13 @@ def daylight(m, scene, spec, beta, albedo=1.0, in_world=False):
     cycle)."""
     top, falloff, ground = spec.layer_per_unit()
     suns = scene_suns(scene)
+    if isinstance(m, NumpyOps):   # the scene now, as values (``sampled_fog``)
+        sun = suns[0].data if suns else None
+        return sunlight.Daylight(beta, top, falloff, ground, np.array(sun_direction(suns[0]) if suns else (0, 0, 1.0)),
+                                 np.array(sun.color) * sun.energy if suns else np.zeros(3),
+                                 np.array(sky_colour(scene.world)[0]), spec.anisotropy, albedo,
+                                 *(() if spec.air_per_unit() is None else (np.array(spec.air_per_unit()[0]),
+                                                                           spec.air_per_unit()[1])))
     if suns:
         sun = suns[0]
         direction = comp_ops.driven_vector(m, "Sun Direction", ["x"] * 3,
@@ -527,63 +539,3 @@ def daylight(m, scene, spec, beta, albedo=1.0, in_world=False):
     return sunlight.Daylight(beta, top, falloff, ground, direction, irradiance, sky, spec.anisotropy, albedo,
                              None if air is None else tuple(air[0]), 0.0 if air is None else air[1], table, world_sky,
                              grey_air=not isinstance(m, comp_ops.CompOps))
-
-
-def notes(scene, spec, method_name, lamps=()):
-    """[(name, why)]: what the daylight leaves out in ``scene`` with ``method_name``; ``lamps``: the fog's lights."""
-    out = []
-    suns = scene_suns(scene)
-    if not spec.layered:
-        for sun in suns:
-            out.append((sun.name, "a fog that fills all space swallows the sun: set a Fog Top (Daylight) for its "
-                                  "light, glow and dimming through the fog"))
-        return out
-    for sun in suns[1:]:
-        out.append((sun.name, f"only the brightest sun ({suns[0].name}) shines through the fog layer: this one "
-                              "is neither dimmed nor glows"))
-    if sun_discs(scene.world) and not suns:
-        out.append((scene.world.name, "its Sky Texture's sun disc is not a sun to the fog (no glow, no dimming of its "
-                                      "light): add a Sun light along it"))
-    if scene.world is not None and not sky_colour(scene.world)[1]:
-        out.append((scene.world.name, "the fog layer's sky glow takes this World as uniform, of its mean colour over "
-                                      "the upper hemisphere (where seen, the World itself is dimmed exactly)"))
-    if spec.air_per_unit() is not None and is_daylit(scene, spec) and holds_air(scene.world):
-        out.append(("Air", f"the World {scene.world.name!r} is a Sky Texture, a sky seen through its own air: the air's "
-                           "glow fades to it (a pixel of sky shows it as it is, dimmed only by the fog layer), and the "
-                           "Sun light is taken as the sun at the ground, already through the air; a haze layer adds its "
-                           "own glow on top (a Sky Texture's aerosol density is haze of its own)"))
-    engine = scene.render.engine
-    if spec.air_per_unit() is not None and not capabilities.can(method_name, "air_colour", engine) and is_daylit(scene, spec):
-        out.append(("Air", f"with {method_name} the air dims surfaces by the mean of its colour (a shader's factor "
-                           f"is one number): the distance greys but does not blue; "
-                           f"{capabilities.suggestion('air_colour', engine)} gives its colour"))
-    if not capabilities.can(method_name, "daylight_once", engine) and is_daylit(scene, spec):
-        out.append(("Daylight", f"with {method_name} the sun's and the sky's glow and fog light are evaluated on "
-                                "every sample (3-8x the fog-free render in a city); "
-                                f"{capabilities.suggestion('daylight_once', engine)} does them once per pixel"))
-    if not capabilities.can(method_name, "animated_sky", engine) and uses_glow_table(scene, spec) and background_animated(
-            scene.world):
-        out.append((scene.world.name, "its Background is animated: the sky's glow where the sky is seen keeps its "
-                                      "colour of the last fog update on every frame (on surfaces it follows); the "
-                                      f"{capabilities.suggestion('animated_sky', engine)} follows it everywhere"))
-    if suns:
-        from . import caveats
-        sun = suns[0]
-        out.append((sun.name, "its light on surfaces and the sky's are dimmed by one factor weighted by the two "
-                              "(lamps' light on the same surfaces is dimmed by it too)"))
-        out.append((sun.name, _shaft_note(scene, spec, method_name)))
-        if caveats.is_animated(sun):
-            out.append((sun.name, "is animated: its fog light on surfaces is baked for the sun's direction when "
-                                  "the fog was last updated (its glow and dimming follow every frame)"))
-    if lamps and not suns and any(c > 0.0 for c in sky_colour(scene.world)[0]):
-        out.append(("Fog Top", "with lamps and no sun the sky's light on surfaces is not dimmed by the layer "
-                               "(one factor would dim the lamps' light too)"))
-    if lamps and capabilities.can(method_name, "layer_ends", engine):
-        out.append(("Fog Top", f"the lamps' glows ({len(lamps)}) end at the layer's top (with a falloff, one falloff "
-                               "length above it); their fog light on surfaces is that of fog everywhere"))
-    elif lamps:
-        out.append(("Fog Top", f"with {method_name} the lamps' glows ({len(lamps)}) take the layer's density "
-                               "everywhere, also above its top: a lamp within a few of its heights of the top glows "
-                               "too bright on rays that pass above it (tens of per cent to several times); "
-                               f"{capabilities.suggestion('layer_ends', engine)} ends them at the top"))
-    return out

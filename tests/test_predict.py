@@ -257,3 +257,46 @@ def test_budgets_keep_room_for_the_users_own_nodes():
     from fog_addon.nodes import budgets  # noqa: PLC0415 (bpy)
     assert not budgets.eevee_budget(0.85, [False] * 21).fits([0] * 21) and _eevee(0.85, [False] * 21).fits([0] * 21)
     assert not budgets.osl_budget([False] * 153).fits([0] * 153) and _osl([False] * 153).fits([0] * 153)
+
+
+def test_the_fog_no_step_leaves_out_is_in_every_samples_denominator():
+    """``choose_steps``' ``other`` (a fog layer's sun and sky, ``ViewSamples.other``) adds to each sample's fog: a
+    lamp whose fog light on surfaces is 0.1 of its glow of 1 keeps it at a 6 % target alone (0.1 / 1.1 = 9.1 %),
+    and drops it beside a daylight fog of 1 (0.1 / 2.1 = 4.8 %), whose share is the error predicted."""
+    glow, scatter = np.ones((4, 1, 3)), np.full((4, 1, 3), 0.1)
+    assert list(predict.choose_steps(glow, scatter, 0.06).steps) == [0]
+    pred = predict.choose_steps(glow, scatter, 0.06, other=np.ones((4, 3)))
+    assert list(pred.steps) == [1]
+    assert pred.error == pytest.approx(0.1 / 2.1, rel=1e-12)
+
+
+@pytest.mark.parametrize("g", [0.0, 0.6])
+def test_sampled_daylight_is_the_suns_single_scattering_in_the_layer(g):
+    """``daylight_terms.sampled_light`` at a ray to the sky (straight up from 5 units inside a 20-unit layer) and a
+    ray to a black wall (level, 30 units): the sun's single scattering along the ray, E p(d.s) beta
+    int e^(-beta s) e^(-beta (top - z(s)) / mu_s) ds (Sun et al. 2005 Eq. 5 with the sun's path to the top), by
+    scipy's adaptive quadrature; no sky, albedo 1, a hard top."""
+    from scipy.integrate import quad
+    from fog_addon.precompute.model import daylight_terms
+    from fog_addon.precompute.physics.daylight import daylight_tables, sunlight
+    beta, top, e_sun = 0.05, 20.0, 3.0
+    sun = np.array([0.0, -np.cos(0.6), np.sin(0.6)])
+    table = daylight_tables.table_spec(beta, top, 0.0, tuple(sun), g)
+    m = NumpyOps({table.name: np.zeros((table.height, table.width, 4), np.float32)})
+    day = sunlight.Daylight(beta, top, 0.0, 0.0, sun, np.full(3, e_sun), np.zeros(3), g, 1.0)
+    camera = np.array([[0.0, 0.0, 5.0], [0.0, 0.0, 5.0]])
+    direction = np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
+    normal = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+    light = daylight_terms.sampled_light(m, day, table, camera, direction, np.array([np.inf, 30.0]), normal,
+                                         np.zeros((2, 3)))
+
+    def hg(c):
+        return (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * c) ** 1.5)
+
+    def glow(d, length):
+        z = lambda s: camera[0, 2] + s * d[2]   # noqa: E731
+        f = lambda s: beta * np.exp(-beta * s - beta * (top - z(s)) / sun[2])   # noqa: E731
+        return e_sun * hg(d @ sun) * quad(f, 0.0, length, epsabs=0, epsrel=1e-10)[0]
+
+    want = [glow(direction[0], top - camera[0, 2]), glow(direction[1], 30.0)]
+    np.testing.assert_allclose(light, np.repeat(np.array(want)[:, None], 3, axis=1), rtol=1e-6)

@@ -29,7 +29,7 @@ pytestmark = pytest.mark.render   # every test here starts Blender (bpy) in a su
 SCRIPT = ROOT / "tests" / "scenes" / "quality_probe.py"
 CASES = [("street_lamps", "draft"), ("boulevard", "final"), ("random:0", "draft"), ("random:1", "draft"),
          ("random:2", "draft"), ("random:4", "final"), ("randomspot:3", "draft"), ("randomspot:5", "final"),
-         ("concert_stage", "final")]
+         ("concert_stage", "final"), ("daylit:2", "draft"), ("daylit:5", "final")]
 # The two biggest are rendered with the Compositor method: the same models once per pixel (pixel centres here,
 # so the same points), where the node groups' two renders took 476 s (randomspot:3, 39 spots) and 152 s
 # (boulevard, 45 lamps) in a full-suite run at 225f330, and gave the same predicted and measured errors.
@@ -69,7 +69,8 @@ def results(tmp_path_factory):
 
 
 # The default tier: a demo scene at Draft, the boulevard at Final (Compositor method) and one random scene; the
-# other random scenes, the random spots and the concert stage (10-210 s each) run in the slow tier.
+# other random scenes, the random spots, the concert stage and the daylit ones (10-210 s each) run in the slow tier
+# (the daylight's share of each sample's fog: tests/test_predict.py in the numpy tier).
 FAST_CASES = {("street_lamps", "draft"), ("boulevard", "final"), ("random:2", "draft")}
 SLOW = pytest.mark.slow(reason="the default tier checks the prediction on FAST_CASES")
 

@@ -265,6 +265,13 @@ MUTATIONS = [
              "    if True:\n",
              ("tests/test_multiple.py::test_multiple_rungs_add_the_multiple_glow_to_the_single",
               "tests/test_dense_surplus.py::test_dense_fog_beside_surfaces_against_path_tracing")),
+    Mutation("daylight_outside_the_denominator", "the predictor: a fog layer's sun and sky left out of each "
+             "sample's fog, so a lamp's share of a daylit picture is judged as if it were night (Sun et al. 2005 "
+             "Eq. 19 sums every source's fog light)",
+             "sample_fog",
+             "    return fog if other is None else fog + np.asarray(other, float)\n",
+             "    return fog\n",
+             ("tests/test_predict.py::test_the_fog_no_step_leaves_out_is_in_every_samples_denominator",)),
     Mutation("surface_share_hemisphere", "light shafts: a surface's fog light sees the fog within 30 degrees of its "
              "normal only (Sun 2005 Eq. 17's G_0 is over the whole hemisphere, cos-weighted)",
              "hemisphere_angles",

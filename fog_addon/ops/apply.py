@@ -134,16 +134,17 @@ def _evaluate(scene):
 
 def apply_fog(scene, density, albedo=(1.0, 1.0, 1.0), anisotropy=0.0, method="nodes", objects=None,
               scene_scale=1.0, with_passes=False, error=spec_.DEFAULT_QUALITY, world_light=False, shafts=True,
-              multiple_scattering=False, progress=progress_.silent):
+              multiple_scattering=False, fog_top=None, height_falloff=0.0, progress=progress_.silent):
     """``apply`` with the spec's fields as arguments, for scripts: ``density`` (1/m), ``albedo``, ``anisotropy``
     (g), ``method`` ("auto", "nodes", "osl", "compositor"), ``scene_scale`` (m per unit), ``with_passes``,
     ``error`` (the Quality: a preset name or a target error; None is Exact), ``world_light``, ``shafts``,
-    ``multiple_scattering`` (Dense Fog).  This function's defaults are a single-scattering fog by the node groups
+    ``multiple_scattering`` (Dense Fog), ``fog_top`` (m above the ground, None: fog fills all space) and
+    ``height_falloff`` (m).  This function's defaults are a single-scattering fog by the node groups
     (the probes' and tests' models); a ``FogSpec``'s, the panel's and the command line's are Auto and Dense Fog by
     the Quality.  See ``precompute/core/spec.py``."""
     spec = FogSpec(density=density, scene_scale=scene_scale, albedo=tuple(albedo), anisotropy=anisotropy,
                    method=method, quality=error, passes=with_passes, world_light=world_light, shafts=shafts,
-                   multiple_scattering=multiple_scattering)
+                   multiple_scattering=multiple_scattering, fog_top=fog_top, height_falloff=height_falloff)
     return apply(scene, spec, objects, progress)
 
 

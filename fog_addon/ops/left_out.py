@@ -8,11 +8,18 @@ import math
 import numpy as np
 from mathutils import Vector
 
-from .. import caveats, escape, methods, shadow_maps, view
+from .. import caveats, escape, methods, shadow_maps, sunsky, view
 from ..precompute.model import capabilities, predict
 
 MULTIPLE_ENTRIES = 1_000_000   # samples x lights at most for Dense Fog's shares (``dense_fog``): every nth sample
 #                                beyond (the choice's time stays that of the ladder's alone)
+
+
+def view_samples(scene, spec, lights):
+    """``view.view_samples`` of ``lights`` holding the fog light that no step of theirs leaves out
+    (``predict.ViewSamples.other``: a fog layer's sun and sky, ``sunsky.sampled_fog``), in every sample's fog."""
+    samples = view.view_samples(scene, lights)
+    return samples._replace(other=sunsky.sampled_fog(scene, spec, samples))
 
 
 def shadow_fog(scene, spec, method, lights):
@@ -94,7 +101,7 @@ def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None,
         out["dense"].update(_scales_account(scales, spec))
         return out
     if samples is None:
-        samples = view.view_samples(scene, lights)
+        samples = view_samples(scene, spec, lights)
     if len(samples.distance) * len(lights) > MULTIPLE_ENTRIES:   # (every nth sample)
         n = math.ceil(len(samples.distance) * len(lights) / MULTIPLE_ENTRIES)
         samples = predict.every_nth(samples, n)

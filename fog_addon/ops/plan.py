@@ -15,7 +15,7 @@ from .. import methods, view
 from ..nodes import budgets, groups
 from ..precompute.model import predict, rungs
 from ..precompute.physics.spot import spot
-from .left_out import dense_fog, dense_served, emitters_dense, kept_scales, shadow_fog
+from .left_out import dense_fog, dense_served, emitters_dense, kept_scales, shadow_fog, view_samples
 
 SUPPORTED_LIGHTS = ("POINT", "SPOT", "AREA")
 PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method it was built with (methods.get)
@@ -99,7 +99,7 @@ def choose_models(scene, spec, method, lights, budget=None, previous=None):
     served = dense_served(spec, method, engine)
     dense = any(served(o) and not view.has_shape(o) for o in lights)   # (the predictor's Dense Fog: point lights)
     if lights and (target is not None or (budget is not None and not budget.fits(steps))):
-        samples = view.view_samples(scene, lights)
+        samples = view_samples(scene, spec, lights)
         pred = predict.predict(samples, view.light_intensities(lights), spec.beta_per_unit, target, budget,
                                spec.anisotropy, spec.grey_albedo if dense else None)
         steps = [int(k) for k in pred.steps]

@@ -231,7 +231,7 @@ def not_modelled(scene, spec, lights, materials, method=None):
              caveats.clip_note(scene, name),
              *caveats.multiple_notes(choice.get("dense"), name, view.has_shape, lights, engine),
              *caveats.glow_notes(methods.compositor.glowing_objects(scene), name, engine),
-             *(f"{what}: {why}" for what, why in sunsky.notes(scene, spec, name, lights))]
+             *(f"{what}: {why}" for what, why in daylight_notes(scene, spec, name, lights))]
     return [n for n in notes if n]
 
 
@@ -239,3 +239,82 @@ def stored_caveats():
     """The notes of ``not_modelled`` from the last Add/Update Fog (the panel shows them), [] if none."""
     surface = bpy.data.node_groups.get(groups.SURFACE)
     return json.loads(surface[CAVEATS_KEY]) if surface is not None and CAVEATS_KEY in surface else []
+
+
+def daylight_notes(scene, spec, method_name, lamps=()):
+    """[(name, why)]: what the daylight leaves out in ``scene`` with ``method_name``; ``lamps``: the fog's lights."""
+    out = []
+    suns = sunsky.scene_suns(scene)
+    if not spec.layered:
+        for sun in suns:
+            out.append((sun.name, "a fog that fills all space swallows the sun: set a Fog Top (Daylight) for its "
+                                  "light, glow and dimming through the fog"))
+        return out
+    for sun in suns[1:]:
+        out.append((sun.name, f"only the brightest sun ({suns[0].name}) shines through the fog layer: this one "
+                              "is neither dimmed nor glows"))
+    if sunsky.sun_discs(scene.world) and not suns:
+        out.append((scene.world.name, "its Sky Texture's sun disc is not a sun to the fog (no glow, no dimming of its "
+                                      "light): add a Sun light along it"))
+    if scene.world is not None and not sunsky.sky_colour(scene.world)[1]:
+        out.append((scene.world.name, "the fog layer's sky glow takes this World as uniform, of its mean colour over "
+                                      "the upper hemisphere (where seen, the World itself is dimmed exactly)"))
+    if spec.air_per_unit() is not None and sunsky.is_daylit(scene, spec) and sunsky.holds_air(scene.world):
+        out.append(("Air", f"the World {scene.world.name!r} is a Sky Texture, a sky seen through its own air: the "
+                           "air's glow fades to it (a pixel of sky shows it as it is, dimmed only by the fog layer), "
+                           "and the Sun light is taken as the sun at the ground, already through the air; a haze layer "
+                           "adds its own glow on top (a Sky Texture's aerosol density is haze of its own)"))
+    engine = scene.render.engine
+    daylit = sunsky.is_daylit(scene, spec)
+    if spec.air_per_unit() is not None and not capabilities.can(method_name, "air_colour", engine) and daylit:
+        out.append(("Air", f"with {method_name} the air dims surfaces by the mean of its colour (a shader's factor "
+                           f"is one number): the distance greys but does not blue; "
+                           f"{capabilities.suggestion('air_colour', engine)} gives its colour"))
+    if not capabilities.can(method_name, "daylight_once", engine) and daylit:
+        out.append(("Daylight", f"with {method_name} the sun's and the sky's glow and fog light are evaluated on "
+                                "every sample (3-8x the fog-free render in a city); "
+                                f"{capabilities.suggestion('daylight_once', engine)} does them once per pixel"))
+    if (not capabilities.can(method_name, "animated_sky", engine) and sunsky.uses_glow_table(scene, spec)
+            and sunsky.background_animated(scene.world)):
+        out.append((scene.world.name, "its Background is animated: the sky's glow where the sky is seen keeps its "
+                                      "colour of the last fog update on every frame (on surfaces it follows); the "
+                                      f"{capabilities.suggestion('animated_sky', engine)} follows it everywhere"))
+    if suns:
+        sun = suns[0]
+        out.append((sun.name, "its light on surfaces and the sky's are dimmed by one factor weighted by the two "
+                              "(lamps' light on the same surfaces is dimmed by it too)"))
+        out.append((sun.name, _sun_shaft_note(scene, spec, method_name)))
+        if caveats.is_animated(sun):
+            out.append((sun.name, "is animated: its fog light on surfaces is baked for the sun's direction when "
+                                  "the fog was last updated (its glow and dimming follow every frame)"))
+    if lamps and not suns and any(c > 0.0 for c in sunsky.sky_colour(scene.world)[0]):
+        out.append(("Fog Top", "with lamps and no sun the sky's light on surfaces is not dimmed by the layer "
+                               "(one factor would dim the lamps' light too)"))
+    if lamps and capabilities.can(method_name, "layer_ends", engine):
+        out.append(("Fog Top", f"the lamps' glows ({len(lamps)}) end at the layer's top (with a falloff, one falloff "
+                               "length above it); their fog light on surfaces is that of fog everywhere"))
+    elif lamps:
+        out.append(("Fog Top", f"with {method_name} the lamps' glows ({len(lamps)}) take the layer's density "
+                               "everywhere, also above its top: a lamp within a few of its heights of the top glows "
+                               "too bright on rays that pass above it (tens of per cent to several times); "
+                               f"{capabilities.suggestion('layer_ends', engine)} ends them at the top"))
+    return out
+
+
+def _sun_shaft_note(scene, spec, method_name):
+    """What the sun's shadows do in the fog with ``method_name``."""
+    if not spec.shafts:
+        return "Light Shafts are off: no shafts in the fog"
+    if sunsky.sun_casts_shafts(scene, spec) is None:
+        return "it casts no shadows: no shafts in the fog"
+    casters = caveats.shadow_casters(scene)
+    if not casters:
+        return "nothing casts a shadow: no shafts in the fog"
+    if not capabilities.can(method_name, "shafts", scene.render.engine):
+        return (f"with {method_name} its shadows fall on surfaces but cast no shafts into the fog: "
+                f"{capabilities.suggestion('shafts', scene.render.engine)} casts them")
+    said = ("its shafts in the fog come from a map of the scene's shadows baked at Update Fog around the camera's "
+            "view; the sky's light in the fog and on surfaces is not shadowed by the buildings, nor the air's glow")
+    if caveats.is_animated(sunsky.sun_casts_shafts(scene, spec)):
+        said += "; the sun moves: its shadow map is that of the frame the fog was last updated at"
+    return said

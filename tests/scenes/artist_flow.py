@@ -161,9 +161,9 @@ def light_notes(scene):
     for o in (dark, sun, squashed):
         scene.collection.objects.link(o)
     bpy.context.view_layer.update()
-    from fog_addon import sunsky
+    from fog_addon.ops import report
     lights, notes = apply.fog_lights(scene)
-    notes += sunsky.notes(scene, apply.spec_of(scene), "nodes", lights)   # a sun: the fog's top decides
+    notes += report.daylight_notes(scene, apply.spec_of(scene), "nodes", lights)   # a sun: the fog's top decides
     R["light_notes"] = {name: why for name, why in notes}
     R["lights_taking_part"] = sorted(o.name for o in lights)
     for o in (dark, sun, squashed):

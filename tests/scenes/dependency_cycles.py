@@ -23,7 +23,7 @@ expressions, sums and averages of single properties and world transforms) and co
 left in its property: ``stale`` lists those that differ (a driver in a cycle may read the frame before).  The
 daylight cases also give the driven sun direction against the sun's, ``world_sky``: the World group's copy of the
 sky's radiance (``sunsky._sky``: a value, not driven) against the Background's as built and after its colour
-changed (the fog's depsgraph handler sets it again: ``sunsky.refresh_world_sky``), and ``notes``: the World's
+changed (the fog's depsgraph handler sets it again: ``sunsky.refresh_world_sky``), and ``daylight_notes``: the World's
 notes for Node Groups and the Compositor once the sun stands still (an animated Background is noted where the World
 group's sky glow reads its copy).
 
@@ -51,7 +51,7 @@ import fog_addon  # noqa: E402
 from demo_scenes import spheres  # noqa: E402
 from fog_addon import sunsky  # noqa: E402
 from fog_addon.nodes import groups  # noqa: E402
-from fog_addon.ops import apply  # noqa: E402
+from fog_addon.ops import apply, report  # noqa: E402
 
 FRAMES = (1, 10, 5)
 FOG_TOP_M = 10.0
@@ -220,8 +220,8 @@ def fog_case(name, method, kind="POINT", daylight=False, dense=False):
         bpy.context.view_layer.update()                           # the fog's depsgraph handler refreshes it
         out["world_sky_refreshed"] = {"sky": sky_of(bg), "world_group": world_sky()}
         sun.animation_data_clear()   # a still sun and camera: the World group's sky glow reads the Background's copy
-        out["notes"] = {m: [n for n in sunsky.notes(scene, apply.spec_of(scene), m) if n[0] == scene.world.name]
-                        for m in ("nodes", "compositor")}
+        out["notes"] = {m: [n for n in report.daylight_notes(scene, apply.spec_of(scene), m)
+                            if n[0] == scene.world.name] for m in ("nodes", "compositor")}
     out["seconds"] = round(time.time() - t0, 2)
     return out
 

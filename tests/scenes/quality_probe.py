@@ -6,7 +6,9 @@ SCENE: a demo scene module name (street_lamps, boulevard, ...) at its default
 density (and anisotropy, if it has one), or ``random:SEED`` (a ground, boxes and spheres with random
 Principled materials, 2-40 point lights of random power and colour, a random
 camera, beta log-uniform in [0.005, 0.3] 1/m), or ``randomspot:SEED``: the same with every other
-light a spot (10-120 degrees, blend 0-1) aimed at a random point of the ground.  Cycles, 1 sample at each
+light a spot (10-120 degrees, blend 0-1) aimed at a random point of the ground, or ``daylit:SEED``: the random
+scene in a fog layer DAYLIT_TOP m deep under a sun (DAYLIT_SUN W/m^2, 25 degrees up), whose fog light is in
+every pixel's fog (the predictor's ``ViewSamples.other``).  Cycles, 1 sample at each
 pixel centre.  The lights light only the fog (hidden from diffuse and
 glossy rays: in Cycles their diffuse and specular factors alone still let
 them light surfaces) and the World is black, so the picture is the fog's
@@ -67,11 +69,20 @@ def random_scene(scene, seed, spots=False):
     return math.exp(rng.uniform(math.log(0.005), math.log(0.3)))
 
 
+DAYLIT_TOP, DAYLIT_SUN = 15.0, 2.0   # ``daylit:SEED``: the layer's top (m) and the sun's strength (W/m^2)
+
+
 def build(scene, name):
     """Build scene ``name``; returns its (beta in 1/m, anisotropy g)."""
     kind, _, seed = name.partition(":")
-    if kind in ("random", "randomspot"):
-        return random_scene(scene, int(seed), spots=kind == "randomspot"), 0.0
+    if kind in ("random", "randomspot", "daylit"):
+        beta = random_scene(scene, int(seed), spots=kind == "randomspot")
+        if kind == "daylit":
+            sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
+            sun.data.energy = DAYLIT_SUN
+            sun.rotation_euler = (math.radians(65.0), 0.0, math.radians(150.0))
+            scene.collection.objects.link(sun)
+        return beta, 0.0
     mod = importlib.import_module(f"demo_scenes.{name}")
     demo_scenes.clear_scene(scene)
     mod.build(scene)
@@ -107,10 +118,13 @@ def main(out, name, quality, method="nodes", width=128, height=72):
     # Dense Fog as the defaults have it, but with spots: the predictor judges Dense Fog's steps for point lights
     # only (a spot's multiply scattered terms are not in its twin), so the spots' scenes keep single scattering
     dense = not name.startswith("randomspot")
-    apply.apply_fog(scene, beta, anisotropy=g, error=quality, method=method, shafts=False, multiple_scattering=dense)
+    top = DAYLIT_TOP if name.startswith("daylit") else None
+    apply.apply_fog(scene, beta, anisotropy=g, error=quality, method=method, shafts=False, multiple_scattering=dense,
+                    fog_top=top)
     choice = apply.stored_choice()
     render(scene, out / "auto.exr")
-    apply.apply_fog(scene, beta, anisotropy=g, error=None, method=method, shafts=False, multiple_scattering=dense)
+    apply.apply_fog(scene, beta, anisotropy=g, error=None, method=method, shafts=False, multiple_scattering=dense,
+                    fog_top=top)
     render(scene, out / "exact.exr")
     print(json.dumps({"scene": name, "beta": beta, "quality": quality, "predicted": choice["error"],
                       "left_out": (choice["dense"]["missing"] if dense is False else 0.0)

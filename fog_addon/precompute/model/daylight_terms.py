@@ -1,6 +1,8 @@
 """A fog layer's sun and sky as the composer's terms (``compose.Term``, source ``compose.DAYLIGHT``): their glow and the
 fog light a surface reflects, evaluated by the daylight's kernels (``physics/daylight/sunlight.py``), at a pixel (the
 Compositor), on a surface's camera ray (the Surface group) and on a ray to the sky (the World)."""
+import numpy as np
+
 from ..physics.daylight import sunlight
 from ..physics.point import model
 from . import compose
@@ -48,3 +50,18 @@ def _reflected_terms(m, day, table, position, normal, reflectance, t_vp, surface
 
 def _term(kind, at, value):
     return compose.Term(kind, at, compose.DAYLIGHT, value)
+
+
+def sampled_light(m, day, table, camera, direction, distance, normal, reflectance):
+    """(P, 3) W/(m^2 sr): the sun's and the sky's fog light at view samples, composed as a pixel's (``pixel_terms``,
+    ``compose.source_light``: Sun et al. 2005 Eq. 19 on a surface, Eq. 12 to the sky), the sun unshadowed: the part
+    of each sample's fog that no step of the lamps' ladder leaves out (``predict.ViewSamples.other``).  ``camera``,
+    ``direction``, ``normal``: (P, 3); ``distance``: (P,) units to the surface, inf for a ray to the sky (coverage
+    0); ``reflectance``: (P, 3) the surface's Lambertian albedo (diffuse plus specular)."""
+    distance = np.asarray(distance, float)
+    cover = np.isfinite(distance).astype(float)
+    length = np.where(cover > 0.0, distance, 0.0)
+    position = np.asarray(camera, float) + np.asarray(direction, float) * length[:, None]
+    t_vp = sunlight.view_transmittance(m, day, position, -np.asarray(direction, float), length)
+    terms = pixel_terms(m, day, table, camera, direction, position, normal, reflectance, length, t_vp, cover)
+    return compose.source_light(m, cover, terms)

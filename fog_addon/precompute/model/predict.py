@@ -13,7 +13,8 @@ which multiplies every term of a channel alike and so cancels):
 
 * glow_i = I_i * airlight (Sun et al. 2005 Eq. 11; Eq. 12 for a ray to the sky);
 * scatter_i = I_i * e^{-beta D_vp} (rho_d M_0 + rho_s M_n) (Eq. 17-18, 19);
-* fog_p = sum_i glow_i + scatter_i: the pixel's fog value, the denominator.
+* fog_p = sum_i glow_i + scatter_i + other_p: the pixel's fog value, the denominator; other_p is the fog light of
+  the sources no step leaves out (a fog layer's sun and sky: ``ViewSamples.other``), composed as the pixel's.
 
 Step 1 of light i drops scatter_i, step 2 drops glow_i too.  The error of a
 choice at p is sum over the lights of what they drop / fog_p: exactly the
@@ -54,6 +55,8 @@ class ViewSamples(NamedTuple):
     lights: Any       # (P, N, 3) each light's position when the sample was taken
     frame: Any = None  # (P,) the frame of each sample (for reports)
     shapes: Any = None  # LightShapes, or None: every light a point light
+    other: Any = None   # (P, 3) W/(m^2 sr): the fog light of the sources the ladder does not step (a fog layer's
+    #                     sun and sky, ``daylight_terms.sampled_light``) before the fog's albedo, or None
 
 
 class Cone(NamedTuple):
@@ -210,7 +213,14 @@ def multiple_parts(samples, intensity, beta, g, albedo, single=None, dense=None)
         samples, single, dense = samples._replace(shapes=None), None, None
     glow, scatter = single if single is not None else light_fog(samples, intensity, beta, g)
     glow_m, scatter_m = dense if dense is not None else light_fog(samples, intensity, beta, g, multiple_albedo=albedo)
-    return judged_shares(np.abs((glow_m + scatter_m) - (glow + scatter)), (glow_m + scatter_m).sum(axis=1))
+    return judged_shares(np.abs((glow_m + scatter_m) - (glow + scatter)), sample_fog(glow_m, scatter_m, samples.other))
+
+
+def sample_fog(glow, scatter, other=None):
+    """(P, 3) W/(m^2 sr): each sample's fog, the lights' ``glow`` and ``scatter`` (P, N, 3) summed, plus the fog light
+    of the sources the ladder does not step (``other``, ``ViewSamples.other``; None: none)."""
+    fog = (np.asarray(glow, float) + np.asarray(scatter, float)).sum(axis=1)
+    return fog if other is None else fog + np.asarray(other, float)
 
 
 def judged_shares(part, fog):
@@ -284,15 +294,15 @@ def rim_deviation(samples, intensity, beta, glow, g=0.0):
     return out
 
 
-def choose_steps(glow, scatter, target, budget=None, rim_dev=None):
+def choose_steps(glow, scatter, target, budget=None, rim_dev=None, other=None):
     """Each light's step down the ladder so that the predicted error stays within ``target``, and each spot's
     rim (``rim_dev``: :func:`rim_deviation`).
 
     glow, scatter: (P, N, 3) from :func:`light_fog`; target: relative error
-    (None: every light full).  Greedy: the candidate drops (a light's scatter,
-    then its glow) are taken in order of the largest share of any judged
-    sample's fog they would leave out, each while the running sum of what is
-    dropped stays within ``target`` of the fog at every judged sample.
+    (None: every light full); ``other``: (P, 3), the fog light no step leaves out (``ViewSamples.other``).
+    Greedy: the candidate drops (a light's scatter, then its glow) are taken in order of the largest share of any
+    judged sample's fog they would leave out, each while the running sum of what is dropped stays within ``target``
+    of the fog at every judged sample.
 
     ``budget`` (:class:`Budget`, e.g. EEVEE's uniform block): if the steps
     don't fit it, more drops are taken in the same order, whatever they
@@ -307,7 +317,7 @@ def choose_steps(glow, scatter, target, budget=None, rim_dev=None):
     glow = np.asarray(glow, float)
     scatter = np.asarray(scatter, float)
     n = glow.shape[1]
-    fog = (glow + scatter).sum(axis=1)                 # (P, 3)
+    fog = sample_fog(glow, scatter, other)             # (P, 3)
     peak = fog.max() if fog.size else 0.0
     # a pixel whose fog light is below MIN_FOG (an opaque fog's far pixels: e^{-beta d} underflows) is not judged:
     # its inverse would overflow and its shares turn NaN
@@ -359,4 +369,4 @@ def predict(samples, intensity, beta, quality, budget=None, g=0.0, multiple_albe
     albedo (a step that drops a term drops its multiply scattered part too), else None."""
     glow, scatter = light_fog(samples, intensity, beta, g, multiple_albedo=multiple_albedo)
     return choose_steps(glow, scatter, spec.target_error(quality), budget,
-                        rim_deviation(samples, intensity, beta, glow, g))._replace(fog=(glow, scatter))
+                        rim_deviation(samples, intensity, beta, glow, g), samples.other)._replace(fog=(glow, scatter))
