@@ -74,7 +74,8 @@ SLOW_MIRROR = pytest.mark.slow(reason="the default tier's boxes hold the specula
     ("glass_box", "nodes"), ("glass_box", "compositor"),
     pytest.param("principled_box", "nodes", marks=pytest.mark.slow(reason="the default tier's Principled glass is "
                                                                             "the default method's")),
-    ("principled_box", "compositor"),
+    pytest.param("principled_box", "compositor", marks=pytest.mark.slow(
+        reason="Principled glass with the default method: tests/test_shop_window.py's pane in the default tier")),
     pytest.param("mixed_box", "nodes", marks=pytest.mark.slow(reason="glass in a mix: the boxes hold the contract")),
     pytest.param("rough_box", "nodes", marks=pytest.mark.slow(reason="frosted glass: the boxes hold the contract"))])
 def test_fog_past_glass_and_mirrors(case, method, tmp_path, reference):

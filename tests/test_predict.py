@@ -300,3 +300,23 @@ def test_sampled_daylight_is_the_suns_single_scattering_in_the_layer(g):
 
     want = [glow(direction[0], top - camera[0, 2]), glow(direction[1], 30.0)]
     np.testing.assert_allclose(light, np.repeat(np.array(want)[:, None], 3, axis=1), rtol=1e-6)
+
+
+def test_the_ladder_judges_dense_fog_as_the_surfaces_scale_it():
+    """``predict.predict``'s ``multiple_scale`` (``escape.field_scales``: the share of Dense Fog's field the
+    surfaces leave): at scale 0 the ladder judges the single scattering alone, at 1 the unbounded field, the
+    limits of ``rungs.choose``'s scaled field; between them the fog the ladder judges lies between theirs."""
+    rng = np.random.default_rng(11)
+    s = _samples(rng, p=240, n=6)
+    intensity = rng.lognormal(0, 3, (6, 1)) * np.ones(3)   # lights from very dim to very bright
+    args = (s, intensity, 0.12, 0.05)
+    alone, unbounded = predict.predict(*args), predict.predict(*args, multiple_albedo=0.9)
+    assert alone.error != pytest.approx(unbounded.error), "Dense Fog changes nothing here: the test proves nothing"
+    for scale, want in ((0.0, alone), (1.0, unbounded)):
+        got = predict.predict(*args, multiple_albedo=0.9, multiple_scale=[scale] * 6)
+        assert list(got.steps) == list(want.steps), scale
+        assert got.error == pytest.approx(want.error, rel=1e-9), scale
+    half = predict.predict(*args, multiple_albedo=0.9, multiple_scale=[0.5] * 6)
+    glow = predict.scaled_fog(half.single, half.fog, [0.5] * 6)[0]
+    assert ((glow >= np.minimum(half.single[0], half.fog[0]) - 1e-12)
+            & (glow <= np.maximum(half.single[0], half.fog[0]) + 1e-12)).all()

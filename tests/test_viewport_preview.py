@@ -32,7 +32,9 @@ def _render(blend, out, engine, *flags):
     return imageio.read_rgb(out).astype(np.float64), r.stdout
 
 
-@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("engine", ["cycles", pytest.param("eevee", marks=pytest.mark.slow(
+    reason="EEVEE's preview is built and rendered in the default tier by test_final_renders_are_those_without_the_"
+           "preview and test_eevee_preview_says_it_has_no_shafts"))])
 def test_viewport_shows_the_node_groups_fog(tmp_path, engine):
     blend = h.scene_blend("spheres", tmp_path)
     view, said = _render(blend, tmp_path / "view.exr", engine, "--method", "compositor", "--viewport")
@@ -90,7 +92,9 @@ def _final_against_unpreviewed(tmp_path, engine, blend, spec, without, group="An
     assert np.array_equal(a, b), float(np.abs(a - b).max())
 
 
-@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("engine", [pytest.param("cycles", marks=pytest.mark.slow(
+    reason="Cycles' final render against the unpreviewed one: test_daylight_final_renders_are_those_without_the_"
+           "preview in the default tier")), "eevee"])
 def test_final_renders_are_those_without_the_preview(tmp_path, engine):
     _final_against_unpreviewed(tmp_path, engine, h.scene_blend("spheres", tmp_path),
                                'FogSpec(density=0.15, method="compositor")',

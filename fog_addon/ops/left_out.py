@@ -73,7 +73,8 @@ def dense_served(spec, method, engine):
     return lambda o: shaped if view.has_shape(o) else point
 
 
-def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None, dense=None, previous=None):
+def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None, dense=None, previous=None,
+              scales=None):
     """Dense Fog by the Quality: which ``lights`` get their multiply scattered light, at which scale, and what the
     picture misses without it (``predict.multiple_parts``, at the view's samples: ``samples``, else sampled here
     where needed; ``single``, ``dense``: their (glow, scatter) without and with it, where computed).
@@ -87,7 +88,8 @@ def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None,
     it) is "left out", with its share.  Returns {"thin": {name: share}, "dense": {"left_out": {name: share},
     "missing": the share of a judged sample's fog that the thin and the left-out lights miss together, at the
     sample where it is largest, "why": "off" or the method's name, "scales": {name: scale below 1}, and
-    ``scale_error``'s}}.  ``previous``: {name: scale} stored, kept while within a step (``escape.field_scales``).
+    ``scale_error``'s}}.  ``previous``: {name: scale} stored, kept while within a step (``escape.field_scales``);
+    ``scales``: the served lights' scales if already judged (``plan.choose_models``, whose ladder judges with them).
     """
     target, engine = spec.target_error, scene.render.engine
     served = dense_served(spec, method, engine)
@@ -96,7 +98,8 @@ def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None,
                                  "why": "off" if not spec.multiple_scattering else getattr(method, "name", method)}}
     if scene.camera is None:
         return out
-    scales = escape.field_scales(scene, spec, [o for o in lights if served(o)], previous=previous)
+    if scales is None:
+        scales = escape.field_scales(scene, spec, [o for o in lights if served(o)], previous=previous)
     if not need:
         out["dense"].update(_scales_account(scales, spec))
         return out

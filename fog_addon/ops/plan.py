@@ -11,7 +11,7 @@ from typing import Any, NamedTuple
 
 import bpy
 
-from .. import methods, view
+from .. import escape, methods, view
 from ..nodes import budgets, groups
 from ..precompute.model import predict, rungs
 from ..precompute.physics.spot import spot
@@ -98,12 +98,16 @@ def choose_models(scene, spec, method, lights, budget=None, previous=None):
     samples, fog = None, {}
     served = dense_served(spec, method, engine)
     dense = any(served(o) and not view.has_shape(o) for o in lights)   # (the predictor's Dense Fog: point lights)
+    # each served light's Dense Fog field scaled by the share the surfaces leave, as the ladder judges it and builds it
+    scales = escape.field_scales(scene, spec, [o for o in lights if served(o)],
+                                 previous=((previous or {}).get("dense") or {}).get("scales"))
     if lights and (target is not None or (budget is not None and not budget.fits(steps))):
         samples = view_samples(scene, spec, lights)
         pred = predict.predict(samples, view.light_intensities(lights), spec.beta_per_unit, target, budget,
-                               spec.anisotropy, spec.grey_albedo if dense else None)
+                               spec.anisotropy, spec.grey_albedo if dense else None,
+                               [scales.get(o.name, 1.0) for o in lights] if dense else None)
         steps = [int(k) for k in pred.steps]
-        fog = {"dense" if dense else "single": pred.fog}
+        fog = {"dense" if dense else "single": pred.fog, **({"single": pred.single} if pred.single else {})}
         choice["error"] = pred.error
         choice["lights"] = {o.name: [int(k), float(e)] for o, k, e in zip(lights, pred.steps, pred.light_error)}
         choice["rims"] = {o.name: int(n) for o, n in zip(lights, pred.rims)   # (a light off keeps RIM_NODES)
@@ -114,7 +118,7 @@ def choose_models(scene, spec, method, lights, budget=None, previous=None):
         choice["lights"] = {o.name: [0, 0.0] for o in lights}
     # (where a budget forced steps beyond the target, thin lights are judged against the target alone)
     choice.update(dense_fog(scene, spec, method, lights, samples, 0.0 if choice["limited"] else choice["error"],
-                            **fog, previous=((previous or {}).get("dense") or {}).get("scales")))
+                            **fog, scales=scales))
     choice["error"] += choice["dense"]["missing"] + choice["dense"].get("surplus_missing", 0.0)
     return _models(spec, method, lights, steps, choice["rims"], set(choice["thin"]), choice["dense"]["scales"]), choice
 

@@ -1,13 +1,13 @@
 """The World's light on surfaces through the fog (``shading.shade_background``'s ``world_light``).
 
-    python tests/scenes/world_light_probe.py OUT_DIR
+    python tests/scenes/world_light_probe.py OUT_DIR [CASE ...]
 
 A white Lambertian plane under a uniform white World (radiance 1), no lamps, seen straight down from
 2 m (4x4 px at pixel centres).  Without fog it reflects radiance 1 (a white furnace).  Fogged at
 beta = 0.2 1/m, World Light off: the fog fills all space, so the World's light never reaches the plane
 (0, as under Cycles' World volume); on: the plane keeps it, seen through e^{-beta 2 m}.  Rendered in
-Cycles (nodes and OSL) and EEVEE; prints ``WORLD_LIGHT_JSON {...}``: the mean radiance per case and
-the pixels' mean e^{-beta D}.
+Cycles (nodes and OSL) and EEVEE (CASE: cycles_nodes, cycles_osl, blender_eevee_nodes; default all);
+prints ``WORLD_LIGHT_JSON {...}``: the mean radiance per case and the pixels' mean e^{-beta D}.
 """
 import json
 import pathlib
@@ -40,11 +40,16 @@ def render(scene, engine, out):
     return float(imageio.read_rgb(out).mean())
 
 
-def main(out_dir):
+CASES = (("CYCLES", "nodes"), ("CYCLES", "osl"), ("BLENDER_EEVEE", "nodes"))
+
+
+def main(out_dir, *cases):
     out_dir = pathlib.Path(out_dir)
     res = {}
-    for engine, method in (("CYCLES", "nodes"), ("CYCLES", "osl"), ("BLENDER_EEVEE", "nodes")):
+    for engine, method in CASES:
         key = f"{engine.lower()}_{method}"
+        if cases and key not in cases:
+            continue
         scene, cam = build()
         _, d = probe_common.camera_rays(cam, SIZE, SIZE)
         res["transmittance"] = float(np.mean(np.exp(-BETA * HEIGHT / np.abs(d[..., 2]))))
@@ -56,4 +61,4 @@ def main(out_dir):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    main(*sys.argv[1:])

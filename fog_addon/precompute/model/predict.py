@@ -86,7 +86,8 @@ class Prediction(NamedTuple):
     limited: bool = False   # the budget took steps beyond the target (error may exceed it)
     fits: bool = True       # the steps fit the budget (False: even every light off does not)
     rims: Any = None        # (N,) int: the point count of each spot's rim (spot.RIM_LADDER; meaningless for points)
-    fog: Any = None         # (glow, scatter) of ``light_fog`` it judged (``multiple_share`` reuses them)
+    fog: Any = None         # (glow, scatter) of ``light_fog`` (with Dense Fog unscaled, if judged with it)
+    single: Any = None      # (glow, scatter) without Dense Fog, where its scales made the judge compute them
 
 
 class Budget(NamedTuple):
@@ -363,10 +364,26 @@ def choose_steps(glow, scatter, target, budget=None, rim_dev=None, other=None):
     return Prediction(steps, light_error, error, int(judged.any(axis=1).sum()), limited, fits, rims)
 
 
-def predict(samples, intensity, beta, quality, budget=None, g=0.0, multiple_albedo=None):
+def predict(samples, intensity, beta, quality, budget=None, g=0.0, multiple_albedo=None, multiple_scale=None):
     """The choice for a view at a Quality (preset name, number or None): :class:`Prediction`.
     ``multiple_albedo``: the point lights' terms judged with Dense Fog's multiply scattered light of that grey
-    albedo (a step that drops a term drops its multiply scattered part too), else None."""
+    albedo (a step that drops a term drops its multiply scattered part too), else None; ``multiple_scale``: (N,)
+    each light's scale of that light (``escape.field_scales``: the share the scene's surfaces leave), as the
+    render scales it (:func:`scaled_fog`), or None for 1."""
     glow, scatter = light_fog(samples, intensity, beta, g, multiple_albedo=multiple_albedo)
-    return choose_steps(glow, scatter, spec.target_error(quality), budget,
-                        rim_deviation(samples, intensity, beta, glow, g), samples.other)._replace(fog=(glow, scatter))
+    single = None
+    if multiple_albedo is not None and multiple_scale is not None and np.any(np.asarray(multiple_scale) != 1.0):
+        single = light_fog(samples, intensity, beta, g)
+        judged = scaled_fog(single, (glow, scatter), multiple_scale)
+    else:
+        judged = (glow, scatter)
+    return choose_steps(*judged, spec.target_error(quality), budget, rim_deviation(samples, intensity, beta, glow, g),
+                        samples.other)._replace(fog=(glow, scatter), single=single)
+
+
+def scaled_fog(single, dense, scale):
+    """(glow, scatter), (P, N, 3): each light's single scattering plus ``scale`` (N,) times its multiply scattered
+    part (``dense`` less ``single``, each a (glow, scatter) of :func:`light_fog`): Dense Fog's field as the render
+    has it beside surfaces (``rungs.choose``'s ``multiple_scale``)."""
+    k = np.asarray(scale, float)[None, :, None]
+    return tuple(s + k * (d - s) for s, d in zip(single, dense))
