@@ -275,9 +275,9 @@ MUTATIONS = [
     Mutation("dense_scale_unjudged", "the Quality's ladder judges each light with Dense Fog's unbounded field "
              "while the render scales it beside surfaces (a random scene at Final measured 1.12 % against 0.98 % "
              "predicted)",
-             "predict.predict",
-             "    if multiple_albedo is not None and multiple_scale is not None and np.any(np.asarray(multiple_scale) != 1.0):\n",
-             "    if False:\n",
+             "light_terms",
+             "    scaled = multiple_albedo is not None and multiple_scale is not None and np.any(np.asarray(multiple_scale) != 1.0)\n",
+             "    scaled = False\n",
              ("tests/test_predict.py::test_the_ladder_judges_dense_fog_as_the_surfaces_scale_it",)),
     Mutation("surface_share_hemisphere", "light shafts: a surface's fog light sees the fog within 30 degrees of its "
              "normal only (Sun 2005 Eq. 17's G_0 is over the whole hemisphere, cos-weighted)",
@@ -716,8 +716,8 @@ MUTATIONS = [
              ("tests/test_multiple_render.py::test_dense_fog_glow_against_64_bounces[4.5-cycles-compositor]",)),
     Mutation("dense_steps_single", "the ladder's steps judged without the multiply scattered terms Dense Fog adds",
              "choose_models",
-             "spec.anisotropy, spec.grey_albedo if dense else None,\n",
-             "spec.anisotropy, None,\n",
+             "spec.anisotropy, spec.grey_albedo if dense else None, scale)",
+             "spec.anisotropy, None, scale)",
              ("tests/test_quality.py::test_measured_error_within_prediction[daylit:5-final]",)),
     Mutation("shadows_uncounted", "Light Shafts off: the shadows the fog lacks are not in the predicted error",
              "plan.plan", '        choice["error"] += choice["shadows"]["missing"]\n', "        pass\n",

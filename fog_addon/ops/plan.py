@@ -76,7 +76,7 @@ def scene_materials(scene, objects=None):
     return mats
 
 
-def choose_models(scene, spec, method, lights, budget=None, previous=None):
+def choose_models(scene, spec, method, lights, budget=None, previous=None, judged=None):
     """Each light's models (rungs.LightModels) at the spec's Quality with ``method``, and the choice for reports.
 
     The view is sampled by ray casts (``view.py``) and every light's step down
@@ -88,7 +88,9 @@ def choose_models(scene, spec, method, lights, budget=None, previous=None):
     "engine": the render engine chosen for, "limited": what forced steps beyond the target, or None, and
     ``dense_fog``'s "thin", "dense": its account of the multiply scattered light left out}.  ``budget``: this budget
     instead of the method's (the viewport's preview: ``preview_models``).  ``previous``: the stored choice, whose
-    Dense Fog scales a light keeps while its new one is within a step of it (``left_out.dense_fog``).
+    Dense Fog scales a light keeps while its new one is within a step of it (``left_out.dense_fog``).  ``judged``:
+    a dict that keeps the view's samples, the scales and the lights' terms for another choice of the same plan (the
+    preview's), which then takes them instead of judging the same view again.
     """
     target = spec.target_error
     engine = scene.render.engine
@@ -98,14 +100,19 @@ def choose_models(scene, spec, method, lights, budget=None, previous=None):
     samples, fog = None, {}
     served = dense_served(spec, method, engine)
     dense = any(served(o) and not view.has_shape(o) for o in lights)   # (the predictor's Dense Fog: point lights)
+    judged = {} if judged is None else judged
     # each served light's Dense Fog field scaled by the share the surfaces leave, as the ladder judges it and builds it
-    scales = escape.field_scales(scene, spec, [o for o in lights if served(o)],
-                                 previous=((previous or {}).get("dense") or {}).get("scales"))
+    scaled = [o for o in lights if served(o)]
+    scales = _judged(judged, ("scales", tuple(o.name for o in scaled)), lambda: escape.field_scales(
+        scene, spec, scaled, previous=((previous or {}).get("dense") or {}).get("scales")))
     if lights and (target is not None or (budget is not None and not budget.fits(steps))):
-        samples = view_samples(scene, spec, lights)
-        pred = predict.predict(samples, view.light_intensities(lights), spec.beta_per_unit, target, budget,
-                               spec.anisotropy, spec.grey_albedo if dense else None,
-                               [scales.get(o.name, 1.0) for o in lights] if dense else None)
+        names = tuple(o.name for o in lights)
+        samples = _judged(judged, ("samples", names), lambda: view_samples(scene, spec, lights))
+        scale = [scales.get(o.name, 1.0) for o in lights] if dense else None
+        args = (samples, view.light_intensities(lights), spec.beta_per_unit)
+        terms = _judged(judged, ("terms", names, dense, None if scale is None else tuple(scale)),
+                        lambda: predict.light_terms(*args, spec.anisotropy, spec.grey_albedo if dense else None, scale))
+        pred = predict.predict(*args, target, budget, spec.anisotropy, terms=terms)
         steps = [int(k) for k in pred.steps]
         fog = {"dense" if dense else "single": pred.fog, **({"single": pred.single} if pred.single else {})}
         choice["error"] = pred.error
@@ -121,6 +128,13 @@ def choose_models(scene, spec, method, lights, budget=None, previous=None):
                             **fog, scales=scales))
     choice["error"] += choice["dense"]["missing"] + choice["dense"].get("surplus_missing", 0.0)
     return _models(spec, method, lights, steps, choice["rims"], set(choice["thin"]), choice["dense"]["scales"]), choice
+
+
+def _judged(judged, key, compute):
+    """``judged[key]``, computed once (``choose_models``' ``judged``)."""
+    if key not in judged:
+        judged[key] = compute()
+    return judged[key]
 
 
 def _models(spec, method, lights, steps, rims, thin=frozenset(), scales=None):
@@ -148,7 +162,7 @@ def lights_in_groups(lights, choice):
     return [o for o in lights if choice["lights"].get(o.name, [0])[0] != rungs.LEFT_OUT]
 
 
-def preview_models(scene, spec, lights, budget):
+def preview_models(scene, spec, lights, budget, judged=None):
     """(lights, models, choice) of the viewport's preview within ``budget`` (``Method.preview_budget``), or None
     without lights: the Node Groups method's models of the lights that matter most to the picture, chosen as the
     Quality chooses (``choose_models``) within the budget; the lights it leaves off are not in it
@@ -156,7 +170,7 @@ def preview_models(scene, spec, lights, budget):
     if not lights:
         return None
     nodes = methods.get("nodes")
-    models, choice = choose_models(scene, spec, nodes, lights, budget)
+    models, choice = choose_models(scene, spec, nodes, lights, budget, judged=judged)
     kept = [(o, mod) for o, mod in zip(lights, models) if choice["lights"][o.name][0] < rungs.OFF]
     return [o for o, _ in kept], [mod for _, mod in kept], choice
 
@@ -221,8 +235,9 @@ def plan(scene, spec, method, lights, reason=None, rechoose=True, this_frame=Fal
         budget = method.budget(scene, spec, lights)
         if budget is not None and not budget.fits(kept):   # e.g. the method switched to OSL: choose again
             kept = None
+    judged = {}   # (the view's samples, scales and terms, for the preview's choice too)
     if kept is None:
-        models, choice = choose_models(scene, spec, method, lights, previous=old)
+        models, choice = choose_models(scene, spec, method, lights, previous=old, judged=judged)
         choice.update(shadow_fog(scene, spec, method, lights))
         choice["error"] += choice["shadows"]["missing"]
         choice["dense"]["emitters"] = emitters_dense(scene, spec)
@@ -249,7 +264,7 @@ def plan(scene, spec, method, lights, reason=None, rechoose=True, this_frame=Fal
                                                       [k for _, k in shown], {}, frozenset(),
                                                       choice["dense"].get("scales")), old_preview)
         else:
-            preview = preview_models(scene, spec, in_groups, preview_budget)
+            preview = preview_models(scene, spec, in_groups, preview_budget, judged)
         choice["preview"] = {"lights": preview[2]["lights"], "error": preview[2]["error"]} if preview else None
     return Plan(lights, models, choice, in_groups, grouped, shader_lights, shader_models,
                 method.windows(scene, in_groups, partial), partial, this_frame, preview)

@@ -364,20 +364,34 @@ def choose_steps(glow, scatter, target, budget=None, rim_dev=None, other=None):
     return Prediction(steps, light_error, error, int(judged.any(axis=1).sum()), limited, fits, rims)
 
 
-def predict(samples, intensity, beta, quality, budget=None, g=0.0, multiple_albedo=None, multiple_scale=None):
+def light_terms(samples, intensity, beta, g=0.0, multiple_albedo=None, multiple_scale=None):
+    """(fog, single): :func:`light_fog`'s (glow, scatter), with Dense Fog's multiply scattered light of grey albedo
+    ``multiple_albedo`` if not None, and where ``multiple_scale`` (N,) scales it (``escape.field_scales``: the
+    share the scene's surfaces leave, as the render scales it) the (glow, scatter) without it, else None: what
+    :func:`predict` judges (:func:`judged_terms`)."""
+    fog = light_fog(samples, intensity, beta, g, multiple_albedo=multiple_albedo)
+    scaled = multiple_albedo is not None and multiple_scale is not None and np.any(np.asarray(multiple_scale) != 1.0)
+    return (fog, light_fog(samples, intensity, beta, g) if scaled else None, multiple_scale)
+
+
+def judged_terms(terms):
+    """The (glow, scatter) the ladder judges from :func:`light_terms`' ``terms``: each light's Dense Fog scaled."""
+    fog, single, scale = terms
+    return fog if single is None else scaled_fog(single, fog, scale)
+
+
+def predict(samples, intensity, beta, quality, budget=None, g=0.0, multiple_albedo=None, multiple_scale=None,
+            terms=None):
     """The choice for a view at a Quality (preset name, number or None): :class:`Prediction`.
     ``multiple_albedo``: the point lights' terms judged with Dense Fog's multiply scattered light of that grey
     albedo (a step that drops a term drops its multiply scattered part too), else None; ``multiple_scale``: (N,)
     each light's scale of that light (``escape.field_scales``: the share the scene's surfaces leave), as the
-    render scales it (:func:`scaled_fog`), or None for 1."""
-    glow, scatter = light_fog(samples, intensity, beta, g, multiple_albedo=multiple_albedo)
-    single = None
-    if multiple_albedo is not None and multiple_scale is not None and np.any(np.asarray(multiple_scale) != 1.0):
-        single = light_fog(samples, intensity, beta, g)
-        judged = scaled_fog(single, (glow, scatter), multiple_scale)
-    else:
-        judged = (glow, scatter)
-    return choose_steps(*judged, spec.target_error(quality), budget, rim_deviation(samples, intensity, beta, glow, g),
+    render scales it (:func:`scaled_fog`), or None for 1.  ``terms``: :func:`light_terms`' if already computed
+    (then the two before are its)."""
+    terms = light_terms(samples, intensity, beta, g, multiple_albedo, multiple_scale) if terms is None else terms
+    (glow, scatter), single, _ = terms
+    return choose_steps(*judged_terms(terms), spec.target_error(quality), budget,
+                        rim_deviation(samples, intensity, beta, glow, g),
                         samples.other)._replace(fog=(glow, scatter), single=single)
 
 
