@@ -161,8 +161,9 @@ def _lane(name, base):
 
 
 # lanes only the slow tier runs (their contracts are the default tier's other lanes' in another engine or method:
-# the OSL script's bytecode, the Compositor in EEVEE, the Compositor's animation); the default runs the rest
-SLOW_LANES = ("osl", "compositor_eevee", "anim_compositor")
+# the OSL script's bytecode, the Compositor in EEVEE, the Compositor's animation, the Compositor without Dense Fog,
+# whose driven graph the dense lane renders too); the default runs the rest
+SLOW_LANES = ("osl", "compositor_eevee", "anim_compositor", "compositor")
 
 
 def _lanes(tmp_path_factory, names):
