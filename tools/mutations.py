@@ -279,6 +279,18 @@ MUTATIONS = [
              "    scaled = multiple_albedo is not None and multiple_scale is not None and np.any(np.asarray(multiple_scale) != 1.0)\n",
              "    scaled = False\n",
              ("tests/test_predict.py::test_the_ladder_judges_dense_fog_as_the_surfaces_scale_it",)),
+    Mutation("emitters_outside_the_denominator", "the predictor: the glowing objects' fog left out of each "
+             "sample's fog where the Compositor glows them (their light is part of every pixel's it reaches)",
+             "with_other",
+             "    if glows_emitters(scene, method):\n",
+             "    if False:\n",
+             ("tests/test_predict_sources.py::test_a_glowing_objects_fog_is_in_the_compositors_denominator",)),
+    Mutation("emitter_intensity_whole_area", "the predictor: a glowing object's intensity L A, its whole surface "
+             "instead of its mean projected area A / 4 (Cauchy)",
+             "emitters_fog",
+             "        intensities.append(np.max(radiance, axis=0) * area / 4.0)\n",
+             "        intensities.append(np.max(radiance, axis=0) * area)\n",
+             ("tests/test_predict_sources.py::test_a_glowing_objects_fog_is_in_the_compositors_denominator",)),
     Mutation("surface_share_hemisphere", "light shafts: a surface's fog light sees the fog within 30 degrees of its "
              "normal only (Sun 2005 Eq. 17's G_0 is over the whole hemisphere, cos-weighted)",
              "hemisphere_angles",

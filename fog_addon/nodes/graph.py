@@ -22,6 +22,7 @@ JSON), so the fog can tell whether a material changed since it was fogged.
 """
 import hashlib
 import json
+import math
 
 import bpy
 
@@ -247,6 +248,23 @@ def emits(material):
     if material is None or material.node_tree is None:
         return False
     return any(not is_zero(e[0]) for k in plan(material.node_tree)[2].values() for e in k.emitters)
+
+
+def emitted_radiance(material):
+    """RGB W/(m^2 sr): the radiance ``material``'s emission adds (each emitter's colour x strength x its weight in
+    the mix, summed), or None where a part of it is not a plain value (a texture, a driven strength): what the
+    predictor takes a glowing object to shine with (``ops/left_out.emitters_fog``)."""
+    if material is None or material.node_tree is None:
+        return None
+    total = [0.0, 0.0, 0.0]
+    for kinds in plan(material.node_tree)[2].values():
+        for weight, colour, strength in kinds.emitters:
+            if not all(isinstance(f, float) for f in weight) or not isinstance(strength, float) \
+                    or not isinstance(colour, tuple):
+                return None
+            w = strength * math.prod(weight)
+            total = [t + w * c for t, c in zip(total, colour)]
+    return tuple(total)
 
 
 # --- the BSDF values the fog copies ------------------------------------------------

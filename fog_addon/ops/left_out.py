@@ -9,17 +9,56 @@ import numpy as np
 from mathutils import Vector
 
 from .. import caveats, escape, methods, shadow_maps, sunsky, view
+from ..nodes import graph
 from ..precompute.model import capabilities, predict
 
 MULTIPLE_ENTRIES = 1_000_000   # samples x lights at most for Dense Fog's shares (``dense_fog``): every nth sample
 #                                beyond (the choice's time stays that of the ladder's alone)
 
 
-def view_samples(scene, spec, lights):
+def view_samples(scene, spec, lights, method=None):
     """``view.view_samples`` of ``lights`` holding the fog light that no step of theirs leaves out
-    (``predict.ViewSamples.other``: a fog layer's sun and sky, ``sunsky.sampled_fog``), in every sample's fog."""
-    samples = view.view_samples(scene, lights)
-    return samples._replace(other=sunsky.sampled_fog(scene, spec, samples))
+    (``predict.ViewSamples.other``), in every sample's fog: a fog layer's sun and sky (``sunsky.sampled_fog``) and,
+    where ``method`` glows them, the glowing objects' (``emitters_fog``)."""
+    return with_other(scene, spec, view.view_samples(scene, lights), method)
+
+
+def glows_emitters(scene, method):
+    """Whether ``method`` (a Method or its name, or None) glows the glowing objects in the scene's engine."""
+    return method is not None and capabilities.can(getattr(method, "name", method), "emitters", scene.render.engine)
+
+
+def with_other(scene, spec, samples, method=None):
+    """``samples`` (``predict.ViewSamples``) with ``view_samples``' ``other``."""
+    parts = [sunsky.sampled_fog(scene, spec, samples)]
+    if glows_emitters(scene, method):
+        parts.append(emitters_fog(scene, spec, samples))
+    parts = [p for p in parts if p is not None]
+    return samples._replace(other=sum(parts[1:], parts[0]) if parts else None)
+
+
+def emitters_fog(scene, spec, samples):
+    """(P, 3) W/(m^2 sr): the glowing objects' glow and fog light at the view ``samples``, each object taken as a
+    point source at its bounds' centre of intensity L A / 4 (its emission's radiance L, ``graph.emitted_radiance``,
+    times its mean projected area, a quarter of its surface's for a convex body: Cauchy), through the lamps' kernels
+    (``predict.light_fog``); None without one whose radiance is a plain value.  An estimate for the denominator:
+    the Compositor blurs the objects' own pixels (``comp_emitters``)."""
+    centres, intensities = [], []
+    for obj in methods.compositor.glowing_objects(scene):
+        radiance = [graph.emitted_radiance(slot.material) for slot in obj.material_slots]
+        radiance = [r for r in radiance if r is not None and any(c > 0.0 for c in r)]
+        if not radiance or obj.type != "MESH":
+            continue
+        m = obj.matrix_world
+        area = sum(p.area for p in obj.data.polygons) * abs(m.to_3x3().determinant()) ** (2.0 / 3.0)
+        centres.append(np.mean([m @ Vector(c) for c in obj.bound_box], axis=0))
+        intensities.append(np.max(radiance, axis=0) * area / 4.0)
+    if not centres:
+        return None
+    at = samples._replace(lights=np.broadcast_to(np.array(centres), (len(samples.distance), len(centres), 3)).copy(),
+                          shapes=None)
+    glow, scatter = predict.light_fog(at, np.array(intensities), spec.beta_per_unit, spec.anisotropy)
+    return np.nan_to_num(glow + scatter, nan=0.0, posinf=0.0).sum(axis=1)
 
 
 def shadow_fog(scene, spec, method, lights):
@@ -104,7 +143,7 @@ def dense_fog(scene, spec, method, lights, samples=None, error=0.0, single=None,
         out["dense"].update(_scales_account(scales, spec))
         return out
     if samples is None:
-        samples = view_samples(scene, spec, lights)
+        samples = view_samples(scene, spec, lights, method)
     if len(samples.distance) * len(lights) > MULTIPLE_ENTRIES:   # (every nth sample)
         n = math.ceil(len(samples.distance) * len(lights) / MULTIPLE_ENTRIES)
         samples = predict.every_nth(samples, n)
