@@ -505,7 +505,8 @@ def refresh_world_sky(scene):
 
 
 def daylight(m, scene, spec, beta, albedo=1.0, in_world=False):
-    """The scene's ``sunlight.Daylight`` in the node tree of ``m`` (NodeOps or CompOps): ``beta`` the tree's
+    """The scene's ``sunlight.Daylight`` in the node tree of ``m`` (NodeOps or CompOps; NumpyOps: its values now,
+    evaluated by the kernels, without the trees' tables): ``beta`` the tree's
     density socket (driven by the params group), the layer from ``spec``, the sun's direction and irradiance and a
     uniform sky's radiance driven by the Sun light and the World's Background (a change needs no rebuild; the sun's
     direction re-bakes the fog light's map at the next Update Fog).  ``in_world``: the tree is the World's group,
@@ -513,14 +514,12 @@ def daylight(m, scene, spec, beta, albedo=1.0, in_world=False):
     cycle)."""
     top, falloff, ground = spec.layer_per_unit()
     suns = scene_suns(scene)
-    if isinstance(m, NumpyOps):   # the scene now, as values (``sampled_fog``)
-        sun = suns[0].data if suns else None
-        return sunlight.Daylight(beta, top, falloff, ground, np.array(sun_direction(suns[0]) if suns else (0, 0, 1.0)),
-                                 np.array(sun.color) * sun.energy if suns else np.zeros(3),
-                                 np.array(sky_colour(scene.world)[0]), spec.anisotropy, albedo,
-                                 *(() if spec.air_per_unit() is None else (np.array(spec.air_per_unit()[0]),
-                                                                           spec.air_per_unit()[1])))
-    if suns:
+    values = isinstance(m, NumpyOps)   # the scene now, as values (``sampled_fog``): the kernels, RGB air
+    if values:
+        sun = suns[0] if suns else None
+        direction = np.array(sun_direction(sun) if sun else (0.0, 0.0, 1.0))
+        irradiance = np.array(sun.data.color) * sun.data.energy if sun else np.zeros(3)
+    elif suns:
         sun = suns[0]
         direction = comp_ops.driven_vector(m, "Sun Direction", ["x"] * 3,
                                            lambda i: [("x", sun, f"matrix_world[2][{i}]")])
@@ -529,13 +528,14 @@ def daylight(m, scene, spec, beta, albedo=1.0, in_world=False):
                                             lambda i: [("e", sun.data, "energy"), ("c", sun.data, f"color[{i}]")])
     else:
         direction, irradiance = m.wrap((0.0, 0.0, 1.0)), m.wrap((0.0, 0.0, 0.0))
-    sky = _sky(m, scene, in_world)
+    sky = np.array(sky_colour(scene.world)[0]) if values else _sky(m, scene, in_world)
     air = spec.air_per_unit()
     table = (daylight_tables.glow_table(spec.beta_per_unit, None if air is None else air[0])
-             if uses_glow_table(scene, spec) else None)
+             if uses_glow_table(scene, spec) and not values else None)
     world_sky = None
-    if air is not None and holds_air(scene.world) and bpy.data.images.get(daylight_tables.SKY_TABLE) is not None:
+    if (air is not None and not values and holds_air(scene.world)
+            and bpy.data.images.get(daylight_tables.SKY_TABLE) is not None):
         world_sky = world_sky_spec()   # (baked by ``fog_light_table`` with the groups' other tables)
     return sunlight.Daylight(beta, top, falloff, ground, direction, irradiance, sky, spec.anisotropy, albedo,
                              None if air is None else tuple(air[0]), 0.0 if air is None else air[1], table, world_sky,
-                             grey_air=not isinstance(m, comp_ops.CompOps))
+                             grey_air=not (values or isinstance(m, comp_ops.CompOps)))

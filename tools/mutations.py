@@ -288,8 +288,8 @@ MUTATIONS = [
     Mutation("emitter_intensity_whole_area", "the predictor: a glowing object's intensity L A, its whole surface "
              "instead of its mean projected area A / 4 (Cauchy)",
              "emitters_fog",
-             "        intensities.append(np.max(radiance, axis=0) * area / 4.0)\n",
-             "        intensities.append(np.max(radiance, axis=0) * area)\n",
+             "np.max(radiance, axis=0) * area / 4.0)",
+             "np.max(radiance, axis=0) * area)",
              ("tests/test_predict_sources.py::test_a_glowing_objects_fog_is_in_the_compositors_denominator",)),
     Mutation("surface_share_hemisphere", "light shafts: a surface's fog light sees the fog within 30 degrees of its "
              "normal only (Sun 2005 Eq. 17's G_0 is over the whole hemisphere, cos-weighted)",

@@ -117,7 +117,7 @@ def choose_models(scene, spec, method, lights, budget=None, previous=None, judge
                         lambda: predict.light_terms(*args, spec.anisotropy, spec.grey_albedo if dense else None, scale))
         pred = predict.predict(*args, target, budget, spec.anisotropy, terms=terms)
         steps = [int(k) for k in pred.steps]
-        fog = {"dense" if dense else "single": pred.fog, **({"single": pred.single} if pred.single else {})}
+        fog = {"dense" if dense else "single": pred.fog, **({"single": pred.single} if pred.single is not None else {})}
         choice["error"] = pred.error
         choice["lights"] = {o.name: [int(k), float(e)] for o, k, e in zip(lights, pred.steps, pred.light_error)}
         choice["rims"] = {o.name: int(n) for o, n in zip(lights, pred.rims)   # (a light off keeps RIM_NODES)

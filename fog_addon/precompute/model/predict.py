@@ -14,7 +14,8 @@ which multiplies every term of a channel alike and so cancels):
 * glow_i = I_i * airlight (Sun et al. 2005 Eq. 11; Eq. 12 for a ray to the sky);
 * scatter_i = I_i * e^{-beta D_vp} (rho_d M_0 + rho_s M_n) (Eq. 17-18, 19);
 * fog_p = sum_i glow_i + scatter_i + other_p: the pixel's fog value, the denominator; other_p is the fog light of
-  the sources no step leaves out (a fog layer's sun and sky: ``ViewSamples.other``), composed as the pixel's.
+  the sources no step leaves out (a fog layer's sun and sky, glowing objects: ``ViewSamples.other``), composed as
+  the pixel's.
 
 Step 1 of light i drops scatter_i, step 2 drops glow_i too.  The error of a
 choice at p is sum over the lights of what they drop / fog_p: exactly the
@@ -56,7 +57,7 @@ class ViewSamples(NamedTuple):
     frame: Any = None  # (P,) the frame of each sample (for reports)
     shapes: Any = None  # LightShapes, or None: every light a point light
     other: Any = None   # (P, 3) W/(m^2 sr): the fog light of the sources the ladder does not step (a fog layer's
-    #                     sun and sky, ``daylight_terms.sampled_light``) before the fog's albedo, or None
+    #                     sun and sky, glowing objects: ``ops/left_out.with_other``) before the fog's albedo, or None
 
 
 class Cone(NamedTuple):
@@ -365,9 +366,9 @@ def choose_steps(glow, scatter, target, budget=None, rim_dev=None, other=None):
 
 
 def light_terms(samples, intensity, beta, g=0.0, multiple_albedo=None, multiple_scale=None):
-    """(fog, single): :func:`light_fog`'s (glow, scatter), with Dense Fog's multiply scattered light of grey albedo
-    ``multiple_albedo`` if not None, and where ``multiple_scale`` (N,) scales it (``escape.field_scales``: the
-    share the scene's surfaces leave, as the render scales it) the (glow, scatter) without it, else None: what
+    """(fog, single, multiple_scale): :func:`light_fog`'s (glow, scatter), with Dense Fog's multiply scattered light
+    of grey albedo ``multiple_albedo`` if not None; where ``multiple_scale`` (N,) scales it (``escape.field_scales``:
+    the share the scene's surfaces leave, as the render scales it) the (glow, scatter) without it, else None: what
     :func:`predict` judges (:func:`judged_terms`)."""
     fog = light_fog(samples, intensity, beta, g, multiple_albedo=multiple_albedo)
     scaled = multiple_albedo is not None and multiple_scale is not None and np.any(np.asarray(multiple_scale) != 1.0)
