@@ -13,6 +13,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 export TMPDIR="${TMPDIR:-/tmp}"
+# One BLAS thread a process: the two workers (and the Blender processes they start) already fill the two cores, and
+# OpenBLAS's second thread only spins waiting for one (measured: the numpy-heavy files 12 % faster, a third less
+# system time; docs/measurements/2026-11-30-test-time.md).
+export OPENBLAS_NUM_THREADS="${OPENBLAS_NUM_THREADS:-1}"
 tier=(-m "not slow")
 args=()
 for a in "$@"; do

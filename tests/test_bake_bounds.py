@@ -108,14 +108,23 @@ def test_cached_tables_cost_nothing(cache):
     assert bakers.estimate_seconds(spec) == 0.0 and bakers.missing([spec]) == []
 
 
+def _least_cpu_seconds(bake, repeats=3):
+    """The least CPU time of this process over ``repeats`` calls of ``bake``: the estimate is for an idle machine,
+    and a busy one (the other test worker, numpy's threads waiting for a core) only adds to a run's time."""
+    times = []
+    for _ in range(repeats):
+        t0 = time.process_time()
+        bake()
+        times.append(time.process_time() - t0)
+    return min(times)
+
+
 @pytest.mark.parametrize("g, albedo", [(0.85, 0.9), (0.0, 1.0)])   # a short walk; the longest (no absorption)
 def test_estimate_within_2x_of_a_small_bake(g, albedo):
     spec = sm.table_spec(g, albedo, COS_HALF, BLEND)
     photons = 4000
     spot_walk.moment_matrices(g)                                   # (per process, once per g)
-    t0 = time.process_time()
-    spot_walk.collide(g, albedo, COS_HALF, BLEND, photons=photons)
-    took = time.process_time() - t0
+    took = _least_cpu_seconds(lambda: spot_walk.collide(g, albedo, COS_HALF, BLEND, photons=photons))
     counts = spot_walk.walk_counts(g, albedo, photons)
     for key, value in spot_walk.LAST_WALK.items():
         assert 1 / 1.5 < counts[key] / value < 1.5, (key, counts[key], value)
@@ -125,11 +134,9 @@ def test_estimate_within_2x_of_a_small_bake(g, albedo):
 
 def test_point_estimate_within_2x_of_a_small_bake():
     photons, g = 4000, 0.85
-    t0 = time.process_time()
-    point_source_mc.radiance_by_order(multiple.row_distances(), g, multiple.MAX_ORDER, photons=photons,
-                                      edges_deg=multiple.column_edges_deg(), r_max=multiple.R_MAX,
-                                      window=multiple.window(g))
-    took = time.process_time() - t0
+    took = _least_cpu_seconds(lambda: point_source_mc.radiance_by_order(
+        multiple.row_distances(), g, multiple.MAX_ORDER, photons=photons, edges_deg=multiple.column_edges_deg(),
+        r_max=multiple.R_MAX, window=multiple.window(g)))
     full = multiple.estimate_seconds(multiple.table_spec(g, 0.9)) - multiple.TABLE_SECONDS
     estimate = full * photons / multiple.PHOTONS
     assert 0.5 < estimate / took < 2.0, (estimate, took)

@@ -217,7 +217,7 @@ from fog_addon.precompute.core.spec import FogSpec
 bpy.ops.wm.open_mainfile(filepath=BLEND)
 scene = bpy.context.scene
 fog_addon.register()
-apply.apply(scene, FogSpec(density=0.015, method="compositor"))
+apply.apply(scene, FogSpec(density=0.015, method="compositor", shafts=False))   # (no shadow maps to bake)
 img = bpy.data.images[preview_sampled.TABLE]
 def rows():
     px = np.empty(len(img.pixels), np.float32); img.pixels.foreach_get(px)
