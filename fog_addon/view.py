@@ -17,6 +17,7 @@ import bpy
 import numpy as np
 from mathutils.bvhtree import BVHTree
 
+from . import caveats
 from .precompute.core import tables
 from .precompute.model import footprint, predict
 from .precompute.physics.area import area
@@ -24,6 +25,8 @@ from .precompute.physics.point import surface
 
 MAX_SAMPLES = 160 * 90          # rays per frame at most: one per pixel centre up to this, else a coarser grid
 MAX_FRAMES = 8                  # an animation: at most this many frames, evenly spread over the range
+GLASS_HOPS = 4                  # glass surfaces a sample ray passes straight through at most (two panes' faces)
+GLASS_STEP = 1e-4               # units past a glass hit the ray goes on from (off the face it hit)
 # (rho_d, rho_s, level) stand-ins for a material whose Principled values can't be read: each of the two
 # counts (a mix of them errs between them); the mirror has the sharpest tabulated lobe (n = 1024).
 LAMBERT = ((1.0, 1.0, 1.0), (0.0, 0.0, 0.0), 0.0)
@@ -216,13 +219,37 @@ class _SceneMesh:
         return np.array(loc), np.array(normal), self.owners[k], tri, int(self.polygon[k][tri])
 
 
-def _sample_frame(scene, depsgraph, lights, grid):
+def _clear_glass(material, cache):
+    """True for a material the camera sees through as glass whose far side the fog is shaded on
+    (``caveats.served_glass``: a Glass or Refraction BSDF, a Principled BSDF that lets light through, at any
+    roughness, on its own or mixed).  A mix counts as all glass: the fog past it is counted whole, the larger of
+    the two."""
+    if material not in cache:
+        tree = material.node_tree if material is not None and material.use_nodes else None
+        cache[material] = tree is not None and any(not n.mute and caveats.served_glass(n) for n in tree.nodes)
+    return cache[material]
+
+
+def _first_opaque(world, origin, d, past_glass, glass):
+    """``world.ray_cast`` of the ray, gone straight through up to GLASS_HOPS glass surfaces when ``past_glass``
+    (what the methods that shade the fog past glass draw there: the segments behind it, straight through a pane,
+    ``nodes/glass_tails.py``): the fog of the whole ray to the first opaque surface, lit by that surface's
+    fog light."""
+    hit = world.ray_cast(origin, d)
+    for _ in range(GLASS_HOPS if past_glass else 0):
+        if hit is None or not _clear_glass(hit[2].material(hit[4]), glass):
+            break
+        hit = world.ray_cast(hit[0] + d * GLASS_STEP, d)
+    return hit
+
+
+def _sample_frame(scene, depsgraph, lights, grid, past_glass=False):
     origin, dirs = _frame_rays(scene, scene.camera, grid)
     rows = []
-    cache = {}
+    cache, glass = {}, {}
     world = _SceneMesh(depsgraph)
     for d in dirs:
-        hit = world.ray_cast(origin, d)
+        hit = _first_opaque(world, origin, d, past_glass, glass)
         if hit is None:
             rows.append((d, math.inf, (0.0, 0.0, 1.0), LAMBERT))
             continue
@@ -270,14 +297,16 @@ def sample_grid(scene, max_samples=MAX_SAMPLES):
     return max(1, int(w * k)), max(1, int(h * k))
 
 
-def view_samples(scene, lights, frames=None, grid=None):
+def view_samples(scene, lights, frames=None, grid=None, past_glass=False):
     """:class:`predict.ViewSamples` of the scene's camera view over ``frames`` (default
-    :func:`sample_frames`).  Changes the current frame while sampling and restores it."""
+    :func:`sample_frames`); ``past_glass``: a ray goes straight through glass to the first opaque surface, as a
+    method that shades the fog past glass draws it (``_first_opaque``).  Changes the current frame while sampling
+    and restores it."""
     frames = sample_frames(scene) if frames is None else frames
     grid = sample_grid(scene) if grid is None else grid
     cams, dirs, dists, normals, rds, rss, levels, lps, invs, fr = [], [], [], [], [], [], [], [], [], []
     for f, depsgraph in at_frames(scene, frames):
-        origin, rows, light_pos, inverse = _sample_frame(scene, depsgraph, lights, grid)
+        origin, rows, light_pos, inverse = _sample_frame(scene, depsgraph, lights, grid, past_glass)
         for d, dist, n, (rd, rs, lev) in rows:
             cams.append(origin)
             dirs.append(d)

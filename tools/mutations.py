@@ -285,6 +285,12 @@ MUTATIONS = [
              "    if glows_emitters(scene, method):\n",
              "    if False:\n",
              ("tests/test_predict_sources.py::test_a_glowing_objects_fog_is_in_the_compositors_denominator",)),
+    Mutation("predictor_stops_at_glass", "the predictor: a view sample stops at glass where the method shades the "
+             "fog past it (the glow of a lamp seen through a shop window left out of its share)",
+             "_first_opaque",
+             "    for _ in range(GLASS_HOPS if past_glass else 0):\n",
+             "    for _ in range(0):\n",
+             ("tests/test_predict_glass.py::test_the_predictor_sees_past_glass",)),
     Mutation("emitter_intensity_whole_area", "the predictor: a glowing object's intensity L A, its whole surface "
              "instead of its mean projected area A / 4 (Cauchy)",
              "emitters_fog",

@@ -18,8 +18,15 @@ MULTIPLE_ENTRIES = 1_000_000   # samples x lights at most for Dense Fog's shares
 def view_samples(scene, spec, lights, method=None):
     """``view.view_samples`` of ``lights`` holding the fog light that no step of theirs leaves out
     (``predict.ViewSamples.other``), in every sample's fog: a fog layer's sun and sky (``sunsky.sampled_fog``) and,
-    where ``method`` glows them, the glowing objects' (``emitters_fog``)."""
-    return with_other(scene, spec, view.view_samples(scene, lights), method)
+    where ``method`` glows them, the glowing objects' (``emitters_fog``); past glass where ``method`` shades the fog
+    there (``sees_past_glass``)."""
+    return with_other(scene, spec, view.view_samples(scene, lights, past_glass=sees_past_glass(scene, method)), method)
+
+
+def sees_past_glass(scene, method):
+    """Whether ``method`` (a Method or its name, or None) shades the fog past glass in the scene's engine: the
+    view's samples then go straight through glass (``view.view_samples``)."""
+    return method is not None and capabilities.can(getattr(method, "name", method), "glass", scene.render.engine)
 
 
 def glows_emitters(scene, method):

@@ -15,7 +15,8 @@ from .. import escape, methods, view
 from ..nodes import budgets, groups
 from ..precompute.model import predict, rungs
 from ..precompute.physics.spot import spot
-from .left_out import (dense_fog, dense_served, emitters_dense, glows_emitters, kept_scales, shadow_fog,
+from .left_out import (dense_fog, dense_served, emitters_dense, glows_emitters, kept_scales, sees_past_glass,
+                       shadow_fog,
                        with_other)
 
 SUPPORTED_LIGHTS = ("POINT", "SPOT", "AREA")
@@ -108,7 +109,8 @@ def choose_models(scene, spec, method, lights, budget=None, previous=None, judge
         scene, spec, scaled, previous=((previous or {}).get("dense") or {}).get("scales")))
     if lights and (target is not None or (budget is not None and not budget.fits(steps))):
         names = tuple(o.name for o in lights)
-        seen = _judged(judged, ("view", names), lambda: view.view_samples(scene, lights))
+        past = sees_past_glass(scene, method)
+        seen = _judged(judged, ("view", names, past), lambda: view.view_samples(scene, lights, past_glass=past))
         samples = _judged(judged, ("samples", names, glows_emitters(scene, method)),
                           lambda: with_other(scene, spec, seen, method))
         scale = [scales.get(o.name, 1.0) for o in lights] if dense else None
