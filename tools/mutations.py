@@ -285,6 +285,18 @@ MUTATIONS = [
              "    if glows_emitters(scene, method):\n",
              "    if False:\n",
              ("tests/test_predict_sources.py::test_a_glowing_objects_fog_is_in_the_compositors_denominator",)),
+    Mutation("emission_image_unread", "the predictor: a glowing object's Image Texture colour left unread (its fog "
+             "out of the denominator, as a procedural texture's)",
+             "emitted_radiance",
+             "                colour = image_mean(colour)\n",
+             "                colour = None\n",
+             ("tests/test_predict_sources.py::test_a_textured_emission_shines_with_its_images_mean",)),
+    Mutation("emission_image_srgb_stored", "the predictor: an 8-bit sRGB image's mean taken of its stored values, not "
+             "made linear (a grey of 0.5 stored shines 2.3 times its 0.21)",
+             "_pixels_mean",
+             "    if not img.is_float and img.colorspace_settings.name == \"sRGB\":\n",
+             "    if False:\n",
+             ("tests/test_predict_sources.py::test_a_textured_emission_shines_with_its_images_mean",)),
     Mutation("predictor_stops_at_glass", "the predictor: a view sample stops at glass where the method shades the "
              "fog past it (the glow of a lamp seen through a shop window left out of its share)",
              "_first_opaque",

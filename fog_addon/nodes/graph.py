@@ -252,19 +252,65 @@ def emits(material):
 
 def emitted_radiance(material):
     """RGB W/(m^2 sr): the radiance ``material``'s emission adds (each emitter's colour x strength x its weight in
-    the mix, summed), or None where a part of it is not a plain value (a texture, a driven strength): what the
-    predictor takes a glowing object to shine with (``ops/left_out.emitters_fog``)."""
+    the mix, summed), or None where a part of it is not a plain value (a procedural texture, a driven strength):
+    what the predictor takes a glowing object to shine with (``ops/left_out.emitters_fog``).  A colour read from
+    an Image Texture counts as the image's mean (``image_mean``: the surface's mean where its UVs cover the image
+    once)."""
     if material is None or material.node_tree is None:
         return None
     total = [0.0, 0.0, 0.0]
     for kinds in plan(material.node_tree)[2].values():
         for weight, colour, strength in kinds.emitters:
-            if not all(isinstance(f, float) for f in weight) or not isinstance(strength, float) \
-                    or not isinstance(colour, tuple):
+            if not isinstance(colour, tuple):
+                colour = image_mean(colour)
+            if not all(isinstance(f, float) for f in weight) or not isinstance(strength, float) or colour is None:
                 return None
             w = strength * math.prod(weight)
             total = [t + w * c for t, c in zip(total, colour)]
     return tuple(total)
+
+
+MEAN_PIXELS = 1024 * 1024   # pixels an image's mean reads at most (``image_mean``: 16 MiB); a larger one is scaled
+MEAN_SIZE = 1024              # to this many pixels a side, in a copy
+_means = {}                   # (image name, size, file, generated colour, dirty) -> its mean, per session
+
+
+def image_mean(sock):
+    """The linear RGB mean of the image an Image Texture node's Color output ``sock`` reads, or None for any other
+    source (or no pixels).  8-bit sRGB pixels are made linear.  An image of more than MEAN_PIXELS is scaled in a
+    copy of its file first (Blender's box filter: a float image's mean kept; an 8-bit one's stored values averaged
+    before they are made linear, which darkens detail finer than a box a little; edits not saved are not seen).
+    Kept per image while its name, size, file, generated colour and unsaved state stay."""
+    node = getattr(sock, "node", None)
+    img = getattr(node, "image", None) if getattr(node, "bl_idname", "") == "ShaderNodeTexImage" else None
+    if img is None or sock.name != "Color":
+        return None
+    key = (img.name_full, tuple(img.size), img.filepath_raw, tuple(img.generated_color), img.is_dirty)
+    if key not in _means:
+        if len(_means) > 64:
+            _means.clear()
+        _means[key] = _pixels_mean(img)
+    return _means[key]
+
+
+def _pixels_mean(img):
+    import numpy as np   # (numpy: only when an image is read)
+    w, h = img.size[:]
+    if w * h == 0:
+        return None
+    source = img if w * h <= MEAN_PIXELS else img.copy()
+    try:
+        if source is not img:
+            source.scale(min(w, MEAN_SIZE), min(h, MEAN_SIZE))
+        px = np.empty(len(source.pixels), np.float32)
+        source.pixels.foreach_get(px)
+        rgb = px.reshape(-1, source.channels)[:, :3].astype(np.float64)
+    finally:
+        if source is not img:
+            bpy.data.images.remove(source)
+    if not img.is_float and img.colorspace_settings.name == "sRGB":
+        rgb = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
+    return tuple(float(c) for c in rgb.mean(axis=0)) if len(rgb) else None
 
 
 # --- the BSDF values the fog copies ------------------------------------------------

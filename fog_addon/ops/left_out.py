@@ -47,7 +47,7 @@ def emitters_fog(scene, spec, samples):
     """(P, 3) W/(m^2 sr): the glowing objects' glow and fog light at the view ``samples``, each object taken as a
     point source at its bounds' centre of intensity L A / 4 (its emission's radiance L, ``graph.emitted_radiance``,
     times its mean projected area, a quarter of its surface's for a convex body: Cauchy), through the lamps' kernels
-    (``predict.light_fog``); None without one whose radiance is a plain value.  An estimate for the denominator:
+    (``predict.light_fog``); None without one whose radiance can be read (plain values, an image).  An estimate for the denominator:
     the Compositor blurs the objects' own pixels (``comp_emitters``)."""
     shining, intensities = [], []
     for obj in methods.compositor.glowing_objects(scene):
