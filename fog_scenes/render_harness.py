@@ -200,6 +200,23 @@ def ensure_reference(scene, density, regen=False, **kw):
     return path
 
 
+def cached_reference(name, render, regen=False):
+    """Path of the committed reference ``tests/references/<name>.exr`` (with the ``.npz`` of masks its scene script
+    writes beside it, if any), made by ``render(out)`` (a path-traced render into ``out``) if missing, or if
+    ``regen`` and not re-rendered yet in this test session: a scene's own path-traced reference is rendered once,
+    not in every run."""
+    path = REFERENCES / f"{name}.exr"
+    if not path.is_file() or (regen and path not in _REGENERATED):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(path.stem + ".tmp.exr")
+        render(tmp)
+        if tmp.with_suffix(".npz").is_file():
+            os.replace(tmp.with_suffix(".npz"), path.with_suffix(".npz"))
+        os.replace(tmp, path)
+        _REGENERATED.add(path)
+    return path
+
+
 def render_test(scene, density, out, engine="cycles", method=None, samples=None,
                 resolution=TEST_RESOLUTION, extra=(), blend=None, cast_shadows=False,
                 interreflection=False, log=None, timeout=600, multiple_scattering="off"):

@@ -38,14 +38,13 @@ def _render(case, mode, out, samples, method="nodes"):
 
 
 @pytest.fixture(scope="module")
-def reference(tmp_path_factory):
-    """reference(case): the case's path-traced picture and pane mask, rendered once per module."""
-    cache, folder = {}, tmp_path_factory.mktemp("glass_references")
-
+def reference(regen):
+    """reference(case): the case's path-traced picture and pane mask, committed (``tests/references``), rendered
+    again with ``--regen-references``."""
     def get(case):
-        if case not in cache:
-            cache[case] = _render(case, "reference", folder / f"{case}_ref.exr", 2048)
-        return cache[case]
+        path = h.cached_reference(f"glass_mirror_{case}_96x54_2048spp",
+                                  lambda out: _render(case, "reference", out, 2048), regen)
+        return imageio.read_rgb(path), np.load(path.with_suffix(".npz"))["pane"]
     return get
 
 

@@ -52,10 +52,12 @@ def _render(mode, out, samples, method="compositor"):
 
 
 @pytest.fixture(scope="module")
-def reference(tmp_path_factory):
-    """The path-traced picture, its pane mask and its lamp mask, rendered once per module."""
-    image, pane, lamps, _ = _render("reference", tmp_path_factory.mktemp("shop_window") / "ref.exr", 2048)
-    return image, pane, lamps
+def reference(regen):
+    """The path-traced picture, its pane mask and its lamp mask: committed (``tests/references``), rendered again
+    with ``--regen-references``."""
+    path = h.cached_reference("shop_window_96x54_2048spp", lambda out: _render("reference", out, 2048), regen)
+    masks = np.load(path.with_suffix(".npz"))
+    return imageio.read_rgb(path), masks["pane"], masks["lamps"]
 
 
 @pytest.mark.parametrize("method", [pytest.param("nodes", marks=pytest.mark.slow(
