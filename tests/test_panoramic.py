@@ -27,8 +27,11 @@ def _render(tmp_path, mode, samples, method="compositor"):
 
 
 @pytest.fixture(scope="module")
-def reference(tmp_path_factory):
-    return _render(tmp_path_factory.mktemp("panoramic"), "reference", 512)
+def reference(regen):
+    """The path-traced picture: committed (``tests/references``), rendered again with ``--regen-references``."""
+    path = h.cached_reference("panoramic_128x64_512spp",
+                              lambda out: h.run([SCENE, "reference", out, 512, "compositor"], timeout=900), regen)
+    return imageio.read_rgb(path)
 
 
 @pytest.mark.parametrize("method", ["compositor", pytest.param("nodes", marks=pytest.mark.slow(
