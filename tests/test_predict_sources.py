@@ -16,18 +16,23 @@ from fog_scenes import render_harness as h
 
 pytestmark = pytest.mark.render
 
-_CODE = r'''
+# the glowing sphere's scene, emptied and built again (``sys.argv[1]``: the repository)
+_SPHERE = r'''
 import sys, json, math, bpy
 import numpy as np
 sys.path.insert(0, sys.argv[1])
 from fog_scenes import glowing_sphere as gs
 from fog_addon import view
+from fog_addon.nodes import graph
 from fog_addon.ops import left_out
 from fog_addon.precompute.core.spec import FogSpec
 from fog_addon.precompute.model import predict
 scene = bpy.context.scene
 for o in list(scene.objects):
     bpy.data.objects.remove(o)
+'''
+
+_CODE = _SPHERE + r'''
 gs.build(scene, resolution=(32, 32))
 spec = FogSpec(density=0.1)
 seen = view.view_samples(scene, [], grid=(32, 32))
@@ -49,18 +54,7 @@ def test_a_glowing_objects_fog_is_in_the_compositors_denominator():
     assert 0.99 < got["ratio"][0] <= got["ratio"][1] < 1.0, got   # (a UV sphere's facets: a little less area)
 
 
-_TEXTURED = r'''
-import sys, json, math, bpy
-import numpy as np
-sys.path.insert(0, sys.argv[1])
-from fog_scenes import glowing_sphere as gs
-from fog_addon.nodes import graph
-from fog_addon import view
-from fog_addon.ops import left_out
-from fog_addon.precompute.core.spec import FogSpec
-scene = bpy.context.scene
-for o in list(scene.objects):
-    bpy.data.objects.remove(o)
+_TEXTURED = _SPHERE + r'''
 gs.build(scene, resolution=(16, 16))
 mat = next(m for m in bpy.data.materials if m.node_tree and any(n.bl_idname == "ShaderNodeEmission"
                                                                   for n in m.node_tree.nodes))
