@@ -190,14 +190,8 @@ _REGENERATED = set()   # references re-rendered in this process (regen renders e
 def ensure_reference(scene, density, regen=False, **kw):
     """Path of the cached reference, rendering it if missing, or if ``regen`` and it
     has not been re-rendered yet in this test session."""
-    path = reference_path(scene, density, kw.get("anisotropy", 0.0))
-    if not path.is_file() or (regen and path not in _REGENERATED):
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(path.stem + ".tmp.exr")
-        render_reference(scene, density, tmp, **kw)
-        os.replace(tmp, path)
-        _REGENERATED.add(path)
-    return path
+    return cached_reference(reference_path(scene, density, kw.get("anisotropy", 0.0)).stem,
+                            lambda out: render_reference(scene, density, out, **kw), regen)
 
 
 def cached_reference(name, render, regen=False):

@@ -2,9 +2,9 @@
 
 * A bake's ``progress(done, total)`` is called as it goes (monotone, ending at total); raising
   ``BakeCancelled`` from it stops the bake and nothing is cached (``table_cache.cached_bake``).
-* ``estimate_seconds`` scales as the bakes do within 2x, and is within 3x of this machine's (CPU time of this
-  process, the least of three: the estimate is for
-  an otherwise idle machine), and ``walk_counts`` within 1.5x of the walk's own counts.
+* ``estimate_seconds`` is within 2x of a measured small bake (the spot's: its estimates scale as its bakes do within
+  2x, each within 3x of this machine's bake; CPU time of this process, the least of three: the estimate is for an
+  otherwise idle machine), and ``walk_counts`` within 1.5x of the walk's own counts.
 * The spot table's cheaper estimators agree with the full ones: its later orders' moments reproduce the
   Henyey-Greenstein series truncated at MOMENT_DEGREE exactly, and on the same walks they give the tabulated
   directions within 3 % summed over distance bands (the Legendre terms left out); the weight window's
@@ -120,8 +120,8 @@ def _least_cpu_seconds(bake, repeats=3):
     return min(times)
 
 
-SPEED_SPREAD = 3.0   # an estimate against this machine's bake: within 3x (the constants were measured on a machine
-#                      about 1.8x faster than the 2-core one of 2026-11-30; a busy one adds more)
+SPEED_SPREAD = 3.0   # a spot walk's estimate against this machine's bake: within 3x (its longest walk's estimate is
+#                      1.6-1.9x low on the 2-core machine of 2026-11-30, its short one's right)
 
 
 @pytest.fixture(scope="module")
@@ -149,8 +149,8 @@ def test_spot_estimates_scale_as_the_bakes(spot_walks):
 
 
 @pytest.mark.parametrize("g, albedo", [(0.85, 0.9), (0.0, 1.0)])
-def test_estimate_within_2x_of_a_small_bake(spot_walks, g, albedo):
-    """Within SPEED_SPREAD of this machine's bake (the name keeps the calibration machine's 2x)."""
+def test_spot_estimate_within_3x_of_a_small_bake(spot_walks, g, albedo):
+    """Within SPEED_SPREAD of this machine's bake."""
     estimate, took = spot_walks[g, albedo]
     assert 1 / SPEED_SPREAD < estimate / took < SPEED_SPREAD, (estimate, took)
 
@@ -162,7 +162,7 @@ def test_point_estimate_within_2x_of_a_small_bake():
         r_max=multiple.R_MAX, window=multiple.window(g)))
     full = multiple.estimate_seconds(multiple.table_spec(g, 0.9)) - multiple.TABLE_SECONDS
     estimate = full * photons / multiple.PHOTONS
-    assert 1 / SPEED_SPREAD < estimate / took < SPEED_SPREAD, (estimate, took)
+    assert 0.5 < estimate / took < 2.0, (estimate, took)   # (measured 0.83 on the 2-core machine of 2026-11-30)
 
 
 def test_every_dense_table_is_estimated_within_the_budget():

@@ -33,7 +33,6 @@ lights = [o for o in scene.objects if o.type == "LIGHT"]
 grid = (48, 27)
 past = view.view_samples(scene, lights, grid=grid, past_glass=True)
 first = view.view_samples(scene, lights, grid=grid, past_glass=False)
-depsgraph = bpy.context.evaluated_depsgraph_get()
 def blender_hit(o, d):
     hit, loc, _n, _i, ob, _m = scene.ray_cast(bpy.context.evaluated_depsgraph_get(), Vector(o), Vector(d))
     return (ob.name if hit else None), ((loc - Vector(o)).length if hit else math.inf)
@@ -53,7 +52,6 @@ behind = np.array([blender_hit(o, d)[1] for o, d in zip(past.camera, past.direct
 scene.objects["Pane"].hide_viewport = False
 bpy.context.view_layer.update()
 past_err = err(behind[pane_past], past.distance[pane_past])
-pane = pane_first
 power = view.light_intensities(lights)
 shop = int(np.argmax([o.location.y for o in lights]))
 g_past = float(np.median(sum(predict.light_fog(past, power, sw.BETA, 0.0))[pane_past, shop]))
@@ -63,7 +61,7 @@ sees = {}
 for engine in ("CYCLES", "BLENDER_EEVEE"):
     scene.render.engine = engine
     sees[engine] = {m: left_out.sees_past_glass(scene, m) for m in ("nodes", "osl", "compositor")}
-print("GLASS " + json.dumps({"pane": int(pane.sum()), "first_err": float(first_err), "past_err": past_err,
+print("GLASS " + json.dumps({"pane": int(pane_first.sum()), "first_err": float(first_err), "past_err": past_err,
                              "same_elsewhere": same_elsewhere, "gain": g_past / g_first,
                              "sees": sees}))
 '''

@@ -23,15 +23,20 @@ def view_samples(scene, spec, lights, method=None):
     return with_other(scene, spec, view.view_samples(scene, lights, past_glass=sees_past_glass(scene, method)), method)
 
 
+def _method_can(scene, method, feature):
+    """Whether ``method`` (a Method or its name, or None) draws ``feature`` in the scene's engine (``capabilities``)."""
+    return method is not None and capabilities.can(getattr(method, "name", method), feature, scene.render.engine)
+
+
 def sees_past_glass(scene, method):
-    """Whether ``method`` (a Method or its name, or None) shades the fog past glass in the scene's engine: the
-    view's samples then go straight through glass (``view.view_samples``)."""
-    return method is not None and capabilities.can(getattr(method, "name", method), "glass", scene.render.engine)
+    """Whether ``method`` shades the fog past glass in the scene's engine: the view's samples then go straight
+    through glass (``view.view_samples``)."""
+    return _method_can(scene, method, "glass")
 
 
 def glows_emitters(scene, method):
-    """Whether ``method`` (a Method or its name, or None) glows the glowing objects in the scene's engine."""
-    return method is not None and capabilities.can(getattr(method, "name", method), "emitters", scene.render.engine)
+    """Whether ``method`` glows the glowing objects in the scene's engine."""
+    return _method_can(scene, method, "emitters")
 
 
 def with_other(scene, spec, samples, method=None):
@@ -47,8 +52,8 @@ def emitters_fog(scene, spec, samples):
     """(P, 3) W/(m^2 sr): the glowing objects' glow and fog light at the view ``samples``, each object taken as a
     point source at its bounds' centre of intensity L A / 4 (its emission's radiance L, ``graph.emitted_radiance``,
     times its mean projected area, a quarter of its surface's for a convex body: Cauchy), through the lamps' kernels
-    (``predict.light_fog``); None without one whose radiance can be read (plain values, an image).  An estimate for the denominator:
-    the Compositor blurs the objects' own pixels (``comp_emitters``)."""
+    (``predict.light_fog``); None without one whose radiance can be read (plain values, an image).  An estimate for
+    the denominator: the Compositor blurs the objects' own pixels (``comp_emitters``)."""
     shining, intensities = [], []
     for obj in methods.compositor.glowing_objects(scene):
         radiance = [graph.emitted_radiance(slot.material) for slot in obj.material_slots]

@@ -16,8 +16,7 @@ from ..nodes import budgets, groups
 from ..precompute.model import predict, rungs
 from ..precompute.physics.spot import spot
 from .left_out import (dense_fog, dense_served, emitters_dense, glows_emitters, kept_scales, sees_past_glass,
-                       shadow_fog,
-                       with_other)
+                       shadow_fog, with_other)
 
 SUPPORTED_LIGHTS = ("POINT", "SPOT", "AREA")
 PREFERENCE_KEY = "analytic_fog_preference"   # on the Surface group: the method it was built with (methods.get)
@@ -108,14 +107,14 @@ def choose_models(scene, spec, method, lights, budget=None, previous=None, judge
     scales = _judged(judged, ("scales", tuple(o.name for o in scaled)), lambda: escape.field_scales(
         scene, spec, scaled, previous=((previous or {}).get("dense") or {}).get("scales")))
     if lights and (target is not None or (budget is not None and not budget.fits(steps))):
-        names = tuple(o.name for o in lights)
         past = sees_past_glass(scene, method)
-        seen = _judged(judged, ("view", names, past), lambda: view.view_samples(scene, lights, past_glass=past))
-        samples = _judged(judged, ("samples", names, glows_emitters(scene, method)),
+        viewed = (tuple(o.name for o in lights), past)   # (the samples of another view are another view's)
+        seen = _judged(judged, ("view", viewed), lambda: view.view_samples(scene, lights, past_glass=past))
+        samples = _judged(judged, ("samples", viewed, glows_emitters(scene, method)),
                           lambda: with_other(scene, spec, seen, method))
         scale = [scales.get(o.name, 1.0) for o in lights] if dense else None
         args = (samples, view.light_intensities(lights), spec.beta_per_unit)
-        terms = _judged(judged, ("terms", names, dense, None if scale is None else tuple(scale)),
+        terms = _judged(judged, ("terms", viewed, dense, None if scale is None else tuple(scale)),
                         lambda: predict.light_terms(*args, spec.anisotropy, spec.grey_albedo if dense else None, scale))
         pred = predict.predict(*args, target, budget, spec.anisotropy, terms=terms)
         steps = [int(k) for k in pred.steps]
