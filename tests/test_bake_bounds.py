@@ -2,9 +2,9 @@
 
 * A bake's ``progress(done, total)`` is called as it goes (monotone, ending at total); raising
   ``BakeCancelled`` from it stops the bake and nothing is cached (``table_cache.cached_bake``).
-* ``estimate_seconds`` is within 2x of a measured small bake (the spot's: its estimates scale as its bakes do within
-  2x, each within 3x of this machine's bake; CPU time of this process, the least of three: the estimate is for an
-  otherwise idle machine), and ``walk_counts`` within 1.5x of the walk's own counts.
+* ``estimate_seconds`` is within 2x of a measured small bake, and a spot's estimates scale as its bakes do within
+  2x (CPU time of this process, the least of three: the estimate is for an otherwise idle machine), and
+  ``walk_counts`` within 1.5x of the walk's own counts.
 * The spot table's cheaper estimators agree with the full ones: its later orders' moments reproduce the
   Henyey-Greenstein series truncated at MOMENT_DEGREE exactly, and on the same walks they give the tabulated
   directions within 3 % summed over distance bands (the Legendre terms left out); the weight window's
@@ -120,10 +120,6 @@ def _least_cpu_seconds(bake, repeats=3):
     return min(times)
 
 
-SPEED_SPREAD = 3.0   # a spot walk's estimate against this machine's bake: within 3x (its longest walk's estimate is
-#                      1.6-1.9x low on the 2-core machine of 2026-11-30, its short one's right)
-
-
 @pytest.fixture(scope="module")
 def spot_walks():
     """{(g, albedo): (the estimate, the least CPU time of three 4 000-photon walks)}: a short walk (absorption)
@@ -140,19 +136,17 @@ def spot_walks():
 
 
 def test_spot_estimates_scale_as_the_bakes(spot_walks):
-    """Machine-free: the longest walk's estimate over the short one's is the measured ratio within 2x (measured
-    1.0 for the short walk and 0.53-0.64 for the longest on the 2-core machine of 2026-11-30: the long walk's
-    estimate is low there)."""
+    """Machine-free: the longest walk's estimate over the short one's is the measured ratio within 2x (0.47-0.64
+    with the constants before their refit of 2026-11-30, 0.9 after)."""
     (est_short, took_short), (est_long, took_long) = spot_walks[0.85, 0.9], spot_walks[0.0, 1.0]
     ratio = (est_long / est_short) / (took_long / took_short)
     assert 0.5 < ratio < 2.0, (spot_walks, ratio)
 
 
 @pytest.mark.parametrize("g, albedo", [(0.85, 0.9), (0.0, 1.0)])
-def test_spot_estimate_within_3x_of_a_small_bake(spot_walks, g, albedo):
-    """Within SPEED_SPREAD of this machine's bake."""
+def test_estimate_within_2x_of_a_small_bake(spot_walks, g, albedo):
     estimate, took = spot_walks[g, albedo]
-    assert 1 / SPEED_SPREAD < estimate / took < SPEED_SPREAD, (estimate, took)
+    assert 0.5 < estimate / took < 2.0, (estimate, took)
 
 
 def test_point_estimate_within_2x_of_a_small_bake():

@@ -126,8 +126,9 @@ def bake_table(spec, photons=PHOTONS, seed=SEED, progress=None):
 
 
 # seconds of a bake (``estimate_seconds``): a fixed part, then per exact tally, per photon step and per loop
-# iteration, fitted to bakes on 2 cores (docs/measurements/2026-11-29-bake-time.md)
-COST = {"fixed": 0.02, "exact": 2.4e-6, "steps": 0.2e-6, "iterations": 0.09e-3}
+# iteration, fitted to bakes on 2 cores (docs/measurements/2026-11-29-bake-time.md; the steps' and the iterations'
+# refitted to six 4 000-photon walks: docs/measurements/2026-11-30-test-time.md)
+COST = {"fixed": 0.02, "exact": 2.4e-6, "steps": 0.305e-6, "iterations": 0.155e-3}
 
 
 def estimate_seconds(spec, photons=PHOTONS):
