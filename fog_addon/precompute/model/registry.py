@@ -47,8 +47,8 @@ def _bake_pixel_filter(spec, progress=None):
     return {s: bake for s, bake in pixel.FILTERS.values()}[spec]()
 
 
-BASE_SECONDS = (1.5, 8.0)   # ``bakers.bakers(g)``'s tables cold on 2 cores at g 0, at any other g (its 256 x 256
-                           # airlight table): docs/measurements/2026-11-29-bake-time.md
+BASE_SECONDS = (1.5, 2.5)   # ``bakers.bakers(g)``'s tables cold in a new process at g 0, at any other g (its
+                           # 256 x 256 airlight table): docs/measurements/2026-11-30-test-time.md
 
 
 def _per_g_seconds(spec):

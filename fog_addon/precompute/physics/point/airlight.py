@@ -67,7 +67,13 @@ def bake_airlight_table(spec=tables.AIRLIGHT):
     y = np.linspace(0.0, 1.0, spec.height)
     rho = tables.airlight_rho(x, spec.g)
     xi = tables.airlight_xi(y, spec.g)
-    return normalised_tail(rho[None, :], xi[:, None], spec.g).astype(np.float32)
+    # a few rows at a time: the quadrature's (rows, columns, panels, nodes) temporaries then stay in the
+    # processor's cache (the whole table's would be 200 MB each)
+    return np.concatenate([normalised_tail(rho[None, :], xi[i:i + ROWS_AT_ONCE, None], spec.g)
+                           for i in range(0, len(xi), ROWS_AT_ONCE)]).astype(np.float32)
+
+
+ROWS_AT_ONCE = 4   # rows of ``bake_airlight_table`` computed together
 
 
 def airlight(beta, d_sv, d_vp, gamma, table=None, quadrature=False, g=0.0):

@@ -102,10 +102,10 @@ def bake_orders(spec, progress=None):
     return arr.reshape(ROWS * MAX_ORDER, COLUMNS)
 
 
-# seconds of ``bake_orders`` on 2 cores: ORDERS_SECONDS[0] + ORDERS_SECONDS[1] (1 - g) (its walks stay nearer
+# seconds of ``bake_orders`` (one core): ORDERS_SECONDS[0] + ORDERS_SECONDS[1] (1 - g) (its walks stay nearer
 # the source at low g, where they cross more of the spheres), and of a table from cached orders (the same for
-# every albedo): TABLE_SECONDS (docs/measurements/2026-11-29-bake-time.md)
-ORDERS_SECONDS = (7.0, 8.0)
+# every albedo): TABLE_SECONDS (docs/measurements/2026-11-29-bake-time.md, 2026-11-30-test-time.md)
+ORDERS_SECONDS = (6.0, 4.2)
 TABLE_SECONDS = 0.8
 
 

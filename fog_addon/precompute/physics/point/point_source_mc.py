@@ -85,6 +85,17 @@ def _tally_crossings(tally, radii, edges_rad, b, c, w, kind, kinds, nb, share=1.
     if not len(ip):
         return
     cos_edges = np.cos(edges_rad)[::-1]        # ascending
+    for lo in range(0, len(ip), CHUNK):
+        hi = lo + CHUNK
+        _tally_pairs(tally, radii, cos_edges, b, c, w, kind, kinds, nb, ip[lo:hi], ir[lo:hi],
+                     None if scale is None else scale[lo:hi])
+
+
+CHUNK = 65_536   # (flight, sphere) pairs tallied at once: their temporaries stay in the processor's cache
+
+
+def _tally_pairs(tally, radii, cos_edges, b, c, w, kind, kinds, nb, ip, ir, scale):
+    """``_tally_crossings`` of the (flight ``ip``, sphere ``ir``) pairs, each of weight ``scale`` (None: 1)."""
     bb, cc, rr = b[ip], c[ip], radii[ir]
     rr2 = rr ** 2
     disc = bb * bb - cc + rr2
