@@ -318,13 +318,13 @@ MUTATIONS = [
               "tests/test_shafts.py::test_surface_share_matches_quadrature")),
     Mutation("mc_crossing_radiance", "multiple scattering: the Monte Carlo tallies flux, not radiance (a crossing "
              "at mu counts 1, not 1 / |mu|)",
-             "_tally_crossings",
+             "_tally_pairs",
              "        val = w[i_photon] * np.exp(-s_h) / np.maximum(np.abs(mu_h), 1e-3)\n",
              "        val = w[i_photon] * np.exp(-s_h)\n",
              ("tests/test_apsf.py::test_monte_carlo_single_scattering_matches_quadrature",)),
     Mutation("mc_expected_crossing", "multiple scattering: the Monte Carlo's expected-value crossings drop their "
              "e^{-s} (every crossing ahead counts as if reached)",
-             "_tally_crossings",
+             "_tally_pairs",
              "        val = w[i_photon] * np.exp(-s_h) / np.maximum(np.abs(mu_h), 1e-3)\n",
              "        val = w[i_photon] / np.maximum(np.abs(mu_h), 1e-3)\n",
              ("tests/test_apsf.py::test_monte_carlo_single_scattering_matches_quadrature",)),
