@@ -17,6 +17,8 @@ from fog_addon.precompute.model import footprint
 
 W, H = 64, 36
 FRAME = (-0.6, 0.6, -0.3375, 0.3375)   # a 36 mm sensor at a 30 mm lens, 16:9
+# the random cases' seeds: three in the default tier (about 2 s each), six in the slow tier
+SEEDS = [pytest.param(s, marks=[pytest.mark.slow] if s >= 3 else []) for s in range(6)]
 
 
 def _look(eye, target):
@@ -66,7 +68,7 @@ def _random_spot(rng):
     return light
 
 
-@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("seed", SEEDS)
 def test_spot_windows_hold_every_hit(seed):
     rng = np.random.default_rng(seed)
     cam = _look((0.0, -10.0, 2.0), (0.0, 5.0, 1.0))
@@ -208,7 +210,7 @@ def _random_quad(rng):
     return np.array([centre - e1 - e2, centre + e1 - e2, centre + e1 + e2, centre - e1 + e2])
 
 
-@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("seed", SEEDS)
 def test_occluded_windows_hold_every_pixel_needing_the_glow(seed):
     """Random spots (the cones of test_spot_windows_hold_every_hit, half of them aimed down) past a random
     quad: every pixel needing the glow (``_needs_glow``) lies in the crop of ``occluded_window``, which is never
