@@ -37,25 +37,6 @@ def pytest_configure(config):
                                 f"registered (tests/pytest.ini): {sorted(known)}")
 
 
-def _pin_worker():
-    """Each xdist worker (and every Blender process it starts) on its own share of the processors: with two
-    workers on two cores, a Blender process's task threads otherwise spin on the core the other worker's process
-    is using (measured: Add Fog of five spots, 19 s of CPU unpinned against 12.5 s pinned, the same wall time;
-    docs/measurements/2026-11-30-test-time.md).  FOG_TEST_PIN=0 leaves the affinity alone."""
-    worker = os.environ.get("PYTEST_XDIST_WORKER", "")
-    count = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "0") or 0)
-    if not worker.startswith("gw") or count < 2 or os.environ.get("FOG_TEST_PIN") == "0" \
-            or not hasattr(os, "sched_setaffinity"):
-        return
-    cpus = sorted(os.sched_getaffinity(0))
-    share = cpus[int(worker[2:]) % count::count]
-    if len(cpus) >= count and share:
-        os.sched_setaffinity(0, share)
-
-
-_pin_worker()
-
-
 def pytest_sessionfinish(session, exitstatus):
     """The numpy tier (``scripts/test.sh --numpy``) must not have imported Blender in this process."""
     if os.environ.get("FOG_NUMPY_TIER") == "1" and "bpy" in sys.modules and exitstatus == 0:
