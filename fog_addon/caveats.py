@@ -20,11 +20,11 @@ _SEE_THROUGH = ("ShaderNodeBsdfTransparent", "ShaderNodeBsdfGlass", "ShaderNodeB
                 "ShaderNodeBsdfTranslucent", "ShaderNodeBsdfHairPrincipled", "ShaderNodeBsdfHair")
 
 
-def see_through(materials, objects, served=None):
+def see_through(materials, objects, served=None, target="CYCLES"):
     """Names of ``materials`` that let the camera see through them (Transparent, Glass, Refraction,
-    Translucent or hair BSDFs, a Principled BSDF with transmission or alpha below 1) on ``objects`` the camera
-    sees, each once; ``served(node)``: True for a node left out (what lies past it is shaded: glass in Cycles,
-    ``served_glass``)."""
+    Translucent or hair BSDFs, a Principled BSDF with transmission or alpha below 1, connected to the output
+    ``target``'s engine renders: ``surface_nodes``) on ``objects`` the camera sees, each once; ``served(node)``:
+    True for a node left out (what lies past it is shaded: glass in Cycles, ``served_glass``)."""
     seen = {slot.material for obj in objects if obj.visible_camera
             for slot in getattr(obj, "material_slots", ()) if slot.material is not None}
     names = []
@@ -34,9 +34,27 @@ def see_through(materials, objects, served=None):
         if any(not node.mute and not (served and served(node)) and (
                 node.bl_idname in _SEE_THROUGH or (node.bl_idname == "ShaderNodeBsdfPrincipled"
                                                    and _principled_see_through(node)))
-               for node in mat.node_tree.nodes):
+               for node in surface_nodes(mat.node_tree, target)):
             names.append(mat.name)
     return names
+
+
+def surface_nodes(tree, target="CYCLES"):
+    """The nodes of a material's ``tree`` whose outputs reach the Surface of the Material Output ``target``'s
+    engine renders (one for ``target`` before one for all engines, then the active one), following the enabled
+    links upstream (not into node groups): a shader left unconnected is not part of the picture."""
+    outs = [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial" and n.target in ("ALL", target)]
+    if not outs:
+        return []
+    out = max(outs, key=lambda n: (n.target == target, n.is_active_output))
+    seen, todo = set(), [out.inputs["Surface"]]
+    while todo:
+        for link in todo.pop().links:
+            node = link.from_node
+            if link.is_valid and not link.is_muted and node.name not in seen:
+                seen.add(node.name)
+                todo.extend(i for i in node.inputs if i.is_linked)
+    return [tree.nodes[name] for name in seen]
 
 
 SHARP = 1e-3   # a roughness at or below which a glossy or metallic surface is a mirror (``specular_paths``)

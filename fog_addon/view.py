@@ -222,11 +222,12 @@ class _SceneMesh:
 def _clear_glass(material, cache):
     """True for a material the camera sees through as glass whose far side the fog is shaded on
     (``caveats.served_glass``: a Glass or Refraction BSDF, a Principled BSDF that lets light through, at any
-    roughness, on its own or mixed).  A mix counts as all glass: the fog past it is counted whole, the larger of
-    the two."""
+    roughness, on its own or mixed) that Cycles' material output renders (``caveats.surface_nodes``).  A mix
+    counts as all glass: the fog past it is counted whole, the larger of the two."""
     if material not in cache:
         tree = material.node_tree if material is not None and material.use_nodes else None
-        cache[material] = tree is not None and any(not n.mute and caveats.served_glass(n) for n in tree.nodes)
+        cache[material] = tree is not None and any(not n.mute and caveats.served_glass(n)
+                                                   for n in caveats.surface_nodes(tree))
     return cache[material]
 
 

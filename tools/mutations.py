@@ -303,6 +303,12 @@ MUTATIONS = [
              "    for _ in range(GLASS_HOPS if past_glass else 0):\n",
              "    for _ in range(0):\n",
              ("tests/test_predict_glass.py::test_the_predictor_sees_past_glass",)),
+    Mutation("predictor_sees_loose_glass", "the predictor: a glass shader anywhere in a material's tree makes it "
+             "glass, connected to the output or not (samples pass an opaque pane)",
+             "_clear_glass",
+             "                                                   for n in caveats.surface_nodes(tree))\n",
+             "                                                   for n in tree.nodes)\n",
+             ("tests/test_predict_glass.py::test_the_predictor_sees_past_glass",)),
     Mutation("emitter_intensity_whole_area", "the predictor: a glowing object's intensity L A, its whole surface "
              "instead of its mean projected area A / 4 (Cauchy)",
              "emitters_fog",

@@ -96,8 +96,9 @@ def _soft_needs(scene, materials):
     if layers:
         needs.append(f"view layers the composite does not show ({caveats.listed(layers)})")
     # (glass in Cycles: both methods shade what lies past it, ``compositor._tails``)
-    see = caveats.see_through(materials, scene.objects,
-                              served=caveats.served_glass if scene.render.engine == "CYCLES" else None)
+    cycles = scene.render.engine == "CYCLES"
+    see = caveats.see_through(materials, scene.objects, served=caveats.served_glass if cycles else None,
+                              target="CYCLES" if cycles else "EEVEE")
     if see:
         shown = ", ".join(see[:3]) + (f" and {len(see) - 3} more" if len(see) > 3 else "")
         needs.append(f"see-through materials ({shown})")
