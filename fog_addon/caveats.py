@@ -42,7 +42,8 @@ def see_through(materials, objects, served=None, target="CYCLES"):
 def surface_nodes(tree, target="CYCLES"):
     """The nodes of a material's ``tree`` whose outputs reach the Surface of the Material Output ``target``'s
     engine renders (one for ``target`` before one for all engines, then the active one), following the enabled
-    links upstream (not into node groups): a shader left unconnected is not part of the picture."""
+    links upstream (not into node groups), in the tree's order: a shader left unconnected is not part of the
+    picture."""
     outs = [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial" and n.target in ("ALL", target)]
     if not outs:
         return []
@@ -54,7 +55,7 @@ def surface_nodes(tree, target="CYCLES"):
             if link.is_valid and not link.is_muted and node.name not in seen:
                 seen.add(node.name)
                 todo.extend(i for i in node.inputs if i.is_linked)
-    return [tree.nodes[name] for name in seen]
+    return [n for n in tree.nodes if n.name in seen]
 
 
 SHARP = 1e-3   # a roughness at or below which a glossy or metallic surface is a mirror (``specular_paths``)

@@ -82,11 +82,11 @@ def sample_frames(scene):
 
 
 def _principled(material):
-    """(base colour, metallic, roughness, specular IOR level, IOR) of a material's Principled BSDF from its
-    own values, or None."""
+    """(base colour, metallic, roughness, specular IOR level, IOR) of a material's Principled BSDF (the first that
+    Cycles' material output renders: ``caveats.surface_nodes``) from its own values, or None."""
     if material is None or not material.use_nodes or material.node_tree is None:
         return None
-    for node in material.node_tree.nodes:
+    for node in caveats.surface_nodes(material.node_tree):
         if node.bl_idname == "ShaderNodeBsdfPrincipled":
             names = ("Base Color", "Metallic", "Roughness", "Specular IOR Level")
             if any(node.inputs[n].is_linked for n in names):

@@ -8,7 +8,7 @@ window, a lamp in the shop behind it).
 * the methods that shade the fog past glass in Cycles see past it (the Node Groups, the Compositor), OSL and every
   method in EEVEE not (``capabilities``' "glass" row: they show the fog in front of the pane only);
 * a glass shader left in the pane's material but not connected to its output is no glass: samples stop at the
-  pane;
+  pane, whose albedo is the connected (red) Principled BSDF's;
 * the shop lamp's predicted fog at the pane's samples takes the shop's segment behind the pane (more than the
   street's segment alone), so the Quality judges the lamp by the glow the render shows through the pane.
 """
@@ -59,19 +59,22 @@ shop = int(np.argmax([o.location.y for o in lights]))
 g_past = float(np.median(sum(predict.light_fog(past, power, sw.BETA, 0.0))[pane_past, shop]))
 g_first = float(np.median(sum(predict.light_fog(first, power, sw.BETA, 0.0))[pane_first, shop]))
 same_elsewhere = elsewhere_err < 1e-4
-# the pane's glass left in its tree but not connected to the output (the Surface unlinked): an opaque pane
+# the pane's glass left in its tree, a red opaque Principled BSDF connected to the output instead: an opaque pane
 tree = scene.objects["Pane"].active_material.node_tree
 surface = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial").inputs["Surface"]
-for link in list(surface.links):
-    tree.links.remove(link)
+red = tree.nodes.new("ShaderNodeBsdfPrincipled")
+red.inputs["Base Color"].default_value = (1.0, 0.0, 0.0, 1.0)
+tree.links.new(red.outputs[0], surface)
 loose = view.view_samples(scene, lights, grid=grid, past_glass=True)
 loose_err = err(first.distance, loose.distance)
+loose_albedo = np.asarray(loose.rho_d)[pane_first].mean(axis=0).tolist()
 sees = {}
 for engine in ("CYCLES", "BLENDER_EEVEE"):
     scene.render.engine = engine
     sees[engine] = {m: left_out.sees_past_glass(scene, m) for m in ("nodes", "osl", "compositor")}
 print("GLASS " + json.dumps({"pane": int(pane_first.sum()), "first_err": float(first_err), "past_err": past_err,
                              "same_elsewhere": same_elsewhere, "gain": g_past / g_first, "loose_err": loose_err,
+                             "loose_albedo": loose_albedo,
                              "sees": sees}))
 '''
 
@@ -85,5 +88,7 @@ def test_the_predictor_sees_past_glass():
     assert got["same_elsewhere"], "samples that meet no glass are as before"
     assert got["gain"] > 1.5, "the shop lamp's fog past the pane counts"
     assert got["loose_err"] < 1e-4, "a glass shader not connected to the output is no glass: samples stop at the pane"
+    r, g, b = got["loose_albedo"]
+    assert r > 0.5 and g < 0.05 and b < 0.05, ("the pane's albedo is the connected red BSDF's", got["loose_albedo"])
     assert got["sees"] == {"CYCLES": {"nodes": True, "osl": False, "compositor": True},
                            "BLENDER_EEVEE": {"nodes": False, "osl": False, "compositor": False}}, got["sees"]

@@ -309,6 +309,12 @@ MUTATIONS = [
              "                                                   for n in caveats.surface_nodes(tree))\n",
              "                                                   for n in tree.nodes)\n",
              ("tests/test_predict_glass.py::test_the_predictor_sees_past_glass",)),
+    Mutation("predictor_reads_loose_principled", "the predictor: a surface's albedo from the first Principled BSDF "
+             "of its material's tree, connected to the output or not",
+             "_principled",
+             "    for node in caveats.surface_nodes(material.node_tree):\n",
+             "    for node in material.node_tree.nodes:\n",
+             ("tests/test_predict_glass.py::test_the_predictor_sees_past_glass",)),
     Mutation("emitter_intensity_whole_area", "the predictor: a glowing object's intensity L A, its whole surface "
              "instead of its mean projected area A / 4 (Cauchy)",
              "emitters_fog",
