@@ -39,15 +39,30 @@ def see_through(materials, objects, served=None, target="CYCLES"):
     return names
 
 
+OUTPUT_TYPES = ("ShaderNodeOutputMaterial", "ShaderNodeOutputWorld")
+
+
+def effective_output(tree, target, skip=None):
+    """The output node of ``tree`` that ``target``'s engine (CYCLES or EEVEE) renders, as Blender chooses it: one
+    for ``target`` before one for ALL engines, then the active one, then the first in the tree's order; None if
+    there is none.  ``skip(node)``: True for an output left out of the choice (the fog's own)."""
+    best = None
+    for n in tree.nodes:
+        if n.bl_idname not in OUTPUT_TYPES or n.target not in ("ALL", target) or (skip and skip(n)):
+            continue
+        if best is None or (best.target == "ALL" and n.target == target) or (
+                best.target == n.target and n.is_active_output and not best.is_active_output):
+            best = n
+    return best
+
+
 def surface_nodes(tree, target="CYCLES"):
-    """The nodes of a material's ``tree`` whose outputs reach the Surface of the Material Output ``target``'s
-    engine renders (one for ``target`` before one for all engines, then the active one), following the enabled
-    links upstream (not into node groups), in the tree's order: a shader left unconnected is not part of the
-    picture."""
-    outs = [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial" and n.target in ("ALL", target)]
-    if not outs:
+    """The nodes of a material's ``tree`` whose outputs reach the Surface of the output ``target``'s engine
+    renders (``effective_output``), following the enabled links upstream (not into node groups), in the tree's
+    order: a shader left unconnected is not part of the picture."""
+    out = effective_output(tree, target)
+    if out is None or "Surface" not in out.inputs:
         return []
-    out = max(outs, key=lambda n: (n.target == target, n.is_active_output))
     seen, todo = set(), [out.inputs["Surface"]]
     while todo:
         for link in todo.pop().links:

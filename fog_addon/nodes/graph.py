@@ -34,27 +34,13 @@ WHITE = (1.0, 1.0, 1.0)
 BLACK = (0.0, 0.0, 0.0)
 _PRINCIPLED_INPUTS = ("Base Color", "Metallic", "Roughness", "Specular IOR Level", "Transmission Weight")
 EMITTERS = ("ShaderNodeEmission", "ShaderNodeBackground")
-_OUTPUT_TYPES = ("ShaderNodeOutputMaterial", "ShaderNodeOutputWorld")
 _PASS_THROUGH = ("ShaderNodeBsdfTransparent", "ShaderNodeHoldout")
 
 
 def effective_output(tree, target, users_only=False):
-    """The output node ``target``'s engine renders: exact target beats ALL, then the active one.
-
-    ``users_only``: among the user's outputs (the fog's own ignored).
-    """
-    best = None
-    for n in tree.nodes:
-        if (n.bl_idname not in _OUTPUT_TYPES or n.target not in ("ALL", target)
-                or (users_only and owned.is_ours(n))):
-            continue
-        if best is None:
-            best = n
-        elif best.target == "ALL" and n.target == target:
-            best = n
-        elif best.target == n.target and n.is_active_output and not best.is_active_output:
-            best = n
-    return best
+    """The output node ``target``'s engine renders (``caveats.effective_output``); ``users_only``: among the
+    user's outputs (the fog's own ignored)."""
+    return caveats.effective_output(tree, target, skip=owned.is_ours if users_only else None)
 
 
 def link_into(sock):
