@@ -137,7 +137,7 @@ def force_step(step):
         pass
     home = next(m for m in mods if hasattr(m, "_models"))
 
-    def forced(scene, spec, method, lights, budget=None, previous=None):
+    def forced(scene, spec, method, lights, budget=None, previous=None, **_judged):
         choice = {"target": spec.target_error, "error": 0.0, "rims": {}, "engine": scene.render.engine,
                   "limited": None, "lights": {o.name: [step, 0.0] for o in lights}, "thin": {},
                   "dense": {"left_out": {}, "missing": 0.0, "why": method.name}}
