@@ -63,3 +63,43 @@ def test_a_sample_takes_one_tail_light_and_its_mean_is_every_light(weight):
     np.testing.assert_allclose(taken.mean(axis=1), chances, atol=1e-5)
     np.testing.assert_allclose((taken * weights[:, None]).mean(axis=1), 1.0, rtol=1e-4)
     assert ps.mixed_chances([2.0]) is None   # one light: taken on every sample
+
+
+@pytest.mark.parametrize("light, direction", [((3.0, 10.0, 0.5), (0.0, 1.0, 0.0)), ((0.0, -4.0, 2.0), (0.0, 1.0, 0.0)),
+                                              ((1.0, 2.0, 0.0), (0.6, 0.8, 0.0))])
+def test_tile_importance_is_the_airlight_integral_of_thin_fog(light, direction):
+    """Each tile's weight is the integral over the ray of 1 / (distance to the light)^2, times I e^{-beta d}
+    (quadrature, scipy: independent of the closed form), where the tile is narrow."""
+    from scipy.integrate import quad
+    p, u = np.asarray(light), np.asarray(direction) / np.linalg.norm(direction)
+    exact, _ = quad(lambda t: 1.0 / np.sum((t * u - p) ** 2), 0.0, np.inf, limit=200)
+    w = ps.tile_importance([light], [(1.0, 2.0, 3.0)], (0.0, 0.0, 0.0), [u], 1e-6, 0.05)
+    assert w.shape == (1, 1)
+    assert w[0, 0] == pytest.approx(6.0 * np.exp(-0.05 * np.linalg.norm(p)) * exact, rel=1e-6)
+
+
+def test_each_tile_estimates_the_sum_of_all_and_favours_its_own_lights():
+    """In every tile, E[I_j / p_j] over the tile's draws is sum I_j; a tile whose ray passes by a light draws it
+    more often than a tile looking away from it, and every light keeps at least EVEN_SHARE of its picture's share."""
+    rng = np.random.default_rng(5)
+    positions = np.column_stack([rng.uniform(-30, 30, 20), rng.uniform(2, 60, 20), rng.uniform(0, 6, 20)])
+    intensities = rng.uniform(1.0, 100.0, (20, 3))
+    frame = [(0.5, 0.3, -1.0), (0.5, -0.3, -1.0), (-0.5, -0.3, -1.0), (-0.5, 0.3, -1.0)]
+    look = np.array([[1, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]], float)   # the camera looks along +y
+    dirs = ps.tile_rays(look, frame)
+    assert dirs.shape == (ps.TILE_COUNT, 3) and np.allclose(np.linalg.norm(dirs, axis=1), 1.0)
+    assert dirs[0, 0] < 0 and dirs[0, 2] < 0 and dirs[-1, 0] > 0 and dirs[-1, 2] > 0   # bottom-left first, top-right last
+    rows = ps.table_rows(positions, intensities, (0.0, 0.0, 0.0), 0.02, dirs, 0.05)
+    assert rows.shape == (ps.ROWS, 20, 4)
+    whole = ps.alias_table(ps.importance(positions, intensities, (0.0, 0.0, 0.0), 0.02))[0]
+    chances = []
+    for t in range(ps.TILE_COUNT):
+        keep, alias = rows[2 + 2 * t, :, 0], rows[2 + 2 * t, :, 1].astype(int)
+        p = drawn(keep, alias)
+        chances.append(p)
+        assert np.allclose((p[:, None] * rows[1 + 2 * t, :, :3]).sum(axis=0), intensities.sum(axis=0), rtol=1e-5)
+        assert (p >= ps.EVEN_SHARE * whole - 1e-9).all()
+    chances = np.array(chances)
+    near = np.argmin(np.linalg.norm(np.cross(dirs[:, None], positions[None]), axis=-1)
+                     / np.linalg.norm(positions, axis=1)[None], axis=0)   # each light's nearest tile by angle
+    assert all(chances[near[j], j] > np.median(chances[:, j]) for j in range(20))

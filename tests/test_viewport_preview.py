@@ -23,6 +23,9 @@ FLAGS = ["--density", "0.15", "--resolution", "48x27", "--pixel-centre", "--samp
          "--no-interreflection", "--no-cast-shadows"]
 
 
+# the street lamps' preview against its Node Groups render, both 256 spp: 3.0 % (mean ratio 1.0006; 0.26 with the
+# sampled lamps' Dense Fog left out, mutation preview_sampled_no_dense)
+THREE_LAMPS_NOISE = 0.045
 ENGINES = ["cycles", "eevee"]   # EEVEE: its materials share the uniform block with the lights they dim
 
 
@@ -36,7 +39,8 @@ def _render(blend, out, engine, *flags):
     reason="EEVEE's preview is built and rendered in the default tier by test_final_renders_are_those_without_the_"
            "preview and test_eevee_preview_says_it_has_no_shafts"))])
 def test_viewport_shows_the_node_groups_fog(tmp_path, engine):
-    blend = h.scene_blend("spheres", tmp_path)
+    """Two lamps (the budget's two): the preview models both on every sample, the Node Groups' picture."""
+    blend = h.scene_blend("glossy_lamps", tmp_path)
     view, said = _render(blend, tmp_path / "view.exr", engine, "--method", "compositor", "--viewport")
     nodes, _ = _render(blend, tmp_path / "nodes.exr", engine, "--method", "nodes")
     final, _ = _render(blend, tmp_path / "final.exr", engine, "--method", "compositor")
@@ -46,6 +50,18 @@ def test_viewport_shows_the_node_groups_fog(tmp_path, engine):
     assert compare.metrics(view, nodes)["rel_rmse"] < 1e-4, compare.metrics(view, nodes)
     assert compare.metrics(view, final)["rel_rmse"] < 0.01   # the compositor's own fog: the same models per pixel
     assert compare.metrics(view, bare)["rel_rmse"] > 0.1      # the fog's light is there
+
+
+def test_viewport_samples_three_lamps_without_bias(tmp_path):
+    """Three lamps, more than the budget's two: Cycles' preview samples all three, one a sample by its tile's guess
+    (``preview_sampled``); over 256 samples its picture is the Node Groups' within the draws' noise."""
+    blend = h.scene_blend("street_lamps", tmp_path)
+    flags = ["--samples", "256"]
+    view, said = _render(blend, tmp_path / "view.exr", "cycles", "--method", "compositor", "--viewport", *flags)
+    nodes, _ = _render(blend, tmp_path / "nodes.exr", "cycles", "--method", "nodes", *flags)
+    assert "preview samples 3 of the 3 lights" in said, said[-2000:]
+    m = compare.metrics(view, nodes)
+    assert m["rel_rmse"] < THREE_LAMPS_NOISE and abs(m["mean_ratio"] - 1.0) < 0.01, m
 
 
 FLOW = r"""
@@ -137,12 +153,13 @@ def test_eevee_preview_says_it_has_no_shafts(tmp_path):
     assert re.search(r"preview shows no light shafts of Lamp \d, Lamp \d in EEVEE", r.stdout), r.stdout[-2000:]
 
 
-# The boulevard (45 lamps, no shadows; the render tests' reference, 64 x 36): the preview models two lamps and
-# samples the other 43, one a sample (nodes/preview_sampled.py).  Measured (2026-11-29): 11.2 % at 64 spp, 6.0 % at
-# 256 (mean ratio 0.98; 35.8 % before the sampling, the 41 lamps out of the preview missing).  The issue's goal:
-# 10 % on a street of 25 lamps, at the viewport's samples (Cycles' default: 1024).
+# The boulevard (45 lamps, no shadows; the render tests' reference, 64 x 36): the preview samples all 45, one a
+# sample, each pixel by its tile's guess of the lamps' glows (nodes/preview_sampled.py).  Measured (2026-11-30):
+# 3.0 % at 256 spp, 6.8 % at 64 (two lamps modelled and 43 drawn by the whole picture's importance: 6.0 %, 11.2 %;
+# 35.8 % before the sampling); the tiles mirrored top to bottom (mutation preview_tiles_flipped) 4.8 % at 256.  The
+# issue's goal: 10 % on a street of 25 lamps, at the viewport's samples (Cycles' default: 1024).
 BOULEVARD_SAMPLES = 256
-BOULEVARD_BOUND = 0.075
+BOULEVARD_BOUND = 0.04
 
 
 @pytest.mark.slow
@@ -152,7 +169,7 @@ def test_viewport_samples_the_other_lamps_of_a_boulevard(tmp_path):
     out = h.render_test("boulevard", 0.015, tmp_path / "boulevard.exr", engine="cycles", method="compositor",
                         samples=BOULEVARD_SAMPLES, log=log, extra=["--viewport"])
     assert not h.log_errors(log[0]), h.log_errors(log[0])
-    assert "preview samples 43 of the 45 lights" in log[0], log[0][-3000:]
+    assert "preview samples 45 of the 45 lights" in log[0], log[0][-3000:]
     m = h.assert_close(out, ref, name="viewport_boulevard", rel_rmse=BOULEVARD_BOUND, mean_ratio_tol=0.04)
     print(f"boulevard: relative RMSE {m['rel_rmse']:.4f}, mean ratio {m['mean_ratio']:.4f}")
 

@@ -22,9 +22,14 @@ from .base import Method
 # The viewport's preview of the Compositor's fog (``nodes/preview.py``): each light's share of its budget by ladder
 # step (rungs.STEPS: full, glow only, off, left out) and the budget: two lights, each fully modelled or its glow
 # alone, with their shafts; the other point lights are sampled, fully modelled, one a sample (``preview_sampled``),
-# so a glow-only step would drop the reflected fog light the sampling would have given
+# so a glow-only step would drop the reflected fog light the sampling would have given.  In Cycles, where a scene
+# has more point lights than the budget holds (SAMPLE_ALL_FROM or more), the preview samples all of them: a light's
+# kernels cost a sample about as much as the fog-free render's own, so two modelled on every sample and one sampled
+# cost the viewport several times the fog-free render's time, one sampled about once more
+# (docs/measurements/2026-11-29-viewport-preview.md)
 PREVIEW_COST = (2.0, 2.0, 0.0, 0.0)
 PREVIEW_LIMIT = 4.0
+SAMPLE_ALL_FROM = 3
 
 
 class Compositor(Method):
@@ -49,6 +54,11 @@ class Compositor(Method):
     def preview_budget(self, scene, spec, lights):
         preview = predict.Budget([PREVIEW_COST], [PREVIEW_LIMIT], "the viewport preview's budget")
         if scene.render.engine != budgets.EEVEE_ENGINE:
+            if not samples_all(scene, lights):
+                return preview
+            preview = predict.joint([preview], len(lights))   # (every point light beyond the budget: sampled)
+            points = [i for i, o in enumerate(lights) if o in preview_sampled.sampled(lights)]
+            preview.cost[:, points, :rungs.OFF] = PREVIEW_LIMIT + 1.0
             return preview
         # EEVEE: the preview's lights share the materials' uniform block with the lights whose direct light they
         # dim (``dimming_lights``), which keep the room they have without a preview (the final render's)
@@ -117,8 +127,8 @@ class Compositor(Method):
     def update(self, scene, spec, plan):
         if plan.windows is not None:
             comp_fog.set_windows(plan.in_groups, plan.windows, grow=plan.partial)
-        if plan.preview and plan.preview[0]:   # the sampled lights as they are now (moved, dimmed, recoloured)
-            preview_sampled.write_table(scene, sampled_lights(plan), spec.beta_per_unit)
+        if sampled_lights(scene, plan):   # the sampled lights as they are now (moved, dimmed, recoloured)
+            preview_sampled.write_table(scene, sampled_lights(scene, plan), spec.beta_per_unit)
 
     def passes(self, scene, spec):   # (the fog passes: the materials' transmittance, the fog group's light)
         return (comp_fog.aovs(scene.render.engine, comp_fog.panoramic(scene))
@@ -156,7 +166,7 @@ class Compositor(Method):
         notes = [("Viewport", "the viewport compositor is on in a 3D view: it adds the compositor's fog over the "
                               "viewport's preview of it (Shading popover > Compositor: Disabled)")
                  ] if eevee and _viewport_compositor_on() else []
-        shown, sampled = plan.preview[0], (sampled_lights(plan) if plan.preview[0] else [])
+        shown, sampled = plan.preview[0], sampled_lights(scene, plan)
         left = [o.name for o in plan.in_groups if o not in shown and o not in sampled]
         if sampled:
             notes.append(("Viewport", f"the viewport's preview samples {len(sampled)} of the {len(plan.in_groups)} "
@@ -170,6 +180,11 @@ class Compositor(Method):
             names = caveats.listed([o.name for o in unshafted])
             notes.append(("Viewport", f"the viewport's preview shows no light shafts of {names} {why} (final "
                                       "renders, F12, have them)"))
+        sampled_shafts = shafted_lights(scene, spec, sampled) if spec.shafts and sampled else []
+        if sampled_shafts:
+            notes.append(("Viewport", f"the viewport's preview shows no light shafts of the lights it samples "
+                                      f"({caveats.listed([o.name for o in sampled_shafts])}): final renders, F12, "
+                                      "have them"))
         glowing = glowing_objects(scene)
         if glowing:
             notes.append(("Viewport", f"the viewport's preview shows no glow of the glowing objects "
@@ -211,12 +226,19 @@ def _preview(scene, spec, plan, maps, day_table=None, day_dims=True):
     (``preview_sampled.py``); a fog layer's sun and sky (``day_table``: the fog light's TableSpec, or None) as the
     node groups give them, their dimming of the surfaces' direct light where ``day_dims``."""
     lights, models = plan.preview[:2] if plan.preview else ([], [])
-    if not lights and day_table is None:
+    sampled = sampled_lights(scene, plan)
+    if not lights and not sampled and day_table is None:
         preview_sampled.write_table(scene, [], spec.beta_per_unit)
         return None, {}
     shadows = _still_maps(lights, maps) if scene.render.engine == "CYCLES" else {}
-    table, img = preview_sampled.write_table(scene, sampled_lights(plan) if lights else [], spec.beta_per_unit)
-    return (preview_.Shown(lights, models, shadows or None, spec.anisotropy, table, day_table, day_dims),
+    table, img = preview_sampled.write_table(scene, sampled, spec.beta_per_unit)
+    final = dict(zip(plan.in_groups, plan.grouped_models))
+    dense = preview_sampled.dense_of(
+        sampled, [final[o] for o in sampled], spec.anisotropy, spec.multiple_albedo,
+        (plan.choice.get("dense") or {}).get("scales") or {},
+        sampling.importance([o.matrix_world.translation for o in sampled], view.light_intensities(sampled),
+                            scene.camera.matrix_world.translation, spec.beta_per_unit)) if sampled else None
+    return (preview_.Shown(lights, models, shadows or None, spec.anisotropy, table, day_table, day_dims, dense),
             {table.name: img} if table is not None else {})
 
 
@@ -247,10 +269,19 @@ def _still_maps(lights, maps):
     return {o.name: maps[o.name] for o in lights if o.name in maps and maps[o.name].atlas is None}
 
 
-def sampled_lights(plan):
+def samples_all(scene, lights):
+    """True if the viewport's preview samples all the point lights of ``lights``, one a sample (Cycles, with
+    SAMPLE_ALL_FROM of them or more), rather than holding some one by one."""
+    return scene.render.engine == "CYCLES" and len(preview_sampled.sampled(lights)) >= SAMPLE_ALL_FROM
+
+
+def sampled_lights(scene, plan):
     """The point lights of the fog the viewport's preview does not hold one by one: it samples them
-    (``preview_sampled.py``)."""
-    shown = set(plan.preview[0]) if plan.preview else set()
+    (``preview_sampled.py``); none where it holds no light and does not sample them all (EEVEE's uniform block
+    without room for the preview)."""
+    if not plan.preview or not (plan.preview[0] or samples_all(scene, plan.in_groups)):
+        return []
+    shown = set(plan.preview[0])
     return preview_sampled.sampled([o for o in plan.in_groups if o not in shown])
 
 

@@ -32,6 +32,7 @@ class Shown(NamedTuple):
     #                            preview's sun and sky, their glow, fog light and dimming, or None
     day_dims: bool = True      # the preview dims the surfaces' direct light by the sun's and the sky's dimming
     #                            (``sunsky.dims_surfaces``)
+    sampled_dense: Any = None  # (grey albedo, scale) of the sampled lights' Dense Fog (``preview_sampled``), or None
 
 
 def factor(m, params):

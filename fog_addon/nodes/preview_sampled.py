@@ -17,12 +17,15 @@ follow the scene (``Compositor.update``): a light moved, recoloured or dimmed sh
 
 Spot and area lights are not sampled (a point's glow is not theirs): the notes name those the preview leaves out.
 """
+import math
+
 import bpy
 import numpy as np
 
 from ..precompute.core.tables import TableSpec
 from ..precompute.model import sampling
 from ..precompute.model import rungs, shading
+from ..precompute.physics.point import multiple
 from . import closures, groups, light_groups
 from .groups import C, F, V
 from .sockets import NodeOps
@@ -51,8 +54,15 @@ def write_table(scene, lights, beta):
             bpy.data.images.remove(img)
         return None, None
     from .. import view   # noqa: PLC0415 (view imports the nodes)
+    camera = scene.camera
+    frame = [tuple(v) for v in camera.data.view_frame(scene=scene)]
+    directions = sampling.tile_rays(camera.matrix_world, frame)
+    nx, ny = sampling.TILES
+    half_angle = 0.5 * math.atan(max(np.linalg.norm(np.subtract(frame[1], frame[2])) / nx,
+                                     np.linalg.norm(np.subtract(frame[3], frame[2])) / ny)
+                                 / max(abs(frame[0][2]), 1e-6))
     rows = sampling.table_rows([o.matrix_world.translation for o in lights], view.light_intensities(lights),
-                      scene.camera.matrix_world.translation, beta)
+                               camera.matrix_world.translation, beta, directions, half_angle)
     spec = table_spec(len(lights))
     if img is not None and tuple(img.size) != (spec.width, spec.height):
         bpy.data.images.remove(img)
@@ -80,23 +90,36 @@ def pack_table():
         img.pack()
 
 
-def _pick(m, spec, u1, u2):
-    """The column Walker's alias method takes for the uniform numbers ``u1``, ``u2`` in [0, 1), as a texture
-    coordinate (its centre)."""
-    n = float(spec.width)
+def _tile(m, ng):
+    """The index of the tile (``sampling.TILES``) the shading point lies in on the camera's frame, by its window
+    coordinates (0 to 1 from the frame's bottom-left corner; a point outside the frame takes the nearest tile)."""
+    coord = ng.nodes.new("ShaderNodeTexCoord")
+    coord.name = coord.label = "Preview Sampled Window"
+    sep = ng.nodes.new("ShaderNodeSeparateXYZ")
+    ng.links.new(coord.outputs["Window"], sep.inputs[0])
+    nx, ny = sampling.TILES
+    tx = m.clamp(m.floor(m.wrap(sep.outputs[0]) * float(nx)), 0.0, nx - 1.0)
+    ty = m.clamp(m.floor(m.wrap(sep.outputs[1]) * float(ny)), 0.0, ny - 1.0)
+    return m.mul_add(ty, float(nx), tx)
+
+
+def _pick(m, spec, u1, u2, tile):
+    """(the column Walker's alias method takes in the row of ``tile`` for the uniform numbers ``u1``, ``u2`` in
+    [0, 1), as a texture coordinate (its centre); the v coordinate of the tile's intensities over probabilities)."""
+    n, rows = float(spec.width), float(spec.height)
     column = m.minimum(m.floor(u1 * n), n - 1.0)
     u = m.mul_add(column, 1.0 / n, 0.5 / n)
-    alias_row = (2.0 + 0.5) / spec.height
+    alias_row = m.mul_add(tile, 2.0 / rows, 2.5 / rows)
     keep = m._tap(spec, u, alias_row, 0)
     alias = m._tap(spec, u, alias_row, 1)
     taken = m.select(m.less(u2, keep), column, alias)
-    return m.mul_add(taken, 1.0 / n, 0.5 / n)
+    return m.mul_add(taken, 1.0 / n, 0.5 / n), m.mul_add(tile, 2.0 / rows, 1.5 / rows)
 
 
-def _light(m, spec, u):
-    """(position, I / p) of the column at the texture coordinate ``u``."""
+def _light(m, spec, u, intensity_row):
+    """(position, I / p) of the column at the texture coordinate ``u``, I / p from the row ``intensity_row``."""
     pos = m.combine(*(m._tap(spec, u, 0.5 / spec.height, c) for c in range(3)))
-    inten = m.combine(*(m._tap(spec, u, 1.5 / spec.height, c) for c in range(3)))
+    inten = m.combine(*(m._tap(spec, u, intensity_row, c) for c in range(3)))
     return pos, inten
 
 
@@ -112,10 +135,29 @@ def _randoms(ng, source):
     return sep.outputs[0], sep.outputs[1]
 
 
-def light_models(g, step=0):
+def light_models(g, step=0, dense=None):
     """A point light's models at the ladder's ``step`` (``rungs.choose``): fully modelled for the surfaces (its glow
-    and the fog light they reflect), "glow only" for the sky."""
-    return rungs.choose("nodes", step, g, "point")
+    and the fog light they reflect), "glow only" for the sky; with Dense Fog's multiply scattered light where
+    ``dense`` = (grey albedo, the share of its field the surfaces leave) is given (one for every sampled light:
+    ``dense_of``)."""
+    albedo, scale = dense if dense is not None else (None, 1.0)
+    return rungs.choose("nodes", step, g, "point", multiple_albedo=albedo, multiple_scale=scale)
+
+
+def dense_of(lights, models, g, albedo, scales, weights):
+    """(albedo, scale) of Dense Fog for the sampled ``lights`` whose final ``models`` (rungs.LightModels, in order)
+    have it (their airlight reads the field's table), or None if none has: their field scales (``scales``: by name,
+    1 where missing) averaged by ``weights`` (their importance).  One light group serves every sampled light, so a
+    light whose own scale differs gets the mean (``escape.field_scales``: near a wall, a hood)."""
+    if albedo is None:
+        return None
+    field = multiple.table_spec(g, albedo).name
+    dense = [i for i, mod in enumerate(models) if any(t.name == field for t in mod.airlight.tables)]
+    if not dense:
+        return None
+    w = np.asarray(weights, float)[dense]
+    k = np.array([scales.get(lights[i].name, 1.0) for i in dense])
+    return albedo, float(np.round((w * k).sum() / w.sum() if w.sum() > 0 else k.mean(), 2))
 
 
 def _sampled_group(name, inputs, images, spec, light_group, shared, jitter_from):
@@ -126,7 +168,7 @@ def _sampled_group(name, inputs, images, spec, light_group, shared, jitter_from)
     m = NodeOps(ng, dict(images))
     s = {x.name: x for x in gin.outputs if x.name}
     u1, u2 = _randoms(ng, s[jitter_from])
-    position, intensity = _light(m, spec, _pick(m, spec, m.wrap(u1), m.wrap(u2)))
+    position, intensity = _light(m, spec, *_pick(m, spec, m.wrap(u1), m.wrap(u2), _tile(m, ng)))
     node = ng.nodes.new("ShaderNodeGroup")
     node.node_tree = light_group
     node.name = node.label = "Sampled Light"
@@ -137,7 +179,7 @@ def _sampled_group(name, inputs, images, spec, light_group, shared, jitter_from)
     return ng, gout, m, s, node
 
 
-def build_surface_group(images, spec, g):
+def build_surface_group(images, spec, g, dense=None):
     """The Surface group's estimate of the other lights' fog light (shader group, output Fog: an Emission of the
     sampled light's, fully modelled: Sun et al. 2005 Eq. 19's albedo x (glow + T x reflected fog light) on camera
     rays, ``shading.sum_lights``; ``light_models``)."""
@@ -145,7 +187,7 @@ def build_surface_group(images, spec, g):
     ng, gout, m, s, node = _sampled_group(SURFACE_GROUP, [
         ("Beta", F), ("Albedo", C), ("Position", V), ("Incoming", V), ("View Distance", F), ("Normal", V),
         ("Diffuse", C), ("Specular", C), ("Glossy Level", F), ("View Transmittance", F), ("Is Camera", F)],
-        images, spec, light_groups.build_light(light_models(g), images), shared, "Position")
+        images, spec, light_groups.build_light(light_models(g, 0, dense), images), shared, "Position")
     terms = light_groups.read(m, node, rungs.SURFACE_OUTPUTS, shading.LightTerms)
     sums = shading.sum_lights(m, [terms], light_groups.medium(m, s["Beta"], s["Albedo"]),
                               m.wrap(s["View Transmittance"]), m.wrap(s["Is Camera"]))
@@ -154,12 +196,13 @@ def build_surface_group(images, spec, g):
     return groups.install(ng, SURFACE_GROUP)
 
 
-def build_world_group(images, spec, g):
+def build_world_group(images, spec, g, dense=None):
     """The World group's estimate of the other lights' glows to the sky (shader group, output Fog: a Background of
     albedo x the sampled light's glow to infinity x Is Camera)."""
     ng, gout, m, s, node = _sampled_group(
         WORLD_GROUP, [("Beta", F), ("Albedo", C), ("Camera", V), ("Direction", V), ("Is Camera", F)], images, spec,
-        light_groups.build_background_light(light_models(g, 1), images), ("Beta", "Camera", "Direction"), "Direction")
+        light_groups.build_background_light(light_models(g, 1, dense), images), ("Beta", "Camera", "Direction"),
+        "Direction")
     sky = light_groups.read(m, node, rungs.SKY_OUTPUTS, shading.SkyTerms)
     glow = m.scale(m.wrap(s["Albedo"], vector=True) * m.wrap(sky.background, vector=True), m.wrap(s["Is Camera"]))
     closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeBackground", [glow])

@@ -5,12 +5,19 @@ that draws it and the table the shaders read, and a draw among a few lights by s
 A pixel's fog light is a sum over the lights; a shader that takes one light j per sample, drawn with probability
 p_j, and adds its light times 1 / p_j estimates that sum without bias (its mean over the draws is the sum), and the
 samples a viewport adds up average the estimates.  Its noise is least when p_j follows each light's share of the
-sum; ``importance`` guesses that share over the whole picture from the camera.
+pixel's sum; ``importance`` guesses that share over the whole picture from the camera, ``tile_importance`` over each
+tile of a grid over the camera's frame (``TILES``), where the shaders find a pixel's row by its window coordinates.
 """
 import numpy as np
 
-ROWS = 3             # the table's rows: 0 positions, 1 intensities over their probability, 2 (keep, alias)
+TILES = (12, 8)      # the grid of tiles over the camera's frame (x, y) whose each row of the table draws for
+TILE_COUNT = TILES[0] * TILES[1]
+ROWS = 1 + 2 * TILE_COUNT   # the table's rows: 0 positions; per tile t: 1 + 2t intensities over their probability,
+#                             2 + 2t (keep, alias)
 MIN_DISTANCE = 1.0   # m: the distance below which a light's weight stops growing (1 / max(d, this))
+EVEN_SHARE = 0.3     # of each tile's probabilities, the share that follows the whole picture's (``importance``):
+#                      a light a tile's guess underrates (another view than the camera's, a surface it lights
+#                      beyond the glow) keeps samples, and I / p stays within 1 / EVEN_SHARE of the picture's
 
 
 def importance(positions, intensities, camera, beta):
@@ -18,6 +25,35 @@ def importance(positions, intensities, camera, beta):
     (I the RGB intensities' sum, d the distance to the camera, m)."""
     d = np.linalg.norm(np.asarray(positions, float) - np.asarray(camera, float), axis=-1)
     return np.asarray(intensities, float).sum(axis=-1) * np.exp(-beta * d) / np.maximum(d, MIN_DISTANCE)
+
+
+def tile_rays(camera_matrix, frame, tiles=TILES):
+    """Unit directions (T, 3) through the centres of the ``tiles`` (x, y) of a camera's frame, row by row from the
+    bottom-left tile (as window coordinates run): ``frame`` the camera's view frame in its own space (top-right,
+    bottom-right, bottom-left, top-left: ``Camera.view_frame``), ``camera_matrix`` its 4 x 4 world matrix."""
+    frame = np.asarray(frame, float)
+    nx, ny = tiles
+    uu, vv = np.meshgrid((np.arange(nx) + 0.5) / nx, (np.arange(ny) + 0.5) / ny)
+    local = (frame[2] + uu[..., None] * (frame[1] - frame[2]) + vv[..., None] * (frame[3] - frame[2])).reshape(-1, 3)
+    d = local @ np.asarray(camera_matrix, float)[:3, :3].T
+    return d / np.linalg.norm(d, axis=1)[:, None]
+
+
+def tile_importance(positions, intensities, camera, directions, half_angle, beta):
+    """(T, N) each light's glow along each tile's centre ray, up to a factor: the single scattering of a point light
+    I on a ray from the camera through fog thin enough that its extinction is e^{-beta d} throughout (d the light's
+    distance to the camera, m), isotropic,  I e^{-beta d} (pi / 2 + atan(t0 / h)) / h,  the integral over t >= 0 of
+    1 / (h^2 + (t - t0)^2): the inverse square of the distance from the ray's point t to the light, t0 the ray's
+    nearest approach and h its distance there (Sun et al. 2005 Eq. 5's airlight integral with its exponentials held
+    at the light's distance).  h is at least the tile's own radius at the light, d sin(``half_angle``) (and
+    MIN_DISTANCE / 100): a tile averages the glow over its pixels, which a lamp's core does not fill."""
+    r = np.asarray(positions, float).reshape(-1, 3) - np.asarray(camera, float)
+    d = np.linalg.norm(r, axis=1)
+    t0 = np.asarray(directions, float) @ r.T
+    h = np.sqrt(np.maximum(d ** 2 - t0 ** 2, 0.0))
+    h = np.maximum(h, np.maximum(d * np.sin(half_angle), MIN_DISTANCE / 100.0))
+    power = np.asarray(intensities, float).reshape(-1, 3).sum(axis=-1) * np.exp(-beta * d)
+    return power * (0.5 * np.pi + np.arctan(t0 / h)) / h
 
 
 def alias_table(weights):
@@ -39,17 +75,35 @@ def alias_table(weights):
     return p, keep, alias
 
 
-def table_rows(positions, intensities, camera, beta):
+def tile_chances(tile_weights, weights):
+    """(T, N) each tile's probabilities: (1 - EVEN_SHARE) of its own weights' shares (``tile_importance``), EVEN_SHARE
+    of the whole picture's (``importance``; even where they are all 0)."""
+    def shares(w):
+        w = np.nan_to_num(np.maximum(np.asarray(w, float), 0.0))
+        total = w.sum(axis=-1, keepdims=True)
+        return np.where(total > 0.0, w / np.where(total > 0.0, total, 1.0), 1.0 / w.shape[-1])
+    return (1.0 - EVEN_SHARE) * shares(tile_weights) + EVEN_SHARE * shares(weights)[None, :]
+
+
+def table_rows(positions, intensities, camera, beta, directions=None, half_angle=0.0):
     """(ROWS, N, 4) float32 of the lights (positions, m; RGB intensities I, W/sr; the camera's position; beta, 1/m):
-    row 0 their positions, row 1 their intensities over their probability (I / p), row 2 (keep, alias column) of
-    ``alias_table`` (``importance``)."""
+    row 0 their positions; for each tile t, row 1 + 2t their intensities over their probability there (I / p) and
+    row 2 + 2t (keep, alias column) of ``alias_table``.  The probabilities are ``tile_chances`` of the tiles' centre
+    rays ``directions`` (TILE_COUNT, 3; ``tile_rays``) of angular radius ``half_angle`` (rad), or the whole picture's
+    ``importance`` in every tile without them."""
     positions = np.asarray(positions, float).reshape(-1, 3)
     intensities = np.asarray(intensities, float).reshape(-1, 3)
-    p, keep, alias = alias_table(importance(positions, intensities, camera, beta))
-    rows = np.zeros((ROWS, len(p), 4), np.float32)
+    weights = importance(positions, intensities, camera, beta)
+    if directions is None:
+        chances = np.repeat(alias_table(weights)[0][None, :], TILE_COUNT, axis=0)
+    else:
+        chances = tile_chances(tile_importance(positions, intensities, camera, directions, half_angle, beta), weights)
+    rows = np.zeros((ROWS, len(positions), 4), np.float32)
     rows[0, :, :3] = positions
-    rows[1, :, :3] = intensities / np.maximum(p, 1e-30)[:, None]
-    rows[2, :, 0], rows[2, :, 1] = keep, alias
+    for t, p in enumerate(chances):
+        p, keep, alias = alias_table(p)
+        rows[1 + 2 * t, :, :3] = intensities / np.maximum(p, 1e-30)[:, None]
+        rows[2 + 2 * t, :, 0], rows[2 + 2 * t, :, 1] = keep, alias
     return rows
 
 
