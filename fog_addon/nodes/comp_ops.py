@@ -187,9 +187,9 @@ def first(m, value):
 def accumulate(m, total, term):
     """total + term, the result on ``total``'s domain (the compositor takes a node's domain from its first
     image input and places the others on it; the hash-consing's sorted operands could swap them)."""
-    return m._new_vmath("ADD", total, term)
+    return m.vmath_in_order("ADD", total, term)
 
 
 def zero(m, image):
     """Black on ``image``'s domain (a sum's first operand: ``accumulate``)."""
-    return m._new_vmath("MULTIPLY", image, (0.0, 0.0, 0.0))
+    return m.vmath_in_order("MULTIPLY", image, (0.0, 0.0, 0.0))

@@ -110,16 +110,16 @@ def _pick(m, spec, u1, u2, tile):
     column = m.minimum(m.floor(u1 * n), n - 1.0)
     u = m.mul_add(column, 1.0 / n, 0.5 / n)
     alias_row = m.mul_add(tile, 2.0 / rows, 2.5 / rows)
-    keep = m._tap(spec, u, alias_row, 0)
-    alias = m._tap(spec, u, alias_row, 1)
+    keep = m.tap(spec, u, alias_row, 0)
+    alias = m.tap(spec, u, alias_row, 1)
     taken = m.select(m.less(u2, keep), column, alias)
     return m.mul_add(taken, 1.0 / n, 0.5 / n), m.mul_add(tile, 2.0 / rows, 1.5 / rows)
 
 
 def _light(m, spec, u, intensity_row):
     """(position, I / p) of the column at the texture coordinate ``u``, I / p from the row ``intensity_row``."""
-    pos = m.combine(*(m._tap(spec, u, 0.5 / spec.height, c) for c in range(3)))
-    inten = m.combine(*(m._tap(spec, u, intensity_row, c) for c in range(3)))
+    pos = m.combine(*(m.tap(spec, u, 0.5 / spec.height, c) for c in range(3)))
+    inten = m.combine(*(m.tap(spec, u, intensity_row, c) for c in range(3)))
     return pos, inten
 
 

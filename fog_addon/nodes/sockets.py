@@ -135,6 +135,11 @@ class NodeOps:
     def vmath(self, op, *args, out=0):
         return self._once(("vmath", op, out, self._ids(args, op)), lambda: self._new_vmath(op, *args, out=out))
 
+    def vmath_in_order(self, op, *args, out=0):
+        """A Vector Math node of its own with the operands in the order given (``vmath`` shares one node among
+        equal calls and sorts a commutative operation's operands)."""
+        return self._new_vmath(op, *args, out=out)
+
     def combine(self, x, y, z):
         return self._once(("combine", self._ids((x, y, z))), lambda: self._new_combine(x, y, z))
 
@@ -163,7 +168,7 @@ class NodeOps:
         SVM's 255); with one tap, about 5."""
         u = self.math("MULTIPLY_ADD", x, (spec.width - 1.0) / spec.width, 0.5 / spec.width)
         v = self.math("MULTIPLY_ADD", y, (spec.height - 1.0) / spec.height, 0.5 / spec.height)
-        return self._tap(spec, u, v, channel)
+        return self.tap(spec, u, v, channel)
 
     def texel(self, spec, node, col, channel):
         """``spec``'s ``channel`` as read by ``node`` (an image-reading node in column ``col``): its Alpha output
@@ -226,7 +231,7 @@ class NodeOps:
         included, a uniform of the material's 64 KiB block, the inputs its operation leaves unused too
         (a link into those is invalid and ignored); with ``hide_value`` set it compiles the value into
         the shader instead.  Measured on the many-lights scene (36 to 81 lights): 4 608 bytes a light,
-        under 805 with this and the tables' identity mapping (``_tap``), the same pixels, and EEVEE's
+        under 805 with this and the tables' identity mapping (``tap``), the same pixels, and EEVEE's
         first render 2.8x faster.  Blender does not save ``hide_value``: a reopened file is back to the
         uniforms (``budgets.EEVEE_MATERIAL_BYTES`` counts them).
         """
@@ -487,7 +492,7 @@ class NodeOps:
         u1 = u0 + 1.0 / spec.width
         v0 = self.math("MULTIPLY_ADD", j, 1.0 / spec.height, (row0 + 0.5) / spec.height)
         v1 = v0 + 1.0 / spec.height
-        taps = [self._tap(spec, u, v, channel) for v in (v0, v1) for u in (u0, u1)]
+        taps = [self.tap(spec, u, v, channel) for v in (v0, v1) for u in (u0, u1)]
         return self.lerp(self.lerp(taps[0], taps[1], tx), self.lerp(taps[2], taps[3], tx), ty)
 
     def lerp(self, a, b, t):
@@ -496,7 +501,9 @@ class NodeOps:
         material with Mix nodes, against the 65 536 EEVEE allows and 78 832 before)."""
         return self.math("MULTIPLY_ADD", t, self.wrap(b) - a, a)
 
-    def _tap(self, spec, u, v, channel):
+    def tap(self, spec, u, v, channel):
+        """The channel ``channel`` of the texel of table ``spec`` at the texture coordinates (``u``, ``v``): one
+        Closest tap (the coordinates at a texel's centre)."""
         uv = self.combine(u, v, 0.0)
         n = self._once(("tap", spec.name, self._ids((uv,))), lambda: self._new_tap(spec, uv))
         return self.texel(spec, n, uv.col + 1, channel)
