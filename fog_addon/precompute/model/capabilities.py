@@ -53,7 +53,7 @@ FEATURES = (
     _row("air_colour", "the air's colour in the distance", (False, "grey (a shader's factor is one number)"),
          (False, "same"), (True, "✓ (blue)"), (False, "grey"), (True, "✓ (blue)")),
     _row("viewport", "live viewport", (True, "rendered view"), (True, "rendered view"),
-         (True, "rendered view: a preview (the lights that matter most, their shafts)"),
+         (True, "rendered view: a preview (two lights with their shafts, or every lamp sampled)"),
          (True, "material preview and rendered view"), (True, "both views: a preview (no shafts)")),
     _row("many_lights", "lights fully modelled per material",
          (True, "any (cost grows with the square of the lights)"), (True, "any"),
