@@ -155,8 +155,9 @@ class _MeshInfo:
         return n / length if length > 0.0 else face_normal
 
 
-def _frame_rays(scene, camera, grid):
-    """(origin, unit directions (P, 3)) through the pixel centres of a grid over the camera's frame."""
+def frame_rays(scene, camera, grid):
+    """(origin, unit directions (P, 3)) through the centres of the cells of a ``grid`` (x, y) over the camera's frame,
+    row by row from the bottom-left cell (as window coordinates run)."""
     # top-right, bottom-right, bottom-left, top-left
     frame = [np.array(v) for v in camera.data.view_frame(scene=scene)]
     nx, ny = grid
@@ -245,7 +246,7 @@ def _first_opaque(world, origin, d, past_glass, glass):
 
 
 def _sample_frame(scene, depsgraph, lights, grid, past_glass=False):
-    origin, dirs = _frame_rays(scene, scene.camera, grid)
+    origin, dirs = frame_rays(scene, scene.camera, grid)
     rows = []
     cache, glass = {}, {}
     world = _SceneMesh(depsgraph)

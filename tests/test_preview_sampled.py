@@ -84,11 +84,10 @@ def test_each_tile_estimates_the_sum_of_all_and_favours_its_own_lights():
     rng = np.random.default_rng(5)
     positions = np.column_stack([rng.uniform(-30, 30, 20), rng.uniform(2, 60, 20), rng.uniform(0, 6, 20)])
     intensities = rng.uniform(1.0, 100.0, (20, 3))
-    frame = [(0.5, 0.3, -1.0), (0.5, -0.3, -1.0), (-0.5, -0.3, -1.0), (-0.5, 0.3, -1.0)]
-    look = np.array([[1, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]], float)   # the camera looks along +y
-    dirs = ps.tile_rays(look, frame)
-    assert dirs.shape == (ps.TILE_COUNT, 3) and np.allclose(np.linalg.norm(dirs, axis=1), 1.0)
-    assert dirs[0, 0] < 0 and dirs[0, 2] < 0 and dirs[-1, 0] > 0 and dirs[-1, 2] > 0   # bottom-left first, top-right last
+    nx, ny = ps.TILES   # the tiles' centre rays of a camera looking along +y (view.frame_rays' order)
+    xx, zz = np.meshgrid((np.arange(nx) + 0.5) / nx - 0.5, 0.6 * ((np.arange(ny) + 0.5) / ny - 0.5))
+    dirs = np.column_stack([xx.ravel(), np.ones(xx.size), zz.ravel()])
+    dirs /= np.linalg.norm(dirs, axis=1)[:, None]
     rows = ps.table_rows(positions, intensities, (0.0, 0.0, 0.0), 0.02, dirs, 0.05)
     assert rows.shape == (ps.ROWS, 20, 4)
     whole = ps.alias_table(ps.importance(positions, intensities, (0.0, 0.0, 0.0), 0.02))[0]

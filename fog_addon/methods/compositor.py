@@ -57,7 +57,8 @@ class Compositor(Method):
             if not samples_all(scene, lights):
                 return preview
             preview = predict.joint([preview], len(lights))   # (every point light beyond the budget: sampled)
-            points = [i for i, o in enumerate(lights) if o in preview_sampled.sampled(lights)]
+            sampled = set(preview_sampled.sampled(lights))
+            points = [i for i, o in enumerate(lights) if o in sampled]
             preview.cost[:, points, :rungs.OFF] = PREVIEW_LIMIT + 1.0
             return preview
         # EEVEE: the preview's lights share the materials' uniform block with the lights whose direct light they
@@ -127,8 +128,9 @@ class Compositor(Method):
     def update(self, scene, spec, plan):
         if plan.windows is not None:
             comp_fog.set_windows(plan.in_groups, plan.windows, grow=plan.partial)
-        if sampled_lights(scene, plan):   # the sampled lights as they are now (moved, dimmed, recoloured)
-            preview_sampled.write_table(scene, sampled_lights(scene, plan), spec.beta_per_unit)
+        sampled = sampled_lights(scene, plan)
+        if sampled:   # the sampled lights as they are now (moved, dimmed, recoloured)
+            preview_sampled.write_table(scene, sampled, spec.beta_per_unit)
 
     def passes(self, scene, spec):   # (the fog passes: the materials' transmittance, the fog group's light)
         return (comp_fog.aovs(scene.render.engine, comp_fog.panoramic(scene))

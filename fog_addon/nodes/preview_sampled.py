@@ -56,7 +56,7 @@ def write_table(scene, lights, beta):
     from .. import view   # noqa: PLC0415 (view imports the nodes)
     camera = scene.camera
     frame = [tuple(v) for v in camera.data.view_frame(scene=scene)]
-    directions = sampling.tile_rays(camera.matrix_world, frame)
+    directions = view.frame_rays(scene, camera, sampling.TILES)[1]
     nx, ny = sampling.TILES
     half_angle = 0.5 * math.atan(max(np.linalg.norm(np.subtract(frame[1], frame[2])) / nx,
                                      np.linalg.norm(np.subtract(frame[3], frame[2])) / ny)

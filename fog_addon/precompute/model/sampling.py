@@ -27,18 +27,6 @@ def importance(positions, intensities, camera, beta):
     return np.asarray(intensities, float).sum(axis=-1) * np.exp(-beta * d) / np.maximum(d, MIN_DISTANCE)
 
 
-def tile_rays(camera_matrix, frame, tiles=TILES):
-    """Unit directions (T, 3) through the centres of the ``tiles`` (x, y) of a camera's frame, row by row from the
-    bottom-left tile (as window coordinates run): ``frame`` the camera's view frame in its own space (top-right,
-    bottom-right, bottom-left, top-left: ``Camera.view_frame``), ``camera_matrix`` its 4 x 4 world matrix."""
-    frame = np.asarray(frame, float)
-    nx, ny = tiles
-    uu, vv = np.meshgrid((np.arange(nx) + 0.5) / nx, (np.arange(ny) + 0.5) / ny)
-    local = (frame[2] + uu[..., None] * (frame[1] - frame[2]) + vv[..., None] * (frame[3] - frame[2])).reshape(-1, 3)
-    d = local @ np.asarray(camera_matrix, float)[:3, :3].T
-    return d / np.linalg.norm(d, axis=1)[:, None]
-
-
 def tile_importance(positions, intensities, camera, directions, half_angle, beta):
     """(T, N) each light's glow along each tile's centre ray, up to a factor: the single scattering of a point light
     I on a ray from the camera through fog thin enough that its extinction is e^{-beta d} throughout (d the light's
@@ -89,7 +77,7 @@ def table_rows(positions, intensities, camera, beta, directions=None, half_angle
     """(ROWS, N, 4) float32 of the lights (positions, m; RGB intensities I, W/sr; the camera's position; beta, 1/m):
     row 0 their positions; for each tile t, row 1 + 2t their intensities over their probability there (I / p) and
     row 2 + 2t (keep, alias column) of ``alias_table``.  The probabilities are ``tile_chances`` of the tiles' centre
-    rays ``directions`` (TILE_COUNT, 3; ``tile_rays``) of angular radius ``half_angle`` (rad), or the whole picture's
+    rays ``directions`` (TILE_COUNT, 3, row by row from the bottom-left tile: ``view.frame_rays``) of angular radius ``half_angle`` (rad), or the whole picture's
     ``importance`` in every tile without them."""
     positions = np.asarray(positions, float).reshape(-1, 3)
     intensities = np.asarray(intensities, float).reshape(-1, 3)
