@@ -21,6 +21,7 @@ from fog_addon.precompute.physics.point import airlight as al
 from fog_addon.precompute.core import tables
 from fog_addon.precompute.model import rungs
 from fog_addon.precompute.physics.point import model
+from fog_addon.precompute.core.ops import NumpyOps
 from tools import airlight_reference as ref
 from tools.shader_float32 import Float32Ops, airlight_float32  # float32 as the shaders
 
@@ -452,3 +453,56 @@ def test_anisotropic_cache_quadrature(hg_cache):
     msg = _hg_per_g(hg_cache, gs, lambda sub, g: al.airlight(*sub, quadrature=True, g=g),
                     lambda g: rungs.HG_QUADRATURE_ERROR, "quadrature")
     assert msg is None, msg
+
+
+# --- the viewport preview's sampled glow: one equiangular point a render sample (model.airlight_equiangular) ----
+
+@pytest.mark.parametrize("g", (0.0, -0.5, 0.7, 0.85))
+def test_equiangular_glow_is_unbiased(g):
+    """The mean over u of ``airlight_equiangular`` (20 000 midpoints in [0, 1): the integral over u to ~1e-8) is
+    Eq. 5 by scipy quadrature, on 40 random rays to a surface and 10 to the sky per g, to 1e-5; and no sample is
+    negative or not finite."""
+    seed = HG_SEED + 7 + int(round(100 * (g + 1)))
+    p = [np.concatenate([x, y]) for x, y in zip(ref.sample_parameters(40, seed),
+                                                 ref.sample_parameters(10, seed + 1, background=True))]
+    want = ref.reference_values(*p, processes=1, g=g)[0]
+    beta, d_sv, d_vp, gamma = (np.asarray(x, float)[:, None] for x in p)
+    u = (np.arange(20_000) + 0.5) / 20_000
+    m = NumpyOps()
+    with np.errstate(over="ignore"):
+        est = model.airlight_equiangular(m, beta, d_sv, d_sv * np.cos(gamma), d_sv * np.sin(gamma),
+                                         np.minimum(d_vp, model.FAR), u[None, :], g)
+    assert np.all(np.isfinite(est)) and est.min() >= 0.0
+    err = _rel(est.mean(axis=1), want)
+    assert err.max() < 1e-5, _describe(p, err, int(np.argmax(err)))
+
+
+def test_equiangular_glow_limits():
+    """No fog gives no glow; a ray through the light (h = 0) stays finite; a surface at the camera gives none."""
+    m = NumpyOps()
+    u = np.linspace(0.01, 0.99, 9)
+    assert np.all(model.airlight_equiangular(m, 0.0, 5.0, 3.0, 4.0, 10.0, u) == 0.0)
+    assert np.all(np.isfinite(model.airlight_equiangular(m, 0.1, 5.0, 5.0, 0.0, 10.0, u, 0.8)))
+    assert np.allclose(model.airlight_equiangular(m, 0.1, 5.0, 3.0, 4.0, 0.0, u), 0.0)
+
+
+def test_sampled_glow_rungs_with_dense_fog():
+    """``rungs.choose(sampled_glow=True)``: the glow rungs sample (their mean over u is the table rung's, within
+    the table's error), Dense Fog's field is added exactly (the uniform number is not its argument), and a
+    spot's glow cannot sample."""
+    from fog_addon.precompute.physics.point import multiple
+    sampled = rungs.choose("nodes", 0, 0.0, multiple_albedo=0.9, sampled_glow=True)
+    table = rungs.choose("nodes", 0, 0.0, multiple_albedo=0.9)
+    assert sampled.airlight.sampled and sampled.background.sampled and not sampled.scatter.sampled
+    field = multiple.table_spec(0.0, 0.9)   # a smooth stand-in for the baked field (both rungs read it alike)
+    rows, cols = np.mgrid[0:field.height, 0:field.width]
+    m = NumpyOps({tables.AIRLIGHT.name: al.bake_airlight_table(),
+                  field.name: (-2.0 - 0.05 * rows - 0.03 * cols).astype(np.float32)})
+    u = (np.arange(4000) + 0.5) / 4000
+    args = (0.1, 12.0, 5.0, np.sqrt(12.0 ** 2 - 25.0), 9.0)
+    mean = np.mean(m.run(sampled.airlight, *args, u))
+    assert mean == pytest.approx(float(m.run(table.airlight, *args)), rel=2e-3)
+    assert np.mean(m.run(sampled.background, *args[:4], u)) == pytest.approx(
+        float(m.run(table.background, *args[:4])), rel=2e-3)
+    with pytest.raises(ValueError):
+        rungs.choose("nodes", 0, 0.0, "spot", sampled_glow=True)

@@ -693,6 +693,18 @@ MUTATIONS = [
              "    return albedo, float(",
              "    return None and float(",
              ("tests/test_viewport_preview.py::test_viewport_samples_three_lamps_without_bias",)),
+    Mutation("equiangular_phase_sign", "the viewport preview's sampled glow: the phase function taken at the "
+             "scattering angle's supplement (cos = +sin theta: forward scattering where the light is ahead of the "
+             "point)", "model.airlight_equiangular",
+             "m.mul_add(m.sin(theta), 2.0 * g, 1.0 + g * g)",
+             "m.mul_add(m.sin(theta), -2.0 * g, 1.0 + g * g)",
+             ("tests/test_airlight.py::test_equiangular_glow_is_unbiased[0.7]",)),
+    Mutation("equiangular_density", "the viewport preview's sampled glow: the equiangular point's density "
+             "without its span of angles (biased wherever the segment is not seen under one radian)",
+             "model.airlight_equiangular",
+             "(beta * (0.25 / math.pi)) * span / h",
+             "(beta * (0.25 / math.pi)) / h",
+             ("tests/test_airlight.py::test_equiangular_glow_is_unbiased[0.0]",)),
     Mutation("compositor_no_glass_glow", "glass, Compositor: no glow along the segment past a pane",
              "compositor._tails",
              "    return glass_tails.Tails(kept,",

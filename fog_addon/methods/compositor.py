@@ -240,7 +240,8 @@ def _preview(scene, spec, plan, maps, day_table=None, day_dims=True):
         (plan.choice.get("dense") or {}).get("scales") or {},
         sampling.importance([o.matrix_world.translation for o in sampled], view.light_intensities(sampled),
                             scene.camera.matrix_world.translation, spec.beta_per_unit)) if sampled else None
-    return (preview_.Shown(lights, models, shadows or None, spec.anisotropy, table, day_table, day_dims, dense),
+    return (preview_.Shown(lights, models, shadows or None, spec.anisotropy, table, day_table, day_dims, dense,
+                            scene.render.engine == "CYCLES"),
             {table.name: img} if table is not None else {})
 
 

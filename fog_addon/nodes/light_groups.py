@@ -14,6 +14,8 @@ from .sockets import NodeOps
 SPOT_ROWS = ("Spot X", "Spot Y", "Spot Z")   # a spot light's group inputs: its inverse matrix's rows (shading.Spot)
 SPOT_COS, SPOT_BLEND = "Spot Cos Half", "Spot Blend"
 AREA_HALF_X, AREA_HALF_Y = "Area Half X", "Area Half Y"   # an area light's: its rectangle's half sizes (m)
+CYCLES_TAG = " (Cycles)"   # a group built for Cycles alone (``build_light``)
+JITTER = "Jitter"   # a sampling glow's uniform number (``shading.Light.u``)
 
 
 def medium(m, beta, albedo=None):
@@ -27,8 +29,11 @@ def _shape_names(models):
 
 
 def spot_inputs(models):
-    """The extra inputs of a spot's or an area light's group (``rungs.is_spot``), none for a point light's."""
-    return [(n, V) for n in SPOT_ROWS] + [(n, F) for n in _shape_names(models)] if rungs.is_spot(models) else []
+    """The extra inputs of a spot's or an area light's group (``rungs.is_spot``), none for a point light's; and
+    the uniform number JITTER of a light whose glow samples (``rungs.Rung.sampled``)."""
+    sampled = [(JITTER, F)] if models.airlight.sampled or models.background.sampled else []
+    return ([(n, V) for n in SPOT_ROWS] + [(n, F) for n in _shape_names(models)] if rungs.is_spot(models)
+            else []) + sampled
 
 
 def _outputs(outputs, models):
@@ -48,19 +53,20 @@ def light_of(g, models):
     if rungs.is_spot(models):
         kind = shading.Area if rungs.is_area(models) else shading.Spot
         cone = kind(tuple(g[n] for n in SPOT_ROWS), *(g[n] for n in _shape_names(models)))
-    return shading.Light(g["Light"], g["Intensity"], cone)
+    return shading.Light(g["Light"], g["Intensity"], cone, g.get(JITTER))
 
 
-def build_light(models, images):
-    """Per-light surface group: ``shading.shade_point`` (Sun et al. 2005 Eq. 11, 14, 17-18) with ``models``."""
-    name = groups.light_group_name(models)
+def build_light(models, images, cycles=False):
+    """Per-light surface group: ``shading.shade_point`` (Sun et al. 2005 Eq. 11, 14, 17-18) with ``models``;
+    ``cycles``: for Cycles alone, its tables read by Cycles' own bilinear filter (``NodeOps.cycles``)."""
+    name = groups.light_group_name(models) + (CYCLES_TAG if cycles else "")
     if (ng := groups.up_to_date(name)) is not None:
         return ng
     ng, gin, gout = groups.new_group(name, [
         ("Beta", F), ("Light", V), ("Intensity", C), ("Position", V), ("Incoming", V),
         ("View Distance", F), ("Normal", V), ("Diffuse", C), ("Specular", C), ("Glossy Level", F),
         *spot_inputs(models)], _outputs(rungs.SURFACE_OUTPUTS, models))
-    m = NodeOps(ng, images)
+    m = NodeOps(ng, images, cycles=cycles)
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
     pos, incoming, d_vp = g["Position"], g["Incoming"], g["View Distance"]
     geo = shading.Geometry(pos + incoming * d_vp, pos, incoming, d_vp, g["Normal"])
@@ -70,15 +76,16 @@ def build_light(models, images):
     return _finish(m, ng, gout, name, rungs.SURFACE_OUTPUTS, models, terms)
 
 
-def build_background_light(models, images):
-    """Per-light world group: ``shading.background_point`` (Sun et al. 2005 Eq. 12) with ``models``."""
-    name = groups.background_group_name(models)
+def build_background_light(models, images, cycles=False):
+    """Per-light world group: ``shading.background_point`` (Sun et al. 2005 Eq. 12) with ``models`` (``cycles``: as
+    ``build_light``'s)."""
+    name = groups.background_group_name(models) + (CYCLES_TAG if cycles else "")
     if (ng := groups.up_to_date(name)) is not None:
         return ng
     ng, gin, gout = groups.new_group(name, [
         ("Beta", F), ("Light", V), ("Intensity", C), ("Camera", V), ("Direction", V), *spot_inputs(models),
     ], _outputs(rungs.SKY_OUTPUTS, models))
-    m = NodeOps(ng, images)
+    m = NodeOps(ng, images, cycles=cycles)
     g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
     light = light_of(g, models)
     terms = shading.sky_terms(m, g["Camera"], g["Direction"], light, medium(m, g["Beta"]), models)

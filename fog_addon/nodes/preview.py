@@ -33,6 +33,8 @@ class Shown(NamedTuple):
     day_dims: bool = True      # the preview dims the surfaces' direct light by the sun's and the sky's dimming
     #                            (``sunsky.dims_surfaces``)
     sampled_dense: Any = None  # (grey albedo, scale) of the sampled lights' Dense Fog (``preview_sampled``), or None
+    cycles: bool = False       # built for Cycles' viewport (a rebuild follows a change of engine): the sampled
+    #                            lights' tables read by Cycles' own filter (``sockets.NodeOps.cycles``)
 
 
 def factor(m, params):

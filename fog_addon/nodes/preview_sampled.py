@@ -124,7 +124,7 @@ def _light(m, spec, u, intensity_row):
 
 
 def _randoms(ng, source):
-    """Two uniform numbers that change at every sample: a White Noise of ``source`` (the pixel filter moves it)."""
+    """Three uniform numbers that change at every sample: a White Noise of ``source`` (the pixel filter moves it)."""
     noise = ng.nodes.new("ShaderNodeTexWhiteNoise")
     noise.noise_dimensions = "4D"
     noise.inputs["W"].default_value = 7.31   # (not the shafts' jitter: independent numbers)
@@ -132,16 +132,17 @@ def _randoms(ng, source):
     ng.links.new(source, noise.inputs["Vector"])
     sep = ng.nodes.new("ShaderNodeSeparateColor")
     ng.links.new(noise.outputs["Color"], sep.inputs[0])
-    return sep.outputs[0], sep.outputs[1]
+    return sep.outputs[0], sep.outputs[1], sep.outputs[2]
 
 
 def light_models(g, step=0, dense=None):
     """A point light's models at the ladder's ``step`` (``rungs.choose``): fully modelled for the surfaces (its glow
-    and the fog light they reflect), "glow only" for the sky; with Dense Fog's multiply scattered light where
-    ``dense`` = (grey albedo, the share of its field the surfaces leave) is given (one for every sampled light:
-    ``dense_of``)."""
+    and the fog light they reflect), "glow only" for the sky; the glow's single scattering one point of the ray a
+    sample (``rungs.sampled_rungs``: the light is already one a sample, and a table's glow costs several fog-free
+    renders); with Dense Fog's multiply scattered light where ``dense`` = (grey albedo, the share of its field the
+    surfaces leave) is given (one for every sampled light: ``dense_of``)."""
     albedo, scale = dense if dense is not None else (None, 1.0)
-    return rungs.choose("nodes", step, g, "point", multiple_albedo=albedo, multiple_scale=scale)
+    return rungs.choose("nodes", step, g, "point", multiple_albedo=albedo, multiple_scale=scale, sampled_glow=True)
 
 
 def dense_of(lights, models, g, albedo, scales, weights):
@@ -167,19 +168,20 @@ def _sampled_group(name, inputs, images, spec, light_group, shared, jitter_from)
     ng, gin, gout = groups.new_group(name, inputs, [("Fog", "NodeSocketShader")])
     m = NodeOps(ng, dict(images))
     s = {x.name: x for x in gin.outputs if x.name}
-    u1, u2 = _randoms(ng, s[jitter_from])
+    u1, u2, u3 = _randoms(ng, s[jitter_from])
     position, intensity = _light(m, spec, *_pick(m, spec, m.wrap(u1), m.wrap(u2), _tile(m, ng)))
     node = ng.nodes.new("ShaderNodeGroup")
     node.node_tree = light_group
     node.name = node.label = "Sampled Light"
     m.feed(node.inputs["Light"], position)
     m.feed(node.inputs["Intensity"], intensity)
+    ng.links.new(u3, node.inputs[light_groups.JITTER])
     for sock in shared:
         ng.links.new(s[sock], node.inputs[sock])
     return ng, gout, m, s, node
 
 
-def build_surface_group(images, spec, g, dense=None):
+def build_surface_group(images, spec, g, dense=None, cycles=False):
     """The Surface group's estimate of the other lights' fog light (shader group, output Fog: an Emission of the
     sampled light's, fully modelled: Sun et al. 2005 Eq. 19's albedo x (glow + T x reflected fog light) on camera
     rays, ``shading.sum_lights``; ``light_models``)."""
@@ -187,7 +189,7 @@ def build_surface_group(images, spec, g, dense=None):
     ng, gout, m, s, node = _sampled_group(SURFACE_GROUP, [
         ("Beta", F), ("Albedo", C), ("Position", V), ("Incoming", V), ("View Distance", F), ("Normal", V),
         ("Diffuse", C), ("Specular", C), ("Glossy Level", F), ("View Transmittance", F), ("Is Camera", F)],
-        images, spec, light_groups.build_light(light_models(g, 0, dense), images), shared, "Position")
+        images, spec, light_groups.build_light(light_models(g, 0, dense), images, cycles), shared, "Position")
     terms = light_groups.read(m, node, rungs.SURFACE_OUTPUTS, shading.LightTerms)
     sums = shading.sum_lights(m, [terms], light_groups.medium(m, s["Beta"], s["Albedo"]),
                               m.wrap(s["View Transmittance"]), m.wrap(s["Is Camera"]))
@@ -196,12 +198,12 @@ def build_surface_group(images, spec, g, dense=None):
     return groups.install(ng, SURFACE_GROUP)
 
 
-def build_world_group(images, spec, g, dense=None):
+def build_world_group(images, spec, g, dense=None, cycles=False):
     """The World group's estimate of the other lights' glows to the sky (shader group, output Fog: a Background of
     albedo x the sampled light's glow to infinity x Is Camera)."""
     ng, gout, m, s, node = _sampled_group(
         WORLD_GROUP, [("Beta", F), ("Albedo", C), ("Camera", V), ("Direction", V), ("Is Camera", F)], images, spec,
-        light_groups.build_background_light(light_models(g, 1, dense), images), ("Beta", "Camera", "Direction"),
+        light_groups.build_background_light(light_models(g, 1, dense), images, cycles), ("Beta", "Camera", "Direction"),
         "Direction")
     sky = light_groups.read(m, node, rungs.SKY_OUTPUTS, shading.SkyTerms)
     glow = m.scale(m.wrap(s["Albedo"], vector=True) * m.wrap(sky.background, vector=True), m.wrap(s["Is Camera"]))

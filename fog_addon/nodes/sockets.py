@@ -83,8 +83,9 @@ class NodeOps:
     SEPARATE_COLOR = "ShaderNodeSeparateColor"
     KERNEL_PREFIX = KERNEL_GROUP
 
-    def __init__(self, tree, images=None, x0=0.0, y0=0.0):
+    def __init__(self, tree, images=None, x0=0.0, y0=0.0, cycles=False):
         self.tree = tree
+        self.cycles = cycles   # the tree runs in Cycles alone: a table is one Linear tap (``_table``)
         self.images = images or {}
         self.x0, self.y0 = x0, y0
         self._rows = {}
@@ -483,6 +484,8 @@ class NodeOps:
         per coordinate, texel centres by Multiply Add, and each of the three interpolations in two nodes.
         """
         rows = spec.height if rows is None else rows
+        if self.cycles:
+            return self._linear(spec, x, y, row0, rows, channel)
         fx = self.clamp(x) * float(spec.width - 1)
         fy = self.clamp(y) * float(rows - 1)
         i = self.minimum(self.floor(fx), float(spec.width - 2))
@@ -494,6 +497,16 @@ class NodeOps:
         v1 = v0 + 1.0 / spec.height
         taps = [self.tap(spec, u, v, channel) for v in (v0, v1) for u in (u0, u1)]
         return self.lerp(self.lerp(taps[0], taps[1], tx), self.lerp(taps[2], taps[3], tx), ty)
+
+    def _linear(self, spec, x, y, row0, rows, channel):
+        """``_table``'s lookup as one Linear tap, for a tree only Cycles runs: Cycles interpolates a float image
+        bilinearly between texel centres in float arithmetic, the four taps' value to 1e-6
+        (docs/measurements/2026-11-29-viewport-preview.md); EEVEE's GPU filter weighs by fewer bits."""
+        u = self.math("MULTIPLY_ADD", self.clamp(x), (spec.width - 1.0) / spec.width, 0.5 / spec.width)
+        v = self.math("MULTIPLY_ADD", self.clamp(y), (rows - 1.0) / spec.height, (row0 + 0.5) / spec.height)
+        uv = self.combine(u, v, 0.0)
+        n = self._once(("linear", spec.name, self._ids((uv,))), lambda: self._new_tap(spec, uv, "Linear"))
+        return self.texel(spec, n, uv.col + 1, channel)
 
     def lerp(self, a, b, t):
         """a + t (b - a) in two nodes (Subtract, Multiply Add).  Not a Mix node: in EEVEE its unused vector,
@@ -508,8 +521,8 @@ class NodeOps:
         n = self._once(("tap", spec.name, self._ids((uv,))), lambda: self._new_tap(spec, uv))
         return self.texel(spec, n, uv.col + 1, channel)
 
-    def _new_tap(self, spec, uv):
-        n = self.node("ShaderNodeTexImage", uv.col + 1, interpolation="Closest", extension="EXTEND")
+    def _new_tap(self, spec, uv, interpolation="Closest"):
+        n = self.node("ShaderNodeTexImage", uv.col + 1, interpolation=interpolation, extension="EXTEND")
         n.image = self.images[spec.name]
         # A new node's texture mapping is not flagged as the identity until one of its values is set
         # (BKE_texture_mapping_init), so EEVEE made its matrix and bounds uniforms: 88 bytes a tap, 1 760

@@ -177,7 +177,7 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
         shaders = [node.outputs["Fog"] for node, mods in shown if any(_lit(mod) for mod in mods)]
         if preview.sampled is not None:   # the other point lights, one sampled a sample
             shaders.append(preview_sampled.group_node(ng, preview_sampled.build_surface_group(
-                images, preview.sampled, preview.g, preview.sampled_dense), shared))
+                images, preview.sampled, preview.g, preview.sampled_dense, preview.cycles), shared))
         if day_preview is not None:   # the sun's and the sky's glow and fog light, as the node groups give them
             shaders.append(_day_light(m, ng, daylight, day_preview, geo, incoming, length, diffuse + specular, t_vp,
                                       is_camera)[0])

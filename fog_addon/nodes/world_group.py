@@ -148,7 +148,7 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
         shaders = [node.outputs["Fog"] for node, _ in shown]
         if preview.sampled is not None and layer_scale is None:   # the other point lights, one sampled a sample
             shaders.append(preview_sampled.group_node(ng, preview_sampled.build_world_group(
-                images, preview.sampled, preview.g, preview.sampled_dense), shared))
+                images, preview.sampled, preview.g, preview.sampled_dense, preview.cycles), shared))
         if day_preview is not None:   # the sun's and the sky's glow to the sky
             shaders.append(_emission(m, ng, m.scale(day_glow, layer_scale)))
         fogs += [sock for sock in [preview_.behind_switch(ng, params, shaders)] if sock]

@@ -65,6 +65,8 @@ class Rung:
     halo: "Rung" = None       # a glow rung's multiply scattered part alone (``spot_multiple_rungs``), which the
     #                           compositor evaluates at a coarser resolution: then ``single`` is the rest
     single: "Rung" = None
+    sampled: bool = False     # a glow rung estimated from one uniform number u a render sample (the kernel's last
+    #                           argument, ``shading.Light.u``): its mean over u is the glow (``model.airlight_equiangular``)
 
     def predicted_error(self, *situation):
         """Bound on the relative error this rung makes in any pixel of a situation (camera, light, medium).
@@ -101,6 +103,15 @@ DIRECT_SPOT = replace(DIRECT_EXACT, name="direct exact, spot cone", spot=True)
 DIRECT_AREA = replace(DIRECT_EXACT, name="direct exact, area light", spot=True, area=True,
                       domain="from the emitter's centre")
 
+# The viewport preview's sampled lights (``nodes/preview_sampled.py``): one point of the ray a render sample, whose
+# mean over the samples is Eq. 5 (unbiased: max_error 0; its noise is the preview's, measured in
+# docs/measurements/2026-11-29-viewport-preview.md).
+AIRLIGHT_SAMPLED = Rung(
+    "airlight equiangular", "airlight", model.airlight_equiangular, frozenset({"numpy", "nodes"}), (),
+    "beta h >= 0; unbiased over the uniform number", 0.0,
+    "tests/test_airlight.py: its mean over u against scipy quadrature of Eq. 5", sampled=True)
+BACKGROUND_SAMPLED = replace(AIRLIGHT_SAMPLED, name="background equiangular", term="background",
+                             kernel=model.airlight_equiangular_background)
 
 
 def no_airlight(m, beta, d_sv, along, h, d_vp):
@@ -255,6 +266,17 @@ def anisotropic_rungs(g):
                                      hg_scatter_error(g))))
 
 
+@functools.lru_cache(maxsize=None)
+def sampled_rungs(g):
+    """(airlight, background) rungs estimated from one uniform number a render sample (AIRLIGHT_SAMPLED), for
+    Henyey-Greenstein anisotropy g: unbiased for any g, noisier as the phase function's peak sharpens."""
+    g = float(g)
+    if g == 0.0:
+        return AIRLIGHT_SAMPLED, BACKGROUND_SAMPLED
+    return tuple(replace(r, name=f"{r.name} (g {g:+.3f})", kernel=functools.partial(r.kernel, g=g))
+                 for r in (AIRLIGHT_SAMPLED, BACKGROUND_SAMPLED))
+
+
 # The rim's quadrature by its point count (spot.RIM_LADDER): max of the whole glow over random spots, tests/test_spot.py
 # (2.0e-3, 1.4e-2, 4.6e-2 measured).  Fewer points than spot.RIM_NODES are chosen per light where the view's
 # samples show the glow move little (predict.py), which bounds them in a scene better than these maxima.
@@ -348,10 +370,10 @@ def _scale_tag(scale):
     return "" if scale == 1.0 else f" x{scale:.2f}"
 
 
-def _with_multiple(base, extra, spec, m, *args, scale=1.0):
+def _with_multiple(base, extra, spec, m, *args, scale=1.0, sampled=False):
     """A single-scattering kernel's value plus its multiply scattered twin's (``multiple.py``) times ``scale``,
-    same arguments."""
-    return base(m, *args) + _scaled(extra(m, spec, *args), scale)
+    same arguments (but a ``sampled`` kernel's last, its uniform number: the twin is exact)."""
+    return base(m, *args) + _scaled(extra(m, spec, *(args[:-1] if sampled else args)), scale)
 
 
 def multiple_rungs(air, background, scatter, g, albedo, scale=1.0):
@@ -365,7 +387,8 @@ def multiple_rungs(air, background, scatter, g, albedo, scale=1.0):
     for rung, extra in ((air, multiple.multiple_airlight), (background, multiple.multiple_background),
                         (scatter, multiple.multiple_scatter)):
         out.append(replace(rung, name=f"{rung.name} + multiple {tag}",
-                           kernel=functools.partial(_with_multiple, rung.kernel, extra, spec, scale=scale),
+                           kernel=functools.partial(_with_multiple, rung.kernel, extra, spec, scale=scale,
+                                                    sampled=rung.sampled),
                            backends=rung.backends & {"numpy", "nodes"}, tables=rung.tables + (spec,),
                            max_error=max(rung.max_error, MULTIPLE_ERROR),
                            evidence="tests/test_multiple.py; docs/measurements/2026-11-27-apsf.md"))
@@ -463,7 +486,7 @@ def _dense_fog(preference, kind, step, multiple_albedo, cone):
 
 
 def choose(preference="nodes", step=0, g=0.0, kind="point", rim_nodes=spot.RIM_NODES, multiple_albedo=None,
-           cone=None, multiple_scale=1.0):
+           cone=None, multiple_scale=1.0, sampled_glow=False):
     """The models for one light's terms, honouring the user's ``preference`` (PREFERENCES), ``step``
     (index into STEPS) rungs down the ladder, for Henyey-Greenstein anisotropy ``g``; ``kind`` (LIGHT_KINDS):
     a point light, a spot light (``spot_rungs``, DIRECT_SPOT) whose glow's rim takes ``rim_nodes`` points
@@ -478,7 +501,8 @@ def choose(preference="nodes", step=0, g=0.0, kind="point", rim_nodes=spot.RIM_N
     multiply scattered glow with (``multiple_rungs``; the node groups' tables, not OSL's quadrature), or None;
     a spot light's with the compositor when its ``cone`` = (cos_half, blend) is given, an area light's with the
     compositor (``spot_multiple_rungs``).  ``multiple_scale``: the share of that field the scene's surfaces
-    leave (``escape.field_scales``; 1: unbounded fog).
+    leave (``escape.field_scales``; 1: unbounded fog).  ``sampled_glow``: a point light's single-scattered glow
+    estimated from one uniform number a render sample (``sampled_rungs``: the viewport preview's sampled lights).
     """
     if preference not in PREFERENCES:
         raise ValueError(f"unknown method {preference!r}; use one of {', '.join(PREFERENCES)}")
@@ -494,6 +518,10 @@ def choose(preference="nodes", step=0, g=0.0, kind="point", rim_nodes=spot.RIM_N
         models = LightModels(air_table, bg_table, scatter, DIRECT_EXACT)
     if kind not in LIGHT_KINDS:
         raise ValueError(f"unknown light kind {kind!r}; use one of {', '.join(LIGHT_KINDS)}")
+    if sampled_glow:
+        if kind != "point":
+            raise ValueError(f"a sampled glow is a point light's, not a {kind} light's")
+        models = models._replace(**dict(zip(("airlight", "background"), sampled_rungs(g))))
     if kind == "area":
         models = LightModels(*area_rungs(models.scatter, g))
     elif kind == "spot":

@@ -114,6 +114,8 @@ class Light(NamedTuple):
     intensity: Any       # RGB radiant intensity I0, W/sr
     spot: Any = None     # Spot for a spot light (its models: rungs.choose's kind "spot"), Area for an area light
     #                      (kind "area"), None for a point light
+    u: Any = None        # a uniform number in [0, 1) that changes every render sample, for glow rungs that sample
+    #                      (``rungs.Rung.sampled``: the viewport preview's sampled lights), else None
 
 
 class LightTerms(NamedTuple):
@@ -175,7 +177,8 @@ def shade_point(m, geo, material, light, medium, models, air=None):
     if air is None:
         d_sv, along, h = model.ray_light_geometry(m, geo.camera, -1.0 * geo.incoming, light.position)
         air_ray = spot_ray(m, light, models.airlight, geo.camera, -1.0 * geo.incoming)
-        air = m.run(models.airlight, beta, d_sv, along, h, geo.view_distance, *air_ray)
+        air = m.run(models.airlight, beta, d_sv, along, h, geo.view_distance, *air_ray,
+                    *sample_arg(light, models.airlight))
         if models.airlight.spot:
             seen = glow_hit(m, light, air_ray[:6], geo.view_distance)
     mirrored = mirror(m, geo.incoming, geo.normal)
@@ -349,6 +352,15 @@ def spot_ray(m, light, rung, origin, direction):
     return (*spot.light_space_ray(m, light.spot.rows, origin, direction, light.position), *shape_args(light))
 
 
+def sample_arg(light, rung):
+    """A sampling glow rung's last argument (``rungs.Rung.sampled``): the light's uniform number; none else."""
+    if not rung.sampled:
+        return ()
+    if light.u is None:
+        raise ValueError(f"the {rung.name} model samples: its light needs a uniform number (Light.u)")
+    return (light.u,)
+
+
 def background_seen(m, camera, direction, light, models):
     """1 if a ray to infinity meets a spot's cone (else its glow is 0: ``Gated``), None for a point light."""
     if not models.background.spot:
@@ -373,7 +385,8 @@ def background_point(m, camera, direction, light, medium, models):
     """One light's RGB glow along a camera ray to infinity (Sun et al. 2005 Eq. 12 times I0), W/(m^2 sr)."""
     d_sv, along, h = model.ray_light_geometry(m, camera, direction, light.position)
     return m.scale(light.intensity, m.run(models.background, medium.beta, d_sv, along, h,
-                                          *spot_ray(m, light, models.background, camera, direction)))
+                                          *spot_ray(m, light, models.background, camera, direction),
+                                          *sample_arg(light, models.background)))
 
 
 def glow_pair(m, camera, direction, view_distance, light, medium, models):
@@ -386,9 +399,10 @@ def glow_pair(m, camera, direction, view_distance, light, medium, models):
     air_ray = spot_ray(m, light, models.airlight, camera, direction)
     if models.airlight.pair is not None and models.background.spot:
         return models.airlight.pair(m, medium.beta, d_sv, along, h, view_distance, *air_ray)
-    return (m.run(models.airlight, medium.beta, d_sv, along, h, view_distance, *air_ray),
+    return (m.run(models.airlight, medium.beta, d_sv, along, h, view_distance, *air_ray,
+                  *sample_arg(light, models.airlight)),
             m.run(models.background, medium.beta, d_sv, along, h,
-                  *spot_ray(m, light, models.background, camera, direction)))
+                  *spot_ray(m, light, models.background, camera, direction), *sample_arg(light, models.background)))
 
 
 def light_glows(m, camera, direction, view_distance, light, medium, models):

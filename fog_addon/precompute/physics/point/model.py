@@ -193,6 +193,38 @@ def airlight_quadrature_background(m, beta, d_sv, along, h, g=0.0):
     return airlight_quadrature(m, beta, d_sv, along, h, FAR, g)
 
 
+
+def airlight_equiangular(m, beta, d_sv, along, h, d_vp, u, g=0.0):
+    """One sample's estimate of the airlight per unit intensity, 1/m^2 (Sun et al. 2005 Eq. 5), for the uniform
+    number ``u`` in [0, 1): its mean over u is ``airlight_segment``'s value, without a table or a sum.
+
+    Equiangular sampling (Kulla and Fajardo 2012, Eq. 8-10): a point of the ray at the angle theta, seen from the
+    light, from the ray's closest point, taken uniformly between the segment's ends theta_a = atan2(-along, h)
+    and theta_b = atan2(d_vp - along, h), lies at t = along + h tan(theta) from the camera and r = h / cos(theta)
+    from the light.  Its density over t, h / ((theta_b - theta_a) r^2), cancels Eq. 5's 1/r^2, so the estimate
+    beta / (4 pi) 4 pi p_HG (theta_b - theta_a) / h e^{-beta (t + r)} varies only by the extinction and the
+    phase function over the segment: a single sample is nearly exact in thin isotropic fog.  The scattering
+    angle there has cosine -sin(theta) (toward the camera from the light; ``hg_weight``).  The viewport preview's
+    sampled lights (``nodes/preview_sampled.py``) take it, one light and one point a render sample.
+    """
+    h = m.maximum(h, MIN_ANGLE * m.maximum(d_sv, MIN_DISTANCE))
+    theta_a = m.atan2(-1.0 * along, h)
+    theta_b = m.atan2(d_vp - along, h)
+    span = theta_b - theta_a
+    theta = m.mul_add(u, span, theta_a)
+    cos_t = m.maximum(m.cos(theta), 1e-30)
+    t = m.mul_add(h, m.tan(theta), along)
+    weight = (beta * (0.25 / math.pi)) * span / h * m.exp(-beta * (t + h / cos_t))
+    if g:   # 4 pi p_HG at cos = -sin(theta): (1 - g^2) (1 + g^2 + 2 g sin(theta))^{-3/2}
+        weight = weight * ((1.0 - g * g) * m.power(m.maximum(m.mul_add(m.sin(theta), 2.0 * g, 1.0 + g * g),
+                                                             1e-30), -1.5))
+    return weight
+
+
+def airlight_equiangular_background(m, beta, d_sv, along, h, u, g=0.0):
+    """:func:`airlight_equiangular` of a ray that meets no surface (Sun et al. 2005 Eq. 12), 1/m^2."""
+    return airlight_equiangular(m, beta, d_sv, along, h, FAR, u, g)
+
 def ray_light_geometry(m, origin, direction, light):
     """(d_sv, along, h) of a ray (unit ``direction``) and a light position, all vectors."""
     to_light = light - origin
