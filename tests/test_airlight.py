@@ -460,8 +460,8 @@ def test_anisotropic_cache_quadrature(hg_cache):
 @pytest.mark.parametrize("g", (0.0, -0.5, 0.7, 0.85))
 def test_equiangular_glow_is_unbiased(g):
     """The mean over u of ``airlight_equiangular`` (20 000 midpoints in [0, 1): the integral over u to ~1e-8) is
-    Eq. 5 by scipy quadrature, on 40 random rays to a surface and 10 to the sky per g, to 1e-5; and no sample is
-    negative or not finite."""
+    Eq. 5 by scipy quadrature, on 40 random rays to a surface and 10 to the sky per g, to 4e-4 (its segment ends
+    8 optical depths on: e^-8); and no sample is negative or not finite."""
     seed = HG_SEED + 7 + int(round(100 * (g + 1)))
     p = [np.concatenate([x, y]) for x, y in zip(ref.sample_parameters(40, seed),
                                                  ref.sample_parameters(10, seed + 1, background=True))]
@@ -474,7 +474,7 @@ def test_equiangular_glow_is_unbiased(g):
                                          np.minimum(d_vp, model.FAR), u[None, :], g)
     assert np.all(np.isfinite(est)) and est.min() >= 0.0
     err = _rel(est.mean(axis=1), want)
-    assert err.max() < 1e-5, _describe(p, err, int(np.argmax(err)))
+    assert err.max() < 4e-4, _describe(p, err, int(np.argmax(err)))
 
 
 def test_equiangular_glow_limits():
@@ -493,7 +493,8 @@ def test_sampled_glow_rungs_with_dense_fog():
     from fog_addon.precompute.physics.point import multiple
     sampled = rungs.choose("nodes", 0, 0.0, multiple_albedo=0.9, sampled_glow=True)
     table = rungs.choose("nodes", 0, 0.0, multiple_albedo=0.9)
-    assert sampled.airlight.sampled and sampled.background.sampled and not sampled.scatter.sampled
+    assert sampled.airlight.sampled and sampled.background.sampled
+    assert sampled.scatter.name == table.scatter.name and not sampled.scatter.sampled
     field = multiple.table_spec(0.0, 0.9)   # a smooth stand-in for the baked field (both rungs read it alike)
     rows, cols = np.mgrid[0:field.height, 0:field.width]
     m = NumpyOps({tables.AIRLIGHT.name: al.bake_airlight_table(),

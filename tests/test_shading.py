@@ -84,6 +84,34 @@ def test_shade_point_against_quadrature(m, seed):
         assert got.weight == pytest.approx(intensity.mean() * lobe / d_sp ** 2, rel=1e-6)
 
 
+@pytest.mark.parametrize("seed", range(2))
+def test_sampled_light_is_unbiased(m, seed):
+    """A light with ``choose(sampled_glow=True)`` (the viewport preview's sampled lights: the glow from equiangular
+    points): its glow's mean over the uniform number is Eq. 5 by quadrature, and its fog light Eq. 15's two lobes
+    by quadrature, to the table rung's bound."""
+    u = (np.arange(8192) + 0.5) / 8192
+    for camera, pos, normal, light_pos, beta, n, rho_d, rho_s in _cases(5, seed + 10):
+        intensity = np.array([3.0, 2.0, 1.0])
+        incoming = (camera - pos) / np.linalg.norm(camera - pos)
+        d_vp = np.linalg.norm(camera - pos)
+        geo = shading.Geometry(camera, pos, incoming, np.asarray(d_vp), normal)
+        mat = shading.Material(rho_d, rho_s, np.asarray(surface.exponent_level(n)))
+        got = shading.shade_point(m, geo, mat, shading.Light(light_pos, intensity, None, u[:, None]), Medium(beta),
+                                  rungs.choose("nodes", sampled_glow=True))
+        to = light_pos - camera
+        air = ref.eq5_quad(beta, np.linalg.norm(to), d_vp, _angle(to, -incoming))[0]
+        mean = {k: np.reshape(getattr(got, k), (-1, 3)).mean(axis=0) for k in ("airlight", "scattered")}
+        np.testing.assert_allclose(mean["airlight"], intensity * air, rtol=1e-4)
+        d_sp = np.linalg.norm(light_pos - pos)
+        t = beta * d_sp
+        mirror = 2 * np.dot(incoming, normal) * normal - incoming
+        scale = beta * math.exp(-t) / (2 * math.pi * d_sp)
+        diffuse = scale * surface.surface_m([t], [_angle(normal, light_pos - pos)], 1.0)[0, 0]
+        glossy = scale * surface.surface_m([t], [_angle(mirror, light_pos - pos)], n)[0, 0]
+        np.testing.assert_allclose(mean["scattered"], intensity * (rho_d * diffuse + rho_s * glossy),
+                                   rtol=SCATTER_TOL)
+
+
 def test_glossy_lobe_follows_the_mirror_direction(m):
     """A sharp lobe pointing at the light reflects far more fog light than one pointing away."""
     geo = shading.Geometry(np.array([0.0, -4.0, 2.0]), np.zeros(3), np.array([0.0, -2.0, 1.0]) / math.sqrt(5),

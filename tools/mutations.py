@@ -702,7 +702,7 @@ MUTATIONS = [
     Mutation("equiangular_density", "the viewport preview's sampled glow: the equiangular point's density "
              "without its span of angles (biased wherever the segment is not seen under one radian)",
              "model.airlight_equiangular",
-             "(beta * (0.25 / math.pi)) * span / h",
+             "(beta * (0.25 / math.pi)) * step / h",
              "(beta * (0.25 / math.pi)) / h",
              ("tests/test_airlight.py::test_equiangular_glow_is_unbiased[0.0]",)),
     Mutation("compositor_no_glass_glow", "glass, Compositor: no glow along the segment past a pane",

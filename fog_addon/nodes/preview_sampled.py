@@ -7,7 +7,11 @@ light j of the N others with probability p_j and add its glow times 1 / p_j: the
 over the samples is the glow of all N (a Monte Carlo estimator; Cycles' many-lights sampling does the same for
 direct light).  The fog light is linear in the light's intensity, so the light group of one point light
 (``light_groups.build_light``: Sun et al. 2005 Eq. 11 and 17-18 at a surface, fully modelled;
-``build_background_light``: Eq. 12 to the sky) takes the intensity I_j / p_j.
+``build_background_light``: Eq. 12 to the sky) takes the intensity I_j / p_j.  Its terms are estimated the same
+way, since the light is already one a sample: its glow from two points of the ray (``model.airlight_equiangular``),
+from a third uniform number; the fog light a surface reflects and Dense Fog's multiply scattered light are read
+from their tables.  In Cycles the light groups' tables are each one
+Linear tap (``sockets.NodeOps.cycles``).
 
 p_j is proportional to I_j e^{-beta d_j} / max(d_j, 1 m), d_j the light's distance to the camera (a glow's light
 over the picture falls as 1 / d, dimmed on its way); j is drawn by Walker's alias method (one uniform number picks a

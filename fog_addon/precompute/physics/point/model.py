@@ -48,6 +48,8 @@ QUAD_GROWTH = 1.0     # a panel is at most this times sqrt(Q^2 + h^2) long (its 
 QUAD_DEPTH = 4.0      # ... and at most this optical depth thick
 QUAD_END = 30.0       # the integral stops at optical depth 30 from Q0 (e^-30 = 1e-13)
 FAR = 1e15            # m; the length of a ray that meets no surface (its square still fits a float32)
+EQUIANGULAR_POINTS = 2   # points of ``airlight_equiangular`` a sample, one in each stratum of angle
+EQUIANGULAR_DEPTH = 8.0  # its segment's end: optical depths past the light's closest point (or the camera)
 INV_2PI = 1.0 / (2.0 * math.pi)
 
 
@@ -203,22 +205,29 @@ def airlight_equiangular(m, beta, d_sv, along, h, d_vp, u, g=0.0):
     and theta_b = atan2(d_vp - along, h), lies at t = along + h tan(theta) from the camera and r = h / cos(theta)
     from the light.  Its density over t, h / ((theta_b - theta_a) r^2), cancels Eq. 5's 1/r^2, so the estimate
     beta / (4 pi) 4 pi p_HG (theta_b - theta_a) / h e^{-beta (t + r)} varies only by the extinction and the
-    phase function over the segment: a single sample is nearly exact in thin isotropic fog.  The scattering
-    angle there has cosine -sin(theta) (toward the camera from the light; ``hg_weight``).  The viewport preview's
-    sampled lights (``nodes/preview_sampled.py``) take it, one light and one point a render sample.
+    phase function over the segment.  The scattering angle there has cosine -sin(theta) (toward the camera from
+    the light; ``hg_weight``).  EQUIANGULAR_POINTS points, one in each equal stratum of theta ((u + k) / K),
+    are averaged.  The segment ends EQUIANGULAR_DEPTH optical depths past the light's closest point (or the
+    camera), where what is left is below e^-8 of the glow: a ray to the sky keeps its points where it glows.  The viewport preview's sampled lights (``nodes/preview_sampled.py``) take it, one light a
+    render sample.
     """
     h = m.maximum(h, MIN_ANGLE * m.maximum(d_sv, MIN_DISTANCE))
     theta_a = m.atan2(-1.0 * along, h)
-    theta_b = m.atan2(d_vp - along, h)
-    span = theta_b - theta_a
-    theta = m.mul_add(u, span, theta_a)
-    cos_t = m.maximum(m.cos(theta), 1e-30)
-    t = m.mul_add(h, m.tan(theta), along)
-    weight = (beta * (0.25 / math.pi)) * span / h * m.exp(-beta * (t + h / cos_t))
-    if g:   # 4 pi p_HG at cos = -sin(theta): (1 - g^2) (1 + g^2 + 2 g sin(theta))^{-3/2}
-        weight = weight * ((1.0 - g * g) * m.power(m.maximum(m.mul_add(m.sin(theta), 2.0 * g, 1.0 + g * g),
-                                                             1e-30), -1.5))
-    return weight
+    end = m.minimum(d_vp, m.maximum(along, 0.0) + EQUIANGULAR_DEPTH / m.maximum(beta, 1e-30))
+    span = m.atan2(end - along, h) - theta_a
+    step = span * (1.0 / EQUIANGULAR_POINTS)
+    scale = (beta * (0.25 / math.pi)) * step / h   # (the strata's mean: span / K)
+    start = m.mul_add(u, step, theta_a)
+    total = 0.0
+    for k in range(EQUIANGULAR_POINTS):
+        theta = start + step * float(k) if k else start
+        cos_t = m.maximum(m.cos(theta), 1e-30)
+        point = m.exp(-beta * (m.mul_add(h, m.tan(theta), along) + h / cos_t))
+        if g:   # 4 pi p_HG at cos = -sin(theta): (1 - g^2) (1 + g^2 + 2 g sin(theta))^{-3/2}
+            point = point * ((1.0 - g * g) * m.power(m.maximum(m.mul_add(m.sin(theta), 2.0 * g, 1.0 + g * g),
+                                                               1e-30), -1.5))
+        total = total + point
+    return scale * total
 
 
 def airlight_equiangular_background(m, beta, d_sv, along, h, u, g=0.0):
