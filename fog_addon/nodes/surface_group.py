@@ -19,14 +19,15 @@ _SURFACE_SHARED = (("Beta", F), ("Position", V), ("Incoming", V), ("View Distanc
 
 
 def build_surface_bundle(images, first, lights, models, with_passes, chained, prefix=groups.SURFACE_LIGHTS,
-                         shadows=None, g_=0.0, samples=None, chances=None):
+                         shadows=None, g_=0.0, samples=None, chances=None, cycles=False):
     """One bundle of the Surface group (``light_bundles.split``): ``shading.sum_lights`` over ``lights``
     (Sun et al. 2005 Eq. 19's L_a) from their per-light groups (``light_groups.build_light``).
 
     ``shadows``: {light name: ShadowMap} of the lights whose glow and reflected fog light take their lit shares
     (the viewport's preview: ``preview_shafts.py``, fog of anisotropy ``g_``, ``samples`` nodes a sample), or None.
     ``chances``: every light's probability of being the one a sample takes (``closures.drawn``, by the Pick
-    input; the surfaces past glass), or None: every light on every sample.
+    input; the surfaces past glass), or None: every light on every sample.  ``cycles``: the light groups for Cycles
+    alone (``light_groups.build_light``: the preview's, a rebuild follows a change of engine).
 
     Outputs: Fog (one Emission closure per lit light, times the Opacity input; a spot's or an area light's
     glow a closure of its own, ``closures.closure_sum``), Emission (their colours' sum), Weighted and Weight
@@ -50,7 +51,7 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained, pr
         if shadows and light.name in shadows:   # the preview's shafts (``preview_shafts.py``)
             jitter = jitter or preview_shafts.jitter(ng, g["Position"])
             shares = _shares(m, ng, light, shadows[light.name], images, g, jitter, g_, samples)
-        node = light_groups.light_instance(ng, first + k, light, light_groups.build_light(mod, images).name,
+        node = light_groups.light_instance(ng, first + k, light, light_groups.build_light(mod, images, cycles).name,
                                            [(g[n], n) for n, _ in _SURFACE_SHARED])
         terms.append(light_groups.read(m, node, rungs.SURFACE_OUTPUTS, shading.LightTerms))
         if shares is not None:
@@ -172,7 +173,8 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     if preview:
         shown, preview_trees, _ = light_bundles.place_bundles(
             ng, preview.lights, preview.models, functools.partial(
-                build_surface_bundle, images, prefix=groups.SURFACE_PREVIEW, shadows=preview.shadows, g_=preview.g),
+                build_surface_bundle, images, prefix=groups.SURFACE_PREVIEW, shadows=preview.shadows, g_=preview.g,
+                cycles=preview.cycles),
             shared, False)
         shaders = [node.outputs["Fog"] for node, mods in shown if any(_lit(mod) for mod in mods)]
         if preview.sampled is not None:   # the other point lights, one sampled a sample

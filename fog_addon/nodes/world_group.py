@@ -13,7 +13,7 @@ from .sockets import NodeOps
 
 
 def build_world_bundle(images, first, lights, models, with_passes, chained, scaled=False,
-                       prefix=groups.WORLD_LIGHTS, shadows=None, g_=0.0):
+                       prefix=groups.WORLD_LIGHTS, shadows=None, g_=0.0, cycles=False):
     """One bundle of the World group (``light_bundles.split``): the lights' glows to infinity (Sun et al. 2005
     Eq. 12) from their per-light groups (``light_groups.build_background_light``).
 
@@ -22,7 +22,8 @@ def build_world_bundle(images, first, lights, models, with_passes, chained, scal
     nothing) plus the glows read by the pass's own instances of the light groups
     (``_world_pass_instances``).  ``prefix``: the bundles' name (the viewport preview's have their own).
     ``shadows``: {light name: ShadowMap} of the lights whose glows take their lit shares (the viewport's preview:
-    ``preview_shafts.py``, fog of anisotropy ``g_``), or None.
+    ``preview_shafts.py``, fog of anisotropy ``g_``), or None.  ``cycles``: the light groups for Cycles alone
+    (``light_groups.build_light``: the preview's, a rebuild follows a change of engine).
     """
     name = light_bundles.bundle_name(prefix, first, lights)
     inputs = [("Beta", F), ("Albedo", C), ("Camera", V), ("Direction", V), ("Is Camera", F)]
@@ -37,7 +38,7 @@ def build_world_bundle(images, first, lights, models, with_passes, chained, scal
     medium, is_camera = light_groups.medium(m, g["Beta"], g["Albedo"]), m.wrap(g["Is Camera"])
     nodes, airlights, colours, jitter = [], [], [], None
     for k, (light, mod) in enumerate(zip(lights, models)):
-        group = light_groups.build_background_light(mod, images).name
+        group = light_groups.build_background_light(mod, images, cycles).name
         node = light_groups.light_instance(ng, first + k, light, group,
                                            [(g[n], n) for n in ("Beta", "Camera", "Direction")])
         nodes.append(node)
@@ -143,7 +144,7 @@ def build_world(lights, models, camera, images, with_passes=False, day=None, day
         shown, preview_trees, _ = light_bundles.place_bundles(
             ng, preview.lights, preview.models, functools.partial(
                 build_world_bundle, images, scaled=layer_scale is not None, prefix=groups.WORLD_PREVIEW,
-                shadows=preview.shadows, g_=preview.g),
+                shadows=preview.shadows, g_=preview.g, cycles=preview.cycles),
             {k: v for k, v in shared.items() if k != "Pass Direction"}, False)   # (the preview writes no pass)
         shaders = [node.outputs["Fog"] for node, _ in shown]
         if preview.sampled is not None and layer_scale is None:   # the other point lights, one sampled a sample
