@@ -15,7 +15,7 @@ from . import comp_shafts, groups, owned
 from .groups import F, V
 from .sockets import NodeOps
 
-PREVIEW_SAMPLES = shafts.Samples(view_nodes=4, surface_directions=1, surface_nodes=4)   # a sample's nodes
+PREVIEW_SAMPLES = shafts.Samples(view_nodes=4, surface_directions=2, surface_nodes=4)   # a sample's nodes
 # the segments past glass in final renders (``glass_tails.build_tail_bundle``): fewer nodes a sample, a final render
 # has many samples (the shop window's pane: 5.9 % with PREVIEW_SAMPLES, the fog's cost with glass 5.9x the fog-free)
 FINAL_SAMPLES = shafts.Samples(view_nodes=4, surface_directions=1, surface_nodes=4)
