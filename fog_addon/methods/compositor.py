@@ -263,7 +263,7 @@ def _tails(scene, spec, plan, maps):
     kept = [plan.in_groups[i] for i in order]
     shadows = _still_maps(kept, maps)
     return glass_tails.Tails(kept, [rungs.choose("nodes", 0, spec.anisotropy, view.light_kind(o)) for o in kept],
-                             shadows or None, spec.anisotropy, sampling.mixed_chances(weight[order]))
+                             shadows or None, spec.anisotropy, sampling.mixed_chances(weight[order]), cycles=True)
 
 
 def _still_maps(lights, maps):

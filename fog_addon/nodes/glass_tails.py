@@ -40,10 +40,11 @@ class Tails(NamedTuple):
     g: float = 0.0        # the fog's anisotropy (the shares' phase weight)
     chances: Any = None   # each light's probability of being the one whose glows a sample takes (``sampling.picked``), or
     #                       None: every light on every sample
+    cycles: bool = False  # built for Cycles alone: the light groups' tables read by its filter (``NodeOps.cycles``)
 
 
 def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp, shared, below, extra=(),
-                shadows=None, g_=0.0, chances=None, pick=None):
+                shadows=None, g_=0.0, chances=None, pick=None, cycles=False):
     """The Surface group's See Through shader (Cycles only: ``material.py`` adds it to the Cycles output):
     the glows of the segments past a glass pane or a mirror, by differences of tails.
 
@@ -73,7 +74,8 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
     Through (the fog light the surfaces past glass reflect, where the materials hold no lights: the Compositor
     method's, ``surface_group.build_surface``).  ``shadows``, ``g_``: the lights' shadow maps and the fog's
     anisotropy (``build_tail_bundle``).  ``chances``: each light's probability of being a sample's one (``sampling.picked``),
-    drawn by ``pick`` (an output socket: ``pick_noise``), or None.  Returns the bundle groups built.
+    drawn by ``pick`` (an output socket: ``pick_noise``), or None.  ``cycles``: the light groups for Cycles alone
+    (``light_groups.build_light``).  Returns the bundle groups built.
     """
     kept = [(light, mod, p) for light, mod, p in zip(lights, models, chances or [None] * len(lights))
             if any(o.computed(mod) for o in rungs.SKY_OUTPUTS if o.colour)]
@@ -107,7 +109,7 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
         inputs["Pick"] = pick
     fogs, trees = [], []
     for first, some, mods in light_bundles.split([light for light, _ in kept], [mod for _, mod in kept]):
-        tree = build_tail_bundle(images, first, some, mods, shadows, g_, chances)
+        tree = build_tail_bundle(images, first, some, mods, shadows, g_, chances, cycles)
         trees.append(tree)
         node = light_bundles.group_node(ng, tree, tree.name.removesuffix(groups.BUILDING), -300,
                                         -300 * (below + len(fogs)), [(src, n) for n, src in inputs.items()])
@@ -122,7 +124,7 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
     return trees
 
 
-def build_tail_bundle(images, first, lights, models, shadows=None, g_=0.0, chances=None):
+def build_tail_bundle(images, first, lights, models, shadows=None, g_=0.0, chances=None, cycles=False):
     """One bundle of the Surface group's See Through shader (``place_tails``): for each light, its glow to infinity
     from Position along Straight times Straight Weight, and the same along Mirrored times Mirrored Weight, composed
     (``shading.segment_terms``: times the albedo and Transmittance), from two instances of its World group
@@ -154,7 +156,7 @@ def build_tail_bundle(images, first, lights, models, shadows=None, g_=0.0, chanc
                 "Beta": g["Beta"], "Camera": g["Position"], "Direction": g[way], "Length": preview_shafts.SKY_LENGTH,
                 "Position": g["Position"], "Normal": g[way], "Jitter": jitter}, preview_shafts.FINAL_SAMPLES)
                 for way in ("Straight", "Mirrored")]
-        group = light_groups.build_background_light(mod, images).name
+        group = light_groups.build_background_light(mod, images, cycles).name
         straight = light_groups.light_instance(ng, first + k, light, group, [
             (g["Beta"], "Beta"), (g["Position"], "Camera"), (g["Straight"], "Direction")])
         for node in shares:

@@ -203,7 +203,8 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
         closures.camera_rays_only(ng, gout.inputs["Fog"], fogged.sock)
     own = not isinstance(tails, glass_tails.Tails)
     tail_lights, tail_models = (lights, models) if own else (tails.lights, tails.models)
-    shadows, anisotropy, chances = (None, 0.0, None) if own else (tails.shadows, tails.g, tails.chances)
+    shadows, anisotropy, chances, cycles = ((None, 0.0, None, False) if own
+                                            else (tails.shadows, tails.g, tails.chances, tails.cycles))
     pick = closures.pick_noise(ng, geo.outputs["Position"]) if chances is not None and tails else None
     segment_lights, segment_trees = [], []
     if not own:   # the materials hold no lights: the fog light surfaces past glass reflect
@@ -211,14 +212,14 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
             ng, tail_lights, tail_models, functools.partial(build_surface_bundle, images,
                                                             prefix=groups.SURFACE_SEGMENT, shadows=shadows,
                                                             g_=anisotropy, samples=preview_shafts.SEGMENT_SAMPLES,
-                                                            chances=chances),
+                                                            chances=chances, cycles=cycles),
             dict(shared, **{"Is Camera": segment.sock}, **({"Pick": pick} if pick is not None else {})), False)
         segment_lights = [node.outputs["Fog"] for node, _ in placed_segment]
     tails = glass_tails.place_tails(m, ng, tail_lights, tail_models, images, geo, g, segment, is_camera, t_vp,
                                     {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"],
                                      "Position": geo.outputs["Position"]}, len(placed),
                                     extra=segment_lights, shadows=shadows, g_=anisotropy,
-                                    chances=chances, pick=pick) + segment_trees if tails else []
+                                    chances=chances, pick=pick, cycles=cycles) + segment_trees if tails else []
     if extra is not None:   # before it replaces the group the materials use: adding a node there costs more
         extra(ng)
     m.place()
