@@ -705,6 +705,16 @@ MUTATIONS = [
              "(beta * (0.25 / math.pi)) * step / h",
              "(beta * (0.25 / math.pi)) / h",
              ("tests/test_airlight.py::test_equiangular_glow_is_unbiased[0.0]",)),
+    Mutation("mirror_lobe_kept", "sharp mirrors: the glossy lobe's blurred fog light kept beside the exact mirrored "
+             "tail (their reflected fog counted twice)", "surface_group.build_surface",
+             "    lobe = specular if mirror is None else m.scale(specular, 1.0 - mirror)",
+             "    lobe = specular",
+             ("tests/test_glass_mirror.py::test_fog_past_glass_and_mirrors[mirror-nodes]",)),
+    Mutation("mirror_no_tail", "sharp mirrors, Compositor: no mirrored tail (the pixels' lobe left out, nothing "
+             "in its place)", "glass_tails.place_tails",
+             "        mirrored = mirrored + mirror",
+             "        mirrored = m.scale(mirrored, 1.0)",
+             ("tests/test_glass_mirror.py::test_fog_past_glass_and_mirrors[mirror-compositor]",)),
     Mutation("compositor_no_glass_glow", "glass, Compositor: no glow along the segment past a pane",
              "compositor._tails",
              "    return glass_tails.Tails(kept,",

@@ -105,9 +105,12 @@ class Compositor(Method):
         images = dict(images, **shadow_images, **sun_images)
         preview, sampled_images = _preview(scene, spec, plan, maps, table, dims)
         images = dict(images, **sampled_images)
+        tails = _tails(scene, spec, plan, maps)
+        # a sharp mirror's reflected fog by its tails where they hold every light (else the pixels' glossy lobe)
+        mirrors = bool(tails) and len(tails.lights) == len(plan.in_groups)
         surface_group.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes, extra=aovs,
-                                    tails=_tails(scene, spec, plan, maps), day=day,
-                                    day_dims=dims and not daylit, day_exact=not daylit, preview=preview)
+                                    tails=tails, day=day, day_dims=dims and not daylit, day_exact=not daylit,
+                                    preview=preview, mirrors=mirrors)
         images = comp_fog.build_fog_group(scene, plan.in_groups, plan.grouped_models, images,
                                           view.full_windows(plan.in_groups) if plan.partial else plan.windows,
                                           plan.partial, (maps, shafts.samples_for(spec.quality, len(maps)),
@@ -120,7 +123,7 @@ class Compositor(Method):
                                                                  shafts.samples_for(spec.quality).view_nodes)
                                                if daylit else None),
                                           layer=spec.layer_per_unit() if spec.layered else None,
-                                          with_passes=spec.passes)
+                                          with_passes=spec.passes, mirrors=mirrors)
         world_group.build_world([], [], scene.camera, images, spec.passes, day=day, day_dims=not daylit,
                                 preview=preview, extra=comp_fog.add_world_aovs if pano else None)
         return images

@@ -32,7 +32,8 @@ class NodeGroups(Method):
         images = dict(images, **table_images)
         surface_group.build_surface(plan.shader_lights, plan.shader_models, images, spec.passes,
                                     tails=caveats.specular_paths(bpy.data.materials), day=day, day_table=table,
-                                    day_dims=sunsky.dims_surfaces(scene, plan.in_groups))
+                                    day_dims=sunsky.dims_surfaces(scene, plan.in_groups),
+                                    mirrors=scene.render.engine == "CYCLES")
         world_group.build_world(plan.shader_lights, plan.shader_models, scene.camera, images, spec.passes, day=day,
                                 day_table=table)
         return images

@@ -209,7 +209,7 @@ def _picture_scale(m, scene, filter_path):
 
 
 def build_fog_group(scene, lights, models, images, windows=None, partial=False, shafted=None, emitters=None,
-                    day=None, layer=None, with_passes=False):
+                    day=None, layer=None, with_passes=False, mirrors=False):
     """(Re)build the compositor group ``FOG_GROUP``: Image (the render) and the AOVs in; Image (the render
     plus the fog's light) and Fog Light out, and with the fog passes (``with_passes``) Fog Transmittance: the
     materials' Fog Transmittance AOV (``passes.py``) times the factor the group puts on the render, so that
@@ -222,7 +222,9 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     a sun or a sky (``daylight_terms.pixel_terms``; the render's surfaces take the sun's and the sky's dimming here, once
     per pixel, and the sky seen its transmittance), else None; ``layer``: a fog layer's (top, falloff, ground) in
     units (``FogSpec.layer_per_unit``), where the lights' glows end (``sunlight.lamp_glow_span``), or None for fog
-    that fills all space.  Rebuilt in place, so the scene's compositor keeps its group node.  Returns the table
+    that fills all space; ``mirrors``: the materials shade the sharp mirrors' reflected fog (``glass_tails``: Cycles,
+    where the scene has specular paths), so the pixels' glossy lobe leaves them out (``surface.sharp_share``).
+    Rebuilt in place, so the scene's compositor keeps its group node.  Returns the table
     images it reads (``images`` and the pixel filter's and the emitters' weights)."""
     filt, peak = None if panoramic(scene) else comp_lights.pixel_filter(scene), None
     if filt is not None:
@@ -282,9 +284,12 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     normal = m.scale(summed, 1.0 / m.maximum(m.length(summed), 1e-9))
     size = _picture_scale(m, scene, filt and filt[1])
     pix = uv * size if peak is not None else m.wrap((0.0, 0.0, 0.0))
+    roughness = p["Fog Roughness"] * inv
     diffuse, specular, level = surface.principled_to_phong(
-        m, m.scale(p["Fog Base Color"], inv), p["Fog Metallic"] * inv, p["Fog Roughness"] * inv,
+        m, m.scale(p["Fog Base Color"], inv), p["Fog Metallic"] * inv, roughness,
         p["Fog Specular IOR Level"] * inv, m.dot(incoming, normal), transmission=p["Fog Transmission Weight"] * inv)
+    if mirrors:   # a sharp mirror's reflected fog is the materials' tails' (``glass_tails.place_tails``)
+        specular = m.scale(specular, 1.0 - surface.sharp_share(m, roughness))
     shared = {"Beta": beta, "Camera": cam, "Incoming": incoming, "View Distance": d_vp, "Direction": direction,
               "Pixel": pix, "Corner": corner, "Across": across, "Up": up, "Size": size, "Glow Origin": cam,
               "Glow Length": d_vp}

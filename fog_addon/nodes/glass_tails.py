@@ -44,7 +44,7 @@ class Tails(NamedTuple):
 
 
 def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp, shared, below, extra=(),
-                shadows=None, g_=0.0, chances=None, pick=None, cycles=False):
+                shadows=None, g_=0.0, chances=None, pick=None, cycles=False, mirror=None):
     """The Surface group's See Through shader (Cycles only: ``material.py`` adds it to the Cycles output):
     the glows of the segments past a glass pane or a mirror, by differences of tails.
 
@@ -64,11 +64,15 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
       node, as Cycles' glass);
     * a Principled BSDF with transmission (Blender's usual glass, sharp or frosted; ``GLASS_WEIGHT`` its
       Transmission Weight, ``GLASS_MIRRORED`` 0), a Refraction BSDF (IOR 1: no Fresnel, no reflection): colour x
-      weight x (1 - F) straight on; a Principled BSDF's reflection is its own glossy fog light, as a mirror's;
+      weight x (1 - F) straight on, its reflection that of its specular layer (next);
+    * a sharp mirror (a specular layer Cycles reflects as singular, ``surface.sharp_share``; ``mirror``: its colour,
+      the layer's albedo, an output socket's value): ``mirror`` about the mirrored direction, its glossy fog light
+      then left to this (``surface_group.build_surface``);
     * glass in a Mix or Add Shader: ``GLASS_WEIGHT`` times its share there (``material._build``); what the vertex
       of a segment lets straight through beside it (1 - the Opacity input) takes the straight tail too;
-    * a mirror (Principled, roughness 0): its glossy fog light (``shading.shade_point``'s Phong lobe of
-      the highest exponent, which is a blurred tail to infinity) already is.
+    * a glossy surface Cycles does not reflect as singular, or a sharp mirror whose tails do not hold every light
+      (the Compositor's beyond its 8): its glossy fog light (``shading.shade_point``'s Phong lobe, at most the
+      highest exponent's, a tail to infinity blurred by about 2 degrees) stands for the tail.
 
     ``below``: the Surface group's light bundles placed (their rows).  ``extra``: more shader outputs summed into See
     Through (the fog light the surfaces past glass reflect, where the materials hold no lights: the Compositor
@@ -100,10 +104,13 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
     # otherwise be one node in Cycles' graph (its deduplication) with the Surface bundles' and, read by both
     # sides of the closure tree, stay on SVM's stack for both: 4 floats a light (199 floats at 24 lights)
     position = m.wrap(shared["Position"], vector=True) + closures.exact_zero(m, incoming)
+    mirrored = m.scale(glass, f * m.wrap(g[GLASS_MIRRORED]))
+    if mirror is not None:
+        mirrored = mirrored + mirror
     inputs = dict(shared, **{"Position": position.sock, "Straight": m.scale(incoming, -1.0).sock,
                              "Mirrored": shading.mirror(m, incoming, m.wrap(geo.outputs["Normal"], vector=True)).sock,
                              "Straight Weight": (m.scale(glass, 1.0 - f) - seg3 + through).sock,
-                             "Mirrored Weight": m.scale(glass, f * m.wrap(g[GLASS_MIRRORED])).sock,
+                             "Mirrored Weight": mirrored.sock,
                              "Transmittance": t_vp.sock})
     if chances is not None:
         inputs["Pick"] = pick
@@ -118,7 +125,7 @@ def place_tails(m, ng, lights, models, images, geo, g, segment, is_camera, t_vp,
     closures.shader_tree(ng, out, fogs + list(extra))
     # only on a specular segment, or on a camera ray that meets glass: a factor of exactly 0 elsewhere, where
     # Cycles' SVM jumps over the tails (``closures.camera_rays_only``)
-    has_glass = m.less(0.0, m.dot(glass, m.combine(1.0, 1.0, 1.0)))
+    has_glass = m.less(0.0, m.dot(glass if mirror is None else glass + mirror, m.combine(1.0, 1.0, 1.0)))
     gate = m.clamp(segment + is_camera * has_glass)
     closures.camera_rays_only(ng, out, gate.sock, "Specular Paths Only")
     return trees

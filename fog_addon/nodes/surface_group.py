@@ -75,7 +75,7 @@ def build_surface_bundle(images, first, lights, models, with_passes, chained, pr
 
 
 def build_surface(lights, models, images, with_passes=False, extra=None, tails=True, day=None, day_table=None,
-                  day_dims=True, day_exact=True, preview=None):
+                  day_dims=True, day_exact=True, preview=None, mirrors=False):
     """Scene group for materials: ``shading.shade_surface`` (Sun et al. 2005 Eq. 19) over ``lights``.
 
     ``models``: one rungs.LightModels per light.  Inputs mirror the Principled
@@ -98,7 +98,9 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     camera segment by ``sunlight.proxy_transmittance`` (the compositor puts the exact colour on every pixel).  The
     lights sit in bundle groups (``light_bundles.split``, ``build_surface_bundle``).  ``preview``: ``preview.Shown``
     of the viewport's preview of a fog added at render time: their fog light on camera rays, behind the Params
-    group's Viewport Preview (``preview.behind_switch``), or None; it changes no other output.
+    group's Viewport Preview (``preview.behind_switch``), or None; it changes no other output.  ``mirrors`` (Cycles,
+    with ``tails``): a sharp mirror's reflected fog is its tails' (``glass_tails.place_tails``), exact, and its
+    glossy lobe's fog light left out (``surface.sharp_share``).
 
     Why closures: Cycles' SVM emits a shader's value nodes in the order of
     their ids, so one colour summed over the lights keeps every light's values
@@ -130,6 +132,8 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
         m.wrap(g["Specular IOR Level"]), m.dot(m.wrap(geo.outputs["Incoming"], vector=True),
                                                m.wrap(geo.outputs["Normal"], vector=True)),
         transmission=m.wrap(g["Transmission Weight"]))
+    mirror = surface.sharp_share(m, m.wrap(g["Roughness"])) if mirrors and tails else None
+    lobe = specular if mirror is None else m.scale(specular, 1.0 - mirror)   # (a sharp mirror's: the tails')
     is_camera = m.wrap(path.outputs["Is Camera Ray"])
     segment = glass_tails.specular_segment(m, path)
     fogged = is_camera + segment   # the rays the fog shades: 0 or 1
@@ -160,7 +164,7 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
     glow_length = view * (1.0 - segment)   # a specular segment's glow is the tails' (``glass_tails``)
     shared = {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"], "Position": geo.outputs["Position"],
               "Incoming": geo.outputs["Incoming"], "View Distance": glow_length.sock,
-              "Normal": geo.outputs["Normal"], "Diffuse": diffuse.sock, "Specular": specular.sock,
+              "Normal": geo.outputs["Normal"], "Diffuse": diffuse.sock, "Specular": lobe.sock,
               "Glossy Level": level.sock, "View Transmittance": t_vp.sock, "Is Camera": fogged.sock,
               passes.OPACITY: g[passes.OPACITY]}
     placed, bundles, running = light_bundles.place_bundles(
@@ -215,11 +219,13 @@ def build_surface(lights, models, images, with_passes=False, extra=None, tails=T
                                                             chances=chances, cycles=cycles),
             dict(shared, **{"Is Camera": segment.sock}, **({"Pick": pick} if pick is not None else {})), False)
         segment_lights = [node.outputs["Fog"] for node, _ in placed_segment]
-    tails = glass_tails.place_tails(m, ng, tail_lights, tail_models, images, geo, g, segment, is_camera, t_vp,
-                                    {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"],
-                                     "Position": geo.outputs["Position"]}, len(placed),
-                                    extra=segment_lights, shadows=shadows, g_=anisotropy,
-                                    chances=chances, pick=pick, cycles=cycles) + segment_trees if tails else []
+    tails = (glass_tails.place_tails(m, ng, tail_lights, tail_models, images, geo, g, segment, is_camera, t_vp,
+                                     {"Beta": params.outputs["Beta"], "Albedo": params.outputs["Albedo"],
+                                      "Position": geo.outputs["Position"]}, len(placed),
+                                     extra=segment_lights, shadows=shadows, g_=anisotropy,
+                                     chances=chances, pick=pick, cycles=cycles,
+                                     mirror=None if mirror is None else m.scale(specular, mirror))
+             + segment_trees if tails else [])
     if extra is not None:   # before it replaces the group the materials use: adding a node there costs more
         extra(ng)
     m.place()

@@ -76,12 +76,19 @@ def missing_tables(scene, spec):
     return bakers.missing(_extra_tables(spec, plan(scene, spec, method, lights, reason).models))
 
 
+def _tails_key(scene):
+    """What the glows past glass and mirrors depend on: whether the scene has such paths, and then the engine (a
+    sharp mirror's reflected fog is the tails' in Cycles, its glossy lobe's in EEVEE: ``surface_group``)."""
+    paths = caveats.specular_paths(bpy.data.materials)
+    return f"{paths}:{scene.render.engine}" if paths else "False"
+
+
 def _signature(scene, spec, method, plan_):
     camera = scene.camera
     return "|".join([groups.code_fingerprint()] + [f"{o.name_full}:{'/'.join(r.name for r in mod)}"
                                                     for o, mod in zip(plan_.in_groups, plan_.grouped_models)]
                      + ["camera:" + (camera.name_full if camera else ""), f"passes:{spec.passes}",
-                        f"method:{method.name}", f"tails:{caveats.specular_paths(bpy.data.materials)}",
+                        f"method:{method.name}", f"tails:{_tails_key(scene)}",
                         method.signature(scene, spec, plan_.shader_lights), sunsky.key(scene, spec)]
                      + ([] if plan_.preview is None else
                         ["preview:" + ",".join(f"{o.name_full}:{'/'.join(r.name for r in mod)}"

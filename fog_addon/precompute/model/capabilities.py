@@ -60,7 +60,7 @@ FEATURES = (
          (True, "any (cost grows with pixels × lights)"), (False, "about 20 in a saved file"), (True, "any")),
     _row("shafts", "light shafts (shadows in the fog), the sun's too", False, False, True, False, True),
     _row("glass", "fog behind glass and in sharp mirrors",
-         (True, "✓ (Glass, Refraction and Principled glass, straight through; mirrors blurred 2°)"), False,
+         (True, "✓ (Glass, Refraction and Principled glass, straight through; sharp mirrors)"), False,
          (True, "✓ (the same, of the 8 brightest lights)"), False, False),
     _row("passes", "fog passes", True, (False, "black"), (True, "✓ (a multilayer EXR the compositor writes)"), True,
          (True, "✓ (a multilayer EXR the compositor writes)")),

@@ -352,6 +352,17 @@ def dielectric_albedo(m, f0, roughness, cos_view):
     return m.minimum(m.table(tables.SPECULAR_ALBEDO, x, y + 2.0 * step) * (f0 * (1.0 / f0_table)), 1.0)
 
 
+SINGULAR_ROUGHNESS = 1e-7 ** 0.25   # ~0.0178: Cycles reflects a GGX lobe of alpha_x alpha_y = roughness^4 <= 1e-7
+#                                    as a mirror (its label singular: bsdf.h), so its reflected ray is a segment
+
+
+def sharp_share(m, roughness):
+    """1 where Cycles reflects a Principled BSDF's specular layer of ``roughness`` as a mirror (SINGULAR_ROUGHNESS),
+    else 0.  There the fog it reflects is the glow along its mirrored ray, exact (``nodes/glass_tails.py``'s tails),
+    not the sharpest Phong lobe's blur of it (n = 1024: about 2 degrees)."""
+    return 1.0 - m.less(SINGULAR_ROUGHNESS, roughness)
+
+
 def principled_to_phong(m, base_color, metallic, roughness, specular_ior_level, cos_view, ior=1.5, transmission=0.0):
     """(rho_d, rho_s, level) of a Principled BSDF for the reflected airlight, against ``m``.
 
