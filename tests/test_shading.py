@@ -54,6 +54,18 @@ def _cases(n, seed):
         yield camera, pos, normal, light, beta, n, rng.uniform(0.1, 1.0, 3), rng.uniform(0.0, 1.0, 3)
 
 
+def _fog_light(pos, normal, incoming, light_pos, beta, n, rho_d, rho_s, intensity):
+    """The fog light a surface reflects (Eq. 15 by quadrature, ``surface.surface_m``), its diffuse and Phong lobes
+    about the normal and the mirrored view vector, recomputed here from the vectors."""
+    d_sp = np.linalg.norm(light_pos - pos)
+    t = beta * d_sp
+    mirror = 2 * np.dot(incoming, normal) * normal - incoming
+    scale = beta * math.exp(-t) / (2 * math.pi * d_sp)
+    diffuse = scale * surface.surface_m([t], [_angle(normal, light_pos - pos)], 1.0)[0, 0]
+    glossy = scale * surface.surface_m([t], [_angle(mirror, light_pos - pos)], n)[0, 0]
+    return intensity * (rho_d * diffuse + rho_s * glossy)
+
+
 @pytest.mark.parametrize("seed", range(4))
 def test_shade_point_against_quadrature(m, seed):
     """Each term of one light at a surface point: glow (Eq. 5), fog light diffuse and glossy (Eq. 15), Eq. 14."""
@@ -69,14 +81,11 @@ def test_shade_point_against_quadrature(m, seed):
         gamma = _angle(to, -incoming)
         air = ref.eq5_quad(beta, np.linalg.norm(to), d_vp, gamma)[0]
         np.testing.assert_allclose(got.airlight, intensity * air, rtol=AIRLIGHT_TOL)
+        np.testing.assert_allclose(got.scattered, _fog_light(pos, normal, incoming, light_pos, beta, n, rho_d, rho_s,
+                                                             intensity), rtol=SCATTER_TOL)
         d_sp = np.linalg.norm(light_pos - pos)
         t = beta * d_sp
         mirror = 2 * np.dot(incoming, normal) * normal - incoming
-        scale = beta * math.exp(-t) / (2 * math.pi * d_sp)
-        diffuse = scale * surface.surface_m([t], [_angle(normal, light_pos - pos)], 1.0)[0, 0]
-        glossy = scale * surface.surface_m([t], [_angle(mirror, light_pos - pos)], n)[0, 0]
-        want = intensity * (rho_d * diffuse + rho_s * glossy)
-        np.testing.assert_allclose(got.scattered, want, rtol=SCATTER_TOL)
         assert got.attenuation == pytest.approx(math.exp(-t), rel=1e-12)
         cos_n = max(np.dot(normal, light_pos - pos) / d_sp, 0.0)
         cos_r = max(np.dot(mirror, light_pos - pos) / d_sp, 0.0)
@@ -102,14 +111,8 @@ def test_sampled_light_is_unbiased(m, seed):
         air = ref.eq5_quad(beta, np.linalg.norm(to), d_vp, _angle(to, -incoming))[0]
         mean = {k: np.reshape(getattr(got, k), (-1, 3)).mean(axis=0) for k in ("airlight", "scattered")}
         np.testing.assert_allclose(mean["airlight"], intensity * air, rtol=1e-4)
-        d_sp = np.linalg.norm(light_pos - pos)
-        t = beta * d_sp
-        mirror = 2 * np.dot(incoming, normal) * normal - incoming
-        scale = beta * math.exp(-t) / (2 * math.pi * d_sp)
-        diffuse = scale * surface.surface_m([t], [_angle(normal, light_pos - pos)], 1.0)[0, 0]
-        glossy = scale * surface.surface_m([t], [_angle(mirror, light_pos - pos)], n)[0, 0]
-        np.testing.assert_allclose(mean["scattered"], intensity * (rho_d * diffuse + rho_s * glossy),
-                                   rtol=SCATTER_TOL)
+        np.testing.assert_allclose(mean["scattered"], _fog_light(pos, normal, incoming, light_pos, beta, n, rho_d,
+                                                                 rho_s, intensity), rtol=SCATTER_TOL)
 
 
 def test_glossy_lobe_follows_the_mirror_direction(m):
