@@ -715,6 +715,16 @@ MUTATIONS = [
              "        mirrored = mirrored + mirror",
              "        mirrored = m.scale(mirrored, 1.0)",
              ("tests/test_glass_mirror.py::test_fog_past_glass_and_mirrors[mirror-compositor]",)),
+    Mutation("preview_no_glowing_points", "viewport preview: the glowing objects not sampled beside the lights "
+             "(no glow of theirs in the preview)", "compositor.sampled_points",
+             "    return points if points[0] else None",
+             "    return None",
+             ("tests/test_viewport_preview.py::test_viewport_glows_a_glowing_object",)),
+    Mutation("preview_glowing_points_light_surfaces", "viewport preview: the glowing objects' points marked as "
+             "lighting the surfaces' fog light, which final renders leave out", "sampling.table_rows",
+             "    rows[0, :, 3] = 1.0 if lights_surfaces is None else np.asarray(lights_surfaces, float)",
+             "    rows[0, :, 3] = 1.0",
+             ("tests/test_preview_sampled.py::test_glowing_points_light_no_surfaces",)),
     Mutation("compositor_no_glass_glow", "glass, Compositor: no glow along the segment past a pane",
              "compositor._tails",
              "    return glass_tails.Tails(kept,",

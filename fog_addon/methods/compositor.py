@@ -15,7 +15,7 @@ from ..nodes import (budgets, comp_daylight, comp_fog, comp_shafts, compositor, 
                      preview as preview_, preview_sampled, surface_group,
                      world_group)
 from .. import caveats, shadow_maps, sunsky, view
-from ..precompute.model import predict, rungs, sampling
+from ..precompute.model import footprint, predict, rungs, sampling
 from ..precompute.physics.shafts import shafts
 from .base import Method
 
@@ -81,7 +81,8 @@ class Compositor(Method):
         c = scene.cycles
         return (f"compositor:{scene.render.engine}:{c.pixel_filter_type}:{comp_fog.horizontal_fit(scene)}:"
                 f"{scene.camera.data.sensor_fit}:{scene.camera.data.type}|shafts:{spec.shafts}{_moving(scene) if spec.shafts else ''}"
-                f"|glow:{bool(glowing_objects(scene))}|dimming:" + ",".join(o.name_full for o in shader_lights))
+                f"|glow:{','.join(o.name_full for o in glowing_points(scene)[0]) or bool(glowing_objects(scene))}"
+                "|dimming:" + ",".join(o.name_full for o in shader_lights))
 
     def windows(self, scene, lights, partial):
         return view.windows(scene, lights, [scene.frame_current] if partial else None, _halos(scene),
@@ -131,9 +132,9 @@ class Compositor(Method):
     def update(self, scene, spec, plan):
         if plan.windows is not None:
             comp_fog.set_windows(plan.in_groups, plan.windows, grow=plan.partial)
-        sampled = sampled_lights(scene, plan)
-        if sampled:   # the sampled lights as they are now (moved, dimmed, recoloured)
-            preview_sampled.write_table(scene, sampled, spec.beta_per_unit)
+        sampled, points = sampled_lights(scene, plan), sampled_points(scene, plan)
+        if sampled or points:   # the sampled lights as they are now (moved, dimmed, recoloured)
+            preview_sampled.write_table(scene, sampled, spec.beta_per_unit, points[1:] if points else None)
 
     def passes(self, scene, spec):   # (the fog passes: the materials' transmittance, the fog group's light)
         return (comp_fog.aovs(scene.render.engine, comp_fog.panoramic(scene))
@@ -190,10 +191,17 @@ class Compositor(Method):
             notes.append(("Viewport", f"the viewport's preview shows no light shafts of the lights it samples "
                                       f"({caveats.listed([o.name for o in sampled_shafts])}): final renders, F12, "
                                       "have them"))
-        glowing = glowing_objects(scene)
-        if glowing:
+        glowing, points = glowing_objects(scene), sampled_points(scene, plan)
+        as_points = set(points[0]) if points else set()
+        if as_points:
+            notes.append(("Viewport", f"the viewport's preview shows the glows of the glowing objects "
+                                      f"({caveats.listed([o.name for o in glowing if o in as_points])}) as round glows "
+                                      "about their centres, sampled with the lights (final renders, F12, glow their "
+                                      "shapes)"))
+        missing = [o.name for o in glowing if o not in as_points]
+        if missing:
             notes.append(("Viewport", f"the viewport's preview shows no glow of the glowing objects "
-                                      f"({caveats.listed([o.name for o in glowing])}): final renders, F12, have it"))
+                                      f"({caveats.listed(missing)}): final renders, F12, have it"))
         if spec.layered and shown:
             notes.append(("Viewport", "the viewport's preview takes the lamps' glows through the fog layer's density "
                                       "everywhere, also above its top (final renders, F12, end them there)"))
@@ -231,12 +239,12 @@ def _preview(scene, spec, plan, maps, day_table=None, day_dims=True):
     (``preview_sampled.py``); a fog layer's sun and sky (``day_table``: the fog light's TableSpec, or None) as the
     node groups give them, their dimming of the surfaces' direct light where ``day_dims``."""
     lights, models = plan.preview[:2] if plan.preview else ([], [])
-    sampled = sampled_lights(scene, plan)
+    sampled, points = sampled_lights(scene, plan), sampled_points(scene, plan)
     if not lights and not sampled and day_table is None:
         preview_sampled.write_table(scene, [], spec.beta_per_unit)
         return None, {}
     shadows = _still_maps(lights, maps) if scene.render.engine == "CYCLES" else {}
-    table, img = preview_sampled.write_table(scene, sampled, spec.beta_per_unit)
+    table, img = preview_sampled.write_table(scene, sampled, spec.beta_per_unit, points[1:] if points else None)
     final = dict(zip(plan.in_groups, plan.grouped_models))
     dense = preview_sampled.dense_of(
         sampled, [final[o] for o in sampled], spec.anisotropy, spec.multiple_albedo,
@@ -291,6 +299,16 @@ def sampled_lights(scene, plan):
     return preview_sampled.sampled([o for o in plan.in_groups if o not in shown])
 
 
+def sampled_points(scene, plan):
+    """``glowing_points`` of the glowing objects whose glows the viewport's preview samples beside its lights, as
+    point sources (``preview_sampled.write_table``), or None: where the preview holds or samples lights (not
+    EEVEE's uniform block without room) and some glowing object's radiance can be read."""
+    if not plan.preview or not (plan.preview[0] or samples_all(scene, plan.in_groups)):
+        return None
+    points = glowing_points(scene)
+    return points if points[0] else None
+
+
 def _viewport_compositor_on():
     """True if a 3D view of the open file runs the viewport compositor (EEVEE's: it would add the compositor's fog
     over the materials' preview of it)."""
@@ -338,6 +356,27 @@ def glowing_objects(scene):
                 found.append(obj)
                 break
     return found
+
+
+def glowing_points(scene):
+    """(objects, centres (N, 3) m, intensities (N, 3) W/sr) of the glowing objects (``glowing_objects``) taken each
+    as a point source at its bounds' centre of intensity L A / 4: its emission's radiance L (``graph.emitted_radiance``,
+    its brightest material) times its mean projected area, a quarter of its surface's for a convex body (Cauchy).
+    Those whose radiance cannot be read (a procedural texture, a driven strength) or that are not meshes are left
+    out.  The predictor's estimate of their fog (``ops/left_out.emitters_fog``) and the viewport preview's glow of
+    them (``preview_sampled.write_table``)."""
+    shining, centres, intensities = [], [], []
+    for obj in glowing_objects(scene):
+        radiance = [graph.emitted_radiance(slot.material) for slot in obj.material_slots]
+        radiance = [r for r in radiance if r is not None and any(c > 0.0 for c in r)]
+        if not radiance or obj.type != "MESH":
+            continue
+        m = obj.matrix_world   # (a uniform scale's area: its determinant to the 2/3)
+        area = sum(p.area for p in obj.data.polygons) * abs(m.to_3x3().determinant()) ** (2.0 / 3.0)
+        shining.append(obj)
+        centres.append(footprint.box_points(obj.bound_box, m).mean(axis=0))
+        intensities.append(np.max(radiance, axis=0) * area / 4.0)
+    return shining, np.reshape(centres, (-1, 3)), np.reshape(intensities, (-1, 3))
 
 
 def shafted_lights(scene, spec, lights):

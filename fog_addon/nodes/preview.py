@@ -27,7 +27,8 @@ class Shown(NamedTuple):
     models: list               # their models (rungs.LightModels, the Node Groups method's)
     shadows: Any = None        # {light name: shadow_maps.ShadowMap} of those whose shafts it shows (Cycles), or None
     g: float = 0.0             # the fog's anisotropy (the shafts' phase weight)
-    sampled: Any = None        # the TableSpec of the other point lights, sampled one a sample (``preview_sampled``)
+    sampled: Any = None        # the TableSpec of the other point lights and the glowing objects' points, sampled one
+    #                            a sample (``preview_sampled``)
     day_table: Any = None      # the fog layer's fog light TableSpec where the compositor adds the daylight: the
     #                            preview's sun and sky, their glow, fog light and dimming, or None
     day_dims: bool = True      # the preview dims the surfaces' direct light by the sun's and the sky's dimming

@@ -49,11 +49,14 @@ def table_spec(count):
     return TableSpec(TABLE, max(count, 1), ROWS, channels=4)
 
 
-def write_table(scene, lights, beta):
-    """Write the table of ``lights`` (``sampled``'s, as they are now) into the image ``TABLE`` (made if missing or
-    of another size); returns (spec, image), or (None, None) without lights (the image removed)."""
+def write_table(scene, lights, beta, points=None):
+    """Write the table of ``lights`` (``sampled``'s, as they are now) and of ``points`` (centres (K, 3) m, RGB
+    intensities (K, 3) W/sr: the glowing objects as point sources, ``methods.compositor.glowing_points``, whose glow
+    the preview shows and whose light on surfaces it leaves out, as final renders do) into the image ``TABLE`` (made
+    if missing or of another size); returns (spec, image), or (None, None) with neither (the image removed)."""
     img = bpy.data.images.get(TABLE)
-    if not lights:
+    centres, glowing = (np.zeros((0, 3)), np.zeros((0, 3))) if points is None else points
+    if not lights and not len(centres):
         if img is not None:
             bpy.data.images.remove(img)
         return None, None
@@ -65,9 +68,11 @@ def write_table(scene, lights, beta):
     half_angle = 0.5 * math.atan(max(np.linalg.norm(np.subtract(frame[1], frame[2])) / nx,
                                      np.linalg.norm(np.subtract(frame[3], frame[2])) / ny)
                                  / max(abs(frame[0][2]), 1e-6))
-    rows = sampling.table_rows([o.matrix_world.translation for o in lights], view.light_intensities(lights),
-                               camera.matrix_world.translation, beta, directions, half_angle)
-    spec = table_spec(len(lights))
+    positions = np.concatenate([np.reshape([tuple(o.matrix_world.translation) for o in lights], (-1, 3)), centres])
+    intensities = np.concatenate([np.reshape(view.light_intensities(lights), (-1, 3)), glowing])
+    rows = sampling.table_rows(positions, intensities, camera.matrix_world.translation, beta, directions, half_angle,
+                               [1.0] * len(lights) + [0.0] * len(centres))
+    spec = table_spec(len(positions))
     if img is not None and tuple(img.size) != (spec.width, spec.height):
         bpy.data.images.remove(img)
         img = None
@@ -121,10 +126,11 @@ def _pick(m, spec, u1, u2, tile):
 
 
 def _light(m, spec, u, intensity_row):
-    """(position, I / p) of the column at the texture coordinate ``u``, I / p from the row ``intensity_row``."""
+    """(position, I / p, 1 if it lights the surfaces' fog light else 0) of the column at the texture coordinate
+    ``u``, I / p from the row ``intensity_row``."""
     pos = m.combine(*(m.tap(spec, u, 0.5 / spec.height, c) for c in range(3)))
     inten = m.combine(*(m.tap(spec, u, intensity_row, c) for c in range(3)))
-    return pos, inten
+    return pos, inten, m.tap(spec, u, 0.5 / spec.height, 3)
 
 
 def _randoms(ng, source):
@@ -166,14 +172,15 @@ def dense_of(lights, models, g, albedo, scales, weights):
 
 
 def _sampled_group(name, inputs, images, spec, light_group, shared, jitter_from):
-    """(tree, its output node, its NodeOps, its inputs by name, the light group's node) of a group ``name`` with ``inputs``: one
+    """(tree, its output node, its NodeOps, its inputs by name, the light group's node, 1 where the light drawn lights
+    surfaces) of a group ``name`` with ``inputs``: one
     light drawn from the table ``spec`` per sample (``_pick``, its randoms from the input ``jitter_from``) feeds
     ``light_group``'s Light and Intensity, the group's ``shared`` inputs its own."""
     ng, gin, gout = groups.new_group(name, inputs, [("Fog", "NodeSocketShader")])
     m = NodeOps(ng, dict(images))
     s = {x.name: x for x in gin.outputs if x.name}
     u1, u2, u3 = _randoms(ng, s[jitter_from])
-    position, intensity = _light(m, spec, *_pick(m, spec, m.wrap(u1), m.wrap(u2), _tile(m, ng)))
+    position, intensity, lit = _light(m, spec, *_pick(m, spec, m.wrap(u1), m.wrap(u2), _tile(m, ng)))
     node = ng.nodes.new("ShaderNodeGroup")
     node.node_tree = light_group
     node.name = node.label = "Sampled Light"
@@ -182,7 +189,7 @@ def _sampled_group(name, inputs, images, spec, light_group, shared, jitter_from)
     ng.links.new(u3, node.inputs[light_groups.JITTER])
     for sock in shared:
         ng.links.new(s[sock], node.inputs[sock])
-    return ng, gout, m, s, node
+    return ng, gout, m, s, node, lit
 
 
 def build_surface_group(images, spec, g, dense=None, cycles=False):
@@ -190,11 +197,12 @@ def build_surface_group(images, spec, g, dense=None, cycles=False):
     sampled light's, fully modelled: Sun et al. 2005 Eq. 19's albedo x (glow + T x reflected fog light) on camera
     rays, ``shading.sum_lights``; ``light_models``)."""
     shared = ("Beta", "Position", "Incoming", "View Distance", "Normal", "Diffuse", "Specular", "Glossy Level")
-    ng, gout, m, s, node = _sampled_group(SURFACE_GROUP, [
+    ng, gout, m, s, node, lit = _sampled_group(SURFACE_GROUP, [
         ("Beta", F), ("Albedo", C), ("Position", V), ("Incoming", V), ("View Distance", F), ("Normal", V),
         ("Diffuse", C), ("Specular", C), ("Glossy Level", F), ("View Transmittance", F), ("Is Camera", F)],
         images, spec, light_groups.build_light(light_models(g, 0, dense), images, cycles), shared, "Position")
     terms = light_groups.read(m, node, rungs.SURFACE_OUTPUTS, shading.LightTerms)
+    terms = terms._replace(scattered=m.scale(terms.scattered, lit))   # (a glowing object's: none, as in final renders)
     sums = shading.sum_lights(m, [terms], light_groups.medium(m, s["Beta"], s["Albedo"]),
                               m.wrap(s["View Transmittance"]), m.wrap(s["Is Camera"]))
     closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", sums.emissions)
@@ -205,7 +213,7 @@ def build_surface_group(images, spec, g, dense=None, cycles=False):
 def build_world_group(images, spec, g, dense=None, cycles=False):
     """The World group's estimate of the other lights' glows to the sky (shader group, output Fog: a Background of
     albedo x the sampled light's glow to infinity x Is Camera)."""
-    ng, gout, m, s, node = _sampled_group(
+    ng, gout, m, s, node, _ = _sampled_group(
         WORLD_GROUP, [("Beta", F), ("Albedo", C), ("Camera", V), ("Direction", V), ("Is Camera", F)], images, spec,
         light_groups.build_background_light(light_models(g, 1, dense), images, cycles), ("Beta", "Camera", "Direction"),
         "Direction")

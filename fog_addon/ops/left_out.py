@@ -8,7 +8,6 @@ import math
 import numpy as np
 
 from .. import caveats, escape, methods, shadow_maps, sunsky, view
-from ..nodes import graph
 from ..precompute.model import capabilities, footprint, predict
 
 MULTIPLE_ENTRIES = 1_000_000   # samples x lights at most for Dense Fog's shares (``dense_fog``): every nth sample
@@ -50,30 +49,18 @@ def with_other(scene, spec, samples, method=None):
 
 def emitters_fog(scene, spec, samples):
     """(P, 3) W/(m^2 sr): the glowing objects' glow and fog light at the view ``samples``, each object taken as a
-    point source at its bounds' centre of intensity L A / 4 (its emission's radiance L, ``graph.emitted_radiance``,
-    times its mean projected area, a quarter of its surface's for a convex body: Cauchy), through the lamps' kernels
-    (``predict.light_fog``); None without one whose radiance can be read (plain values, an image).  An estimate for
-    the denominator: the Compositor blurs the objects' own pixels (``comp_emitters``)."""
-    shining, intensities = [], []
-    for obj in methods.compositor.glowing_objects(scene):
-        radiance = [graph.emitted_radiance(slot.material) for slot in obj.material_slots]
-        radiance = [r for r in radiance if r is not None and any(c > 0.0 for c in r)]
-        if not radiance or obj.type != "MESH":
-            continue
-        m = obj.matrix_world   # (a uniform scale's area: its determinant to the 2/3)
-        area = sum(p.area for p in obj.data.polygons) * abs(m.to_3x3().determinant()) ** (2.0 / 3.0)
-        shining.append(obj)
-        intensities.append(np.max(radiance, axis=0) * area / 4.0)   # (its brightest material)
+    point source (``methods.compositor.glowing_points``) through the lamps' kernels (``predict.light_fog``); None
+    without one whose radiance can be read (plain values, an image).  An estimate for the denominator: the
+    Compositor blurs the objects' own pixels (``comp_emitters``)."""
+    shining, centres, intensities = methods.compositor.glowing_points(scene)
     if not shining:
         return None
-    glow, scatter = predict.light_fog(_at_centres(samples, shining), np.array(intensities), spec.beta_per_unit,
-                                      spec.anisotropy)
+    glow, scatter = predict.light_fog(_at_centres(samples, centres), intensities, spec.beta_per_unit, spec.anisotropy)
     return np.nan_to_num(glow + scatter, nan=0.0, posinf=0.0).sum(axis=1)
 
 
-def _at_centres(samples, objects):
-    """``samples`` with point lights at the ``objects``' bounds' centres (``footprint.box_points``)."""
-    centres = np.array([footprint.box_points(o.bound_box, o.matrix_world).mean(axis=0) for o in objects])
+def _at_centres(samples, centres):
+    """``samples`` with point lights at ``centres`` ((N, 3) m)."""
     return samples._replace(lights=np.broadcast_to(centres, (len(samples.distance),) + centres.shape).copy(),
                             shapes=None)
 
@@ -112,7 +99,8 @@ def emitters_dense(scene, spec):
     if not glowing or target is None or scene.camera is None:
         return bool(glowing)
     grid = tuple(min(a, b) for a, b in zip(view.sample_grid(scene), EMITTER_GRID))
-    samples = _at_centres(view.view_samples(scene, [], frames=[scene.frame_current], grid=grid), glowing)
+    centres = np.array([footprint.box_points(o.bound_box, o.matrix_world).mean(axis=0) for o in glowing])
+    samples = _at_centres(view.view_samples(scene, [], frames=[scene.frame_current], grid=grid), centres)
     parts = predict.multiple_parts(samples, np.ones((len(glowing), 3)), spec.beta_per_unit, spec.anisotropy,
                                    spec.grey_albedo)
     return bool(parts.max(initial=0.0) > predict.THIN_SHARE * target)
