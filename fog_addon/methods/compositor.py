@@ -81,7 +81,7 @@ class Compositor(Method):
         c = scene.cycles
         return (f"compositor:{scene.render.engine}:{c.pixel_filter_type}:{comp_fog.horizontal_fit(scene)}:"
                 f"{scene.camera.data.sensor_fit}:{scene.camera.data.type}|shafts:{spec.shafts}{_moving(scene) if spec.shafts else ''}"
-                f"|glow:{','.join(o.name_full for o in glowing_points(scene)[0]) or bool(glowing_objects(scene))}"
+                f"|glow:{','.join(o.name_full for o, _ in _shining(scene)) or bool(glowing_objects(scene))}"
                 "|dimming:" + ",".join(o.name_full for o in shader_lights))
 
     def windows(self, scene, lights, partial):
@@ -366,17 +366,25 @@ def glowing_points(scene):
     out.  The predictor's estimate of their fog (``ops/left_out.emitters_fog``) and the viewport preview's glow of
     them (``preview_sampled.write_table``)."""
     shining, centres, intensities = [], [], []
-    for obj in glowing_objects(scene):
-        radiance = [graph.emitted_radiance(slot.material) for slot in obj.material_slots]
-        radiance = [r for r in radiance if r is not None and any(c > 0.0 for c in r)]
-        if not radiance or obj.type != "MESH":
-            continue
+    for obj, radiance in _shining(scene):
         m = obj.matrix_world   # (a uniform scale's area: its determinant to the 2/3)
         area = sum(p.area for p in obj.data.polygons) * abs(m.to_3x3().determinant()) ** (2.0 / 3.0)
         shining.append(obj)
         centres.append(footprint.box_points(obj.bound_box, m).mean(axis=0))
         intensities.append(np.max(radiance, axis=0) * area / 4.0)
     return shining, np.reshape(centres, (-1, 3)), np.reshape(intensities, (-1, 3))
+
+
+def _shining(scene):
+    """[(object, [RGB radiance of each of its emitting materials])] of the glowing mesh objects whose radiance can be
+    read (``glowing_points``; no mesh is measured: the build's signature asks for them at every update)."""
+    out = []
+    for obj in glowing_objects(scene):
+        radiance = [graph.emitted_radiance(slot.material) for slot in obj.material_slots]
+        radiance = [r for r in radiance if r is not None and any(c > 0.0 for c in r)]
+        if radiance and obj.type == "MESH":
+            out.append((obj, radiance))
+    return out
 
 
 def shafted_lights(scene, spec, lights):
