@@ -315,12 +315,13 @@ MUTATIONS = [
              "    for node in caveats.surface_nodes(material.node_tree):\n",
              "    for node in material.node_tree.nodes:\n",
              ("tests/test_predict_glass.py::test_the_predictor_sees_past_glass",)),
-    Mutation("emitter_intensity_whole_area", "the predictor: a glowing object's intensity L A, its whole surface "
-             "instead of its mean projected area A / 4 (Cauchy)",
-             "emitters_fog",
+    Mutation("emitter_intensity_whole_area", "the predictor and the preview: a glowing object's intensity L A, its "
+             "whole surface instead of its mean projected area A / 4 (Cauchy)",
+             "compositor.glowing_points",
              "np.max(radiance, axis=0) * area / 4.0)",
              "np.max(radiance, axis=0) * area)",
-             ("tests/test_predict_sources.py::test_a_glowing_objects_fog_is_in_the_compositors_denominator",)),
+             ("tests/test_predict_sources.py::test_a_glowing_objects_fog_is_in_the_compositors_denominator",
+              "tests/test_viewport_preview.py::test_viewport_glows_a_glowing_object")),
     Mutation("surface_share_hemisphere", "light shafts: a surface's fog light sees the fog within 30 degrees of its "
              "normal only (Sun 2005 Eq. 17's G_0 is over the whole hemisphere, cos-weighted)",
              "hemisphere_angles",
