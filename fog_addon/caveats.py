@@ -306,8 +306,8 @@ def glass_note(materials, objects):
             "behind glass (a Glass or Refraction BSDF, a Principled BSDF that lets light through; on its own or in a "
             "Mix or Add Shader) and in sharp mirrors is shaded along the path (taken straight through the pane: "
             "frosted glass does not blur a lamp's glow seen through it; with the Compositor, of the 8 brightest "
-            "lights, and with more lights than that a sharp mirror shows them blurred by about 2 degrees); glass inside a node group, the OSL method and "
-            "EEVEE show only the fog in front of the first surface")
+            "lights, and with more lights than that a sharp mirror shows them blurred by about 2 degrees); glass "
+            "inside a node group, the OSL method and EEVEE show only the fog in front of the first surface")
 
 
 EEVEE_CLIP_RATIO = 1e7   # EEVEE's depth loses its way beyond this clip end / clip start (blender-facts.md)

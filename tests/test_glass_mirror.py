@@ -87,9 +87,10 @@ def test_fog_past_glass_and_mirrors(case, method, tmp_path, reference):
     BSDF (0.6 glass): 4.6 % with the Node Groups (140 % before: the mix's glass had no tails, and what the
     Transparent BSDF let through on a segment was taken away at the next vertex but never added); the Compositor
     16.6 % (its one surface per pixel, wrong with any transparency: Auto's caveat).  The sharp mirror by its
-    mirrored tail: 0.42 % with either method (8.7 % while its glossy lobe's 2 degree blur stood for it).  Frosted glass (a Glass BSDF of
-    roughness 0.1), the lamp's blurred image left out: 5.0 % (12.3 % before, 10 % too bright: the tails added at the
-    pane and never taken away at the wall, whose rough-refracted ray was no segment)."""
+    mirrored tail: 0.42 % with either method (8.7 % while its glossy lobe's 2 degree blur stood for it).
+    Frosted glass (a Glass BSDF of roughness 0.1), the lamp's blurred image left out: 5.0 % (12.3 % before, 10 % too
+    bright: the tails added at the pane and never taken away at the wall, whose rough-refracted ray was no
+    segment)."""
     inside, frame = _errors(case, tmp_path, reference, method)
     pane_limit, frame_limit = LIMITS[case]
     assert inside["n_nonfinite"] == 0 and frame["n_nonfinite"] == 0

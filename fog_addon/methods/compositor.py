@@ -134,7 +134,7 @@ class Compositor(Method):
             comp_fog.set_windows(plan.in_groups, plan.windows, grow=plan.partial)
         sampled, points = sampled_lights(scene, plan), sampled_points(scene, plan)
         if sampled or points:   # the sampled lights as they are now (moved, dimmed, recoloured)
-            preview_sampled.write_table(scene, sampled, spec.beta_per_unit, points[1:] if points else None)
+            preview_sampled.write_table(scene, sampled, spec.beta_per_unit, points)
 
     def passes(self, scene, spec):   # (the fog passes: the materials' transmittance, the fog group's light)
         return (comp_fog.aovs(scene.render.engine, comp_fog.panoramic(scene))
@@ -244,7 +244,7 @@ def _preview(scene, spec, plan, maps, day_table=None, day_dims=True):
         preview_sampled.write_table(scene, [], spec.beta_per_unit)
         return None, {}
     shadows = _still_maps(lights, maps) if scene.render.engine == "CYCLES" else {}
-    table, img = preview_sampled.write_table(scene, sampled, spec.beta_per_unit, points[1:] if points else None)
+    table, img = preview_sampled.write_table(scene, sampled, spec.beta_per_unit, points)
     final = dict(zip(plan.in_groups, plan.grouped_models))
     dense = preview_sampled.dense_of(
         sampled, [final[o] for o in sampled], spec.anisotropy, spec.multiple_albedo,

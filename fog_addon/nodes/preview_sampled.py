@@ -10,8 +10,7 @@ direct light).  The fog light is linear in the light's intensity, so the light g
 ``build_background_light``: Eq. 12 to the sky) takes the intensity I_j / p_j.  Its terms are estimated the same
 way, since the light is already one a sample: its glow from two points of the ray (``model.airlight_equiangular``),
 from a third uniform number; the fog light a surface reflects and Dense Fog's multiply scattered light are read
-from their tables.  In Cycles the light groups' tables are each one
-Linear tap (``sockets.NodeOps.cycles``).
+from their tables.  In Cycles the light groups' tables are each one Linear tap (``sockets.NodeOps.cycles``).
 
 p_j is proportional to I_j e^{-beta d_j} / max(d_j, 1 m), d_j the light's distance to the camera (a glow's light
 over the picture falls as 1 / d, dimmed on its way); j is drawn by Walker's alias method (one uniform number picks a
@@ -50,12 +49,12 @@ def table_spec(count):
 
 
 def write_table(scene, lights, beta, points=None):
-    """Write the table of ``lights`` (``sampled``'s, as they are now) and of ``points`` (centres (K, 3) m, RGB
-    intensities (K, 3) W/sr: the glowing objects as point sources, ``methods.compositor.glowing_points``, whose glow
+    """Write the table of ``lights`` (``sampled``'s, as they are now) and of ``points`` (objects, centres (K, 3) m,
+    RGB intensities (K, 3) W/sr: the glowing objects as point sources, ``methods.compositor.glowing_points``, whose glow
     the preview shows and whose light on surfaces it leaves out, as final renders do) into the image ``TABLE`` (made
     if missing or of another size); returns (spec, image), or (None, None) with neither (the image removed)."""
     img = bpy.data.images.get(TABLE)
-    centres, glowing = (np.zeros((0, 3)), np.zeros((0, 3))) if points is None else points
+    centres, glowing = (np.zeros((0, 3)), np.zeros((0, 3))) if points is None else points[1:]
     if not lights and not len(centres):
         if img is not None:
             bpy.data.images.remove(img)

@@ -66,7 +66,8 @@ class Rung:
     #                           compositor evaluates at a coarser resolution: then ``single`` is the rest
     single: "Rung" = None
     sampled: bool = False     # a glow rung estimated from one uniform number u a render sample (the kernel's last
-    #                           argument, ``shading.Light.u``): its mean over u is the glow (``model.airlight_equiangular``)
+    #                           argument, ``shading.Light.u``): its mean over u is the glow
+    #                           (``model.airlight_equiangular``)
 
     def predicted_error(self, *situation):
         """Bound on the relative error this rung makes in any pixel of a situation (camera, light, medium).

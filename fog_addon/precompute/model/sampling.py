@@ -75,11 +75,12 @@ def tile_chances(tile_weights, weights):
 
 def table_rows(positions, intensities, camera, beta, directions=None, half_angle=0.0, lights_surfaces=None):
     """(ROWS, N, 4) float32 of the lights (positions, m; RGB intensities I, W/sr; the camera's position; beta, 1/m):
-    row 0 their positions, and in its fourth channel whether each lights the surfaces' fog light (``lights_surfaces``,
-    N of 0 or 1; all 1 without it); for each tile t, row 1 + 2t their intensities over their probability there (I / p) and
-    row 2 + 2t (keep, alias column) of ``alias_table``.  The probabilities are ``tile_chances`` of the tiles' centre
-    rays ``directions`` (TILE_COUNT, 3, row by row from the bottom-left tile: ``view.frame_rays``) of angular radius ``half_angle`` (rad), or the whole picture's
-    ``importance`` in every tile without them."""
+    row 0 their positions, and in its fourth channel whether each lights the surfaces' fog light
+    (``lights_surfaces``, N of 0 or 1; all 1 without it); for each tile t, row 1 + 2t their intensities over their
+    probability there (I / p) and row 2 + 2t (keep, alias column) of ``alias_table``.  The probabilities are
+    ``tile_chances`` of the tiles' centre rays ``directions`` (TILE_COUNT, 3, row by row from the bottom-left tile:
+    ``view.frame_rays``) of angular radius ``half_angle`` (rad), or the whole picture's ``importance`` in every tile
+    without them."""
     positions = np.asarray(positions, float).reshape(-1, 3)
     intensities = np.asarray(intensities, float).reshape(-1, 3)
     weights = importance(positions, intensities, camera, beta)

@@ -208,8 +208,8 @@ def airlight_equiangular(m, beta, d_sv, along, h, d_vp, u, g=0.0):
     phase function over the segment.  The scattering angle there has cosine -sin(theta) (toward the camera from
     the light; ``hg_weight``).  EQUIANGULAR_POINTS points, one in each equal stratum of theta ((u + k) / K),
     are averaged.  The segment ends EQUIANGULAR_DEPTH optical depths past the light's closest point (or the
-    camera), where what is left is below e^-8 of the glow: a ray to the sky keeps its points where it glows.  The viewport preview's sampled lights (``nodes/preview_sampled.py``) take it, one light a
-    render sample.
+    camera), where what is left is below e^-8 of the glow: a ray to the sky keeps its points where it glows.
+    The viewport preview's sampled lights (``nodes/preview_sampled.py``) take it, one light a render sample.
     """
     h = m.maximum(h, MIN_ANGLE * m.maximum(d_sv, MIN_DISTANCE))
     theta_a = m.atan2(-1.0 * along, h)
