@@ -147,7 +147,7 @@ def build(engine, method, n):
 def pixel_rays(scene, width, height):
     """A function (i, j, sx, sy) -> the unit directions (..., 3) of the camera rays through pixel (i, j) (from the
     bottom-left) at offsets sx, sy px from its centre (arrays of one shape), for a render of width x height."""
-    _, rays = view._frame_rays(scene, scene.camera, (width, height))
+    _, rays = view.frame_rays(scene, scene.camera, (width, height))
     rays = rays.reshape(height, width, 3)
     forward = -np.array(scene.camera.matrix_world.to_3x3().col[2])
     plane = rays / (rays @ forward)[..., None]          # on the plane at unit depth: linear in pixel coords
