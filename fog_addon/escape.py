@@ -6,24 +6,26 @@ scene's shadow casters (``shadow_maps.scene_bvh``: a coarse point map of each li
 of ``precompute/physics/point/escape.py`` evaluated:
 
 * ``escape_fractions``: each light's escape fraction f (the share of its power that scatters at all);
-* ``field_scales``: each light's second-order share at the points the camera sees (the nearest point of each
-  sampled camera ray to the light, and the surface it meets), both flights stopped by the surfaces, the scale
-  Dense Fog's field of that light takes in every method (``rungs.choose``'s ``multiple_scale``).  The later
-  flights' losses are left out; ``ops/left_out.scale_error`` counts them in the predicted error.
+* ``field_scales``: each light's traced share (``escape.traced_share``: photons of every order, stopped by the
+  surfaces, sending their light to the sampled camera rays and the surfaces they meet), the scale Dense Fog's field
+  of that light takes in every method (``rungs.choose``'s ``multiple_scale``); ``ops/left_out.scale_error`` counts
+  what it may miss in the predicted error.
 
 Both judge at most ``shadow_maps.SHARE_LIGHTS`` lights, the most important to the picture (a city's other lamps
 take the judged lamps' median scale).
 """
+import functools
 import math
 
 import numpy as np
+from mathutils import Vector
 
 from . import shadow_maps, view
 from .precompute.physics.point import escape
 from .precompute.physics.shafts import shaft_maps
 
-ESCAPE_MAP = (48, 24)      # longitude x latitude points of the second order's directions (7.5 degrees apart)
-ESCAPE_GRID = (16, 9)      # the view's samples the second order is judged at
+ESCAPE_MAP = (48, 24)      # longitude x latitude points of a light's map (7.5 degrees apart): its escape fraction
+ESCAPE_GRID = (16, 9)      # the view's samples (rays and the surfaces they meet) the share is judged at
 SCALE_STEP = 0.05          # scales are rounded to this (lights of one scale share their node groups)
 
 
@@ -60,21 +62,20 @@ def escape_fractions(scene, spec, lights):
     return out
 
 
-def _receivers(samples, k):
-    """(K, 3) the points the camera sees that light ``k``'s field is judged at: each sampled ray's nearest point
-    to the light (within the ray's visible part) and its surface point."""
-    position = samples.lights[:, k, :]
-    along = np.einsum("pi,pi->p", position - samples.camera, samples.direction)
+def receivers(samples, beta):
+    """``escape.Receivers`` of the view's samples (one frame's ``predict.ViewSamples``): each ray's visible part
+    (to the sky: escape.SKY_DEPTH / beta) and the surfaces the rays meet, their grey diffuse albedo."""
     finite = np.isfinite(samples.distance)
-    reach = np.where(finite, samples.distance, np.inf)
-    nearest = samples.camera + np.clip(along, 0.0, reach)[:, None] * samples.direction
-    surface = (samples.camera + np.where(finite, samples.distance, 0.0)[:, None] * samples.direction)[finite]
-    return np.concatenate([nearest, surface])
+    length = np.where(finite, samples.distance, escape.SKY_DEPTH / beta)
+    at = finite.nonzero()[0]
+    return escape.Receivers(samples.camera, samples.direction, length,
+                            samples.camera[at] + length[at, None] * samples.direction[at], samples.normal[at],
+                            samples.rho_d[at].mean(axis=1), length[at])
 
 
 def field_scales(scene, spec, lights, grid=ESCAPE_GRID, previous=None):
     """{light name: scale in [0, 1]}: Dense Fog's field of each judged light times this is the field with the
-    scene's surfaces in the way (``escape.second_order_share`` at the view's samples on ``grid``), its mean over
+    scene's surfaces in the way (``escape.traced_share`` at the view's samples on ``grid``), its mean over
     an animation's sampled frames (``view.sample_frames``: every frame renders the same groups), rounded to
     SCALE_STEP (at least SCALE_STEP); the lights not judged take the judged lights' median.  A light keeps its
     scale in ``previous`` ({name: scale}, a stored choice's; lights without one there: 1) while its new share is
@@ -89,9 +90,9 @@ def field_scales(scene, spec, lights, grid=ESCAPE_GRID, previous=None):
     for frame, depsgraph in view.at_frames(scene, frames):
         geometry = shadow_maps.scene_bvh(scene, depsgraph)
         at = samples._replace(**{f: getattr(samples, f)[samples.frame == frame]
-                                 for f in ("camera", "direction", "distance", "lights")})
-        for k, light in enumerate(judged):
-            shares[light.name].append(_share(geometry, light, at, k, spec))
+                                 for f in ("camera", "direction", "distance", "normal", "rho_d", "lights")})
+        for light in judged:
+            shares[light.name].append(_share(geometry, light, at, spec))
     out = {name: _rounded(float(np.mean(v)), None if previous is None else previous.get(name, 1.0))
            for name, v in shares.items()}
     if len(judged) < len(lights):   # (the others, less important to the picture: as the judged are)
@@ -107,39 +108,33 @@ def _rounded(share, kept=None):
     return min(1.0, max(SCALE_STEP, SCALE_STEP * round(share / SCALE_STEP)))
 
 
-def _share(geometry, light, samples, k, spec):
-    """Light ``k``'s second-order share at ``samples`` (one frame's) with the surfaces of ``geometry``: the first
-    flight's by ``escape.second_order_share`` over every direction, the second's (from a first scattering to a
-    receiver) by ray casts from FLIGHT_POINTS first scatterings drawn by what they feed."""
+def _share(geometry, light, samples, spec):
+    """The light's traced share (``escape.traced_share``, TRACED_PHOTONS photons, the same random numbers for every
+    light and call) of what the camera sees at ``samples`` (one frame's), with the surfaces of ``geometry``."""
     directions, depth = _depths(geometry, light, ESCAPE_MAP)
-    emission = _emission(light, directions)
-    if escape.escape_fraction(spec.beta_per_unit, depth, emission) >= 1.0 - 0.5 * SCALE_STEP:
-        return 1.0   # (nothing stops the light's power before it scatters: no second order to judge)
-    origin = np.asarray(light.matrix_world.translation)
-    receivers = _receivers(samples, k)
-    share, points, feeds = escape.second_order_share(origin, directions, emission, depth, receivers,
-                                                     spec.beta_per_unit, spec.anisotropy, with_sources=True)
-    if feeds.sum() <= 0.0:
-        return share
-    return share * _second_flight_seen(geometry, origin, points, feeds, receivers, spec)
+    if escape.escape_fraction(spec.beta_per_unit, depth, _emission(light, directions)) >= 1.0 - 0.5 * SCALE_STEP:
+        return 1.0   # (nothing stops the light's power before it scatters: nothing to judge)
+    rng = np.random.default_rng(SEED)
+    kept, unbounded = escape.traced_share(
+        np.asarray(light.matrix_world.translation), _emitted(light, rng), receivers(samples, spec.beta_per_unit),
+        spec.beta_per_unit, spec.anisotropy, spec.grey_albedo, functools.partial(_free, geometry.bvh), rng=rng)
+    return kept / unbounded if unbounded > 0.0 else 1.0
 
 
-FLIGHT_POINTS = 48          # first scatterings the second flight is judged from
+SEED = 20261130             # the photons' random numbers (a light's share is the same at every judgement)
 
 
-def _second_flight_seen(geometry, origin, points, feeds, receivers, spec):
-    """The share of the second order that reaches the receivers past the surfaces: at FLIGHT_POINTS first
-    scatterings drawn by what they feed (quantiles of ``feeds``), the kernel-weighted share of the receivers each
-    sees (ray casts), averaged."""
-    at = np.searchsorted(np.cumsum(feeds) / feeds.sum(), (np.arange(FLIGHT_POINTS) + 0.5) / FLIGHT_POINTS)
-    at = np.minimum(at, len(feeds) - 1)
-    sources = points[at]
-    kernel = escape.second_order_kernel(origin, sources, receivers, spec.beta_per_unit, spec.anisotropy)
-    seen = np.zeros(kernel.shape)
-    for s, y in enumerate(sources):
-        v = receivers - y
-        d = np.linalg.norm(v, axis=1)
-        hit = shadow_maps.cast(geometry.bvh, tuple(y), v / np.maximum(d, 1e-12)[:, None])
-        seen[:, s] = hit >= d * (1.0 - 1e-4) - 1e-4   # (a receiver on a surface: its own surface)
-    per_source = (kernel * seen).sum(axis=0) / np.maximum(kernel.sum(axis=0), 1e-30)
-    return float(per_source.mean())
+def _emitted(light, rng):
+    """``escape.emitted_directions`` of ``light``: a point light's sphere, a spot's cone, an area light's cosine."""
+    axis = -np.asarray(light.matrix_world.to_3x3().col[2], float)
+    if view.is_spot(light):
+        return escape.emitted_directions(escape.TRACED_PHOTONS, rng, axis, math.cos(0.5 * light.data.spot_size))
+    return escape.emitted_directions(escape.TRACED_PHOTONS, rng, axis, lambertian=light.data.type == "AREA")
+
+
+def _free(bvh, origins, directions, lengths):
+    """(M,) True where nothing of ``bvh`` lies on each segment (``origins``, unit ``directions``, ``lengths`` m)."""
+    if bvh is None:
+        return np.ones(len(origins), bool)
+    hits = map(bvh.ray_cast, map(Vector, origins.tolist()), map(Vector, directions.tolist()), lengths.tolist())
+    return np.fromiter((hit[0] is None for hit in hits), bool, len(origins))

@@ -245,19 +245,31 @@ MUTATIONS = [
              "    scattered = -np.expm1(-beta * np.minimum(np.asarray(depth, float), 1e12))\n",
              "    scattered = -np.expm1(-beta * 1e12 + 0.0 * np.asarray(depth, float))\n",
              ("tests/test_escape.py::test_escape_fraction_over_a_floor_against_its_closed_form",)),
-    Mutation("dense_scale_unoccluded", "Dense Fog beside surfaces: the second order's sources all lit (a hood, a wall "
-             "or the ground stops none of a light's power: its field that of unbounded fog)",
-             "second_order_share",
-             "    lit = (r[None, :] < np.asarray(depth, float)[:, None]).ravel()",
-             "    lit = (r[None, :] < np.inf + 0.0 * np.asarray(depth, float)[:, None]).ravel()",
-             ("tests/test_escape.py::test_second_order_share_over_a_floor_against_quadrature",)),
-    Mutation("dense_second_flight_unseen", "Dense Fog beside surfaces: the second order's flight from a first "
-             "scattering to the camera's fog never stopped by a surface (a room lit through its windows scaled 0.5, "
-             "its fog 38 % off path tracing)",
-             "_second_flight_seen",
-             "    return float(per_source.mean())\n",
-             "    return 1.0 + 0.0 * float(per_source.mean())\n",
-             ("tests/test_dense_surplus.py::test_dense_fog_beside_surfaces_against_path_tracing",)),
+    Mutation("dense_scale_unoccluded", "Dense Fog beside surfaces: the photons' flights never stopped by a surface "
+             "(a hood, a wall or the ground stops none of a light's power: its field that of unbounded fog)",
+             "traced_share",
+             "            alive[alive] = free(position[alive], heading[alive], step[alive])\n",
+             "            alive[alive] = True\n",
+             ("tests/test_escape.py::test_later_orders_lose_more_to_the_floor",)),
+    Mutation("dense_second_flight_unseen", "Dense Fog beside surfaces: a scattering's light to the camera's fog never "
+             "stopped by a surface (a room lit through its windows: its fog fed through the wall)",
+             "traced_share",
+             "                kept += float((value[live].reshape(-1) * seen).sum())\n",
+             "                kept += float(value[live].sum()) + 0.0 * float(seen.sum())\n",
+             ("tests/test_escape.py::test_nothing_reaches_the_fog_behind_an_endless_wall",)),
+    Mutation("dense_second_order_only", "Dense Fog beside surfaces: the photons scatter once and stop (the second "
+             "order's share: the light the ground stops between later scatterings left out, an open street 16 % "
+             "bright)",
+             "traced_share",
+             "    for _ in range(orders):\n",
+             "    for _ in range(min(orders, 1)):\n",
+             ("tests/test_escape.py::test_later_orders_lose_more_to_the_floor",)),
+    Mutation("dense_ray_angle_dropped", "Dense Fog beside surfaces: a view ray's equiangular estimate without the "
+             "angle it subtends (the draw's density taken as 1 / (h^2 + (t - t0)^2) alone)",
+             "ray_sample",
+             "exp(-beta * (t + d)) * angle / h\n",
+             "exp(-beta * (t + d)) / h\n",
+             ("tests/test_escape.py::test_a_scattering_sends_the_rays_their_second_order",)),
     Mutation("dense_scale_unapplied", "Dense Fog beside surfaces: the lights' multiply scattered terms keep the "
              "unbounded field whatever their scale (the hooded lamp's fog 49 % off path tracing)",
              "_scaled",

@@ -196,15 +196,14 @@ def kept_scales(scene, spec, method, lights, dense):
 
 
 def scale_error(names, scales, escapes, parts):
-    """What the scale of Dense Fog's field beside surfaces may miss (``escape.field_scales``: the second order's
-    share, which leaves out the scattered light the surfaces stop between later scatterings, and the light that
-    reaches the camera's fog around them): each light's unbounded multiply scattered share ``parts`` times the
-    larger of k (1 - f), its scaled field too bright by the later flights' losses (f its escape fraction,
-    ``escapes``: the share of a flight from the light that scatters before a surface), and (1 - k) / 2, its field
-    scaled down too far (k its scale, ``scales``).  Measured against Cycles with surfaces that absorb the
-    scattered light (docs/measurements/2026-11-30-dense-walls.md): the true share 0.65 beside an open street's
-    ground where k is 0.92, 0.17 in a room lit through its windows where k is 0.05.  Returns {"surplus":
-    {name: share}, "surplus_missing": their share together at the sample where it is largest}."""
+    """What the scale of Dense Fog's field beside surfaces may miss (``escape.field_scales``: one traced share a
+    light, for the whole picture, from a few hundred photons): each light's unbounded multiply scattered share
+    ``parts`` times the larger of k (1 - f), its field too bright where the share over the picture is more than the
+    fog near a surface keeps (f its escape fraction, ``escapes``: the share of a flight from the light that
+    scatters before a surface), and (1 - k) / 2, its field scaled down too far (k its scale, ``scales``).  An
+    upper bound measured against Cycles with surfaces that absorb the scattered light, at least the measured error
+    on nine scenes (docs/measurements/2026-11-30-dense-walls.md).  Returns {"surplus": {name: share},
+    "surplus_missing": their share together at the sample where it is largest}."""
     if not names:
         return {"surplus": {}, "surplus_missing": 0.0}
     k, f = np.asarray(scales, float), np.asarray(escapes, float)
