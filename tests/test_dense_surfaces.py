@@ -20,8 +20,9 @@ pytestmark = [pytest.mark.render, pytest.mark.slow]
 # (volume bounces, Dense Fog) -> upper bounds on: relative RMSE (fireflies clipped), its excess over the
 # reference's noise, the 4x4 block means' relative RMSE, |ground ratio - 1|, |wall ratio - 1|.
 # Measured against 64 bounces with the ground and the wall absorbing the scattered light (``ds.ABSORBING_TAG``):
-# 0.250 (noise 0.247), 0.039, 0.072, 0.107, 0.008 (on / 64: the ground 11 % bright, the light it stops between later
-# scatterings, which Dense Fog's scale beside surfaces leaves out: docs/measurements/2026-11-30-dense-walls.md);
+# 0.250 (noise 0.247), 0.039, 0.072, 0.107, 0.008 (on / 64: the ground 11 % bright, the light it stops, which Dense
+# Fog's scale beside surfaces would take: here the surfaces cast no shadows, the references' convention, so nothing is
+# in the photons' way and the scale is 1; docs/measurements/2026-11-30-dense-walls.md);
 # 0.069 (noise 0.069), 0.000, 0.020, 0.010, 0.002 (off / 0).  Against the unbounded medium's field (the references
 # before 2026-11-30, surfaces hidden from volume-scatter rays) Dense Fog unscaled gave 0.070 and 0.010 on the ground.
 BOUNDS = {
