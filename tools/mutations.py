@@ -270,6 +270,12 @@ MUTATIONS = [
              "exp(-beta * (t + d)) * angle / h\n",
              "exp(-beta * (t + d)) / h\n",
              ("tests/test_escape.py::test_a_scattering_sends_the_rays_their_second_order",)),
+    Mutation("emitter_surface_light_dropped", "glowing objects: the fog light they scatter onto other surfaces left "
+             "out (the ground under a glowing sphere 0.67 of path tracing)",
+             "emitter_fog_light",
+             "    return m.scale(total, 1.0 - glowing)\n",
+             "    return m.scale(total, 0.0 * glowing)\n",
+             ("tests/test_emitter_surfaces.py::test_a_glowing_sphere_lights_the_ground_through_the_fog",)),
     Mutation("dense_scale_unapplied", "Dense Fog beside surfaces: the lights' multiply scattered terms keep the "
              "unbounded field whatever their scale (the hooded lamp's fog 49 % off path tracing)",
              "_scaled",

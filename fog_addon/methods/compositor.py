@@ -124,7 +124,8 @@ class Compositor(Method):
                                                                  shafts.samples_for(spec.quality).view_nodes)
                                                if daylit else None),
                                           layer=spec.layer_per_unit() if spec.layered else None,
-                                          with_passes=spec.passes, mirrors=mirrors)
+                                          with_passes=spec.passes, mirrors=mirrors,
+                                          emitter_points=emitter_points(scene) if not pano else None)
         world_group.build_world([], [], scene.camera, images, spec.passes, day=day, day_dims=not daylit,
                                 preview=preview, extra=comp_fog.add_world_aovs if pano else None)
         return images
@@ -132,6 +133,7 @@ class Compositor(Method):
     def update(self, scene, spec, plan):
         if plan.windows is not None:
             comp_fog.set_windows(plan.in_groups, plan.windows, grow=plan.partial)
+        comp_fog.set_emitter_points(emitter_points(scene))   # (moved, resized, brightened)
         sampled, points = sampled_lights(scene, plan), sampled_points(scene, plan)
         if sampled or points:   # the sampled lights as they are now (moved, dimmed, recoloured)
             preview_sampled.write_table(scene, sampled, spec.beta_per_unit, points)
@@ -221,6 +223,7 @@ class Compositor(Method):
                                  grow=True)
             follow_shadows(scene, spec, lights)
             sunsky.follow_sun(scene, spec)
+            comp_fog.set_emitter_points(emitter_points(scene))
 
     def follow(self, scene, rebuild):
         return compositor.follow(scene, rebuild, bpy.data.node_groups.get(comp_fog.FOG_GROUP))
@@ -381,6 +384,13 @@ def mesh_area(mesh):
     areas = np.empty(len(mesh.polygons), np.float32)
     mesh.polygons.foreach_get("area", areas)
     return float(areas.sum(dtype=np.float64))
+
+
+def emitter_points(scene):
+    """(centres (N, 3) m, intensities (N, 3) W/sr) of ``glowing_points``, whose fog light the compositor's surfaces
+    reflect (``comp_fog.emitter_fog_light``), or None without one."""
+    shining, centres, intensities = glowing_points(scene)
+    return (centres, intensities) if shining else None
 
 
 def _shining(scene):

@@ -209,7 +209,7 @@ def _picture_scale(m, scene, filter_path):
 
 
 def build_fog_group(scene, lights, models, images, windows=None, partial=False, shafted=None, emitters=None,
-                    day=None, layer=None, with_passes=False, mirrors=False):
+                    day=None, layer=None, with_passes=False, mirrors=False, emitter_points=None):
     """(Re)build the compositor group ``FOG_GROUP``: Image (the render) and the AOVs in; Image (the render
     plus the fog's light) and Fog Light out, and with the fog passes (``with_passes``) Fog Transmittance: the
     materials' Fog Transmittance AOV (``passes.py``) times the factor the group puts on the render, so that
@@ -223,7 +223,9 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     per pixel, and the sky seen its transmittance), else None; ``layer``: a fog layer's (top, falloff, ground) in
     units (``FogSpec.layer_per_unit``), where the lights' glows end (``sunlight.lamp_glow_span``), or None for fog
     that fills all space; ``mirrors``: the materials shade the sharp mirrors' reflected fog (``glass_tails``: Cycles,
-    where the scene has specular paths), so the pixels' glossy lobe leaves them out (``surface.sharp_share``).
+    where the scene has specular paths), so the pixels' glossy lobe leaves them out (``surface.sharp_share``);
+    ``emitter_points``: (centres (N, 3), intensities (N, 3)) of the glowing objects taken as points
+    (``methods.compositor.glowing_points``), whose fog light the surfaces reflect (``emitter_fog_light``), or None.
     Rebuilt in place, so the scene's compositor keeps its group node.  Returns the table
     images it reads (``images`` and the pixel filter's and the emitters' weights)."""
     filt, peak = None if panoramic(scene) else comp_lights.pixel_filter(scene), None
@@ -359,6 +361,11 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
         pixel_angle = comp_emitters.emitter_pixel_angle(scene)
         terms.append(compose.Term(compose.GLOW, compose.RAY, compose.EMITTERS, comp_emitters.glows(
             m, p, beta, d_vp, emitters[0], pixel_angle, emitters[1], cover, m.abs(m.dot(normal, incoming)), lean)))
+        if emitter_points is not None and len(emitter_points[0]):
+            light = emitter_fog_light(m, shared, emitter_points, emitters[0], images, p[EMITTERS], win, direction)
+            t_vp = model.transmittance(m, beta, d_vp) if daylight is None else sunlight.grey(m, t_day)
+            terms += [compose.Term(compose.REFLECTED, compose.SURFACE, compose.EMITTERS, light),
+                      compose.Term(compose.DIMMING, compose.SURFACE, compose.EMITTERS, t_vp)]
     if daylight is not None:   # the dimming of the pixel's surface by the fog above it and of the sky seen through
         one = 1.0 if daylight.air is None else m.wrap((1.0, 1.0, 1.0))   # (with air the dimming is RGB)
         sun_visible = (None if sun_share is None else   # the sun's map: a surface in its shadow takes the sky's factor
@@ -385,3 +392,51 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     ng[PARTIAL] = partial
     ng[owned.BUILT] = groups.code_fingerprint()
     return images
+
+
+EMITTER_POINT = "Emitter Point"   # the nodes of the glowing objects' points: "<EMITTER_POINT> k Location" / "Intensity"
+
+
+def emitter_fog_light(m, shared, points, g, images, emission, win, domain):
+    """The fog light the pixel's surface reflects of the glowing objects (RGB per unit albedo, Sun et al. 2005 Eq.
+    17-18), each taken as a point source at its centre of its mean intensity (``points``: (centres, intensities),
+    ``methods.compositor.glowing_points``) through the point lights' scatter group (``comp_lights``: single
+    scattering, no shadows), summed over the surfaces' window ``win`` (or the picture) and put back on the picture
+    (``domain``: a value of its size); none on a glowing pixel itself (``emission``, the Emission pass: the point
+    lies inside its own surface).  The points' values are constants set here and by ``set_emitter_points``."""
+    models = rungs.choose("nodes", 0, g, "point")
+    total = None
+    for k, (centre, intensity) in enumerate(zip(*points)):
+        node = m.node("CompositorNodeGroup", 7)
+        node.node_tree = comp_lights.build_scatter_group(models, images)
+        node.label = f"{EMITTER_POINT} {k} Scatter"
+        for socket, _ in comp_lights.SURFACE_SHARED:
+            m.feed(node.inputs[socket], shared[socket if socket not in comp_lights.SURFACE_IMAGES else SURFACE + socket])
+        for name, value in (("Light", centre), ("Intensity", intensity)):
+            value_node = m.node("ShaderNodeCombineXYZ", 6)
+            value_node.name = value_node.label = f"{EMITTER_POINT} {k} {name}"
+            for c in range(3):
+                value_node.inputs[c].default_value = float(value[c])
+            m.feed(node.inputs[name], m.wrap(value_node.outputs[0], vector=True))
+        v = m.wrap(node.outputs[rungs.SCATTERED_OUT.compositor], vector=True)
+        total = v if total is None else comp_ops.accumulate(m, total, v)
+    if win is not None:
+        total = comp_ops.accumulate(m, comp_ops.zero(m, domain), comp_ops.uncrop(m, total, win))
+    glowing = m.less(1e-30, m.dot(emission, (1.0, 1.0, 1.0)))
+    return m.scale(total, 1.0 - glowing)
+
+
+def set_emitter_points(points):
+    """Set the glowing objects' points' constants in the fog group (``emitter_fog_light``) to ``points``:
+    (centres, intensities), as many as it holds (a new count rebuilds the group: the build's signature names the
+    objects)."""
+    ng = bpy.data.node_groups.get(FOG_GROUP)
+    if ng is None or points is None:
+        return
+    for k, (centre, intensity) in enumerate(zip(*points)):
+        for name, value in (("Light", centre), ("Intensity", intensity)):
+            node = ng.nodes.get(f"{EMITTER_POINT} {k} {name}")
+            if node is not None:
+                for c in range(3):
+                    if node.inputs[c].default_value != float(value[c]):
+                        node.inputs[c].default_value = float(value[c])

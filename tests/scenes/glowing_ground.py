@@ -1,0 +1,106 @@
+"""A glowing sphere over a grey ground in fog, nothing else: the glowing object's fog light on the ground (the
+Compositor method's ``comp_fog.emitter_fog_light``) against Cycles' path-traced fog.
+
+    python tests/scenes/glowing_ground.py MODE OUT.exr SAMPLES
+        (MODE: reference | reference-direct | ours | ours-without)
+
+An emissive UV sphere (Emission, white, STRENGTH W/(m^2 sr), radius RADIUS m) HEIGHT m over a grey Lambertian
+ground (base colour 0.5, roughness 1, Specular IOR Level 0), a camera looking down at it; World black, no lamp.
+``reference``: Cycles' World volume (Volume Scatter, white, density BETA; volume bounces 0: single scattering, the
+ground's light of the fog through one diffuse bounce; clip start 1 mm); ``reference-direct``: the same without the
+bounce, so the ground has its direct light alone (the difference is the fog light it reflects).  ``ours``: the add-on's fog (the Compositor
+method, Dense Fog off, no shafts), as F12 renders it; ``ours-without``: the same with the glowing object's fog light
+on surfaces left out (what the method rendered before it).
+"""
+import math
+import pathlib
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+import bpy  # noqa: E402
+
+from fog_addon import measure  # noqa: E402
+
+BETA = 0.2
+STRENGTH = 60.0
+RADIUS = 0.15
+HEIGHT = 1.0
+RES = (96, 54)
+
+
+def build():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=RADIUS, location=(0, 0, HEIGHT), segments=48, ring_count=24)
+    sphere = bpy.context.active_object
+    sphere.name = "Glowing Sphere"
+    mat = bpy.data.materials.new("Glow")
+    mat.use_nodes = True
+    nt = mat.node_tree
+    nt.nodes.clear()
+    emit = nt.nodes.new("ShaderNodeEmission")
+    emit.inputs["Strength"].default_value = STRENGTH
+    nt.links.new(emit.outputs[0], nt.nodes.new("ShaderNodeOutputMaterial").inputs[0])
+    sphere.data.materials.append(mat)
+    bpy.ops.mesh.primitive_plane_add(size=60.0, location=(0, 0, 0))
+    ground = bpy.context.active_object
+    ground.name = "Ground"
+    grey = bpy.data.materials.new("Grey")
+    grey.use_nodes = True
+    bsdf = grey.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (0.5, 0.5, 0.5, 1.0)
+    bsdf.inputs["Roughness"].default_value = 1.0
+    bsdf.inputs["Specular IOR Level"].default_value = 0.0
+    ground.data.materials.append(grey)
+    cam = bpy.data.cameras.new("Camera")
+    cam.lens, cam.clip_start = 28.0, 0.001
+    camera = bpy.data.objects.new("Camera", cam)
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    camera.location, camera.rotation_euler = (0.0, -5.0, 3.0), (math.radians(62.0), 0.0, 0.0)
+    scene.world = bpy.data.worlds.new("World")
+    scene.render.engine = "CYCLES"
+    measure.set_cycles_cpu(scene)
+    scene.render.resolution_x, scene.render.resolution_y = RES
+    scene.cycles.use_denoising = False
+    scene.cycles.pixel_filter_type, scene.cycles.filter_width = "BOX", 0.01
+    return scene
+
+
+def reference(scene):
+    world = scene.world
+    world.use_nodes = True
+    wn = world.node_tree
+    wn.nodes.clear()
+    scatter = wn.nodes.new("ShaderNodeVolumeScatter")
+    scatter.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    scatter.inputs["Density"].default_value = BETA
+    wn.links.new(scatter.outputs[0], wn.nodes.new("ShaderNodeOutputWorld").inputs["Volume"])
+    c = scene.cycles
+    c.volume_bounces, c.max_bounces, c.diffuse_bounces, c.glossy_bounces = 0, 2, 1, 1
+
+
+def main(mode, out, samples):
+    scene = build()
+    scene.cycles.samples = samples
+    if mode.startswith("reference"):
+        reference(scene)
+        if mode == "reference-direct":   # no bounce off the ground: its direct light alone, no fog light
+            scene.cycles.diffuse_bounces = 0
+        measure.render_to_file(scene, out)
+        return
+    import fog_addon
+    from fog_addon.methods import compositor
+    from fog_addon.ops import apply
+    from fog_addon.precompute.core.spec import FogSpec
+    fog_addon.register()
+    if mode == "ours-without":
+        compositor.emitter_points = lambda scene: None
+    apply.apply(scene, FogSpec(density=BETA, method="compositor", shafts=False, multiple_scattering=False))
+    measure.render_to_file(scene, out)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], sys.argv[2], int(sys.argv[3]))
