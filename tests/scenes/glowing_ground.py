@@ -19,7 +19,10 @@ import sys
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
+sys.path.insert(0, str(pathlib.Path(__file__).parent))
+
 import bpy  # noqa: E402
+import glowing_preview  # noqa: E402  (its glowing sphere and the references' World fog)
 
 from fog_addon import measure  # noqa: E402
 
@@ -33,17 +36,7 @@ RES = (96, 54)
 def build():
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
-    bpy.ops.mesh.primitive_uv_sphere_add(radius=RADIUS, location=(0, 0, HEIGHT), segments=48, ring_count=24)
-    sphere = bpy.context.active_object
-    sphere.name = "Glowing Sphere"
-    mat = bpy.data.materials.new("Glow")
-    mat.use_nodes = True
-    nt = mat.node_tree
-    nt.nodes.clear()
-    emit = nt.nodes.new("ShaderNodeEmission")
-    emit.inputs["Strength"].default_value = STRENGTH
-    nt.links.new(emit.outputs[0], nt.nodes.new("ShaderNodeOutputMaterial").inputs[0])
-    sphere.data.materials.append(mat)
+    glowing_preview.add_glowing_sphere(RADIUS, (0, 0, HEIGHT), STRENGTH)
     bpy.ops.mesh.primitive_plane_add(size=60.0, location=(0, 0, 0))
     ground = bpy.context.active_object
     ground.name = "Ground"
@@ -70,14 +63,7 @@ def build():
 
 
 def reference(scene):
-    world = scene.world
-    world.use_nodes = True
-    wn = world.node_tree
-    wn.nodes.clear()
-    scatter = wn.nodes.new("ShaderNodeVolumeScatter")
-    scatter.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    scatter.inputs["Density"].default_value = BETA
-    wn.links.new(scatter.outputs[0], wn.nodes.new("ShaderNodeOutputWorld").inputs["Volume"])
+    glowing_preview.world_fog(scene, BETA)
     c = scene.cycles
     c.volume_bounces, c.max_bounces, c.diffuse_bounces, c.glossy_bounces = 0, 2, 1, 1
 

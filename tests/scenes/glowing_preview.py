@@ -28,10 +28,9 @@ LAMP_AT = (3.0, 4.0, 1.0)
 RES = (96, 54)
 
 
-def build():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    bpy.ops.mesh.primitive_uv_sphere_add(radius=RADIUS, location=(0, 0, 0), segments=48, ring_count=24)
+def add_glowing_sphere(radius, location, strength):
+    """An emissive UV sphere "Glowing Sphere" (Emission, white, ``strength`` W/(m^2 sr))."""
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=radius, location=location, segments=48, ring_count=24)
     sphere = bpy.context.active_object
     sphere.name = "Glowing Sphere"
     mat = bpy.data.materials.new("Glow")
@@ -39,9 +38,28 @@ def build():
     nt = mat.node_tree
     nt.nodes.clear()
     emit = nt.nodes.new("ShaderNodeEmission")
-    emit.inputs["Strength"].default_value = STRENGTH
+    emit.inputs["Strength"].default_value = strength
     nt.links.new(emit.outputs[0], nt.nodes.new("ShaderNodeOutputMaterial").inputs[0])
     sphere.data.materials.append(mat)
+    return sphere
+
+
+def world_fog(scene, beta):
+    """The World's volume: Volume Scatter, white, density ``beta`` (the references' fog)."""
+    world = scene.world
+    world.use_nodes = True
+    wn = world.node_tree
+    wn.nodes.clear()
+    scatter = wn.nodes.new("ShaderNodeVolumeScatter")
+    scatter.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    scatter.inputs["Density"].default_value = beta
+    wn.links.new(scatter.outputs[0], wn.nodes.new("ShaderNodeOutputWorld").inputs["Volume"])
+
+
+def build():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    add_glowing_sphere(RADIUS, (0, 0, 0), STRENGTH)
     light = bpy.data.lights.new("Lamp", "POINT")
     light.energy, light.shadow_soft_size = LAMP_W, 0.0
     lamp = bpy.data.objects.new("Lamp", light)
@@ -62,14 +80,7 @@ def build():
 
 
 def reference(scene):
-    world = scene.world
-    world.use_nodes = True
-    wn = world.node_tree
-    wn.nodes.clear()
-    scatter = wn.nodes.new("ShaderNodeVolumeScatter")
-    scatter.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    scatter.inputs["Density"].default_value = BETA
-    wn.links.new(scatter.outputs[0], wn.nodes.new("ShaderNodeOutputWorld").inputs["Volume"])
+    world_fog(scene, BETA)
     scene.cycles.volume_bounces, scene.cycles.max_bounces = 0, 4
 
 
