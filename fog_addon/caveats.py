@@ -264,14 +264,14 @@ def _left_out_notes(dense, method_name, is_spot, lights, engine):
 def glow_notes(glowing, method_name, engine="CYCLES"):
     """Notes on the glowing objects (emissive materials) the camera sees, ``glowing``: with a method other than
     the compositor they have no glow in the fog, and the light they scatter in the fog does not light other surfaces
-    (a ground under a neon sign 0.78-0.82 of path tracing); the compositor's fog light of them on surfaces is each
-    one's from a point at its centre, without shadows (``comp_fog.emitter_fog_light``); in EEVEE their light on
+    (a ground under a neon sign 0.78-0.82 of path tracing); the compositor's fog light of them on surfaces comes
+    from points along each, without shadows (``comp_fog.emitter_fog_light``); in EEVEE their light on
     other surfaces is not dimmed by the fog (Cycles dims it in the materials: ``material._dim_emitted_light``)."""
     if not glowing:
         return []
     names = listed([o.name for o in glowing])
-    notes = [f"glowing objects ({names}): their fog light on other surfaces is taken from a point at each one's "
-             "centre, without shadows" if capabilities.can(method_name, "emitters", engine) else
+    notes = [f"glowing objects ({names}): their fog light on other surfaces is taken from points along each, "
+             "without shadows" if capabilities.can(method_name, "emitters", engine) else
              f"glowing objects ({names}): the light they scatter in the fog does not light other surfaces"]
     if engine != "CYCLES":
         notes.append(f"glowing objects ({names}): in EEVEE their light on other surfaces is not dimmed by the fog")

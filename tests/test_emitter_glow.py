@@ -153,14 +153,14 @@ def test_facing_dipole_against_quadrature():
 
 def test_glowing_objects_notes():
     """What the fog cannot do with glowing objects is said: no glow but with the compositor, no fog light on other
-    surfaces but the compositor's (from a point at each one's centre, without shadows), no dimming of their light in
+    surfaces but the compositor's (from points along each, without shadows), no dimming of their light in
     EEVEE."""
     from types import SimpleNamespace
     from fog_addon import caveats
     sign = [SimpleNamespace(name="Neon")]
     assert caveats.glow_notes([], "nodes") == []
     cycles = caveats.glow_notes(sign, "compositor")
-    assert len(cycles) == 1 and "from a point at each one's centre" in cycles[0]
+    assert len(cycles) == 1 and "from points along each" in cycles[0]
     eevee = caveats.glow_notes(sign, "nodes", "BLENDER_EEVEE_NEXT")
     assert "no glow" in eevee[0] and "does not light other surfaces" in eevee[1] and "not dimmed" in eevee[-1]
     assert len(eevee) == 3

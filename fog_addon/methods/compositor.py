@@ -81,7 +81,7 @@ class Compositor(Method):
         c = scene.cycles
         return (f"compositor:{scene.render.engine}:{c.pixel_filter_type}:{comp_fog.horizontal_fit(scene)}:"
                 f"{scene.camera.data.sensor_fit}:{scene.camera.data.type}|shafts:{spec.shafts}{_moving(scene) if spec.shafts else ''}"
-                f"|glow:{','.join(o.name_full for o, _ in _shining(scene)) or bool(glowing_objects(scene))}"
+                f"|glow:{_glow_key(scene)}"
                 "|dimming:" + ",".join(o.name_full for o in shader_lights))
 
     def windows(self, scene, lights, partial):
@@ -370,27 +370,67 @@ def glowing_points(scene):
     them (``preview_sampled.write_table``)."""
     shining, centres, intensities = [], [], []
     for obj, radiance in _shining(scene):
-        m = obj.matrix_world   # (a uniform scale's area: its determinant to the 2/3)
-        area = mesh_area(obj.data) * abs(m.to_3x3().determinant()) ** (2.0 / 3.0)
+        m = obj.matrix_world
+        area = world_area(obj.data, m)
         shining.append(obj)
         centres.append(footprint.box_points(obj.bound_box, m).mean(axis=0))
         intensities.append(np.max(radiance, axis=0) * area / 4.0)
     return shining, np.reshape(centres, (-1, 3)), np.reshape(intensities, (-1, 3))
 
 
-def mesh_area(mesh):
-    """The area of ``mesh``'s faces, m^2 in its own space, read in one call (``foreach_get``), not face by face: a
-    viewport update measures the glowing meshes each time."""
-    areas = np.empty(len(mesh.polygons), np.float32)
-    mesh.polygons.foreach_get("area", areas)
-    return float(areas.sum(dtype=np.float64))
+def world_area(mesh, matrix):
+    """The area of ``mesh``'s faces in world space, m^2, under ``matrix`` (any scale, also non-uniform: a neon tube
+    is often a cube scaled along one axis): its triangles' (``loop_triangles``) corners moved to world space, read
+    in one call each (``foreach_get``), not face by face (a viewport update measures the glowing meshes each
+    time)."""
+    tris = np.empty(3 * len(mesh.loop_triangles), np.int32)
+    mesh.loop_triangles.foreach_get("vertices", tris)
+    co = np.empty(3 * len(mesh.vertices), np.float32)
+    mesh.vertices.foreach_get("co", co)
+    corners = (co.reshape(-1, 3).astype(float) @ np.asarray(matrix.to_3x3(), float).T)[tris.reshape(-1, 3)]
+    return float(0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]),
+                                      axis=1).sum())
+
+
+EMITTER_PIECES = 4   # the most points a long glowing object is taken as (``emitter_points``)
 
 
 def emitter_points(scene):
-    """(centres (N, 3) m, intensities (N, 3) W/sr) of ``glowing_points``, whose fog light the compositor's surfaces
-    reflect (``comp_fog.emitter_fog_light``), or None without one."""
+    """(points (N, 3) m, intensities (N, 3) W/sr) whose fog light the compositor's surfaces reflect
+    (``comp_fog.emitter_fog_light``), or None without a glowing object: each of ``glowing_points`` cut into
+    ``emitter_pieces`` equal pieces along its bounds' longest edge (a neon tube, a strip of windows), a point at each
+    piece's centre with its share of the object's intensity."""
     shining, centres, intensities = glowing_points(scene)
-    return (centres, intensities) if shining else None
+    if not shining:
+        return None
+    points, shares = [], []
+    for obj, centre, intensity in zip(shining, centres, intensities):
+        axis, n = _long_axis(obj), emitter_pieces(obj)
+        for i in range(n):
+            points.append(centre + axis * ((i + 0.5) / n - 0.5))
+            shares.append(intensity / n)
+    return np.reshape(points, (-1, 3)), np.reshape(shares, (-1, 3))
+
+
+def _long_axis(obj):
+    """The world vector of ``obj``'s bounds' longest edge (Blender's ``bound_box`` corners 0-4, 0-3, 0-1)."""
+    corners = footprint.box_points(obj.bound_box, obj.matrix_world)
+    edges = [corners[4] - corners[0], corners[3] - corners[0], corners[1] - corners[0]]
+    return max(edges, key=lambda e: float(e @ e))
+
+
+def emitter_pieces(obj):
+    """How many points ``emitter_points`` takes ``obj`` as: its bounds' longest edge over the next, rounded, 1 to
+    EMITTER_PIECES (no mesh is measured: the build's signature asks at every update)."""
+    corners = footprint.box_points(obj.bound_box, obj.matrix_world)
+    lengths = sorted((float(np.linalg.norm(corners[j] - corners[0])) for j in (4, 3, 1)), reverse=True)
+    return int(min(max(round(lengths[0] / max(lengths[1], 1e-9)), 1), EMITTER_PIECES))
+
+
+def _glow_key(scene):
+    """The glowing objects as the build takes them: each one's name and pieces (``emitter_pieces``), or whether any
+    glows at all where no radiance can be read."""
+    return ",".join(f"{o.name_full}x{emitter_pieces(o)}" for o, _ in _shining(scene)) or str(bool(glowing_objects(scene)))
 
 
 def _shining(scene):

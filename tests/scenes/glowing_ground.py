@@ -1,16 +1,18 @@
 """A glowing sphere over a grey ground in fog, nothing else: the glowing object's fog light on the ground (the
 Compositor method's ``comp_fog.emitter_fog_light``) against Cycles' path-traced fog.
 
-    python tests/scenes/glowing_ground.py MODE OUT.exr SAMPLES
-        (MODE: reference | reference-direct | ours | ours-without)
+    python tests/scenes/glowing_ground.py MODE OUT.exr SAMPLES [SHAPE]
+        (MODE: reference | reference-direct | ours | ours-without | ours-one-point; SHAPE: sphere | bar)
 
 An emissive UV sphere (Emission, white, STRENGTH W/(m^2 sr), radius RADIUS m) HEIGHT m over a grey Lambertian
 ground (base colour 0.5, roughness 1, Specular IOR Level 0), a camera looking down at it; World black, no lamp.
+SHAPE ``bar``: a glowing bar BAR m long and BAR_WIDTH thick across the view instead (a neon tube).
 ``reference``: Cycles' World volume (Volume Scatter, white, density BETA; volume bounces 0: single scattering, the
 ground's light of the fog through one diffuse bounce; clip start 1 mm); ``reference-direct``: the same without the
 bounce, so the ground has its direct light alone (the difference is the fog light it reflects).  ``ours``: the add-on's fog (the Compositor
 method, Dense Fog off, no shafts), as F12 renders it; ``ours-without``: the same with the glowing object's fog light
-on surfaces left out (what the method rendered before it).
+on surfaces left out (what the method rendered before it); ``ours-one-point``: each glowing object one point, not
+cut along its length (``methods.compositor.EMITTER_PIECES`` 1).
 """
 import math
 import pathlib
@@ -31,12 +33,20 @@ STRENGTH = 60.0
 RADIUS = 0.15
 HEIGHT = 1.0
 RES = (96, 54)
+BAR, BAR_WIDTH, BAR_STRENGTH = 2.4, 0.08, 30.0
 
 
-def build():
+def build(shape="sphere"):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
-    glowing_preview.add_glowing_sphere(RADIUS, (0, 0, HEIGHT), STRENGTH)
+    glowing = glowing_preview.add_glowing_sphere(RADIUS, (0, 0, HEIGHT), STRENGTH)
+    if shape == "bar":   # the sphere's material on a box along x
+        bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0, 0, HEIGHT))
+        bar = bpy.context.active_object
+        bar.scale = (BAR, BAR_WIDTH, BAR_WIDTH)
+        bar.data.materials.append(glowing.data.materials[0])
+        glowing.data.materials[0].node_tree.nodes["Emission"].inputs["Strength"].default_value = BAR_STRENGTH
+        bpy.data.objects.remove(glowing)
     bpy.ops.mesh.primitive_plane_add(size=60.0, location=(0, 0, 0))
     ground = bpy.context.active_object
     ground.name = "Ground"
@@ -68,8 +78,8 @@ def reference(scene):
     c.volume_bounces, c.max_bounces, c.diffuse_bounces, c.glossy_bounces = 0, 2, 1, 1
 
 
-def main(mode, out, samples):
-    scene = build()
+def main(mode, out, samples, shape="sphere"):
+    scene = build(shape)
     scene.cycles.samples = samples
     if mode.startswith("reference"):
         reference(scene)
@@ -84,9 +94,11 @@ def main(mode, out, samples):
     fog_addon.register()
     if mode == "ours-without":
         compositor.emitter_points = lambda scene: None
+    if mode == "ours-one-point":
+        compositor.EMITTER_PIECES = 1
     apply.apply(scene, FogSpec(density=BETA, method="compositor", shafts=False, multiple_scattering=False))
     measure.render_to_file(scene, out)
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2], int(sys.argv[3]))
+    main(sys.argv[1], sys.argv[2], int(sys.argv[3]), *sys.argv[4:5])
