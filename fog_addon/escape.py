@@ -18,7 +18,6 @@ import functools
 import math
 
 import numpy as np
-from mathutils import Vector
 
 from . import shadow_maps, view
 from .precompute.physics.point import escape
@@ -115,9 +114,10 @@ def _share(geometry, light, samples, spec):
     if escape.escape_fraction(spec.beta_per_unit, depth, _emission(light, directions)) >= 1.0 - 0.5 * SCALE_STEP:
         return 1.0   # (nothing stops the light's power before it scatters: nothing to judge)
     rng = np.random.default_rng(SEED)
+    free = functools.partial(shadow_maps.segments_free, geometry.bvh)
     kept, unbounded = escape.traced_share(
         np.asarray(light.matrix_world.translation), _emitted(light, rng), receivers(samples, spec.beta_per_unit),
-        spec.beta_per_unit, spec.anisotropy, spec.grey_albedo, functools.partial(_free, geometry.bvh), rng=rng)
+        spec.beta_per_unit, spec.anisotropy, spec.grey_albedo, free, rng=rng)
     return kept / unbounded if unbounded > 0.0 else 1.0
 
 
@@ -131,10 +131,3 @@ def _emitted(light, rng):
         return escape.emitted_directions(escape.TRACED_PHOTONS, rng, axis, math.cos(0.5 * light.data.spot_size))
     return escape.emitted_directions(escape.TRACED_PHOTONS, rng, axis, lambertian=light.data.type == "AREA")
 
-
-def _free(bvh, origins, directions, lengths):
-    """(M,) True where nothing of ``bvh`` lies on each segment (``origins``, unit ``directions``, ``lengths`` m)."""
-    if bvh is None:
-        return np.ones(len(origins), bool)
-    hits = map(bvh.ray_cast, map(Vector, origins.tolist()), map(Vector, directions.tolist()), lengths.tolist())
-    return np.fromiter((hit[0] is None for hit in hits), bool, len(origins))

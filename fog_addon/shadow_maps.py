@@ -160,6 +160,15 @@ def cast_parallel(bvh, origins, direction):
     return _first_hits(bvh, _vectors(origins), itertools.repeat(Vector(tuple(direction)), len(origins)), len(origins))
 
 
+def segments_free(bvh, origins, directions, lengths):
+    """(M,) True where no triangle of ``bvh`` (None: none) lies on each segment: ``origins`` and unit ``directions``
+    ((M, 3) arrays), ``lengths`` ((M,) units) (``escape``'s photons and their light)."""
+    if bvh is None:
+        return np.ones(len(origins), bool)
+    hits = map(bvh.ray_cast, _vectors(origins), _vectors(directions), np.asarray(lengths, float).tolist())
+    return np.fromiter((hit[0] is None for hit in hits), bool, len(origins))
+
+
 def _first_hits(bvh, origins, directions, count):
     """(count,) float32: the distance along each ray (``origins`` and unit ``directions``: iterables of mathutils
     Vectors) to the first triangle of ``bvh``, NO_HIT where none (or no BVH).  The rays go through ``map``, not a

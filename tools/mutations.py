@@ -279,8 +279,8 @@ MUTATIONS = [
     Mutation("emitter_one_point", "glowing objects: a long one's fog light on surfaces from one point at its centre "
              "(a bar's ground 21 % off path tracing by blocks, against 10 % in four pieces)",
              "emitter_points",
-             "        axis, n = _long_axis(obj), emitter_pieces(obj)\n",
-             "        axis, n = _long_axis(obj), 1\n",
+             "        axis, n = _pieces(obj)\n",
+             "        axis, n = _pieces(obj)[0], 1\n",
              ("tests/test_emitter_surfaces.py::test_a_glowing_object_lights_the_ground_through_the_fog",)),
     Mutation("emitter_area_uniform_scale", "glowing objects: the area of a mesh scaled non-uniformly taken as if its "
              "scale were uniform (a cube scaled into a bar: 0.47 of its area, half its fog light)",
@@ -749,11 +749,11 @@ MUTATIONS = [
              ("tests/test_glass_mirror.py::test_fog_past_glass_and_mirrors[mirror-compositor]",)),
     Mutation("preview_no_glowing_points", "viewport preview: the glowing objects not sampled beside the lights "
              "(no glow of theirs in the preview)", "compositor.sampled_points",
-             "    return points if points[0] else None",
+             "    return shining if shining[0] else None",
              "    return None",
              ("tests/test_viewport_preview.py::test_viewport_glows_a_glowing_object",)),
     Mutation("preview_glowing_points_light_surfaces", "viewport preview: the glowing objects' points marked as "
-             "lighting the surfaces' fog light, which final renders leave out", "sampling.table_rows",
+             "lighting the surfaces' fog light, which the preview leaves out", "sampling.table_rows",
              "    rows[0, :, 3] = 1.0 if lights_surfaces is None else np.asarray(lights_surfaces, float)",
              "    rows[0, :, 3] = 1.0",
              ("tests/test_preview_sampled.py::test_glowing_points_light_no_surfaces",)),

@@ -104,7 +104,8 @@ class Compositor(Method):
         sun_shadow, sun_images = sunsky.sun_shadow(scene, spec, lazy=plan.this_frame) if daylit else (None, {})
         shadow_maps.remove_unused(set(shadow_images) | set(sun_images))
         images = dict(images, **shadow_images, **sun_images)
-        preview, sampled_images = _preview(scene, spec, plan, maps, table, dims)
+        shining = glowing_points(scene)   # (the glowing meshes measured once: the preview and the fog light)
+        preview, sampled_images = _preview(scene, spec, plan, maps, shining, table, dims)
         images = dict(images, **sampled_images)
         tails = _tails(scene, spec, plan, maps)
         # a sharp mirror's reflected fog by its tails where they hold every light (else the pixels' glossy lobe)
@@ -125,7 +126,7 @@ class Compositor(Method):
                                                if daylit else None),
                                           layer=spec.layer_per_unit() if spec.layered else None,
                                           with_passes=spec.passes, mirrors=mirrors,
-                                          emitter_points=emitter_points(scene) if not pano else None)
+                                          emitter_points=emitter_points(shining) if not pano else None)
         world_group.build_world([], [], scene.camera, images, spec.passes, day=day, day_dims=not daylit,
                                 preview=preview, extra=comp_fog.add_world_aovs if pano else None)
         return images
@@ -133,8 +134,9 @@ class Compositor(Method):
     def update(self, scene, spec, plan):
         if plan.windows is not None:
             comp_fog.set_windows(plan.in_groups, plan.windows, grow=plan.partial)
-        comp_fog.set_emitter_points(emitter_points(scene))   # (moved, resized, brightened)
-        sampled, points = sampled_lights(scene, plan), sampled_points(scene, plan)
+        shining = glowing_points(scene)
+        comp_fog.set_emitter_points(emitter_points(shining))   # (moved, resized, brightened)
+        sampled, points = sampled_lights(scene, plan), sampled_points(scene, plan, shining)
         if sampled or points:   # the sampled lights as they are now (moved, dimmed, recoloured)
             preview_sampled.write_table(scene, sampled, spec.beta_per_unit, points)
 
@@ -193,13 +195,13 @@ class Compositor(Method):
             notes.append(("Viewport", f"the viewport's preview shows no light shafts of the lights it samples "
                                       f"({caveats.listed([o.name for o in sampled_shafts])}): final renders, F12, "
                                       "have them"))
-        glowing, points = glowing_objects(scene), sampled_points(scene, plan)
+        glowing, points = glowing_objects(scene), sampled_points(scene, plan, glowing_points(scene))
         as_points = set(points[0]) if points else set()
         if as_points:
             notes.append(("Viewport", f"the viewport's preview shows the glows of the glowing objects "
                                       f"({caveats.listed([o.name for o in glowing if o in as_points])}) as round glows "
-                                      "about their centres, sampled with the lights (final renders, F12, glow their "
-                                      "shapes)"))
+                                      "about their centres, sampled with the lights, that light no surface (final "
+                                      "renders, F12, glow their shapes and light the surfaces around them)"))
         missing = [o.name for o in glowing if o not in as_points]
         if missing:
             notes.append(("Viewport", f"the viewport's preview shows no glow of the glowing objects "
@@ -223,7 +225,7 @@ class Compositor(Method):
                                  grow=True)
             follow_shadows(scene, spec, lights)
             sunsky.follow_sun(scene, spec)
-            comp_fog.set_emitter_points(emitter_points(scene))
+            comp_fog.set_emitter_points(emitter_points(glowing_points(scene)))
 
     def follow(self, scene, rebuild):
         return compositor.follow(scene, rebuild, bpy.data.node_groups.get(comp_fog.FOG_GROUP))
@@ -235,14 +237,15 @@ class Compositor(Method):
         shadow_maps.remove_unused()
 
 
-def _preview(scene, spec, plan, maps, day_table=None, day_dims=True):
+def _preview(scene, spec, plan, maps, shining, day_table=None, day_dims=True):
     """(``preview.Shown`` of the viewport's preview (``plan.preview``) or None, the images it reads): in Cycles its
     shafted lights' still maps give it their shafts (``preview_shafts.py``; an animation's atlas does not, nor
-    EEVEE, whose uniform block the shares' constants would fill); the other point lights are sampled one a sample
-    (``preview_sampled.py``); a fog layer's sun and sky (``day_table``: the fog light's TableSpec, or None) as the
+    EEVEE, whose uniform block the shares' constants would fill); the other point lights are sampled one a sample,
+    with the glowing objects' points (``shining``: ``glowing_points``') (``preview_sampled.py``); a fog layer's sun
+    and sky (``day_table``: the fog light's TableSpec, or None) as the
     node groups give them, their dimming of the surfaces' direct light where ``day_dims``."""
     lights, models = plan.preview[:2] if plan.preview else ([], [])
-    sampled, points = sampled_lights(scene, plan), sampled_points(scene, plan)
+    sampled, points = sampled_lights(scene, plan), sampled_points(scene, plan, shining)
     if not lights and not sampled and day_table is None:
         preview_sampled.write_table(scene, [], spec.beta_per_unit)
         return None, {}
@@ -302,14 +305,13 @@ def sampled_lights(scene, plan):
     return preview_sampled.sampled([o for o in plan.in_groups if o not in shown])
 
 
-def sampled_points(scene, plan):
-    """``glowing_points`` of the glowing objects whose glows the viewport's preview samples beside its lights, as
-    point sources (``preview_sampled.write_table``), or None: where the preview holds or samples lights (not
+def sampled_points(scene, plan, shining):
+    """``shining`` (``glowing_points``') where the viewport's preview samples the glowing objects beside its lights,
+    as point sources (``preview_sampled.write_table``), or None: where the preview holds or samples lights (not
     EEVEE's uniform block without room) and some glowing object's radiance can be read."""
     if not plan.preview or not (plan.preview[0] or samples_all(scene, plan.in_groups)):
         return None
-    points = glowing_points(scene)
-    return points if points[0] else None
+    return shining if shining[0] else None
 
 
 def _viewport_compositor_on():
@@ -373,7 +375,7 @@ def glowing_points(scene):
         m = obj.matrix_world
         area = world_area(obj.data, m)
         shining.append(obj)
-        centres.append(footprint.box_points(obj.bound_box, m).mean(axis=0))
+        centres.append(object_centre(obj))
         intensities.append(np.max(radiance, axis=0) * area / 4.0)
     return shining, np.reshape(centres, (-1, 3)), np.reshape(intensities, (-1, 3))
 
@@ -395,42 +397,44 @@ def world_area(mesh, matrix):
 EMITTER_PIECES = 4   # the most points a long glowing object is taken as (``emitter_points``)
 
 
-def emitter_points(scene):
+def emitter_points(shining):
     """(points (N, 3) m, intensities (N, 3) W/sr) whose fog light the compositor's surfaces reflect
-    (``comp_fog.emitter_fog_light``), or None without a glowing object: each of ``glowing_points`` cut into
-    ``emitter_pieces`` equal pieces along its bounds' longest edge (a neon tube, a strip of windows), a point at each
-    piece's centre with its share of the object's intensity."""
-    shining, centres, intensities = glowing_points(scene)
-    if not shining:
+    (``comp_fog.emitter_fog_light``), or None without a glowing object: each of ``shining`` (``glowing_points``')
+    cut into ``_pieces`` equal pieces along its bounds' longest edge (a neon tube, a strip of windows), a
+    point at each piece's centre with its share of the object's intensity."""
+    objects, centres, intensities = shining
+    if not objects:
         return None
     points, shares = [], []
-    for obj, centre, intensity in zip(shining, centres, intensities):
-        axis, n = _long_axis(obj), emitter_pieces(obj)
+    for obj, centre, intensity in zip(objects, centres, intensities):
+        axis, n = _pieces(obj)
         for i in range(n):
             points.append(centre + axis * ((i + 0.5) / n - 0.5))
             shares.append(intensity / n)
     return np.reshape(points, (-1, 3)), np.reshape(shares, (-1, 3))
 
 
-def _long_axis(obj):
-    """The world vector of ``obj``'s bounds' longest edge (Blender's ``bound_box`` corners 0-4, 0-3, 0-1)."""
-    corners = footprint.box_points(obj.bound_box, obj.matrix_world)
-    edges = [corners[4] - corners[0], corners[3] - corners[0], corners[1] - corners[0]]
-    return max(edges, key=lambda e: float(e @ e))
+def object_centre(obj):
+    """(3,) m: the world centre of ``obj``'s bounds (``footprint.box_points``), where a glowing object stands as a
+    point source."""
+    return footprint.box_points(obj.bound_box, obj.matrix_world).mean(axis=0)
 
 
-def emitter_pieces(obj):
-    """How many points ``emitter_points`` takes ``obj`` as: its bounds' longest edge over the next, rounded, 1 to
-    EMITTER_PIECES (no mesh is measured: the build's signature asks at every update)."""
+def _pieces(obj):
+    """(the world vector of ``obj``'s bounds' longest edge, the pieces ``emitter_points`` cuts it into: that edge
+    over the next, rounded, 1 to EMITTER_PIECES).  No mesh is measured: the build's signature asks at every
+    update (``_glow_key``)."""
     corners = footprint.box_points(obj.bound_box, obj.matrix_world)
-    lengths = sorted((float(np.linalg.norm(corners[j] - corners[0])) for j in (4, 3, 1)), reverse=True)
-    return int(min(max(round(lengths[0] / max(lengths[1], 1e-9)), 1), EMITTER_PIECES))
+    edges = sorted((corners[j] - corners[0] for j in (4, 3, 1)), key=lambda e: -float(e @ e))   # (Blender's corners)
+    ratio = float(np.linalg.norm(edges[0])) / max(float(np.linalg.norm(edges[1])), 1e-9)
+    return edges[0], int(min(max(round(ratio), 1), EMITTER_PIECES))
 
 
 def _glow_key(scene):
-    """The glowing objects as the build takes them: each one's name and pieces (``emitter_pieces``), or whether any
+    """The glowing objects as the build takes them: each one's name and pieces (``_pieces``), or whether any
     glows at all where no radiance can be read."""
-    return ",".join(f"{o.name_full}x{emitter_pieces(o)}" for o, _ in _shining(scene)) or str(bool(glowing_objects(scene)))
+    pieces = ",".join(f"{o.name_full}x{_pieces(o)[1]}" for o, _ in _shining(scene))
+    return pieces or str(bool(glowing_objects(scene)))
 
 
 def _shining(scene):

@@ -224,8 +224,8 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     units (``FogSpec.layer_per_unit``), where the lights' glows end (``sunlight.lamp_glow_span``), or None for fog
     that fills all space; ``mirrors``: the materials shade the sharp mirrors' reflected fog (``glass_tails``: Cycles,
     where the scene has specular paths), so the pixels' glossy lobe leaves them out (``surface.sharp_share``);
-    ``emitter_points``: (centres (N, 3), intensities (N, 3)) of the glowing objects taken as points
-    (``methods.compositor.glowing_points``), whose fog light the surfaces reflect (``emitter_fog_light``), or None.
+    ``emitter_points``: (points (N, 3), intensities (N, 3)) the glowing objects are taken as
+    (``methods.compositor.emitter_points``), whose fog light the surfaces reflect (``emitter_fog_light``), or None.
     Rebuilt in place, so the scene's compositor keeps its group node.  Returns the table
     images it reads (``images`` and the pixel filter's and the emitters' weights)."""
     filt, peak = None if panoramic(scene) else comp_lights.pixel_filter(scene), None
@@ -399,8 +399,8 @@ EMITTER_POINT = "Emitter Point"   # the nodes of the glowing objects' points: "<
 
 def emitter_fog_light(m, shared, points, g, images, emission, win, domain):
     """The fog light the pixel's surface reflects of the glowing objects (RGB per unit albedo, Sun et al. 2005 Eq.
-    17-18), each taken as a point source at its centre of its mean intensity (``points``: (centres, intensities),
-    ``methods.compositor.glowing_points``) through the point lights' scatter group (``comp_lights``: single
+    17-18), each taken as point sources along it (``points``: (positions, intensities),
+    ``methods.compositor.emitter_points``) through the point lights' scatter group (``comp_lights``: single
     scattering, no shadows), summed over the surfaces' window ``win`` (or the picture) and put back on the picture
     (``domain``: a value of its size); none on a glowing pixel itself (``emission``, the Emission pass: the point
     lies inside its own surface).  The points' values are constants set here and by ``set_emitter_points``."""
@@ -410,8 +410,9 @@ def emitter_fog_light(m, shared, points, g, images, emission, win, domain):
         node = m.node("CompositorNodeGroup", 7)
         node.node_tree = comp_lights.build_scatter_group(models, images)
         node.label = f"{EMITTER_POINT} {k} Scatter"
-        for socket, _ in comp_lights.SURFACE_SHARED:
-            m.feed(node.inputs[socket], shared[socket if socket not in comp_lights.SURFACE_IMAGES else SURFACE + socket])
+        for socket, _ in comp_lights.SURFACE_SHARED:   # (the per-pixel ones cropped to the surfaces' window)
+            per_pixel = socket in comp_lights.SURFACE_IMAGES
+            m.feed(node.inputs[socket], shared[SURFACE + socket if per_pixel else socket])
         for name, value in (("Light", centre), ("Intensity", intensity)):
             value_node = m.node("ShaderNodeCombineXYZ", 6)
             value_node.name = value_node.label = f"{EMITTER_POINT} {k} {name}"
@@ -428,8 +429,8 @@ def emitter_fog_light(m, shared, points, g, images, emission, win, domain):
 
 def set_emitter_points(points):
     """Set the glowing objects' points' constants in the fog group (``emitter_fog_light``) to ``points``:
-    (centres, intensities), as many as it holds (a new count rebuilds the group: the build's signature names the
-    objects)."""
+    (positions, intensities), as many as it holds (a new count rebuilds the group: the build's signature names the
+    objects and their pieces)."""
     ng = bpy.data.node_groups.get(FOG_GROUP)
     if ng is None or points is None:
         return

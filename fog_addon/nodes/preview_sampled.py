@@ -51,8 +51,8 @@ def table_spec(count):
 def write_table(scene, lights, beta, points=None):
     """Write the table of ``lights`` (``sampled``'s, as they are now) and of ``points`` (objects, centres (K, 3) m,
     RGB intensities (K, 3) W/sr: the glowing objects as point sources, ``methods.compositor.glowing_points``, whose glow
-    the preview shows and whose light on surfaces it leaves out, as final renders do) into the image ``TABLE`` (made
-    if missing or of another size); returns (spec, image), or (None, None) with neither (the image removed)."""
+    the preview shows and whose light on surfaces it leaves out: final renders with the Compositor have it,
+    ``comp_fog.emitter_fog_light``) into the image ``TABLE`` (made if missing or of another size); returns (spec, image), or (None, None) with neither (the image removed)."""
     img = bpy.data.images.get(TABLE)
     centres, glowing = (np.zeros((0, 3)), np.zeros((0, 3))) if points is None else points[1:]
     if not lights and not len(centres):
@@ -201,7 +201,7 @@ def build_surface_group(images, spec, g, dense=None, cycles=False):
         ("Diffuse", C), ("Specular", C), ("Glossy Level", F), ("View Transmittance", F), ("Is Camera", F)],
         images, spec, light_groups.build_light(light_models(g, 0, dense), images, cycles), shared, "Position")
     terms = light_groups.read(m, node, rungs.SURFACE_OUTPUTS, shading.LightTerms)
-    terms = terms._replace(scattered=m.scale(terms.scattered, lit))   # (a glowing object's: none, as in final renders)
+    terms = terms._replace(scattered=m.scale(terms.scattered, lit))   # (a glowing object's: none in the preview)
     sums = shading.sum_lights(m, [terms], light_groups.medium(m, s["Beta"], s["Albedo"]),
                               m.wrap(s["View Transmittance"]), m.wrap(s["Is Camera"]))
     closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", sums.emissions)

@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from .. import caveats, escape, methods, shadow_maps, sunsky, view
-from ..precompute.model import capabilities, footprint, predict
+from ..precompute.model import capabilities, predict
 
 MULTIPLE_ENTRIES = 1_000_000   # samples x lights at most for Dense Fog's shares (``dense_fog``): every nth sample
 #                                beyond (the choice's time stays that of the ladder's alone)
@@ -99,7 +99,7 @@ def emitters_dense(scene, spec):
     if not glowing or target is None or scene.camera is None:
         return bool(glowing)
     grid = tuple(min(a, b) for a, b in zip(view.sample_grid(scene), EMITTER_GRID))
-    centres = np.array([footprint.box_points(o.bound_box, o.matrix_world).mean(axis=0) for o in glowing])
+    centres = np.array([methods.compositor.object_centre(o) for o in glowing])
     samples = _at_centres(view.view_samples(scene, [], frames=[scene.frame_current], grid=grid), centres)
     parts = predict.multiple_parts(samples, np.ones((len(glowing), 3)), spec.beta_per_unit, spec.anisotropy,
                                    spec.grey_albedo)

@@ -9,10 +9,10 @@ ground (base colour 0.5, roughness 1, Specular IOR Level 0), a camera looking do
 SHAPE ``bar``: a glowing bar BAR m long and BAR_WIDTH thick across the view instead (a neon tube).
 ``reference``: Cycles' World volume (Volume Scatter, white, density BETA; volume bounces 0: single scattering, the
 ground's light of the fog through one diffuse bounce; clip start 1 mm); ``reference-direct``: the same without the
-bounce, so the ground has its direct light alone (the difference is the fog light it reflects).  ``ours``: the add-on's fog (the Compositor
-method, Dense Fog off, no shafts), as F12 renders it; ``ours-without``: the same with the glowing object's fog light
-on surfaces left out (what the method rendered before it); ``ours-one-point``: each glowing object one point, not
-cut along its length (``methods.compositor.EMITTER_PIECES`` 1).
+bounce, so the ground has its direct light alone (the difference is the fog light it reflects).  ``ours``: the
+add-on's fog (the Compositor method, Dense Fog off, no shafts), as F12 renders it; ``ours-without``: the same with
+the glowing object's fog light on surfaces left out (what the method rendered before it); ``ours-one-point``: each
+glowing object one point, not cut along its length (``methods.compositor.EMITTER_PIECES`` 1).
 """
 import math
 import pathlib
@@ -93,7 +93,7 @@ def main(mode, out, samples, shape="sphere"):
     from fog_addon.precompute.core.spec import FogSpec
     fog_addon.register()
     if mode == "ours-without":
-        compositor.emitter_points = lambda scene: None
+        compositor.emitter_points = lambda shining: None
     if mode == "ours-one-point":
         compositor.EMITTER_PIECES = 1
     apply.apply(scene, FogSpec(density=BETA, method="compositor", shafts=False, multiple_scattering=False))
