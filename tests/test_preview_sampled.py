@@ -103,12 +103,3 @@ def test_each_tile_estimates_the_sum_of_all_and_favours_its_own_lights():
                      / np.linalg.norm(positions, axis=1)[None], axis=0)   # each light's nearest tile by angle
     assert all(chances[near[j], j] > np.median(chances[:, j]) for j in range(20))
 
-
-def test_glowing_points_light_no_surfaces():
-    """The table marks which entries light the surfaces' fog light (row 0's fourth channel, read by
-    ``preview_sampled.build_surface_group``): the lamps 1, the glowing objects' points 0 (final renders give them
-    no light on surfaces); without marks, every entry is a lamp."""
-    positions, intensities = [(0.0, 5.0, 1.0), (2.0, 8.0, 1.0), (-1.0, 4.0, 0.5)], [(10.0, 10.0, 10.0)] * 3
-    rows = ps.table_rows(positions, intensities, (0.0, 0.0, 1.7), 0.05, lights_surfaces=[1.0, 1.0, 0.0])
-    assert rows[0, :, 3].tolist() == [1.0, 1.0, 0.0]
-    assert ps.table_rows(positions, intensities, (0.0, 0.0, 1.7), 0.05)[0, :, 3].tolist() == [1.0, 1.0, 1.0]

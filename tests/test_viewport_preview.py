@@ -216,11 +216,12 @@ print(json.dumps([why for _, why in notes]))
 
 
 def test_preview_names_what_it_leaves_out_of_a_layer_and_glowing_objects(tmp_path):
-    """The preview shows glowing objects' glows as round glows about their centres (the compositor's follow their
-    shapes), and its lamps glow above a layer's top: the notes say both."""
+    """The preview shows glowing objects' glows from points along each, without their shadows (the compositor's
+    follow their shapes), and its lamps glow above a layer's top: the notes say both."""
     blend = h.scene_blend("spheres", tmp_path)
     notes = h.bpy_flow(NOTES_FLOW.replace("BLEND", repr(str(blend))), tmp_path)
-    assert any("preview shows the glows of the glowing objects (Neon Sign) as round glows" in n for n in notes), notes
+    assert any("preview shows the glows of the glowing objects (Neon Sign) from points along each" in n
+               for n in notes), notes
     assert any("preview takes the lamps' glows through the fog layer" in n for n in notes), notes
 
 

@@ -171,7 +171,7 @@ class Compositor(Method):
     def preview_notes(self, scene, spec, plan):
         """What the viewport's preview shows of the compositor's fog (``nodes/preview.py``)."""
         if plan.preview is None:
-            return []
+            return self.glowing_notes(scene, plan)
         eevee = scene.render.engine == budgets.EEVEE_ENGINE
         notes = [("Viewport", "the viewport compositor is on in a 3D view: it adds the compositor's fog over the "
                               "viewport's preview of it (Shading popover > Compositor: Disabled)")
@@ -195,17 +195,7 @@ class Compositor(Method):
             notes.append(("Viewport", f"the viewport's preview shows no light shafts of the lights it samples "
                                       f"({caveats.listed([o.name for o in sampled_shafts])}): final renders, F12, "
                                       "have them"))
-        glowing, points = glowing_objects(scene), sampled_points(scene, plan, glowing_points(scene))
-        as_points = set(points[0]) if points else set()
-        if as_points:
-            notes.append(("Viewport", f"the viewport's preview shows the glows of the glowing objects "
-                                      f"({caveats.listed([o.name for o in glowing if o in as_points])}) as round glows "
-                                      "about their centres, sampled with the lights, that light no surface (final "
-                                      "renders, F12, glow their shapes and light the surfaces around them)"))
-        missing = [o.name for o in glowing if o not in as_points]
-        if missing:
-            notes.append(("Viewport", f"the viewport's preview shows no glow of the glowing objects "
-                                      f"({caveats.listed(missing)}): final renders, F12, have it"))
+        notes += self.glowing_notes(scene, plan)
         if spec.layered and shown:
             notes.append(("Viewport", "the viewport's preview takes the lamps' glows through the fog layer's density "
                                       "everywhere, also above its top (final renders, F12, end them there)"))
@@ -217,6 +207,25 @@ class Compositor(Method):
                                      f"{len(plan.in_groups)} lights (spot and area lights beyond its "
                                      f"{len(shown)}): {caveats.listed(left)}, up to {share:.0%} of a pixel's fog "
                                      "(predicted; final renders, F12, have every light)")]
+
+    def glowing_notes(self, scene, plan):
+        """What the viewport's preview shows of the glowing objects' fog (``sampled_points``)."""
+        glowing = glowing_objects(scene)
+        if not glowing:
+            return []
+        shining = glowing_points(scene)
+        as_points = set(shining[0]) if sampled_points(scene, plan, shining) is not None else set()
+        notes = []
+        if as_points:
+            notes.append(("Viewport", f"the viewport's preview shows the glows of the glowing objects "
+                                      f"({caveats.listed([o.name for o in glowing if o in as_points])}) from points "
+                                      "along each, sampled with the lights, without their shadows (final renders, "
+                                      "F12, glow their shapes)"))
+        missing = [o.name for o in glowing if o not in as_points]
+        if missing:
+            notes.append(("Viewport", f"the viewport's preview shows no glow of the glowing objects "
+                                      f"({caveats.listed(missing)}): final renders, F12, have it"))
+        return notes
 
     def frame_change(self, scene, spec, lights):
         if comp_fog.FOG_GROUP in bpy.data.node_groups:
@@ -246,7 +255,7 @@ def _preview(scene, spec, plan, maps, shining, day_table=None, day_dims=True):
     node groups give them, their dimming of the surfaces' direct light where ``day_dims``."""
     lights, models = plan.preview[:2] if plan.preview else ([], [])
     sampled, points = sampled_lights(scene, plan), sampled_points(scene, plan, shining)
-    if not lights and not sampled and day_table is None:
+    if not lights and not sampled and points is None and day_table is None:
         preview_sampled.write_table(scene, [], spec.beta_per_unit)
         return None, {}
     shadows = _still_maps(lights, maps) if scene.render.engine == "CYCLES" else {}
@@ -306,12 +315,16 @@ def sampled_lights(scene, plan):
 
 
 def sampled_points(scene, plan, shining):
-    """``shining`` (``glowing_points``') where the viewport's preview samples the glowing objects beside its lights,
-    as point sources (``preview_sampled.write_table``), or None: where the preview holds or samples lights (not
-    EEVEE's uniform block without room) and some glowing object's radiance can be read."""
-    if not plan.preview or not (plan.preview[0] or samples_all(scene, plan.in_groups)):
+    """(centres (K, 3) m, intensities (K, 3) W/sr) of the glowing objects (``shining``: ``glowing_points``') that the
+    viewport's preview samples beside its lights (``preview_sampled.write_table``), each cut along its length as the
+    final render's fog light on surfaces takes it (``emitter_points``), or None: without a glowing object whose
+    radiance can be read, or in EEVEE where the preview holds no light (its uniform block without room).  In Cycles
+    the glowing objects have a preview of their own in a scene without lamps."""
+    if not shining[0]:
         return None
-    return shining if shining[0] else None
+    if scene.render.engine != "CYCLES" and not (plan.preview and plan.preview[0]):
+        return None
+    return emitter_points(shining)
 
 
 def _viewport_compositor_on():

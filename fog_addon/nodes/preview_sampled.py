@@ -18,6 +18,8 @@ column, a second keeps it or takes its alias: two texel reads, no search).  The 
 alias table are an image (``TABLE``), written by ``write_table`` when the fog is built and each time the handlers
 follow the scene (``Compositor.update``): a light moved, recoloured or dimmed shows at the next depsgraph update.
 
+The glowing objects join them as point sources along their length (``methods.compositor.sampled_points``): their
+glows and the fog light they give the surfaces are a lamp's, as the final render's (``comp_fog.emitter_fog_light``).
 Spot and area lights are not sampled (a point's glow is not theirs): the notes name those the preview leaves out.
 """
 import math
@@ -49,12 +51,12 @@ def table_spec(count):
 
 
 def write_table(scene, lights, beta, points=None):
-    """Write the table of ``lights`` (``sampled``'s, as they are now) and of ``points`` (objects, centres (K, 3) m,
-    RGB intensities (K, 3) W/sr: the glowing objects as point sources, ``methods.compositor.glowing_points``, whose glow
-    the preview shows and whose light on surfaces it leaves out: final renders with the Compositor have it,
-    ``comp_fog.emitter_fog_light``) into the image ``TABLE`` (made if missing or of another size); returns (spec, image), or (None, None) with neither (the image removed)."""
+    """Write the table of ``lights`` (``sampled``'s, as they are now) and of ``points`` (centres (K, 3) m, RGB
+    intensities (K, 3) W/sr: the glowing objects as point sources, ``methods.compositor.sampled_points``, drawn and
+    modelled as the lamps are) into the image ``TABLE`` (made if missing or of another size); returns (spec, image),
+    or (None, None) with neither (the image removed)."""
     img = bpy.data.images.get(TABLE)
-    centres, glowing = (np.zeros((0, 3)), np.zeros((0, 3))) if points is None else points[1:]
+    centres, glowing = (np.zeros((0, 3)), np.zeros((0, 3))) if points is None else points
     if not lights and not len(centres):
         if img is not None:
             bpy.data.images.remove(img)
@@ -69,8 +71,7 @@ def write_table(scene, lights, beta, points=None):
                                  / max(abs(frame[0][2]), 1e-6))
     positions = np.concatenate([np.reshape([tuple(o.matrix_world.translation) for o in lights], (-1, 3)), centres])
     intensities = np.concatenate([np.reshape(view.light_intensities(lights), (-1, 3)), glowing])
-    rows = sampling.table_rows(positions, intensities, camera.matrix_world.translation, beta, directions, half_angle,
-                               [1.0] * len(lights) + [0.0] * len(centres))
+    rows = sampling.table_rows(positions, intensities, camera.matrix_world.translation, beta, directions, half_angle)
     spec = table_spec(len(positions))
     if img is not None and tuple(img.size) != (spec.width, spec.height):
         bpy.data.images.remove(img)
@@ -125,11 +126,10 @@ def _pick(m, spec, u1, u2, tile):
 
 
 def _light(m, spec, u, intensity_row):
-    """(position, I / p, 1 if it lights the surfaces' fog light else 0) of the column at the texture coordinate
-    ``u``, I / p from the row ``intensity_row``."""
+    """(position, I / p) of the column at the texture coordinate ``u``, I / p from the row ``intensity_row``."""
     pos = m.combine(*(m.tap(spec, u, 0.5 / spec.height, c) for c in range(3)))
     inten = m.combine(*(m.tap(spec, u, intensity_row, c) for c in range(3)))
-    return pos, inten, m.tap(spec, u, 0.5 / spec.height, 3)
+    return pos, inten
 
 
 def _randoms(ng, source):
@@ -171,15 +171,14 @@ def dense_of(lights, models, g, albedo, scales, weights):
 
 
 def _sampled_group(name, inputs, images, spec, light_group, shared, jitter_from):
-    """(tree, its output node, its NodeOps, its inputs by name, the light group's node, 1 where the light drawn lights
-    surfaces) of a group ``name`` with ``inputs``: one
-    light drawn from the table ``spec`` per sample (``_pick``, its randoms from the input ``jitter_from``) feeds
+    """(tree, its output node, its NodeOps, its inputs by name, the light group's node) of a group ``name`` with
+    ``inputs``: one light drawn from the table ``spec`` per sample (``_pick``, its randoms from the input ``jitter_from``) feeds
     ``light_group``'s Light and Intensity, the group's ``shared`` inputs its own."""
     ng, gin, gout = groups.new_group(name, inputs, [("Fog", "NodeSocketShader")])
     m = NodeOps(ng, dict(images))
     s = {x.name: x for x in gin.outputs if x.name}
     u1, u2, u3 = _randoms(ng, s[jitter_from])
-    position, intensity, lit = _light(m, spec, *_pick(m, spec, m.wrap(u1), m.wrap(u2), _tile(m, ng)))
+    position, intensity = _light(m, spec, *_pick(m, spec, m.wrap(u1), m.wrap(u2), _tile(m, ng)))
     node = ng.nodes.new("ShaderNodeGroup")
     node.node_tree = light_group
     node.name = node.label = "Sampled Light"
@@ -188,7 +187,7 @@ def _sampled_group(name, inputs, images, spec, light_group, shared, jitter_from)
     ng.links.new(u3, node.inputs[light_groups.JITTER])
     for sock in shared:
         ng.links.new(s[sock], node.inputs[sock])
-    return ng, gout, m, s, node, lit
+    return ng, gout, m, s, node
 
 
 def build_surface_group(images, spec, g, dense=None, cycles=False):
@@ -196,12 +195,11 @@ def build_surface_group(images, spec, g, dense=None, cycles=False):
     sampled light's, fully modelled: Sun et al. 2005 Eq. 19's albedo x (glow + T x reflected fog light) on camera
     rays, ``shading.sum_lights``; ``light_models``)."""
     shared = ("Beta", "Position", "Incoming", "View Distance", "Normal", "Diffuse", "Specular", "Glossy Level")
-    ng, gout, m, s, node, lit = _sampled_group(SURFACE_GROUP, [
+    ng, gout, m, s, node = _sampled_group(SURFACE_GROUP, [
         ("Beta", F), ("Albedo", C), ("Position", V), ("Incoming", V), ("View Distance", F), ("Normal", V),
         ("Diffuse", C), ("Specular", C), ("Glossy Level", F), ("View Transmittance", F), ("Is Camera", F)],
         images, spec, light_groups.build_light(light_models(g, 0, dense), images, cycles), shared, "Position")
     terms = light_groups.read(m, node, rungs.SURFACE_OUTPUTS, shading.LightTerms)
-    terms = terms._replace(scattered=m.scale(terms.scattered, lit))   # (a glowing object's: none in the preview)
     sums = shading.sum_lights(m, [terms], light_groups.medium(m, s["Beta"], s["Albedo"]),
                               m.wrap(s["View Transmittance"]), m.wrap(s["Is Camera"]))
     closures.closure_sum(m, gout.inputs["Fog"], "ShaderNodeEmission", sums.emissions)
@@ -212,7 +210,7 @@ def build_surface_group(images, spec, g, dense=None, cycles=False):
 def build_world_group(images, spec, g, dense=None, cycles=False):
     """The World group's estimate of the other lights' glows to the sky (shader group, output Fog: a Background of
     albedo x the sampled light's glow to infinity x Is Camera)."""
-    ng, gout, m, s, node, _ = _sampled_group(
+    ng, gout, m, s, node = _sampled_group(
         WORLD_GROUP, [("Beta", F), ("Albedo", C), ("Camera", V), ("Direction", V), ("Is Camera", F)], images, spec,
         light_groups.build_background_light(light_models(g, 1, dense), images, cycles), ("Beta", "Camera", "Direction"),
         "Direction")

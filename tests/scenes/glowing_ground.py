@@ -2,7 +2,8 @@
 Compositor method's ``comp_fog.emitter_fog_light``) against Cycles' path-traced fog.
 
     python tests/scenes/glowing_ground.py MODE OUT.exr SAMPLES [SHAPE]
-        (MODE: reference | reference-direct | ours | ours-without | ours-one-point; SHAPE: sphere | bar)
+        (MODE: reference | reference-direct | ours | ours-without | ours-one-point | viewport;
+         SHAPE: sphere | bar)
 
 An emissive UV sphere (Emission, white, STRENGTH W/(m^2 sr), radius RADIUS m) HEIGHT m over a grey Lambertian
 ground (base colour 0.5, roughness 1, Specular IOR Level 0), a camera looking down at it; World black, no lamp.
@@ -12,7 +13,9 @@ ground's light of the fog through one diffuse bounce; clip start 1 mm); ``refere
 bounce, so the ground has its direct light alone (the difference is the fog light it reflects).  ``ours``: the
 add-on's fog (the Compositor method, Dense Fog off, no shafts), as F12 renders it; ``ours-without``: the same with
 the glowing object's fog light on surfaces left out (what the method rendered before it); ``ours-one-point``: each
-glowing object one point, not cut along its length (``methods.compositor.EMITTER_PIECES`` 1).
+glowing object one point, not cut along its length (``methods.compositor.EMITTER_PIECES`` 1); ``viewport``: the
+add-on's fog as the rendered viewport shows it (``preview.forced``, compositing off: the preview's glowing objects
+sampled as points along each, ``methods.compositor.sampled_points``).
 """
 import math
 import pathlib
@@ -97,6 +100,12 @@ def main(mode, out, samples, shape="sphere"):
     if mode == "ours-one-point":
         compositor.EMITTER_PIECES = 1
     apply.apply(scene, FogSpec(density=BETA, method="compositor", shafts=False, multiple_scattering=False))
+    if mode == "viewport":
+        from fog_addon.nodes import preview
+        scene.render.use_compositing = False
+        with preview.forced():
+            measure.render_to_file(scene, out)
+        return
     measure.render_to_file(scene, out)
 
 

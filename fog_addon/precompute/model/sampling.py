@@ -73,10 +73,9 @@ def tile_chances(tile_weights, weights):
     return (1.0 - EVEN_SHARE) * shares(tile_weights) + EVEN_SHARE * shares(weights)[None, :]
 
 
-def table_rows(positions, intensities, camera, beta, directions=None, half_angle=0.0, lights_surfaces=None):
+def table_rows(positions, intensities, camera, beta, directions=None, half_angle=0.0):
     """(ROWS, N, 4) float32 of the lights (positions, m; RGB intensities I, W/sr; the camera's position; beta, 1/m):
-    row 0 their positions, and in its fourth channel whether each lights the surfaces' fog light
-    (``lights_surfaces``, N of 0 or 1; all 1 without it); for each tile t, row 1 + 2t their intensities over their
+    row 0 their positions; for each tile t, row 1 + 2t their intensities over their
     probability there (I / p) and row 2 + 2t (keep, alias column) of ``alias_table``.  The probabilities are
     ``tile_chances`` of the tiles' centre rays ``directions`` (TILE_COUNT, 3, row by row from the bottom-left tile:
     ``view.frame_rays``) of angular radius ``half_angle`` (rad), or the whole picture's ``importance`` in every tile
@@ -90,7 +89,6 @@ def table_rows(positions, intensities, camera, beta, directions=None, half_angle
         chances = tile_chances(tile_importance(positions, intensities, camera, directions, half_angle, beta), weights)
     rows = np.zeros((ROWS, len(positions), 4), np.float32)
     rows[0, :, :3] = positions
-    rows[0, :, 3] = 1.0 if lights_surfaces is None else np.asarray(lights_surfaces, float)
     for t, p in enumerate(chances):
         p, keep, alias = alias_table(p)
         rows[1 + 2 * t, :, :3] = intensities / np.maximum(p, 1e-30)[:, None]
