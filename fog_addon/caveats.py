@@ -197,12 +197,12 @@ def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None, shares=None
                 f"{len(found)} light(s) ({listed(found)}) passes through the objects near them (a lamp's hood, "
                 f"a wall, a window frame){_effect(shares)}"]
     notes = []
-    areas = [o.name for o in lights if o.name in found and o.data.type == "AREA"]
+    shafted = [o for o in lights if o.name in found]
+    areas = [o.name for o in shafted if o.data.type == "AREA"]
     if areas:
-        notes.append(f"area lights cast no shafts yet: the glow of {listed(areas)} passes through the objects "
-                     f"near them{_effect(shares)}")
-    shafted = [o for o in lights if o.name in found and o.data.type != "AREA"]
-    soft = [o.name for o in shafted if getattr(o.data, "shadow_soft_size", 0.0) > 0.0]
+        notes.append(f"light shafts are sharp: the area lights {listed(areas)} cast theirs from their centres, so "
+                     "their soft shadows are sharp in the fog")
+    soft = [o.name for o in shafted if o.data.type != "AREA" and getattr(o.data, "shadow_soft_size", 0.0) > 0.0]
     if soft:
         notes.append(f"light shafts are sharp: the Radius of {listed(soft)} softens their shadows on surfaces "
                      "(Cycles) but not in the fog")

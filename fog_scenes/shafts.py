@@ -3,7 +3,8 @@
 The cases are demo scenes whose fog is cut by shadows: windows (``window_room``), columns (``colonnade``), a hood
 and a hole in a wall (``hooded_lamp``), a picket fence and a thin pole (``fence``), a pergola's slats under a low
 spot, a stairwell with a shaded pendant, a lantern among thin trunks, a lit bus shelter by a street lamp
-(``pergola``, ``stairwell``, ``forest``, ``bus_shelter``: built after the shafts were tuned on the others), plus
+(``pergola``, ``stairwell``, ``forest``, ``bus_shelter``: built after the shafts were tuned on the others), the
+colonnade raked by an area light (``softbox_colonnade``: an area light's shafts), plus
 the open street (``street_lamps``), where the lamp posts' shadows are all there is to model.  Each reference is Cycles'
 path-traced World volume with single scattering and interreflection off, as the other references
 (fog_addon/reference.py), but with every object casting shadows into the fog and onto the surfaces: that is what
@@ -38,6 +39,7 @@ SHAFT_CASES = [
     ("stairwell", 0.1, 0.0),
     ("forest", 0.06, 0.0),
     ("bus_shelter", 0.07, 0.0),
+    ("softbox_colonnade", 0.08, 0.0),   # (an area light's shafts)
 ]
 # The open street, its posts casting shadows, stored apart from the shadowless street_lamps_0.08.exr.
 OPEN_CASES = [("street_lamps", 0.08, 0.0)]
@@ -57,8 +59,10 @@ SHAFT_SAMPLES = {
     "stairwell": 4096,
     "forest": 4096,
     "bus_shelter": 4096,
+    "softbox_colonnade": 4096,
 }
-SHAFT_SEEDS = {"window_room": 2, "colonnade": 4, "pergola": 2, "stairwell": 2, "forest": 2, "bus_shelter": 2}
+SHAFT_SEEDS = {"window_room": 2, "colonnade": 4, "pergola": 2, "stairwell": 2, "forest": 2, "bus_shelter": 2,
+               "softbox_colonnade": 4}
 
 # Measured noise of ONE cached reference (all its seeds averaged), lamps' 3x3 pixels left out, as (relative RMSE,
 # p95 per-pixel relative error, max per-pixel relative error).  With one seed: from a second render with seed 1
@@ -75,6 +79,7 @@ SHAFT_REFERENCE_NOISE = {
     ("stairwell", 0.1): (0.0024, 0.018, 0.25),   # (2026-11-30: 52 s a seed)
     ("forest", 0.06): (0.0019, 0.005, 0.09),   # (37 s a seed)
     ("bus_shelter", 0.07): (0.0031, 0.013, 0.31),   # (42 s a seed)
+    ("softbox_colonnade", 0.08): (0.0031, 0.014, 0.14),   # (2026-12-01: 46 s a seed)
 }
 
 SHADOWS_SUFFIX = "_shadows"

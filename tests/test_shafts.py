@@ -27,7 +27,9 @@ def point_map(light, occluders, size=(512, 256)):
     return spec, depth.reshape(dirs.shape[:2])
 
 
-def expected_share(camera, direction, length, light, beta, occluders, g=0.0):
+def expected_share(camera, direction, length, light, beta, occluders, g=0.0, normal=None):
+    """The lit share by quadrature; ``normal``: an area light's emitting side (world), whose fog weighs
+    max(cos, 0) about it (Lambert), else a point light's."""
     camera, direction, light = (np.asarray(a, float) for a in (camera, direction, light))
 
     def integrand(t, visible):
@@ -39,6 +41,8 @@ def expected_share(camera, direction, length, light, beta, occluders, g=0.0):
             mu = np.dot(u / d, -direction)
             w = (1 - g * g) / (1 + g * g - 2 * g * mu) ** 1.5
         f = math.exp(-beta * (t + d)) * w / (d * d)
+        if normal is not None:
+            f *= max(float(np.dot(u / d, normal)), 0.0)
         if visible:
             for centre, radius in occluders:
                 if sphere_hit(light, (u / d)[None], centre, radius)[0] < d:
@@ -52,12 +56,12 @@ def expected_share(camera, direction, length, light, beta, occluders, g=0.0):
     return num / den
 
 
-def share(camera, direction, length, light, beta, spec, depth, nodes=64, shift=0.5, g=0.0):
+def share(camera, direction, length, light, beta, spec, depth, nodes=64, shift=0.5, g=0.0, falloff=None):
     m = NumpyOps({spec.name: depth})
     light = np.asarray(light, float)
 
     return shafts.lit_share(m, np.asarray(camera, float), np.asarray(direction, float), length, light, beta,
-                            (spec, None), nodes, shift=shift, g=g)
+                            (spec, None), nodes, shift=shift, g=g, falloff=falloff)
 
 
 CAMERA = np.array([0.0, -10.0, 1.5])
@@ -86,6 +90,34 @@ def test_sphere_shadow_matches_quadrature(target, length, g):
     want = expected_share(CAMERA, direction, min(length, 400.0), light, 0.1, occluders, g=g)
     assert want < (0.999 if g else 0.97)   # the ray does cross a shadow
     assert abs(got - want) < 0.02, (got, want)
+
+
+@pytest.mark.parametrize("camera,target,length", [((-2.0, -10.0, 3.1), (-2.0, 0.0, 3.1), 25.0),
+                                                  ((-10.0, -1.0, 3.5), (0.0, 0.0, 3.5), 1e6)])
+def test_area_light_share_weighs_its_front_side(camera, target, length):
+    """An area light facing -x (its rows those of a light turned 90 degrees about y, scaled 2 x 0.5 x 1: the third
+    row stays normal to the emitter): its shafts' share weighs the fog by Lambert's cosine on its front side and
+    none behind (``area.shaft_falloff``), against quadrature with that weight.  The share a point light's weights
+    would give differs: the ray's fog behind the emitter, lit or shadowed, counts for nothing."""
+    from fog_addon.precompute.physics.area import area
+    light = (0.0, 0.0, 3.0)
+    occluders = [((-1.5, 0.0, 3.0), 0.5), ((1.5, 0.0, 3.0), 0.5)]   # one before it, one behind
+    spec, depth = point_map(light, occluders, (1024, 512))
+    turn = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]) @ np.diag([2.0, 0.5, 1.0])
+    rows = tuple(np.linalg.inv(turn).ravel())   # its local -Z in the world: -x
+    normal = -turn[:, 2] / np.linalg.norm(turn[:, 2])
+
+    def falloff(m, u, d):
+        return area.shaft_falloff(m, u, d, *rows)
+    camera = np.asarray(camera, float)   # (the second ray crosses the emitter's plane x = 0)
+    direction = np.subtract(target, camera) / np.linalg.norm(np.subtract(target, camera))
+    got = np.mean([share(camera, direction, length, light, 0.1, spec, depth, nodes=64, shift=(k + 0.5) / 16,
+                         falloff=falloff) for k in range(16)])
+    want = expected_share(camera, direction, min(length, 400.0), light, 0.1, occluders, normal=normal)
+    point = expected_share(camera, direction, min(length, 400.0), light, 0.1, occluders)
+    print(f"area {got:.4f}, quadrature {want:.4f}, a point light's {point:.4f}")
+    assert abs(got - want) < 0.02, (got, want)
+    assert abs(point - want) > 0.05, (point, want)
 
 
 def test_thin_pole_casts_its_shaft():

@@ -122,13 +122,14 @@ def test_final_renders_are_those_without_the_preview(tmp_path, engine):
 # a street.  Measured (2026-11-30, docs/measurements/2026-11-29-viewport-preview.md): window room 6.3 % (180 %
 # without the preview's shafts), colonnade 1.35 % (19 %), street lamps 7.7 % (its three lamps sampled one a sample,
 # without shafts: noise at 16 spp; 4.5 % at 64, 3.1 % at 256; 4.2 % when two were modelled with their shafts); the
-# bounds add a margin.
-PREVIEW_BOUND = {"window_room": 0.09, "colonnade": 0.025, "street_lamps": 0.09}
-PREVIEW_GOAL = {"window_room": 0.15, "colonnade": 0.15, "street_lamps": 0.10}
+# bounds add a margin.  The softbox colonnade (an area light's shafts, 2026-12-01): 3.09 % (14.9 % without them).
+PREVIEW_BOUND = {"window_room": 0.09, "colonnade": 0.025, "street_lamps": 0.09, "softbox_colonnade": 0.04}
+PREVIEW_GOAL = {"window_room": 0.15, "colonnade": 0.15, "street_lamps": 0.10, "softbox_colonnade": 0.15}
 
 
 @pytest.mark.parametrize("scene,density", [("window_room", 0.1),
                                            pytest.param("colonnade", 0.08, marks=pytest.mark.slow),
+                                           pytest.param("softbox_colonnade", 0.08, marks=pytest.mark.slow),
                                            pytest.param("street_lamps", 0.08, marks=pytest.mark.slow)])
 def test_viewport_against_path_tracing(tmp_path, scene, density):
     from fog_scenes import shafts as fs   # noqa: PLC0415 (the shaft scenes' references)

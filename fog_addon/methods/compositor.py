@@ -464,10 +464,10 @@ def _shining(scene):
 
 def shafted_lights(scene, spec, lights):
     """The ``lights`` whose shadows fall in fog the camera may see (``caveats.shadowing_lights``: an object
-    casting shadows within the glow's reach): only they get a shadow map and a shaft group (area lights none:
-    ``caveats.shadow_notes`` says so)."""
+    casting shadows within the glow's reach): only they get a shadow map and a shaft group (an area light a point
+    light's map from its centre: ``comp_shafts.area_falloff``)."""
     found = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(view.scene_size(scene), 1e-6))
-    return [light for light in lights if light.name in found and light.data.type != "AREA"]
+    return [light for light in lights if light.name in found]
 
 
 def _moving(scene):

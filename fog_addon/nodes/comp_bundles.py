@@ -127,10 +127,12 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
             for node in built[1:] + ([halo[0]] if halo is not None else []):
                 for socket, _ in light_groups.spot_inputs(mod):
                     ng.links.new(built[0].inputs[socket].links[0].from_socket, node.inputs[socket])
-        if shaft is not None and light_groups.SPOT_ROWS[0] in shaft.inputs:   # a moving spot's shafts: its cone now
+        if shaft is not None and light_groups.SPOT_ROWS[0] in shaft.inputs:   # a moving spot's shafts: its cone
+            # now; an area light's: its pose now
             if built and light_groups.SPOT_ROWS[0] in built[0].inputs:
                 for socket in (*light_groups.SPOT_ROWS, light_groups.SPOT_COS, light_groups.SPOT_BLEND):
-                    ng.links.new(built[0].inputs[socket].links[0].from_socket, shaft.inputs[socket])
+                    if socket in shaft.inputs:
+                        ng.links.new(built[0].inputs[socket].links[0].from_socket, shaft.inputs[socket])
             else:
                 light_groups.drive_spot(ng, k, light, shaft)
     if halos:

@@ -6,6 +6,7 @@ import dataclasses
 import hashlib
 import math
 
+from ..precompute.physics.area import area
 from ..precompute.physics.shafts import shaft_maps, shafts
 from ..precompute.physics.spot import spot as spot_
 from . import comp_ops, groups, light_groups, owned
@@ -37,11 +38,17 @@ QUARTER_FROM = 2 * HALF_FROM   # px: from this many, at a quarter (never coarser
 UPSAMPLE_EDGE = 0.1   # ``_upsampled``'s threshold on log distance: a coarse sample of another surface is not taken
 
 
+def is_area(light):
+    """True for an area light: its shafts take a point light's map from its centre and weigh its fog by Lambert's
+    cosine about its normal (``area.shaft_falloff``)."""
+    return light.data.type == "AREA"
+
+
 def shaft_group_name(light, shadow, samples, g):
     """The shaft group of ``light``: one for every point light of the same map size, samples and g (their maps
     differ only in what the group's Map input reads), one per spot (its frame and cone are built in; a moving
-    spot's map frame, its cone being inputs)."""
-    if shadow.spot is not None or shadow.cone:
+    spot's map frame, its cone being inputs) and per area light (its normal an input)."""
+    if shadow.spot is not None or shadow.cone or is_area(light):
         return f"{SHAFT_GROUP} {light.name}"
     return (f"{SHAFT_GROUP} Point {shadow.spec.width}x{shadow.spec.height} g {g:.6g} "
             f"K {samples.view_nodes} {samples.surface_directions}x{samples.surface_nodes}")
@@ -57,10 +64,11 @@ def build_shaft_group(light, shadow, images, samples, g):
     poses.  The map is the group's Map input (its Image node is the bundle's, an animation's map cut from its atlas
     there: ``atlas_tile``), so point lights share one group (``shaft_group_name``), built once."""
     name = shaft_group_name(light, shadow, samples, g)
-    if shadow.spot is None and not shadow.cone and (ng := groups.up_to_date(name)) is not None:
+    emitter = is_area(light)   # an area light
+    if shadow.spot is None and not shadow.cone and not emitter and (ng := groups.up_to_date(name)) is not None:
         return ng
     cone = ([(n, V) for n in light_groups.SPOT_ROWS] + [(light_groups.SPOT_COS, F), (light_groups.SPOT_BLEND, F)]
-            if shadow.cone else [])
+            if shadow.cone else [(n, V) for n in light_groups.SPOT_ROWS] if emitter else [])
     ng, gin, gout = groups.new_group(name, [*SHAFT_SHARED, ("Light", V), ("Surface Position", V),
                                             ("Surface Normal", V), ("Surface Offset", F), (SHAFT_MAP, C), *cone],
                                      [("Share", F), ("Share Far", F), ("Visible", V)],
@@ -78,8 +86,12 @@ def build_shaft_group(light, shadow, images, samples, g):
     m.images[spec.name] = m.wrap(gin.outputs[SHAFT_MAP], vector=True)
     g_ = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
     cone_args = ()
+    axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+    if emitter:   # the rows' 9 components: scalar inputs of the node groups (the light's pose now, driven)
+        kind = f"area {shadow.spec.width}x{shadow.spec.height}"
+        cone_args = tuple(m.dot(g_[n], a) for n in light_groups.SPOT_ROWS for a in axes)
+        falloff = area.shaft_falloff
     if shadow.cone:   # the rows' 9 components, cos(size / 2) and blend: scalar inputs of the node groups
-        axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
         cone_args = tuple(m.dot(g_[n], a) for n in light_groups.SPOT_ROWS for a in axes) + (
             g_[light_groups.SPOT_COS], g_[light_groups.SPOT_BLEND])
 

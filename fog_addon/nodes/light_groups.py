@@ -139,6 +139,8 @@ def drive_spot(ng, k, light, node):
                                       (("a", cj, a1), ("b", ck, a2), ("c", cj, a2), ("e", ck, a1))])
         ng.links.new(vec.outputs[0], node.inputs[row_name])
     for sock_name, path, expression in _shape_drivers(light):
+        if sock_name not in node.inputs:   # (an area light's shaft group takes its rows alone)
+            continue
         value = ng.nodes.new("ShaderNodeValue")
         value.name = value.label = f"Light {k} {sock_name}"
         value.location = (-900, -300 * k - 200)

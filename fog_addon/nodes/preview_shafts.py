@@ -10,6 +10,7 @@ converges to the shares of a finer quadrature, as the compositor's does over its
 """
 import hashlib
 
+from ..precompute.physics.area import area
 from ..precompute.physics.shafts import shafts
 from . import comp_shafts, groups, owned
 from .groups import F, V
@@ -27,7 +28,7 @@ SKY_LENGTH = 1.0e6   # m: a ray to the sky's length (its far nodes weigh e^{-bet
 INPUTS = (("Beta", F), ("Camera", V), ("Direction", V), ("Length", F), ("Light", V), ("Position", V), ("Normal", V),
           ("Jitter", F))
 OUTPUTS = (("Share", F), ("Visible", F))
-KEY = "analytic_fog_shaft_key"   # on a group: what it was built for (the map, a spot's frame, g)
+KEY = "analytic_fog_shaft_key"   # on a group: what it was built for (the map, a spot's frame, g, an area's normal)
 
 
 def group_name(light, samples=PREVIEW_SAMPLES):
@@ -44,10 +45,15 @@ def build_group(light, shadow, images, g, samples=PREVIEW_SAMPLES):
     ``samples``: the nodes a sample evaluates (``shafts.Samples``).  Built once per rebuild of the fog (a group of
     this code's, ``groups.up_to_date``, is taken as it is)."""
     name = group_name(light, samples)
-    if (ng := groups.up_to_date(name)) is not None and ng.get(KEY) == repr((shadow.spec.name, shadow.spot, g)):
+    normal = _area_normal(light)
+    built_for = repr((shadow.spec.name, shadow.spot, g) + ((normal,) if normal else ()))
+    if (ng := groups.up_to_date(name)) is not None and ng.get(KEY) == built_for:
         return ng
     falloff, clip, kind = None, None, f"point {shadow.spec.name}"
-    if shadow.spot is not None:
+    if normal:   # an area light: its map a point light's, its fog weighed by Lambert's cosine (its pose now)
+        falloff = (lambda m_, u, d: area.shaft_falloff(m_, u, d, *(0.0,) * 6, *normal))
+        kind = f"area {shadow.spec.name} " + hashlib.sha1(repr(normal).encode()).hexdigest()[:12]
+    elif shadow.spot is not None:
         falloff, key = comp_shafts.still_spot_falloff(light, shadow.spot)
         clip = comp_shafts.still_spot_clip(light, shadow.spot)
         kind = "spot " + hashlib.sha1(repr((shadow.spec.name, shadow.spec.width, *key)).encode()).hexdigest()[:12]
@@ -64,9 +70,17 @@ def build_group(light, shadow, images, g, samples=PREVIEW_SAMPLES):
                                    directions=samples.surface_directions, nodes=samples.surface_nodes, clip=clip)
     m.feed(gout.inputs["Visible"], visible)
     ng[owned.BUILT] = groups.code_fingerprint()
-    ng[KEY] = repr((shadow.spec.name, shadow.spot, g))
+    ng[KEY] = built_for
     m.place()
     return groups.install(ng, name)
+
+
+def _area_normal(light):
+    """An area light's emitting side as its world normal's opposite, the third row of its inverse 3x3 world matrix
+    (``area.shaft_falloff``), rounded; None for other lights."""
+    if not comp_shafts.is_area(light):
+        return None
+    return tuple(round(float(c), 6) for c in light.matrix_world.to_3x3().inverted_safe()[2])
 
 
 def jitter(ng, position):

@@ -67,16 +67,16 @@ def _at_centres(samples, centres):
 
 def shadow_fog(scene, spec, method, lights):
     """What the shadows would take from the fog where it has none: the lights with objects near them
-    (``caveats.shadowing_lights``) whose shafts the picture lacks (Light Shafts off, a method without them, area
-    lights), judged at the view's samples (``shadow_maps.shadowed_parts``).  Returns {"shadows": {"left_out":
+    (``caveats.shadowing_lights``) whose shafts the picture lacks (Light Shafts off, a method without them),
+    judged at the view's samples (``shadow_maps.shadowed_parts``).  Returns {"shadows": {"left_out":
     {name: share}, "missing": their share of a judged sample's fog together, at the sample where it is largest,
-    "why": "off", the method's name or "area"}}."""
+    "why": "off" or the method's name}}."""
     name, engine = getattr(method, "name", method), scene.render.engine
     casting = spec.shafts and capabilities.can(name, "shafts", engine)
-    out = {"left_out": {}, "missing": 0.0, "why": "off" if not spec.shafts else name if not casting else "area"}
+    out = {"left_out": {}, "missing": 0.0, "why": "off" if not spec.shafts else name}
     found = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(view.scene_size(scene), 1e-6)) \
         if lights and spec.beta_per_unit > 0.0 else {}
-    unshafted = [o for o in lights if o.name in found and (not casting or o.data.type == "AREA")]
+    unshafted = [o for o in lights if o.name in found] if not casting else []
     judged = shadow_maps.shadowed_parts(scene, spec, unshafted) if unshafted else None
     if judged is not None:
         names, parts = judged

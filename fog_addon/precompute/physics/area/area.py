@@ -94,6 +94,17 @@ def lambert_falloff(m, c_axis):
     return m.maximum(c_axis, 0.0)
 
 
+def shaft_falloff(m, u, d, *rows):
+    """An area light's factor in its shafts' weights (``shafts.lit_share``, ``surface_share``) at the fog point
+    light + u, d = |u| (m): Lambert's cos(theta) about its normal, ``lambert_falloff`` (its far field, which its
+    solid angle factor Omega r^2 / A tends to).  ``rows``: the 9 components of the inverse of the light's 3x3 world
+    matrix, row by row (a spot's driven rows, ``spot.light_space``); the third is normal to the emitter's plane
+    under any scale, pointing away from the side that emits.  The shares are ratios of lit to all fog, which the
+    light's own glow then scales: its shape near the emitter (the solid angle) is left to the glow."""
+    normal = m.combine(*rows[6:9])
+    return lambert_falloff(m, m.dot(normal, u) * -1.0 / m.maximum(m.length(normal) * d, 1e-30))
+
+
 def _metres(m, dx, dy, dz):
     """1 / |d|: the light-space ray's scale (``spot.light_space_ray`` of a unit world direction)."""
     return 1.0 / m.maximum(m.sqrt(m.mul_add(dx, dx, m.mul_add(dy, dy, dz * dz))), 1e-30)
