@@ -276,6 +276,24 @@ MUTATIONS = [
              "    return m.scale(total, 1.0 - glowing)\n",
              "    return m.scale(total, 0.0 * glowing)\n",
              ("tests/test_emitter_surfaces.py::test_a_glowing_object_lights_the_ground_through_the_fog",)),
+    Mutation("emitter_far_glow_dropped", "glowing objects: no glow far from them (the ladder of blurs holds only the "
+             "near kernel: a sphere's ground 0.87 of path tracing, 0.999 with the points' far glow)",
+             "comp_fog.build_fog_group",
+             "            terms += [compose.Term(compose.GLOW, at, compose.EMITTERS, v) for at, v in far.items()]",
+             "            terms += []",
+             ("tests/test_emitter_surfaces.py::test_a_glowing_object_lights_the_ground_through_the_fog",)),
+    Mutation("emitter_far_window_dropped", "glowing objects: the points' far glow not windowed, so added whole over "
+             "the ladder's near part (the glow twice near the object)",
+             "comp_lights.build_far_glow_group",
+             "    far = emitter_glow.far_window(m, gamma, pixel_angle)",
+             "    far = 1.0 + 0.0 * gamma",
+             ("tests/test_emitter_glow.py::test_glowing_sphere_against_path_traced_fog",)),
+    Mutation("emitter_one_sided", "glowing objects: an open mesh's faces taken to emit on one side (a flat sign's far "
+             "glow half)",
+             "emitting_sides",
+             "    return 2 if len(counts) and bool((counts == 1).any()) else 1",
+             "    return 1",
+             ("tests/test_emitter_glow.py::test_a_sign_cut_by_the_frame_glows_as_its_pixels_do",)),
     Mutation("emitter_one_point", "glowing objects: a long one's fog light on surfaces from one point at its centre "
              "(a bar's ground 21 % off path tracing by blocks, against 10 % in four pieces)",
              "emitter_points",
@@ -285,7 +303,7 @@ MUTATIONS = [
     Mutation("emitter_area_uniform_scale", "glowing objects: the area of a mesh scaled non-uniformly taken as if its "
              "scale were uniform (a cube scaled into a bar: 0.47 of its area, half its fog light)",
              "glowing_points",
-             "        area = world_area(obj.data, m)\n",
+             "        area = world_area(obj.data, m) * emitting_sides(obj.data)\n",
              "        area = world_area(obj.data, m.to_3x3().normalized()\n"
              "                          * abs(m.to_3x3().determinant()) ** (1.0 / 3.0))\n",
              ("tests/test_emitter_surfaces.py::test_a_glowing_object_lights_the_ground_through_the_fog",)),

@@ -379,18 +379,29 @@ def glowing_objects(scene):
 def glowing_points(scene):
     """(objects, centres (N, 3) m, intensities (N, 3) W/sr) of the glowing objects (``glowing_objects``) taken each
     as a point source at its bounds' centre of intensity L A / 4: its emission's radiance L (``graph.emitted_radiance``,
-    its brightest material) times its mean projected area, a quarter of its surface's for a convex body (Cauchy).
+    its brightest material) times its mean projected area, a quarter of its surface's for a convex body (Cauchy),
+    both sides of an open mesh's faces counted (``emitting_sides``: a flat sign's mean is L A / 2).
     Those whose radiance cannot be read (a procedural texture, a driven strength) or that are not meshes are left
     out.  The predictor's estimate of their fog (``ops/left_out.emitters_fog``) and the viewport preview's glow of
     them (``preview_sampled.write_table``)."""
     shining, centres, intensities = [], [], []
     for obj, radiance in _shining(scene):
         m = obj.matrix_world
-        area = world_area(obj.data, m)
+        area = world_area(obj.data, m) * emitting_sides(obj.data)
         shining.append(obj)
         centres.append(object_centre(obj))
         intensities.append(np.max(radiance, axis=0) * area / 4.0)
     return shining, np.reshape(centres, (-1, 3)), np.reshape(intensities, (-1, 3))
+
+
+def emitting_sides(mesh):
+    """How many sides of ``mesh``'s faces send their light out: 1 for a closed mesh (every edge between two faces:
+    the inner sides light its inside), 2 for an open one (a sign, a plane: Cycles' and EEVEE's emission leaves both
+    sides of a face).  A mesh partly open counts as open."""
+    used = np.empty(len(mesh.loops), np.int32)
+    mesh.loops.foreach_get("edge_index", used)
+    counts = np.bincount(used, minlength=len(mesh.edges))
+    return 2 if len(counts) and bool((counts == 1).any()) else 1
 
 
 def world_area(mesh, matrix):

@@ -361,8 +361,12 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
         pixel_angle = comp_emitters.emitter_pixel_angle(scene)
         terms.append(compose.Term(compose.GLOW, compose.RAY, compose.EMITTERS, comp_emitters.glows(
             m, p, beta, d_vp, emitters[0], pixel_angle, emitters[1], cover, m.abs(m.dot(normal, incoming)), lean)))
-        if emitter_points is not None and len(emitter_points[0]):
-            light = emitter_fog_light(m, shared, emitter_points, emitters[0], images, p[EMITTERS], win, direction)
+        values = emitter_point_values(m, emitter_points) if emitter_points is not None else []
+        if values:   # the glows far from them, which the ladder leaves out
+            far = emitter_far_glows(m, shared, values, emitters[0], emitters[1], images, pixel_angle)
+            terms += [compose.Term(compose.GLOW, at, compose.EMITTERS, v) for at, v in far.items()]
+        if values:
+            light = emitter_fog_light(m, shared, values, emitters[0], images, p[EMITTERS], win, direction)
             t_vp = model.transmittance(m, beta, d_vp) if daylight is None else sunlight.grey(m, t_day)
             terms += [compose.Term(compose.REFLECTED, compose.SURFACE, compose.EMITTERS, light),
                       compose.Term(compose.DIMMING, compose.SURFACE, compose.EMITTERS, t_vp)]
@@ -397,34 +401,71 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
 EMITTER_POINT = "Emitter Point"   # the nodes of the glowing objects' points: "<EMITTER_POINT> k Location" / "Intensity"
 
 
-def emitter_fog_light(m, shared, points, g, images, emission, win, domain):
+def emitter_point_values(m, points):
+    """[(position, intensity)] of the glowing objects' points (``points``: (positions, intensities),
+    ``methods.compositor.emitter_points``), each a value node of the fog group (``EMITTER_POINT``) whose constants
+    are set here and by ``set_emitter_points``; their fog light on surfaces (``emitter_fog_light``) and their far
+    glows (``emitter_far_glows``) read them."""
+    values = []
+    for k, (centre, intensity) in enumerate(zip(*points)):
+        pair = []
+        for name, value in (("Light", centre), ("Intensity", intensity)):
+            value_node = m.node("ShaderNodeCombineXYZ", 6)
+            value_node.name = value_node.label = f"{EMITTER_POINT} {k} {name}"
+            for c in range(3):
+                value_node.inputs[c].default_value = float(value[c])
+            pair.append(m.wrap(value_node.outputs[0], vector=True))
+        values.append(tuple(pair))
+    return values
+
+
+def emitter_fog_light(m, shared, values, g, images, emission, win, domain):
     """The fog light the pixel's surface reflects of the glowing objects (RGB per unit albedo, Sun et al. 2005 Eq.
-    17-18), each taken as point sources along it (``points``: (positions, intensities),
-    ``methods.compositor.emitter_points``) through the point lights' scatter group (``comp_lights``: single
-    scattering, no shadows), summed over the surfaces' window ``win`` (or the picture) and put back on the picture
-    (``domain``: a value of its size); none on a glowing pixel itself (``emission``, the Emission pass: the point
-    lies inside its own surface).  The points' values are constants set here and by ``set_emitter_points``."""
+    17-18), each taken as point sources along it (``values``: ``emitter_point_values``) through the point lights'
+    scatter group (``comp_lights``: single scattering, no shadows), summed over the surfaces' window ``win`` (or the
+    picture) and put back on the picture (``domain``: a value of its size); none on a glowing pixel itself
+    (``emission``, the Emission pass: the point lies inside its own surface)."""
     models = rungs.choose("nodes", 0, g, "point")
     total = None
-    for k, (centre, intensity) in enumerate(zip(*points)):
+    for k, (light, intensity) in enumerate(values):
         node = m.node("CompositorNodeGroup", 7)
         node.node_tree = comp_lights.build_scatter_group(models, images)
         node.label = f"{EMITTER_POINT} {k} Scatter"
         for socket, _ in comp_lights.SURFACE_SHARED:   # (the per-pixel ones cropped to the surfaces' window)
             per_pixel = socket in comp_lights.SURFACE_IMAGES
             m.feed(node.inputs[socket], shared[SURFACE + socket if per_pixel else socket])
-        for name, value in (("Light", centre), ("Intensity", intensity)):
-            value_node = m.node("ShaderNodeCombineXYZ", 6)
-            value_node.name = value_node.label = f"{EMITTER_POINT} {k} {name}"
-            for c in range(3):
-                value_node.inputs[c].default_value = float(value[c])
-            m.feed(node.inputs[name], m.wrap(value_node.outputs[0], vector=True))
+        m.feed(node.inputs["Light"], light)
+        m.feed(node.inputs["Intensity"], intensity)
         v = m.wrap(node.outputs[rungs.SCATTERED_OUT.compositor], vector=True)
         total = v if total is None else comp_ops.accumulate(m, total, v)
     if win is not None:
         total = comp_ops.accumulate(m, comp_ops.zero(m, domain), comp_ops.uncrop(m, total, win))
     glowing = m.less(1e-30, m.dot(emission, (1.0, 1.0, 1.0)))
     return m.scale(total, 1.0 - glowing)
+
+
+def emitter_far_glows(m, shared, values, g, multiple_albedo, images, pixel_angle):
+    """The glowing objects' glows far from them (RGB per unit albedo: {rungs place: value}, the glow to the
+    pixel's surface and to the sky): each point of ``values`` (``emitter_point_values``) as a point light times the
+    far window of its angle off the pixel's ray (``comp_lights.build_far_glow_group``: Sun et al. 2005 Eq. 11 to
+    the surface, Eq. 12 to the sky; with Dense Fog's field where ``multiple_albedo`` is given): the part of the
+    glow kernel the ladder of blurs leaves out (``comp_emitters.glows`` blurs the near part,
+    ``emitter_glow.far_window``)."""
+    models = rungs.choose("nodes", 0, g, "point", multiple_albedo=multiple_albedo)
+    totals = {}
+    for k, (light, intensity) in enumerate(values):
+        node = m.node("CompositorNodeGroup", 7)
+        node.node_tree = comp_lights.build_far_glow_group(models, images, pixel_angle)
+        node.label = f"{EMITTER_POINT} {k} Far Glow"
+        for socket, _ in comp_lights.GLOW_SHARED:
+            if socket in node.inputs:
+                m.feed(node.inputs[socket], shared[socket])
+        m.feed(node.inputs["Light"], light)
+        m.feed(node.inputs["Intensity"], intensity)
+        for o in comp_lights.GLOW_OUTPUTS:
+            v = m.wrap(node.outputs[o.compositor], vector=True)
+            totals[o.at] = v if o.at not in totals else comp_ops.accumulate(m, totals[o.at], v)
+    return totals
 
 
 def set_emitter_points(points):

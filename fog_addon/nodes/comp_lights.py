@@ -2,6 +2,7 @@
 pixel's ray (``build_glow_group``, times the pixel filter's peak where the light is seen in the picture) and the
 fog light the pixel's surface reflects (``build_scatter_group``); what each reads of the pixel."""
 from ..precompute.model import pixel, rungs, shading
+from ..precompute.physics.emitter import emitter_glow
 from . import budgets, groups, light_groups, owned
 from .comp_ops import CompOps
 from .groups import F, V
@@ -81,6 +82,29 @@ def build_glow_group(models, images, peak):
         glows = {o: m.scale(v, factors[o.at]) for o, v in glows.items()}
     for o in GLOW_OUTPUTS:
         m.feed(gout.inputs[o.compositor], glows[o])
+    ng[owned.BUILT] = groups.code_fingerprint()
+    m.place()
+    return groups.install(ng, name)
+
+
+def build_far_glow_group(models, images, pixel_angle):
+    """A glowing object's point's glows far from it (compositor group: Airlight and Background, per unit albedo):
+    a point light's (``build_glow_group``'s kernels, no peak) times the far window s(gamma) of the point's angle
+    gamma off the pixel's ray (``emitter_glow.far_window`` at ``pixel_angle``, rad/px): the part of a glowing
+    object's kernel its ladder of blurs leaves out (``comp_fog.emitter_far_glows``).  One group for every point
+    (its nodes once, not per point in the fog group).  Reads GLOW_SHARED's Beta, Camera, Direction, Glow Origin and
+    Glow Length."""
+    name = f"{LIGHT_GROUP} Far Glow [{models.airlight.name}, {models.background.name}] {float(pixel_angle):.6g}"
+    if (ng := groups.up_to_date(name)) is not None:
+        return ng
+    ng, m, g, gout, light = _light_group(name, GLOW_SHARED, GLOW_TERMS, models, images)
+    glows = shading.light_glows(m, g["Glow Origin"], g["Direction"], g["Glow Length"], light,
+                                light_groups.medium(m, g["Beta"]), models)
+    to_point = g["Light"] - g["Camera"]
+    gamma = m.atan2(m.length(m.cross(g["Direction"], to_point)), m.dot(g["Direction"], to_point))
+    far = emitter_glow.far_window(m, gamma, pixel_angle)
+    for o in GLOW_OUTPUTS:
+        m.feed(gout.inputs[o.compositor], m.scale(glows[o], far))
     ng[owned.BUILT] = groups.code_fingerprint()
     m.place()
     return groups.install(ng, name)

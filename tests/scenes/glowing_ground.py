@@ -95,8 +95,10 @@ def main(mode, out, samples, shape="sphere"):
     from fog_addon.ops import apply
     from fog_addon.precompute.core.spec import FogSpec
     fog_addon.register()
-    if mode == "ours-without":
-        compositor.emitter_points = lambda shining: None
+    if mode == "ours-without":   # (the fog light on surfaces alone: the points' far glows stay)
+        from fog_addon.nodes import comp_fog
+        fog_light = comp_fog.emitter_fog_light
+        comp_fog.emitter_fog_light = lambda m, *args: m.scale(fog_light(m, *args), 0.0)
     if mode == "ours-one-point":
         compositor.EMITTER_PIECES = 1
     apply.apply(scene, FogSpec(density=BETA, method="compositor", shafts=False, multiple_scattering=False))

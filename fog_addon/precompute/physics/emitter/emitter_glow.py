@@ -14,7 +14,15 @@ Gaussian blurs of any size (Blender's Blur node: a separable Gaussian of sigma =
     K(T, gamma(r)) ~ sum_j a_j(T) B_j(r),
 
 and the glow as  sum_j B_j * (a_j(T(q)) L(q)):  one blur per rung of the ladder, whatever the depths, the
-depth entering only the per-pixel weights a_j(T) (a table over T, ``bake_weights``).  The ladder's sizes
+depth entering only the per-pixel weights a_j(T) (a table over T, ``bake_weights``).
+
+The ladder holds the kernel's near part only, K (1 - s(gamma)), s the far window (``far_window``: a smooth step
+from FAR_SPAN[0] to FAR_SPAN[1] of the far angle ``far_angle``).  Far from an emitter its shape no longer shows and
+its glow is that of point sources: the compositor adds each glowing object's points' glows (the point lights' own
+kernels, Sun et al. 2005 Eq. 11-12, exact to the pixel's surface) times s (``comp_emitters.far_glows``).  A sum of
+Gaussians fits K's 1/gamma tail only so far (the fit weighs rings relatively, its largest Gaussian reaches 512 px),
+and the kernel is taken as radial in pixels at the picture's centre, where a pixel's angle is the centre's: far
+from the source both fall short (a sphere's ground 0.76-0.9 of path tracing 100-200 px away).  The ladder's sizes
 double from 1 px; the fit is least squares, relative, over the kernel's core (supersampled: the kernel
 diverges as 1/gamma at a source's own pixel) and its tail to the largest size (tests/test_emitter_glow.py
 measures it ring by ring).
@@ -34,6 +42,9 @@ from .emitter_table import (FACING_COUNT, FACING_KIND_KEY, KIND_KEY, estimate_se
                             needs, table_spec)
 from ...core.ops import NumpyOps
 
+FAR_ANGLE = 0.3      # rad: where the glow is the points' alone (``far_angle``), at most FAR_PIXELS px
+FAR_PIXELS = 300     # px: ... within the fit's grid (HALF) and the ladder's reach
+FAR_SPAN = (0.1, 1.0)   # the far window's smooth step, as fractions of the far angle
 CORE_SUBSAMPLES = 8   # the kernel at a source's own pixel and its neighbours, averaged over 8 x 8 points
 CORE = 2              # px: the core's half-width
 HALF = 400            # px: the fit's grid about a source (the largest blur reaches 512)
@@ -111,29 +122,46 @@ def _nnls(a, b, iterations=200):
     return x
 
 
-def kernel_grid(t, pixel_angle, single, albedo, half):
-    """K(T, gamma) per unit source radiance on the (2 half + 1)^2 pixel grid about a source (module docstring;
-    ``single(T, cos gamma)``: I_1 per unit intensity at extinction 1), its core supersampled."""
+def far_angle(pixel_angle):
+    """rad: the angle from a glowing object beyond which its glow is its points' alone: FAR_ANGLE, or FAR_PIXELS
+    pixels of ``pixel_angle`` (rad/px) where that is less (a picture of many pixels: the ladder's Gaussians reach
+    512 px)."""
+    return min(FAR_ANGLE, FAR_PIXELS * float(pixel_angle))
+
+
+def far_window(m, gamma, pixel_angle):
+    """s in [0, 1]: the far part's share of the glow kernel at ``gamma`` rad from its source (module docstring), a
+    smooth step over FAR_SPAN of ``far_angle``; the ladder holds 1 - s of it."""
+    top = far_angle(pixel_angle)
+    return m.smoothstep(FAR_SPAN[0] * top, FAR_SPAN[1] * top, gamma)
+
+
+def kernel_grid(t, pixel_angle, single, albedo, half, near=True):
+    """The near kernel K(T, gamma) (1 - s(gamma)) per unit source radiance on the (2 half + 1)^2 pixel grid about a
+    source (module docstring; ``single(T, cos gamma)``: I_1 per unit intensity at extinction 1; s ``far_window``),
+    its core supersampled; the whole kernel K with ``near`` False."""
     d = np.arange(-half, half + 1, dtype=float)
     dx, dy = np.meshgrid(d, d)
-    kern = _kernel_at(t, pixel_angle, single, albedo, dx, dy)
+    kern = _kernel_at(t, pixel_angle, single, albedo, dx, dy, near)
     return kern.reshape(dx.shape)
 
 
-def kernel_octant(t, pixel_angle, single, albedo, half):
+def kernel_octant(t, pixel_angle, single, albedo, half, near=True):
     """``kernel_grid``'s values at ``_octant``'s points only (the kernel is radial; the fit reads no others)."""
     (rows, cols), _ = _octant(half)
-    return _kernel_at(t, pixel_angle, single, albedo, (cols - half).astype(float), (rows - half).astype(float))
+    return _kernel_at(t, pixel_angle, single, albedo, (cols - half).astype(float), (rows - half).astype(float), near)
 
 
-def _kernel_at(t, pixel_angle, single, albedo, dx, dy):
-    """K(T, gamma) at the pixel offsets (dx, dy) from a source (any shape, flattened), those within CORE of it
-    supersampled (CORE_SUBSAMPLES^2 points each)."""
+def _kernel_at(t, pixel_angle, single, albedo, dx, dy, near=True):
+    """The near kernel K(T, gamma) (1 - s(gamma)) (``near``; else K) at the pixel offsets (dx, dy) from a source
+    (any shape, flattened), those within CORE of it supersampled (CORE_SUBSAMPLES^2 points each)."""
     dx, dy = np.ravel(dx), np.ravel(dy)
+    m = NumpyOps()
 
     def k_at(r_px):
-        c = np.cos(r_px * pixel_angle)
-        return albedo * single(np.full(c.shape, float(t)), c)
+        gamma = r_px * pixel_angle
+        share = 1.0 - far_window(m, gamma, pixel_angle) if near else 1.0
+        return albedo * single(np.full(gamma.shape, float(t)), np.cos(gamma)) * share
 
     kern = k_at(np.hypot(dx, dy))
     sub = (np.arange(CORE_SUBSAMPLES) + 0.5) / CORE_SUBSAMPLES - 0.5
@@ -154,20 +182,22 @@ def _octant(half):
     return (half + dy[keep], half + dx[keep]), count[keep]
 
 
-def fit_weights(kern, sizes=None):
-    """(a_j) >= 0 with sum_j a_j B_j ~ ``kern`` (square, centred), least squares relative to the kernel (each
-    pixel weighted by 1 / K, so the tail counts as much as the core), on the grid's octant (each point weighted
-    by the pixels it stands for)."""
+def fit_weights(kern, sizes=None, scale=None):
+    """(a_j) >= 0 with sum_j a_j B_j ~ ``kern`` (square, centred), least squares relative to ``scale`` (default
+    ``kern``; the whole kernel K where ``kern`` is its near part, which falls to 0: each pixel weighted by 1 / K, so
+    the tail counts as much as the core and the near part's error as what it adds to the whole glow), on the
+    grid's octant (each point weighted by the pixels it stands for)."""
     half = kern.shape[0] // 2
     idx, _ = _octant(half)
-    return fit_octant(kern[idx], half, sizes)
+    return fit_octant(kern[idx], half, sizes, None if scale is None else scale[idx])
 
 
-def fit_octant(target, half, sizes=None):
+def fit_octant(target, half, sizes=None, scale=None):
     """``fit_weights`` of a kernel given at ``_octant(half)``'s points (``kernel_octant``)."""
     sizes = SIZES if sizes is None else tuple(sizes)
     basis, count = _octant_basis(half, sizes)
-    weight = np.sqrt(count) / np.maximum(target, 1e-30 * max(float(target.max()), 1e-300))
+    scale = target if scale is None else scale
+    weight = np.sqrt(count) / np.maximum(scale, 1e-30 * max(float(scale.max()), 1e-300))
     return _nnls(basis * weight[:, None], target * weight)
 
 
@@ -243,7 +273,8 @@ def bake_weights(single, pixel_angle, count=T_COUNT, progress=None):
     for k, t in enumerate(optical_depths(count)):
         if progress is not None:
             progress(k, count)
-        a = fit_octant(kernel_octant(t, pixel_angle, single, 1.0, HALF), HALF)
+        a = fit_octant(kernel_octant(t, pixel_angle, single, 1.0, HALF), HALF,
+                       scale=kernel_octant(t, pixel_angle, single, 1.0, HALF, near=False))
         total = float(a.sum())
         if total > 0.0:
             out[:-1, k] = a / total

@@ -17,11 +17,11 @@ T_COUNT_DENSE = 48            # its columns with Dense Fog (the halo's shape cha
 def table_spec(g, pixel_angle, multiple_albedo=None):
     """The TableSpec of the weights for anisotropy ``g``, ``pixel_angle`` (rad/px) and, with Dense Fog, the
     multiply scattered field's albedo: one row per size (its share), and the normalisation's row
-    (``emitter_glow.bake_weights``)."""
+    (``emitter_glow.bake_weights``), of the kernel's near part (``emitter_glow.far_window``)."""
     albedo = None if multiple_albedo is None else float(multiple_albedo)
     dense = "" if albedo is None else f", multiple W0 {albedo:.3f}"
     count = T_COUNT if albedo is None else T_COUNT_DENSE
-    return tables.TableSpec(f"AnalyticFog Emitter Glow (g {float(g):+.3f}, {float(pixel_angle):.6g} rad/px{dense})",
+    return tables.TableSpec(f"AnalyticFog Emitter Glow Near (g {float(g):+.3f}, {float(pixel_angle):.6g} rad/px{dense})",
                             count, len(SIZES) + 1, g=float(g), kind=KIND_KEY,
                             args=(float(g), float(pixel_angle), albedo))
 
