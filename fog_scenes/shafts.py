@@ -146,6 +146,27 @@ def ensure_shaft_reference(scene, density, regen=False, anisotropy=0.0, keep_see
     return path
 
 
+GRAIN_BOUND = 2.5   # ``interleave_excess``: measured 0.77-1.89 on the shaft scenes (the largest of 9 frequencies'
+#                     noise: about 2 where there is none), 20-42 with the interleaved shares left unfiltered, 2.9-3.4
+#                     with the surfaces' 4 x 4 shares averaged over 2 x 2 only (2026-12-01)
+
+
+def interleave_excess(ours, ref, mask):
+    """How strongly a regular pattern of the compositor's interleaved shares is left in ``ours`` (H, W, 3): the
+    largest amplitude of the 2D Fourier transform of ours - ``ref`` (the path-traced reference, whose structure it
+    takes away) at the patterns' frequencies off the axes (periods of 2 and 4 pixels in both x and y: the 2 x 2
+    Bayer pattern of the ray's shares, the 4 x 4 one of the surfaces'), over the median amplitude of all its
+    frequencies (the two pictures' noise and their smooth differences).  About 1 where no pattern is left; the axes'
+    frequencies are left out (a column's edge puts energy along them).  ``mask``: the pixels to take (the lamps'
+    left out, as 0 difference)."""
+    d = np.where(mask, ours.mean(axis=-1) - ref.mean(axis=-1), 0.0).astype(float)
+    h, w = (n // 4 * 4 for n in d.shape)
+    amplitude = np.abs(np.fft.fft2(d[:h, :w]))
+    floor = float(np.median(amplitude))
+    return max(float(amplitude[fy, fx]) for fy in (h // 4, h // 2, 3 * h // 4) for fx in (w // 4, w // 2, 3 * w // 4)) \
+        / max(floor, 1e-30)
+
+
 def lamp_mask(ref):
     """True except on the lamps' pixels (luminance 20x the picture's median) and their 8 neighbours."""
     lum = np.asarray(ref, dtype=np.float64)[..., :3].mean(axis=-1)

@@ -765,6 +765,18 @@ MUTATIONS = [
              "        mirrored = mirrored + mirror",
              "        mirrored = m.scale(mirrored, 1.0)",
              ("tests/test_glass_mirror.py::test_fog_past_glass_and_mirrors[mirror-compositor]",)),
+    Mutation("shafts_interleave_unfiltered", "light shafts: the interleaved shares left unfiltered (a regular 2 x 2 "
+             "and 4 x 4 grain: the pattern's excess 20-42 against 0.8-1.9)",
+             "comp_shafts._interleave_mean",
+             "    log = m.math(\"LOGARITHM\", m.maximum(length, 1e-3), math.e)",
+             "    return value",
+             ("tests/test_shaft_scenes.py::test_shaft_scene_against_path_tracing[window_room]",)),
+    Mutation("shafts_surface_taps_short", "light shafts: the surfaces' 4 x 4 interleaved shares averaged over 2 x 2 "
+             "only (a faint 4-pixel grain: its excess 3.4 on the window room, whose relative RMSE still passes)",
+             "comp_shafts.SURFACE_TAPS",
+             "SURFACE_TAPS = (1,) + (2,) * (2 ** shafts.SURFACE_PATTERN_LEVELS - 1) + (1,)",
+             "SURFACE_TAPS = (1, 2, 1)",
+             ("tests/test_shaft_scenes.py::test_shaft_scene_against_path_tracing[window_room]",)),
     Mutation("area_shaft_unweighted", "area lights' shafts: the fog weighed as a point light's, not by Lambert's "
              "cosine on the emitter's front side (the softbox colonnade 4.2 % off path tracing, 2.07 % weighed)",
              "area.shaft_falloff",
