@@ -284,9 +284,9 @@ MUTATIONS = [
              ("tests/test_emitter_surfaces.py::test_a_glowing_object_lights_the_ground_through_the_fog",)),
     Mutation("emitter_far_window_dropped", "glowing objects: the points' far glow not windowed, so added whole over "
              "the ladder's near part (the glow twice near the object)",
-             "comp_lights.build_far_glow_group",
-             "    far = emitter_glow.far_window(m, gamma, pixel_angle)",
-             "    far = 1.0 + 0.0 * gamma",
+             "comp_lights.build_glow_group",
+             "        far = emitter_glow.far_window(m, gamma, far_from)",
+             "        far = 1.0 + 0.0 * gamma",
              ("tests/test_emitter_glow.py::test_glowing_sphere_against_path_traced_fog",)),
     Mutation("emitter_one_sided", "glowing objects: an open mesh's faces taken to emit on one side (a flat sign's far "
              "glow half)",
@@ -295,11 +295,13 @@ MUTATIONS = [
              "    return 1",
              ("tests/test_emitter_glow.py::test_a_sign_cut_by_the_frame_glows_as_its_pixels_do",)),
     Mutation("emitter_one_point", "glowing objects: a long one's fog light on surfaces from one point at its centre "
-             "(a bar's ground 21 % off path tracing by blocks, against 10 % in four pieces)",
+             "(a bar's ground 21 % off path tracing by blocks, against 10 % in four pieces; the same points in the "
+             "viewport: 4.5 % against 2.4 %)",
              "emitter_points",
              "        axis, n = _pieces(obj)\n",
              "        axis, n = _pieces(obj)[0], 1\n",
-             ("tests/test_emitter_surfaces.py::test_a_glowing_object_lights_the_ground_through_the_fog",)),
+             ("tests/test_emitter_surfaces.py::test_a_glowing_object_lights_the_ground_through_the_fog",
+              "tests/test_emitter_surfaces.py::test_the_viewport_shows_a_glowing_objects_light_on_the_ground")),
     Mutation("emitter_area_uniform_scale", "glowing objects: the area of a mesh scaled non-uniformly taken as if its "
              "scale were uniform (a cube scaled into a bar: 0.47 of its area, half its fog light)",
              "glowing_points",
@@ -790,20 +792,14 @@ MUTATIONS = [
              ("tests/test_shaft_scenes.py::test_shaft_scene_against_path_tracing[softbox_colonnade]",)),
     Mutation("preview_no_glowing_points", "viewport preview: the glowing objects not sampled beside the lights "
              "(no glow of theirs in the preview)", "compositor.sampled_points",
-             "    return emitter_points(shining)",
+             "    return points",
              "    return None",
              ("tests/test_viewport_preview.py::test_viewport_glows_a_glowing_object",)),
-    Mutation("preview_glowing_one_point", "viewport preview: a glowing object one point at its centre, not points "
-             "along its length (a neon bar's light on the ground 4.5 % off path tracing, 2.4 % along it)",
-             "compositor.sampled_points",
-             "    return emitter_points(shining)",
-             "    return shining[1:]",
-             ("tests/test_emitter_surfaces.py::test_the_viewport_shows_a_glowing_objects_light_on_the_ground",)),
     Mutation("preview_glowing_needs_lamps", "viewport preview: the glowing objects previewed only where the preview "
              "holds lamps (a scene lit by glowing objects alone shows no fog in the viewport)",
              "compositor.sampled_points",
-             "    if not shining[0]:",
-             "    if not shining[0] or not (plan.preview and plan.preview[0]):",
+             "    if points is None:",
+             "    if points is None or not (plan.preview and plan.preview[0]):",
              ("tests/test_emitter_surfaces.py::test_the_viewport_shows_a_glowing_objects_light_on_the_ground",)),
     Mutation("preview_sampled_no_surface_light", "viewport preview: the sampled lights and glowing objects give the "
              "surfaces no fog light (the ground under a neon bar 0.80 of path tracing)",

@@ -104,8 +104,9 @@ class Compositor(Method):
         sun_shadow, sun_images = sunsky.sun_shadow(scene, spec, lazy=plan.this_frame) if daylit else (None, {})
         shadow_maps.remove_unused(set(shadow_images) | set(sun_images))
         images = dict(images, **shadow_images, **sun_images)
-        shining = glowing_points(scene)   # (the glowing meshes measured once: the preview and the fog light)
-        preview, sampled_images = _preview(scene, spec, plan, maps, shining, table, dims)
+        # the glowing meshes measured and cut into points once: the preview, the far glows and the fog light
+        points = emitter_points(glowing_points(scene))
+        preview, sampled_images = _preview(scene, spec, plan, maps, points, table, dims)
         images = dict(images, **sampled_images)
         tails = _tails(scene, spec, plan, maps)
         # a sharp mirror's reflected fog by its tails where they hold every light (else the pixels' glossy lobe)
@@ -126,7 +127,7 @@ class Compositor(Method):
                                                if daylit else None),
                                           layer=spec.layer_per_unit() if spec.layered else None,
                                           with_passes=spec.passes, mirrors=mirrors,
-                                          emitter_points=emitter_points(shining) if not pano else None)
+                                          emitter_points=points if not pano else None)
         world_group.build_world([], [], scene.camera, images, spec.passes, day=day, day_dims=not daylit,
                                 preview=preview, extra=comp_fog.add_world_aovs if pano else None)
         return images
@@ -134,9 +135,9 @@ class Compositor(Method):
     def update(self, scene, spec, plan):
         if plan.windows is not None:
             comp_fog.set_windows(plan.in_groups, plan.windows, grow=plan.partial)
-        shining = glowing_points(scene)
-        comp_fog.set_emitter_points(emitter_points(shining))   # (moved, resized, brightened)
-        sampled, points = sampled_lights(scene, plan), sampled_points(scene, plan, shining)
+        points = emitter_points(glowing_points(scene))
+        comp_fog.set_emitter_points(points)   # (moved, resized, brightened)
+        sampled, points = sampled_lights(scene, plan), sampled_points(scene, plan, points)
         if sampled or points:   # the sampled lights as they are now (moved, dimmed, recoloured)
             preview_sampled.write_table(scene, sampled, spec.beta_per_unit, points)
 
@@ -214,7 +215,7 @@ class Compositor(Method):
         if not glowing:
             return []
         shining = glowing_points(scene)
-        as_points = set(shining[0]) if sampled_points(scene, plan, shining) is not None else set()
+        as_points = set(shining[0]) if sampled_points(scene, plan, emitter_points(shining)) is not None else set()
         notes = []
         if as_points:
             notes.append(("Viewport", f"the viewport's preview shows the glows of the glowing objects "
@@ -246,15 +247,15 @@ class Compositor(Method):
         shadow_maps.remove_unused()
 
 
-def _preview(scene, spec, plan, maps, shining, day_table=None, day_dims=True):
+def _preview(scene, spec, plan, maps, points, day_table=None, day_dims=True):
     """(``preview.Shown`` of the viewport's preview (``plan.preview``) or None, the images it reads): in Cycles its
     shafted lights' still maps give it their shafts (``preview_shafts.py``; an animation's atlas does not, nor
     EEVEE, whose uniform block the shares' constants would fill); the other point lights are sampled one a sample,
-    with the glowing objects' points (``shining``: ``glowing_points``') (``preview_sampled.py``); a fog layer's sun
+    with the glowing objects' points (``points``: ``emitter_points``') (``preview_sampled.py``); a fog layer's sun
     and sky (``day_table``: the fog light's TableSpec, or None) as the
     node groups give them, their dimming of the surfaces' direct light where ``day_dims``."""
     lights, models = plan.preview[:2] if plan.preview else ([], [])
-    sampled, points = sampled_lights(scene, plan), sampled_points(scene, plan, shining)
+    sampled, points = sampled_lights(scene, plan), sampled_points(scene, plan, points)
     if not lights and not sampled and points is None and day_table is None:
         preview_sampled.write_table(scene, [], spec.beta_per_unit)
         return None, {}
@@ -314,17 +315,17 @@ def sampled_lights(scene, plan):
     return preview_sampled.sampled([o for o in plan.in_groups if o not in shown])
 
 
-def sampled_points(scene, plan, shining):
-    """(centres (K, 3) m, intensities (K, 3) W/sr) of the glowing objects (``shining``: ``glowing_points``') that the
-    viewport's preview samples beside its lights (``preview_sampled.write_table``), each cut along its length as the
-    final render's fog light on surfaces takes it (``emitter_points``), or None: without a glowing object whose
-    radiance can be read, or in EEVEE where the preview holds no light (its uniform block without room).  In Cycles
-    the glowing objects have a preview of their own in a scene without lamps."""
-    if not shining[0]:
+def sampled_points(scene, plan, points):
+    """The glowing objects' ``points`` (``emitter_points``': (centres (K, 3) m, intensities (K, 3) W/sr), each object
+    cut along its length as the final render takes it) where the viewport's preview samples them beside its lights
+    (``preview_sampled.write_table``), or None: without a glowing object whose radiance can be read, or in EEVEE
+    where the preview holds no light (its uniform block without room).  In Cycles the glowing objects have a
+    preview of their own in a scene without lamps."""
+    if points is None:
         return None
     if scene.render.engine != "CYCLES" and not (plan.preview and plan.preview[0]):
         return None
-    return emitter_points(shining)
+    return points
 
 
 def _viewport_compositor_on():
@@ -476,7 +477,7 @@ def _shining(scene):
 def shafted_lights(scene, spec, lights):
     """The ``lights`` whose shadows fall in fog the camera may see (``caveats.shadowing_lights``: an object
     casting shadows within the glow's reach): only they get a shadow map and a shaft group (an area light a point
-    light's map from its centre: ``comp_shafts.area_falloff``)."""
+    light's map from its centre: ``area.shaft_falloff``)."""
     found = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(view.scene_size(scene), 1e-6))
     return [light for light in lights if light.name in found]
 

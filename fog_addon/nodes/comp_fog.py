@@ -225,7 +225,8 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     that fills all space; ``mirrors``: the materials shade the sharp mirrors' reflected fog (``glass_tails``: Cycles,
     where the scene has specular paths), so the pixels' glossy lobe leaves them out (``surface.sharp_share``);
     ``emitter_points``: (points (N, 3), intensities (N, 3)) the glowing objects are taken as
-    (``methods.compositor.emitter_points``), whose fog light the surfaces reflect (``emitter_fog_light``), or None.
+    (``methods.compositor.emitter_points``), whose fog light the surfaces reflect (``emitter_fog_light``) and whose
+    glows far from them the pixels take (``emitter_far_glows``), or None.
     Rebuilt in place, so the scene's compositor keeps its group node.  Returns the table
     images it reads (``images`` and the pixel filter's and the emitters' weights)."""
     filt, peak = None if panoramic(scene) else comp_lights.pixel_filter(scene), None
@@ -362,10 +363,9 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
         terms.append(compose.Term(compose.GLOW, compose.RAY, compose.EMITTERS, comp_emitters.glows(
             m, p, beta, d_vp, emitters[0], pixel_angle, emitters[1], cover, m.abs(m.dot(normal, incoming)), lean)))
         values = emitter_point_values(m, emitter_points) if emitter_points is not None else []
-        if values:   # the glows far from them, which the ladder leaves out
+        if values:   # the glows far from them, which the ladder leaves out, and their fog light on surfaces
             far = emitter_far_glows(m, shared, values, emitters[0], emitters[1], images, pixel_angle)
             terms += [compose.Term(compose.GLOW, at, compose.EMITTERS, v) for at, v in far.items()]
-        if values:
             light = emitter_fog_light(m, shared, values, emitters[0], images, p[EMITTERS], win, direction)
             t_vp = model.transmittance(m, beta, d_vp) if daylight is None else sunlight.grey(m, t_day)
             terms += [compose.Term(compose.REFLECTED, compose.SURFACE, compose.EMITTERS, light),
@@ -398,7 +398,7 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
     return images
 
 
-EMITTER_POINT = "Emitter Point"   # the nodes of the glowing objects' points: "<EMITTER_POINT> k Location" / "Intensity"
+EMITTER_POINT = "Emitter Point"   # the nodes of the glowing objects' points: "<EMITTER_POINT> k Light" / "Intensity"
 
 
 def emitter_point_values(m, points):
@@ -447,7 +447,7 @@ def emitter_fog_light(m, shared, values, g, images, emission, win, domain):
 def emitter_far_glows(m, shared, values, g, multiple_albedo, images, pixel_angle):
     """The glowing objects' glows far from them (RGB per unit albedo: {rungs place: value}, the glow to the
     pixel's surface and to the sky): each point of ``values`` (``emitter_point_values``) as a point light times the
-    far window of its angle off the pixel's ray (``comp_lights.build_far_glow_group``: Sun et al. 2005 Eq. 11 to
+    far window of its angle off the pixel's ray (``comp_lights.build_glow_group``'s far one: Sun et al. 2005 Eq. 11 to
     the surface, Eq. 12 to the sky; with Dense Fog's field where ``multiple_albedo`` is given): the part of the
     glow kernel the ladder of blurs leaves out (``comp_emitters.glows`` blurs the near part,
     ``emitter_glow.far_window``)."""
@@ -455,11 +455,10 @@ def emitter_far_glows(m, shared, values, g, multiple_albedo, images, pixel_angle
     totals = {}
     for k, (light, intensity) in enumerate(values):
         node = m.node("CompositorNodeGroup", 7)
-        node.node_tree = comp_lights.build_far_glow_group(models, images, pixel_angle)
+        node.node_tree = comp_lights.build_glow_group(models, images, None, far_from=pixel_angle)
         node.label = f"{EMITTER_POINT} {k} Far Glow"
         for socket, _ in comp_lights.GLOW_SHARED:
-            if socket in node.inputs:
-                m.feed(node.inputs[socket], shared[socket])
+            m.feed(node.inputs[socket], shared[socket])
         m.feed(node.inputs["Light"], light)
         m.feed(node.inputs["Intensity"], intensity)
         for o in comp_lights.GLOW_OUTPUTS:

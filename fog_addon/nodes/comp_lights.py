@@ -24,10 +24,12 @@ GLOW_TERMS = tuple((o.compositor, V) for o in GLOW_OUTPUTS)            # Airligh
 SCATTER_TERMS = tuple((o.compositor, V) for o in SCATTER_OUTPUTS)      # Scattered
 
 
-def glow_group_name(models, peak):
-    """``peak``: the pixel filter's table (``pixel.filter_table``) or None."""
+def glow_group_name(models, peak, far_from=None):
+    """``peak``: the pixel filter's table (``pixel.filter_table``) or None; ``far_from``: the far window's pixel
+    angle (``build_glow_group``) or None."""
     suffix = "" if peak is None else " Peak" + (" EEVEE" if peak is pixel.EEVEE_FILTER else "")
-    return f"{LIGHT_GROUP} Glow [{models.airlight.name}, {models.background.name}]" + suffix
+    far = "" if far_from is None else f" Far {float(far_from):.6g}"
+    return f"{LIGHT_GROUP} Glow [{models.airlight.name}, {models.background.name}]" + suffix + far
 
 
 def pixel_filter(scene):
@@ -56,7 +58,7 @@ def _light_group(name, shared, terms, models, images):
     return ng, m, g, gout, light_groups.light_of(g, models)
 
 
-def build_glow_group(models, images, peak):
+def build_glow_group(models, images, peak, far_from=None):
     """One light's glows at a pixel (compositor group), shared by every light with these models: Airlight
     (the glow along the pixel's ray up to the surface, Sun et al. 2005 Eq. 11) and Background (the glow of
     the ray to the sky, Eq. 12), from ``shading.glow_pair``.  ``peak``: the pixel filter's table or None;
@@ -65,8 +67,10 @@ def build_glow_group(models, images, peak):
     picture's, in the filter table's pixels).  The glows are the kernels' from Glow Origin over
     Glow Length (the camera and the view distance, or in a fog layer the part of the ray in it:
     ``sunlight.lamp_glow_span``); the peak takes the camera's.  Reads GLOW_SHARED (Incoming and Pixel only with
-    ``peak``)."""
-    name = glow_group_name(models, peak)
+    ``peak``).  ``far_from``: a pixel angle (rad/px), or None: a glowing object's point's glows far from it, times
+    the far window s(gamma) of the point's angle gamma off the pixel's ray (``emitter_glow.far_window``): the
+    part of its kernel the ladder of blurs leaves out (``comp_fog.emitter_far_glows``)."""
+    name = glow_group_name(models, peak, far_from)
     if (ng := groups.up_to_date(name)) is not None:
         return ng
     ng, m, g, gout, light = _light_group(name, GLOW_SHARED, GLOW_TERMS, models, images)
@@ -80,31 +84,13 @@ def build_glow_group(models, images, peak):
         factors = {rungs.SURFACE_POINT: pixel.peak_factor(m, excess, along, g["View Distance"]),
                    rungs.SKY: 1.0 + excess}
         glows = {o: m.scale(v, factors[o.at]) for o, v in glows.items()}
+    if far_from is not None:
+        to_point = g["Light"] - g["Camera"]
+        gamma = m.atan2(m.length(m.cross(g["Direction"], to_point)), m.dot(g["Direction"], to_point))
+        far = emitter_glow.far_window(m, gamma, far_from)
+        glows = {o: m.scale(v, far) for o, v in glows.items()}
     for o in GLOW_OUTPUTS:
         m.feed(gout.inputs[o.compositor], glows[o])
-    ng[owned.BUILT] = groups.code_fingerprint()
-    m.place()
-    return groups.install(ng, name)
-
-
-def build_far_glow_group(models, images, pixel_angle):
-    """A glowing object's point's glows far from it (compositor group: Airlight and Background, per unit albedo):
-    a point light's (``build_glow_group``'s kernels, no peak) times the far window s(gamma) of the point's angle
-    gamma off the pixel's ray (``emitter_glow.far_window`` at ``pixel_angle``, rad/px): the part of a glowing
-    object's kernel its ladder of blurs leaves out (``comp_fog.emitter_far_glows``).  One group for every point
-    (its nodes once, not per point in the fog group).  Reads GLOW_SHARED's Beta, Camera, Direction, Glow Origin and
-    Glow Length."""
-    name = f"{LIGHT_GROUP} Far Glow [{models.airlight.name}, {models.background.name}] {float(pixel_angle):.6g}"
-    if (ng := groups.up_to_date(name)) is not None:
-        return ng
-    ng, m, g, gout, light = _light_group(name, GLOW_SHARED, GLOW_TERMS, models, images)
-    glows = shading.light_glows(m, g["Glow Origin"], g["Direction"], g["Glow Length"], light,
-                                light_groups.medium(m, g["Beta"]), models)
-    to_point = g["Light"] - g["Camera"]
-    gamma = m.atan2(m.length(m.cross(g["Direction"], to_point)), m.dot(g["Direction"], to_point))
-    far = emitter_glow.far_window(m, gamma, pixel_angle)
-    for o in GLOW_OUTPUTS:
-        m.feed(gout.inputs[o.compositor], m.scale(glows[o], far))
     ng[owned.BUILT] = groups.code_fingerprint()
     m.place()
     return groups.install(ng, name)

@@ -86,14 +86,14 @@ def build_shaft_group(light, shadow, images, samples, g):
     m.images[spec.name] = m.wrap(gin.outputs[SHAFT_MAP], vector=True)
     g_ = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
     cone_args = ()
-    axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
-    if emitter:   # the rows' 9 components: scalar inputs of the node groups (the light's pose now, driven)
-        kind = f"area {shadow.spec.width}x{shadow.spec.height}"
+    if shadow.cone or emitter:   # the driven rows' 9 components: scalar inputs of the node groups
+        axes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
         cone_args = tuple(m.dot(g_[n], a) for n in light_groups.SPOT_ROWS for a in axes)
+    if emitter:   # an area light: its pose now
+        kind = f"area {shadow.spec.width}x{shadow.spec.height}"
         falloff = area.shaft_falloff
-    if shadow.cone:   # the rows' 9 components, cos(size / 2) and blend: scalar inputs of the node groups
-        cone_args = tuple(m.dot(g_[n], a) for n in light_groups.SPOT_ROWS for a in axes) + (
-            g_[light_groups.SPOT_COS], g_[light_groups.SPOT_BLEND])
+    if shadow.cone:   # a moving spot: its rows, cos(size / 2) and blend
+        cone_args += (g_[light_groups.SPOT_COS], g_[light_groups.SPOT_BLEND])
 
         def driven_falloff(mm, u, d, *cone_):   # (inside the node groups: their own inputs, ``cone_args``)
             rows = [mm.combine(*cone_[3 * i:3 * i + 3]) for i in range(3)]
