@@ -240,11 +240,11 @@ def log_errors(text):
     return list(dict.fromkeys(h.log_errors(text) + extra))
 
 
-def run_worker(spec, budget):
-    """(last result, log text, status, wall s, CPU s of the worker process)."""
+def run_worker(spec, budget, script=__file__):
+    """(last result, log text, status, wall s, CPU s of the worker process ``script`` --worker ``spec``)."""
     from fog_scenes import render_harness as h
     env = dict(h._env(), PYTHONUNBUFFERED="1")
-    cmd = [h.PYTHON, str(pathlib.Path(__file__).resolve()), "--worker", json.dumps(spec)]
+    cmd = [h.PYTHON, str(pathlib.Path(script).resolve()), "--worker", json.dumps(spec)]
     t, ru0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
     try:
         proc = subprocess.run(cmd, cwd=str(ROOT), env=env, capture_output=True, text=True, timeout=budget)

@@ -126,7 +126,7 @@ def scene_bvh(scene, depsgraph=None, objects=None):
     return Scene(bvh, digest)
 
 
-@functools.lru_cache(maxsize=2)
+@functools.lru_cache(maxsize=8)
 def point_casts(width=shaft_maps.POINT_MAP[0], height=shaft_maps.POINT_MAP[1]):
     """(the rays of a point light's map as mathutils Vectors, the ray each grid point takes):
     ``shaft_maps.point_map_casts`` (every point light's map of this grid shares them)."""
@@ -186,15 +186,17 @@ def _is_spot(light):
     return light.data.type == "SPOT" and light.data.spot_size < math.radians(179.0)
 
 
-def bake(light, geometry):
-    """(ShadowMap, depths (rows, columns) float32) of ``light`` against ``geometry`` (``scene_bvh``)."""
+def bake(light, geometry, level=0):
+    """(ShadowMap, depths (rows, columns) float32) of ``light`` against ``geometry`` (``scene_bvh``), its grid
+    ``level`` times halved across (``shaft_maps.map_grid``)."""
     origin = tuple(light.matrix_world.translation)
     spot = spot_map(light)
+    grid = shaft_maps.map_grid(spot is not None, level)
     if spot is not None:
-        dirs = shaft_maps.spot_map_directions(*spot)
+        dirs = shaft_maps.spot_map_directions(*spot, size=grid[0])
         depth = cast(geometry.bvh, origin, dirs.reshape(-1, 3)).reshape(dirs.shape[:2])
     else:
-        vectors, fill = point_casts()
+        vectors, fill = point_casts(*grid)
         depth = cast(geometry.bvh, origin, vectors)[fill]
     spec = TableSpec(IMAGE_PREFIX + light.name, depth.shape[1], depth.shape[0])
     return ShadowMap(spec, spot), depth
@@ -284,28 +286,52 @@ def frames_of(scene):
     return shaft_maps.atlas_frames(scene.frame_start, scene.frame_end, scene.frame_step)
 
 
-def ensure(scene, lights, geometry=None, lazy=False):
-    """{light name: ShadowMap} of ``lights``, each baked unless its image holds this pose and geometry (the lights
-    whose maps move over an animation of more than one frame: their atlases, ``ensure_atlases``, ``lazy`` as
-    there); returns (maps, images by spec name)."""
+def ensure(scene, lights, geometry=None, lazy=False, sizing=None):
+    """{light name: ShadowMap} of ``lights``, each baked unless its image holds this pose and geometry at its grid
+    (the lights whose maps move over an animation of more than one frame: their atlases, ``ensure_atlases``,
+    ``lazy`` as there); returns (maps, images by spec name).  ``sizing``: (beta 1/unit, budget grid points or None
+    for no limit) to size the still maps by ``map_levels``; None keeps each map's grid as it is (a new one full)."""
     if not lights:
         return {}, {}
     moving = {o.name for o in moving_lights(scene, lights)} if frames_of(scene)[2] > 1 else set()
     maps, images = ensure_atlases(scene, [o for o in lights if o.name in moving], lazy=lazy)
-    for light in lights:
-        if light.name in moving:
-            continue
+    still = [o for o in lights if o.name not in moving]
+    levels = map_levels(scene, still, *sizing) if sizing is not None else {}
+    for light in still:
         geometry = geometry or scene_bvh(scene)
         version = key(light, geometry)
         name = IMAGE_PREFIX + light.name
         img = bpy.data.images.get(name)
-        if img is not None and img.get(KEY) == version and img.packed_file is not None and ATLAS not in img:
+        level = levels.get(light.name, _level_of(light, img))
+        if (img is not None and img.get(KEY) == version and img.packed_file is not None and ATLAS not in img
+                and tuple(img.size) == shaft_maps.map_grid(spot_map(light) is not None, level)):
             shadow = describe(light, img)
         else:
-            shadow, depth = bake(light, geometry)
+            shadow, depth = bake(light, geometry, level)
             img = _store(shadow.spec, depth, version)
         maps[light.name], images[shadow.spec.name] = shadow, img
     return maps, images
+
+
+def map_levels(scene, lights, beta, budget=shaft_maps.MAP_BUDGET):
+    """{light name: level} of the still maps of ``lights`` (``shaft_maps.map_levels``): their grid points within
+    ``budget`` (None: every map full), shared by each light's weight in the picture seen from the camera
+    (``sampling.importance``, fog of ``beta`` 1/unit)."""
+    if budget is None or not lights:
+        return {o.name: 0 for o in lights}
+    eye = np.array(scene.camera.matrix_world.translation) if scene.camera is not None else np.zeros(3)
+    weight = sampling.importance([o.matrix_world.translation for o in lights], view.light_intensities(lights), eye,
+                                 beta)
+    levels = shaft_maps.map_levels(weight, [spot_map(o) is not None for o in lights], budget)
+    return {o.name: int(k) for o, k in zip(lights, levels)}
+
+
+def _level_of(light, img):
+    """The level (``shaft_maps.map_grid``) of ``light``'s still map ``img`` (0 without one, or for an atlas)."""
+    if img is None or ATLAS in img or img.size[0] < 2:
+        return 0
+    full = shaft_maps.map_grid(spot_map(light) is not None)[0]
+    return max(int(round(math.log2(full / img.size[0]))), 0)
 
 
 def _layout(light, frames, union):

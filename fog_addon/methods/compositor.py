@@ -100,7 +100,8 @@ class Compositor(Method):
         daylit = table is not None
         shafted = shafted_lights(scene, spec, plan.in_groups) if spec.shafts else []
         # (a handler's rebuild does not step through the frames: the save completes the atlases)
-        maps, shadow_images = shadow_maps.ensure(scene, shafted, lazy=plan.this_frame)
+        maps, shadow_images = shadow_maps.ensure(scene, shafted, lazy=plan.this_frame,
+                                                 sizing=(spec.beta_per_unit, shafts.map_budget(spec.quality)))
         sun_shadow, sun_images = sunsky.sun_shadow(scene, spec, lazy=plan.this_frame) if daylit else (None, {})
         shadow_maps.remove_unused(set(shadow_images) | set(sun_images))
         images = dict(images, **shadow_images, **sun_images)

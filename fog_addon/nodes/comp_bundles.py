@@ -51,6 +51,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
         intensity = m.node("ShaderNodeCombineXYZ", 4)
         drivers.drive_intensity(intensity, light.data)
         built = []   # a term the light's step leaves out (rungs.STEPS) gets no group at all
+        terms = {}   # this light's terms by output
         # the light's glow window, made only where a glow or a shaft group reads it (a window no group reads
         # would still grow with the frames and mark the windows partial, ``comp_fog.set_windows``)
         has_window = windows is not None and windows[k - first] is not None
@@ -98,7 +99,7 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
                 v = m.wrap(glow.outputs[o.compositor], vector=True)
                 if shaft is not None:
                     v = m.scale(v, share[o])
-                sums[o] = comp_ops.accumulate(m, sums[o], v if win is None else comp_ops.uncrop(m, v, win))
+                terms[o] = v if win is None else comp_ops.uncrop(m, v, win)
             built.append(glow)
         if any(o.computed(mod) for o in SCATTER_OUTPUTS):
             if shaft is not None:   # its directions interleave as the glow's nodes do (``shafts.surface_share``)
@@ -117,8 +118,9 @@ def build_bundle(scene, first, lights, models, images, peak, windows, shafted=No
                 v = m.wrap(scatter.outputs[o.compositor], vector=True)
                 if shaft is not None:
                     v = m.scale(v, visible)
-                sums[o] = comp_ops.accumulate(m, sums[o], v)
+                terms[o] = v
             built.append(scatter)
+        sums = comp_ops.in_step(m, sums, terms)   # this light's terms all computed before the next light's
         for node in built:
             m.feed(node.inputs["Light"], position)
             ng.links.new(intensity.outputs[0], node.inputs["Intensity"])

@@ -330,9 +330,8 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
                                                    shafted, layered=layer is not None)
         for name, v in shared.items():
             m.feed(node.inputs[name], v)
-        for o in rungs.COMPOSITOR_OUTPUTS:
-            v = m.wrap(node.outputs[o.compositor], vector=True)
-            sums[o] = v if o not in sums else comp_ops.accumulate(m, sums[o], v)
+        sums = comp_ops.in_step(m, sums, {o: m.wrap(node.outputs[o.compositor], vector=True)
+                                          for o in rungs.COMPOSITOR_OUTPUTS})
     if win is not None:   # the sums over the surfaces' window back in place, on the picture's domain
         sums.update({o: comp_ops.accumulate(m, comp_ops.zero(m, direction), comp_ops.uncrop(m, sums[o], win))
                      for o in SCATTER_OUTPUTS if o in sums})

@@ -190,6 +190,26 @@ def accumulate(m, total, term):
     return m.vmath_in_order("ADD", total, term)
 
 
+def in_step(m, sums, terms):
+    """``sums`` (key -> image) with ``terms`` (key -> image) added, each new sum tied to another sum of the step
+    before (a ring over the keys) by adding min(|that sum|, 0), which is 0: every sum of a step then depends on all
+    the sums two steps back, and a step's terms are computed within two steps of each other.  The compositor
+    schedules each output's inputs depth first, one output after another (Blender's
+    ``compositor/intern/scheduler.cc``), so untied sums over N lights (the glows' Airlight and Background, the
+    surfaces' Scattered) keep every buffer of each light that two sums share (its shafts' shares, its glow's lookups)
+    from the first sum's pass to the last: memory that grows with lights x pixels."""
+    keys = [k for k in terms if sums.get(k) is not None]
+    out = dict(sums)
+    for key, term in terms.items():
+        total = sums.get(key)
+        out[key] = term if total is None else accumulate(m, total, term)
+    if len(keys) > 1:
+        for key, other in zip(keys, keys[1:] + keys[:1]):
+            tie = m.vmath_in_order("MINIMUM", m.vmath_in_order("ABSOLUTE", sums[other]), (0.0, 0.0, 0.0))
+            out[key] = accumulate(m, out[key], tie)
+    return out
+
+
 def zero(m, image):
     """Black on ``image``'s domain (a sum's first operand: ``accumulate``)."""
     return m.vmath_in_order("MULTIPLY", image, (0.0, 0.0, 0.0))

@@ -41,6 +41,8 @@ FLOOR = 1e-3          # samples below this fraction of the peak fog are not judg
 MIN_FOG = 1e-30       # fog light (W/m^2/sr) below which a sample is not judged: an opaque fog's far samples
 THIN_SHARE = 0.25     # Dense Fog is left out for a light whose multiply scattered light is at most this share of
 #                       the Quality's target at every judged view sample (``multiple_parts``; ``ops/left_out.dense_fog``)
+CHUNK_VALUES = 1 << 17   # samples x lights a light kind's terms are evaluated for at once: their temporaries (about
+#                         0.7 kB each) stay near 0.1 GB however many lights there are
 RIM_SAFETY = 2.0      # a cheaper rim's deviation at the samples counts twice: between them it can peak higher
 
 
@@ -179,23 +181,28 @@ def _view(m, samples):
 
 def _light_kinds(samples, intensity):
     """[(indices k, shading.Light of the lights k as (P, K, 3) arrays)]: the point lights', the spots'
-    (``shading.Spot`` of their cones), then the area lights' (``shading.Area``), each only if there is one."""
+    (``shading.Spot`` of their cones), then the area lights' (``shading.Area``), each only if there is one, and
+    each kind's lights cut in runs of at most CHUNK_VALUES / P (the temporaries of their terms are bounded)."""
     lights = np.asarray(samples.lights, float)
     shapes = samples.shapes
     kinds = [None] * lights.shape[1] if shapes is None else list(shapes.kinds)
+    run = max(1, CHUNK_VALUES // max(lights.shape[0], 1))
     out = []
     for shape, kernel in ((type(None), None), (Cone, shading.Spot), (Rectangle, shading.Area)):
-        k = np.array([i for i, s in enumerate(kinds) if isinstance(s, shape)], int)
-        if not len(k):
-            continue
-        if kernel is None:
-            out.append((k, shading.Light(lights[:, k], intensity[k])))
-            continue
-        rows = np.asarray(shapes.rows, float)[:, k]
-        params = np.array([tuple(kinds[i]) for i in k], float)
-        out.append((k, shading.Light(lights[:, k], intensity[k], kernel(tuple(rows[..., i, :] for i in range(3)),
-                                                                         params[:, 0], params[:, 1]))))
+        every = np.array([i for i, s in enumerate(kinds) if isinstance(s, shape)], int)
+        for k in (every[i:i + run] for i in range(0, len(every), run)):
+            out.append(_light_run(lights, intensity, shapes, kinds, k, kernel))
     return out
+
+
+def _light_run(lights, intensity, shapes, kinds, k, kernel):
+    """(k, shading.Light of the lights k, all of one kind: ``kernel`` None for point lights)."""
+    if kernel is None:
+        return k, shading.Light(lights[:, k], intensity[k])
+    rows = np.asarray(shapes.rows, float)[:, k]
+    params = np.array([tuple(kinds[i]) for i in k], float)
+    return k, shading.Light(lights[:, k], intensity[k], kernel(tuple(rows[..., i, :] for i in range(3)),
+                                                               params[:, 0], params[:, 1]))
 
 
 def _models(g, light, rim_nodes=spot_mod.RIM_NODES, multiple_albedo=None):
@@ -279,13 +286,15 @@ def _pixel_parts(m, values, beta, view):
 def rim_deviation(samples, intensity, beta, glow, g=0.0):
     """(R, P, N, 3) W/(m^2 sr): how far each spot's glow moves at every sample when its rim takes the point
     count ``spot.RIM_LADDER[1 + r]`` instead of spot.RIM_NODES (0 for point lights); ``glow``: the exact
-    glows of :func:`light_fog` (spot.RIM_NODES points), which it does not compute again."""
+    glows of :func:`light_fog` (spot.RIM_NODES points), which it does not compute again.  None without spots."""
+    spots = [(k, light) for k, light in _light_kinds(samples, np.asarray(intensity, float))
+             if isinstance(light.spot, shading.Spot)]
+    if not spots:
+        return None
     m = _numpy_ops(g)
     view = _view(m, samples)
     ladder = spot_mod.RIM_LADDER[1:]
     out = np.zeros((len(ladder),) + np.shape(samples.lights))
-    spots = [(k, light) for k, light in _light_kinds(samples, np.asarray(intensity, float))
-             if isinstance(light.spot, shading.Spot)]
     for r, n in enumerate(ladder):
         for k, light in spots:
             with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
@@ -348,7 +357,9 @@ def choose_steps(glow, scatter, target, budget=None, rim_dev=None, other=None):
             break
         if steps[i] == step - 1:
             dropped, steps[i], limited = dropped + drop(i, step), step, True
-    light_drop = np.where(steps[None, :, None] >= 1, scatter, 0.0) + np.where(steps[None, :, None] >= 2, glow, 0.0)
+    # each light's largest share of a sample's fog that its step leaves out (its scatter from step 1, its glow too
+    # from step 2), taken from the shares above: no (P, N, 3) array of the drops is made
+    light_error = np.where(steps >= 2, share_g, np.where(steps >= 1, share_s, 0.0))
     rims = np.full(n, spot_mod.RIM_NODES)
     if rim_dev is not None and target is not None and peak > MIN_FOG:
         rim_dev = RIM_SAFETY * np.asarray(rim_dev, float)
@@ -357,9 +368,9 @@ def choose_steps(glow, scatter, target, budget=None, rim_dev=None, other=None):
                 trial = dropped + rim_dev[r][:, i]
                 if (trial * inv).max() <= target:
                     dropped, rims[i] = trial, spot_mod.RIM_LADDER[1 + r]
-                    light_drop[:, i] += rim_dev[r][:, i]
+                    own = rim_dev[r][:, i] + (scatter[:, i] if steps[i] >= 1 else 0.0)
+                    light_error[i] = (own * inv).max()
                     break
-    light_error = (light_drop * inv[:, None, :]).max(axis=(0, 2)) if fog.size else np.zeros(n)
     error = float((dropped * inv).max()) if fog.size else 0.0
     fits = budget is None or budget.fits(steps)
     return Prediction(steps, light_error, error, int(judged.any(axis=1).sum()), limited, fits, rims)

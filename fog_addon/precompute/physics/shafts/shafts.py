@@ -40,6 +40,7 @@ from typing import NamedTuple
 
 from ..point.model import FAR
 from ..spot import spot as spot_
+from . import shaft_maps
 from .shaft_maps import lit, map_depth, nearest_depth, point_map_xy_of
 
 
@@ -69,6 +70,12 @@ def nodes_per_pixel(samples):
     """Quadrature nodes a ``Samples`` evaluates at a pixel for one light: the ray's K, its tail's, the surface's."""
     tail = max(samples.view_nodes // TAIL_SHARE, 2)
     return samples.view_nodes + tail + samples.surface_directions * samples.surface_nodes
+
+
+def map_budget(quality):
+    """Grid points all the still shadow maps hold together at a Quality (``shaft_maps.map_levels``): None (no limit,
+    every map full) at Exact, else ``shaft_maps.MAP_BUDGET``."""
+    return None if quality == "exact" else shaft_maps.MAP_BUDGET
 
 
 def samples_for(quality, lights=1):
