@@ -62,7 +62,7 @@ def worker(spec):
     """Time and weigh one N: no fog, apply, fog; print as it goes (``overhead._emit``)."""
     import bpy
     from demo_scenes import city_night
-    from fog_addon import caveats, measure, shadow_maps
+    from fog_addon import caveats, shadow_maps
     from fog_addon.methods import auto
     from fog_addon.nodes import comp_shafts
     from fog_addon.ops import apply

@@ -8,7 +8,6 @@ south-east corner of the north-west block's roof (the tallest, 34 m), looking so
 
     python demo_scenes/city_night.py OUT.blend [LAMPS]
 """
-import math
 import os
 import sys
 
