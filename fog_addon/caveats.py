@@ -197,7 +197,12 @@ def shadow_notes(scene, lights, beta, reach_m, shafts, why_off=None, shares=None
                 f"{len(found)} light(s) ({listed(found)}) passes through the objects near them (a lamp's hood, "
                 f"a wall, a window frame){_effect(shares)}"]
     notes = []
-    shafted = [o for o in lights if o.name in found]
+    over = set((shares or {}).get("left_out") or ()) if (shares or {}).get("why") == "cap" else set()
+    if over:
+        notes.append(f"light shafts for the {len(found) - len(over)} lights most important to the picture: the glow "
+                     f"of {len(over)} more ({listed(over)}) passes through the objects near them"
+                     f"{_effect(shares)} (Quality Exact shafts every light)")
+    shafted = [o for o in lights if o.name in found and o.name not in over]
     areas = [o.name for o in shafted if o.data.type == "AREA"]
     if areas:
         notes.append(f"light shafts are sharp: the area lights {listed(areas)} cast theirs from their centres, so "

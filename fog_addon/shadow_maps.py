@@ -313,16 +313,33 @@ def ensure(scene, lights, geometry=None, lazy=False, sizing=None):
     return maps, images
 
 
+def shafted_split(scene, lights, beta, cap):
+    """(shafted, over): the ``lights`` whose shadows fall in fog the camera may see (``caveats.shadowing_lights``),
+    the ``cap`` most important of them to the picture (``sampling.importance``; None: all) shafted and the rest
+    over the cap (their glows unshadowed: ``shafts.shaft_lights``), each in the order of ``lights``."""
+    found = caveats.shadowing_lights(scene, lights, beta, max(view.scene_size(scene), 1e-6)) if lights else {}
+    casting = [o for o in lights if o.name in found]
+    if cap is None or len(casting) <= cap:
+        return casting, []
+    weight = _weights(scene, casting, beta)
+    kept = set(np.argsort(-weight, kind="stable")[:cap].tolist())
+    return [o for k, o in enumerate(casting) if k in kept], [o for k, o in enumerate(casting) if k not in kept]
+
+
+def _weights(scene, lights, beta):
+    """Each light's share of the picture's fog seen from the camera, up to a factor (``sampling.importance``)."""
+    eye = np.array(scene.camera.matrix_world.translation) if scene.camera is not None else np.zeros(3)
+    return sampling.importance([o.matrix_world.translation for o in lights], view.light_intensities(lights), eye,
+                               beta)
+
+
 def map_levels(scene, lights, beta, budget=shaft_maps.MAP_BUDGET):
     """{light name: level} of the still maps of ``lights`` (``shaft_maps.map_levels``): their grid points within
     ``budget`` (None: every map full), shared by each light's weight in the picture seen from the camera
     (``sampling.importance``, fog of ``beta`` 1/unit)."""
     if budget is None or not lights:
         return {o.name: 0 for o in lights}
-    eye = np.array(scene.camera.matrix_world.translation) if scene.camera is not None else np.zeros(3)
-    weight = sampling.importance([o.matrix_world.translation for o in lights], view.light_intensities(lights), eye,
-                                 beta)
-    levels = shaft_maps.map_levels(weight, [spot_map(o) is not None for o in lights], budget)
+    levels = shaft_maps.map_levels(_weights(scene, lights, beta), [spot_map(o) is not None for o in lights], budget)
     return {o.name: int(k) for o, k in zip(lights, levels)}
 
 

@@ -23,6 +23,8 @@ from .precompute.model import footprint, predict
 from .precompute.physics.area import area
 from .precompute.physics.point import surface
 
+JUDGED_ENTRIES = 2_000_000   # samples x lights the Quality's choice judges at most (``judged_grid``)
+MIN_JUDGED = 48 * 27           # samples it judges at least
 MAX_SAMPLES = 160 * 90          # rays per frame at most: one per pixel centre up to this, else a coarser grid
 MAX_FRAMES = 8                  # an animation: at most this many frames, evenly spread over the range
 GLASS_HOPS = 4                  # glass surfaces a sample ray passes straight through at most (two panes' faces)
@@ -297,6 +299,12 @@ def sample_grid(scene, max_samples=MAX_SAMPLES):
         return w, h
     k = math.sqrt(max_samples / (w * h))
     return max(1, int(w * k)), max(1, int(h * k))
+
+
+def judged_grid(scene, lights):
+    """``sample_grid`` for the Quality's choice among ``lights`` (a count): at most JUDGED_ENTRIES samples x lights,
+    never fewer than MIN_JUDGED samples (the predictor's arrays, and its time, stay bounded in a city of lamps)."""
+    return sample_grid(scene, max(MIN_JUDGED, min(MAX_SAMPLES, JUDGED_ENTRIES // max(int(lights), 1))))
 
 
 def view_samples(scene, lights, frames=None, grid=None, past_glass=False):

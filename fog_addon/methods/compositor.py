@@ -477,10 +477,10 @@ def _shining(scene):
 
 def shafted_lights(scene, spec, lights):
     """The ``lights`` whose shadows fall in fog the camera may see (``caveats.shadowing_lights``: an object
-    casting shadows within the glow's reach): only they get a shadow map and a shaft group (an area light a point
-    light's map from its centre: ``area.shaft_falloff``)."""
-    found = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(view.scene_size(scene), 1e-6))
-    return [light for light in lights if light.name in found]
+    casting shadows within the glow's reach), the Quality's most important of them (``shadow_maps.shafted_split``):
+    only they get a shadow map and a shaft group (an area light a point light's map from its centre:
+    ``area.shaft_falloff``)."""
+    return shadow_maps.shafted_split(scene, lights, spec.beta_per_unit, shafts.shaft_lights(spec.quality))[0]
 
 
 def _moving(scene):

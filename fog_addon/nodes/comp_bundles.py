@@ -19,6 +19,41 @@ SHARED = (GLOW_SHARED + tuple((SURFACE + name, kind) for name, kind in SURFACE_S
 TERMS = tuple((o.compositor, V) for o in rungs.COMPOSITOR_OUTPUTS)     # a bundle's: Airlight, Scattered, Background
 
 
+BUNDLE_SET = f"{BUNDLE} Set"   # the bundles by SET_SIZE where there are more than SET_SIZE of them: "<BUNDLE_SET> 1-64"
+SET_SIZE = 8   # bundles a set (``build_bundle_set``): the fog group then holds sets, each of 64 lights
+
+
+def bundle_set_name(first, count):
+    """The set of bundles of the scene's lights ``first`` + 1 .. ``first`` + ``count``."""
+    return f"{BUNDLE_SET} {first + 1}-{first + count}"
+
+
+def build_bundle_set(scene, first, lights, models, images, peak, windows, shafted=None, layered=False):
+    """The compositor group of the bundles (``build_bundle``) of the scene's lights ``first`` + 1 ..
+    ``first`` + len(lights) (at most BUNDLE_SIZE x SET_SIZE), SHARED in, their TERMS summed step by step out
+    (``comp_ops.in_step``).  Blender's node and link editing slows as a tree grows (a new node in a tree of 3 000
+    takes 20-40 ms, in one of 100 0.3 ms), so a city of lamps is a tree of sets of bundles of lights, none of
+    them large.  ``windows``: each light's, or None (``build_bundle``'s)."""
+    name = bundle_set_name(first, len(lights))
+    ng, gin, gout = groups.new_group(name, SHARED, TERMS, tree_type="CompositorNodeTree")
+    m = CompOps(ng, images)
+    g = {s.name: m.wrap(s, vector=s.type in ("VECTOR", "RGBA")) for s in gin.outputs if s.name}
+    sums = {}
+    for k in range(0, len(lights), BUNDLE_SIZE):
+        node = m.node("CompositorNodeGroup", 2)
+        node.node_tree = build_bundle(scene, first + k, lights[k:k + BUNDLE_SIZE], models[k:k + BUNDLE_SIZE], images,
+                                      peak, None if windows is None else windows[k:k + BUNDLE_SIZE], shafted,
+                                      layered)
+        for socket, v in g.items():
+            m.feed(node.inputs[socket], v)
+        sums = comp_ops.in_step(m, sums, {o: m.wrap(node.outputs[o.compositor], vector=True)
+                                          for o in rungs.COMPOSITOR_OUTPUTS})
+    for o, v in sums.items():
+        m.feed(gout.inputs[o.compositor], v)
+    m.place()
+    return groups.install(ng, name)
+
+
 def bundle_name(first, count):
     """The bundle group of the scene's lights ``first`` + 1 .. ``first`` + ``count``."""
     return f"{BUNDLE} {first + 1}-{first + count}"

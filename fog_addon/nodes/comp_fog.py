@@ -116,11 +116,13 @@ def add_world_aovs(world_group):
 
 
 def all_group_names():
-    """The compositor groups the fog can make in this file, users first: the fog group, the bundles, the
-    per-light groups (their kernels are among ``groups.all_group_names``, which must come after these)."""
+    """The compositor groups the fog can make in this file, users first: the fog group, the sets of bundles, the
+    bundles, the per-light groups (their kernels are among ``groups.all_group_names``, which must come after
+    these)."""
     names = {owned.base_name(ng.name) for ng in bpy.data.node_groups
              if ng.get(groups.FOG_PROP) and ng.name.startswith((LIGHT_GROUP, BUNDLE))}
-    return [FOG_GROUP] + sorted(names, key=lambda name: (not name.startswith(BUNDLE), name))
+    return [FOG_GROUP] + sorted(names, key=lambda name: (not name.startswith(comp_bundles.BUNDLE_SET),
+                                                         not name.startswith(BUNDLE), name))
 
 
 PARTIAL = "Fog Windows Partial"   # on the fog group: its windows were grown by single frames (or built full)
@@ -321,13 +323,14 @@ def build_fog_group(scene, lights, models, images, windows=None, partial=False, 
                          else m.wrap(1.0))
     shared["Shaft Length"] = m.select(m.less(1e-3, cover), d_vp, SKY_LENGTH)
     shared["Shaft Offset"] = shafts.offset(m, px, py)
-    sums = {}   # Output -> the sum over the bundles
-    for first in range(0, len(lights), BUNDLE_SIZE):
+    sums = {}   # Output -> the sum over the bundles (over sets of bundles where there are many lights)
+    step, build = ((BUNDLE_SIZE, comp_bundles.build_bundle) if len(lights) <= BUNDLE_SIZE * comp_bundles.SET_SIZE
+                   else (BUNDLE_SIZE * comp_bundles.SET_SIZE, comp_bundles.build_bundle_set))
+    for first in range(0, len(lights), step):
         node = m.node("CompositorNodeGroup", 5)
-        node.node_tree = comp_bundles.build_bundle(scene, first, lights[first:first + BUNDLE_SIZE],
-                                                   models[first:first + BUNDLE_SIZE], images, peak,
-                                                   None if windows is None else windows[1][first:first + BUNDLE_SIZE],
-                                                   shafted, layered=layer is not None)
+        node.node_tree = build(scene, first, lights[first:first + step], models[first:first + step], images, peak,
+                               None if windows is None else windows[1][first:first + step], shafted,
+                               layered=layer is not None)
         for name, v in shared.items():
             m.feed(node.inputs[name], v)
         sums = comp_ops.in_step(m, sums, {o: m.wrap(node.outputs[o.compositor], vector=True)

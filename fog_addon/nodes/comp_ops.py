@@ -192,7 +192,8 @@ def accumulate(m, total, term):
 
 def in_step(m, sums, terms):
     """``sums`` (key -> image) with ``terms`` (key -> image) added, each new sum tied to another sum of the step
-    before (a ring over the keys) by adding min(|that sum|, 0), which is 0: every sum of a step then depends on all
+    before (a ring over the keys) by adding 0 times that sum (0: the sums are finite; two nodes, Blender's node
+    editing slows as a tree grows, ``comp_bundles.BUNDLE_SIZE``): every sum of a step then depends on all
     the sums two steps back, and a step's terms are computed within two steps of each other.  The compositor
     schedules each output's inputs depth first, one output after another (Blender's
     ``compositor/intern/scheduler.cc``), so untied sums over N lights (the glows' Airlight and Background, the
@@ -205,8 +206,7 @@ def in_step(m, sums, terms):
         out[key] = term if total is None else accumulate(m, total, term)
     if len(keys) > 1:
         for key, other in zip(keys, keys[1:] + keys[:1]):
-            tie = m.vmath_in_order("MINIMUM", m.vmath_in_order("ABSOLUTE", sums[other]), (0.0, 0.0, 0.0))
-            out[key] = accumulate(m, out[key], tie)
+            out[key] = accumulate(m, out[key], zero(m, sums[other]))
     return out
 
 

@@ -7,8 +7,9 @@ import math
 
 import numpy as np
 
-from .. import caveats, escape, methods, shadow_maps, sunsky, view
+from .. import escape, methods, shadow_maps, sunsky, view
 from ..precompute.model import capabilities, predict
+from ..precompute.physics.shafts import shafts
 
 MULTIPLE_ENTRIES = 1_000_000   # samples x lights at most for Dense Fog's shares (``dense_fog``): every nth sample
 #                                beyond (the choice's time stays that of the ladder's alone)
@@ -67,16 +68,18 @@ def _at_centres(samples, centres):
 
 def shadow_fog(scene, spec, method, lights):
     """What the shadows would take from the fog where it has none: the lights with objects near them
-    (``caveats.shadowing_lights``) whose shafts the picture lacks (Light Shafts off, a method without them),
-    judged at the view's samples (``shadow_maps.shadowed_parts``).  Returns {"shadows": {"left_out":
-    {name: share}, "missing": their share of a judged sample's fog together, at the sample where it is largest,
-    "why": "off" or the method's name}}."""
+    (``caveats.shadowing_lights``) whose shafts the picture lacks (Light Shafts off, a method without them, or
+    beyond the lights the Quality shafts: ``shadow_maps.shafted_split``), judged at the view's samples
+    (``shadow_maps.shadowed_parts``).  Returns {"shadows": {"left_out": {name: share}, "missing": their share of a
+    judged sample's fog together, at the sample where it is largest, "why": "off", "cap" (the Quality's) or the
+    method's name}}."""
     name, engine = getattr(method, "name", method), scene.render.engine
     casting = spec.shafts and capabilities.can(name, "shafts", engine)
-    out = {"left_out": {}, "missing": 0.0, "why": "off" if not spec.shafts else name}
-    found = caveats.shadowing_lights(scene, lights, spec.beta_per_unit, max(view.scene_size(scene), 1e-6)) \
-        if lights and spec.beta_per_unit > 0.0 else {}
-    unshafted = [o for o in lights if o.name in found] if not casting else []
+    cap = shafts.shaft_lights(spec.quality) if casting else None
+    out = {"left_out": {}, "missing": 0.0, "why": "cap" if casting else "off" if not spec.shafts else name}
+    shafted, over = shadow_maps.shafted_split(scene, lights, spec.beta_per_unit, cap) \
+        if lights and spec.beta_per_unit > 0.0 else ([], [])
+    unshafted = over if casting else shafted
     judged = shadow_maps.shadowed_parts(scene, spec, unshafted) if unshafted else None
     if judged is not None:
         names, parts = judged

@@ -109,7 +109,8 @@ def choose_models(scene, spec, method, lights, budget=None, previous=None, judge
     if lights and (target is not None or (budget is not None and not budget.fits(steps))):
         past = sees_past_glass(scene, method)
         viewed = (tuple(o.name for o in lights), past)   # (the samples of another view are another view's)
-        seen = _judged(judged, ("view", viewed), lambda: view.view_samples(scene, lights, past_glass=past))
+        seen = _judged(judged, ("view", viewed), lambda: view.view_samples(
+            scene, lights, grid=view.judged_grid(scene, len(lights)), past_glass=past))
         samples = _judged(judged, ("samples", viewed, glows_emitters(scene, method)),
                           lambda: with_other(scene, spec, seen, method))
         scale = [scales.get(o.name, 1.0) for o in lights] if dense else None

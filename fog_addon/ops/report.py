@@ -60,7 +60,8 @@ def shadows_line(choice):
     if not left:
         return None
     why = shadows.get("why")
-    why = "Light Shafts is off" if why == "off" else f"Method {methods.get(why).label} has none"
+    why = ("Light Shafts is off" if why == "off" else "beyond the lights the Quality shafts" if why == "cap"
+           else f"Method {methods.get(why).label} has none")
     names = sorted(left, key=left.get, reverse=True)
     return (f"shadows in the fog left out of {len(left)} light(s) ({', '.join(names[:3])}"
             f"{' and more' if len(names) > 3 else ''}; {why}): up to {shadows.get('missing', 0.0):.2%} of a "

@@ -72,6 +72,17 @@ def nodes_per_pixel(samples):
     return samples.view_nodes + tail + samples.surface_directions * samples.surface_nodes
 
 
+SHAFT_LIGHTS = {"draft": 16, "final": 64}   # lights a Quality shafts at most, the most important (``shaft_lights``)
+
+
+def shaft_lights(quality):
+    """How many lights a Quality shafts at most (a target error as Final; None at Exact: all of them).  Each shafted
+    light is a shadow map, a shaft group and its quadrature at every pixel: the compositor's memory and time grow
+    with them, so a city's far lamps glow unshadowed, and the predicted error counts what their shadows would take
+    (``ops/left_out.shadow_fog``)."""
+    return None if quality == "exact" else SHAFT_LIGHTS.get(quality, SHAFT_LIGHTS["final"])
+
+
 def map_budget(quality):
     """Grid points all the still shadow maps hold together at a Quality (``shaft_maps.map_levels``): None (no limit,
     every map full) at Exact, else ``shaft_maps.MAP_BUDGET``."""
