@@ -22,8 +22,9 @@ def test_many_maps_stay_within_the_budget(n):
     spots = np.arange(n) % 3 == 0
     levels = sm.map_levels(w, spots)
     assert levels.min() >= 0 and levels.max() <= sm.SMALLEST_LEVEL
-    assert points(levels, spots) <= sm.MAP_BUDGET or levels.min() == sm.SMALLEST_LEVEL
-    assert points(levels, spots) >= 0.5 * sm.MAP_BUDGET   # (rounding down leaves no more than half of it)
+    smallest = points([sm.SMALLEST_LEVEL] * n, spots)
+    assert points(levels, spots) <= max(sm.MAP_BUDGET, smallest)
+    assert points(levels, spots) >= min(0.5 * sm.MAP_BUDGET, smallest)   # (rounding down leaves at most half)
     order = np.argsort(w)   # a heavier light's map is never coarser than a lighter one's of the same kind
     for kind in (False, True):
         k = [i for i in order if spots[i] == kind]

@@ -787,9 +787,36 @@ MUTATIONS = [
              ("tests/test_shafts.py::test_area_light_share_weighs_its_front_side",)),
     Mutation("area_no_shafts", "area lights cast no shafts (the softbox colonnade 14.9 % off path tracing)",
              "compositor.shafted_lights",
-             "    return [light for light in lights if light.name in found]",
-             "    return [light for light in lights if light.name in found and light.data.type != \"AREA\"]",
+             "    return shadow_maps.shafted_split(scene, lights, spec.beta_per_unit, shafts.shaft_lights(spec.quality))[0]",
+             "    return [o for o in shadow_maps.shafted_split(scene, lights, spec.beta_per_unit,\n"
+             "                                                 shafts.shaft_lights(spec.quality))[0]\n"
+             "            if o.data.type != \"AREA\"]",
              ("tests/test_shaft_scenes.py::test_shaft_scene_against_path_tracing[softbox_colonnade]",)),
+    Mutation("shaft_cap_ignored", "a city's lamps all shafted whatever the Quality (its memory and time grow with "
+             "every lamp's map and shaft group)", "shadow_maps.shafted_split",
+             "    if cap is None or len(casting) <= cap:",
+             "    if True:",
+             ("tests/test_city_night.py::test_the_quality_shafts_its_most_important_lights",)),
+    Mutation("shaft_cap_least_important", "the Quality's shafted lights taken from the least important (the lamps "
+             "nearest the camera glow unshadowed)", "shadow_maps.shafted_split",
+             "    kept = set(np.argsort(-weight, kind=\"stable\")[:cap].tolist())",
+             "    kept = set(np.argsort(weight, kind=\"stable\")[:cap].tolist())",
+             ("tests/test_city_night.py::test_the_quality_shafts_its_most_important_lights",)),
+    Mutation("map_budget_ignored", "every still shadow map full however many lights (memory grows with the lights)",
+             "shaft_maps.map_levels",
+             "    if full.sum() <= budget or not len(w):",
+             "    if True:",
+             ("tests/test_map_budget.py::test_many_maps_stay_within_the_budget",)),
+    Mutation("map_budget_unweighted", "the maps' budget shared evenly, not as each light's weight^(2/3)",
+             "shaft_maps.map_levels",
+             "    share = w ** (2.0 / 3.0)",
+             "    share = np.ones_like(w)",
+             ("tests/test_map_budget.py::test_grid_points_go_as_the_weight_to_two_thirds",)),
+    Mutation("sums_untied", "the compositor's sums over the lights not tied step by step (each light's buffers live "
+             "from the first sum's pass to the last: memory grows with lights x pixels)", "comp_ops.in_step",
+             "    if len(keys) > 1:",
+             "    if False:",
+             ("tests/test_city_night.py::test_a_city_of_lamps_in_bounded_memory",)),
     Mutation("preview_no_glowing_points", "viewport preview: the glowing objects not sampled beside the lights "
              "(no glow of theirs in the preview)", "compositor.sampled_points",
              "    return points",

@@ -24,7 +24,8 @@ FOG_BIAS = (0.002, 0.003)   # (relative, m): a fog point is lit if d < D (1 - re
 
 MAP_BUDGET = 16 * POINT_MAP[0] * POINT_MAP[1]   # grid points of all the still maps together (8.4 M: 134 MB as the
 #                                                 float images Blender holds, 16 bytes a point), beyond which they shrink
-SMALLEST_LEVEL = 4        # a map halves across at most this many times (a point light's 64 x 32: 5.6 deg a point)
+SMALLEST_LEVEL = 3        # a map halves across at most this many times (a point light's 128 x 64: 2.8 deg a point; at
+#                           64 x 32 the shaft scenes were 8-10 % off path tracing: docs/measurements/2026-12-01-city-night.md)
 
 
 # --- maps -----------------------------------------------------------------------------------------------
@@ -44,9 +45,9 @@ def map_levels(weights, spots, budget=MAP_BUDGET, smallest=SMALLEST_LEVEL):
     ``spots`` (N,) bool: a spot's map (else a point light's).  A shadow's edge in the fog moves by up to a
     grid point's angle, which goes as t^(-1/2) for a map of t points, and what that moves in the picture goes as
     the light's weight w: the sum of w t^(-1/2) is least, for t's summing to the budget, where t goes as
-    w^(2/3) (Lagrange).  So t = min(full, c w^(2/3)), c found by bisection to fill the budget, and each map takes
-    the first level at or below its t (the levels' totals stay within the budget unless ``smallest`` holds them
-    up); what rounding down leaves of the budget takes the heaviest maps a level up.  Every map is full where the
+    w^(2/3) (Lagrange).  So t = c w^(2/3) between the smallest and the full map, c found by bisection to fill the
+    budget, and each map takes the first level at or below its t (the levels' totals stay within the budget unless
+    the smallest maps alone exceed it); what rounding down leaves of the budget takes the heaviest maps a level up.  Every map is full where the
     full maps fit."""
     w = np.maximum(np.nan_to_num(np.asarray(weights, float), nan=0.0), 0.0)
     full = np.array([float(np.prod(map_grid(s))) for s in spots]).reshape(w.shape)
@@ -55,11 +56,12 @@ def map_levels(weights, spots, budget=MAP_BUDGET, smallest=SMALLEST_LEVEL):
     share = w ** (2.0 / 3.0)
     if share.max() <= 0.0:
         share = np.ones_like(w)
+    least = full / 4.0 ** smallest
     lo, hi = 0.0, float(full.max() / share[share > 0].min())
     for _ in range(64):
         c = 0.5 * (lo + hi)
-        lo, hi = (c, hi) if np.minimum(full, c * share).sum() < budget else (lo, c)
-    t = np.maximum(np.minimum(full, lo * share), 1.0)
+        lo, hi = (c, hi) if np.clip(c * share, least, full).sum() < budget else (lo, c)
+    t = np.clip(lo * share, least, full)
     levels = np.clip(np.ceil(np.log2(full / t) / 2.0 - 1e-9), 0, smallest).astype(int)
     points = full / 4.0 ** levels
     for i in np.argsort(-w, kind="stable"):   # what rounding down left of the budget: the heaviest maps a level up
