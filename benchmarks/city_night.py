@@ -157,7 +157,7 @@ def chart(rows, path):
     for ax, label in ((a1, "CPU time with fog / without"), (a2, "seconds / GB")):
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("street lamps (all shafted)")
+        ax.set_xlabel("street lamps (each by walls; the Quality shafts at most 64)")
         ax.set_ylabel(label)
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7.5)
