@@ -343,6 +343,22 @@ def map_levels(scene, lights, beta, budget=shaft_maps.MAP_BUDGET):
     return {o.name: int(k) for o, k in zip(lights, levels)}
 
 
+def map_level_error(scene, spec, lights, levels, grid=None):
+    """The largest share of a view sample's fog that the shrunk maps (``levels`` by name: ``map_levels``) may move:
+    each light's glow times ``shaft_maps.MAP_LEVEL_ERROR`` at its level, summed over the lights, over the fog of all
+    ``lights`` (at the view's samples on ``grid``, SHADOW_GRID by default; each light a point: an estimate); 0 where
+    no map is shrunk."""
+    errors = np.array([shaft_maps.MAP_LEVEL_ERROR[levels.get(o.name, 0)] for o in lights])
+    if scene.camera is None or not errors.any():
+        return 0.0
+    samples = view.view_samples(scene, lights, frames=[scene.frame_current],
+                                grid=grid or SHADOW_GRID)._replace(shapes=None)
+    glow, scatter = predict.light_fog(samples, view.light_intensities(lights), spec.beta_per_unit, spec.anisotropy)
+    moved = (np.nan_to_num(glow, nan=0.0, posinf=0.0) * errors[None, :, None]).sum(axis=1)
+    fog = np.nan_to_num(glow + scatter, nan=0.0, posinf=0.0).sum(axis=1)
+    return float(predict.judged_shares(moved[:, None, :], fog).max(initial=0.0))
+
+
 def _level_of(light, img):
     """The level (``shaft_maps.map_grid``) of ``light``'s still map ``img`` (0 without one, or for an atlas)."""
     if img is None or ATLAS in img or img.size[0] < 2:

@@ -5,7 +5,8 @@ roof) with the defaults at a Quality and prints what the budgets did.
 
 * The Quality shafts at most ``shafts.shaft_lights`` lights, the most important to the picture: with equal lamps,
   the nearest to the camera (the test's own order: distance, not the add-on's weights).  The others' shadows are
-  in the predicted error ("why" "cap") and a note names them.
+  in the predicted error ("why" "cap") and a note names them.  Where their maps shrink to the budget, what that may
+  move is in the predicted error too.
 * (slow) 200 lamps at 640x360: the fog's memory.  Add Fog's peak over the scene's, the fog render's over Add Fog's
   (the compositor: each light's buffers freed as its terms are summed, ``comp_ops.in_step``), the shadow maps'
   grid points within ``shaft_maps.MAP_BUDGET``.
@@ -47,6 +48,20 @@ def test_the_quality_shafts_its_most_important_lights(tmp_path):
     assert 0.0 < shadows["missing"] <= res["error"]
     note = next(n for n in res["notes"] if "most important" in n)
     assert f"light shafts for the {cap} lights" in note and "4 more" in note
+
+
+def test_shrunk_maps_are_in_the_predicted_error(tmp_path):
+    """20 lamps at Final: all shafted (its cap is 64), their maps more than the budget's 16 full ones, so the
+    least important shrink, and what that may move (``shadow_maps.map_level_error``) is the shadows' whole account:
+    above 0, at most the largest level's error (a sample's shares sum to at most 1)."""
+    res = _run(tmp_path, 20, "final", "160x90", 0)
+    grids = res["maps"]
+    assert len(grids) == 20 and sum(w * h_ for w, h_ in grids.values()) <= shaft_maps.MAP_BUDGET
+    assert min(w for w, _ in grids.values()) < shaft_maps.POINT_MAP[0]
+    shadows = res["shadows"]
+    assert shadows["why"] == "cap" and not shadows["left_out"]
+    assert 0.0 < shadows["maps"] == shadows["missing"] <= shaft_maps.MAP_LEVEL_ERROR[-1]
+    assert res["error"] >= shadows["missing"]
 
 
 @pytest.mark.slow

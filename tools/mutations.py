@@ -812,6 +812,11 @@ MUTATIONS = [
              "    share = w ** (2.0 / 3.0)",
              "    share = np.ones_like(w)",
              ("tests/test_map_budget.py::test_grid_points_go_as_the_weight_to_two_thirds",)),
+    Mutation("map_level_error_dropped", "the shrunk shadow maps' error left out of the predicted error",
+             "left_out.shadow_fog",
+             "        out[\"missing\"] += out[\"maps\"]",
+             "        out[\"missing\"] += 0.0",
+             ("tests/test_city_night.py::test_shrunk_maps_are_in_the_predicted_error",)),
     Mutation("sums_untied", "the compositor's sums over the lights not tied step by step (each light's buffers live "
              "from the first sum's pass to the last: memory grows with lights x pixels)", "comp_ops.in_step",
              "    if len(keys) > 1:",

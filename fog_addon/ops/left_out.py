@@ -71,8 +71,9 @@ def shadow_fog(scene, spec, method, lights):
     (``caveats.shadowing_lights``) whose shafts the picture lacks (Light Shafts off, a method without them, or
     beyond the lights the Quality shafts: ``shadow_maps.shafted_split``), judged at the view's samples
     (``shadow_maps.shadowed_parts``).  Returns {"shadows": {"left_out": {name: share}, "missing": their share of a
-    judged sample's fog together, at the sample where it is largest, "why": "off", "cap" (the Quality's) or the
-    method's name}}."""
+    judged sample's fog together, at the sample where it is largest (the shrunk maps' "maps" with them: their
+    lights' maps within the Quality's budget, ``shadow_maps.map_level_error``), "why": "off", "cap" (the
+    Quality's) or the method's name}}."""
     name, engine = getattr(method, "name", method), scene.render.engine
     casting = spec.shafts and capabilities.can(name, "shafts", engine)
     cap = shafts.shaft_lights(spec.quality) if casting else None
@@ -85,6 +86,12 @@ def shadow_fog(scene, spec, method, lights):
         names, parts = judged
         out["left_out"] = {n: float(parts[:, k].max(initial=0.0)) for k, n in enumerate(names)}
         out["missing"] = float(parts.sum(axis=1).max(initial=0.0))
+    if casting and len(shafted) > 1:   # the shafted lights' maps shrunk to the Quality's budget
+        still = [o for o in shafted if o not in shadow_maps.moving_lights(scene, shafted)] \
+            if shadow_maps.frames_of(scene)[2] > 1 else shafted
+        levels = shadow_maps.map_levels(scene, still, spec.beta_per_unit, shafts.map_budget(spec.quality))
+        out["maps"] = shadow_maps.map_level_error(scene, spec, lights, levels)
+        out["missing"] += out["maps"]
     return {"shadows": out}
 
 

@@ -24,6 +24,10 @@ FOG_BIAS = (0.002, 0.003)   # (relative, m): a fog point is lit if d < D (1 - re
 
 MAP_BUDGET = 16 * POINT_MAP[0] * POINT_MAP[1]   # grid points of all the still maps together (8.4 M: 134 MB as the
 #                                                 float images Blender holds, 16 bytes a point), beyond which they shrink
+# the largest growth of a shaft scene's relative RMSE against path tracing when its lights' maps took level 0, 1, 2, 3
+# (docs/measurements/2026-12-01-city-night.md: colonnade, window room, hooded lamp, street lamps): a shrunk map's
+# error, as a share of its light's glow, in the predicted error (``shadow_maps.map_level_error``)
+MAP_LEVEL_ERROR = (0.0, 0.001, 0.003, 0.007)
 SMALLEST_LEVEL = 3        # a map halves across at most this many times (a point light's 128 x 64: 2.8 deg a point; at
 #                           64 x 32 the shaft scenes were 8-10 % off path tracing: docs/measurements/2026-12-01-city-night.md)
 
