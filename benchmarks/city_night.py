@@ -167,7 +167,7 @@ def chart(rows, path):
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
+    plt.close(fig)   # (the worker's process renders; this one only draws)
 
 
 def print_table(rows):
@@ -200,11 +200,7 @@ def main(argv=None):
         out = [r for r in kept if (int(r["lights"]), r["resolution"]) not in done] + rows
         out.sort(key=lambda r: (r["resolution"], int(r["lights"])))
         csv_rows.write(args.out, out, FIELDS, digits=4)
-    rows = csv_rows.read(args.out, TEXT_FIELDS)
-    chart(rows, args.chart)
-    print_table(rows)
-    print(f"\nwrote {args.out}, {args.chart}")
-    return 0
+    return cost_cli.finish(args, csv_rows.read(args.out, TEXT_FIELDS), chart, print_table)
 
 
 if __name__ == "__main__":

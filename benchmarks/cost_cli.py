@@ -34,3 +34,11 @@ def dispatch(args, worker, read_csv, chart, print_table, kept):
     args.resolution = [int(v) for v in args.resolution.lower().split("x")]
     args.eevee_resolution = [int(v) for v in args.eevee_resolution.lower().split("x")]
     return None
+
+
+def finish(args, rows, chart, print_table):
+    """A measurement's end: the chart of ``rows`` (the CSV as written) at ``args.chart``, the table, the paths."""
+    chart(rows, args.chart)
+    print_table(rows)
+    print(f"\nwrote {args.out}, {args.chart}")
+    return 0
