@@ -12,9 +12,10 @@ casters' BVH, the maps' ray casts and the shaft groups, timed by wrapping the ad
 warm).  Peak memory is the worker's resident set at its highest (``ru_maxrss``) after each phase: ``rss_nofog_gb``
 (the scene and its fog-free renders), ``rss_apply_gb``, ``rss_fog_gb``; ``fog_peak_gb`` = ``rss_fog_gb`` -
 ``rss_nofog_gb``, what the fog adds.  ``map_points_m``: the shadow maps' grid points (millions) in the file;
-``predicted``: Auto's predicted ratio (``methods.auto.predicted_ratio``, the compositor's).  Ratios are process CPU
-time (``time.process_time``: all threads): warm = fog warm / no-fog warm; first = (apply + fog first) / no-fog
-first.  The log is checked for "out of SVM stack space" and compositor errors, the picture for black surfaces.
+``predicted``: Auto's predicted ratio (``methods.auto.predicted_ratio``, the compositor's, read from its choice).
+Ratios are process CPU time (``time.process_time``: all threads): warm = fog warm / no-fog warm; first = (apply +
+fog first) / no-fog first.  The log is checked for "out of SVM stack space" and compositor errors, the picture
+for black surfaces.
 
 Outputs: benchmarks/out/city_night.csv and city_night.png (the ratios and the fog's memory against lamps, the
 issue's goals); copy them to docs/measurements/data/ under dated names to keep them.  Smoke mode
@@ -22,6 +23,7 @@ issue's goals); copy them to docs/measurements/data/ under dated names to keep t
 """
 import os
 import pathlib
+import re
 import resource
 import sys
 import tempfile
@@ -63,7 +65,6 @@ def worker(spec):
     import bpy
     from demo_scenes import city_night
     from fog_addon import caveats, shadow_maps
-    from fog_addon.methods import auto
     from fog_addon.nodes import comp_shafts
     from fog_addon.ops import apply
     from fog_addon.precompute.core.spec import FogSpec
@@ -96,9 +97,8 @@ def worker(spec):
     res["shadow_maps"] = len(maps)
     res["map_points_m"] = sum(img.size[0] * img.size[1] for img in maps) / 1e6
     res["shaft_groups"] = timers.calls.get("shaft_groups", 0)
-    px = spec["resolution"][0] * spec["resolution"][1]
-    res["predicted"] = auto.predicted_ratio("compositor", "CYCLES", spec["lights"], pixels=px,
-                                            samples=spec["samples"])
+    found = re.search(r"predicted [0-9.]+x with node groups, ([0-9.]+)x with the compositor", res["choice"])
+    res["predicted"] = float(found.group(1)) if found else None   # Auto's own
     ov._emit(res)
     res["fog_first_s"], res["fog_first_cpu_s"] = ov._render(scene, "fog_first")
     res.update(ov.picture_stats(nofog, ov._save_render(scene, tmp / f"city_{spec['lights']}_fog_{os.getpid()}.exr")))

@@ -13,6 +13,7 @@ roof) with the defaults at a Quality and prints what the budgets did.
 * (slow) 72 lamps: the fog group of sets of bundles (``comp_bundles.build_bundle_set``) renders the picture the
   fog group of bundles renders.
 """
+import csv
 import json
 
 import numpy as np
@@ -25,6 +26,7 @@ from fog_scenes import render_harness as h
 pytestmark = pytest.mark.render
 
 SCRIPT = h.ROOT / "tests" / "scenes" / "city_budget.py"
+CITY_CSV = h.ROOT / "docs" / "measurements" / "data" / "city_night_2026-12-01.csv"   # benchmarks/city_night.py
 # the fog's memory with 200 lamps at 640x360, 1 spp (GB, ru_maxrss): measured Add Fog's peak 0.46 over the scene's,
 # the fog render's 1.12 over Add Fog's (1.76 with the sums untied): docs/measurements/2026-12-01-city-night.md
 APPLY_GB, RENDER_GB = 0.7, 1.4
@@ -62,6 +64,20 @@ def test_shrunk_maps_are_in_the_predicted_error(tmp_path):
     assert shadows["why"] == "cap" and not shadows["left_out"]
     assert 0.0 < shadows["maps"] == shadows["missing"] <= shaft_maps.MAP_LEVEL_ERROR[-1]
     assert res["error"] >= shadows["missing"]
+
+
+def test_auto_predicts_the_citys_measured_cost():
+    """Issue 47: Auto's predicted ratio within 25 % of the measured warm ratio (CPU time, fog over no fog) of the
+    committed benchmark run, 1 to 1 000 lamps, each shafted lamp counted (``auto.SHAFT_LOAD``)."""
+    from fog_addon.methods import auto
+    rows = list(csv.DictReader(open(CITY_CSV)))
+    assert {int(r["lights"]) for r in rows} >= {1, 10, 100, 400, 1000}
+    for r in rows:
+        w, h_ = (int(v) for v in r["resolution"].split("x"))
+        predicted = auto.predicted_ratio("compositor", "CYCLES", int(r["lights"]), pixels=w * h_,
+                                         samples=int(float(r["samples"])), shafted=int(r["shadow_maps"]))
+        measured = float(r["ratio_warm_cpu"])
+        assert abs(predicted / measured - 1.0) <= 0.25, (r["lights"], r["resolution"], predicted, measured)
 
 
 @pytest.mark.slow

@@ -817,6 +817,11 @@ MUTATIONS = [
              "        out[\"missing\"] += out[\"maps\"]",
              "        out[\"missing\"] += 0.0",
              ("tests/test_city_night.py::test_shrunk_maps_are_in_the_predicted_error",)),
+    Mutation("auto_shafts_free", "Auto's predicted cost counts a shafted light as an unshafted one (100 street lamps "
+             "predicted 1.66x, measured 2.7x)", "auto.predicted_ratio",
+             "(n + SHAFT_LOAD * max(int(shafted), 0))",
+             "(n + 0.0 * max(int(shafted), 0))",
+             ("tests/test_city_night.py::test_auto_predicts_the_citys_measured_cost",)),
     Mutation("sums_untied", "the compositor's sums over the lights not tied step by step (each light's buffers live "
              "from the first sum's pass to the last: memory grows with lights x pixels)", "comp_ops.in_step",
              "    if len(keys) > 1:",

@@ -2,7 +2,7 @@
 
 The predicted cost of a method is the render time with the fog over the same render without it, from
 the scene's lights, fogged materials, pixels, samples and engine (``predicted_ratio``; the model and the
-measurements it is fitted to: docs/decisions/auto-method.md):
+measurements it is fitted to: docs/decisions/2026-11-26-method-auto.md):
 
 * node groups: every fogged material evaluates every light on every sample, so their share of the render
   does not depend on pixels or samples, and grows with the lights (Cycles: 1 + 2.9 N^0.85; EEVEE:
@@ -10,7 +10,7 @@ measurements it is fitted to: docs/decisions/auto-method.md):
   (Cycles' node deduplication), against the fog-free render's time (pixels x samples);
 * the compositor: a cost per pixel and frame, fixed plus a part per light, against the render's cost per
   pixel, which grows with the samples (Cycles: 1 + (0.27 + 0.0105 N) 16 / samples; EEVEE: 1 + (0.05 +
-  0.001 N) 16 / samples).
+  0.001 N) 16 / samples), a shafted light counting 1 + SHAFT_LOAD lights.
 
 N counts lights; a scene's Quality steps some of them down the ladder, which both methods profit from.
 
@@ -32,9 +32,10 @@ What the scene needs comes first:
   objects the camera sees, a Glass BSDF in EEVEE, depth of field, motion blur): the node groups, unless their
   predicted cost exceeds SOFT_COST_LIMIT; then the compositor, and the choice says what it gets wrong.
 """
-from .. import caveats, sunsky, view
+from .. import caveats, shadow_maps, sunsky, view
 from ..nodes import budgets
 from ..precompute.model import capabilities, predict, rungs
+from ..precompute.physics.shafts import shafts
 from .compositor import glowing_objects, unfogged_layers
 
 SOFT_COST_LIMIT = 6.0   # a soft need keeps the node groups while they cost at most this (x the fog-free render)
@@ -47,6 +48,9 @@ _COST = {   # (node groups: a, p of 1 + a N^p), (compositor: fixed, per light, a
 }
 
 
+SHAFT_LOAD = 3.5   # a shafted light costs the compositor about this many lights more (its map's lookups along the ray
+#                    and over the surface's hemisphere: benchmarks/city_night.py, 10-1 000 street lamps, and the hall of
+#                    benchmarks/shafts_cost.py; docs/measurements/2026-12-01-city-night.md)
 AREA_LIGHT_LOAD = 6   # an area light costs about this many point lights (benchmarks/area_cost.py, the hall at
 #                        g 0.85: fog over no fog 1.69x against 1.13x with 4 lights in the compositor, 65x against 8.7x
 #                        with the node groups; docs/measurements/2026-11-27-area-lights.md)
@@ -57,14 +61,15 @@ def light_load(lights):
     return sum(AREA_LIGHT_LOAD if getattr(o.data, "type", "POINT") == "AREA" else 1 for o in lights)
 
 
-def predicted_ratio(method, engine, lights, materials=1, pixels=320 * 180, samples=16):
+def predicted_ratio(method, engine, lights, materials=1, pixels=320 * 180, samples=16, shafted=0):
     """The render time with the fog over without it (dimensionless) that ``method`` is predicted to cost
-    (module docstring): ``lights`` taking part, fogged ``materials``, ``pixels`` and ``samples`` per pixel."""
+    (module docstring): ``lights`` taking part, fogged ``materials``, ``pixels`` and ``samples`` per pixel;
+    ``shafted``: the lights the compositor shafts, each SHAFT_LOAD lights more."""
     (a, p), (fixed, per_light) = _COST.get(engine, _COST["CYCLES"])
     n = max(int(lights), 0)
     samples = max(int(samples), 1)
     if method == "compositor":
-        return 1.0 + (fixed + per_light * n) * _REFERENCE_SAMPLES / samples
+        return 1.0 + (fixed + per_light * (n + SHAFT_LOAD * max(int(shafted), 0))) * _REFERENCE_SAMPLES / samples
     ratio = 1.0 + (a * n ** p if n else 0.0)
     if engine == "CYCLES":
         base_s = _CYCLES_S_PER_PIXEL_SAMPLE * max(pixels, 1) * samples
@@ -153,7 +158,9 @@ def choose(scene, spec, lights, materials, methods):
     hard = methods["compositor"].check(scene, spec)
     n, m = light_load(lights), len(materials)
     px, spp = pixels_of(scene), samples_of(scene)
-    cost = {name: predicted_ratio(name, engine, n, m, px, spp) for name in ("nodes", "compositor")}
+    shafted = (len(shadow_maps.shafted_split(scene, lights, spec.beta_per_unit, shafts.shaft_lights(spec.quality))[0])
+               if spec.shafts and lights else 0)
+    cost = {name: predicted_ratio(name, engine, n, m, px, spp, shafted) for name in ("nodes", "compositor")}
     costs = f"predicted {cost['nodes']:.2f}x with node groups, {cost['compositor']:.2f}x with the compositor"
     if hard is not None:
         why = hard.split(":")[0].replace("the Compositor method", "the compositor")
