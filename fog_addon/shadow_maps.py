@@ -611,7 +611,7 @@ def judged_lights(scene, spec, lights):
     return [lights[k] for k in sorted(np.argsort(-weight, kind="stable")[:SHARE_LIGHTS])]
 
 
-def shadowed_parts(scene, spec, lights, grid=SHADOW_GRID):
+def shadowed_parts(scene, spec, lights, grid=SHADOW_GRID, others=()):
     """Where the fog has no shafts: (names of the judged lights, (P, N') each one's fog light that its shadows
     would take away, as a share of the sample's fog with them), at the view's samples on ``grid``, judged lights
     only (at most SHARE_LIGHTS of ``lights``, the most important to the picture), or None without a camera.
@@ -620,20 +620,25 @@ def shadowed_parts(scene, spec, lights, grid=SHADOW_GRID):
     the compositor's shafts, SHARE_NODES of them) read from a coarse point map of the light (SHARE_MAP, ray cast
     here; a spot or an area light is mapped as a point), and the glow without shafts, G, overestimates the fog
     by G (1 - S); the denominator is the fog with the shadows, sum G S + the fog light on surfaces (unshadowed:
-    the fog light's own shadows are left out of the estimate).  The predicted error's share of what Light
-    Shafts off or a method without them leaves out (``ops/left_out.shadow_fog``)."""
+    the fog light's own shadows are left out of the estimate).  ``others``: lights whose fog is in the picture
+    beside them (the shafted ones where the Quality's cap leaves ``lights`` out), in the denominator too, the most
+    important SHARE_LIGHTS of them with their shadows the same way, the rest without.  The predicted error's
+    share of what Light Shafts off, a method without them or the Quality's cap leaves out
+    (``ops/left_out.shadow_fog``)."""
     if scene.camera is None or not lights:
         return None
     judged = judged_lights(scene, spec, lights)
-    samples = view.view_samples(scene, judged, frames=[scene.frame_current], grid=grid)
+    shaded = judged_lights(scene, spec, others) if others else []
+    every = judged + shaded + [o for o in others if o not in shaded]
+    samples = view.view_samples(scene, every, frames=[scene.frame_current], grid=grid)
     samples = samples._replace(shapes=None)   # (each light a point: an estimate)
-    glow, scatter = predict.light_fog(samples, view.light_intensities(judged), spec.beta_per_unit, spec.anisotropy)
+    glow, scatter = predict.light_fog(samples, view.light_intensities(every), spec.beta_per_unit, spec.anisotropy)
     geometry = scene_bvh(scene)
     vectors, fill = point_casts(*SHARE_MAP)
     m = NumpyOps(bakers.numpy_tables(spec.anisotropy))
     length = np.where(np.isfinite(samples.distance), samples.distance, 1.0e6)
     lit = np.ones(glow.shape[:2])
-    for k, light in enumerate(judged):
+    for k, light in enumerate(judged + shaded):
         origin = tuple(light.matrix_world.translation)
         spec_k = TableSpec(f"share map {k}", SHARE_MAP[0], SHARE_MAP[1])
         m.tables[spec_k.name] = cast(geometry.bvh, origin, vectors)[fill].astype(float)
@@ -641,5 +646,6 @@ def shadowed_parts(scene, spec, lights, grid=SHADOW_GRID):
             share = shafts.lit_share(m, samples.camera, samples.direction, length, np.array(origin),
                                      spec.beta_per_unit, (spec_k, None), SHARE_NODES, g=spec.anisotropy)
         lit[:, k] = np.nan_to_num(np.asarray(share, float), nan=1.0).clip(0.0, 1.0)
-    return [o.name for o in judged], predict.judged_shares(glow * (1.0 - lit)[..., None],
+    n = len(judged)
+    return [o.name for o in judged], predict.judged_shares(glow[:, :n] * (1.0 - lit[:, :n])[..., None],
                                                            (glow * lit[..., None] + scatter).sum(axis=1))

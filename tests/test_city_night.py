@@ -48,8 +48,11 @@ def test_the_quality_shafts_its_most_important_lights(tmp_path):
     shadows = res["shadows"]
     assert shadows["why"] == "cap" and sorted(shadows["left_out"]) == sorted(nearest[cap:])
     assert 0.0 < shadows["missing"] <= res["error"]
+    # the share is of the fog of every lamp, the shafted ones' too (over the 4 lamps' fog alone: 618 %)
+    assert shadows["missing"] < 0.5
     note = next(n for n in res["notes"] if "most important" in n)
     assert f"light shafts for the {cap} lights" in note and "4 more" in note
+    assert any("left out of 4 light(s)" in line and "Quality shafts" in line for line in res["panel"])
 
 
 def test_shrunk_maps_are_in_the_predicted_error(tmp_path):
@@ -64,6 +67,7 @@ def test_shrunk_maps_are_in_the_predicted_error(tmp_path):
     assert shadows["why"] == "cap" and not shadows["left_out"]
     assert 0.0 < shadows["maps"] == shadows["missing"] <= shaft_maps.MAP_LEVEL_ERROR[-1]
     assert res["error"] >= shadows["missing"]
+    assert any("shadow maps shrunk to the Quality's budget" in line for line in res["panel"])
 
 
 def test_auto_predicts_the_citys_measured_cost():

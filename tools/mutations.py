@@ -822,6 +822,12 @@ MUTATIONS = [
              "(n + SHAFT_LOAD * max(int(shafted), 0))",
              "(n + 0.0 * max(int(shafted), 0))",
              ("tests/test_city_night.py::test_auto_predicts_the_citys_measured_cost",)),
+    Mutation("cap_share_alone", "the shadows the Quality's cap leaves out judged as a share of the left-out lamps' "
+             "fog alone (the shafted lamps' fog left out of the denominator: 20 street lamps at Draft 618 %)",
+             "left_out.shadow_fog",
+             "                                        if casting else ()) if unshafted else None",
+             "                                        if False else ()) if unshafted else None",
+             ("tests/test_city_night.py::test_the_quality_shafts_its_most_important_lights",)),
     Mutation("sums_untied", "the compositor's sums over the lights not tied step by step (each light's buffers live "
              "from the first sum's pass to the last: memory grows with lights x pixels)", "comp_ops.in_step",
              "    if len(keys) > 1:",

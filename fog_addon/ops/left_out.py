@@ -81,7 +81,8 @@ def shadow_fog(scene, spec, method, lights):
     shafted, over = shadow_maps.shafted_split(scene, lights, spec.beta_per_unit, cap) \
         if lights and spec.beta_per_unit > 0.0 else ([], [])
     unshafted = over if casting else shafted
-    judged = shadow_maps.shadowed_parts(scene, spec, unshafted) if unshafted else None
+    judged = shadow_maps.shadowed_parts(scene, spec, unshafted, others=[o for o in lights if o not in unshafted]
+                                        if casting else ()) if unshafted else None
     if judged is not None:
         names, parts = judged
         out["left_out"] = {n: float(parts[:, k].max(initial=0.0)) for k, n in enumerate(names)}

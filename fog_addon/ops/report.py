@@ -53,19 +53,22 @@ def dense_line(choice):
 
 
 def shadows_line(choice):
-    """One line: the shadows the fog lacks where it has no shafts (``left_out.shadow_fog``), with their predicted
-    share; None where none are left out."""
+    """One line: the shadows the fog lacks where it has no shafts (``left_out.shadow_fog``), and what the shadow maps
+    shrunk to the Quality's budget may move, with their predicted share; None where neither is."""
     shadows = choice.get("shadows") or {}
     left = shadows.get("left_out") or {}
+    maps = (f"; the shadow maps shrunk to the Quality's budget: up to {shadows['maps']:.2%}"
+            if shadows.get("maps") else "")
     if not left:
-        return None
+        return (f"shadows in the fog drawn from shadow maps shrunk to the Quality's budget: up to "
+                f"{shadows['maps']:.2%} of a pixel's fog, in the predicted error") if maps else None
     why = shadows.get("why")
     why = ("Light Shafts is off" if why == "off" else "beyond the lights the Quality shafts" if why == "cap"
            else f"Method {methods.get(why).label} has none")
     names = sorted(left, key=left.get, reverse=True)
     return (f"shadows in the fog left out of {len(left)} light(s) ({', '.join(names[:3])}"
-            f"{' and more' if len(names) > 3 else ''}; {why}): up to {shadows.get('missing', 0.0):.2%} of a "
-            "pixel's fog, in the predicted error")
+            f"{' and more' if len(names) > 3 else ''}; {why}{maps}): up to {shadows.get('missing', 0.0):.2%} of "
+            "a pixel's fog, in the predicted error")
 
 
 def surplus_line(choice):

@@ -8,7 +8,7 @@ and city_fog.exr); SETS: 0 to build the fog group without sets of bundles (``com
 to use), as it is up to 64 lights (default 1).
 
 The JSON: each lamp's distance to the camera (m, by name), the shadow maps' grids (by lamp name), the choice's
-shadows account and error, the notes, and the process's peak resident memory (GB, ``ru_maxrss``) after the scene
+shadows account and error, the notes, the panel's lines of what the predicted error counts, and the process's peak resident memory (GB, ``ru_maxrss``) after the scene
 (and its fog-free render), after Add Fog and after the fog's render.
 """
 import json
@@ -62,6 +62,7 @@ def main(out, lamps, quality, size, render, sets=1):
     res["shadows"] = choice.get("shadows")
     res["error"] = choice.get("error")
     res["notes"] = [f"{a}: {b}" for a, b in notes]
+    res["panel"] = apply.left_out_lines(choice)   # the panel's lines of what the predicted error counts
     if int(render):
         bpy.ops.render.render()
         bpy.data.images["Render Result"].save_render(str(out / "city_fog.exr"), scene=scene)
