@@ -599,16 +599,17 @@ def remove_unused(keep=()):
 SHADOW_GRID = (48, 27)     # the view's samples the shadows' share is judged at (``shadowed_parts``)
 SHARE_MAP = (128, 64)      # longitude x latitude points of the coarse point maps it casts (2.8 degrees apart)
 SHARE_NODES = 16           # quadrature nodes along each ray (``shafts.lit_share``)
+SHARE_OTHERS = 64          # the other lights whose fog it counts at most beside them (``shadowed_parts``' others)
 SHARE_LIGHTS = 16          # the lights it judges at most: the most important (``sampling.importance``)
 
 
-def judged_lights(scene, spec, lights):
-    """At most SHARE_LIGHTS of ``lights``, the most important to the picture seen from the camera
+def judged_lights(scene, spec, lights, count=None):
+    """At most ``count`` (SHARE_LIGHTS) of ``lights``, the most important to the picture seen from the camera
     (``sampling.importance``; from the origin without one), in their order."""
     eye = np.array(scene.camera.matrix_world.translation) if scene.camera is not None else np.zeros(3)
     weight = sampling.importance([o.matrix_world.translation for o in lights], view.light_intensities(lights), eye,
                                  spec.beta_per_unit)
-    return [lights[k] for k in sorted(np.argsort(-weight, kind="stable")[:SHARE_LIGHTS])]
+    return [lights[k] for k in sorted(np.argsort(-weight, kind="stable")[:count or SHARE_LIGHTS])]
 
 
 def shadowed_parts(scene, spec, lights, grid=SHADOW_GRID, others=()):
@@ -621,15 +622,17 @@ def shadowed_parts(scene, spec, lights, grid=SHADOW_GRID, others=()):
     here; a spot or an area light is mapped as a point), and the glow without shafts, G, overestimates the fog
     by G (1 - S); the denominator is the fog with the shadows, sum G S + the fog light on surfaces (unshadowed:
     the fog light's own shadows are left out of the estimate).  ``others``: lights whose fog is in the picture
-    beside them (the shafted ones where the Quality's cap leaves ``lights`` out), in the denominator too, the most
-    important SHARE_LIGHTS of them with their shadows the same way, the rest without.  The predicted error's
+    beside them (the shafted ones where the Quality's cap leaves ``lights`` out), in the denominator too: the most
+    important SHARE_OTHERS of them, SHARE_LIGHTS of those with their shadows the same way (the rest's fog left out
+    makes the share larger: an estimate on the safe side).  The predicted error's
     share of what Light Shafts off, a method without them or the Quality's cap leaves out
     (``ops/left_out.shadow_fog``)."""
     if scene.camera is None or not lights:
         return None
     judged = judged_lights(scene, spec, lights)
     shaded = judged_lights(scene, spec, others) if others else []
-    every = judged + shaded + [o for o in others if o not in shaded]
+    beside = judged_lights(scene, spec, others, SHARE_OTHERS) if others else []
+    every = judged + shaded + [o for o in beside if o not in shaded]
     samples = view.view_samples(scene, every, frames=[scene.frame_current], grid=grid)
     samples = samples._replace(shapes=None)   # (each light a point: an estimate)
     glow, scatter = predict.light_fog(samples, view.light_intensities(every), spec.beta_per_unit, spec.anisotropy)
